@@ -1,0 +1,169 @@
+"""Command-line interface: ``accelcal calibrate RECORDING.csv --g G --method M --out RESULT.json``."""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from . import ESTIMATORS, __version__
+from .errors import AccelcalError
+from .results import _finite_json
+
+MODEL_HELP = """\
+model (Burkhard et al. 2024, eq. 1):  z = M x + b + e
+  z  measured specific force of a static pose (mean of the rest interval)
+  x  true specific force, |x| = g at rest
+  b  bias;  M lower triangular, row i = (1 + s_i) u_i with scale factors s and
+     non-orthogonality angles (theta_xy, theta_zx, theta_zy), see accelcal.model
+
+methods:
+  full-lls   closed form (SVD), bias + scale + non-orthogonality, >= 10 poses
+  full-als   full-lls with its O(noise^2) bias removed (adjusted least squares)
+  full-nlls  iterative (CasADi/IPOPT) from b = 0, M = I, >= 10 poses
+  bias-lls   closed form with M = I, >= 4 poses; the bias does not depend on g
+  bias-nlls  iterative with M = I, >= 4 poses
+
+input: CSV with a header row and columns
+  t         time [s], strictly increasing
+  ax,ay,az  acceleration, one consistent unit (m/s^2 or raw counts)
+  temp      optional, temperature [degC]
+other columns are ignored. The recording must start at rest (the noise level is
+learned there, as in IMU-TK) and hold the sensor still in each pose.
+
+units: give --g in the unit the calibrated output should have. For the full
+models z may be in raw counts with g in m/s^2: M then carries the sensitivity
+(counts per m/s^2) and b is in counts. The bias-only models (M = I) need z and g
+in the same unit.
+"""
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = _parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except AccelcalError as exc:
+        return _fail(str(exc))
+    except OSError as exc:
+        return _fail(f"{exc.strerror or exc}: {exc.filename}" if getattr(exc, "filename", None) else str(exc))
+    except KeyboardInterrupt:
+        return _fail("interrupted", code=130)
+    except Exception as exc:  # never a traceback for the user; ACCELCAL_DEBUG=1 shows it
+        if os.environ.get("ACCELCAL_DEBUG"):
+            raise
+        return _fail(f"internal error ({type(exc).__name__}: {exc}); rerun with ACCELCAL_DEBUG=1 and report it", code=3)
+
+
+def _fail(message: str, code: int = 2) -> int:
+    print(f"accelcal: error: {message.splitlines()[0] if message else 'failed'}", file=sys.stderr)
+    return code
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="accelcal", description="Accelerometer calibration from static poses.",
+                                formatter_class=argparse.RawDescriptionHelpFormatter, epilog=MODEL_HELP)
+    p.add_argument("--version", action="version", version=f"accelcal {__version__}")
+    sub = p.add_subparsers(dest="command", required=True)
+    c = sub.add_parser("calibrate", help="estimate bias, scale factors and non-orthogonality from a recording",
+                       description="Detect the static poses of RECORDING.csv and estimate the accelerometer errors.",
+                       formatter_class=argparse.RawDescriptionHelpFormatter, epilog=MODEL_HELP)
+    c.add_argument("recording", type=Path, help="CSV with columns t, ax, ay, az [, temp]")
+    c.add_argument("--g", type=float, required=True, help="local gravity magnitude (e.g. 9.80665)")
+    c.add_argument("--method", choices=sorted(ESTIMATORS), default="full-lls", help="estimator (default full-lls)")
+    c.add_argument("--out", type=Path, required=True, help="result JSON (written only on success)")
+    c.set_defaults(func=_calibrate)
+    return p
+
+
+def _calibrate(args) -> int:
+    from .recording import read_recording
+    from .static import detect_static_recording
+
+    t0 = time.perf_counter()
+    _progress(f"reading {args.recording}")
+    rec = read_recording(args.recording)
+    _progress(f"{len(rec.t)} samples over {rec.t[-1] - rec.t[0]:.1f} s; detecting static intervals")
+    poses = detect_static_recording(rec)
+    _progress(f"{len(poses.means)} static poses; estimating with {args.method}")
+    estimator = ESTIMATORS[args.method]
+    if args.method.startswith("bias"):
+        _check_same_unit(poses.means, args.g)
+    result = estimator(poses.means, args.g)
+    out = result.to_dict()
+    out.update({
+        "method": args.method,
+        "accelcal_version": __version__,
+        "recording": str(args.recording),
+        "recording_sha256": _sha256(args.recording),
+        "poses": {
+            "t_start": poses.t_start.tolist(),
+            "t_end": poses.t_end.tolist(),
+            "mean": poses.means.tolist(),
+            "mean_std": poses.mean_std.tolist(),
+            "temp": None if poses.temp is None else poses.temp.tolist(),
+        },
+        "elapsed_s": time.perf_counter() - t0,
+    })
+    _write_json_atomic(args.out, _finite_json(out))
+    _summary(result, args.out)
+    return 0
+
+
+def _check_same_unit(means: np.ndarray, g: float) -> None:
+    norm = float(np.median(np.linalg.norm(means, axis=1)))
+    if not 0.5 < norm / g < 2.0:
+        raise AccelcalError(
+            f"pose magnitudes (median {norm:.4g}) are not in the unit of --g {g:g}: "
+            "the bias-only models need both in one unit (use a full model for raw counts)"
+        )
+
+
+def _progress(msg: str) -> None:
+    print(f"accelcal: {msg}", file=sys.stderr, flush=True)
+
+
+def _summary(r, out: Path) -> None:
+    se = r.standard_errors
+    lines = [
+        f"{r.method}: {r.n_poses} poses, residual RMS {r.residual_rms:.3g} (noise estimate {float(se['noise_std']):.3g})",
+        "  bias          " + _fmt(r.bias, se["bias"]),
+    ]
+    if r.model == "full":
+        lines.append("  scale [ppm]   " + _fmt(r.scale_factors * 1e6, se["scale_factors"] * 1e6))
+        lines.append("  nonorth [deg] " + _fmt(r.nonorthogonality_deg, se["nonorthogonality_deg"]))
+    lines.append(f"  written to {out}")
+    print("\n".join(lines), file=sys.stderr)
+
+
+def _fmt(values, errors) -> str:
+    return "  ".join(f"{v:+.6g} ± {e:.2g}" for v, e in zip(values, errors))
+
+
+def _sha256(path: Path) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def _write_json_atomic(path: Path, obj) -> None:
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w") as fh:
+            json.dump(obj, fh, indent=2)
+            fh.write("\n")
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+if __name__ == "__main__":
+    sys.exit(main())

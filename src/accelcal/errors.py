@@ -1,0 +1,33 @@
+"""Typed errors of accelcal. Every user-facing failure is one of these, with a one-line message."""
+
+
+class AccelcalError(ValueError):
+    """Base class: a problem with the user's input that the CLI reports in one line."""
+
+
+class InputShapeError(AccelcalError):
+    """Arrays of the wrong shape or dimensionality."""
+
+
+class NonFiniteError(AccelcalError):
+    """NaN or infinite values in the input."""
+
+
+class TooFewPosesError(AccelcalError):
+    """Fewer static poses than the estimator needs (q + 1 for q unknowns)."""
+
+
+class DegeneratePosesError(AccelcalError):
+    """Pose set that does not determine the parameters (coplanar, one axis only...)."""
+
+
+class NotPositiveDefiniteError(AccelcalError):
+    """Estimated S-hat not positive definite, or a non-positive diagonal of M."""
+
+
+class NotConvergedError(AccelcalError):
+    """An iterative solver did not converge."""
+
+
+class RecordingError(AccelcalError):
+    """A recording file that cannot be read or used (columns, values, no rest)."""

@@ -1,0 +1,146 @@
+"""Result objects: one dataclass per family of estimator, all with the same core fields.
+
+Every result has ``bias`` (3,), ``M`` (3, 3) with ``z = M x + b`` (identity for the
+bias-only models), ``scale_factors`` (3,), ``nonorthogonality`` (3,) [rad, order
+θxy, θzx, θzy], per-pose ``residuals`` ``||M⁻¹(z_i - b)|| - g`` [input units] and
+``standard_errors`` (dict of arrays, same units; NaN where not estimable).
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from .model import params_from_m
+from .uncertainty import pose_residuals, standard_errors
+
+
+@dataclass(frozen=True)
+class CalibrationResult:
+    """Fields shared by every estimator.
+
+    ``poses`` are the static pose means the estimate was computed from; residuals and
+    standard errors are derived from them on first access (so that timing an estimator
+    times the estimator, not its error analysis).
+    """
+
+    method: str
+    bias: np.ndarray
+    M: np.ndarray
+    g: float
+    poses: np.ndarray
+
+    @property
+    def model(self) -> str:
+        """'bias' for the bias-only estimators (M = I), else 'full'."""
+        return "bias" if self.method.startswith("bias") else "full"
+
+    @property
+    def n_poses(self) -> int:
+        return len(self.poses)
+
+    @cached_property
+    def _params(self) -> tuple[np.ndarray, np.ndarray]:
+        return params_from_m(self.M)
+
+    @property
+    def scale_factors(self) -> np.ndarray:
+        return self._params[0]
+
+    @property
+    def nonorthogonality(self) -> np.ndarray:
+        """Non-orthogonality angles (θxy, θzx, θzy) in radians."""
+        return self._params[1]
+
+    @property
+    def nonorthogonality_deg(self) -> np.ndarray:
+        return np.rad2deg(self.nonorthogonality)
+
+    @cached_property
+    def residuals(self) -> np.ndarray:
+        """Per-pose misfit ``||M⁻¹(z_i - b)|| - g`` in input units."""
+        return pose_residuals(self.poses, self.g, self.M, self.bias)
+
+    @property
+    def residual_rms(self) -> float:
+        return float(np.sqrt(np.mean(self.residuals**2)))
+
+    @cached_property
+    def standard_errors(self) -> dict[str, np.ndarray]:
+        """Linearised standard errors (see :func:`accelcal.uncertainty.standard_errors`)."""
+        return standard_errors(self.poses, self.g, self.M, self.bias, self.model)
+
+    @property
+    def n_parameters(self) -> int:
+        return 3 if self.model == "bias" else 9
+
+    def to_dict(self) -> dict:
+        """JSON-ready dictionary (the CLI's output format)."""
+        out = {
+            "method": self.method,
+            "g": float(self.g),
+            "n_poses": int(self.n_poses),
+            "bias": self.bias.tolist(),
+            "M": self.M.tolist(),
+            "scale_factors": self.scale_factors.tolist(),
+            "nonorthogonality_deg": self.nonorthogonality_deg.tolist(),
+            "residual_rms": self.residual_rms,
+            "residuals": self.residuals.tolist(),
+            "standard_errors": {k: np.asarray(v).tolist() for k, v in self.standard_errors.items()},
+        }
+        for k, v in asdict(self).items():
+            if k not in out and k != "poses":
+                out[k] = v.tolist() if isinstance(v, np.ndarray) else v
+        return _finite_json(out)
+
+
+def _finite_json(obj):
+    """NaN is not JSON: write it as null."""
+    if isinstance(obj, float):
+        return obj if np.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: _finite_json(v) for k, v in obj.items()}
+    if isinstance(obj, list):
+        return [_finite_json(v) for v in obj]
+    return obj
+
+
+@dataclass(frozen=True)
+class LLSResult(CalibrationResult):
+    """Closed-form estimators (full LLS, bias-only LLS, ALS).
+
+    ``singular_values`` of the design matrix (full models) or of the bias-only system;
+    ``lam`` the scale λ of eq. (5) (NaN for bias-only); ``c`` the fitted ``g² - bᵀb``
+    of eq. (7) (NaN for full); ``noise_var`` the noise variance ALS corrected for
+    (NaN for LLS).
+    """
+
+    singular_values: np.ndarray = field(default_factory=lambda: np.empty(0))
+    lam: float = float("nan")
+    c: float = float("nan")
+    noise_var: float = float("nan")
+
+
+@dataclass(frozen=True)
+class NLLSResult(CalibrationResult):
+    """Iterative NLLS (CasADi + IPOPT): solver status, iterations, final cost."""
+
+    status: str = ""
+    iterations: int = 0
+    cost: float = float("nan")
+
+
+@dataclass(frozen=True)
+class BatchResult:
+    """Batched closed-form estimates over many trials (Monte Carlo).
+
+    ``valid`` marks trials where the estimator produced a model (for the full LLS:
+    Ŝ positive definite and λ > 0); invalid trials hold NaN, never a number.
+    """
+
+    method: str
+    bias: np.ndarray  # (T, 3)
+    M: np.ndarray  # (T, 3, 3)
+    valid: np.ndarray  # (T,) bool

@@ -1,0 +1,12 @@
+#!/bin/sh
+# Regenerate environment.lock from pyproject.toml (+ the build backend), pinned with hashes
+# for every platform and Python >= 3.11.  Run after editing the dependencies in pyproject.toml:
+#     pip install uv && sh tools/lock.sh
+# tests/test_lock.py fails when the lock no longer matches pyproject.toml.
+set -eu
+cd "$(dirname "$0")/.."
+uv pip compile pyproject.toml tools/build-requirements.in --extra test \
+    --universal --python-version 3.11 --generate-hashes --no-header \
+    --index-url https://pypi.org/simple --no-emit-index-url -o environment.lock.tmp -q
+python3 tools/lockstamp.py environment.lock.tmp > environment.lock
+rm -f environment.lock.tmp
