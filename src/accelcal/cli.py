@@ -8,7 +8,9 @@ import json
 import os
 import sys
 import tempfile
+import threading
 import time
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -88,15 +90,15 @@ def _calibrate(args) -> int:
     from .static import detect_static_recording
 
     t0 = time.perf_counter()
-    _progress(f"reading {args.recording}")
-    rec = read_recording(args.recording)
-    _progress(f"{len(rec.t)} samples over {rec.t[-1] - rec.t[0]:.1f} s; detecting static intervals")
-    poses = detect_static_recording(rec)
-    _progress(f"{len(poses.means)} static poses; estimating with {args.method}")
+    with _step(f"reading {args.recording}"):
+        rec = read_recording(args.recording)
+    with _step(f"detecting static intervals in {len(rec.t)} samples"):
+        poses = detect_static_recording(rec)
     estimator = ESTIMATORS[args.method]
     if args.method.startswith("bias"):
         _check_same_unit(poses.means, args.g)
-    result = estimator(poses.means, args.g)
+    with _step(f"estimating {args.method} from {len(poses.means)} poses"):
+        result = estimator(poses.means, args.g)
     out = result.to_dict()
     out.update({
         "method": args.method,
@@ -113,7 +115,7 @@ def _calibrate(args) -> int:
         "elapsed_s": time.perf_counter() - t0,
     })
     _write_json_atomic(args.out, _finite_json(out))
-    _summary(result, args.out)
+    _summary(result, args.method, args.out)
     return 0
 
 
@@ -126,14 +128,23 @@ def _check_same_unit(means: np.ndarray, g: float) -> None:
         )
 
 
-def _progress(msg: str) -> None:
-    print(f"accelcal: {msg}", file=sys.stderr, flush=True)
+@contextmanager
+def _step(what: str, after_s: float = 2.0):
+    """Announce ``what`` on stderr only if it is still running after ``after_s`` seconds,
+    so that quick runs print nothing but their summary (or their one-line error)."""
+    timer = threading.Timer(after_s, lambda: print(f"accelcal: {what} ...", file=sys.stderr, flush=True))
+    timer.daemon = True
+    timer.start()
+    try:
+        yield
+    finally:
+        timer.cancel()
 
 
-def _summary(r, out: Path) -> None:
+def _summary(r, method: str, out: Path) -> None:
     se = r.standard_errors
     lines = [
-        f"{r.method}: {r.n_poses} poses, residual RMS {r.residual_rms:.3g} (noise estimate {float(se['noise_std']):.3g})",
+        f"{method}: {r.n_poses} poses, residual RMS {r.residual_rms:.3g} (noise estimate {float(se['noise_std']):.3g})",
         "  bias          " + _fmt(r.bias, se["bias"]),
     ]
     if r.model == "full":

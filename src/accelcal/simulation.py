@@ -107,8 +107,7 @@ def simulate_recording(rng: np.random.Generator, directions, g: float, M, bias, 
         if i + 1 < len(u):
             n_move = int(round(move_s * rate))
             w = np.linspace(0, 1, n_move, endpoint=False)[:, None]
-            path = (1 - w) * ui + w * u[i + 1]
-            path /= np.linalg.norm(path, axis=1, keepdims=True)
+            path = _slerp(ui, u[i + 1], w)
             shake = 0.5 * g * np.sin(np.pi * w) * rng.standard_normal((n_move, 3))
             chunks.append(g * path + shake)
     x = np.concatenate(chunks)
@@ -118,3 +117,24 @@ def simulate_recording(rng: np.random.Generator, directions, g: float, M, bias, 
     if temperature is not None:
         out["temp"] = np.linspace(temperature[0], temperature[1], len(t))
     return out
+
+
+def _slerp(a: np.ndarray, b: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """Great-circle path from unit vector ``a`` to ``b`` at fractions ``w`` (m, 1).
+
+    Antipodal ends have no unique great circle: the path then passes through a
+    direction perpendicular to ``a``.
+    """
+    a = a / np.linalg.norm(a)
+    b = b / np.linalg.norm(b)
+    angle = np.arccos(np.clip(a @ b, -1.0, 1.0))
+    if angle < 1e-9:
+        return np.repeat(a[None, :], len(w), axis=0)
+    if np.pi - angle < 1e-6:
+        perp = np.cross(a, [1.0, 0, 0] if abs(a[0]) < 0.9 else [0, 1.0, 0])
+        perp /= np.linalg.norm(perp)
+    else:
+        perp = b - (a @ b) * a
+        perp /= np.linalg.norm(perp)
+    phi = angle * w
+    return np.cos(phi) * a + np.sin(phi) * perp
