@@ -1,0 +1,310 @@
+"""Static-interval detection in raw accelerometer recordings (IMU-TK style).
+
+Tedaldi, Pretto & Menegatti (ICRA 2014): the sensor first rests for a while; the
+noise level learned there sets a threshold on a moving-window variance, and the
+stretches where the variance stays below it are the static poses.
+
+Algorithm (all windows centred, length ``window``, variances via cumulative sums)
+
+1. ``v[i]`` = sum over the three axes of the variance of the window centred on
+   sample ``i`` (the trace of the window covariance, i.e. the total noise power;
+   IMU-TK uses the norm of the per-axis variances, which behaves the same).
+2. Initial rest.  With ``init_duration=None`` it is found from the data: the first
+   window seeds a threshold, the initial rest is the first run of windows below
+   ``threshold_factor`` × that seed.  With ``init_duration`` given it is
+   ``[0, init_duration)``.  Either way it must look like a rest (see
+   :func:`_check_initial_rest`), else :class:`RecordingError`.
+3. ``vref`` = trace of the covariance of the initial rest; a window centre is static
+   when ``v < threshold_factor * vref``.
+4. A run of static centres ``[a, b)`` means every sample of ``[a - h, b + h)`` lies in
+   a quiet window (``h`` = half window); that span, minus ``trim`` at each end that
+   borders motion, is the pose, kept if it lasts at least ``min_duration``.
+
+Defaults (identical for the three recordings in ``shared/data``; no per-file tuning)
+
+* ``window = 1.0`` s — IMU-TK's 101 samples at 100 Hz.  The MPU-6050 poses last only
+  2–3 s, so a 2 s window would lose them.
+* ``threshold_factor = 6`` — the middle of IMU-TK's search range 2…10.  The
+  hand-placed MPU-6050 poses are 1.5–3 × noisier than its initial rest (the hand or
+  the surface still moves a little): with factor 4 one of them breaks in two, with
+  6–10 each is one run (10 poses).  Motion between poses is 10²–10⁵ × the noise, so
+  6 is far from it.  On the Xsens data factors 4–10 give the same 38 poses; at 3 and
+  below, two brief taps (≈ 0.2 s, window variance ≈ 3.4 × the rest) split two poses.
+  The imucal session's initial rest is ≈ 3 × noisier than its later rests, so with a
+  factor ≤ 3 the "later parts are quieter" check (step 2) rejects it.
+* ``min_duration = 1.0`` s — IMU-TK keeps intervals of at least 100 samples (1 s).
+  The initial rest only needs one window to serve as noise reference.
+* ``trim = 0.25`` s — cut from each end that borders motion, where the sensor is
+  still settling: without it pose means move by up to 10 standard errors (imucal,
+  MPU-6050) against a 0.5 s trim; with 0.25 s by at most 1.4.
+* ``init_duration = None`` (automatic) — the initial rests differ too much to fix
+  one duration: Xsens ≈ 52 s, MPU-6050 ≈ 37 s, imucal Ferraris session only ≈ 1.3 s
+  (it is bumped at 1.5 s, then rests again in the same orientation).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import AccelcalError, RecordingError
+
+DEFAULT_WINDOW = 1.0
+DEFAULT_THRESHOLD_FACTOR = 6.0
+DEFAULT_MIN_DURATION = 1.0
+DEFAULT_TRIM = 0.25
+#: Largest drift of the initial rest's block means, in per-sample noise std, that is
+#: still a rest.  A slow rotation gives ≈ 3.5 (B - 1) over B blocks; the real initial
+#: rests drift by 0.9 (Xsens, 51 blocks), 0.5 (MPU-6050), 0.3 (imucal).
+MAX_INIT_DRIFT = 3.0
+
+
+@dataclass(frozen=True)
+class StaticPoses:
+    """Static poses found in a recording (all arrays have one row per pose, in time order).
+
+    Attributes
+    ----------
+    means : ndarray, shape (n_poses, 3)
+        Mean acceleration of each pose, input units.
+    t_start, t_end, t_mid : ndarray, shape (n_poses,)
+        Time of the first and last sample of each pose and their midpoint [s].
+    n_samples : ndarray of int, shape (n_poses,)
+        Samples averaged in each pose.
+    noise_std : ndarray, shape (n_poses, 3)
+        Per-sample standard deviation of each axis within the pose.
+    mean_std : ndarray, shape (n_poses, 3)
+        Standard error of each pose mean, ``noise_std / sqrt(n_eff)`` with the effective
+        sample size from the autocorrelation (Geyer's initial positive sequence).  This
+        is the per-pose noise the estimators use.
+    temp : ndarray, shape (n_poses,), or None
+        Mean temperature of each pose if the recording has one.
+    intervals : ndarray of int, shape (n_poses, 2)
+        Sample index range ``[start, stop)`` of each pose.
+    init_rest : tuple of int
+        Sample range ``[start, stop)`` whose noise set the threshold.
+    """
+
+    means: np.ndarray
+    t_start: np.ndarray
+    t_end: np.ndarray
+    t_mid: np.ndarray
+    n_samples: np.ndarray
+    noise_std: np.ndarray
+    mean_std: np.ndarray
+    temp: np.ndarray | None
+    intervals: np.ndarray
+    init_rest: tuple[int, int]
+
+    def __len__(self) -> int:
+        return len(self.means)
+
+
+def detect_static(t, acc, *, init_duration: float | None = None, window: float = DEFAULT_WINDOW,
+                  threshold_factor: float = DEFAULT_THRESHOLD_FACTOR,
+                  min_duration: float = DEFAULT_MIN_DURATION, trim: float = DEFAULT_TRIM,
+                  temp=None) -> StaticPoses:
+    """Find the static poses of a raw recording.
+
+    Parameters
+    ----------
+    t : array_like, shape (n,)
+        Time [s], strictly increasing (sampling rate from the median step).
+    acc : array_like, shape (n, 3)
+        Acceleration in any one unit.
+    init_duration : float, optional
+        Length [s] of the initial rest.  None: found from the data (module docstring).
+    window : float
+        Length [s] of the moving variance window.
+    threshold_factor : float
+        A window is static if its variance is below this multiple of the initial rest's.
+    min_duration : float
+        Shortest pose [s] kept, after trimming.
+    trim : float
+        Time [s] cut from each end of a pose that borders motion.
+    temp : array_like, shape (n,), optional
+        Temperature, averaged per pose.
+
+    Returns
+    -------
+    StaticPoses
+        The initial rest is normally the first pose.
+
+    Raises
+    ------
+    RecordingError
+        Non-finite values, time not strictly increasing, a recording shorter than three
+        windows, an initial segment that is not at rest (the sensor never rests, or
+        moves at the start), or no static pose at all.
+    """
+    t, acc, temp = _validate(t, acc, temp)
+    if not (window > 0 and threshold_factor > 1 and min_duration >= 0 and trim >= 0):
+        raise AccelcalError("need window > 0, threshold_factor > 1, min_duration >= 0 and trim >= 0")
+    n = t.size
+    fs = 1.0 / float(np.median(np.diff(t)))
+    w = max(3, int(round(window * fs)) | 1)  # odd, so the window is centred on a sample
+    h = w // 2
+    if n < 3 * w:
+        raise RecordingError(f"recording too short: {n} samples ({n / fs:.2f} s); "
+                             f"need at least 3 windows ({3 * w} samples)")
+    v = _rolling_variance_trace(acc, w)
+    m = int(round(trim * fs))
+    n_min = max(int(np.ceil(min_duration * fs)), 2)
+
+    # Initial rest: from the data (first run below k × the first window's variance) or given.
+    if init_duration is None:
+        seed = v[h]  # variance of the first window; v[0] == seed, so the first run starts at 0
+        if seed <= 0:
+            raise RecordingError("the first window has zero variance: the sensor output is constant (stuck?)")
+        init = _spans(_runs(v < threshold_factor * seed)[:1], h, m, n)[0]
+    else:
+        n0 = int(round(init_duration * fs))
+        if not w <= n0 <= n:
+            raise RecordingError(f"init_duration {init_duration:g} s must cover one window ({window:g} s) "
+                                 f"and fit in the recording ({n / fs:.1f} s)")
+        init = (0, n0)
+    vref = _check_initial_rest(acc, v, init, w, threshold_factor, fs)
+
+    spans = _spans(_runs(v < threshold_factor * vref), h, m, n)
+    spans = spans[spans[:, 1] - spans[:, 0] >= n_min]
+    if len(spans) == 0:
+        raise RecordingError("no static interval found: the sensor never rests long enough")
+    return _pose_statistics(t, acc, temp, spans, init)
+
+
+def detect_static_recording(rec, **kw) -> StaticPoses:
+    """:func:`detect_static` on a :class:`~accelcal.recording.Recording` (uses its temperature)."""
+    return detect_static(rec.t, rec.acc, temp=rec.temp, **kw)
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def _validate(t, acc, temp):
+    t = np.asarray(t, dtype=float)
+    acc = np.asarray(acc, dtype=float)
+    if t.ndim != 1 or acc.shape != (t.size, 3):
+        raise RecordingError(f"need t of shape (n,) and acc of shape (n, 3); got {t.shape} and {acc.shape}")
+    if temp is not None:
+        temp = np.asarray(temp, dtype=float)
+        if temp.shape != t.shape:
+            raise RecordingError(f"temp has shape {temp.shape}, expected {t.shape}")
+    for name, a in (("t", t), ("acc", acc), ("temp", temp)):
+        if a is not None and not np.all(np.isfinite(a)):
+            raise RecordingError(f"non-finite value in {name} (first at sample "
+                                 f"{int(np.flatnonzero(~np.isfinite(a).reshape(len(a), -1).all(1))[0])})")
+    if t.size < 2 or np.any(np.diff(t) <= 0):
+        i = int(np.flatnonzero(np.diff(t) <= 0)[0]) + 1 if t.size >= 2 else 0
+        raise RecordingError(f"time must be strictly increasing with at least 2 samples (fails at sample {i})")
+    return t, acc, temp
+
+
+def _rolling_variance_trace(acc: np.ndarray, w: int) -> np.ndarray:
+    """Trace of the covariance of each centred window of ``w`` samples; edges copy the nearest full window.
+
+    Cumulative sums make this O(n).  The data are centred on their first sample
+    first, so that raw counts around 32768 do not cost digits in the sums of squares.
+    """
+    x = acc - acc[0]
+    c1 = np.concatenate([np.zeros((1, 3)), np.cumsum(x, axis=0)])
+    c2 = np.concatenate([np.zeros((1, 3)), np.cumsum(x * x, axis=0)])
+    s1 = c1[w:] - c1[:-w]
+    s2 = c2[w:] - c2[:-w]
+    var = np.maximum((s2 - s1 * s1 / w) / (w - 1), 0.0).sum(axis=1)  # clip round-off below zero
+    h = w // 2
+    return np.concatenate([np.full(h, var[0]), var, np.full(acc.shape[0] - h - var.size, var[-1])])
+
+
+def _runs(mask: np.ndarray) -> np.ndarray:
+    """``[start, stop)`` of each run of True in ``mask``, shape (k, 2)."""
+    d = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
+    return np.column_stack([np.flatnonzero(d == 1), np.flatnonzero(d == -1)])
+
+
+def _spans(runs: np.ndarray, h: int, m: int, n: int) -> np.ndarray:
+    """Samples covered by the quiet windows of each run of centres, minus ``m`` at ends that border motion."""
+    start = runs[:, 0] - h
+    stop = runs[:, 1] + h
+    start = np.where(start > 0, start + m, 0)   # the recording's own start borders no motion
+    stop = np.where(stop < n, stop - m, n)
+    return np.column_stack([start, np.maximum(stop, start)])
+
+
+def _check_initial_rest(acc, v, init, w, k, fs) -> float:
+    """Check that the initial segment is a rest and return the trace of its covariance.
+
+    Three symptoms of a segment that is not at rest, each fatal:
+
+    * shorter than one window: too short to learn a noise level from;
+    * its mean drifts: split into blocks of about one window, the block means spread
+      by more than ``MAX_INIT_DRIFT`` within-block noise std on some axis (a slow
+      rotation; a rest drifts by a small fraction of the noise);
+    * it is not the quiet reference: the windows of the rest of the recording go
+      below ``1/k`` of its variance (the sensor shook at the start, then rested), or
+      one of its own blocks exceeds ``k`` × their median (motion inside it).
+    """
+    a, b = init
+    if b - a < w:  # the noise level must rest on at least as many samples as each window
+        raise RecordingError(f"the recording does not start at rest: initial rest only {(b - a) / fs:.2f} s, "
+                             f"need at least one window ({w / fs:.2f} s)")
+    seg = acc[a:b]
+    blocks = np.array_split(seg, min(max((b - a) // w, 2), 64))
+    means = np.array([blk.mean(axis=0) for blk in blocks])
+    bvars = np.array([blk.var(axis=0, ddof=1) for blk in blocks])
+    within = np.sqrt(bvars.mean(axis=0))
+    drift = (means.max(axis=0) - means.min(axis=0)) / np.where(within > 0, within, np.inf)
+    where = f"the initial segment (0-{b / fs:.1f} s) is not at rest"
+    if np.any(drift > MAX_INIT_DRIFT):
+        raise RecordingError(f"{where}: its mean drifts by {drift.max():.1f} noise std "
+                             "(the sensor never rests, or moves at the start)")
+    vtr = bvars.sum(axis=1)
+    vref = float(seg.var(axis=0, ddof=1).sum())
+    if vref <= 0:
+        raise RecordingError(f"{where}: zero variance, the sensor output is constant (stuck?)")
+    if vtr.max() > k * np.median(vtr):
+        raise RecordingError(f"{where}: part of it is {vtr.max() / np.median(vtr):.0f}x noisier than the rest of it")
+    rest = np.concatenate([v[:a], v[b:]])
+    if rest.size and rest.min() * k < vref:
+        raise RecordingError(f"{where}: later parts of the recording are {vref / rest.min():.0f}x quieter "
+                             "(the sensor moved or vibrated at the start)")
+    return vref
+
+
+def _integrated_autocorr_time(x: np.ndarray) -> np.ndarray:
+    """Integrated autocorrelation time of each column of ``x`` (n, 3), at least 1.
+
+    Geyer's initial positive sequence: sum the pairs ``ρ(2j) + ρ(2j+1)`` while positive,
+    ``τ = 2 Σ - 1``.  It needs no lag cut-off, and truncating at the first
+    non-positive pair stops before the noisy tail of the estimate.
+    """
+    n = x.shape[0]
+    xc = x - x.mean(axis=0)
+    f = np.fft.rfft(xc, n=2 * n, axis=0)  # zero-padded: linear, not circular, correlation
+    acov = np.fft.irfft(f * np.conj(f), axis=0)[:n]
+    tau = np.ones(x.shape[1])
+    for j in range(x.shape[1]):
+        if acov[0, j] <= 0:
+            continue
+        rho = acov[:, j] / acov[0, j]
+        pairs = rho[: 2 * (n // 2)].reshape(-1, 2).sum(axis=1)
+        neg = np.flatnonzero(pairs <= 0)
+        pairs = pairs[: neg[0]] if neg.size else pairs
+        tau[j] = max(1.0, 2.0 * pairs.sum() - 1.0)
+    return np.minimum(tau, n)
+
+
+def _pose_statistics(t, acc, temp, spans, init) -> StaticPoses:
+    k = len(spans)
+    means, noise_std, mean_std = np.empty((k, 3)), np.empty((k, 3)), np.empty((k, 3))
+    for i, (a, b) in enumerate(spans):
+        seg = acc[a:b]
+        means[i] = seg.mean(axis=0)
+        noise_std[i] = seg.std(axis=0, ddof=1)
+        mean_std[i] = noise_std[i] * np.sqrt(_integrated_autocorr_time(seg) / (b - a))
+    t_start, t_end = t[spans[:, 0]], t[spans[:, 1] - 1]
+    ptemp = None if temp is None else np.array([temp[a:b].mean() for a, b in spans])
+    return StaticPoses(means=means, t_start=t_start, t_end=t_end, t_mid=0.5 * (t_start + t_end),
+                       n_samples=(spans[:, 1] - spans[:, 0]).astype(int), noise_std=noise_std,
+                       mean_std=mean_std, temp=ptemp, intervals=spans.astype(int),
+                       init_rest=(int(init[0]), int(init[1])))

@@ -1,0 +1,255 @@
+"""Recording readers: canonical CSV round trip, strict errors, the three public formats."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from accelcal.errors import RecordingError
+from accelcal.recording import (Recording, nominal_conversion, read_imucal_annotated, read_imucal_section_list,
+                                read_imucal_session, read_imutk_ascii, read_mpu6050_csv, read_recording,
+                                write_recording)
+
+
+@pytest.fixture(scope="module")
+def data_dir() -> Path:
+    d = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
+    if not d.is_dir():
+        pytest.skip("shared/data not available")
+    return d
+
+
+def _rec(n=50, temp=True, seed=0):
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) / 100.0
+    acc = rng.standard_normal((n, 3)) * 0.01 + [0.1, -0.2, 9.81]
+    return Recording(t, acc, 20.0 + 0.01 * t if temp else None, "test")
+
+
+def _csv(tmp_path, text, name="rec.csv") -> Path:
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+def _good_lines(n=12):
+    return [f"{i / 100:.2f},0.1,0.2,9.8" for i in range(n)]
+
+
+def _raises(path, reader=read_recording, match=None) -> str:
+    with pytest.raises(RecordingError) as e:
+        reader(path)
+    msg = str(e.value)
+    assert msg and "\n" not in msg and "Traceback" not in msg, msg
+    if match:
+        assert match in msg, msg
+    return msg
+
+
+# --------------------------------------------------------------------------- canonical CSV
+
+
+@pytest.mark.parametrize("temp", [True, False])
+def test_round_trip_is_exact(tmp_path, temp):
+    rec = _rec(temp=temp)
+    p = tmp_path / "out.csv"
+    write_recording(p, rec)
+    back = read_recording(p)
+    np.testing.assert_array_equal(back.t, rec.t)
+    np.testing.assert_array_equal(back.acc, rec.acc)
+    if temp:
+        np.testing.assert_array_equal(back.temp, rec.temp)
+    else:
+        assert back.temp is None
+    assert back.source == str(p)
+    assert [f.name for f in tmp_path.iterdir()] == ["out.csv"]  # no temp file left behind
+
+
+def test_write_replaces_existing_file(tmp_path):
+    p = _csv(tmp_path, "old content\n", "out.csv")
+    write_recording(p, _rec(n=20, temp=False))
+    assert read_recording(p).n == 20
+
+
+def test_extra_columns_ignored_and_header_whitespace_tolerated(tmp_path):
+    lines = [" t , ax,ay ,az,gx,comment"] + [f"{i / 100},{i},{2 * i},{3 * i},0,x" for i in range(12)]
+    rec = read_recording(_csv(tmp_path, "\n".join(lines) + "\n\n"))  # trailing blank line is harmless
+    assert rec.n == 12 and rec.temp is None
+    np.testing.assert_array_equal(rec.acc[3], [3, 6, 9])
+    assert rec.rate == pytest.approx(100.0)
+
+
+def test_recording_is_frozen():
+    rec = _rec()
+    with pytest.raises(ValueError):
+        rec.acc[0, 0] = 1.0
+    with pytest.raises(AttributeError):
+        rec.t = None
+
+
+def test_missing_file(tmp_path):
+    _raises(tmp_path / "nope.csv", match="no such file")
+
+
+def test_empty_file(tmp_path):
+    _raises(_csv(tmp_path, ""), match="empty file")
+
+
+def test_header_only(tmp_path):
+    _raises(_csv(tmp_path, "t,ax,ay,az\n"), match="no data rows")
+
+
+def test_no_header(tmp_path):
+    _raises(_csv(tmp_path, "\n".join(_good_lines()) + "\n"), match="no header")
+
+
+def test_wrong_columns_are_named(tmp_path):
+    msg = _raises(_csv(tmp_path, "time,ax,ay,accz\n" + "\n".join(_good_lines()) + "\n"), match="missing column")
+    assert "t," in msg and "az" in msg
+
+
+def test_duplicate_columns(tmp_path):
+    _raises(_csv(tmp_path, "t,ax,ay,az,ax\n" + "\n".join(l + ",1" for l in _good_lines()) + "\n"),
+            match="duplicate")
+
+
+def test_non_numeric_names_column_and_line(tmp_path):
+    lines = _good_lines()
+    lines[4] = "0.04,0.1,abc,9.8"
+    msg = _raises(_csv(tmp_path, "t,ax,ay,az\n" + "\n".join(lines) + "\n"), match="non-numeric")
+    assert "'ay'" in msg and "line 6" in msg and "abc" in msg
+
+
+@pytest.mark.parametrize("value", ["nan", "NaN", "inf", "-inf"])
+def test_non_finite(tmp_path, value):
+    lines = _good_lines()
+    lines[2] = f"0.02,{value},0.2,9.8"
+    msg = _raises(_csv(tmp_path, "t,ax,ay,az\n" + "\n".join(lines) + "\n"), match="non-finite")
+    assert "'ax'" in msg and "line 4" in msg
+
+
+def test_truncated_last_line(tmp_path):
+    text = "t,ax,ay,az\n" + "\n".join(_good_lines()) + "\n0.12,0.1,0."
+    _raises(_csv(tmp_path, text), match="missing value")
+
+
+def test_blank_line_inside(tmp_path):
+    lines = _good_lines()
+    lines.insert(5, "")
+    _raises(_csv(tmp_path, "t,ax,ay,az\n" + "\n".join(lines) + "\n"), match="line 7")
+
+
+def test_too_many_fields(tmp_path):
+    lines = _good_lines()
+    lines[3] += ",5"
+    _raises(_csv(tmp_path, "t,ax,ay,az\n" + "\n".join(lines) + "\n"), match="malformed")
+
+
+def test_too_few_rows(tmp_path):
+    _raises(_csv(tmp_path, "t,ax,ay,az\n" + "\n".join(_good_lines(5)) + "\n"), match="need at least")
+
+
+def test_time_not_increasing(tmp_path):
+    lines = _good_lines()
+    lines[6] = lines[5]
+    _raises(_csv(tmp_path, "t,ax,ay,az\n" + "\n".join(lines) + "\n"), match="not strictly increasing")
+
+
+def test_binary_garbage(tmp_path):
+    p = tmp_path / "rec.csv"
+    p.write_bytes(bytes(range(256)) * 4)
+    _raises(p)
+
+
+# --------------------------------------------------------------------------- public formats
+
+
+def test_read_imutk_ascii(data_dir):
+    rec = read_imutk_ascii(data_dir / "imu_tk_xsens" / "xsens_acc.mat")
+    assert rec.n == 51175 and rec.temp is None
+    assert rec.rate == pytest.approx(100.0, rel=1e-6)
+    np.testing.assert_array_equal(rec.acc[0], [33108, 33329, 36429])
+    assert rec.t[0] == pytest.approx(0.02984)
+
+
+def test_read_imucal_session(data_dir):
+    rec = read_imucal_session(data_dir / "imucal_ferraris" / "example_ferraris_session.csv")
+    assert rec.n == 10376
+    np.testing.assert_allclose(rec.t, np.arange(10376) / 204.8)  # n_samples is the row counter
+    assert np.linalg.norm(rec.acc[0]) == pytest.approx(10.35, abs=0.05)  # m/s²
+
+
+def test_read_imucal_section_list(data_dir):
+    s = read_imucal_section_list(data_dir / "imucal_ferraris" / "example_ferraris_session_list.json")
+    assert set(s) == {"x_p", "x_a", "y_p", "y_a", "z_p", "z_a", "x_rot", "y_rot", "z_rot"}
+    assert s["x_p"] == (540, 1271)
+
+
+def test_read_imucal_annotated(data_dir):
+    rec, parts = read_imucal_annotated(data_dir / "imucal_ferraris" / "annotated_session.csv")
+    assert rec.n == len(parts) == 9414
+    np.testing.assert_allclose(np.diff(rec.t), 1 / 204.8)
+    order = [parts[0]] + [b for a, b in zip(parts[:-1], parts[1:]) if a != b]
+    assert order == ["x_p", "x_a", "y_p", "y_a", "z_p", "z_a", "x_rot", "y_rot", "z_rot"]  # contiguous, time order
+    assert abs(rec.acc[parts == "x_p", 0].mean() - 2040) < 10  # raw counts
+
+
+def test_read_mpu6050(data_dir):
+    rec = read_mpu6050_csv(data_dir / "mpu6050_suarez" / "example_data_calibration.csv")
+    assert rec.n == 10245
+    assert rec.rate == pytest.approx(100.0)
+    np.testing.assert_array_equal(rec.acc[0], [-12, -812, 15032])
+
+
+def test_nominal_conversions():
+    x = nominal_conversion("imutk_xsens")
+    np.testing.assert_array_equal(x.offset, 32768)
+    np.testing.assert_array_equal(x.counts_per_unit, [415, 413, 415])
+    assert x.g_local == 9.81744
+    m = nominal_conversion("mpu6050")
+    assert m.to_si([0, 0, 16384])[2] == pytest.approx(9.80665)
+    np.testing.assert_array_equal(nominal_conversion("imucal_session").to_si([1.0, 2.0, 3.0]), [1, 2, 3])
+    assert nominal_conversion("imucal_annotated") is None
+    with pytest.raises(RecordingError):
+        nominal_conversion("nonsense")
+
+
+def _damaged(tmp_path, src: Path, cut_chars: int = 0, replace=None) -> Path:
+    """A copy of ``src`` in tmp_path, cut ``cut_chars`` before its end or with one substitution."""
+    text = src.read_text()
+    if cut_chars:
+        text = text[:-cut_chars]
+    if replace:
+        text = text.replace(*replace, 1)
+    p = tmp_path / src.name
+    p.write_text(text)
+    return p
+
+
+@pytest.mark.parametrize("reader, rel, cut, replace", [
+    (read_imutk_ascii, "imu_tk_xsens/xsens_acc.mat", 35, None),  # last line loses a field
+    (read_imutk_ascii, "imu_tk_xsens/xsens_acc.mat", 4, None),  # last number cut inside its exponent
+    (read_imutk_ascii, "imu_tk_xsens/xsens_acc.mat", 0, ("3.3329000e+04", "3.33#9000e+04")),
+    (read_imucal_session, "imucal_ferraris/example_ferraris_session.csv", 30, None),
+    (read_imucal_session, "imucal_ferraris/example_ferraris_session.csv", 0, ("10.336904296875", "10.33x")),
+    (read_mpu6050_csv, "mpu6050_suarez/example_data_calibration.csv", 12, None),  # gyro fields lost
+    (read_mpu6050_csv, "mpu6050_suarez/example_data_calibration.csv", 0, ("Fs,100", "Fs,fast")),
+    (read_mpu6050_csv, "mpu6050_suarez/example_data_calibration.csv", 0, ("ax,ay,az", "ax,ay")),
+    (lambda p: read_imucal_annotated(p)[0], "imucal_ferraris/annotated_session.csv", 10, None),
+    (lambda p: read_imucal_annotated(p)[0], "imucal_ferraris/annotated_session.csv", 0, ("x_a,1029,", "x_a,1028,")),
+])
+def test_damaged_public_files_raise(tmp_path, data_dir, reader, rel, cut, replace):
+    _raises(_damaged(tmp_path, data_dir / rel, cut, replace), reader=reader)
+
+
+def test_public_readers_reject_empty_and_missing(tmp_path):
+    for reader in (read_imutk_ascii, read_imucal_session, read_mpu6050_csv, read_imucal_annotated,
+                   read_imucal_section_list):
+        _raises(tmp_path / "missing", reader=reader)
+    empty = _csv(tmp_path, "", "empty.txt")
+    for reader in (read_imutk_ascii, read_imucal_session, read_mpu6050_csv, read_imucal_annotated):
+        _raises(empty, reader=reader)
+    _raises(_csv(tmp_path, "{not json", "s.json"), reader=read_imucal_section_list)
+    _raises(_csv(tmp_path, '{"x_p": {"start": 10, "end": 5}}', "s2.json"), reader=read_imucal_section_list)
