@@ -148,7 +148,10 @@ def _summary(r, method: str, out: Path) -> None:
         "  bias          " + _fmt(r.bias, se["bias"]),
     ]
     if r.model == "full":
-        lines.append("  scale [ppm]   " + _fmt(r.scale_factors * 1e6, se["scale_factors"] * 1e6))
+        if np.all(np.abs(r.scale_factors) < 0.5):
+            lines.append("  scale [ppm]   " + _fmt(r.scale_factors * 1e6, se["scale_factors"] * 1e6))
+        else:  # raw counts against g in m/s²: the row norms of M are sensitivities
+            lines.append("  gain 1+s      " + _fmt(1 + r.scale_factors, se["scale_factors"]))
         lines.append("  nonorth [deg] " + _fmt(r.nonorthogonality_deg, se["nonorthogonality_deg"]))
     lines.append(f"  written to {out}")
     print("\n".join(lines), file=sys.stderr)
