@@ -1,0 +1,50 @@
+"""accelcal: reproducible workflow for Burkhard et al. (2024), Batista et al. (2011), Tereshkov.
+
+    .venv/bin/snakemake all                               # paper scale (profiles/default)
+    .venv/bin/snakemake all --configfile config/ci.yaml   # reduced sizes (tests, CI)
+    .venv/bin/snakemake foundation_crlb                   # one figure (every figure id is a target)
+
+Layout (snakemake-workflows style): this file loads and validates the config, then
+includes one rule file per stage from workflow/rules/.  Thin scripts in
+workflow/scripts/ call the library (src/accelcal/).  Outputs go to results/
+(see results/README.md), logs to results/logs/.
+"""
+
+import os
+
+from snakemake.utils import min_version
+
+min_version("9.0")
+
+
+# The default config, next to this file (so --directory elsewhere still finds it).
+# --configfile FILE extends it key by key; add --replace-workflow-config to replace it.
+configfile: os.path.join(workflow.basedir, "config", "config.yaml")
+
+
+report: "workflow/report/workflow.rst"
+
+
+include: "workflow/rules/common.smk"
+
+
+# Fail on a broken config before any job runs, with one line naming the key.
+check_config(config, "workflow/schemas/config.schema.yaml")
+
+
+# One rule file per stage; each appends its figure ids to FIGURES and its name to
+# CLAIM_STAGES.  claims.smk comes last: it gathers the claims of every stage above.
+include: "workflow/rules/foundation.smk"
+include: "workflow/rules/batista2011.smk"
+include: "workflow/rules/tereshkov.smk"
+include: "workflow/rules/measured.smk"
+include: "workflow/rules/claims.smk"
+
+
+rule all:
+    """Every figure and the claims ledger (target only: no job, hence no log or resources)."""
+    default_target: True
+    localrule: True
+    input:
+        expand("results/figures/{figure}.{ext}", figure=FIGURES, ext=("png", "pdf")),
+        "results/claims.csv",

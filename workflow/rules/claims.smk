@@ -1,0 +1,16 @@
+"""The claims ledger: every stage's claims, validated and concatenated."""
+
+
+rule claims:
+    """results/claims.csv from results/claims/<stage>.csv of every stage."""
+    input:
+        expand("results/claims/{stage}.csv", stage=CLAIM_STAGES),
+    output:
+        report("results/claims.csv", caption="../report/claims.rst", category="Claims"),
+    log:
+        log_path("claims"),
+    threads: 1
+    resources:
+        **SMALL,
+    script:
+        "../scripts/claims_ledger.py"
