@@ -1,0 +1,234 @@
+"""Stage 'batista2011' (Batista, Silvestre, Oliveira, Cardeira 2011): Table I calibration
+against the CRLB and the full LLS, the online bias/gravity Kalman filter (Figs. 4-8), its
+observability condition, its cost per step, and the paper's claims.
+
+Needs the helpers of common.smk (FIGURES, CLAIM_STAGES, log_path, figure_outputs, SMALL)
+and config["batista2011"] (config/batista2011.default.yaml)."""
+
+BATISTA = config["batista2011"]
+
+
+def batista_cfg(*sections):
+    """The stage config restricted to seed, g and ``sections``: a job reruns only when
+    what it uses changes (e.g. new claim thresholds do not rerun the Monte Carlo)."""
+    return {k: BATISTA[k] for k in ("seed", "g") + sections}
+
+BATISTA_OUT = "results/batista2011"
+BATISTA_FIGURES = [
+    "batista2011_trajectories",
+    "batista2011_calibration",
+    "batista2011_fig4",
+    "batista2011_fig5",
+    "batista2011_errors",
+    "batista2011_observability",
+]
+FIGURES.extend(BATISTA_FIGURES)
+CLAIM_STAGES.append("batista2011")
+
+#: Tables each figure is drawn from.
+BATISTA_FIGURE_INPUTS = {
+    "batista2011_trajectories": {},
+    "batista2011_calibration": {
+        "summary": f"{BATISTA_OUT}/calibration_summary.csv",
+        "comparison": f"{BATISTA_OUT}/calibration_lls_comparison.csv",
+    },
+    "batista2011_fig4": {"filter_example": f"{BATISTA_OUT}/filter_example.csv.gz"},
+    "batista2011_fig5": {"filter_example": f"{BATISTA_OUT}/filter_example.csv.gz"},
+    "batista2011_errors": {
+        "filter_summary": f"{BATISTA_OUT}/filter_summary.csv.gz",
+        "filter_cost": f"{BATISTA_OUT}/filter_cost.csv",
+    },
+    "batista2011_observability": {
+        "observability": f"{BATISTA_OUT}/observability.csv",
+        "gramian": f"{BATISTA_OUT}/gramian.csv",
+    },
+}
+
+
+rule batista2011_calibration_mc:
+    """Table I, its linear-only variant and the full LLS on the same simulated noise; CRLB."""
+    output:
+        errors=f"{BATISTA_OUT}/calibration_errors.csv.gz",
+        bounds=f"{BATISTA_OUT}/calibration_bounds.csv",
+        summary=f"{BATISTA_OUT}/calibration_summary.csv",
+        comparison=f"{BATISTA_OUT}/calibration_lls_comparison.csv",
+    params:
+        cfg=batista_cfg("calibration"),
+    log:
+        log_path("batista2011/calibration_mc"),
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=20,  # about 10 ms per run and data set
+    script:
+        "../scripts/batista2011_calibration_mc.py"
+
+
+rule batista2011_filter_mc:
+    """Monte Carlo of the filter (shared gain sequence, per-run gyro readings)."""
+    output:
+        runs=f"{BATISTA_OUT}/filter_runs.csv.gz",
+        summary=f"{BATISTA_OUT}/filter_summary.csv.gz",
+    params:
+        cfg=batista_cfg("filter"),
+    log:
+        log_path("batista2011/filter_mc"),
+    threads: 1
+    resources:
+        mem_mb=3000,
+        runtime=30,  # about 1 µs per run and step
+    script:
+        "../scripts/batista2011_filter_mc.py"
+
+
+rule batista2011_filter_example:
+    """One run of the exact filter (its own covariance): Figs. 4 and 5."""
+    output:
+        f"{BATISTA_OUT}/filter_example.csv.gz",
+    params:
+        cfg=batista_cfg("filter"),
+    log:
+        log_path("batista2011/filter_example"),
+    threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=10,
+    script:
+        "../scripts/batista2011_filter_example.py"
+
+
+rule batista2011_error_budget:
+    """Steady-state filter errors with one noise source at a time."""
+    output:
+        f"{BATISTA_OUT}/filter_error_budget.csv",
+    params:
+        cfg=batista_cfg("filter"),
+    log:
+        log_path("batista2011/error_budget"),
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=30,
+    script:
+        "../scripts/batista2011_error_budget.py"
+
+
+rule batista2011_filter_cost:
+    """Wall time per filter step. threads = all cores: Snakemake runs it alone (clean clock)."""
+    output:
+        f"{BATISTA_OUT}/filter_cost.csv",
+    params:
+        cfg=batista_cfg("filter"),
+    log:
+        log_path("batista2011/filter_cost"),
+    threads: workflow.cores
+    resources:
+        mem_mb=1000,
+        runtime=10,
+    script:
+        "../scripts/batista2011_filter_cost.py"
+
+
+rule batista2011_observability_mc:
+    """The filter with ω along a fixed axis and with a changing axis; observability Gramian."""
+    output:
+        table=f"{BATISTA_OUT}/observability.csv",
+        gramian=f"{BATISTA_OUT}/gramian.csv",
+    params:
+        cfg=batista_cfg("filter", "observability"),
+    log:
+        log_path("batista2011/observability_mc"),
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=30,
+    script:
+        "../scripts/batista2011_observability.py"
+
+
+# One plotting rule per figure (rule name <id>_plot): results/figures/<id>.png|pdf.
+for _fid in BATISTA_FIGURES:
+
+    rule:
+        name:
+            f"{_fid}_plot"
+        input:
+            **BATISTA_FIGURE_INPUTS[_fid],
+        output:
+            **figure_outputs(_fid, f"../report/{_fid}.rst", "Batista 2011"),
+        params:
+            cfg=BATISTA,
+            figure=_fid,
+        log:
+            log_path(f"batista2011/figure_{_fid}"),
+        threads: 1
+        resources:
+            **SMALL,
+        script:
+            "../scripts/batista2011_figures.py"
+
+
+rule batista2011_claims:
+    """Batista (2011) claims computed from the stage's tables."""
+    input:
+        summary=f"{BATISTA_OUT}/calibration_summary.csv",
+        filter_summary=f"{BATISTA_OUT}/filter_summary.csv.gz",
+        filter_runs=f"{BATISTA_OUT}/filter_runs.csv.gz",
+        observability=f"{BATISTA_OUT}/observability.csv",
+        gramian=f"{BATISTA_OUT}/gramian.csv",
+        error_budget=f"{BATISTA_OUT}/filter_error_budget.csv",
+    output:
+        "results/claims/batista2011.csv",
+    params:
+        cfg=BATISTA,
+    log:
+        log_path("batista2011/claims"),
+    threads: 1
+    resources:
+        **SMALL,
+    script:
+        "../scripts/batista2011_claims.py"
+
+
+# Figure ids as targets: `snakemake batista2011_fig4`.
+rule batista2011_trajectories:
+    input:
+        "results/figures/batista2011_trajectories.png",
+        "results/figures/batista2011_trajectories.pdf",
+
+
+rule batista2011_calibration:
+    input:
+        "results/figures/batista2011_calibration.png",
+        "results/figures/batista2011_calibration.pdf",
+
+
+rule batista2011_fig4:
+    input:
+        "results/figures/batista2011_fig4.png",
+        "results/figures/batista2011_fig4.pdf",
+
+
+rule batista2011_fig5:
+    input:
+        "results/figures/batista2011_fig5.png",
+        "results/figures/batista2011_fig5.pdf",
+
+
+rule batista2011_errors:
+    input:
+        "results/figures/batista2011_errors.png",
+        "results/figures/batista2011_errors.pdf",
+
+
+rule batista2011_observability:
+    input:
+        "results/figures/batista2011_observability.png",
+        "results/figures/batista2011_observability.pdf",
+
+
+rule batista2011:
+    """The whole stage: every figure and the claims."""
+    input:
+        expand("results/figures/{figure}.{ext}", figure=BATISTA_FIGURES, ext=("png", "pdf")),
+        "results/claims/batista2011.csv",

@@ -1,0 +1,31 @@
+"""Claims of Batista et al. (2011), computed from the stage's result tables."""
+
+import pandas as pd
+from _helpers import configure_logging
+from batista2011_common import TABLES, standalone, write_table
+
+from accelcal.batista.claims import batista_claims
+from accelcal.claims import verdict_counts
+
+if "snakemake" not in globals():
+    snakemake = standalone("batista2011_claims",
+                           input={k: TABLES[k] for k in ("summary", "filter_summary", "filter_runs", "observability",
+                                                         "gramian", "error_budget")},
+                           output=["results/claims/batista2011.csv"])
+
+log = configure_logging(snakemake)
+cfg = snakemake.params.cfg
+inp = snakemake.input
+f = cfg["filter"]
+rows = batista_claims(
+    pd.read_csv(inp.summary), pd.read_csv(inp.filter_summary), pd.read_csv(inp.filter_runs),
+    pd.read_csv(inp.observability), pd.read_csv(inp.gramian),
+    bias=f["bias"], noise_acc=float(f["noise"]["accel"]), steady_from_s=float(f["steady_from_s"]),
+    error_budget=pd.read_csv(inp.error_budget), rules=cfg["claims"],
+    sources={"calibration": inp.summary, "filter": inp.filter_summary, "filter_runs": inp.filter_runs,
+             "observability": inp.observability, "gramian": inp.gramian},
+)
+for _, r in rows.iterrows():
+    log.info("%s: %s (%s)", r["claim_id"], r["verdict"], r["reproduced_value"])
+log.info("verdicts: %s", verdict_counts(rows))
+write_table(rows, snakemake.output[0])
