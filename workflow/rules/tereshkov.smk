@@ -1,0 +1,278 @@
+"""Stage 'tereshkov' (issue 5): Tereshkov's virtual-platform AHRS and closed-form bias
+estimator on simulated tractor runs — Monte Carlo convergence and accuracy, straight vs
+turning observability, the artificial-bias test, an installation-angle sweep, the
+stage's claims and figures.  Config: the `tereshkov` mapping (config/tereshkov.default.yaml).
+
+Needs from common.smk: FIGURES, CLAIM_STAGES, log_path, figure_outputs, SMALL.
+"""
+
+FIGURES.extend(["tereshkov_fig2", "tereshkov_fig3", "tereshkov_fig4", "tereshkov_installation"])
+CLAIM_STAGES.append("tereshkov")
+
+TERESHKOV = config["tereshkov"]
+#: Scenarios of equal duration share one estimator loop (its cost is per step, not per run).
+TERESHKOV_MAIN = ("field", "straight", "artificial")
+
+
+rule tereshkov_simulate:
+    """Field, straight-only and artificial-bias Monte Carlo runs through one estimator loop:
+    tidy tables (run × time × sensor × axis)."""
+    output:
+        **{sc: f"results/tereshkov/{sc}.csv.gz" for sc in TERESHKOV_MAIN},
+        timing="results/tereshkov/timing_main.csv",
+    params:
+        cfg=TERESHKOV,
+        scenarios=list(TERESHKOV_MAIN),
+    log:
+        log_path("tereshkov/simulate"),
+    threads: 1
+    resources:
+        mem_mb=3000,
+        runtime=30,  # about a minute at the default size (90 runs x 1800 s at 50 Hz)
+    script:
+        "../scripts/tereshkov_simulate.py"
+
+
+rule tereshkov_sweep:
+    """Installation-angle sweep (same paths, biases and noise at every angle)."""
+    output:
+        sweep="results/tereshkov/sweep.csv.gz",
+        timing="results/tereshkov/timing_sweep.csv",
+    params:
+        cfg=TERESHKOV,
+        scenarios=["sweep"],
+    log:
+        log_path("tereshkov/sweep"),
+    threads: 1
+    resources:
+        mem_mb=3000,
+        runtime=30,
+    script:
+        "../scripts/tereshkov_simulate.py"
+
+
+rule tereshkov_observability:
+    """Pairs of runs differing by a known accelerometer-bias shift: torque change in
+    straight motion vs turns (eqs. 12, 13)."""
+    output:
+        table="results/tereshkov/observability.csv",
+        timing="results/tereshkov/timing_observability.csv",
+    params:
+        cfg=TERESHKOV,
+    log:
+        log_path("tereshkov/observability"),
+    threads: 1
+    resources:
+        mem_mb=1500,
+        runtime=20,
+    script:
+        "../scripts/tereshkov_observability.py"
+
+
+rule tereshkov_headings:
+    """True heading, yaw rate and speed of the example field runs (Fig. 2)."""
+    output:
+        "results/tereshkov/headings.csv",
+    params:
+        cfg=TERESHKOV,
+    log:
+        log_path("tereshkov/headings"),
+    threads: 1
+    resources:
+        **SMALL,
+    script:
+        "../scripts/tereshkov_headings.py"
+
+
+rule tereshkov_summary:
+    """Convergence times, steady-state errors, artificial-bias test and sweep summaries,
+    and the wall times of the Monte Carlo jobs."""
+    input:
+        **{sc: f"results/tereshkov/{sc}.csv.gz" for sc in TERESHKOV_MAIN},
+        sweep="results/tereshkov/sweep.csv.gz",
+        timings=expand("results/tereshkov/timing_{part}.csv", part=("main", "sweep", "observability")),
+    output:
+        summary="results/tereshkov/summary.csv",
+        artificial="results/tereshkov/artificial_summary.csv",
+        sweep="results/tereshkov/sweep_summary.csv",
+        timing="results/tereshkov/timing.csv",
+    params:
+        cfg=TERESHKOV,
+    log:
+        log_path("tereshkov/summary"),
+    threads: 1
+    resources:
+        mem_mb=3000,
+        runtime=10,
+    script:
+        "../scripts/tereshkov_summary.py"
+
+
+rule tereshkov_claims:
+    """Tereshkov claims computed from the summaries."""
+    input:
+        summary="results/tereshkov/summary.csv",
+        observability="results/tereshkov/observability.csv",
+        artificial="results/tereshkov/artificial_summary.csv",
+        sweep="results/tereshkov/sweep_summary.csv",
+    output:
+        "results/claims/tereshkov.csv",
+    params:
+        rules=TERESHKOV["claims"],
+    log:
+        log_path("tereshkov/claims"),
+    threads: 1
+    resources:
+        **SMALL,
+    script:
+        "../scripts/tereshkov_claims.py"
+
+
+rule tereshkov_fig2_figure:
+    input:
+        headings="results/tereshkov/headings.csv",
+    output:
+        **figure_outputs("tereshkov_fig2", "../report/tereshkov_fig2.rst", "Tereshkov"),
+    params:
+        figure="fig2",
+        cfg=TERESHKOV,
+    log:
+        log_path("tereshkov/fig2"),
+    threads: 1
+    resources:
+        **SMALL,
+    script:
+        "../scripts/tereshkov_figure.py"
+
+
+rule tereshkov_fig3_figure:
+    input:
+        field="results/tereshkov/field.csv.gz",
+        straight="results/tereshkov/straight.csv.gz",
+        summary="results/tereshkov/summary.csv",
+    output:
+        **figure_outputs("tereshkov_fig3", "../report/tereshkov_fig3.rst", "Tereshkov"),
+    params:
+        figure="fig3",
+        cfg=TERESHKOV,
+    log:
+        log_path("tereshkov/fig3"),
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=10,
+    script:
+        "../scripts/tereshkov_figure.py"
+
+
+rule tereshkov_fig4_figure:
+    input:
+        field="results/tereshkov/field.csv.gz",
+        straight="results/tereshkov/straight.csv.gz",
+        artificial="results/tereshkov/artificial.csv.gz",
+        summary="results/tereshkov/summary.csv",
+    output:
+        **figure_outputs("tereshkov_fig4", "../report/tereshkov_fig4.rst", "Tereshkov"),
+    params:
+        figure="fig4",
+        cfg=TERESHKOV,
+    log:
+        log_path("tereshkov/fig4"),
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=10,
+    script:
+        "../scripts/tereshkov_figure.py"
+
+
+rule tereshkov_installation_figure:
+    input:
+        sweep="results/tereshkov/sweep_summary.csv",
+    output:
+        **figure_outputs("tereshkov_installation", "../report/tereshkov_installation.rst", "Tereshkov"),
+    params:
+        figure="installation",
+        cfg=TERESHKOV,
+    log:
+        log_path("tereshkov/installation"),
+    threads: 1
+    resources:
+        **SMALL,
+    script:
+        "../scripts/tereshkov_figure.py"
+
+
+# Figure ids as targets: `snakemake tereshkov_fig3`.
+rule tereshkov_fig2:
+    input:
+        "results/figures/tereshkov_fig2.png",
+        "results/figures/tereshkov_fig2.pdf",
+
+
+rule tereshkov_fig3:
+    input:
+        "results/figures/tereshkov_fig3.png",
+        "results/figures/tereshkov_fig3.pdf",
+
+
+rule tereshkov_fig4:
+    input:
+        "results/figures/tereshkov_fig4.png",
+        "results/figures/tereshkov_fig4.pdf",
+
+
+rule tereshkov_installation:
+    input:
+        "results/figures/tereshkov_installation.png",
+        "results/figures/tereshkov_installation.pdf",
+
+
+# ---------------------------------------------------------------------------- comparison
+# Tereshkov against the Batista et al. (2011) Kalman filter on the same simulated runs.
+FIGURES.append("bias_convergence_comparison")
+
+
+rule tereshkov_comparison:
+    """Same runs, same IMU data: Tereshkov (GNSS specific force) vs the Batista filter
+    (body-frame velocity), bias errors and compute cost per step."""
+    output:
+        table="results/tereshkov/comparison.csv.gz",
+        summary="results/tereshkov/comparison_summary.csv",
+    params:
+        cfg=TERESHKOV,
+        # the Batista filter's tuning from its own stage config (paper Ξ, Θ; P0 choice)
+        batista={k: v for k, v in config.get("batista2011", {}).get("filter", {}).items()
+                 if k in ("xi", "theta", "P0_std")},
+    log:
+        log_path("tereshkov/comparison"),
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=30,  # one 9-state Kalman filter per run, a few hundred µs per step
+    script:
+        "../scripts/tereshkov_comparison.py"
+
+
+rule bias_convergence_comparison_figure:
+    input:
+        table="results/tereshkov/comparison.csv.gz",
+        summary="results/tereshkov/comparison_summary.csv",
+    output:
+        **figure_outputs("bias_convergence_comparison", "../report/tereshkov_comparison.rst", "Tereshkov"),
+    params:
+        figure="comparison",
+        cfg=TERESHKOV,
+    log:
+        log_path("tereshkov/comparison_figure"),
+    threads: 1
+    resources:
+        **SMALL,
+    script:
+        "../scripts/tereshkov_figure.py"
+
+
+rule bias_convergence_comparison:
+    input:
+        "results/figures/bias_convergence_comparison.png",
+        "results/figures/bias_convergence_comparison.pdf",

@@ -1,0 +1,28 @@
+"""Claims of the Tereshkov stage, computed from its summary tables."""
+
+import pandas as pd
+from _helpers import configure_logging, mock_snakemake
+from tereshkov_common import stage_config, write_table
+
+from accelcal.claims import verdict_counts
+from accelcal.tereshkov.claims import tereshkov_claims
+
+if "snakemake" not in globals():
+    _d = "results/tereshkov"
+    snakemake = mock_snakemake(
+        "tereshkov_claims",
+        input={"summary": f"{_d}/summary.csv", "observability": f"{_d}/observability.csv",
+               "artificial": f"{_d}/artificial_summary.csv", "sweep": f"{_d}/sweep_summary.csv"},
+        output=["results/claims/tereshkov.csv"],
+        params={"rules": stage_config()["claims"]},
+    )
+
+log = configure_logging(snakemake)
+i = snakemake.input
+rows = tereshkov_claims(pd.read_csv(i.summary), pd.read_csv(i.observability), pd.read_csv(i.artificial),
+                        pd.read_csv(i.sweep), dict(snakemake.params.rules), summary_path=i.summary,
+                        observability_path=i.observability, artificial_path=i.artificial, sweep_path=i.sweep)
+for _, r in rows.iterrows():
+    log.info("%s/%s: %s (%s)", r["paper"], r["claim_id"], r["verdict"], r["reproduced_value"])
+log.info("verdicts: %s", verdict_counts(rows))
+write_table(rows, snakemake.output[0])
