@@ -1,0 +1,34 @@
+"""Calibrate one measured recording with every configured estimator and evaluate it."""
+
+from _helpers import configure_logging, mock_snakemake, write_csv
+
+from accelcal.measured.calibrate import TABLES, calibrate_recording
+from accelcal.measured.sources import read_manifest, section_list
+from accelcal.recording import read_recording
+
+if "snakemake" not in globals():
+    from measured_common import measured_config
+
+    _m = measured_config()
+    snakemake = mock_snakemake(
+        "measured_calibrate",
+        input={"csv": "results/measured/xsens_mti.csv", "manifest": "results/measured/data/xsens_mti.json"},
+        output={t: f"results/measured/xsens_mti/{t}.csv" for t in TABLES},
+        params={"settings": _m["recordings"]["xsens_mti"], "bootstrap": _m["bootstrap"], "static": _m["static"]},
+        wildcards={"recording": "xsens_mti"})
+
+log = configure_logging(snakemake)
+name = snakemake.wildcards.recording
+s, b = snakemake.params.settings, snakemake.params.bootstrap
+mc = calibrate_recording(
+    name, read_recording(snakemake.input.csv), g=float(s["g"]), estimators=list(s["estimators"]),
+    sections=section_list(name, read_manifest(snakemake.input.manifest)),
+    pose_selection=s.get("pose_selection", "section_list"), n_boot=int(b["replicates"]), seed=int(b["seed"]),
+    level=float(b["level"]), min_valid_fraction=float(b["min_valid_fraction"]), static_kw=dict(snakemake.params.static))
+log.info("%s: %d rests detected, %d used", name, len(mc.poses), int(mc.poses.used.sum()))
+for r in mc.summary.itertuples():
+    log.info("%s %s: residual RMS %.3g m/s^2 = %.2fx noise (chi2/dof %.3g on %d), LOPO RMS %.3g%s; "
+             "bootstrap valid %.0f%% -> %s", name, r.estimator, r.residual_rms, r.excess, r.reduced_chi2, r.dof,
+             r.lopo_rms, f" ({r.lopo_note})" if r.lopo_note else "", 100 * r.boot_valid_fraction, r.ci_method)
+for t in TABLES:
+    write_csv(getattr(mc, t), getattr(snakemake.output, t))

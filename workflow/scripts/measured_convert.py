@@ -1,0 +1,14 @@
+"""One measured recording as canonical CSV (t,ax,ay,az), in the unit of its file."""
+
+from _helpers import configure_logging, mock_snakemake
+
+from accelcal.measured.sources import convert, read_manifest
+
+if "snakemake" not in globals():
+    snakemake = mock_snakemake("measured_convert", input={"manifest": "results/measured/data/xsens_mti.json"},
+                               output=["results/measured/xsens_mti.csv"], wildcards={"recording": "xsens_mti"})
+
+log = configure_logging(snakemake)
+name = snakemake.wildcards.recording
+rec = convert(name, read_manifest(snakemake.input.manifest), snakemake.output[0])
+log.info("%s: %d samples, %.1f s at %.1f Hz -> %s", name, rec.n, rec.t[-1] - rec.t[0], rec.rate, snakemake.output[0])

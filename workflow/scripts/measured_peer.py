@@ -1,0 +1,31 @@
+"""imucal's Ferraris calibration on its example session, against accelcal on the same poses."""
+
+import pandas as pd
+from _helpers import configure_logging, mock_snakemake, write_csv
+
+from accelcal.measured.peer import ferraris_comparison
+from accelcal.measured.sources import FERRARIS_STATIC, read_manifest
+
+if "snakemake" not in globals():
+    from measured_common import measured_config
+
+    _m = measured_config()
+    snakemake = mock_snakemake(
+        "measured_peer",
+        input={"manifest": "results/measured/data/imucal_ferraris.json",
+               "poses": "results/measured/imucal_ferraris/poses.csv"},
+        output=["results/measured/peer_imucal.csv"],
+        params={"grav": _m["recordings"]["imucal_ferraris"]["g"], "rate_hz": _m["peer"]["rate_hz"]})
+
+log = configure_logging(snakemake)
+paths = read_manifest(snakemake.input.manifest)
+poses = pd.read_csv(snakemake.input.poses).set_index("label")
+detected = {k: (int(poses.loc[k, "start_index"]), int(poses.loc[k, "stop_index"]))
+            for k in FERRARIS_STATIC if k in poses.index}
+df = ferraris_comparison(paths["example_ferraris_session.csv"], paths["example_ferraris_session_list.json"],
+                         grav=float(snakemake.params.grav), rate_hz=float(snakemake.params.rate_hz),
+                         detected=detected if len(detected) == len(FERRARIS_STATIC) else None)
+for r in df[df.tool == "accelcal"].itertuples():
+    log.info("%s %s (%s, %s poses): %.6g, minus imucal %.2g %s", r.parameter, r.axis, r.method, r.poses, r.value,
+             r.diff_to_imucal, r.unit)
+write_csv(df, snakemake.output[0])
