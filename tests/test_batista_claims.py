@@ -143,7 +143,7 @@ def test_ledger_rows_are_valid_and_complete(cal, filt, obs):
                           steady_from_s=STEADY, rules={"conv_max_s": 60.0})
     assert list(rows.columns) == list(COLUMNS)
     validate_rows(rows)
-    assert (rows["paper"] == "batista2011").all() and len(rows) == 11
+    assert (rows["paper"] == "batista2011").all() and len(rows) == 9
     exp = rows[rows["claim_id"].str.startswith("exp_")]
     assert (exp["verdict"] == "not_reproducible").all() and len(exp) == len(experimental_claims())
     assert (rows.loc[~rows["claim_id"].str.startswith("exp_"), "evidence"].str.len() > 40).all()

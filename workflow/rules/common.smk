@@ -1,6 +1,7 @@
 """Shared helpers of the workflow: config validation, the figure and claim registries,
 log paths and default resources."""
 
+import os
 import re
 
 import jsonschema
@@ -25,16 +26,27 @@ def _config_error(where, what):
     return ConfigError(f"invalid config ({', '.join(files) or 'no config file'}): {where}: {what}")
 
 
-def check_config(cfg, schema):
-    """Validate ``cfg`` against the JSON schema, then the rules a schema cannot express."""
+def _validate(cfg, schema, prefix=""):
     try:
         validate(cfg, schema, set_default=False)
     except WorkflowError as e:
         err = e.__context__  # validate() raises from inside `except ValidationError`
         if not isinstance(err, jsonschema.ValidationError):
             raise
-        where = ".".join(str(p) for p in err.absolute_path) or "(top level)"
+        where = ".".join([prefix] * bool(prefix) + [str(p) for p in err.absolute_path]) or "(top level)"
         raise _config_error(where, err.message) from None
+
+
+def check_config(cfg, schema):
+    """Validate ``cfg`` against the JSON schema, each stage's section against the stage's
+    own schema (``workflow/schemas/<key>.schema.yaml``, where one exists), then the rules a
+    schema cannot express."""
+    _validate(cfg, schema)
+    schemas = os.path.join(workflow.basedir, "workflow", "schemas")
+    for key in sorted(cfg):
+        stage_schema = os.path.join(schemas, f"{key}.schema.yaml")
+        if os.path.exists(stage_schema):
+            _validate(cfg[key], stage_schema, prefix=key)
     for key, (lo, hi) in cfg["burkhard"]["truth"].items():
         if lo > hi:
             raise _config_error(f"burkhard.truth.{key}", f"low end {lo} exceeds high end {hi}")

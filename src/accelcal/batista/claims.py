@@ -261,19 +261,12 @@ def observability_claims(observability: pd.DataFrame, gramian: pd.DataFrame, *, 
 
 
 def experimental_claims() -> list[dict]:
-    """Sec. VI (motion rate table, Silicon Designs 2422 accelerometer): no public data."""
+    """Sec. VI-C (motion rate table): no public data.  The Sec. VI-B calibration rows
+    (parameters, Fig. 11) are the measured-data stage's (accelcal.measured.claims), which
+    also says what the public recordings show instead."""
     reason = ("no public data: the motion-rate-table recordings of Sec. VI (Ideal Aerosmith 2103HT, Silicon Designs "
               "2422 accelerometer) are not published")
     return [
-        Claim(PAPER, "exp_calibration_parameters",
-              "Sec. VI-B: calibrated parameters of the MEMS unit F⁻¹ = [[0.9946, 0.0037, -0.0061], [-0.0091, "
-              "0.9998, 0.0079], [-0.0071, -0.0186, 1.0047]], b' = (-0.7368, -0.2803, 0.3995) m/s², "
-              "F2 = 1e-4 diag(-2.362, 1.055, 3.666); scale and quadratic terms stable between tests, bias not",
-              "Sec. VI-B values").not_reproducible(reason),
-        Claim(PAPER, "exp_static_residuals",
-              "Sec. VI-B, Fig. 11: errors of the corrected measurements at the static positions (non-zero means "
-              "from higher-order terms and time variation; table oscillations and an 11 Hz vibration)",
-              "Fig. 11").not_reproducible(reason),
         Claim(PAPER, "exp_filter",
               "Sec. VI-C, Figs. 12-15: on the rate table the filter tracks gravity, the bias estimate varies in "
               "time, and the mean errors of velocity and gravity converge to zero",
