@@ -10,7 +10,7 @@ def requirement_lines() -> list[str]:
     project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
     lines = list(project["dependencies"])
     for extra, reqs in sorted(project.get("optional-dependencies", {}).items()):
-        if extra in ("test", "peer"):
+        if extra in ("test", "peer", "cluster"):
             lines += reqs
     build = (ROOT / "tools" / "build-requirements.in").read_text().splitlines()
     lines += [ln.strip() for ln in build if ln.strip() and not ln.startswith("#")]
