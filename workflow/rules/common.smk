@@ -5,6 +5,7 @@ import os
 import re
 
 import jsonschema
+import yaml
 from snakemake.exceptions import WorkflowError
 from snakemake.utils import validate
 
@@ -47,6 +48,9 @@ def check_config(cfg, schema):
         stage_schema = os.path.join(schemas, f"{key}.schema.yaml")
         if os.path.exists(stage_schema):
             _validate(cfg[key], stage_schema, prefix=key)
+            _check_ranges(cfg[key], stage_schema, prefix=key)
+            if key in STAGE_RULES:
+                STAGE_RULES[key](cfg[key])
     for key, (lo, hi) in cfg["burkhard"]["truth"].items():
         if lo > hi:
             raise _config_error(f"burkhard.truth.{key}", f"low end {lo} exceeds high end {hi}")
@@ -54,6 +58,85 @@ def check_config(cfg, schema):
     if timing["headline_interleave"] not in timing["interleavings"]:
         raise _config_error("foundation.timing.headline_interleave",
                             f"{timing['headline_interleave']!r} is not in interleavings {timing['interleavings']}")
+
+
+def _ranges(schema, defs, path=()):
+    """Key paths of the [low, high] ranges of a schema: properties that refer (directly
+    or through another definition) to ``#/$defs/range``."""
+    for name, sub in schema.get("properties", {}).items():
+        ref = sub
+        while ref.get("$ref", "").startswith("#/$defs/") and ref["$ref"] != "#/$defs/range":
+            ref = defs[ref["$ref"].removeprefix("#/$defs/")]
+        if ref.get("$ref") == "#/$defs/range":
+            yield path + (name,)
+        yield from _ranges(sub, defs, path + (name,))
+
+
+def _check_ranges(section, schema_path, prefix):
+    """Every [low, high] range of a stage section (found in its schema) has low <= high."""
+    with open(schema_path) as f:
+        schema = yaml.safe_load(f)
+    for path in _ranges(schema, schema.get("$defs", {})):
+        value = section
+        for k in path:
+            value = value[k]
+        lo, hi = value
+        if lo > hi:
+            raise _config_error(".".join((prefix, *path)), f"low end {lo} exceeds high end {hi}")
+
+
+def _check_batista2011(b):
+    s = b["calibration"]["schedule"]
+    # accelcal.batista.trajectory.StepSchedule: the window must miss the transition
+    if not s["transition_s"] <= s["window_start_s"] <= s["step_s"] - s["window_s"]:
+        raise _config_error("batista2011.calibration.schedule.window_start_s",
+                            f"the data window {s['window_start_s']}-{s['window_start_s'] + s['window_s']} s "
+                            f"must lie in the static part {s['transition_s']}-{s['step_s']} s of each step")
+    f = b["filter"]
+    if f["steady_from_s"] >= f["duration_s"]:
+        raise _config_error("batista2011.filter.steady_from_s",
+                            f"{f['steady_from_s']} s leaves no steady state in a run of filter.duration_s = "
+                            f"{f['duration_s']} s")
+    # the observability runs use the filter's time grid; a longer window would be cut silently
+    if b["observability"]["gramian_window_s"] > f["duration_s"]:
+        raise _config_error("batista2011.observability.gramian_window_s",
+                            f"{b['observability']['gramian_window_s']} s exceeds the run, filter.duration_s = "
+                            f"{f['duration_s']} s")
+
+
+def _check_tereshkov(t):
+    for part in ("monte_carlo", "sweep", "comparison"):
+        start, duration = t[part]["steady_state_from_s"], t[part]["duration_s"]
+        if start >= duration:
+            raise _config_error(f"tereshkov.{part}.steady_state_from_s",
+                                f"{start} s leaves no steady state in a run of {part}.duration_s = {duration} s")
+    e = t["estimator"]
+    if e["turn_rate_dps"] <= e["straight_rate_dps"]:
+        raise _config_error("tereshkov.estimator.turn_rate_dps",
+                            f"{e['turn_rate_dps']} must exceed straight_rate_dps = {e['straight_rate_dps']}")
+    # the external specific force is differenced GNSS velocity interpolated to the IMU samples
+    for where in ("imu.rate_hz", "comparison.imu_rate_hz"):
+        part, key = where.split(".")
+        rate = t[part][key]
+        if t["gnss"]["rate_hz"] > rate:
+            raise _config_error("tereshkov.gnss.rate_hz",
+                                f"{t['gnss']['rate_hz']} Hz exceeds the IMU rate {where} = {rate} Hz")
+
+
+def _check_measured(m):
+    # The six static positions of the Ferraris session list (accelcal.measured.sources.
+    # FERRARIS_STATIC) are fewer than the full models need (calibrate.MIN_POSES["full"] = 10).
+    ferraris = m["recordings"].get("imucal_ferraris")
+    if ferraris and ferraris["pose_selection"] == "section_list":
+        full = [e for e in ferraris["estimators"] if e.startswith("full_")]
+        if full:
+            raise _config_error("measured.recordings.imucal_ferraris.estimators",
+                                f"{', '.join(full)} need at least 10 poses, pose_selection 'section_list' "
+                                "gives the session's 6 static positions (bias-only estimators only)")
+
+
+#: Rules a stage's schema cannot express, run after the schema accepted the section.
+STAGE_RULES = {"batista2011": _check_batista2011, "tereshkov": _check_tereshkov, "measured": _check_measured}
 
 
 def log_path(name):

@@ -1,0 +1,225 @@
+"""Schemas and cross-field rules of the config sections batista2011, tereshkov and measured
+(workflow/schemas/<stage>.schema.yaml and the stage rules in check_config, common.smk).
+
+Each broken config is the CI config with one change, given to `snakemake -n` as the whole
+config (--replace-workflow-config, so that a deleted key stays deleted): it must fail
+before the DAG is built, with one line naming the config file, the key and what is wrong.
+Valid configs at the edges of every rule pass, so the checks do not reject good values.
+"""
+
+import copy
+
+import jsonschema
+import pytest
+import yaml
+
+from tests.test_workflow import CI, REPO, snakemake
+
+DEFAULT = REPO / "config" / "config.yaml"
+SCHEMAS = REPO / "workflow" / "schemas"
+STAGES = ("batista2011", "tereshkov", "measured")
+
+
+def ci_config():
+    return yaml.safe_load(CI.read_text())
+
+
+def schema(stage):
+    return yaml.safe_load((SCHEMAS / f"{stage}.schema.yaml").read_text())
+
+
+def _parent(cfg, dotted):
+    *path, last = dotted.split(".")
+    for k in path:
+        cfg = cfg[k]
+    return cfg, last
+
+
+#: Value of a change that removes the key.
+DELETE = object()
+
+
+def changed(changes):
+    """The CI config with ``{"a.b.c": value}`` changes (value ``DELETE`` removes the key)."""
+    cfg = ci_config()
+    for dotted, value in changes.items():
+        parent, last = _parent(cfg, dotted)
+        if value is DELETE:
+            del parent[last]
+        else:
+            parent[last] = copy.deepcopy(value)
+    return cfg
+
+
+def dry_run(tmp_path, cfg):
+    path = tmp_path / "config.yaml"
+    path.write_text(yaml.safe_dump(cfg))
+    workdir = tmp_path / "work"
+    workdir.mkdir()
+    proc = snakemake(workdir, "-n", "all", "--configfile", path, "--replace-workflow-config", timeout=180)
+    return path, workdir, proc
+
+
+BROKEN = {
+    # ---------------------------------------------------------------- batista2011
+    "batista_wrong_type": (changed({"batista2011.calibration.runs": "500"}),
+                           "batista2011.calibration.runs: '500' is not of type 'integer'"),
+    "batista_negative_runs": (changed({"batista2011.filter.runs": -5}),
+                              "batista2011.filter.runs: -5 is less than the minimum of 2"),
+    "batista_missing_key": (changed({"batista2011.filter.theta": DELETE}),
+                            "batista2011.filter: 'theta' is a required property"),
+    "batista_unknown_key": (changed({"batista2011.calibration.schedule.rate_hz": 100.0}),
+                            "batista2011.calibration.schedule: Additional properties are not allowed "
+                            "('rate_hz' was unexpected)"),
+    "batista_short_vector": (changed({"batista2011.filter.xi": [1e-3, 1e-4]}),
+                             "batista2011.filter.xi: [0.001, 0.0001] is too short"),
+    "batista_zero_axis": (changed({"batista2011.observability.axis_body": [0, 0, 0]}),
+                          "batista2011.observability.axis_body: [0, 0, 0] should not be valid"),
+    "batista_window_in_transition": (changed({"batista2011.calibration.schedule.window_start_s": 1.0}),
+                                     "batista2011.calibration.schedule.window_start_s: the data window 1.0-5.0 s "
+                                     "must lie in the static part 2.0-22.0 s of each step"),
+    "batista_window_past_step": (changed({"batista2011.calibration.schedule.window_start_s": 19.0}),
+                                 "batista2011.calibration.schedule.window_start_s: the data window 19.0-23.0 s"),
+    "batista_steady_after_run": (changed({"batista2011.filter.steady_from_s": 150.0}),
+                                 "batista2011.filter.steady_from_s: 150.0 s leaves no steady state"),
+    "batista_gramian_longer_than_run": (changed({"batista2011.observability.gramian_window_s": 200.0}),
+                                        "batista2011.observability.gramian_window_s: 200.0 s exceeds the run"),
+    # ------------------------------------------------------------------ tereshkov
+    "tereshkov_bad_enum": (changed({"tereshkov.estimator.accel_formula": "eq15"}),
+                           "tereshkov.estimator.accel_formula: 'eq15' is not one of ['eq14', 'eq13']"),
+    "tereshkov_negative_runs": (changed({"tereshkov.scenarios.field.runs": -1}),
+                                "tereshkov.scenarios.field.runs: -1 is less than the minimum of 1"),
+    "tereshkov_wrong_type": (changed({"tereshkov.estimator.accel_feedback": "yes"}),
+                             "tereshkov.estimator.accel_feedback: 'yes' is not of type 'boolean'"),
+    "tereshkov_missing_key": (changed({"tereshkov.monte_carlo.steady_state_from_s": DELETE}),
+                              "tereshkov.monte_carlo: 'steady_state_from_s' is a required property"),
+    "tereshkov_unknown_key": (changed({"tereshkov.vehicle.turn_radius_m": 10.0}),
+                              "tereshkov.vehicle: Additional properties are not allowed ('turn_radius_m' was "
+                              "unexpected)"),
+    "tereshkov_inverted_range": (changed({"tereshkov.vehicle.cruise_mps": [4.0, 2.5]}),
+                                 "tereshkov.vehicle.cruise_mps: low end 4.0 exceeds high end 2.5"),
+    "tereshkov_inverted_claim_range": (changed({"tereshkov.claims.convergence_ratio_range": [2.0, 0.5]}),
+                                       "tereshkov.claims.convergence_ratio_range: low end 2.0 exceeds high end 0.5"),
+    "tereshkov_zero_turn_angle": (changed({"tereshkov.vehicle.turn_deg": [0, 360]}),
+                                  "tereshkov.vehicle.turn_deg.0: 0 is less than or equal to the minimum of 0"),
+    "tereshkov_steady_after_run": (changed({"tereshkov.sweep.steady_state_from_s": 700}),
+                                   "tereshkov.sweep.steady_state_from_s: 700 s leaves no steady state"),
+    "tereshkov_turn_below_straight": (changed({"tereshkov.estimator.turn_rate_dps": 0.5}),
+                                      "tereshkov.estimator.turn_rate_dps: 0.5 must exceed straight_rate_dps = 1.0"),
+    "tereshkov_gnss_faster_than_imu": (changed({"tereshkov.gnss.rate_hz": 15}),
+                                       "tereshkov.gnss.rate_hz: 15 Hz exceeds the IMU rate comparison.imu_rate_hz"),
+    # ------------------------------------------------------------------- measured
+    "measured_unknown_recording": (changed({"measured.recordings.adis16475": {"g": 9.81,
+                                                                             "estimators": ["full_lls"]}}),
+                                   "measured.recordings: 'adis16475' is not one of ['xsens_mti', 'mpu6050', "
+                                   "'imucal_ferraris']"),
+    "measured_bad_estimator": (changed({"measured.recordings.xsens_mti.estimators": ["full_lls", "magic"]}),
+                               "measured.recordings.xsens_mti.estimators.1: 'magic' is not one of"),
+    "measured_missing_key": (changed({"measured.bootstrap.level": DELETE}),
+                             "measured.bootstrap: 'level' is a required property"),
+    "measured_unknown_key": (changed({"measured.recordings.mpu6050.pose_selection": "all"}),
+                             "measured.recordings.mpu6050: Additional properties are not allowed ('pose_selection' "
+                             "was unexpected)"),
+    "measured_negative_replicates": (changed({"measured.bootstrap.replicates": -10}),
+                                     "measured.bootstrap.replicates: -10 is less than the minimum of 1"),
+    "measured_wrong_type": (changed({"measured.static.window": "1s"}),
+                            "measured.static.window: '1s' is not of type 'number'"),
+    "measured_g_in_g_units": (changed({"measured.recordings.mpu6050.g": 1.0}),
+                              "measured.recordings.mpu6050.g: 1.0 is less than the minimum of 9.7"),
+    "measured_full_model_on_six_poses": (changed({"measured.recordings.imucal_ferraris.estimators":
+                                                  ["full_lls", "bias_lls"]}),
+                                         "measured.recordings.imucal_ferraris.estimators: full_lls need at least 10 "
+                                         "poses"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BROKEN))
+def test_broken_stage_config_fails_the_dry_run_before_any_job(tmp_path, case):
+    cfg, message = BROKEN[case]
+    path, workdir, proc = dry_run(tmp_path, cfg)
+    out = proc.stdout + proc.stderr  # Snakemake logs to stderr, to stdout in a dry run
+    assert proc.returncode != 0, out[-2000:]
+    lines = [ln for ln in out.splitlines() if ln.startswith("invalid config")]
+    assert len(lines) == 1, out
+    assert str(path) in lines[0] and message in lines[0], lines[0]
+    assert "Traceback" not in out
+    assert "Job stats" not in out, "the DAG was built despite the broken config"
+    assert not (workdir / "results").exists()
+
+
+# Valid configs at the edges of the rules above (the same checks must let them through).
+EDGES = {
+    "batista2011": changed({"batista2011.calibration.runs": 2, "batista2011.filter.runs": 2,
+                            "batista2011.calibration.schedule.window_start_s": 2.0,  # = transition_s
+                            "batista2011.calibration.schedule.window_s": 20.0,  # ends with the step
+                            "batista2011.filter.steady_from_s": 0.0,
+                            "batista2011.observability.gramian_window_s": 150.0}),  # = filter.duration_s
+    "tereshkov": changed({"tereshkov.vehicle.cruise_mps": [3.0, 3.0], "tereshkov.imu.gyro_bias_dps": [0.0, 0.0],
+                         "tereshkov.vehicle.terrain_terms": 0, "tereshkov.vehicle.first_straight_s": 45.0,
+                         "tereshkov.estimator.accel_formula": "eq13", "tereshkov.estimator.turn_rate_dps": 1.01,
+                         "tereshkov.gnss.rate_hz": 10, "tereshkov.comparison.imu_rate_hz": 10,
+                         "tereshkov.sweep.kinds": ["all"], "tereshkov.sweep.steady_state_from_s": 699}),
+    "measured": changed({"measured.recordings": {"imucal_ferraris": {
+        "g": 9.81, "estimators": ["full_lls", "bias_lls"], "pose_selection": "all"}}}),
+}
+
+
+@pytest.mark.parametrize("stage", STAGES)
+def test_valid_configs_at_the_edges_pass_the_dry_run(tmp_path, stage):
+    _, workdir, proc = dry_run(tmp_path, EDGES[stage])
+    out = proc.stdout + proc.stderr
+    assert proc.returncode == 0, out[-3000:]
+    assert "invalid config" not in out
+    assert not (workdir / "results").exists()
+
+
+@pytest.mark.parametrize("config", [DEFAULT, CI], ids=["config.yaml", "ci.yaml"])
+def test_both_configs_validate(config):
+    cfg = yaml.safe_load(config.read_text())
+    for stage in STAGES:
+        s = schema(stage)
+        jsonschema.Draft202012Validator.check_schema(s)
+        errors = [f"{stage}.{'.'.join(map(str, e.absolute_path))}: {e.message}"
+                  for e in jsonschema.Draft202012Validator(s).iter_errors(cfg[stage])]
+        assert not errors, errors
+
+
+def test_default_config_passes_the_dry_run(tmp_path):
+    proc = snakemake(tmp_path, "-n", "all", timeout=180)  # the Snakefile's default: config/config.yaml
+    out = proc.stdout + proc.stderr
+    assert proc.returncode == 0, out[-3000:]
+    assert "invalid config" not in out
+
+
+def test_every_key_is_required_and_no_other_key_allowed():
+    """Every object of the three schemas lists all its properties as required and forbids
+    others, except measured.recordings (a subset of the known recordings, by name)."""
+    def walk(s, where):
+        if "properties" in s and where != "measured.recordings":
+            assert s.get("additionalProperties") is False, where
+            assert sorted(s.get("required", [])) == sorted(s["properties"]), where
+        for k, sub in s.get("properties", {}).items():
+            walk(sub, f"{where}.{k}")
+
+    for stage in STAGES:
+        walk(schema(stage), stage)
+
+
+def test_named_choices_match_the_library():
+    """The schemas' enums are the names the code accepts (a renamed estimator, recording or
+    option would otherwise pass the schema and fail in a job, or the reverse)."""
+    from accelcal.measured.calibrate import MIN_POSES, MODEL
+    from accelcal.measured.sources import FERRARIS_STATIC, SOURCES
+    from accelcal.tereshkov.errors import InvalidParameterError
+    from accelcal.tereshkov.estimator import TereshkovParams
+
+    rec = schema("measured")["properties"]["recordings"]
+    assert set(rec["propertyNames"]["enum"]) == set(rec["properties"]) == set(SOURCES)
+    assert set(schema("measured")["$defs"]["estimators"]["items"]["enum"]) == set(MODEL)
+    # the cross-field rule's numbers: six static positions, ten poses for a full model
+    assert len(FERRARIS_STATIC) == 6 and MIN_POSES["full"] == 10
+    formulas = schema("tereshkov")["properties"]["estimator"]["properties"]["accel_formula"]["enum"]
+    for f in formulas:
+        TereshkovParams(accel_formula=f)
+    with pytest.raises(InvalidParameterError):
+        TereshkovParams(accel_formula="eq15")
