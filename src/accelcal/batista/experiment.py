@@ -1,6 +1,6 @@
 """Build the Batista (2011) experiments from the workflow config (``config["batista2011"]``).
 
-Pure functions of the config mapping (see ``config/batista2011.default.yaml``), so that
+Pure functions of the config mapping (section ``batista2011`` of ``config/config.yaml``), so that
 the workflow scripts stay thin and the tests can build the same experiments.
 """
 

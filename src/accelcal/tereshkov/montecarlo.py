@@ -1,6 +1,6 @@
 """Monte Carlo runs of the Tereshkov estimator on simulated tractor paths: tidy tables.
 
-Every function takes the ``tereshkov`` config mapping (``config/tereshkov.default.yaml``)
+Every function takes the ``tereshkov`` config mapping (section ``tereshkov`` of ``config/config.yaml``)
 and returns pandas DataFrames.  Runs are vectorised (one estimator loop for all runs
 of a scenario); each run draws its truth and noise from its own seed, so results do
 not depend on how runs are batched.
