@@ -56,6 +56,8 @@ rule batista2011_calibration_mc:
         cfg=batista_cfg("calibration"),
     log:
         log_path("batista2011/calibration_mc"),
+    benchmark:
+        bench_path("batista2011/calibration_mc"),
     threads: 1
     resources:
         mem_mb=2000,
@@ -73,6 +75,8 @@ rule batista2011_filter_mc:
         cfg=batista_cfg("filter"),
     log:
         log_path("batista2011/filter_mc"),
+    benchmark:
+        bench_path("batista2011/filter_mc"),
     threads: 1
     resources:
         mem_mb=3000,
@@ -89,6 +93,8 @@ rule batista2011_filter_example:
         cfg=batista_cfg("filter"),
     log:
         log_path("batista2011/filter_example"),
+    benchmark:
+        bench_path("batista2011/filter_example"),
     threads: 1
     resources:
         mem_mb=1000,
@@ -105,6 +111,8 @@ rule batista2011_error_budget:
         cfg=batista_cfg("filter"),
     log:
         log_path("batista2011/error_budget"),
+    benchmark:
+        bench_path("batista2011/error_budget"),
     threads: 1
     resources:
         mem_mb=2000,
@@ -121,6 +129,8 @@ rule batista2011_filter_cost:
         cfg=batista_cfg("filter"),
     log:
         log_path("batista2011/filter_cost"),
+    benchmark:
+        bench_path("batista2011/filter_cost"),
     threads: workflow.cores
     resources:
         mem_mb=1000,
@@ -138,6 +148,8 @@ rule batista2011_observability_mc:
         cfg=batista_cfg("filter", "observability"),
     log:
         log_path("batista2011/observability_mc"),
+    benchmark:
+        bench_path("batista2011/observability_mc"),
     threads: 1
     resources:
         mem_mb=2000,
@@ -161,6 +173,8 @@ for _fid in BATISTA_FIGURES:
             figure=_fid,
         log:
             log_path(f"batista2011/figure_{_fid}"),
+        benchmark:
+            bench_path(f"batista2011/figure_{_fid}"),
         threads: 1
         resources:
             **SMALL,
@@ -183,6 +197,8 @@ rule batista2011_claims:
         cfg=BATISTA,
     log:
         log_path("batista2011/claims"),
+    benchmark:
+        bench_path("batista2011/claims"),
     threads: 1
     resources:
         **SMALL,

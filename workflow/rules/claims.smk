@@ -9,6 +9,8 @@ rule claims:
         report("results/claims.csv", caption="../report/claims.rst", category="Claims"),
     log:
         log_path("claims"),
+    benchmark:
+        bench_path("claims"),
     threads: 1
     resources:
         **SMALL,

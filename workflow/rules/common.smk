@@ -14,6 +14,9 @@ from snakemake.utils import validate
 FIGURES = []
 #: Stages that write results/claims/<stage>.csv; rule ``claims`` concatenates them.
 CLAIM_STAGES = []
+#: Summary tables shown in results/report.html: (section, title, path).  A stage appends
+#: its own, so the report asks only for tables the DAG knows how to make.
+REPORT_TABLES = []
 
 
 class ConfigError(WorkflowError):
@@ -142,6 +145,12 @@ STAGE_RULES = {"batista2011": _check_batista2011, "tereshkov": _check_tereshkov,
 def log_path(name):
     """Log file of a job: results/logs/<name>.log (results/ is generated, not versioned)."""
     return f"results/logs/{name}.log"
+
+
+def bench_path(name):
+    """Benchmark file of a job (wall time s, max_rss MB, ...): results/benchmarks/<name>.tsv.
+    The first path component is the stage; the report sums the wall times per stage."""
+    return f"results/benchmarks/{name}.tsv"
 
 
 def figure_outputs(figure_id, caption, category):

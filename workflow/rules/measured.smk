@@ -21,6 +21,11 @@ MEASURED_DATA_DIR = os.path.normpath(os.path.join(workflow.basedir, MEASURED["da
 MEASURED_TABLES = ("poses", "params", "pose_errors", "summary", "agreement", "nominal")
 #: The peer runs on the imucal session only if that recording is configured.
 MEASURED_PEER = ["results/measured/peer_imucal.csv"] if "imucal_ferraris" in MEASURED_RECORDINGS else []
+REPORT_TABLES.extend([
+    ("measured", "Fit quality per recording and estimator (χ², leave-one-pose-out, bootstrap)",
+     "results/measured/summary.csv"),
+    ("measured", "Sensitivities against the data sheet", "results/measured/nominal.csv"),
+] + [("measured", "imucal's Ferraris calibration against accelcal", p) for p in MEASURED_PEER])
 
 
 wildcard_constraints:
@@ -37,6 +42,8 @@ rule measured_fetch:
         resources_dir=MEASURED["resources_dir"],
     log:
         log_path("measured/fetch_{recording}"),
+    benchmark:
+        bench_path("measured/fetch_{recording}"),
     threads: 1
     resources:
         mem_mb=500,
@@ -53,6 +60,8 @@ rule measured_convert:
         "results/measured/{recording}.csv",
     log:
         log_path("measured/convert_{recording}"),
+    benchmark:
+        bench_path("measured/convert_{recording}"),
     threads: 1
     resources:
         **SMALL,
@@ -73,6 +82,8 @@ rule measured_calibrate:
         static=MEASURED["static"],
     log:
         log_path("measured/calibrate_{recording}"),
+    benchmark:
+        bench_path("measured/calibrate_{recording}"),
     threads: 1
     resources:
         mem_mb=1000,
@@ -94,6 +105,8 @@ rule measured_peer:
         rate_hz=MEASURED["peer"]["rate_hz"],
     log:
         log_path("measured/peer_imucal"),
+    benchmark:
+        bench_path("measured/peer_imucal"),
     threads: 1
     resources:
         **SMALL,
@@ -110,6 +123,8 @@ rule measured_tables:
         **{t: f"results/measured/{t}.csv" for t in MEASURED_TABLES},
     log:
         log_path("measured/tables"),
+    benchmark:
+        bench_path("measured/tables"),
     threads: 1
     resources:
         **SMALL,
@@ -128,6 +143,8 @@ rule measured_claims:
         "results/claims/measured.csv",
     log:
         log_path("measured/claims"),
+    benchmark:
+        bench_path("measured/claims"),
     threads: 1
     resources:
         **SMALL,
@@ -146,6 +163,8 @@ rule measured_static_detection_figure:
         recordings=MEASURED_RECORDINGS,
     log:
         log_path("measured/static_detection_figure"),
+    benchmark:
+        bench_path("measured/static_detection_figure"),
     threads: 1
     resources:
         **SMALL,
@@ -164,6 +183,8 @@ rule measured_calibration_figure:
         recordings=MEASURED_RECORDINGS,
     log:
         log_path("measured/calibration_figure"),
+    benchmark:
+        bench_path("measured/calibration_figure"),
     threads: 1
     resources:
         **SMALL,
@@ -181,6 +202,8 @@ rule measured_residuals_figure:
         recordings=MEASURED_RECORDINGS,
     log:
         log_path("measured/residuals_figure"),
+    benchmark:
+        bench_path("measured/residuals_figure"),
     threads: 1
     resources:
         **SMALL,

@@ -25,6 +25,8 @@ rule tereshkov_simulate:
         scenarios=list(TERESHKOV_MAIN),
     log:
         log_path("tereshkov/simulate"),
+    benchmark:
+        bench_path("tereshkov/simulate"),
     threads: 1
     resources:
         mem_mb=3000,
@@ -43,6 +45,8 @@ rule tereshkov_sweep:
         scenarios=["sweep"],
     log:
         log_path("tereshkov/sweep"),
+    benchmark:
+        bench_path("tereshkov/sweep"),
     threads: 1
     resources:
         mem_mb=3000,
@@ -61,6 +65,8 @@ rule tereshkov_observability:
         cfg=TERESHKOV,
     log:
         log_path("tereshkov/observability"),
+    benchmark:
+        bench_path("tereshkov/observability"),
     threads: 1
     resources:
         mem_mb=1500,
@@ -77,6 +83,8 @@ rule tereshkov_headings:
         cfg=TERESHKOV,
     log:
         log_path("tereshkov/headings"),
+    benchmark:
+        bench_path("tereshkov/headings"),
     threads: 1
     resources:
         **SMALL,
@@ -100,6 +108,8 @@ rule tereshkov_summary:
         cfg=TERESHKOV,
     log:
         log_path("tereshkov/summary"),
+    benchmark:
+        bench_path("tereshkov/summary"),
     threads: 1
     resources:
         mem_mb=3000,
@@ -121,6 +131,8 @@ rule tereshkov_claims:
         rules=TERESHKOV["claims"],
     log:
         log_path("tereshkov/claims"),
+    benchmark:
+        bench_path("tereshkov/claims"),
     threads: 1
     resources:
         **SMALL,
@@ -138,6 +150,8 @@ rule tereshkov_fig2_figure:
         cfg=TERESHKOV,
     log:
         log_path("tereshkov/fig2"),
+    benchmark:
+        bench_path("tereshkov/fig2"),
     threads: 1
     resources:
         **SMALL,
@@ -157,6 +171,8 @@ rule tereshkov_fig3_figure:
         cfg=TERESHKOV,
     log:
         log_path("tereshkov/fig3"),
+    benchmark:
+        bench_path("tereshkov/fig3"),
     threads: 1
     resources:
         mem_mb=2000,
@@ -178,6 +194,8 @@ rule tereshkov_fig4_figure:
         cfg=TERESHKOV,
     log:
         log_path("tereshkov/fig4"),
+    benchmark:
+        bench_path("tereshkov/fig4"),
     threads: 1
     resources:
         mem_mb=2000,
@@ -196,6 +214,8 @@ rule tereshkov_installation_figure:
         cfg=TERESHKOV,
     log:
         log_path("tereshkov/installation"),
+    benchmark:
+        bench_path("tereshkov/installation"),
     threads: 1
     resources:
         **SMALL,
@@ -246,6 +266,8 @@ rule tereshkov_comparison:
                  if k in ("xi", "theta", "P0_std")},
     log:
         log_path("tereshkov/comparison"),
+    benchmark:
+        bench_path("tereshkov/comparison"),
     threads: 1
     resources:
         mem_mb=2000,
@@ -265,6 +287,8 @@ rule bias_convergence_comparison_figure:
         cfg=TERESHKOV,
     log:
         log_path("tereshkov/comparison_figure"),
+    benchmark:
+        bench_path("tereshkov/comparison_figure"),
     threads: 1
     resources:
         **SMALL,
