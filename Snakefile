@@ -39,12 +39,14 @@ include: "workflow/rules/batista2011.smk"
 include: "workflow/rules/tereshkov.smk"
 include: "workflow/rules/measured.smk"
 include: "workflow/rules/claims.smk"
+include: "workflow/rules/report.smk"
 
 
 rule all:
-    """Every figure and the claims ledger (target only: no job, hence no log or resources)."""
+    """Every figure, the claims ledger and the report (target only: no job, hence no log or resources)."""
     default_target: True
     localrule: True
     input:
         expand("results/figures/{figure}.{ext}", figure=FIGURES, ext=("png", "pdf")),
         "results/claims.csv",
+        "results/report.html",

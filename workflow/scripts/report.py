@@ -1,0 +1,48 @@
+"""results/report.html: the one page a reviewer opens first (accelcal.report).
+
+The benchmark files (results/benchmarks/) are read as they are when this job runs: the
+rule depends on every figure and the claims ledger, so every job of the workflow has
+finished (and written its benchmark) by then.
+"""
+
+import sys
+from pathlib import Path
+
+from _helpers import REPO, configure_logging, mock_snakemake
+
+from accelcal.report import ReportError, build_report, load_conclusions, write_report
+
+if "snakemake" not in globals():
+    # Standalone: every figure in results/figures/ with the caption of the same name.
+    figures = sorted(Path("results/figures").glob("*.png"))
+    snakemake = mock_snakemake(
+        "report",
+        input={"claims": "results/claims.csv", "figures": [str(p) for p in figures],
+               "conclusions": str(REPO / "workflow/report/conclusions.yaml"),
+               "lock": str(REPO / "environment.lock")},
+        output=["results/report.html"],
+        params={"figure_ids": [p.stem for p in figures],
+                "captions": {p.stem: str(REPO / f"workflow/report/{p.stem}.rst") for p in figures
+                             if (REPO / f"workflow/report/{p.stem}.rst").exists()},
+                "tables": [], "benchmarks_dir": "results/benchmarks", "config_files": []},
+    )
+
+log = configure_logging(snakemake)
+try:
+    page = build_report(
+        claims=snakemake.input.claims,
+        figures=dict(zip(snakemake.params.figure_ids, snakemake.input.figures, strict=True)),
+        captions={fid: Path(p).read_text(encoding="utf-8") for fid, p in snakemake.params.captions.items()},
+        conclusions=load_conclusions(snakemake.input.conclusions),
+        tables=[tuple(t) for t in snakemake.params.tables],
+        config=snakemake.config,
+        lock_text=Path(snakemake.input.lock).read_text(encoding="utf-8"),
+        benchmarks_dir=snakemake.params.benchmarks_dir,
+        config_files=snakemake.params.config_files,
+    )
+except ReportError as e:
+    log.error("%s", e)  # one line in the log and on stderr, no traceback
+    sys.exit(1)
+write_report(page, snakemake.output[0])
+log.info("wrote %s (%.1f MB, %d figures)", snakemake.output[0], len(page.encode()) / 1e6,
+         len(snakemake.params.figure_ids))
