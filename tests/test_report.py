@@ -124,7 +124,15 @@ def test_report_colour_codes_every_verdict(tree):
         row = row[:row.index("</tr>")]
         assert f'class="verdict verdict-{verdict}" style="background:{bg};color:{fg}">{verdict}<' in row
         assert f"results/x_{i}.csv" in row and "≈35×" in row
-    assert VERDICT_COLOURS["reproduced"][0] != VERDICT_COLOURS["not_reproduced"][0]
+    def rgb(hex_colour):
+        return [int(hex_colour[i:i + 2], 16) for i in (1, 3, 5)]
+
+    r, g, b = rgb(VERDICT_COLOURS["reproduced"][0])
+    assert g > r and g > b, "reproduced is not green"
+    r, g, b = rgb(VERDICT_COLOURS["not_reproduced"][0])
+    assert r > g and r > b, "not_reproduced is not red"
+    r, g, b = rgb(VERDICT_COLOURS["not_reproducible"][0])
+    assert r == g == b, "not_reproducible is not grey"
 
 
 def test_report_is_self_contained_and_byte_identical(tree):
