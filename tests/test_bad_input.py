@@ -116,3 +116,58 @@ def test_batch_wrong_shape_and_nan(rng, truth):
     Z[0, 0, 0] = np.nan
     with pytest.raises(NonFiniteError):
         full_lls_batch(Z, G)
+
+
+@pytest.mark.filterwarnings("ignore:overflow encountered:RuntimeWarning")
+@pytest.mark.parametrize("est", ALL)
+def test_values_whose_squares_overflow(rng, truth, est):
+    with pytest.raises(NonFiniteError, match="too large") as e:
+        est(make_poses(rng, truth, 24, 1e-4) * 1e160, G)
+    _one_line(e)
+
+
+@pytest.mark.parametrize("est", ALL)
+def test_non_finite_takes_precedence_over_too_few_poses(rng, truth, est):
+    z = make_poses(rng, truth, 3, 1e-4)
+    z[0, 0] = np.nan
+    with pytest.raises(NonFiniteError):
+        est(z, G)
+
+
+def _bad_pose_sets(rng, truth):
+    a = rng.uniform(0, 2 * np.pi, 24)
+    circle = np.column_stack([np.cos(a), np.sin(a), np.zeros_like(a)])
+    b = rng.uniform(0, 2 * np.pi, 12)
+    two_planes = np.vstack([np.column_stack([np.cos(b), np.sin(b), 0 * b]), np.column_stack([np.cos(b), 0 * b, np.sin(b)])])
+    nan = make_poses(rng, truth, 24, 1e-4)
+    nan[5, 2] = np.nan
+    return {
+        "coplanar": G * circle + truth["bias"] + rng.normal(0, 1e-4, circle.shape),
+        # out of plane by ±0.039: scatter eigenvalue 1.5e-3 of the trace, between COPLANAR_TOL
+        # and the margin of the moment check, so the reference check decides
+        "just_out_of_plane": G * (circle + np.outer((-1) ** np.arange(24), [0, 0, 0.039])) + truth["bias"],
+        "one_axis": G * np.repeat([[0, 0, 1.0], [0, 0, -1.0]], 12, axis=0) + truth["bias"],
+        "identical": np.tile(G * np.array([0, 0, 1.0]) + truth["bias"], (24, 1)),
+        "nearly_identical": G * np.array([0, 0, 1.0]) + rng.normal(0, 1e-9, (24, 3)),
+        "two_planes": G * two_planes + truth["bias"],
+        "hyperboloid": _hyperboloid_points(rng, 24),
+        "nan": nan,
+        "zeros": np.zeros((24, 3)),
+    }
+
+
+def test_fast_routes_raise_exactly_what_the_references_raise(rng, truth):
+    """The single-problem fast routes decide nothing themselves in doubtful cases: they
+    hand over to the reference implementations, so the errors are identical."""
+    from accelcal import lls
+
+    for name, z in _bad_pose_sets(rng, truth).items():
+        for fast, ref in ((lls.full_lls, lls._full_lls_svd), (lls.bias_lls, lls._bias_lls_lstsq)):
+            outcome = []
+            for f in (fast, ref):
+                try:
+                    f(z, G)
+                    outcome.append(None)
+                except Exception as exc:  # noqa: BLE001 - comparing whatever is raised
+                    outcome.append((type(exc), str(exc)))
+            assert outcome[0] == outcome[1], (name, fast.__name__, outcome)

@@ -24,7 +24,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from .errors import NotPositiveDefiniteError
-from .lls import _full_result, _scale, _theta_to_model_single, full_lls
+from .lls import _scale_single, _theta_to_model_single, full_lls
 from .results import LLSResult
 from .validation import check_g, check_poses
 
@@ -90,12 +90,19 @@ def full_als(z, g: float, noise_std: float | None = None) -> LLSResult:
     z = check_poses(z, "full")
     g = check_g(g)
     full_lls(z, g)  # same degeneracy checks and errors as the LLS it corrects
-    k = float(_scale(z))
+    k = _scale_single(z)
     zs = z / k
     var = estimate_noise_var(zs) if noise_std is None else (float(noise_std) / k) ** 2
     w, V = np.linalg.eigh(corrected_moments(zs, var))
     b, M, lam, valid = _theta_to_model_single(V[:, 0], g / k)
     if not valid:
         raise NotPositiveDefiniteError("ALS gives no ellipsoid (Ŝ not positive definite or λ <= 0)")
-    return _full_result("full_als", z, g, b * k, M, singular_values=np.sqrt(np.abs(w)),
-                        lam=float(lam), noise_var=var * k * k)
+    return LLSResult._trusted(method="full_als", bias=np.array(b) * k, M=M, g=g, poses=z, lam=lam,
+                              c=float("nan"), noise_var=var * k * k, singular_values=np.sqrt(np.abs(w)))
+
+
+def moment_singular_values(poses: np.ndarray, noise_var: float) -> np.ndarray:
+    """``sqrt(|eigenvalues|)`` of the ALS matrix Ψ(σ²) of the scaled poses (ascending),
+    the ``singular_values`` of an ALS result (``noise_var`` in input units squared)."""
+    k = _scale_single(poses)
+    return np.sqrt(np.abs(np.linalg.eigvalsh(corrected_moments(poses / k, noise_var / (k * k)))))

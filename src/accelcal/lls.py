@@ -12,6 +12,29 @@ Bias-only LLS (Sec. 1.2, eq. 7): ``[2 z_iᵀ, 1] (b; c) = z_iᵀ z_i`` with
 Numerics: the data are divided by ``k = sqrt(mean ||z||²)`` before the SVD so that
 the columns of X (z², z, 1) have comparable size whatever the unit (m/s² or raw
 counts); the model is invariant (``M`` unchanged, ``b`` and ``g`` scale by ``k``).
+
+Speed (one problem).  The paper's point is that the closed forms are cheap; a 24x10
+problem is a few microseconds of arithmetic, so each numpy/LAPACK call (about a
+microsecond of overhead) counts.  :func:`full_lls` and :func:`bias_lls` therefore
+compute the same estimate in fewer calls, and hand the problem to the reference
+implementation (``_full_lls_svd``, ``_bias_lls_lstsq``: the SVD and ``lstsq`` forms,
+which are also what the tests compare against) whenever the fast route cannot
+certify its answer:
+
+* full LLS: Θ̂ is the eigenvector of the smallest eigenvalue of ``N = XᵀX``, found by
+  inverse iteration (Cholesky of the 10x10 N).  Forming N squares the condition of
+  the eigenvector problem, so the fast route is taken only when it *proves* (i) that
+  the second-smallest eigenvalue exceeds both ``NULLSPACE_RATIO²`` times the smallest
+  and ``MIN_GAP`` times trace(N) (Cholesky of the leading 9x9 block of N shifted down
+  by that bound; Cauchy interlacing), so that the null space is one-dimensional
+  exactly when the SVD test says so and the squared conditioning costs at most a
+  factor 1/MIN_GAP on the rounding error; and (ii) that the returned Θ̂ is within
+  ``EIGVEC_TOL`` (angle) of that eigenvector (Davis–Kahan bound from the residual
+  ``N Θ̂ - ρ Θ̂`` and the certified gap).  Differences to the SVD are ~1e-14 in practice.
+* bias-only LLS: the least-squares problem of eq. (7) with the intercept c eliminated,
+  i.e. the 3x3 normal equations of the centred poses (the scatter matrix the geometry
+  check inspects anyway), solved by Cholesky in scalar arithmetic.
+* residuals, standard errors and singular values are computed on first access.
 """
 
 from __future__ import annotations
@@ -19,16 +42,46 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.linalg import lapack
 
 from .errors import DegeneratePosesError, NotPositiveDefiniteError
 from .model import lower_from_gram
 from .results import BatchResult, LLSResult
-from .validation import check_g, check_poses
+from .validation import check_g, check_poses, geometry_is_clearly_fine, pose_array, scatter_is_clearly_3d
 
 #: The full system has a one-dimensional null space only if σ9 clearly exceeds σ10.
 #: For a well-spread pose set σ9/σ10 is of order g/noise (10³ and more); for a pose set
 #: that admits a second quadric (e.g. poses on two planes) σ9 sinks to the noise floor.
 NULLSPACE_RATIO = 3.0
+
+#: Fast route of the full LLS (see the module docstring): it requires the
+#: second-smallest eigenvalue of N = XᵀX to exceed MIN_GAP * trace(N) (σ0/σ8 below
+#: ~30; for 24 poses spread over the sphere σ0/σ8 is about 6, for 10 random poses often
+#: more than 30 and they take the SVD), and its Θ̂ to be within EIGVEC_TOL of the
+#: smallest eigenvector of N; otherwise the SVD decides and computes.
+MIN_GAP = 1e-3
+EIGVEC_TOL = 1e-11
+#: Rounding of N x is below 10 eps trace(N) (N positive semi-definite, 10 terms):
+#: added to the computed residual so that the Davis–Kahan bound holds in floating point.
+_MATVEC_ROUNDING = 10 * np.finfo(float).eps
+_CANCELLATION = 4 * math.sqrt(np.finfo(float).eps)
+#: If N is singular to rounding (noise-free poses) the Cholesky is of N + δI with
+#: δ = _SHIFT trace(N): same eigenvectors; inverse iteration slows by at most
+#: _SHIFT / MIN_GAP = 1e-10 per step.
+_SHIFT = 1e-13
+#: Inverse iteration starts at the sphere |z/k| = 1 (b = 0, M = I, d = -1), close to
+#: every plausible calibration; two solves per round, up to three rounds.
+_START = np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0])
+_ROUNDS = 3
+
+# Columns of X (eq. 3) as products (Z1 L) * (Z1 R) with Z1 = [z, 1]: L picks the first
+# factor, R the second times the coefficient (zx², zy², zz², 2zx zy, 2zx zz, 2zy zz,
+# -2zx, -2zy, -2zz, 1).  One nonzero per column: X equals design_matrix bit for bit.
+_LEFT = np.zeros((4, 10))
+_LEFT[[0, 1, 2, 0, 0, 1, 0, 1, 2, 3], range(10)] = 1.0
+_RIGHT = np.zeros((4, 10))
+_RIGHT[[0, 1, 2, 1, 2, 2, 3, 3, 3, 3], range(10)] = [1.0, 1.0, 1.0, 2.0, 2.0, 2.0, -2.0, -2.0, -2.0, 1.0]
+_EYE3 = np.eye(3)
 
 
 def design_matrix(z: np.ndarray) -> np.ndarray:
@@ -44,6 +97,25 @@ def design_matrix(z: np.ndarray) -> np.ndarray:
 
 def _scale(z: np.ndarray) -> np.ndarray:
     return np.sqrt(np.einsum("...ni,...ni->...", z, z) / z.shape[-2])
+
+
+def _scale_single(z: np.ndarray) -> float:
+    """``k = sqrt(mean ||z||²)`` of one problem; NaN/inf if ``z`` is not finite."""
+    flat = z.ravel()
+    return math.sqrt(float(flat @ flat) / len(z))
+
+
+def bias_design(z: np.ndarray) -> np.ndarray:
+    """Rows ``[2 zx, 2 zy, 2 zz, 1]`` of eq. (7) for one problem."""
+    return np.column_stack([2 * z, np.ones(len(z))])
+
+
+def design_singular_values(model: str, poses: np.ndarray) -> np.ndarray:
+    """Singular values of the scaled design of the full LLS (eq. 3) or of the bias-only
+    LLS (eq. 7): the conditioning of the problem each estimate came from."""
+    zs = poses / _scale_single(poses)
+    X = design_matrix(zs) if model == "full" else bias_design(zs)
+    return np.linalg.svd(X, compute_uv=False)
 
 
 def theta_to_model(theta: np.ndarray, g_scaled):
@@ -78,15 +150,19 @@ def theta_to_model(theta: np.ndarray, g_scaled):
 
 def _theta_to_model_single(theta: np.ndarray, g_scaled: float):
     """:func:`theta_to_model` for one problem in scalar arithmetic (3x3 numpy calls cost
-    more than the arithmetic; this keeps a single closed-form solve in the tens of µs)."""
-    t = theta if theta[0] + theta[1] + theta[2] > 0 else -theta
-    S11, S22, S33, S12, S13, S23, r1, r2, r3, d = t.tolist()
-    nan = (np.full(3, np.nan), np.full((3, 3), np.nan), float("nan"), False)
+    more than the arithmetic).  Θ may have any sign and scale; b and M do not depend on
+    them, λ is for the Θ given (λ |Θ| for the unit-norm Θ̂).
+
+    Returns ``(b, M, λ, valid)`` with ``b`` a list of 3 floats and ``M`` a (3, 3) array
+    (NaN and ``valid=False`` if the estimate is no ellipsoid)."""
+    S11, S22, S33, S12, S13, S23, r1, r2, r3, d = theta.tolist()
+    if S11 + S22 + S33 < 0:  # Θ is defined up to sign: make trace(Ŝ) positive
+        S11, S22, S33, S12, S13, S23, r1, r2, r3, d = (-S11, -S22, -S33, -S12, -S13, -S23, -r1, -r2, -r3, -d)
     # Ŝ positive definite <=> leading principal minors positive (Sylvester).
     m2 = S11 * S22 - S12 * S12
     det = S11 * (S22 * S33 - S23 * S23) - S12 * (S12 * S33 - S23 * S13) + S13 * (S12 * S23 - S22 * S13)
     if S11 <= 0 or m2 <= 0 or det <= 0:
-        return nan
+        return _no_ellipsoid()
     # b = Ŝ⁻¹ r̂ via the adjugate (eq. 4)
     c11, c22, c33 = S22 * S33 - S23 * S23, S11 * S33 - S13 * S13, m2
     c12, c13, c23 = S13 * S23 - S12 * S33, S12 * S23 - S13 * S22, S12 * S13 - S11 * S23
@@ -95,9 +171,9 @@ def _theta_to_model_single(theta: np.ndarray, g_scaled: float):
     b3 = (c13 * r1 + c23 * r2 + c33 * r3) / det
     quad = b1 * r1 + b2 * r2 + b3 * r3 - d  # bᵀŜb - d̂, with Ŝb = r̂
     if quad <= 0:
-        return nan
+        return _no_ellipsoid()
     lam = g_scaled * g_scaled / quad  # eq. (5)
-    S11, S22, S33, S12, S13, S23 = (lam * v for v in (S11, S22, S33, S12, S13, S23))
+    S11, S22, S33, S12, S13, S23 = lam * S11, lam * S22, lam * S33, lam * S12, lam * S13, lam * S23
     # reversed Cholesky (eq. 6); radicands are Schur complements of a PD matrix
     a6 = math.sqrt(S33)
     a5, a4 = S23 / a6, S13 / a6
@@ -109,8 +185,54 @@ def _theta_to_model_single(theta: np.ndarray, g_scaled: float):
     m21 = -a2 * m11 / a3
     m32 = -a5 * m22 / a6
     m31 = -(a4 * m11 + a5 * m21) / a6
-    M = np.array([[m11, 0.0, 0.0], [m21, m22, 0.0], [m31, m32, m33]])
-    return np.array([b1, b2, b3]), M, lam, True
+    M = np.array([m11, 0.0, 0.0, m21, m22, 0.0, m31, m32, m33]).reshape(3, 3)
+    return [b1, b2, b3], M, lam, True
+
+
+def _no_ellipsoid():
+    return [math.nan] * 3, np.full((3, 3), np.nan), math.nan, False
+
+
+def _null_vector(N: np.ndarray) -> tuple[np.ndarray, float] | None:
+    """Θ̂ of the full LLS from ``N = XᵀX`` (10x10, C-contiguous, overwritten) as ``(x,
+    |x|)``, Θ̂ = x / |x| (the division is left to the caller: eqs. 4 and 6 do not need
+    it), or None when the fast route cannot certify it (see the module docstring); the
+    caller then takes the SVD.
+
+    Inverse iteration with the Cholesky factor of N.  After every second solve the
+    residual bound is checked; once it holds, the gap is certified.
+    """
+    diag = N.ravel()[::11]  # a view of the diagonal
+    tr = sum(diag.tolist())
+    U, info = lapack.dpotrf(N)
+    delta = 0.0
+    if info != 0:  # N singular to rounding (σ10 ≈ 0: noise-free poses): use N + δI
+        delta = _SHIFT * tr
+        diag += delta
+        U, info = lapack.dpotrf(N)
+        if info != 0:
+            return None
+    x = _START
+    for _ in range(_ROUNDS):
+        x = lapack.dpotrs(U, lapack.dpotrs(U, x)[0])[0]
+        y = N @ x  # (N + δI) x
+        xx = x.dot(x)
+        rho = x.dot(y) / xx  # Rayleigh quotient of N + δI
+        # ||N x̂ - ρ x̂|| for unit x̂ (the shift cancels), plus what rounding can hide:
+        # that of N x, and the cancellation in |N x̂|² - ρ² (a few eps ρ²)
+        res = math.sqrt(max(y.dot(y) / xx - rho * rho, 0.0)) + _MATVEC_ROUNDING * tr + _CANCELLATION * abs(rho)
+        rho -= delta  # Rayleigh quotient of N: at least its smallest eigenvalue
+        # Required lower bound on the second-smallest eigenvalue of N: above
+        # NULLSPACE_RATIO² times the smallest (at most rho) and above MIN_GAP trace(N);
+        # given it, sin∠(x, eigenvector) <= res / (bound - rho) (Davis–Kahan).
+        bound = max(NULLSPACE_RATIO**2 * rho, MIN_GAP * tr)
+        if res <= EIGVEC_TOL * (bound - rho):
+            # λmin of the leading 9x9 block <= second-smallest eigenvalue (Cauchy
+            # interlacing): a Cholesky of that block minus the bound proves the gap.
+            diag[:9] -= bound + delta
+            return (x, math.sqrt(xx)) if lapack.dpotrf(N[:9, :9])[1] == 0 else None
+        x /= math.sqrt(xx)  # keep the iterate O(1) between rounds
+    return None
 
 
 def full_lls(z, g: float) -> LLSResult:
@@ -132,9 +254,42 @@ def full_lls(z, g: float) -> LLSResult:
     TooFewPosesError, DegeneratePosesError, NonFiniteError, InputShapeError,
     NotPositiveDefiniteError
     """
+    z = pose_array(z, "full")
+    n = len(z)
+    k = _scale_single(z)
+    if not (math.isfinite(k) and k > 0):  # NaN/inf or all-zero poses: the reference says which
+        return _full_lls_svd(z, g)
+    Z1 = np.empty((n, 4))
+    np.divide(z, k, out=Z1[:, :3])
+    Z1[:, 3] = 1.0
+    X = (Z1 @ _LEFT) * (Z1 @ _RIGHT)  # the design matrix of eq. (3) of z / k
+    N = X.T @ X
+    # row 9 of N holds the column sums of X: Σ zs², 2 Σ zx zy, ..., -2 Σ zs, n
+    xx, yy, zz, xy, xz, yz, sx, sy, sz, _ = N[9].tolist()
+    if not geometry_is_clearly_fine((-0.5 * sx, -0.5 * sy, -0.5 * sz),
+                                    ((xx, 0.5 * xy, 0.5 * xz), (0.0, yy, 0.5 * yz), (0.0, 0.0, zz)), n):
+        return _full_lls_svd(z, g)
+    g = check_g(g)
+    null = _null_vector(N)
+    if null is None:
+        return _full_lls_svd(z, g)
+    theta, norm = null
+    b, M, lam, valid = _theta_to_model_single(theta, g / k)
+    if not valid:
+        raise NotPositiveDefiniteError(_NO_ELLIPSOID)
+    # λ of eq. (5) refers to the unit-norm Θ̂ = theta / norm; b and M do not depend on the scale
+    return LLSResult._trusted(method="full_lls", bias=np.array([b[0] * k, b[1] * k, b[2] * k]), M=M, g=g,
+                              poses=z, lam=lam * norm, c=math.nan, noise_var=math.nan)
+
+
+_NO_ELLIPSOID = "full LLS gives no ellipsoid (Ŝ not positive definite or λ <= 0): poses too noisy or not static"
+
+
+def _full_lls_svd(z, g: float) -> LLSResult:
+    """Reference full LLS: SVD of the scaled design matrix (eq. 3), every check."""
     z = check_poses(z, "full")
     g = check_g(g)
-    k = _scale(z)
+    k = _scale_single(z)
     X = design_matrix(z / k)
     _, sv, Vt = np.linalg.svd(X, full_matrices=False)
     if sv[8] < NULLSPACE_RATIO * sv[9] or sv[8] < 1e-10 * sv[0]:
@@ -144,14 +299,9 @@ def full_lls(z, g: float) -> LLSResult:
         )
     b, M, lam, valid = _theta_to_model_single(Vt[-1], g / k)
     if not valid:
-        raise NotPositiveDefiniteError(
-            "full LLS gives no ellipsoid (Ŝ not positive definite or λ <= 0): poses too noisy or not static"
-        )
-    return _full_result("full_lls", z, g, b * k, M, singular_values=sv, lam=float(lam))
-
-
-def _full_result(method, z, g, b, M, **extra) -> LLSResult:
-    return LLSResult(method=method, bias=b, M=M, g=g, poses=z, **extra)
+        raise NotPositiveDefiniteError(_NO_ELLIPSOID)
+    return LLSResult._trusted(method="full_lls", bias=np.array(b) * k, M=M, g=g, poses=z, lam=lam,
+                              c=math.nan, noise_var=math.nan, singular_values=sv)
 
 
 def bias_lls(z, g: float) -> LLSResult:
@@ -168,17 +318,68 @@ def bias_lls(z, g: float) -> LLSResult:
     -------
     LLSResult
     """
+    z = pose_array(z, "bias")
+    n = len(z)
+    flat = z.ravel()
+    sum_sq = float(flat @ flat)  # Σ |z|²: NaN or inf iff some z is (or overflows)
+    if not math.isfinite(sum_sq):
+        return _bias_lls_lstsq(z, g)  # the reference says which error
+    # Eq. (7) is a least-squares problem with an intercept, so it is the same problem in
+    # poses shifted by any point p: with c_i = z_i - p, |c_i|² = 2 c_iᵀ(b - p) + c'.
+    # Shifting by the first pose removes the offset of the data; eliminating the
+    # intercept leaves the 3x3 normal equations of the centred c_i, whose moments are
+    # in WᵀW with W = [c, |c|², 1].
+    p = z[0]
+    W = np.empty((n, 5))
+    np.subtract(z, p, out=W[:, :3])
+    np.einsum("ij,ij->i", W[:, :3], W[:, :3], out=W[:, 3])
+    W[:, 4] = 1.0
+    (xx, xy, xz, xq, sx), (_, yy, yz, yq, sy), (_, _, zz, zq, sz), (_, _, _, _, sq), _ = (W.T @ W).tolist()
+    # scatter about the mean, Σ (c - c̄)(c - c̄)ᵀ, and mean of c
+    mx, my, mz = sx / n, sy / n, sz / n
+    C = ((xx - sx * mx, xy - sx * my, xz - sx * mz), (0.0, yy - sy * my, yz - sy * mz), (0.0, 0.0, zz - sz * mz))
+    if not scatter_is_clearly_3d(C, sum_sq):
+        return _bias_lls_lstsq(z, g)
+    g = check_g(g)
+    mean_cc = sq / n  # mean |c|²
+    x1, x2, x3 = _solve_spd3(C, (xq - sx * mean_cc, yq - sy * mean_cc, zq - sz * mean_cc))  # = 2 (b - p)
+    p1, p2, p3 = p.tolist()
+    b1, b2, b3 = 0.5 * x1 + p1, 0.5 * x2 + p2, 0.5 * x3 + p3
+    # intercept of eq. (7), c = mean |z|² - 2 z̄ᵀb, with z̄ = c̄ + p
+    c = sum_sq / n - 2 * ((mx + p1) * b1 + (my + p2) * b2 + (mz + p3) * b3)
+    return LLSResult._trusted(method="bias_lls", bias=np.array([b1, b2, b3]), M=_EYE3.copy(), g=g, poses=z,
+                              lam=math.nan, c=c, noise_var=math.nan)
+
+
+def _solve_spd3(C, h):
+    """Solve ``C x = h`` for a symmetric positive-definite 3x3 ``C`` (nested sequences,
+    upper triangle read) by Cholesky in scalar arithmetic."""
+    (a, b, c), (_, d, e), (_, _, f) = C
+    l11 = math.sqrt(a)
+    l21, l31 = b / l11, c / l11
+    l22 = math.sqrt(d - l21 * l21)
+    l32 = (e - l31 * l21) / l22
+    l33 = math.sqrt(f - l31 * l31 - l32 * l32)
+    y1 = h[0] / l11
+    y2 = (h[1] - l21 * y1) / l22
+    y3 = (h[2] - l31 * y1 - l32 * y2) / l33
+    x3 = y3 / l33
+    x2 = (y2 - l32 * x3) / l22
+    x1 = (y1 - l21 * x2 - l31 * x3) / l11
+    return x1, x2, x3
+
+
+def _bias_lls_lstsq(z, g: float) -> LLSResult:
+    """Reference bias-only LLS: ``lstsq`` of the scaled eq. (7), every check."""
     z = check_poses(z, "bias")
     g = check_g(g)
-    k = _scale(z)
+    k = _scale_single(z)
     zs = z / k
-    H = np.column_stack([2 * zs, np.ones(len(zs))])
-    sol, _, rank, sv = np.linalg.lstsq(H, np.sum(zs**2, axis=1), rcond=None)
+    sol, _, rank, sv = np.linalg.lstsq(bias_design(zs), np.sum(zs**2, axis=1), rcond=None)
     if rank < 4:
         raise DegeneratePosesError("pose set does not determine the bias: turn the sensor about more axes")
-    b = sol[:3] * k
-    M = np.eye(3)
-    return LLSResult(method="bias_lls", bias=b, M=M, g=g, poses=z, singular_values=sv, c=float(sol[3] * k**2))
+    return LLSResult._trusted(method="bias_lls", bias=sol[:3] * k, M=np.eye(3), g=g, poses=z, lam=math.nan,
+                              c=float(sol[3] * k**2), noise_var=math.nan, singular_values=sv)
 
 
 def full_lls_batch(z, g: float) -> BatchResult:

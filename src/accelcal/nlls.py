@@ -94,7 +94,8 @@ def _nlls(z, g, model: str) -> NLLSResult:
     b, M, status, iters, cost = _solve(z, g, model)
     if status not in CONVERGED or not np.all(np.isfinite(b)) or not np.all(np.isfinite(M)):
         raise NotConvergedError(f"{model} NLLS did not converge (IPOPT status {status} after {iters} iterations)")
-    return NLLSResult(method=f"{model}_nlls", bias=b, M=M, g=g, poses=z, status=status, iterations=iters, cost=cost)
+    return NLLSResult._trusted(method=f"{model}_nlls", bias=b, M=M, g=g, poses=z, status=status, iterations=iters,
+                               cost=cost)
 
 
 def full_nlls(z, g: float) -> NLLSResult:
