@@ -30,7 +30,7 @@ from accelcal.report import (  # noqa: E402
 )
 
 REPO = Path(__file__).resolve().parents[1]
-FIGURE_IDS = ["foundation_crlb", "batista2011_fig4", "tereshkov_fig3", "bias_convergence_comparison",
+FIGURE_IDS = ["burkhard2024_fig1a", "batista2011_fig4", "tereshkov_fig3", "bias_convergence_comparison",
               "measured_calibration", "discrepancy_overview", "zz_unregistered"]
 BENCH = "s\th:m:s\tmax_rss\tmax_vms\tmax_uss\tmax_pss\tio_in\tio_out\tmean_load\tcpu_time\n"
 
@@ -64,12 +64,12 @@ def tree(tmp_path):
         f.write_text(BENCH + f"{s}\t0:00:0{int(s)}\t{rss}\t1\t1\t1\t0\t0\t50\t1\n")
     (res / "measured").mkdir()
     pd.DataFrame({"recording": ["xsens_mti"], "chi2": [256.1]}).to_csv(res / "measured" / "summary.csv", index=False)
-    captions = {"foundation_crlb": 'Bias error, {{ snakemake.config["foundation"]["trials"] }} trials; '
+    captions = {"burkhard2024_fig1a": 'Bias error, {{ snakemake.config["burkhard2024"]["trials"] }} trials; '
                                    "table ``results/foundation/crlb_summary.csv``.\n\nSecond paragraph.",
                 "tereshkov_fig3": "Gyro bias estimates."}
-    conclusions = {"foundation_crlb": "Full LLS is as accurate as full NLLS.",
+    conclusions = {"burkhard2024_fig1a": "Full LLS is as accurate as full NLLS.",
                    "batista2011_fig4": "The gravity estimate follows the truth."}
-    config = {"seed": 123, "foundation": {"trials": 77}, "tereshkov": {"seed": 456, "k": [1, 2]}}
+    config = {"seed": 123, "burkhard2024": {"trials": 77}, "tereshkov": {"seed": 456, "k": [1, 2]}}
     kwargs = dict(
         claims=res / "claims.csv",
         figures={fid: res / "figures" / f"{fid}.png" for fid in FIGURE_IDS},
@@ -91,7 +91,7 @@ def test_report_has_every_figure_conclusion_caption_and_table(tree):
     order = [page.index(f'id="{key}"') for key in ("burkhard2024", "batista2011", "tereshkov", "measured",
                                                      "discrepancy", "other")]
     assert order == sorted(order)
-    assert order[0] < page.index('id="fig-foundation_crlb"') < order[1] < page.index('id="fig-batista2011_fig4"')
+    assert order[0] < page.index('id="fig-burkhard2024_fig1a"') < order[1] < page.index('id="fig-batista2011_fig4"')
     assert order[2] < page.index('id="fig-bias_convergence_comparison"') < order[3]
     assert page.index('id="fig-zz_unregistered"') > order[5]
     # conclusion beside the figure; caption rendered with the config (Jinja2) and rst code
@@ -189,13 +189,13 @@ def test_benchmarks_are_grouped_by_stage(tree):
 
 def test_conclusions_file_covers_known_figures_with_one_line_each(tmp_path):
     conclusions = load_conclusions(REPO / "workflow" / "report" / "conclusions.yaml")
-    for fid in ("foundation_crlb", "batista2011_fig5", "tereshkov_fig4", "tereshkov_installation"):
+    for fid in ("burkhard2024_fig1a", "batista2011_fig5", "tereshkov_fig4", "tereshkov_installation"):
         assert fid in conclusions
     for fid, text in conclusions.items():
         assert figure_section(fid) != "other", f"{fid} belongs to no section"
         assert 20 < len(text) < 300, fid
     bad = tmp_path / "c.yaml"
-    bad.write_text("foundation_crlb: |\n  two\n  lines\n")
+    bad.write_text("burkhard2024_fig1a: |\n  two\n  lines\n")
     with pytest.raises(ReportError, match="one non-empty line"):
         load_conclusions(bad)
 
