@@ -47,6 +47,24 @@ in the same unit.
 """
 
 
+DISCREPANCY_HELP = """\
+discrepancy report (JSON):
+  effect       effect named in the first round, or 'none'
+  effects      every effect named, in order (refit after each)
+  outcome      effect, or 'not_identifiable' when nothing was named and a candidate
+               could not be tested with these poses, or 'none'
+  candidates   per candidate and round: identifiable (absorbed fraction, minimum
+               detectable effect), F statistic, p_value (Holm-adjusted: p_adjusted),
+               delta_bic, leave-one-pose-out gap, estimate and standard error
+  gap_before, gap_after   RMS pose residual in units of its noise, base model and
+               base + named effects (noise alone: gap_expected_*)
+  stochastic   Allan deviation of the rests vs a white-noise simulator, named noise
+               terms, Allan gap before/after; noise_implication: what they mean for
+               the pose residuals
+
+"""
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = _parser()
     args = parser.parse_args(argv)
@@ -82,7 +100,74 @@ def _parser() -> argparse.ArgumentParser:
     c.add_argument("--method", choices=sorted(ESTIMATORS), default="full-lls", help="estimator (default full-lls)")
     c.add_argument("--out", type=Path, required=True, help="result JSON (written only on success)")
     c.set_defaults(func=_calibrate)
+    d = sub.add_parser("discrepancy", help="find where the calibrated model and the recording disagree, name the "
+                                           "missing effect and noise term",
+                       description="Fit the model of Burkhard et al. (2024) to the static poses of RECORDING.csv, "
+                                   "test a library of candidate effects (quadratic, cubic, bias_drift, temperature, "
+                                   "temperature_scale) as nested extensions and name the one the residuals ask for "
+                                   "(or 'none'); compare the Allan deviation of the rests with a white-noise "
+                                   "simulator and name the missing noise term.",
+                       formatter_class=argparse.RawDescriptionHelpFormatter, epilog=DISCREPANCY_HELP + MODEL_HELP)
+    d.add_argument("recording", type=Path, help="CSV with columns t, ax, ay, az [, temp]")
+    d.add_argument("--g", type=float, required=True, help="local gravity magnitude (e.g. 9.80665)")
+    d.add_argument("--out", type=Path, required=True, help="report JSON (written only on success)")
+    d.add_argument("--figures", type=Path, default=None, metavar="DIR",
+                   help="also write discrepancy_residuals and discrepancy_allan (.png, .pdf) to DIR")
+    d.set_defaults(func=_discrepancy)
     return p
+
+
+def _discrepancy(args) -> int:
+    from .discrepancy.report import analyse
+    from .recording import read_recording
+
+    if not np.isfinite(args.g) or args.g <= 0:
+        raise AccelcalError(f"--g must be a positive number, got {args.g:g}")
+    t0 = time.perf_counter()
+    with _step(f"reading {args.recording}"):
+        rec = read_recording(args.recording)
+    with _step("static detection, deterministic and stochastic layers (the noise bootstrap takes a while)"):
+        analysis = analyse(rec, args.g, unit="data unit")
+    figures = []
+    if args.figures is not None:
+        from .discrepancy.figures import recording_figures
+
+        with _step("drawing figures"):
+            figures = recording_figures(analysis, title=args.recording.name)
+    out = analysis.to_dict()
+    out.update({"accelcal_version": __version__, "recording": str(args.recording),
+                "recording_sha256": _sha256(args.recording), "g": args.g, "elapsed_s": time.perf_counter() - t0})
+    if figures:
+        from .plotting import save_figure
+
+        for name, fig in figures:
+            save_figure(fig, Path(args.figures) / name)
+    _write_json_atomic(args.out, _finite_json(out))
+    _discrepancy_summary(out, args.out)
+    return 0
+
+
+def _discrepancy_summary(out: dict, path: Path) -> None:
+    det = out
+    lines = [f"discrepancy: {det['n_poses']} poses; effect named: {det['effect']}"
+             + (f" (then {', '.join(det['effects'][1:])})" if len(det["effects"]) > 1 else ""),
+             f"  gap (RMS residual / noise) {det['gap_before']:.3g} -> {det['gap_after']:.3g} "
+             f"(noise alone: {det['gap_expected_after']:.3g}); excess {det['excess_before']:.3g} -> "
+             f"{det['excess_after']:.3g}"]
+    if det["not_identifiable"]:
+        lines.append(f"  not identifiable with these poses: {', '.join(det['not_identifiable'])}")
+    st = out.get("stochastic")
+    if st:
+        named = {ax: a["named"] for ax, a in st["axes"].items()}
+        lines.append("  noise terms named: " + "; ".join(f"{ax}: {', '.join(v)}" for ax, v in named.items()))
+        imp = out.get("noise_implication") or {}
+        if imp:
+            lines.append(f"  residual excess expected from the noise model {imp['expected_excess']:.3g}, "
+                         f"observed {imp['observed_excess']:.3g} (explained: {'yes' if imp['explains_excess'] else 'no'})")
+    else:
+        lines.append(f"  stochastic layer: {out.get('stochastic_error', 'not run')}")
+    lines.append(f"  written to {path}")
+    print("\n".join(lines), file=sys.stderr)
 
 
 def _calibrate(args) -> int:

@@ -1,0 +1,499 @@
+"""The deterministic layer: which candidate effect do the pose residuals ask for?
+
+Given :class:`~accelcal.discrepancy.fit.PoseData`, the loop fits the base model (bias,
+scale, non-orthogonality: 9 parameters), treats it as the simulation of the experiment,
+and tests every candidate effect of the library as a nested extension of it:
+
+1. **Identifiability** (:func:`identifiability`), before any test.  With ``J₀`` the
+   weighted Jacobian of the current model and ``J₁`` that of the effect's three
+   parameters at zero effect:
+
+   * *absorbed* = the largest squared canonical correlation between the column spaces
+     of ``J₁`` and ``J₀``: the fraction of the residual signature of the effect's worst
+     direction that the current model reproduces by changing its own parameters
+     (1 = rank-deficient augmented Jacobian, e.g. the quadratic term on the six faces);
+   * *MDE* (minimum detectable effect) per axis: the size at which the nested F-test at
+     level ``α/m`` (``m`` candidates in the round: Holm's first step) has the configured
+     power, from the augmented Fisher information profiled over the current model,
+     ``I_φ = J₁ᵀ (I - P₀) J₁`` (noise model = the per-pose standard errors): the
+     non-centrality ``λ = φᵀ I_φ φ`` must reach ``λ*`` with
+     ``P(F(3, n - q - 3; λ*) > F_crit) = power``; axis j alone: ``φ_j = sqrt(λ*/I_φ,jj)``.
+     It is also given in the data unit: the largest change of a pose mean that effect
+     causes at that size.
+
+   A candidate is *not identifiable* (refused, never named) when its covariate is
+   missing or does not vary (temperature range below the configured minimum), when
+   fewer than one residual degree of freedom would remain, when ``absorbed`` exceeds
+   ``max_absorbed``, or when its MDE in the data unit exceeds ``max_mde_g`` × g.
+2. **Nested test** of current vs current + effect: the F-test on the weighted
+   residuals, ``F = ((χ²₀ - χ²₁)/3) / (χ²₁/(n - q - 3))`` against ``F(3, n - q - 3)``.
+   Not the likelihood-ratio χ² test with the per-pose noise as known variance: the
+   residuals of real recordings exceed that noise (Xsens: ≈ 3×, results/measured), and
+   a test that takes the noise model as exact would call every candidate significant.
+   The F-test estimates the common scale of the residuals from the extended model's own
+   residuals, so it is exact for Gaussian errors whose covariance is known up to a
+   factor.  Holm's step-down procedure controls the family-wise error across the
+   identifiable candidates of a round (``correction='bonferroni'`` is available;
+   ``'none'`` exists only as the negative control of the benchmark).
+3. **ΔBIC** = ``n ln(χ²₁/χ²₀) + 3 ln n`` (Gaussian likelihood with the scale profiled
+   out, as the F-test) must be below ``-bic_threshold``.
+4. **Leave-one-pose-out** prediction error (PRESS, in noise units, each reduced fit
+   warm-started from the full one) must fall below ``(1 - lopo_min_improvement)`` × that
+   of the current model.
+
+The best candidate among those passing 2–4 (smallest p-value, then smallest ΔBIC) is
+named, the model is refitted with it, and the loop repeats with the remaining
+candidates until none passes or ``max_rounds`` effects are named.  Each round is a
+family tested at level α; a round is only reached if the previous one named an effect,
+so on effect-free data the probability of naming anything is that of round 1: ≤ α.
+
+Gap (:func:`gap`): the RMS of the weighted pose residuals, ``sqrt(χ²/n)``, with the same
+fixed weights before (base model) and after (base + named effects); noise alone predicts
+``sqrt((n - q)/n)``.  In-sample it can only shrink when parameters are added, so the
+leave-one-pose-out gap ``sqrt(PRESS/n)`` is reported next to it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+from scipy import optimize, stats
+
+from ..errors import AccelcalError
+from .effects import EFFECT_IDS, EFFECTS, TEMPERATURE, effect
+from .fit import Fit, PoseData, effect_columns, fit, lopo, parameter_names
+
+CORRECTIONS = ("holm", "bonferroni", "none")
+
+
+@dataclass(frozen=True)
+class Rules:
+    """Decision rules of the loop (config ``discrepancy.rules``; defaults = config/config.yaml)."""
+
+    alpha: float = 0.05
+    correction: str = "holm"
+    bic_threshold: float = 2.0
+    lopo_min_improvement: float = 0.0
+    max_rounds: int = 3
+    power: float = 0.8
+    max_absorbed: float = 0.9999
+    max_mde_g: float = 0.01
+    min_temp_range: float = 0.5
+    candidates: tuple[str, ...] = EFFECT_IDS
+
+    def __post_init__(self):
+        if not 0 < self.alpha < 1 or not 0 < self.power < 1:
+            raise AccelcalError(f"need 0 < alpha < 1 and 0 < power < 1, got {self.alpha}, {self.power}")
+        if self.correction not in CORRECTIONS:
+            raise AccelcalError(f"correction must be one of {', '.join(CORRECTIONS)}, got {self.correction!r}")
+        if self.max_rounds < 1 or not 0 < self.max_absorbed <= 1:
+            raise AccelcalError("need max_rounds >= 1 and 0 < max_absorbed <= 1")
+        object.__setattr__(self, "candidates", tuple(self.candidates))
+        for e in self.candidates:
+            effect(e)
+        if len(set(self.candidates)) != len(self.candidates) or not self.candidates:
+            raise AccelcalError("candidates must be a non-empty list of distinct effect ids")
+
+    @classmethod
+    def from_config(cls, cfg: dict) -> Rules:
+        return cls(**{k: (tuple(v) if k == "candidates" else v) for k, v in cfg.items()})
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def gap(weighted_residuals) -> float:
+    """The gap between model and data: ``sqrt(mean((r_i/σ_i)²))`` (1 = noise level)."""
+    w = np.asarray(weighted_residuals, float)
+    w = w[np.isfinite(w)]
+    return float(np.sqrt(np.mean(w * w))) if w.size else float("nan")
+
+
+def critical_noncentrality(k: int, dof: int, level: float, power: float) -> float:
+    """``λ*`` with ``P(F(k, dof; λ*) > F_{1-level}(k, dof)) = power`` (inf if ``dof < 1``)."""
+    if dof < 1:
+        return float("inf")
+    fcrit = stats.f.isf(level, k, dof)
+
+    def f(lam):
+        return stats.ncf.sf(fcrit, k, dof, lam) - power
+
+    hi = 1.0
+    while f(hi) < 0:
+        hi *= 2
+        if hi > 1e8:
+            return float("inf")
+    return float(optimize.brentq(f, 0.0, hi, xtol=1e-10, rtol=1e-12))
+
+
+def _orth(J: np.ndarray) -> tuple[np.ndarray, int]:
+    """Orthonormal basis of the column space of ``J`` and its numerical rank."""
+    U, s, _ = np.linalg.svd(J, full_matrices=False)
+    if s.size == 0 or s[0] == 0:
+        return U[:, :0], 0
+    rank = int(np.sum(s > max(J.shape) * np.finfo(float).eps * s[0]))
+    return U[:, :rank], rank
+
+
+def holm(p_values, correction: str = "holm") -> np.ndarray:
+    """Adjusted p-values (Holm step-down, Bonferroni, or none); NaN entries stay NaN."""
+    p = np.asarray(p_values, float)
+    out = np.full(p.shape, np.nan)
+    ok = np.flatnonzero(np.isfinite(p))
+    m = ok.size
+    if m == 0:
+        return out
+    if correction == "none":
+        out[ok] = p[ok]
+    elif correction == "bonferroni":
+        out[ok] = np.minimum(1.0, m * p[ok])
+    else:
+        order = ok[np.argsort(p[ok], kind="stable")]
+        running = 0.0
+        for j, i in enumerate(order):
+            running = max(running, min(1.0, (m - j) * p[i]))
+            out[i] = running
+    return out
+
+
+# --------------------------------------------------------------------------- identifiability
+
+
+@dataclass(frozen=True)
+class Identifiability:
+    """Can an effect be tested against the current model on this pose set?
+
+    ``mde`` in the effect's parameter unit (per axis), ``mde_data`` the largest change of
+    a pose mean it causes at that size (data unit); ``info`` = ``I_φ`` (3, 3), the
+    profiled Fisher information in noise units; ``lambda_crit`` = ``λ*``.
+    """
+
+    effect: str
+    identifiable: bool
+    reasons: tuple[str, ...]
+    absorbed: float
+    absorbed_axis: np.ndarray
+    mde: np.ndarray
+    mde_data: np.ndarray
+    info: np.ndarray
+    lambda_crit: float
+    dof: int
+
+    def mde_along(self, direction) -> float:
+        """Size ``a`` of the MDE along the unit direction ``d`` in parameter space: ``φ = a d``."""
+        d = np.asarray(direction, float)
+        d = d / np.linalg.norm(d)
+        v = float(d @ self.info @ d)
+        return float(np.sqrt(self.lambda_crit / v)) if v > 0 else float("inf")
+
+
+def _perturbation(eid: str, data: PoseData, base: Fit) -> np.ndarray:
+    """(n, 3) largest change of pose mean i (over the three axes of z, data unit) per unit
+    of each of the effect's three parameters."""
+    e = EFFECTS[eid]
+    n = len(data)
+    if e.kind == "additive":
+        return np.repeat(np.abs(data.covariate(e.covariate))[:, None], 3, axis=1)
+    col = np.linalg.norm(base.M, axis=0)  # |M[:, j]|: how much P_j moves z
+    x = np.abs(base.x)
+    per = x ** e.power if e.power > 1 else x * np.abs(data.covariate(e.covariate))[:, None]
+    return per * col[None, :] if n else per
+
+
+def identifiability(data: PoseData, base: Fit, eid: str, rules: Rules, n_tests: int) -> Identifiability:
+    """Identifiability and minimum detectable effect of ``eid`` against the fitted ``base``.
+
+    Parameters
+    ----------
+    data : PoseData
+    base : Fit
+        The current model (base + effects named so far).
+    eid : str
+        Candidate effect id.
+    rules : Rules
+    n_tests : int
+        Candidates in the round (the MDE is computed at level ``alpha / n_tests``).
+    """
+    e = effect(eid)
+    reasons = []
+    n, q = len(data), base.q
+    dof = n - q - 3
+    if e.covariate == TEMPERATURE:
+        if data.temp is None:
+            raise AccelcalError(f"{eid}: the recording has no temperature column (not applicable)")
+        rng = float(np.ptp(data.temp))
+        if rng < rules.min_temp_range:
+            reasons.append(f"temperature varies by {rng:.3g} degC over the poses (< {rules.min_temp_range:g})")
+    if dof < 1:
+        reasons.append(f"{n} poses leave {dof} residual degrees of freedom for {q} + 3 parameters")
+    J0 = base.J
+    J1 = effect_columns(base.p, data, base.effects, eid) / data.sigma[:, None]
+    U0, _ = _orth(J0)
+    U1, rank1 = _orth(J1)
+    rho = np.linalg.svd(U0.T @ U1, compute_uv=False) if rank1 else np.zeros(0)
+    absorbed = 1.0 if rank1 < 3 else float(min(1.0, rho.max() ** 2))
+    proj = U0 @ (U0.T @ J1)
+    norms = np.sum(J1 * J1, axis=0)
+    absorbed_axis = np.where(norms > 0, np.sum(proj * proj, axis=0) / np.where(norms > 0, norms, 1), 1.0)
+    Jp = J1 - proj
+    info = Jp.T @ Jp
+    lam = critical_noncentrality(3, dof, rules.alpha / max(n_tests, 1), rules.power)
+    diag = np.diag(info)
+    mde = np.where(diag > 0, np.sqrt(lam / np.where(diag > 0, diag, 1)), np.inf)
+    with np.errstate(invalid="ignore"):
+        mde_data = np.max(_perturbation(eid, data, base), axis=0) * mde
+    mde_data = np.where(np.isnan(mde_data), np.inf, mde_data)
+    g_data = float(np.median(np.linalg.norm(data.z - base.bias, axis=1)))
+    if rank1 < 3:
+        reasons.append(f"the effect's residual signature has rank {rank1} < 3 on this pose set")
+    elif absorbed > rules.max_absorbed:
+        reasons.append(f"the base model absorbs {absorbed:.6f} of its worst direction (> {rules.max_absorbed:g})")
+    worst = float(np.max(mde_data))
+    if not reasons and not worst <= rules.max_mde_g * g_data:
+        reasons.append(f"minimum detectable effect changes the pose means by {worst:.3g} "
+                       f"(> {rules.max_mde_g:g} g = {rules.max_mde_g * g_data:.3g} in the data unit)")
+    return Identifiability(eid, not reasons, tuple(reasons), absorbed, absorbed_axis, mde, mde_data, info, lam, dof)
+
+
+# --------------------------------------------------------------------------- the loop
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One candidate in one round: identifiability, nested test, ΔBIC, LOPO, estimate."""
+
+    round: int
+    effect: str
+    identifiable: bool
+    reasons: tuple[str, ...]
+    absorbed: float
+    absorbed_axis: list
+    mde: list
+    mde_data: list
+    statistic: float = float("nan")
+    dof: tuple = (3, 0)
+    p_value: float = float("nan")
+    p_adjusted: float = float("nan")
+    delta_bic: float = float("nan")
+    lopo_gap_current: float = float("nan")
+    lopo_gap: float = float("nan")
+    estimate: list = field(default_factory=lambda: [float("nan")] * 3)
+    se: list = field(default_factory=lambda: [float("nan")] * 3)
+    se_noise: list = field(default_factory=lambda: [float("nan")] * 3)
+    passed_test: bool = False
+    passed_bic: bool = False
+    passed_lopo: bool = False
+    named: bool = False
+
+    @property
+    def passed(self) -> bool:
+        return self.identifiable and self.passed_test and self.passed_bic and self.passed_lopo
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["reasons"] = list(self.reasons)
+        d["dof"] = list(self.dof)
+        d["passed"] = self.passed
+        d["parameters"] = list(EFFECTS[self.effect].parameters)
+        d["unit"] = EFFECTS[self.effect].unit
+        return d
+
+
+@dataclass(frozen=True)
+class DiscrepancyResult:
+    """Outcome of the deterministic layer on one pose set.
+
+    ``effect`` is the effect named in round 1 (or ``'none'``); ``outcome`` is the same,
+    except ``'not_identifiable'`` when nothing was named and at least one applicable
+    candidate was refused in round 1 (the recording cannot rule that effect out).
+    """
+
+    effects: tuple[str, ...]
+    candidates: tuple[Candidate, ...]
+    not_applicable: dict
+    base: Fit
+    final: Fit
+    lopo_base: np.ndarray
+    lopo_final: np.ndarray
+    data: PoseData
+    rules: Rules
+
+    @property
+    def effect(self) -> str:
+        return self.effects[0] if self.effects else "none"
+
+    @property
+    def not_identifiable(self) -> tuple[str, ...]:
+        return tuple(c.effect for c in self.candidates if c.round == 1 and not c.identifiable)
+
+    @property
+    def outcome(self) -> str:
+        if self.effects:
+            return self.effects[0]
+        return "not_identifiable" if self.not_identifiable else "none"
+
+    @property
+    def gap_before(self) -> float:
+        return gap(self.base.weighted)
+
+    @property
+    def gap_after(self) -> float:
+        return gap(self.final.weighted)
+
+    def summary(self) -> dict:
+        """The gaps and what noise alone predicts, before (base) and after (named effects)."""
+        b, f = self.base, self.final
+        chi0 = stats.chi2.sf(b.chi2, b.dof) if b.dof > 0 else float("nan")
+        chi1 = stats.chi2.sf(f.chi2, f.dof) if f.dof > 0 else float("nan")
+        excess_var = b.chi2 - b.dof
+        return {
+            "n_poses": b.n,
+            "gap_before": self.gap_before,
+            "gap_after": self.gap_after,
+            "gap_expected_before": float(np.sqrt(max(b.dof, 0) / b.n)),
+            "gap_expected_after": float(np.sqrt(max(f.dof, 0) / f.n)),
+            "gap_lopo_before": gap(self.lopo_base),
+            "gap_lopo_after": gap(self.lopo_final),
+            "excess_before": float(np.sqrt(b.chi2 / b.dof)) if b.dof > 0 else float("nan"),
+            "excess_after": float(np.sqrt(f.chi2 / f.dof)) if f.dof > 0 else float("nan"),
+            "chi2_before": b.chi2, "dof_before": b.dof, "chi2_p_before": float(chi0),
+            "chi2_after": f.chi2, "dof_after": f.dof, "chi2_p_after": float(chi1),
+            # share of the χ² in excess of its expectation that the named effects remove
+            "excess_explained_fraction": float((b.chi2 - f.chi2) / excess_var) if excess_var > 0 else float("nan"),
+            # 'no excess' (the base model's residuals are consistent with the pose noise at
+            # level α), 'explained' (they were not, after the named effects they are),
+            # 'not explained' (still not), or 'untestable' (no degree of freedom)
+            "excess_status": _excess_status(chi0, chi1, self.rules.alpha),
+        }
+
+    def to_dict(self) -> dict:
+        def params(f: Fit):
+            names = parameter_names(f.effects)
+            se = f.standard_errors(scaled=True)
+            sen = f.standard_errors(scaled=False)
+            return {nm: {"value": float(v), "se": float(s), "se_noise": float(sn)}
+                    for nm, v, s, sn in zip(names, f.p, se, sen)}
+
+        d = {
+            "effect": self.effect,
+            "effects": list(self.effects),
+            "outcome": self.outcome,
+            "not_identifiable": list(self.not_identifiable),
+            "not_applicable": dict(self.not_applicable),
+            "candidates": [c.to_dict() for c in self.candidates],
+            **self.summary(),
+            "rules": {**asdict(self.rules), "candidates": list(self.rules.candidates)},
+            "model_before": {"effects": [], "parameters": params(self.base)},
+            "model_after": {"effects": list(self.final.effects), "parameters": params(self.final)},
+            "poses": {
+                "t": self.data.t.tolist(),
+                "temp": None if self.data.temp is None else self.data.temp.tolist(),
+                "sigma": self.data.sigma.tolist(),
+                "residual_before": self.base.residuals.tolist(),
+                "residual_after": self.final.residuals.tolist(),
+                "lopo_before": self.lopo_base.tolist(),
+                "lopo_after": self.lopo_final.tolist(),
+            },
+        }
+        return d
+
+
+def _excess_status(p_before: float, p_after: float, alpha: float) -> str:
+    if not (np.isfinite(p_before) and np.isfinite(p_after)):
+        return "untestable"
+    if p_before >= alpha:
+        return "no excess"
+    return "explained" if p_after >= alpha else "not explained"
+
+
+def _test_candidate(data: PoseData, current: Fit, lopo_cur: np.ndarray, ident: Identifiability,
+                    rnd: int, rules: Rules):
+    eid = ident.effect
+    common = dict(round=rnd, effect=eid, identifiable=ident.identifiable, reasons=ident.reasons,
+                  absorbed=ident.absorbed, absorbed_axis=ident.absorbed_axis.tolist(), mde=ident.mde.tolist(),
+                  mde_data=ident.mde_data.tolist())
+    if not ident.identifiable:
+        return Candidate(**common), None, None
+    try:
+        aug = fit(data, (*current.effects, eid), p0=current.p)
+    except AccelcalError as err:
+        return Candidate(**{**common, "identifiable": False,
+                            "reasons": (*ident.reasons, f"fit failed: {err}")}), None, None
+    n = data.z.shape[0]
+    dof1 = aug.dof
+    chi0, chi1 = current.chi2, aug.chi2
+    stat = ((chi0 - chi1) / 3) / (chi1 / dof1) if chi1 > 0 else float("inf")
+    stat = max(stat, 0.0)
+    p = float(stats.f.sf(stat, 3, dof1))
+    dbic = float(n * np.log(chi1 / chi0) + 3 * np.log(n)) if chi0 > 0 and chi1 > 0 else float("nan")
+    lo = lopo(aug, data)
+    both = np.isfinite(lo) & np.isfinite(lopo_cur)
+    press0, press1 = (float(np.sum(lopo_cur[both] ** 2)), float(np.sum(lo[both] ** 2))) if both.any() else (np.nan,) * 2
+    i = len(current.effects)
+    sl = slice(9 + 3 * i, 12 + 3 * i)
+    cand = Candidate(**common, statistic=float(stat), dof=(3, dof1), p_value=p, delta_bic=dbic,
+                     lopo_gap_current=gap(lopo_cur[both]) if both.any() else float("nan"),
+                     lopo_gap=gap(lo[both]) if both.any() else float("nan"),
+                     estimate=aug.p[sl].tolist(), se=aug.standard_errors(True)[sl].tolist(),
+                     se_noise=aug.standard_errors(False)[sl].tolist(),
+                     passed_bic=bool(dbic < -rules.bic_threshold),
+                     passed_lopo=bool(np.isfinite(press1) and press1 < (1 - rules.lopo_min_improvement) * press0))
+    return cand, aug, lo
+
+
+def applicable(data: PoseData, candidates) -> tuple[list[str], dict]:
+    """Candidates whose covariate exists in the recording, and why the others are not applicable."""
+    ok, skipped = [], {}
+    for eid in candidates:
+        if EFFECTS[eid].covariate == TEMPERATURE and data.temp is None:
+            skipped[eid] = "the recording has no temperature column"
+        else:
+            ok.append(eid)
+    return ok, skipped
+
+
+def discrepancy(data: PoseData, rules: Rules | None = None) -> DiscrepancyResult:
+    """Run the deterministic layer (module docstring) on one pose set.
+
+    Raises
+    ------
+    AccelcalError
+        The base model cannot be fitted (too few or degenerate poses: the full model
+        needs at least 10).
+    """
+    rules = rules or Rules()
+    cands, skipped = applicable(data, rules.candidates)
+    base = fit(data)
+    lopo_base = lopo(base, data)
+    current, lopo_cur = base, lopo_base
+    named, rows = [], []
+    for rnd in range(1, rules.max_rounds + 1):
+        remaining = [e for e in cands if e not in named]
+        if not remaining:
+            break
+        tested = []
+        for eid in remaining:
+            ident = identifiability(data, current, eid, rules, len(remaining))
+            tested.append(_test_candidate(data, current, lopo_cur, ident, rnd, rules))
+        padj = holm([c.p_value for c, _, _ in tested], rules.correction)
+        round_rows = []
+        for (c, aug, lo), pa in zip(tested, padj):
+            ok = bool(np.isfinite(pa) and pa <= rules.alpha)
+            round_rows.append((Candidate(**{**asdict(c), "reasons": c.reasons, "p_adjusted": float(pa),
+                                            "passed_test": ok}), aug, lo))
+        passing = [t for t in round_rows if t[0].passed]
+        if passing:
+            best = min(passing, key=lambda t: (t[0].p_value, t[0].delta_bic))
+            round_rows = [(Candidate(**{**asdict(c), "reasons": c.reasons, "named": c is best[0]}), a, lo)
+                          for c, a, lo in round_rows]
+        rows += [c for c, _, _ in round_rows]
+        if not passing:
+            break
+        _, current, lopo_cur = best
+        named.append(best[0].effect)
+    return DiscrepancyResult(tuple(named), tuple(rows), skipped, base, current, lopo_base, lopo_cur, data, rules)
+
+
+__all__ = ["CORRECTIONS", "Candidate", "DiscrepancyResult", "Identifiability", "Rules", "applicable",
+           "critical_noncentrality", "discrepancy", "gap", "holm", "identifiability"]

@@ -1,0 +1,33 @@
+"""Benchmark chunk: the discrepancy loop on every recording of the chunk (never reads the key)."""
+
+from pathlib import Path
+
+import pandas as pd
+from _helpers import configure_logging, load_config, mock_snakemake, write_csv
+
+from accelcal.discrepancy.benchmark import detect_case
+from accelcal.discrepancy.detect import Rules
+from accelcal.errors import AccelcalError
+from accelcal.recording import read_recording
+
+if "snakemake" not in globals():
+    _cfg = load_config()["discrepancy"]
+    snakemake = mock_snakemake(
+        "discrepancy_detect", input={"recordings": "results/discrepancy/benchmark/recordings/chunk_0"},
+        output=["results/discrepancy/benchmark/detections/chunk_0.csv"],
+        params={"g": _cfg["benchmark"]["session"]["g"], "rules": _cfg["rules"]}, wildcards={"chunk": "0"})
+
+log = configure_logging(snakemake)
+rules = Rules.from_config(snakemake.params.rules)
+paths = sorted(Path(snakemake.input.recordings).glob("*.csv"))
+rows = []
+for path in paths:
+    try:
+        rec = read_recording(path)
+    except AccelcalError as e:
+        rows.append({"recording": path.stem, "outcome": "error", "error": str(e).splitlines()[0]})
+        continue
+    rows.append({"recording": path.stem, **detect_case(rec, snakemake.params.g, rules)})
+df = pd.DataFrame(rows)
+write_csv(df, snakemake.output[0])
+log.info("%d recordings: %s", len(df), df["outcome"].value_counts().to_dict() if len(df) else {})

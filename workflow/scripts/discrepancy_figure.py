@@ -1,0 +1,45 @@
+"""The figures of the discrepancy stage (one script, the figure id in params)."""
+
+import json
+
+import pandas as pd
+from _helpers import configure_logging, load_config, mock_snakemake
+
+from accelcal.discrepancy import figures as F
+from accelcal.plotting import save_figure
+
+if "snakemake" not in globals():
+    _cfg = load_config()["discrepancy"]
+    snakemake = mock_snakemake(
+        "discrepancy_power_figure",
+        input={"rates": "results/discrepancy/benchmark/rates.csv", "summary": "results/discrepancy/benchmark/summary.csv"},
+        output={"png": "results/figures/discrepancy_power.png", "pdf": "results/figures/discrepancy_power.pdf"},
+        params={"figure": "discrepancy_power", "rules": _cfg["rules"]})
+
+log = configure_logging(snakemake)
+fid = snakemake.params.figure
+if fid == "discrepancy_confusion":
+    scores = pd.read_csv(snakemake.input.scores, keep_default_na=False, na_values=[""])
+    fig = F.plot_confusion(scores, snakemake.params.confusion_size, snakemake.params.rules["alpha"])
+elif fid == "discrepancy_power":
+    summ = pd.read_csv(snakemake.input.summary)
+    fpr = summ[(summ.effect == "none") & (summ.metric == "false_positive_rate")]["value"]
+    fig = F.plot_power(pd.read_csv(snakemake.input.rates), snakemake.params.rules["power"],
+                       snakemake.params.rules["alpha"], float(fpr.iloc[0]) if len(fpr) else None)
+else:
+    reports = {}
+    for name, path in zip(snakemake.params.recordings, snakemake.input.reports):
+        with open(path) as f:
+            reports[name] = json.load(f)
+    if fid == "discrepancy_measured_before_after":
+        fig = F.plot_before_after(reports)
+    elif fid == "discrepancy_allan":
+        missing = [n for n, r in reports.items() if r.get("stochastic") is None]
+        if missing:
+            raise SystemExit(f"no stochastic layer for {', '.join(missing)}: "
+                             f"{'; '.join(reports[n].get('stochastic_error', '') for n in missing)}")
+        fig = F.allan_figure({n: r["stochastic"] for n, r in reports.items()})
+    else:
+        raise SystemExit(f"unknown figure {fid!r}")
+save_figure(fig, snakemake.output.png)
+log.info("%s -> %s, %s", fid, snakemake.output.png, snakemake.output.pdf)

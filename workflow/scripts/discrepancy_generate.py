@@ -1,0 +1,37 @@
+"""Benchmark chunk: simulated recordings with one hidden effect each (canonical CSV) and their key."""
+
+from pathlib import Path
+
+import pandas as pd
+from _helpers import configure_logging, load_config, mock_snakemake, write_csv
+
+from accelcal.discrepancy.benchmark import Session, chunk, plan, simulate_case
+from accelcal.discrepancy.detect import Rules
+from accelcal.recording import write_recording
+
+if "snakemake" not in globals():
+    _cfg = load_config()["discrepancy"]
+    snakemake = mock_snakemake(
+        "discrepancy_generate",
+        output={"recordings": "results/discrepancy/benchmark/recordings/chunk_0",
+                "key": "results/discrepancy/benchmark/key/chunk_0.csv"},
+        params={"chunk": 0, "chunks": _cfg["benchmark"]["chunks"], "seed": _cfg["seed"],
+                "benchmark": _cfg["benchmark"], "rules": _cfg["rules"]},
+        wildcards={"chunk": "0"})
+
+log = configure_logging(snakemake)
+p = snakemake.params
+bench = p.benchmark
+session = Session.from_config(bench["session"])
+rules = Rules.from_config(p.rules)
+todo = chunk(plan(rules.candidates, bench["sizes_mde"], bench["seeds"], bench["seeds_none"],
+                  bench["seeds_constant"]), p.chunks, p.chunk)
+out = Path(snakemake.output.recordings)
+out.mkdir(parents=True, exist_ok=True)
+rows = []
+for _, spec in todo.iterrows():
+    rec, key = simulate_case(spec.truth, spec.size_mde, int(spec.replicate), seed=p.seed, session=session, rules=rules)
+    write_recording(out / f"{spec.recording}.csv", rec)
+    rows.append({"recording": spec.recording, **key})
+write_csv(pd.DataFrame(rows), snakemake.output.key)
+log.info("chunk %d of %d: %d recordings -> %s, key -> %s", p.chunk, p.chunks, len(rows), out, snakemake.output.key)

@@ -1,0 +1,45 @@
+"""Both layers of the discrepancy workflow on one measured recording (the JSON of `accelcal discrepancy`)."""
+
+import json
+import os
+import tempfile
+from pathlib import Path
+
+from _helpers import configure_logging, load_config, mock_snakemake
+
+from accelcal.discrepancy.detect import Rules
+from accelcal.discrepancy.report import StochasticSettings, analyse
+from accelcal.measured.sources import source
+from accelcal.recording import read_recording
+from accelcal.results import _finite_json
+
+if "snakemake" not in globals():
+    _cfg = load_config()
+    snakemake = mock_snakemake(
+        "discrepancy_measured_report", input={"csv": "results/measured/xsens_mti.csv"},
+        output=["results/discrepancy/measured/xsens_mti.json"],
+        params={"g": _cfg["measured"]["recordings"]["xsens_mti"]["g"], "rules": _cfg["discrepancy"]["rules"],
+                "stochastic": _cfg["discrepancy"]["stochastic"]},
+        wildcards={"recording": "xsens_mti"})
+
+log = configure_logging(snakemake)
+name = snakemake.wildcards.recording
+p = snakemake.params
+rec = read_recording(snakemake.input.csv)
+unit = source(name).unit
+analysis = analyse(rec, p.g, rules=Rules.from_config(p.rules), stochastic=StochasticSettings.from_config(p.stochastic),
+                   unit=unit)
+out = analysis.to_dict()
+out.update({"recording": name, "g": p.g, "unit": unit})
+path = Path(snakemake.output[0])
+path.parent.mkdir(parents=True, exist_ok=True)
+fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+with os.fdopen(fd, "w") as fh:
+    json.dump(_finite_json(out), fh, indent=1, sort_keys=False)
+    fh.write("\n")
+os.replace(tmp, path)
+s = analysis.deterministic.summary()
+log.info("%s: %d poses, effect %s (outcome %s), gap %.3g -> %.3g, not identifiable: %s; stochastic: %s", name,
+         s["n_poses"], analysis.deterministic.effect, analysis.deterministic.outcome, s["gap_before"], s["gap_after"],
+         ", ".join(analysis.deterministic.not_identifiable) or "-",
+         analysis.implication.get("named_terms") if analysis.stochastic is not None else analysis.stochastic_error)
