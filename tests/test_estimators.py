@@ -295,3 +295,19 @@ def test_fast_and_reference_results_serialise_alike(rng, truth):
         assert list(a) == list(b)
         np.testing.assert_allclose(a["singular_values"], b["singular_values"], rtol=1e-12)
         np.testing.assert_allclose(a["residuals"], b["residuals"], rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("var", [0.0, 1e-6, 0.05])
+def test_als_matrix_from_the_lls_normal_matrix_equals_its_definition(rng, var):
+    """Ψ(σ²) = N + σ² Ψ1 + σ⁴ Ψ2 from XᵀX equals the monomial-by-monomial corrected moments
+    (and differs from XᵀX as soon as σ² > 0: the test can tell)."""
+    from accelcal.als import corrected_matrix_terms, corrected_moments
+    from accelcal.lls import normal_matrix
+
+    z = rng.normal(size=(30, 3)) + [0.2, -0.1, 0.3]
+    N = normal_matrix(z, 1.0)
+    P1, P2 = corrected_matrix_terms(N)
+    ref = corrected_moments(z, var)
+    np.testing.assert_allclose(N + var * P1 + var**2 * P2, ref, rtol=0, atol=1e-13 * np.abs(ref).max())
+    if var:
+        assert np.abs(N - ref).max() > 1e3 * 1e-13 * np.abs(ref).max()

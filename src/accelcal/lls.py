@@ -102,7 +102,16 @@ def _scale(z: np.ndarray) -> np.ndarray:
 def _scale_single(z: np.ndarray) -> float:
     """``k = sqrt(mean ||z||²)`` of one problem; NaN/inf if ``z`` is not finite."""
     flat = z.ravel()
-    return math.sqrt(float(flat @ flat) / len(z))
+    return math.sqrt(flat.dot(flat) / len(z))
+
+
+def normal_matrix(z: np.ndarray, k: float) -> np.ndarray:
+    """``XᵀX`` (10x10) for the design matrix X of eq. (3) of the poses ``z / k`` (n, 3)."""
+    Z1 = np.empty((len(z), 4))
+    np.divide(z, k, out=Z1[:, :3])
+    Z1[:, 3] = 1.0
+    X = Z1.dot(_LEFT) * Z1.dot(_RIGHT)  # = design_matrix(z / k), bit for bit
+    return X.T.dot(X)
 
 
 def bias_design(z: np.ndarray) -> np.ndarray:
@@ -204,18 +213,17 @@ def _null_vector(N: np.ndarray) -> tuple[np.ndarray, float] | None:
     """
     diag = N.ravel()[::11]  # a view of the diagonal
     tr = sum(diag.tolist())
-    U, info = lapack.dpotrf(N)
+    U, x, info = lapack.dposv(N, _START)  # Cholesky factor and the first solve
     delta = 0.0
     if info != 0:  # N singular to rounding (σ10 ≈ 0: noise-free poses): use N + δI
         delta = _SHIFT * tr
         diag += delta
-        U, info = lapack.dpotrf(N)
+        U, x, info = lapack.dposv(N, _START)
         if info != 0:
             return None
-    x = _START
     for _ in range(_ROUNDS):
-        x = lapack.dpotrs(U, lapack.dpotrs(U, x)[0])[0]
-        y = N @ x  # (N + δI) x
+        x = lapack.dpotrs(U, x)[0]  # two solves per round
+        y = N.dot(x)  # (N + δI) x
         xx = x.dot(x)
         rho = x.dot(y) / xx  # Rayleigh quotient of N + δI
         # ||N x̂ - ρ x̂|| for unit x̂ (the shift cancels), plus what rounding can hide:
@@ -231,7 +239,7 @@ def _null_vector(N: np.ndarray) -> tuple[np.ndarray, float] | None:
             # interlacing): a Cholesky of that block minus the bound proves the gap.
             diag[:9] -= bound + delta
             return (x, math.sqrt(xx)) if lapack.dpotrf(N[:9, :9])[1] == 0 else None
-        x /= math.sqrt(xx)  # keep the iterate O(1) between rounds
+        x = lapack.dpotrs(U, x / math.sqrt(xx))[0]  # keep the iterate O(1) between rounds
     return None
 
 
@@ -259,11 +267,7 @@ def full_lls(z, g: float) -> LLSResult:
     k = _scale_single(z)
     if not (math.isfinite(k) and k > 0):  # NaN/inf or all-zero poses: the reference says which
         return _full_lls_svd(z, g)
-    Z1 = np.empty((n, 4))
-    np.divide(z, k, out=Z1[:, :3])
-    Z1[:, 3] = 1.0
-    X = (Z1 @ _LEFT) * (Z1 @ _RIGHT)  # the design matrix of eq. (3) of z / k
-    N = X.T @ X
+    N = normal_matrix(z, k)
     # row 9 of N holds the column sums of X: Σ zs², 2 Σ zx zy, ..., -2 Σ zs, n
     xx, yy, zz, xy, xz, yz, sx, sy, sz, _ = N[9].tolist()
     if not geometry_is_clearly_fine((-0.5 * sx, -0.5 * sy, -0.5 * sz),
@@ -321,20 +325,26 @@ def bias_lls(z, g: float) -> LLSResult:
     z = pose_array(z, "bias")
     n = len(z)
     flat = z.ravel()
-    sum_sq = float(flat @ flat)  # Σ |z|²: NaN or inf iff some z is (or overflows)
+    sum_sq = flat.dot(flat)  # Σ |z|²: NaN or inf iff some z is (or overflows)
     if not math.isfinite(sum_sq):
         return _bias_lls_lstsq(z, g)  # the reference says which error
     # Eq. (7) is a least-squares problem with an intercept, so it is the same problem in
     # poses shifted by any point p: with c_i = z_i - p, |c_i|² = 2 c_iᵀ(b - p) + c'.
     # Shifting by the first pose removes the offset of the data; eliminating the
     # intercept leaves the 3x3 normal equations of the centred c_i, whose moments are
-    # in WᵀW with W = [c, |c|², 1].
+    # in WᵀW with W = [c, c², 1] (c² element-wise).
     p = z[0]
-    W = np.empty((n, 5))
-    np.subtract(z, p, out=W[:, :3])
-    np.einsum("ij,ij->i", W[:, :3], W[:, :3], out=W[:, 3])
-    W[:, 4] = 1.0
-    (xx, xy, xz, xq, sx), (_, yy, yz, yq, sy), (_, _, zz, zq, sz), (_, _, _, _, sq), _ = (W.T @ W).tolist()
+    W = np.empty((n, 7))
+    shifted = W[:, :3]
+    np.subtract(z, p, out=shifted)
+    np.multiply(shifted, shifted, out=W[:, 3:6])
+    W[:, 6] = 1.0
+    rx, ry, rz = W.T[:3].dot(W).tolist()  # Σ c_j (c, c², 1) for j = x, y, z
+    xx, xy, xz, sx = rx[0], rx[1], rx[2], rx[6]
+    yy, yz, sy = ry[1], ry[2], ry[6]
+    zz, sz = rz[2], rz[6]
+    sq = xx + yy + zz  # Σ |c|²
+    xq, yq, zq = rx[3] + rx[4] + rx[5], ry[3] + ry[4] + ry[5], rz[3] + rz[4] + rz[5]  # Σ c |c|²
     # scatter about the mean, Σ (c - c̄)(c - c̄)ᵀ, and mean of c
     mx, my, mz = sx / n, sy / n, sz / n
     C = ((xx - sx * mx, xy - sx * my, xz - sx * mz), (0.0, yy - sy * my, yz - sy * mz), (0.0, 0.0, zz - sz * mz))
