@@ -31,10 +31,16 @@ certify its answer:
   factor 1/MIN_GAP on the rounding error; and (ii) that the returned Θ̂ is within
   ``EIGVEC_TOL`` (angle) of that eigenvector (Davis–Kahan bound from the residual
   ``N Θ̂ - ρ Θ̂`` and the certified gap).  Differences to the SVD are ~1e-14 in practice.
+  Problems that take the SVD: poses on a hemisphere only, raw counts whose offset is
+  several times the gravity radius (σ0/σ8 in the thousands), ~10-12 random poses, noise
+  above ~1e-2 g, and every degenerate or doubtful pose set (the SVD then raises).
 * bias-only LLS: the least-squares problem of eq. (7) with the intercept c eliminated,
   i.e. the 3x3 normal equations of the centred poses (the scatter matrix the geometry
-  check inspects anyway), solved by Cholesky in scalar arithmetic.
-* residuals, standard errors and singular values are computed on first access.
+  check inspects anyway; moments taken about the first pose, so an offset far from the
+  origin costs no precision), solved by Cholesky in scalar arithmetic.
+* validation reads finiteness and geometry from the moments computed anyway
+  (:mod:`accelcal.validation`); residuals, standard errors and singular values are
+  computed on first access; results skip the frozen-dataclass ``__init__``.
 """
 
 from __future__ import annotations
@@ -82,6 +88,8 @@ _LEFT[[0, 1, 2, 0, 0, 1, 0, 1, 2, 3], range(10)] = 1.0
 _RIGHT = np.zeros((4, 10))
 _RIGHT[[0, 1, 2, 1, 2, 2, 3, 3, 3, 3], range(10)] = [1.0, 1.0, 1.0, 2.0, 2.0, 2.0, -2.0, -2.0, -2.0, 1.0]
 _EYE3 = np.eye(3)
+for _constant in (_START, _LEFT, _RIGHT, _EYE3):
+    _constant.setflags(write=False)  # shared by every call (LAPACK gets copies)
 
 
 def design_matrix(z: np.ndarray) -> np.ndarray:
