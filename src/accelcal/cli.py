@@ -118,7 +118,7 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _discrepancy(args) -> int:
-    from .discrepancy.report import analyse
+    from .discrepancy import report
     from .recording import read_recording
 
     if not np.isfinite(args.g) or args.g <= 0:
@@ -127,7 +127,7 @@ def _discrepancy(args) -> int:
     with _step(f"reading {args.recording}"):
         rec = read_recording(args.recording)
     with _step("static detection, deterministic and stochastic layers (the noise bootstrap takes a while)"):
-        analysis = analyse(rec, args.g, unit="data unit")
+        analysis = report.analyse(rec, args.g, stochastic=report.DEFAULT_STOCHASTIC, unit="data unit")
     figures = []
     if args.figures is not None:
         from .discrepancy.figures import recording_figures

@@ -5,9 +5,8 @@ from pathlib import Path
 import pandas as pd
 from _helpers import configure_logging, load_config, mock_snakemake, write_csv
 
-from accelcal.discrepancy.benchmark import Session, chunk, plan, simulate_case
+from accelcal.discrepancy.benchmark import Session, chunk, plan, simulate_case, write_counts_csv
 from accelcal.discrepancy.detect import Rules
-from accelcal.recording import write_recording
 
 if "snakemake" not in globals():
     _cfg = load_config()["discrepancy"]
@@ -31,7 +30,7 @@ out.mkdir(parents=True, exist_ok=True)
 rows = []
 for _, spec in todo.iterrows():
     rec, key = simulate_case(spec.truth, spec.size_mde, int(spec.replicate), seed=p.seed, session=session, rules=rules)
-    write_recording(out / f"{spec.recording}.csv", rec)
+    write_counts_csv(out / f"{spec.recording}.csv", rec)
     rows.append({"recording": spec.recording, **key})
 write_csv(pd.DataFrame(rows), snakemake.output.key)
 log.info("chunk %d of %d: %d recordings -> %s, key -> %s", p.chunk, p.chunks, len(rows), out, snakemake.output.key)

@@ -206,6 +206,33 @@ def simulate_case(truth: str, size_mde: float, replicate: int, *, seed: int, ses
     return rec, key
 
 
+def write_counts_csv(path, rec: Recording) -> None:
+    """Write a simulated recording as canonical CSV with integer counts (what a 16-bit
+    sensor logs; ~25 % smaller and faster to write than float text), atomically.
+
+    ``read_recording`` returns the same numbers: counts are integers, ``t`` and ``temp``
+    are written with 10 significant digits (they are multiples of 0.01)."""
+    import os
+    import tempfile
+    from pathlib import Path
+
+    path = Path(path)
+    acc = np.asarray(rec.acc)
+    if not np.array_equal(acc, np.round(acc)):
+        raise AccelcalError("write_counts_csv needs integer counts")
+    df = pd.DataFrame({"t": rec.t, "ax": acc[:, 0].astype(np.int64), "ay": acc[:, 1].astype(np.int64),
+                       "az": acc[:, 2].astype(np.int64)})
+    if rec.temp is not None:
+        df["temp"] = rec.temp
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    os.close(fd)
+    try:
+        df.to_csv(tmp, index=False, float_format="%.10g")
+        os.replace(tmp, path)
+    finally:
+        Path(tmp).unlink(missing_ok=True)
+
+
 # --------------------------------------------------------------------------- detection
 
 
@@ -377,5 +404,6 @@ def summary(scores: pd.DataFrame, rate_table: pd.DataFrame, *, alpha: float, pow
 
 
 __all__ = ["CONSTANT_TEMPERATURE", "NONE", "NOT_IDENTIFIABLE", "Session", "chunk", "clopper_pearson", "crossing",
-           "detect_case", "expected_outcome", "plan", "rates", "score_cases", "simulate_case", "summary"]
+           "detect_case", "expected_outcome", "plan", "rates", "score_cases", "simulate_case", "summary",
+           "write_counts_csv"]
 

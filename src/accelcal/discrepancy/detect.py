@@ -56,6 +56,7 @@ leave-one-pose-out gap ``sqrt(PRESS/n)`` is reported next to it.
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
+from functools import lru_cache
 
 import numpy as np
 from scipy import optimize, stats
@@ -110,6 +111,7 @@ def gap(weighted_residuals) -> float:
     return float(np.sqrt(np.mean(w * w))) if w.size else float("nan")
 
 
+@lru_cache(maxsize=4096)
 def critical_noncentrality(k: int, dof: int, level: float, power: float) -> float:
     """``λ*`` with ``P(F(k, dof; λ*) > F_{1-level}(k, dof)) = power`` (inf if ``dof < 1``)."""
     if dof < 1:
