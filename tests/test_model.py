@@ -68,3 +68,13 @@ def test_classic_designs(n):
     np.testing.assert_allclose(u.T @ u, n / 3 * np.eye(3), atol=1e-12)
     with pytest.raises(InputShapeError):
         classic_directions(7)
+
+
+def test_scalar_m_from_params_equals_the_array_version(rng):
+    from accelcal.model import m_from_params_single
+
+    for _ in range(50):
+        s, th = rng.uniform(-1e-2, 1e-2, 3), rng.uniform(-0.3, 0.3, 3)
+        np.testing.assert_allclose(m_from_params_single(s, th), m_from_params(s, th), rtol=1e-15, atol=1e-16)
+    with pytest.raises(InputShapeError, match="too large"):
+        m_from_params_single(np.zeros(3), [0.0, 1.2, 1.2])

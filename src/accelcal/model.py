@@ -20,6 +20,8 @@ All functions accept leading batch dimensions (``s`` of shape ``(..., 3)``).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .errors import InputShapeError, NotPositiveDefiniteError
@@ -61,6 +63,20 @@ def m_from_params(scale_factors, nonorthogonality) -> np.ndarray:
     M[..., 2, 1] = szy
     M[..., 2, 2] = np.sqrt(uz_z2)
     return M * (1.0 + s)[..., :, None]
+
+
+def m_from_params_single(scale_factors, nonorthogonality) -> np.ndarray:
+    """:func:`m_from_params` for one parameter set (two sequences of 3 floats) in scalar
+    arithmetic: the same matrix for a tenth of the time, for the per-problem estimators."""
+    sx, sy, sz = (float(v) for v in scale_factors)
+    txy, tzx, tzy = (float(v) for v in nonorthogonality)
+    sxy, szx, szy = math.sin(txy), math.sin(tzx), math.sin(tzy)
+    uz_z2 = 1.0 - szx * szx - szy * szy
+    if not uz_z2 > 0:
+        raise InputShapeError("non-orthogonality angles too large: sin²θzx + sin²θzy must be < 1")
+    ax, ay, az = 1.0 + sx, 1.0 + sy, 1.0 + sz
+    return np.array([ax, 0.0, 0.0, ay * sxy, ay * math.cos(txy), 0.0,
+                     az * szx, az * szy, az * math.sqrt(uz_z2)]).reshape(3, 3)
 
 
 def params_from_m(M) -> tuple[np.ndarray, np.ndarray]:
