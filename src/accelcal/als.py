@@ -14,8 +14,9 @@ with independent noise of variance σ² on each axis, ``E[h_k(z)] = x^k`` for
 and a monomial ``zx^a zy^b zz^c`` is replaced by ``h_a(zx) h_b(zy) h_c(zz)``.  The
 estimate is the eigenvector of the smallest eigenvalue of the corrected matrix
 ``Ψ(σ²)``, a quadratic polynomial in σ² whose constant term is the LLS normal matrix
-``XᵀX`` (:func:`corrected_matrix_terms`; :func:`corrected_moments` is the definition).  When σ² is unknown it is estimated as the root of ``λ_min(Ψ(σ²)) = 0``
-(the noise-free moment matrix is singular), as in Kukush et al.  The rest (b, λ, M)
+``XᵀX`` (:func:`corrected_matrix_terms`; :func:`corrected_moments` is the definition).
+When σ² is unknown it is estimated as the root of ``λ_min(Ψ(σ²)) = 0`` (the
+noise-free moment matrix is singular), as in Kukush et al.  The rest (b, λ, M)
 follows eqs. (4)-(6) exactly as for the full LLS.
 """
 

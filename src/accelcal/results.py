@@ -122,6 +122,7 @@ class CalibrationResult:
 
 _CORE_FIELDS = frozenset(f.name for f in fields(CalibrationResult))
 
+
 def _finite_json(obj):
     """NaN is not JSON: write it as null."""
     if isinstance(obj, float):
