@@ -1,0 +1,56 @@
+"""Discrepancy workflow: where simulation and measured data disagree, and which effect is missing.
+
+Deterministic layer (pose residuals): :func:`discrepancy` fits the base model of Burkhard
+et al. (2024) and tests a library of candidate effects (:mod:`.effects`) as nested
+extensions (:mod:`.fit`, :mod:`.detect`); :mod:`.benchmark` scores it on simulated
+recordings with hidden effects; :func:`analyse` runs both layers on a recording
+(:mod:`.report`, the ``accelcal discrepancy`` command).
+
+Stochastic layer (rest data): :func:`stochastic_layer` compares the Allan deviation of
+the measured rests with the simulator's noise model, names the missing noise term and
+re-simulates (:mod:`.allan`, :mod:`.stochastic`).
+"""
+
+from .allan import AllanError, AllanVariance, allan_variance
+from .detect import DiscrepancyResult, Rules, discrepancy, identifiability
+from .effects import EFFECT_IDS, EFFECTS
+from .fit import PoseData, fit, pose_data, pose_data_from_static
+from .report import Analysis, analyse
+from .stochastic import (
+    DEFAULT_CANDIDATES,
+    TERMS,
+    StochasticError,
+    StochasticResult,
+    expected_residual_std,
+    plot_allan,
+    rest_segments,
+    simulate_segments,
+    stochastic_layer,
+)
+
+__all__ = [
+    "EFFECTS",
+    "EFFECT_IDS",
+    "Analysis",
+    "DiscrepancyResult",
+    "PoseData",
+    "Rules",
+    "analyse",
+    "discrepancy",
+    "fit",
+    "identifiability",
+    "pose_data",
+    "pose_data_from_static",
+    "DEFAULT_CANDIDATES",
+    "TERMS",
+    "AllanError",
+    "AllanVariance",
+    "StochasticError",
+    "StochasticResult",
+    "allan_variance",
+    "expected_residual_std",
+    "plot_allan",
+    "rest_segments",
+    "simulate_segments",
+    "stochastic_layer",
+]
