@@ -2,7 +2,7 @@
 
     .venv/bin/snakemake all                               # paper scale (profiles/default)
     .venv/bin/snakemake all --configfile config/ci.yaml   # reduced sizes (tests, CI)
-    .venv/bin/snakemake foundation_crlb                   # one figure (every figure id is a target)
+    .venv/bin/snakemake burkhard2024_fig1a                # one figure (every figure id is a target)
 
 Layout (snakemake-workflows style): this file loads and validates the config, then
 includes one rule file per stage from workflow/rules/.  Thin scripts in
@@ -34,7 +34,7 @@ check_config(config, "workflow/schemas/config.schema.yaml")
 
 # One rule file per stage; each appends its figure ids to FIGURES and its name to
 # CLAIM_STAGES.  claims.smk comes last: it gathers the claims of every stage above.
-include: "workflow/rules/foundation.smk"
+include: "workflow/rules/burkhard2024.smk"
 include: "workflow/rules/batista2011.smk"
 include: "workflow/rules/tereshkov.smk"
 include: "workflow/rules/measured.smk"

@@ -10,7 +10,8 @@ applied to a result table) or ``not_reproducible`` (nothing to compute it from, 
 public data; ``evidence`` says why).  Reproduced values are never typed in: a
 :class:`Claim` turns a value computed from a table into a row with :meth:`Claim.judge`.
 
-Each workflow stage writes ``results/claims/<stage>.csv``; :func:`assemble_ledger`
+Each workflow stage writes ``results/claims/<stage>.csv`` (the stage's own module builds
+the rows, e.g. :mod:`accelcal.burkhard2024.claims`); :func:`assemble_ledger`
 concatenates them into ``results/claims.csv`` and validates them.
 
 Adding a claim is a few lines::
@@ -83,84 +84,6 @@ def at_least(claim: Claim, value: float, threshold: float, evidence: str, fmt: s
     return claim.judge(value, value >= threshold, evidence, fmt)
 
 
-def max_relative_difference(summary: pd.DataFrame, column: str, method: str, reference: str,
-                            by: str = "noise_std") -> tuple[float, pd.Series]:
-    """``max over by`` of ``|x_method / x_reference - 1|`` for ``column`` of a summary
-    table with one row per (``by``, method).  Returns the maximum and the per-level values."""
-    wide = summary.pivot_table(index=by, columns="method", values=column)
-    for m in (method, reference):
-        if m not in wide:
-            raise LedgerError(f"summary has no rows for method {m!r} (has {sorted(wide.columns)})")
-    rel = (wide[method] / wide[reference] - 1.0).abs()
-    # a level where either is missing (no valid trial) counts as a failure
-    return (float(rel.max()) if rel.notna().all() and len(rel) else float("nan")), rel
-
-
-def equal_within(claim: Claim, summary: pd.DataFrame, column: str, method: str, reference: str,
-                 rel_tol: float, source: str, by: str = "noise_std") -> dict:
-    """``reproduced`` iff ``column`` of ``method`` is within ``rel_tol`` (relative) of
-    ``reference`` at every level ``by`` of ``summary``; the evidence lists every level."""
-    worst, rel = max_relative_difference(summary, column, method, reference, by)
-    levels = ", ".join(f"{k:g}: {100 * v:.2g}%" for k, v in rel.items())
-    evidence = f"{source}: |{column}({method})/{column}({reference}) - 1| per {by}: {levels}"
-    return claim.judge(100 * worst, worst <= rel_tol, evidence, fmt="{:.2g}% max rel. diff.")
-
-
-# --------------------------------------------------------------------------- Burkhard 2024, foundation stage
-def burkhard_foundation_claims(crlb_summary: pd.DataFrame, timing_summary: pd.DataFrame, *,
-                               speed_min_ratio: float = 10.0, equal_rel_tol: float = 0.05,
-                               interleave: str = "block",
-                               crlb_path: str = "results/foundation/crlb_summary.csv",
-                               timing_path: str = "results/foundation/timing_summary.csv") -> pd.DataFrame:
-    """The Burkhard (2024) rows of the foundation stage, computed from its two summaries.
-
-    Rules (stated in the claim texts):
-
-    * ``speed_full`` / ``speed_bias``: reproduced iff the median of the paired per-problem
-      ratios t_NLLS / t_LLS (``interleave`` timings) is at least ``speed_min_ratio``.
-    * ``fig1a_full_lls_equals_nlls``: reproduced iff the RMS bias error of full LLS is
-      within ``equal_rel_tol`` (relative) of full NLLS at every noise level.
-    * ``table1_field_tests``: not reproducible (no public data).
-    """
-    rows = []
-    for cid, method, paper in (("speed_full", "full_lls", "≈35×"), ("speed_bias", "bias_lls", "≈20×")):
-        base = "full NLLS" if method == "full_lls" else "bias-only NLLS"
-        name = "Full LLS" if method == "full_lls" else "Bias-only LLS"
-        claim = Claim(
-            "burkhard2024", cid,
-            f"{name} is about {paper[1:]} faster than {base} (24 poses). Rule: reproduced if the "
-            f"median per-problem time ratio {base} / {name.split()[0].lower()} LLS, measured in one run on "
-            f"identical problems ({interleave}-interleaved, repeated), is >= {speed_min_ratio:g}x "
-            f"(the paper's order of magnitude; absolute ratios depend on implementation and machine)",
-            paper)
-        sel = timing_summary[(timing_summary["mode"] == "single") & (timing_summary["method"] == method)
-                             & (timing_summary["interleave"] == interleave)]
-        if len(sel) != 1:
-            raise LedgerError(f"timing summary has {len(sel)} rows for {method} ({interleave}); expected 1")
-        r = sel.iloc[0]
-        other = timing_summary[(timing_summary["mode"] == "single") & (timing_summary["method"] == method)
-                               & (timing_summary["interleave"] != interleave)]
-        extra = "".join(f"; {o['interleave']}-interleaved: {o['speedup_median']:.1f}x" for _, o in other.iterrows())
-        evidence = (f"{timing_path}: median paired ratio {r['baseline']}/{method} = {r['speedup_median']:.1f}x "
-                    f"(IQR {r['speedup_q25']:.1f}-{r['speedup_q75']:.1f}x, n={int(r['n_timings'])}; "
-                    f"median {1e6 * r['median_s']:.0f} us vs "
-                    f"{1e6 * r['median_s'] * r['speedup_of_medians']:.0f} us){extra}")
-        rows.append(at_least(claim, r["speedup_median"], speed_min_ratio, evidence, fmt="{:.1f}×"))
-
-    claim = Claim(
-        "burkhard2024", "fig1a_full_lls_equals_nlls",
-        "Fig. 1(a): full LLS and full NLLS have the same bias error at every noise level (24 poses, M != I). "
-        f"Rule: reproduced if the Monte Carlo RMS bias error of full LLS is within {100 * equal_rel_tol:g}% "
-        "(relative) of full NLLS at every noise level of the grid",
-        "LLS ≈ NLLS")
-    rows.append(equal_within(claim, crlb_summary, "bias_rms", "full_lls", "full_nlls", equal_rel_tol, crlb_path))
-
-    rows.append(Claim("burkhard2024", "table1_field_tests",
-                      "Table 1: field-test calibration of an ADIS-16475 and a STIM318 with LLS and NLLS",
-                      "Table 1").not_reproducible("no public data: the field-test recordings are not published"))
-    return pd.DataFrame(rows, columns=list(COLUMNS))
-
-
 # --------------------------------------------------------------------------- ledger
 def validate_rows(rows: Iterable[Mapping] | pd.DataFrame, source: str = "claims") -> pd.DataFrame:
     """Check ledger rows; return them as a DataFrame with exactly :data:`COLUMNS`.
@@ -230,9 +153,6 @@ __all__ = [
     "VERDICTS",
     "assemble_ledger",
     "at_least",
-    "burkhard_foundation_claims",
-    "equal_within",
-    "max_relative_difference",
     "read_claims",
     "validate_rows",
     "verdict_counts",

@@ -1,142 +1,199 @@
-"""Stage 'foundation' (Burkhard et al. 2024): Monte Carlo errors of every estimator
-against the Cramér–Rao bound, LLS vs NLLS compute time, and the stage's claims."""
+"""Stage 'burkhard2024' (issue 3): Burkhard, Sharma, Skaloud (2024), every panel of Fig. 1,
+the compute-time claim, and where the closed form stops being enough.  Config: the
+`burkhard2024` mapping (workflow/schemas/burkhard2024.schema.yaml).
 
-FIGURES.extend(["foundation_crlb", "foundation_timing"])
-CLAIM_STAGES.append("foundation")
+The experiments of the config (one per panel) are merged into one Monte Carlo job per grid
+point (pose count, noise std; accelcal.burkhard2024.grid.grid_points), each with its own
+random stream; a gather job writes the tidy table and its summaries, from which the
+figures and the claims are computed.
 
-CRLB = config["foundation"]["crlb"]
-TIMING = config["foundation"]["timing"]
-#: noise level by its file-name key (one Monte Carlo job per noise level)
-NOISE = {noise_key(x): float(x) for x in CRLB["noise_std"]}
+Needs from common.smk: FIGURES, CLAIM_STAGES, REPORT_TABLES, log_path, bench_path,
+figure_outputs, SMALL.
+"""
+
+import re
+
+from accelcal.burkhard2024.grid import experiments_from_config, grid_points
+
+BURKHARD = config["burkhard2024"]
+#: Monte Carlo jobs: point key (e.g. n24_s0.0001) -> {n_poses, noise_std, cases}
+BURKHARD_POINTS = grid_points(experiments_from_config(BURKHARD["experiments"]))
+BURKHARD_DIR = "results/burkhard2024"
+#: Figures by job: the panels of Fig. 1 and the limit come from the gathered tables (one
+#: job: a plotting job costs more to start than to draw), the timing figure from the benchmark.
+BURKHARD_FIGURE_JOBS = {
+    "figures": {
+        "figures": ["fig1a", "fig1b", "fig1c", "fig1d", "fig1e", "lls_limit"],
+        "input": {"summary": f"{BURKHARD_DIR}/summary.csv", "limit": f"{BURKHARD_DIR}/lls_limit.csv",
+                  "onsets": f"{BURKHARD_DIR}/lls_limit_onsets.csv"},
+    },
+    "timing_figure": {
+        "figures": ["timing"],
+        "input": {"timing_summary": f"{BURKHARD_DIR}/timing_summary.csv",
+                  "mc_timing": f"{BURKHARD_DIR}/mc_timing_summary.csv"},
+    },
+}
+BURKHARD_FIGURES = [f for job in BURKHARD_FIGURE_JOBS.values() for f in job["figures"]]
+
+FIGURES.extend(f"burkhard2024_{f}" for f in BURKHARD_FIGURES)
+CLAIM_STAGES.append("burkhard2024")
+REPORT_TABLES.extend([
+    ("burkhard2024", "Scale-factor and non-orthogonality errors across the noise range (24 poses)",
+     f"{BURKHARD_DIR}/relative_errors.csv"),
+    ("burkhard2024", "Where full LLS becomes measurably worse than NLLS and the CRLB",
+     f"{BURKHARD_DIR}/lls_limit_onsets.csv"),
+])
 
 
 wildcard_constraints:
-    noise="|".join(re.escape(k) for k in NOISE),
+    bk_point="|".join(re.escape(k) for k in BURKHARD_POINTS),
 
 
-rule foundation_crlb_mc:
-    """Monte Carlo of the Burkhard setting at one noise level (its own random stream)."""
+rule burkhard2024_mc:
+    """Monte Carlo of one grid point: every case (data set, g error, methods) on its data."""
     output:
-        "results/foundation/crlb_mc/noise_{noise}.csv",
+        table=f"{BURKHARD_DIR}/mc/{{bk_point}}.csv.gz",
+        timing=f"{BURKHARD_DIR}/mc_timing/{{bk_point}}.csv",
     params:
-        seed=config["seed"],
-        noise_std=lambda w: NOISE[w.noise],
-        trials=CRLB["trials"],
-        methods=CRLB["methods"],
-        als_known_noise=CRLB["als_known_noise"],
-        burkhard=config["burkhard"],
+        point=lambda w: BURKHARD_POINTS[w.bk_point],
+        seed=BURKHARD["seed"],
+        g=BURKHARD["g"],
+        truth=BURKHARD["truth"],
+        trials=BURKHARD["trials"],
+        als_known_noise=BURKHARD["als_known_noise"],
     log:
-        log_path("foundation/crlb_mc_noise_{noise}"),
+        log_path("burkhard2024/mc_{bk_point}"),
+    benchmark:
+        bench_path("burkhard2024/mc_{bk_point}"),
     threads: 1
     resources:
         mem_mb=2000,
-        runtime=60,  # about 15 ms per trial with NLLS, ALS and two CRLBs
+        runtime=30,  # about 1 min for the largest point (24 poses, every g error, 1000 trials)
     script:
-        "../scripts/foundation_crlb_mc.py"
+        "../scripts/burkhard2024_mc.py"
 
 
-rule foundation_crlb_summary:
-    """Gather the noise levels into one tidy table and summarise per noise × method."""
+rule burkhard2024_summary:
+    """Gather the points into the tidy table; summaries, paired comparisons, the relative
+    errors across the noise range, the LLS limit and the Monte Carlo wall times."""
     input:
-        expand("results/foundation/crlb_mc/noise_{noise}.csv", noise=NOISE),
+        tables=expand(f"{BURKHARD_DIR}/mc/{{bk_point}}.csv.gz", bk_point=BURKHARD_POINTS),
+        timings=expand(f"{BURKHARD_DIR}/mc_timing/{{bk_point}}.csv", bk_point=BURKHARD_POINTS),
     output:
-        table="results/foundation/crlb_mc.csv",
-        summary="results/foundation/crlb_summary.csv",
-    log:
-        log_path("foundation/crlb_summary"),
-    threads: 1
-    resources:
-        **SMALL,
-    script:
-        "../scripts/foundation_crlb_summary.py"
-
-
-rule foundation_crlb_figure:
-    input:
-        summary="results/foundation/crlb_summary.csv",
-    output:
-        **figure_outputs("foundation_crlb", "../report/foundation_crlb.rst", "Foundation"),
+        table=f"{BURKHARD_DIR}/mc.csv.gz",
+        summary=f"{BURKHARD_DIR}/summary.csv",
+        comparisons=f"{BURKHARD_DIR}/comparisons.csv",
+        relative_errors=f"{BURKHARD_DIR}/relative_errors.csv",
+        limit=f"{BURKHARD_DIR}/lls_limit.csv",
+        onsets=f"{BURKHARD_DIR}/lls_limit_onsets.csv",
+        mc_timing=f"{BURKHARD_DIR}/mc_timing.csv",
+        mc_timing_summary=f"{BURKHARD_DIR}/mc_timing_summary.csv",
     params:
-        methods=CRLB["methods"],
+        experiments=BURKHARD["experiments"],
+        paper_noise_range=BURKHARD["claims"]["paper_noise_range"],
+        z=BURKHARD["claims"]["z"],
+        min_effect=BURKHARD["lls_limit"]["min_effect"],
     log:
-        log_path("foundation/crlb_figure"),
+        log_path("burkhard2024/summary"),
+    benchmark:
+        bench_path("burkhard2024/summary"),
     threads: 1
     resources:
-        **SMALL,
+        mem_mb=3000,
+        runtime=10,
     script:
-        "../scripts/plot_foundation_crlb.py"
+        "../scripts/burkhard2024_summary.py"
 
 
-rule foundation_timing_run:
-    """Benchmark: per-problem time of LLS vs NLLS side by side, and batched LLS throughput.
+rule burkhard2024_timing_run:
+    """Benchmark: per-problem time of every method side by side, per pose count, and the
+    batched closed forms' throughput.
 
     threads = all cores: Snakemake then runs it alone, so no other job perturbs the clock.
     """
     output:
-        single="results/foundation/timing.csv",
-        batch="results/foundation/timing_batch.csv",
-        summary="results/foundation/timing_summary.csv",
+        single=f"{BURKHARD_DIR}/timing.csv",
+        batch=f"{BURKHARD_DIR}/timing_batch.csv",
+        summary=f"{BURKHARD_DIR}/timing_summary.csv",
     params:
-        seed=config["seed"],
-        timing=TIMING,
-        g=config["burkhard"]["g"],
-        n_poses=config["burkhard"]["n_poses"],
+        seed=BURKHARD["seed"],
+        g=BURKHARD["g"],
+        timing=BURKHARD["timing"],
+        als_known_noise=BURKHARD["als_known_noise"],
     log:
-        log_path("foundation/timing_run"),
+        log_path("burkhard2024/timing_run"),
+    benchmark:
+        bench_path("burkhard2024/timing_run"),
     threads: workflow.cores
     resources:
         mem_mb=2000,
         runtime=30,
     script:
-        "../scripts/foundation_timing.py"
+        "../scripts/burkhard2024_timing.py"
 
 
-rule foundation_timing_figure:
+for _job, _spec in BURKHARD_FIGURE_JOBS.items():
+
+    rule:
+        name:
+            f"burkhard2024_{_job}"
+        input:
+            **_spec["input"],
+        output:
+            **{f"{fig}_{ext}": path for fig in _spec["figures"]
+               for ext, path in figure_outputs(f"burkhard2024_{fig}", f"../report/burkhard2024_{fig}.rst",
+                                               "Burkhard 2024").items()},
+        params:
+            figures=_spec["figures"],
+            cfg=BURKHARD,
+        log:
+            log_path(f"burkhard2024/{_job}"),
+        benchmark:
+            bench_path(f"burkhard2024/{_job}"),
+        threads: 1
+        resources:
+            **SMALL,
+        script:
+            "../scripts/burkhard2024_figure.py"
+
+
+# Figure ids as targets: `snakemake burkhard2024_fig1a` (target only: no job, no log).
+for _fig in BURKHARD_FIGURES:
+
+    rule:
+        name:
+            f"burkhard2024_{_fig}"
+        localrule: True
+        input:
+            f"results/figures/burkhard2024_{_fig}.png",
+            f"results/figures/burkhard2024_{_fig}.pdf",
+
+
+rule burkhard2024_claims:
+    """Burkhard (2024) claims computed from the summaries."""
     input:
-        single="results/foundation/timing.csv",
-        summary="results/foundation/timing_summary.csv",
+        summary=f"{BURKHARD_DIR}/summary.csv",
+        comparisons=f"{BURKHARD_DIR}/comparisons.csv",
+        timing_summary=f"{BURKHARD_DIR}/timing_summary.csv",
+        mc_timing_summary=f"{BURKHARD_DIR}/mc_timing_summary.csv",
     output:
-        **figure_outputs("foundation_timing", "../report/foundation_timing.rst", "Foundation"),
+        "results/claims/burkhard2024.csv",
     params:
-        interleave=TIMING["headline_interleave"],
+        cfg=BURKHARD,
     log:
-        log_path("foundation/timing_figure"),
+        log_path("burkhard2024/claims"),
+    benchmark:
+        bench_path("burkhard2024/claims"),
     threads: 1
     resources:
         **SMALL,
     script:
-        "../scripts/plot_foundation_timing.py"
+        "../scripts/burkhard2024_claims.py"
 
 
-rule foundation_claims:
-    """Burkhard (2024) claims computed from the foundation tables."""
-    input:
-        crlb_summary="results/foundation/crlb_summary.csv",
-        timing_summary="results/foundation/timing_summary.csv",
-    output:
-        "results/claims/foundation.csv",
-    params:
-        claims=config["claims"],
-        interleave=TIMING["headline_interleave"],
-    log:
-        log_path("foundation/claims"),
-    threads: 1
-    resources:
-        **SMALL,
-    script:
-        "../scripts/foundation_claims.py"
-
-
-# Figure ids as targets: `snakemake foundation_crlb` (target only: no job, no log).
-rule foundation_crlb:
+rule burkhard2024:
+    """Every output of the stage (target only)."""
     localrule: True
     input:
-        "results/figures/foundation_crlb.png",
-        "results/figures/foundation_crlb.pdf",
-
-
-rule foundation_timing:
-    localrule: True
-    input:
-        "results/figures/foundation_timing.png",
-        "results/figures/foundation_timing.pdf",
+        expand("results/figures/burkhard2024_{figure}.{ext}", figure=BURKHARD_FIGURES, ext=("png", "pdf")),
+        "results/claims/burkhard2024.csv",

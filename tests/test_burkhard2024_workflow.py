@@ -1,0 +1,127 @@
+"""The Burkhard stage of the workflow on the CI config: the jobs, the tidy table, the
+figures and their targets, the claims file, determinism of a rerun and a clean failure."""
+
+import gzip
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+import pytest
+import yaml
+
+from accelcal.burkhard2024.grid import experiments_from_config, grid_points
+
+REPO = Path(__file__).resolve().parents[1]
+SNAKEMAKE = Path(sys.executable).with_name("snakemake")
+CI = REPO / "config" / "ci.yaml"
+CFG = yaml.safe_load(CI.read_text())["burkhard2024"]
+FIGURES = ["fig1a", "fig1b", "fig1c", "fig1d", "fig1e", "timing", "lls_limit"]
+
+
+def snakemake(workdir, *args, config=CI, timeout=600):
+    cmd = [str(SNAKEMAKE), "--snakefile", str(REPO / "Snakefile"), "--directory", str(workdir), "--cores", "2",
+           "--scheduler", "greedy", *map(str, args), "--configfile", str(config)]  # --configfile takes the rest
+    return subprocess.run(cmd, cwd=REPO, capture_output=True, text=True, timeout=timeout)
+
+
+@pytest.fixture(scope="module")
+def stage(tmp_path_factory):
+    workdir = tmp_path_factory.mktemp("burkhard2024")
+    proc = snakemake(workdir, "burkhard2024")
+    assert proc.returncode == 0, proc.stderr[-4000:]
+    return workdir
+
+
+def test_one_monte_carlo_job_per_grid_point(stage):
+    points = grid_points(experiments_from_config(CFG["experiments"]))
+    logs = sorted(p.name for p in (stage / "results" / "logs" / "burkhard2024").glob("mc_*.log"))
+    assert logs == sorted(f"mc_{k}.log" for k in points)
+    assert len(list((stage / "results" / "benchmarks" / "burkhard2024").glob("mc_*.tsv"))) == len(points)
+
+
+def test_tidy_table_one_row_per_trial_method_and_grid_point(stage):
+    d = stage / "results" / "burkhard2024"
+    mc = pd.read_csv(d / "mc.csv.gz")
+    points = grid_points(experiments_from_config(CFG["experiments"]))
+    expected = CFG["trials"] * sum(len(ms) for p in points.values() for _, _, ms in p["cases"])
+    assert len(mc) == expected
+    assert not mc.duplicated(["data_model", "n_poses", "noise_std", "g_error", "method", "trial"]).any()
+    assert mc["valid"].mean() > 0.95
+    s = pd.read_csv(d / "summary.csv")
+    assert (s["n_trials"] == CFG["trials"]).all()
+    for name in ("comparisons", "relative_errors", "lls_limit", "lls_limit_onsets", "mc_timing_summary",
+                 "timing_summary"):
+        assert len(pd.read_csv(d / f"{name}.csv")), name
+    t = pd.read_csv(d / "timing_summary.csv")
+    assert set(t["n_poses"]) == set(CFG["timing"]["n_poses"])
+    assert {"full_lls", "full_als", "full_nlls", "bias_lls", "bias_nlls", "full_lls_batch"} <= set(t["method"])
+
+
+def test_every_figure_and_its_target(stage):
+    figs = stage / "results" / "figures"
+    for f in FIGURES:
+        for ext in ("png", "pdf"):
+            assert (figs / f"burkhard2024_{f}.{ext}").stat().st_size > 5000, f
+    proc = snakemake(stage, "-n", *[f"burkhard2024_{f}" for f in FIGURES])
+    assert proc.returncode == 0 and "Nothing to be done" in proc.stdout + proc.stderr
+
+
+def test_claims_file(stage):
+    rows = pd.read_csv(stage / "results" / "claims" / "burkhard2024.csv", dtype=str, keep_default_na=False)
+    rows = rows.set_index("claim_id")
+    assert len(rows) == 11 and "table1_field_tests" not in rows.index
+    assert rows.loc["max_errors_scale_nonorth", "verdict"] == "not_reproduced"
+    deterministic = rows.drop(index=["max_errors_scale_nonorth", "speed_full", "speed_bias"])
+    assert (deterministic["verdict"] == "reproduced").all(), deterministic["verdict"]
+    for cid in ("speed_full", "speed_bias"):  # wall times: computed, not asserted either way
+        assert rows.loc[cid, "verdict"] in ("reproduced", "not_reproduced")
+        assert rows.loc[cid, "reproduced_value"].endswith("×")
+    for cid, r in rows.iterrows():
+        assert (stage / r["evidence"].split(":")[0]).is_file(), (cid, r["evidence"])
+
+
+def test_rerun_of_a_job_and_the_scripts_standalone_are_byte_identical(stage, tmp_path):
+    d = stage / "results" / "burkhard2024" / "mc"
+    point = sorted(d.glob("*.csv.gz"))[0]
+    before = point.read_bytes()
+    summary_before = (stage / "results" / "burkhard2024" / "summary.csv").read_bytes()
+    figure_before = (stage / "results" / "figures" / "burkhard2024_fig1c.png").read_bytes()
+    proc = snakemake(stage, point.relative_to(stage), "--force")
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    # the table is byte-identical; the gzip header is compared apart because _helpers.write_csv
+    # writes the random name of its temporary file into it (FNAME)
+    assert gzip.decompress(point.read_bytes()) == gzip.decompress(before)
+    assert gzip.decompress(before).startswith(b"n_poses,noise_std,data_model,g_error,trial,method")
+    # the scripts also run outside Snakemake (mock object) and give the same bytes
+    env = dict(os.environ, ACCELCAL_CONFIG=str(CI))
+    for script in ("burkhard2024_summary.py", "burkhard2024_figure.py", "burkhard2024_claims.py"):
+        proc = subprocess.run([sys.executable, str(REPO / "workflow" / "scripts" / script)], cwd=stage, env=env,
+                              capture_output=True, text=True, timeout=300)
+        assert proc.returncode == 0, (script, proc.stderr[-3000:])
+    assert (stage / "results" / "burkhard2024" / "summary.csv").read_bytes() == summary_before
+    assert (stage / "results" / "figures" / "burkhard2024_fig1c.png").read_bytes() == figure_before
+
+
+def test_a_broken_stage_config_fails_before_any_job(tmp_path):
+    cfg = yaml.safe_load(CI.read_text())
+    cfg["burkhard2024"]["experiments"]["fig1cd"]["g_error"] = [0.001, 0.01]
+    path = tmp_path / "broken.yaml"
+    path.write_text(yaml.safe_dump(cfg))
+    proc = snakemake(tmp_path / "work", "burkhard2024", config=path, timeout=120)
+    assert proc.returncode != 0
+    lines = [ln for ln in (proc.stdout + proc.stderr).splitlines() if ln.startswith("invalid config")]
+    assert len(lines) == 1 and "burkhard2024.experiments.fig1cd.g_error" in lines[0], lines
+    assert not (tmp_path / "work" / "results").exists()
+
+
+def test_default_config_dry_run_splits_the_grid_into_jobs(tmp_path):
+    proc = subprocess.run([str(SNAKEMAKE), "--snakefile", str(REPO / "Snakefile"), "--directory", str(tmp_path),
+                           "-n", "burkhard2024", "--cores", "2"], cwd=REPO, capture_output=True, text=True,
+                          timeout=120)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    default = yaml.safe_load((REPO / "config" / "config.yaml").read_text())["burkhard2024"]
+    n = len(grid_points(experiments_from_config(default["experiments"])))
+    assert f"burkhard2024_mc {n}" in " ".join((proc.stdout + proc.stderr).split())
+    assert not (tmp_path / "results").exists()

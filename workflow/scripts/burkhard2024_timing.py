@@ -1,0 +1,38 @@
+"""Benchmark: per-problem wall time of every method side by side (interleaved, one run) at
+each pose count, and the batched closed forms' throughput."""
+
+import pandas as pd
+from _helpers import configure_logging, mock_snakemake, write_csv
+
+from accelcal.timing import run_benchmark, summarize_timing
+
+if "snakemake" not in globals():
+    from _helpers import stage_config
+
+    _cfg = stage_config("burkhard2024")
+    _d = "results/burkhard2024"
+    snakemake = mock_snakemake(
+        "burkhard2024_timing_run",
+        output={"single": f"{_d}/timing.csv", "batch": f"{_d}/timing_batch.csv", "summary": f"{_d}/timing_summary.csv"},
+        params={"seed": _cfg["seed"], "g": _cfg["g"], "timing": _cfg["timing"],
+                "als_known_noise": _cfg["als_known_noise"]},
+    )
+
+log = configure_logging(snakemake)
+p = snakemake.params
+t = p.timing
+single, batch = run_benchmark(
+    seed=int(p.seed), g=float(p.g), noise_std=float(t["noise_std"]), n_poses=[int(n) for n in t["n_poses"]],
+    n_problems=int(t["problems"]), repeats=int(t["repeats"]), batch_problems=int(t["batch_problems"]),
+    batch_repeats=int(t["batch_repeats"]), interleavings=list(t["interleavings"]),
+    als_known_noise=bool(p.als_known_noise),
+)
+summary = summarize_timing(single, batch)
+failed = single[single["status"] != "ok"]
+if len(failed):
+    log.warning("failed solves (timed anyway): %s", failed.groupby(["n_poses", "method", "status"]).size().to_dict())
+with pd.option_context("display.width", 250, "display.max_columns", 20, "display.float_format", "{:.4g}".format):
+    log.info("timing summary (wall times are machine-dependent; recorded, not asserted):\n%s", summary)
+write_csv(single, snakemake.output.single)
+write_csv(batch, snakemake.output.batch)
+write_csv(summary, snakemake.output.summary)
