@@ -339,3 +339,12 @@ def test_bad_models_raise_one_line_errors():
         assert _one_line_error(e)
     with pytest.raises(AccelcalError, match="overlap"):
         st.pose_difference_variance("white", 1.0, [0, 1], [2, 2])
+
+
+def test_short_gauss_markov_counts_as_white_in_the_implication():
+    """White noise through a low-pass (GM with T_c ≪ pose) is no excess for the pose means."""
+    starts, durations = [0, 10, 20], [5, 5, 5]
+    imp = st.pose_residual_implication({"white": 0.0, "gauss_markov": (1.0, 0.005)}, starts, durations, FS)
+    assert imp["pose_mean_std_excess"] == pytest.approx(0.0, abs=1e-6) and imp["inflation"] == pytest.approx(1.0)
+    slow = st.pose_residual_implication({"white": 0.1, "gauss_markov": (1.0, 2.0)}, starts, durations, FS)
+    assert slow["pose_mean_std_excess"] > 0.1

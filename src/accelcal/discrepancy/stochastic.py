@@ -604,17 +604,26 @@ def pose_residual_implication(terms: Mapping[str, object], starts, durations, fs
         the other terms add); ``by_term`` that RMS per term; ``inflation`` = model /
         white; ``adev_excess_at_median_duration`` = sqrt(AVAR_model(T) − N²/T) at the
         median pose duration T (extra std of a pose mean against an adjacent one);
-        ``pose_mean_var_white`` / ``_model``: per-pose variances.
+        ``pose_mean_var_white`` / ``_model``: per-pose variances.  A ``gauss_markov``
+        term with ``T_c`` below a tenth of the shortest pose is white noise seen through
+        a low-pass filter at the scale of the poses: it counts as white here (with
+        ``N² = 2σ²T_c``), not as excess.
     """
     starts = np.asarray(starts, dtype=float)
     durations = np.asarray(durations, dtype=float)
     per_term = {k: centred_pose_variance(pose_difference_variance(k, v, starts, durations))
                 for k, v in terms.items()}
-    v_white = per_term.get("white", np.zeros(starts.shape))
+    white_like = ["white"]
+    n2_white = _value("white", terms["white"])[0] ** 2 if "white" in terms else 0.0
+    if "gauss_markov" in terms:
+        sigma, tc = _value("gauss_markov", terms["gauss_markov"])
+        if tc < 0.1 * durations.min():
+            white_like.append("gauss_markov")
+            n2_white += 2 * sigma**2 * tc
+    v_white = np.sum([per_term[k] for k in white_like if k in per_term] or [np.zeros(starts.shape)], axis=0)
     v_model = np.sum(list(per_term.values()), axis=0)
     T = float(np.median(durations))
-    n_white = _value("white", terms["white"])[0] if "white" in terms else 0.0
-    excess_avar = model_avar(terms, [T], fs)[0] - n_white**2 / T
+    excess_avar = model_avar(terms, [T], fs)[0] - n2_white / T
     return {
         "n_poses": int(starts.size),
         "session_length_s": float((starts + durations).max() - starts.min()),
