@@ -54,6 +54,9 @@ for name, path in zip(snakemake.params.recordings, snakemake.input.reports):
             verdict=imp["verdict"],
             rule=f"residual excess the named noise terms predict (observed {imp['observed_excess']:.3g}); "
                  f"two-sided chi2 p = {imp['p_value']:.3g}; explained: {'yes' if imp['explains_excess'] else 'no'}")
+        row("noise_expected_excess_short_term", imp["expected_excess_short_term"], effect="",
+            rule="same, each pose mean carrying only the extra Allan variance at its own duration (no wander "
+                 "between poses)")
     st = rep.get("stochastic")
     if st:
         for ax, a in st["axes"].items():

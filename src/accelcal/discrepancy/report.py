@@ -6,11 +6,12 @@ and the stochastic layer (:func:`accelcal.discrepancy.stochastic.stochastic_laye
 the same rests, and then joins them: what the named noise terms imply for the pose
 residuals (:func:`noise_implication`).
 
-The join.  The stochastic layer gives, per pose and axis, the expected variance of the
-pose-mean error about the session's common mean under the white-only model and under the
-final noise model.  The extra variance of the named terms reaches the scalar residual of
-pose i as ``Σ_k w_ik² Δv_ik`` with ``w_i = ∂r_i/∂z_i`` (the same projection that turns
-the per-pose standard errors into ``σ_i``).  Adding it to ``σ_i²`` gives the residual
+The join.  Each noise model of the stochastic layer implies, per pose and axis, the
+variance of the pose-mean error about the session's common mean
+(:func:`accelcal.discrepancy.stochastic.pose_difference_variance`): the white-only
+simulator before, the simulator with the named terms after.  Their difference reaches the
+scalar residual of pose i as ``Σ_k w_ik² Δv_ik`` with ``w_i = ∂r_i/∂z_i`` (the same
+projection that turns the per-pose standard errors into ``σ_i``).  Adding it to ``σ_i²`` gives the residual
 scatter the deterministic layer should expect if the noise model is complete; the χ² of
 the final residuals against it says whether the named noise terms account for the
 excess the white-noise model leaves.
@@ -74,16 +75,43 @@ class Analysis:
         return d
 
 
-def noise_implication(det: DiscrepancyResult, stoch, alpha: float) -> dict:
+def _pose_mean_variance(model: dict, starts, durations) -> np.ndarray:
+    """Expected variance of each pose-mean error about the session's common mean under a
+    noise model ``{term: value}`` (:func:`accelcal.discrepancy.stochastic.pose_difference_variance`)."""
+    from .stochastic import centred_pose_variance, pose_difference_variance
+
+    return sum(centred_pose_variance(pose_difference_variance(k, v, starts, durations)) for k, v in model.items())
+
+
+def noise_implication(det: DiscrepancyResult, stoch, starts, durations, alpha: float) -> dict:
     """What the named noise terms mean for the pose residuals of the final deterministic model.
+
+    The simulator's noise model before is the white-only fit of each axis, after it is the
+    fit with the named terms; ``extra_i = Σ_k w_ik² (v_after,ik - v_before,ik)`` is the
+    additional variance of pose i's residual (``v`` the centred pose-mean variances of the
+    model, ``w_i = ∂r_i/∂z_i``).  Comparing after with the white-only *fit*, not with the
+    white term inside the final fit, avoids counting short-τ noise twice when the final
+    fit moves it from ``white`` into another term.
+
+    Parameters
+    ----------
+    det : DiscrepancyResult
+    stoch : StochasticResult
+        Its rests must be the poses of ``det`` (same order).
+    starts, durations : array_like
+        Start and duration [s] of each pose.
+    alpha : float
 
     Returns
     -------
     dict
         ``named_terms`` per axis; ``expected_excess`` = ``sqrt(mean((σ_i² + extra_i)/σ_i²))``
-        (1 with white noise only); ``observed_excess`` (of the final deterministic
-        model); ``chi2``, ``dof`` and the two-sided ``p_value`` of the final residuals
-        against ``σ_i² + extra_i`` (a noise model that predicts far more scatter than the
+        (1 without named terms); ``observed_excess`` (of the final deterministic model);
+        ``expected_excess_short_term``: the same with each pose mean carrying only the
+        extra Allan variance at its own duration (no wander between poses: the named
+        terms not extrapolated beyond the rests' τ range);
+        ``chi2``, ``dof`` and the two-sided ``p_value`` of the final residuals against
+        ``σ_i² + extra_i`` (a noise model that predicts far more scatter than the
         residuals show does not explain them either); ``verdict``; ``gap_with_noise_terms``
         = ``sqrt(χ²/n)`` on that yardstick; ``explains_excess`` = p-value ≥ α;
         ``extra_residual_std`` per pose (unit of g).
@@ -92,11 +120,23 @@ def noise_implication(det: DiscrepancyResult, stoch, alpha: float) -> dict:
         return {}
     f = det.final
     w = -(f.J[:, :3] * f.sigma[:, None])  # ∂r/∂z = -∂r/∂b (unweighted)
-    v_white = np.column_stack([a.pose_residual_implication["pose_mean_var_white"] for a in stoch.axes])
-    v_model = np.column_stack([a.pose_residual_implication["pose_mean_var_model"] for a in stoch.axes])
-    if v_white.shape != w.shape:
-        raise AccelcalError(f"stochastic layer has {v_white.shape[0]} rests, deterministic layer {w.shape[0]} poses")
-    extra = np.sum(w * w * np.clip(v_model - v_white, 0, None), axis=1)
+    if len(starts) != w.shape[0] or len(stoch.axes) != 3:
+        raise AccelcalError(f"stochastic layer and deterministic layer disagree on the poses ({len(starts)} "
+                            f"rests, {w.shape[0]} poses, {len(stoch.axes)} axes)")
+    dv = np.zeros_like(w)
+    for k, a in enumerate(stoch.axes):
+        before = {t: v["value"] for t, v in a.fit_before.items()}
+        dv[:, k] = _pose_mean_variance(a.model_after, starts, durations) - _pose_mean_variance(before, starts, durations)
+    extra = np.sum(w * w * np.clip(dv, 0, None), axis=1)
+    # Short-term reading: each pose mean only carries the extra Allan variance at its own
+    # duration (no wander between poses), i.e. the named terms without their extrapolation
+    # from the rests (τ up to ~10 s) to the whole session.
+    from .stochastic import model_avar
+
+    dshort = np.column_stack([
+        model_avar(a.model_after, durations, stoch.fs)
+        - model_avar({t: v["value"] for t, v in a.fit_before.items()}, durations, stoch.fs) for a in stoch.axes])
+    extra_short = np.sum(w * w * np.clip(dshort, 0, None), axis=1)
     s2 = f.sigma ** 2 + extra
     chi2 = float(np.sum(f.residuals ** 2 / s2))
     if f.dof > 0:
@@ -108,6 +148,7 @@ def noise_implication(det: DiscrepancyResult, stoch, alpha: float) -> dict:
     return {
         "named_terms": {a.axis: list(a.named) if a.named else ["none"] for a in stoch.axes},
         "expected_excess": float(np.sqrt(np.mean(s2 / f.sigma ** 2))),
+        "expected_excess_short_term": float(np.sqrt(np.mean(1 + extra_short / f.sigma ** 2))),
         "observed_excess": float(np.sqrt(f.chi2 / f.dof)) if f.dof > 0 else float("nan"),
         "chi2": chi2, "dof": int(f.dof), "p_value": p,
         "gap_with_noise_terms": float(np.sqrt(chi2 / f.n)),
@@ -143,7 +184,9 @@ def analyse(rec: Recording, g: float, *, rules: Rules | None = None,
         except AccelcalError as e:
             err = str(e).splitlines()[0]
         else:
-            impl = noise_implication(det, stoch, (rules or Rules()).alpha)
+            iv = poses.intervals
+            impl = noise_implication(det, stoch, iv[:, 0] / rec.rate, (iv[:, 1] - iv[:, 0]) / rec.rate,
+                                     (rules or Rules()).alpha)
     else:
         err = "not run"
     return Analysis(poses, det, stoch, err, impl, rec.rate)

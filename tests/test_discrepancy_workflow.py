@@ -1,0 +1,80 @@
+"""The discrepancy stage's rules: a tiny run end to end, byte-identical on rerun, and a broken
+config failing in one line.
+
+The rule files are included into a throwaway Snakefile (common.smk, measured.smk,
+discrepancy.smk) in a temporary folder, with a config reduced below the CI one.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+import pytest
+import yaml
+
+REPO = Path(__file__).resolve().parents[1]
+DATA = REPO.parent / "shared" / "data"
+SNAKEMAKE = Path(sys.executable).with_name("snakemake")
+pytestmark = pytest.mark.skipif(not DATA.is_dir(), reason="shared/data not available")
+
+
+def _config(**bench):
+    cfg = yaml.safe_load((REPO / "config" / "ci.yaml").read_text())
+    cfg = {"measured": cfg["measured"], "discrepancy": cfg["discrepancy"]}
+    cfg["measured"]["data_dir"] = str(DATA)
+    d = cfg["discrepancy"]
+    d["recordings"] = ["mpu6050"]
+    d["stochastic"].update(n_boot=19, n_resim=1)
+    d["benchmark"].update(sizes_mde=[3.0], seeds=1, seeds_none=2, seeds_constant=1, confusion_size_mde=3.0,
+                          chunks=2, **bench)
+    return cfg
+
+
+def run(tmp_path, cfg, *targets, work="work"):
+    (tmp_path / "config.yaml").write_text(yaml.safe_dump(cfg))
+    sf = tmp_path / "Snakefile"
+    sf.write_text("import os, re\n" + "".join(f"include: {str(REPO / 'workflow' / 'rules' / r)!r}\n"
+                                             for r in ("common.smk", "measured.smk", "discrepancy.smk")))
+    cmd = [str(SNAKEMAKE), "-s", str(sf), "--directory", str(tmp_path / work), "--configfile",
+           str(tmp_path / "config.yaml"), "--cores", "2", "--scheduler", "greedy", *targets]
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=900)
+
+
+TABLES = ["results/discrepancy/benchmark/scores.csv", "results/discrepancy/benchmark/rates.csv",
+          "results/discrepancy/benchmark/summary.csv", "results/discrepancy/summary.csv",
+          "results/discrepancy/measured.csv", "results/discrepancy/measured/mpu6050.json"]
+
+
+def test_stage_runs_and_reruns_byte_identical(tmp_path):
+    cfg = _config()
+    p = run(tmp_path, cfg, "discrepancy")
+    assert p.returncode == 0, p.stderr[-3000:]
+    w = tmp_path / "work"
+    scores = pd.read_csv(w / TABLES[0], keep_default_na=False, na_values=[""])
+    assert len(scores) == 5 * 1 + 2 + 1  # five effects x one size x one seed, two effect-free, one constant T
+    assert not (w / "results/discrepancy/benchmark/recordings").exists() or \
+        not any((w / "results/discrepancy/benchmark/recordings").iterdir())  # temporary, removed
+    for f in ("discrepancy_confusion", "discrepancy_power", "discrepancy_measured_before_after", "discrepancy_allan"):
+        for ext in ("png", "pdf"):
+            assert (w / "results" / "figures" / f"{f}.{ext}").stat().st_size > 0
+    summ = pd.read_csv(w / "results/discrepancy/summary.csv", keep_default_na=False, na_values=[""])
+    assert {"benchmark", "measured"} == set(summ.section)
+    assert summ[(summ.recording == "mpu6050") & (summ.metric == "outcome")].verdict.iloc[0] == "not_identifiable"
+    p = run(tmp_path, cfg, "discrepancy", work="again")
+    assert p.returncode == 0, p.stderr[-3000:]
+    for t in TABLES + ["results/figures/discrepancy_confusion.png", "results/figures/discrepancy_power.pdf"]:
+        assert (w / t).read_bytes() == (tmp_path / "again" / t).read_bytes(), t
+
+
+def test_confusion_size_outside_the_grid_fails_in_one_line(tmp_path):
+    cfg = _config()
+    cfg["discrepancy"]["benchmark"]["confusion_size_mde"] = 2.0
+    p = run(tmp_path, cfg, "-n", "discrepancy")
+    assert p.returncode != 0
+    out = p.stdout + p.stderr
+    line = [x for x in out.splitlines() if "discrepancy.benchmark.confusion_size_mde" in x]
+    assert line and "is not in sizes_mde" in line[0], out[-2000:]
+    assert "Traceback" not in out
