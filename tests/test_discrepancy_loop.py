@@ -220,3 +220,32 @@ def test_refit_rounds_name_two_effects():
     assert set(res.effects) == {"bias_drift", "quadratic"}
     assert max(c.round for c in res.candidates) == 3  # round 3 tested the rest and named nothing
     assert not any(c.named for c in res.candidates if c.round == 3)
+
+
+@pytest.mark.parametrize("eid", ["quadratic", "temperature"])
+def test_mde_is_detected_with_the_design_power(eid):
+    """Pose-level data with the effect at exactly its MDE along a direction: the nested
+    F-test at level α/m rejects in about `power` of the trials (exact binomial 99.9 % band),
+    and at level α/m in about α/m of the trials without the effect."""
+    rng = np.random.default_rng(9)
+    u = random_directions(rng, 30)
+    M, b, p_true, t, T, ms = _design(rng, u)
+    z0 = forward(G * u, M, b, {})
+    d0 = pose_data(z0, G, ms, t, T, sigma=residual_sigma(z0, ms, M, b))
+    ident = identifiability(d0, fit_at(d0, (), p_true), eid, RULES, 5)
+    direction = np.array([1.0, -0.5, 0.3])
+    phi = ident.mde_along(direction) * direction / np.linalg.norm(direction)
+    z1 = forward(G * u, M, b, {eid: phi}, dt=t - t.mean(), dtemp=T - T.mean())
+    level = RULES.alpha / 5
+    trials = 300
+    hits = {0: 0, 1: 0}
+    for k in range(trials):
+        e = ms * rng.standard_normal(z0.shape)
+        for which, z in ((0, z0), (1, z1)):
+            d = pose_data(z + e, G, ms, t, T, sigma=d0.sigma)
+            f0, f1 = fit(d), fit(d, (eid,))
+            F = ((f0.chi2 - f1.chi2) / 3) / (f1.chi2 / f1.dof)
+            hits[which] += stats.f.sf(F, 3, f1.dof) <= level
+    for which, p in ((1, RULES.power), (0, level)):
+        lo, hi = stats.binom.ppf([0.0005, 0.9995], trials, p)
+        assert lo <= hits[which] <= hi, (which, hits[which], lo, hi)

@@ -287,15 +287,15 @@ def clopper_pearson(k, n, level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
 
 def score_cases(key: pd.DataFrame, detections: pd.DataFrame) -> pd.DataFrame:
     """One row per recording: key, detection and ``correct`` (outcome == expected),
-    ``detected`` (the injected effect named first), ``false_positive`` (an effect named
-    on a recording without one)."""
+    ``detected`` (the injected effect named first; False on effect-free recordings),
+    ``false_positive`` (an effect named on a recording without one)."""
     df = key.merge(detections, on="recording", how="left", validate="one_to_one")
     if df["outcome"].isna().any():
         missing = df.loc[df["outcome"].isna(), "recording"].head(3).tolist()
         raise AccelcalError(f"recordings without a detection row: {missing}")
     named = ~df["outcome"].isin([NONE, NOT_IDENTIFIABLE, "error"])
     df["correct"] = df["outcome"] == df["expected"]
-    df["detected"] = df["effect"] == df["effect_injected"]
+    df["detected"] = (df["effect"] == df["effect_injected"]) & (df["truth"] != NONE)
     df["false_positive"] = (df["truth"] == NONE) & named
     return df
 
@@ -309,6 +309,8 @@ def rates(scores: pd.DataFrame, level: float = 0.95) -> pd.DataFrame:
         k_det = int(d["detected"].sum())
         k_ok = int(d["correct"].sum())
         lo_d, hi_d = clopper_pearson(k_det, n, level)
+        if truth == NONE:  # nothing to detect: the row's rate is its false-positive rate (summary)
+            k_det, lo_d, hi_d = np.nan, np.nan, np.nan
         lo_a, hi_a = clopper_pearson(k_ok, n, level)
         row = {"truth": truth, "size_mde": size, "n": n, "expected": d["expected"].iloc[0],
                "detected": k_det, "detection_rate": k_det / n, "detection_ci_low": float(lo_d),

@@ -109,16 +109,27 @@ def _residual_panel(ax, det: dict, implication: dict | None, title: str):
     ra = np.asarray(p["residual_after"], float) / s
     ax.axhspan(-2, 2, color="0.92", lw=0)
     ax.axhspan(-1, 1, color="0.85", lw=0)
+    top = max(4.0, 1.3 * float(np.nanmax(np.abs(np.concatenate([rb, ra])))))
     if implication and implication.get("extra_residual_std"):
         infl = np.sqrt(1 + (np.asarray(implication["extra_residual_std"], float) / s) ** 2)
-        ax.plot(t, 2 * infl, color="C2", ls="--", lw=0.9, label="±2σ incl. named noise terms")
-        ax.plot(t, -2 * infl, color="C2", ls="--", lw=0.9)
+        if np.any(infl > 1 + 1e-9):
+            ax.plot(np.repeat(t, 2), np.ravel(np.column_stack([2 * infl, -2 * infl])), ls="none", marker="_",
+                    ms=7, color="C2", label="±2σ incl. the named noise terms (per pose)")
+            if 2 * infl.max() > 3 * top:  # the band dwarfs the residuals: symlog keeps both readable
+                ax.set_yscale("symlog", linthresh=4.0, linscale=1.5)
+            top = max(top, 1.1 * 2 * float(infl.max()))
+            if ax.get_yscale() == "symlog":
+                ticks = [v for v in (2, 4, 10, 30, 100, 300, 1000, 3000) if v < top]
+                ticks = [-v for v in ticks[::-1]] + [0] + ticks
+                ax.set_yticks(ticks, [f"{v:g}" for v in ticks])
+                ax.minorticks_off()
     named = "+".join(det["effects"]) or "none"
     ax.plot(t, rb, "o", color="C0", ms=4, mfc="none",
             label=f"base model: gap {det['gap_before']:.2f} (noise alone {det['gap_expected_before']:.2f})")
     ax.plot(t, ra, "x", color="C3", ms=4,
             label=f"base + {named}: gap {det['gap_after']:.2f} (noise alone {det['gap_expected_after']:.2f})")
     ax.axhline(0, color="k", lw=0.6)
+    ax.set_ylim(-top, top)
     ax.set_xlabel("pose mid time [s]")
     ax.set_ylabel("pose residual / its noise σ_i")
     ax.set_title(title, fontsize=8.5)
@@ -128,7 +139,8 @@ def _residual_panel(ax, det: dict, implication: dict | None, title: str):
 def plot_before_after(reports: dict[str, dict]):
     """One panel per recording: weighted pose residuals of the base model (before) and of
     the model with the named effects (after); grey bands ±1σ, ±2σ of the white-noise
-    prediction, green dashed ±2σ including the named noise terms."""
+    prediction, green ticks ±2σ including the named noise terms (symmetric-log axis when
+    that band dwarfs the residuals)."""
     n = len(reports)
     with plt.rc_context(RC):
         fig, axes = plt.subplots(1, n, figsize=(3.8 * n + 0.4, 3.6), layout="constrained", squeeze=False)
