@@ -3,7 +3,7 @@ against the CRLB and the full LLS, the online bias/gravity Kalman filter (Figs. 
 observability condition, its cost per step, and the paper's claims.
 
 Needs the helpers of common.smk (FIGURES, CLAIM_STAGES, log_path, figure_outputs, SMALL)
-and config["batista2011"] (config/batista2011.default.yaml)."""
+and config["batista2011"] (section batista2011 of config/config.yaml)."""
 
 BATISTA = config["batista2011"]
 

@@ -2,7 +2,7 @@
 their pose count allows and evaluated without ground truth (noise-predicted χ²,
 leave-one-pose-out, bootstrap over poses, agreement, nominal sensitivities, and imucal's
 Ferraris calibration as a peer).  Config: the `measured` mapping
-(config/measured.default.yaml).
+(section `measured` of config/config.yaml).
 
 Needs from common.smk: FIGURES, CLAIM_STAGES, log_path, figure_outputs, SMALL.
 """

@@ -1,7 +1,7 @@
 """Stage 'tereshkov' (issue 5): Tereshkov's virtual-platform AHRS and closed-form bias
 estimator on simulated tractor runs — Monte Carlo convergence and accuracy, straight vs
 turning observability, the artificial-bias test, an installation-angle sweep, the
-stage's claims and figures.  Config: the `tereshkov` mapping (config/tereshkov.default.yaml).
+stage's claims and figures.  Config: the `tereshkov` mapping (section `tereshkov` of config/config.yaml).
 
 Needs from common.smk: FIGURES, CLAIM_STAGES, log_path, figure_outputs, SMALL.
 """
@@ -300,3 +300,12 @@ rule bias_convergence_comparison:
     input:
         "results/figures/bias_convergence_comparison.png",
         "results/figures/bias_convergence_comparison.pdf",
+
+
+rule tereshkov:
+    """The whole stage: every figure and the claims."""
+    input:
+        expand("results/figures/{figure}.{ext}",
+               figure=["tereshkov_fig2", "tereshkov_fig3", "tereshkov_fig4", "tereshkov_installation",
+                       "bias_convergence_comparison"], ext=("png", "pdf")),
+        "results/claims/tereshkov.csv",
