@@ -140,6 +140,34 @@ def assemble_ledger(paths: Sequence[str | Path]) -> pd.DataFrame:
     return validate_rows(pd.concat(frames, ignore_index=True), source="ledger (" + ", ".join(map(str, paths)) + ")")
 
 
+#: Columns of an expected-verdicts file (the CI reproduction check).
+EXPECTED_COLUMNS = ("paper", "claim_id", "verdict")
+
+
+def expected_verdicts(ledger: pd.DataFrame) -> pd.DataFrame:
+    """The ``(paper, claim_id, verdict)`` table of a ledger, sorted: what an
+    expected-verdicts file holds."""
+    return ledger.loc[:, list(EXPECTED_COLUMNS)].sort_values(["paper", "claim_id"]).reset_index(drop=True)
+
+
+def verdict_changes(ledger: pd.DataFrame, expected: pd.DataFrame) -> list[str]:
+    """One line per difference between a ledger and its expected verdicts: a claim whose
+    verdict changed, a claim without an expected verdict, and an expected claim that the
+    ledger no longer has.  Empty when they agree."""
+    have = {(r.paper, r.claim_id): r.verdict for r in ledger.itertuples()}
+    want = {(r.paper, r.claim_id): r.verdict for r in expected.itertuples()}
+    lines = []
+    for key in sorted(have.keys() | want.keys()):
+        name = "/".join(key)
+        if key not in want:
+            lines.append(f"{name}: new claim (verdict {have[key]}) has no expected verdict")
+        elif key not in have:
+            lines.append(f"{name}: expected verdict {want[key]} but the ledger has no such claim")
+        elif have[key] != want[key]:
+            lines.append(f"{name}: verdict changed from {want[key]} to {have[key]}")
+    return lines
+
+
 def verdict_counts(ledger: pd.DataFrame) -> dict[str, int]:
     """Number of claims per verdict (for logs)."""
     return {v: int(np.sum(ledger["verdict"] == v)) for v in VERDICTS}
@@ -148,12 +176,15 @@ def verdict_counts(ledger: pd.DataFrame) -> dict[str, int]:
 __all__ = [
     "COLUMNS",
     "Claim",
+    "EXPECTED_COLUMNS",
     "LedgerError",
     "PAPERS",
     "VERDICTS",
     "assemble_ledger",
     "at_least",
+    "expected_verdicts",
     "read_claims",
     "validate_rows",
+    "verdict_changes",
     "verdict_counts",
 ]
