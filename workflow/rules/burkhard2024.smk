@@ -3,8 +3,9 @@ the compute-time claim, and where the closed form stops being enough.  Config: t
 `burkhard2024` mapping (workflow/schemas/burkhard2024.schema.yaml).
 
 The experiments of the config (one per panel) are merged into one Monte Carlo job per grid
-point (pose count, noise std; accelcal.burkhard2024.grid.grid_points), each with its own
-random stream; a gather job writes the tidy table and its summaries, from which the
+point (pose count, noise std, g error; accelcal.burkhard2024.grid.grid_points); the data
+come from the random stream of (pose count, noise std), so the g errors of a point share
+their trials.  A gather job writes the tidy table and its summaries, from which the
 figures and the claims are computed.
 
 Needs from common.smk: FIGURES, CLAIM_STAGES, REPORT_TABLES, log_path, bench_path,
@@ -68,7 +69,7 @@ rule burkhard2024_mc:
     threads: 1
     resources:
         mem_mb=2000,
-        runtime=30,  # about 1 min for the largest point (24 poses, every g error, 1000 trials)
+        runtime=30,  # [min]; about 30 s of CPU for the largest point (24 poses, 7 methods, 1000 trials)
     script:
         "../scripts/burkhard2024_mc.py"
 

@@ -63,7 +63,6 @@ def burkhard2024_claims(summary: pd.DataFrame, comparisons: pd.DataFrame, timing
     r = rules
     rng, z = tuple(r["paper_noise_range"]), float(r["z"])
     a, b, cd, e = experiments["fig1a"], experiments["fig1b"], experiments["fig1cd"], experiments["fig1e"]
-    both = f"{summary_path} and {comparisons_path}"
     rows = []
 
     c = checks.full_lls_equals_nlls(summary, comparisons, a, rng, r["equal_rel_tol"], r["efficiency_tol"], z)
