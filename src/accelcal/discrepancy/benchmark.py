@@ -320,7 +320,12 @@ def rates(scores: pd.DataFrame, level: float = 0.95) -> pd.DataFrame:
         for o, c in d["outcome"].value_counts().items():
             row[f"n_{o}"] = int(c)
         out.append(row)
-    return pd.DataFrame(out)
+    order = {t: i for i, t in enumerate((NONE, *EFFECT_IDS, CONSTANT_TEMPERATURE))}
+    df = pd.DataFrame(out)
+    if len(df):
+        df = df.sort_values(["truth", "size_mde"], key=lambda c: c.map(order) if c.name == "truth" else c,
+                            kind="stable").reset_index(drop=True)
+    return df
 
 
 def crossing(sizes, rate, target: float) -> tuple[float, str]:

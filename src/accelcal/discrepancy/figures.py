@@ -133,7 +133,7 @@ def _residual_panel(ax, det: dict, implication: dict | None, title: str):
     ax.set_xlabel("pose mid time [s]")
     ax.set_ylabel("pose residual / its noise σ_i")
     ax.set_title(title, fontsize=8.5)
-    ax.legend(fontsize=6.5, loc="best")
+    ax.legend(fontsize=6.5, loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=1, frameon=False)
 
 
 def plot_before_after(reports: dict[str, dict]):
@@ -143,7 +143,7 @@ def plot_before_after(reports: dict[str, dict]):
     that band dwarfs the residuals)."""
     n = len(reports)
     with plt.rc_context(RC):
-        fig, axes = plt.subplots(1, n, figsize=(3.8 * n + 0.4, 3.6), layout="constrained", squeeze=False)
+        fig, axes = plt.subplots(1, n, figsize=(3.8 * n + 0.4, 4.4), layout="constrained", squeeze=False)
         for ax, (name, rep) in zip(axes[0], reports.items()):
             ni = ", ".join(rep["not_identifiable"]) or "-"
             _residual_panel(ax, rep, rep.get("noise_implication"),
@@ -196,7 +196,7 @@ def recording_figures(analysis, title: str) -> list[tuple[str, object]]:
     layer ran, ``discrepancy_allan``."""
     rep = analysis.to_dict()
     with plt.rc_context(RC):
-        fig, ax = plt.subplots(figsize=(6.4, 3.8), layout="constrained")
+        fig, ax = plt.subplots(figsize=(6.4, 4.6), layout="constrained")
         _residual_panel(ax, rep, rep.get("noise_implication"), f"{title}: named {rep['effect']}")
     out = [("discrepancy_residuals", fig)]
     if analysis.stochastic is not None:
