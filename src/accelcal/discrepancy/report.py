@@ -29,6 +29,7 @@ from ..recording import Recording
 from ..static import StaticPoses, detect_static_recording
 from .detect import DiscrepancyResult, Rules, discrepancy
 from .fit import pose_data_from_static
+from .stochastic import DEFAULT_CANDIDATES
 
 
 @dataclass(frozen=True)
@@ -38,7 +39,7 @@ class StochasticSettings:
     seed: int = 20240708
     alpha: float = 0.05
     max_terms: int = 3
-    candidates: tuple[str, ...] = ("quantization", "bias_instability", "random_walk", "drift_ramp", "gauss_markov")
+    candidates: tuple[str, ...] = DEFAULT_CANDIDATES
     n_boot: int = 199
     n_resim: int = 16
 
