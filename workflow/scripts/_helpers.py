@@ -9,6 +9,7 @@ $ACCELCAL_CONFIG) and use the workflow's default paths relative to the current d
 
 from __future__ import annotations
 
+import gzip
 import logging
 import os
 import sys
@@ -70,17 +71,20 @@ def stage_config(stage: str) -> dict:
 def write_csv(df, path: str | os.PathLike, **kwargs) -> Path:
     """Write a CSV atomically: a temporary file in the target directory, then rename.
 
-    A name ending in ``.gz`` is gzip-compressed without a time stamp, so that rerunning a
-    job gives byte-identical files.
+    A name ending in ``.gz`` is gzip-compressed with an empty file name and no time stamp
+    in the gzip header, so that rerunning a job gives byte-identical files.
     """
     path = Path(path)
-    if path.name.endswith(".gz"):
-        kwargs.setdefault("compression", {"method": "gzip", "mtime": 0})
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     os.close(fd)
     try:
-        df.to_csv(tmp, index=False, **kwargs)
+        if path.name.endswith(".gz"):
+            text = df.to_csv(index=False, **kwargs).encode()
+            with open(tmp, "wb") as raw, gzip.GzipFile(filename="", mode="wb", fileobj=raw, mtime=0) as gz:
+                gz.write(text)
+        else:
+            df.to_csv(tmp, index=False, **kwargs)
         os.replace(tmp, path)
     finally:
         Path(tmp).unlink(missing_ok=True)
