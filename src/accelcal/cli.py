@@ -3,11 +3,8 @@
 from __future__ import annotations
 
 import argparse
-import hashlib
-import json
 import os
 import sys
-import tempfile
 import threading
 import time
 from contextlib import contextmanager
@@ -17,6 +14,8 @@ import numpy as np
 
 from . import ESTIMATORS, __version__
 from .errors import AccelcalError
+from .measured.data import sha256_file
+from .measured.sources import write_json_atomic
 from .results import _finite_json
 
 MODEL_HELP = """\
@@ -136,13 +135,13 @@ def _discrepancy(args) -> int:
             figures = recording_figures(analysis, title=args.recording.name)
     out = analysis.to_dict()
     out.update({"accelcal_version": __version__, "recording": str(args.recording),
-                "recording_sha256": _sha256(args.recording), "g": args.g, "elapsed_s": time.perf_counter() - t0})
+                "recording_sha256": sha256_file(args.recording), "g": args.g, "elapsed_s": time.perf_counter() - t0})
     if figures:
         from .plotting import save_figure
 
         for name, fig in figures:
             save_figure(fig, Path(args.figures) / name)
-    _write_json_atomic(args.out, _finite_json(out))
+    write_json_atomic(args.out, _finite_json(out))
     _discrepancy_summary(out, args.out)
     return 0
 
@@ -189,7 +188,7 @@ def _calibrate(args) -> int:
         "method": args.method,
         "accelcal_version": __version__,
         "recording": str(args.recording),
-        "recording_sha256": _sha256(args.recording),
+        "recording_sha256": sha256_file(args.recording),
         "poses": {
             "t_start": poses.t_start.tolist(),
             "t_end": poses.t_end.tolist(),
@@ -199,7 +198,7 @@ def _calibrate(args) -> int:
         },
         "elapsed_s": time.perf_counter() - t0,
     })
-    _write_json_atomic(args.out, _finite_json(out))
+    write_json_atomic(args.out, _finite_json(out))
     _summary(result, args.method, args.out)
     return 0
 
@@ -244,24 +243,6 @@ def _summary(r, method: str, out: Path) -> None:
 
 def _fmt(values, errors) -> str:
     return "  ".join(f"{v:+.6g} ± {e:.2g}" for v, e in zip(values, errors))
-
-
-def _sha256(path: Path) -> str:
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
-
-
-def _write_json_atomic(path: Path, obj) -> None:
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w") as fh:
-            json.dump(obj, fh, indent=2)
-            fh.write("\n")
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 if __name__ == "__main__":
