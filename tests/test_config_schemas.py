@@ -159,8 +159,8 @@ EDGES = {
                          "tereshkov.estimator.accel_formula": "eq13", "tereshkov.estimator.turn_rate_dps": 1.01,
                          "tereshkov.gnss.rate_hz": 10, "tereshkov.comparison.imu_rate_hz": 10,
                          "tereshkov.sweep.kinds": ["all"], "tereshkov.sweep.steady_state_from_s": 699}),
-    "measured": changed({"measured.recordings": {"imucal_ferraris": {
-        "g": 9.81, "estimators": ["full_lls", "bias_lls"], "pose_selection": "all"}}}),
+    "measured": changed({"measured.recordings.imucal_ferraris": {
+        "g": 9.81, "estimators": ["full_lls", "bias_lls"], "pose_selection": "all"}}),
 }
 
 
