@@ -43,7 +43,7 @@ FIGURE_SECTIONS = (
     ("tereshkov", "Tereshkov: an intuitive approach to inertial sensor bias estimation",
      ("tereshkov_", "bias_convergence_comparison")),
     ("measured", "Measured data: public recordings calibrated without ground truth", ("measured_",)),
-    ("discrepancy", "Discrepancy: where the papers' settings and ours differ", ("discrepancy_",)),
+    ("discrepancy", "Discrepancy: where simulation and measured data disagree, and the missing effect", ("discrepancy_",)),
 )
 OTHER_SECTION = ("other", "Other figures")
 
