@@ -86,7 +86,7 @@ def test_non_convergence_is_reported(design):
         calibrate(a, R, G, tol=0.0, max_iter=3, strict=True)
     rb = calibrate_batch(WindowStatistics.from_samples(np.stack([win, win])), design.R, G, tol=0.0, max_iter=2)
     assert not rb.converged.any() and (rb.iterations == 2).all()
-    errors = calibration_montecarlo(design, 4, np.random.default_rng(4), tol=0.0, max_iter=2, chunk=2)
+    errors = calibration_montecarlo(design, np.random.default_rng(4).spawn(4), tol=0.0, max_iter=2, chunk=2)
     table = errors[errors["method"] == "batista2011"]
     assert not table["converged"].any()
     summary = calibration_summary(errors, calibration_bounds(design))
@@ -134,7 +134,7 @@ def test_crlb_jacobian_and_scaling(design):
 def test_monte_carlo_error_attains_the_crlb(design):
     """Table I is (nearly) efficient: error std ≈ CRLB for every parameter, mean ≈ 0."""
     T = 400
-    errors = calibration_montecarlo(design, T, np.random.default_rng(7), chunk=200)
+    errors = calibration_montecarlo(design, np.random.default_rng(7).spawn(T), chunk=200)
     s = calibration_summary(errors, calibration_bounds(design))
     s = s[(s["method"] == "batista2011") & (s["data"] == "quadratic") & s["parameter"].isin(PARAMETERS)]
     assert len(s) == 18 and (s["n_converged"] == T).all()
@@ -151,7 +151,7 @@ def test_errors_in_variables_bias_matches_monte_carlo_at_high_noise():
     d = _design(noise=noise)
     ab = asymptotic_bias(d)
     T = 1500
-    errors = calibration_montecarlo(d, T, np.random.default_rng(8), chunk=500)
+    errors = calibration_montecarlo(d, np.random.default_rng(8).spawn(T), chunk=500)
     e = errors[(errors["method"] == "batista2011") & (errors["data"] == "quadratic")]
     s = e.groupby("parameter")["error"].agg(["mean", "std"])
     for name in ("F_inv_11", "F_inv_22", "F_inv_33"):
@@ -163,7 +163,7 @@ def test_errors_in_variables_bias_matches_monte_carlo_at_high_noise():
 
 def test_quadratic_term_and_known_rotations_against_full_lls(design):
     """Full LLS (no F2, unknown attitude) is biased by F2; on F2 = 0 data it is only less precise."""
-    errors = calibration_montecarlo(design, 60, np.random.default_rng(9))
+    errors = calibration_montecarlo(design, np.random.default_rng(9).spawn(60))
     c = lls_comparison(errors).set_index(["data", "method", "quantity"])["rms_norm"]
     assert c[("quadratic", "full_lls", "b")] > 100 * c[("quadratic", "batista2011", "b")]
     assert c[("quadratic", "batista2011_linear", "b")] > 100 * c[("quadratic", "batista2011", "b")]
@@ -175,3 +175,19 @@ def test_quadratic_term_and_known_rotations_against_full_lls(design):
     M = np.linalg.cholesky(F @ F.T)
     np.testing.assert_allclose(derived_quantities(p)[3:], M[[0, 1, 1, 2, 2, 2], [0, 0, 1, 0, 1, 2]])
     assert pack(PAPER_F_INV, PAPER_B_PRIME, PAPER_F2, design.g_table).shape == (18,)
+
+
+def test_chunked_calibration_monte_carlo_equals_one_job(design):
+    """The runs of a chunk draw from their own streams: split into jobs, the same table."""
+    import pandas as pd
+
+    from accelcal.batista.montecarlo import run_streams
+
+    whole = calibration_montecarlo(design, run_streams(3, "calibration", range(6)), chunk=4)
+    parts = [calibration_montecarlo(design, run_streams(3, "calibration", ids), run_ids=ids, chunk=4)
+             for ids in (range(0, 2), range(2, 6))]
+    merged = pd.concat(parts, ignore_index=True).sort_values(["data", "method", "run"], kind="stable")
+    expected = whole.sort_values(["data", "method", "run"], kind="stable")
+    pd.testing.assert_frame_equal(merged.reset_index(drop=True), expected.reset_index(drop=True))
+    shifted = calibration_montecarlo(design, run_streams(3, "calibration", range(1, 3)), run_ids=range(1, 3))
+    assert not np.allclose(shifted["estimate"], parts[0]["estimate"])

@@ -31,7 +31,7 @@ def _verdicts(rows):
 def _cal_summary(noise, runs=150, seed=0):
     d = calibration_design(np.arange(0, 360, 45), [-60, -30, 0, 30, 60], [0, 90, 180, 270], [0.3, -0.2, 0], 9.81,
                            PAPER_F_INV, PAPER_B_PRIME, PAPER_F2, noise, window_s=1.0)
-    return calibration_summary(calibration_montecarlo(d, runs, np.random.default_rng(seed), chunk=150),
+    return calibration_summary(calibration_montecarlo(d, np.random.default_rng(seed).spawn(runs), chunk=150),
                                calibration_bounds(d))
 
 
@@ -45,7 +45,7 @@ def _scenario(kind, gyro=0.05):
 
 
 def _mc(sc, seed, runs=30, **kw):
-    return filter_montecarlo(sc, runs, np.random.default_rng(seed), kw.pop("P0", P0), record_every_s=1.0,
+    return filter_montecarlo(sc, np.random.default_rng(seed).spawn(runs), kw.pop("P0", P0), record_every_s=1.0,
                              summary_every_s=0.5, **kw)
 
 

@@ -88,7 +88,7 @@ def test_noise_free_filter_stays_on_the_truth_with_second_order_error():
 def test_shared_gain_batch_matches_the_exact_filter():
     sc = _scenario(_changing(60.0))
     rng = np.random.default_rng(1)
-    a, w, y = _measurements(sc, np.arange(len(sc.t)), rng, 3)
+    a, w, y = _measurements(sc, np.arange(len(sc.t)), rng.spawn(3))
     x0 = initial_estimate(a[:, 0], y[:, 0])
     K, _ = covariance_sequence(sc.t, sc.attitude.omega, P0)
     out = shared_gain_filter(sc.dt, a, w, y, x0, K, np.arange(len(sc.t)))
@@ -106,7 +106,7 @@ def test_shared_gain_batch_matches_the_exact_filter():
 @pytest.fixture(scope="module")
 def changing_mc():
     sc = _scenario(_changing(150.0))
-    return sc, filter_montecarlo(sc, 40, np.random.default_rng(2), P0, record_every_s=1.0, summary_every_s=0.5)
+    return sc, filter_montecarlo(sc, np.random.default_rng(2).spawn(40), P0, record_every_s=1.0, summary_every_s=0.5)
 
 
 def test_mean_error_converges_to_zero_within_the_filter_sigma(changing_mc):
@@ -131,7 +131,7 @@ def test_constant_omega_direction_leaves_the_axial_components_unobserved(changin
     """Sec. IV: with ω along n, g·n and b·n cannot be told apart; the rest converges."""
     _, mc_change = changing_mc
     sc = _scenario(_constant(150.0))
-    mc = filter_montecarlo(sc, 30, np.random.default_rng(3), P0, record_every_s=1.0, summary_every_s=1.0)
+    mc = filter_montecarlo(sc, np.random.default_rng(3).spawn(30), P0, record_every_s=1.0, summary_every_s=1.0)
     obs = observability_table(mc, AXIS, "constant").set_index(["component", "t"])["rms_error"]
     obs_c = observability_table(mc_change, AXIS, "changing").set_index(["component", "t"])["rms_error"]
     t_end = 150.0
@@ -169,3 +169,26 @@ def test_bad_input_is_rejected():
     a[3, 0] = np.inf
     with pytest.raises(NonFiniteError):
         kalman_filter(t, a, sc.attitude.omega, s["v"], np.zeros(9), P0)
+
+
+def test_chunked_monte_carlo_merges_to_the_single_job_tables():
+    """Runs split over jobs (run_streams per run number) merge to the numbers of one job;
+    a chunk that drew the wrong runs' noise would not."""
+    from accelcal.batista.montecarlo import filter_summary, merge_filter_moments, run_streams
+
+    sc = _scenario(_changing(20.0))
+    kw = dict(record_every_s=5.0, summary_every_s=1.0)
+    whole = filter_montecarlo(sc, run_streams(7, "filter", range(9)), P0, **kw)
+    parts = [filter_montecarlo(sc, run_streams(7, "filter", ids), P0, run_ids=ids, **kw)
+             for ids in (range(0, 4), range(4, 7), range(7, 9))]
+    runs = __import__("pandas").concat([p.runs for p in parts], ignore_index=True)
+    assert np.array_equal(runs.to_numpy(), whole.runs.to_numpy())
+    merged = filter_summary(merge_filter_moments([p.moments for p in parts[::-1]]))  # order does not matter
+    num = [c for c in whole.summary.columns if c != "state"]
+    assert (merged["state"] == whole.summary["state"]).all() and (merged["n_runs"] == 9).all()
+    np.testing.assert_allclose(merged[num].to_numpy(float), whole.summary[num].to_numpy(float), rtol=1e-12, atol=1e-15)
+    # the same runs drawn from other streams give other numbers
+    other = filter_montecarlo(sc, run_streams(8, "filter", range(9)), P0, **kw)
+    assert not np.allclose(other.summary["mean_error"], whole.summary["mean_error"])
+    with pytest.raises(ValueError, match="different summary times"):
+        merge_filter_moments([parts[0].moments, parts[1].moments.iloc[:-9]])

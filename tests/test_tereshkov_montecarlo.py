@@ -32,7 +32,8 @@ def tables():
     field, straight, art, sweep = (out[k][0] for k in ("field", "straight", "artificial", "sweep"))
     summary = mc.convergence_summary(pd.concat([field, straight]), SS)
     obs, _ = mc.observability_table(CFG)
-    return {"field": field, "straight": straight, "summary": summary, "obs": obs,
+    return {"field": field, "straight": straight, "artificial": art, "sweep_table": sweep, "timing": out,
+            "summary": summary, "obs": obs,
             "art": mc.artificial_summary(art, SS), "sweep": mc.sweep_summary(sweep, SS)}
 
 
@@ -119,3 +120,28 @@ def test_claims_reject_slow_gyro_filter(tables):
     rows = tereshkov_claims(s, tables["obs"], tables["art"], tables["sweep"]).set_index("claim_id")
     assert rows.loc["gyro_convergence_time", "verdict"] == "not_reproduced"
     assert rows.loc["accel_slower_than_gyro", "verdict"] == "not_reproduced"
+
+
+def test_jobs_merge_to_the_tables_of_one_job(tables):
+    """Split over two jobs (run r in job r % 2), the merged tables equal one job's (to
+    rounding: the batched matrix products differ in the last bit, ~1e-16, with the batch
+    size); the wall times add up over the jobs."""
+    parts = [mc.run_scenarios(CFG, ["field", "straight", "artificial", "sweep"], job=j, jobs=2) for j in (0, 1)]
+    for name, whole in (("field", tables["field"]), ("artificial", tables["artificial"]),
+                        ("sweep", tables["sweep_table"]), ("straight", tables["straight"])):
+        assert set(parts[0][name][0]["run"]) == set(range(0, whole["run"].max() + 1, 2))
+        merged = mc.merge_job_tables(p[name][0] for p in parts)
+        assert list(merged.columns) == list(whole.columns)
+        floats = list(whole.select_dtypes("float").columns)
+        pd.testing.assert_frame_equal(merged.drop(columns=floats), whole.drop(columns=floats))
+        np.testing.assert_allclose(merged[floats].to_numpy(), whole[floats].to_numpy(), rtol=1e-12, atol=1e-12,
+                                   err_msg=name)
+    timings = pd.DataFrame([p[n][1] for p in parts for n in ("field", "sweep")])
+    merged = mc.merge_job_timings(timings).set_index("scenario")
+    assert merged.loc["field", "runs"] == tables["timing"]["field"][1]["runs"] and merged.loc["field", "jobs"] == 2
+    assert merged.loc["field", "estimator_s"] == pytest.approx(sum(p["field"][1]["estimator_s"] for p in parts))
+    # a wrong merge (jobs concatenated in job order) is not the one-job table
+    naive = pd.concat([p["field"][0] for p in parts], ignore_index=True).drop(columns="batch_row")
+    assert not np.allclose(naive["estimate"], tables["field"]["estimate"])
+    with pytest.raises(mc.InvalidParameterError, match="job 2 is not in 0 .. 1"):
+        mc.job_share(mc.build_scenario(CFG, "field"), 2, 2)

@@ -45,8 +45,46 @@ BATISTA_FIGURE_INPUTS = {
 }
 
 
+def batista_chunk_runs(section, chunk):
+    """[first, last + 1) run numbers of job ``chunk`` of ``section`` (calibration or filter):
+    ``jobs`` contiguous blocks of nearly equal size.  Each run draws from its own stream
+    (accelcal.batista.montecarlo.run_streams), so the split changes no number."""
+    c = BATISTA[section]
+    edges = [round(i * c["runs"] / c["jobs"]) for i in range(c["jobs"] + 1)]
+    return [edges[int(chunk)], edges[int(chunk) + 1]]
+
+
+def batista_chunks(section, pattern):
+    return expand(pattern, chunk=range(BATISTA[section]["jobs"]))
+
+
 rule batista2011_calibration_mc:
-    """Table I, its linear-only variant and the full LLS on the same simulated noise; CRLB."""
+    """One chunk of the Table I Monte Carlo (and the linear-only variant and the full LLS
+    on the same simulated noise): the error of every run, data set, method and parameter."""
+    output:
+        f"{BATISTA_OUT}/chunks/calibration_errors_{{chunk}}.csv.gz",
+    params:
+        cfg=batista_cfg("calibration"),
+        runs=lambda w: batista_chunk_runs("calibration", w.chunk),
+    wildcard_constraints:
+        chunk=r"\d+",
+    log:
+        log_path("batista2011/calibration_mc_{chunk}"),
+    benchmark:
+        bench_path("batista2011/calibration_mc_{chunk}"),
+    threads: 1
+    resources:
+        mem_mb=1500,
+        runtime=15,  # about 10 ms per run and data set
+    script:
+        "../scripts/batista2011_calibration_mc.py"
+
+
+rule batista2011_calibration_merge:
+    """The chunks merged into Table I's error table; its summary against the CRLB and the
+    comparison with the full LLS."""
+    input:
+        chunks=batista_chunks("calibration", f"{BATISTA_OUT}/chunks/calibration_errors_{{chunk}}.csv.gz"),
     output:
         errors=f"{BATISTA_OUT}/calibration_errors.csv.gz",
         bounds=f"{BATISTA_OUT}/calibration_bounds.csv",
@@ -55,34 +93,58 @@ rule batista2011_calibration_mc:
     params:
         cfg=batista_cfg("calibration"),
     log:
-        log_path("batista2011/calibration_mc"),
+        log_path("batista2011/calibration_merge"),
     benchmark:
-        bench_path("batista2011/calibration_mc"),
+        bench_path("batista2011/calibration_merge"),
     threads: 1
     resources:
         mem_mb=2000,
-        runtime=20,  # about 10 ms per run and data set
+        runtime=10,
     script:
-        "../scripts/batista2011_calibration_mc.py"
+        "../scripts/batista2011_calibration_merge.py"
 
 
 rule batista2011_filter_mc:
-    """Monte Carlo of the filter (shared gain sequence, per-run gyro readings)."""
+    """One chunk of the filter Monte Carlo (shared gain sequence, per-run gyro readings):
+    per-run errors and the mergeable statistics over its runs."""
+    output:
+        runs=f"{BATISTA_OUT}/chunks/filter_runs_{{chunk}}.csv.gz",
+        moments=f"{BATISTA_OUT}/chunks/filter_moments_{{chunk}}.csv.gz",
+    params:
+        cfg=batista_cfg("filter"),
+        runs=lambda w: batista_chunk_runs("filter", w.chunk),
+    wildcard_constraints:
+        chunk=r"\d+",
+    log:
+        log_path("batista2011/filter_mc_{chunk}"),
+    benchmark:
+        bench_path("batista2011/filter_mc_{chunk}"),
+    threads: 1
+    resources:
+        mem_mb=1500,
+        runtime=15,  # about 1 µs per run and step
+    script:
+        "../scripts/batista2011_filter_mc.py"
+
+
+rule batista2011_filter_merge:
+    """The filter chunks merged: per-run errors and the statistics over all runs (Figs. 6-8)."""
+    input:
+        runs=batista_chunks("filter", f"{BATISTA_OUT}/chunks/filter_runs_{{chunk}}.csv.gz"),
+        moments=batista_chunks("filter", f"{BATISTA_OUT}/chunks/filter_moments_{{chunk}}.csv.gz"),
     output:
         runs=f"{BATISTA_OUT}/filter_runs.csv.gz",
         summary=f"{BATISTA_OUT}/filter_summary.csv.gz",
-    params:
-        cfg=batista_cfg("filter"),
     log:
-        log_path("batista2011/filter_mc"),
+        log_path("batista2011/filter_merge"),
     benchmark:
-        bench_path("batista2011/filter_mc"),
+        bench_path("batista2011/filter_merge"),
     threads: 1
     resources:
-        mem_mb=3000,
-        runtime=30,  # about 1 µs per run and step
+        mem_mb=2000,
+        runtime=10,
     script:
-        "../scripts/batista2011_filter_mc.py"
+        "../scripts/batista2011_filter_merge.py"
 
 
 rule batista2011_filter_example:

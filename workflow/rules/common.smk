@@ -88,6 +88,10 @@ def _check_batista2011(b):
         raise _config_error("batista2011.calibration.schedule.window_start_s",
                             f"the data window {s['window_start_s']}-{s['window_start_s'] + s['window_s']} s "
                             f"must lie in the static part {s['transition_s']}-{s['step_s']} s of each step")
+    for part in ("calibration", "filter"):
+        if b[part]["jobs"] > b[part]["runs"]:
+            raise _config_error(f"batista2011.{part}.jobs",
+                                f"{b[part]['jobs']} jobs for {b[part]['runs']} runs would leave a job without runs")
     f = b["filter"]
     if f["steady_from_s"] >= f["duration_s"]:
         raise _config_error("batista2011.filter.steady_from_s",
@@ -106,6 +110,14 @@ def _check_tereshkov(t):
         if start >= duration:
             raise _config_error(f"tereshkov.{part}.steady_state_from_s",
                                 f"{start} s leaves no steady state in a run of {part}.duration_s = {duration} s")
+    # a job holds the runs r with r % jobs == job of every scenario it simulates
+    for part, scenarios in (("monte_carlo", ("field", "straight", "artificial")), ("sweep", None)):
+        runs = {sc: t["scenarios"][sc]["runs"] for sc in scenarios} if scenarios else {"sweep": t["sweep"]["runs"]}
+        fewest = min(runs, key=runs.get)
+        if t[part]["jobs"] > runs[fewest]:
+            raise _config_error(f"tereshkov.{part}.jobs",
+                                f"{t[part]['jobs']} jobs for the {runs[fewest]} runs of {fewest} would leave a job "
+                                "without runs")
     e = t["estimator"]
     if e["turn_rate_dps"] <= e["straight_rate_dps"]:
         raise _config_error("tereshkov.estimator.turn_rate_dps",

@@ -15,44 +15,84 @@ TERESHKOV_MAIN = ("field", "straight", "artificial")
 
 
 rule tereshkov_simulate:
-    """Field, straight-only and artificial-bias Monte Carlo runs through one estimator loop:
-    tidy tables (run × time × sensor × axis)."""
+    """One job's share of the field, straight-only and artificial-bias Monte Carlo runs
+    (run r in job r mod monte_carlo.jobs) through one estimator loop: tidy tables
+    (run × time × sensor × axis) and the wall times."""
     output:
-        **{sc: f"results/tereshkov/{sc}.csv.gz" for sc in TERESHKOV_MAIN},
-        timing="results/tereshkov/timing_main.csv",
+        **{sc: f"results/tereshkov/chunks/{sc}_{{job}}.csv.gz" for sc in TERESHKOV_MAIN},
+        timing="results/tereshkov/chunks/timing_main_{job}.csv",
     params:
         cfg=TERESHKOV,
         scenarios=list(TERESHKOV_MAIN),
+        job=lambda w: int(w.job),
+        jobs=TERESHKOV["monte_carlo"]["jobs"],
+    wildcard_constraints:
+        job=r"\d+",
     log:
-        log_path("tereshkov/simulate"),
+        log_path("tereshkov/simulate_{job}"),
     benchmark:
-        bench_path("tereshkov/simulate"),
+        bench_path("tereshkov/simulate_{job}"),
     threads: 1
     resources:
-        mem_mb=3000,
-        runtime=30,  # about a minute at the default size (90 runs x 1800 s at 50 Hz)
+        mem_mb=2000,
+        runtime=20,  # about a minute for 16 runs x 1800 s at 50 Hz
     script:
         "../scripts/tereshkov_simulate.py"
 
 
 rule tereshkov_sweep:
-    """Installation-angle sweep (same paths, biases and noise at every angle)."""
+    """One job's share of the installation-angle sweep (same paths, biases and noise at
+    every angle)."""
     output:
-        sweep="results/tereshkov/sweep.csv.gz",
-        timing="results/tereshkov/timing_sweep.csv",
+        sweep="results/tereshkov/chunks/sweep_{job}.csv.gz",
+        timing="results/tereshkov/chunks/timing_sweep_{job}.csv",
     params:
         cfg=TERESHKOV,
         scenarios=["sweep"],
+        job=lambda w: int(w.job),
+        jobs=TERESHKOV["sweep"]["jobs"],
+    wildcard_constraints:
+        job=r"\d+",
     log:
-        log_path("tereshkov/sweep"),
+        log_path("tereshkov/sweep_{job}"),
     benchmark:
-        bench_path("tereshkov/sweep"),
+        bench_path("tereshkov/sweep_{job}"),
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=20,
+    script:
+        "../scripts/tereshkov_simulate.py"
+
+
+def tereshkov_jobs(part, pattern, **wildcards):
+    return expand(pattern, job=range(TERESHKOV[part]["jobs"]), **wildcards)
+
+
+rule tereshkov_merge:
+    """The jobs' tables of each scenario merged in the order of one job, and their wall times."""
+    input:
+        **{sc: tereshkov_jobs("monte_carlo", f"results/tereshkov/chunks/{sc}_{{job}}.csv.gz")
+           for sc in TERESHKOV_MAIN},
+        main_timing=tereshkov_jobs("monte_carlo", "results/tereshkov/chunks/timing_main_{job}.csv"),
+        sweep=tereshkov_jobs("sweep", "results/tereshkov/chunks/sweep_{job}.csv.gz"),
+        sweep_timing=tereshkov_jobs("sweep", "results/tereshkov/chunks/timing_sweep_{job}.csv"),
+    output:
+        **{sc: f"results/tereshkov/{sc}.csv.gz" for sc in TERESHKOV_MAIN + ("sweep",)},
+        timing_main="results/tereshkov/timing_main.csv",
+        timing_sweep="results/tereshkov/timing_sweep.csv",
+    params:
+        scenarios=list(TERESHKOV_MAIN) + ["sweep"],
+    log:
+        log_path("tereshkov/merge"),
+    benchmark:
+        bench_path("tereshkov/merge"),
     threads: 1
     resources:
         mem_mb=3000,
-        runtime=30,
+        runtime=10,
     script:
-        "../scripts/tereshkov_simulate.py"
+        "../scripts/tereshkov_merge.py"
 
 
 rule tereshkov_observability:

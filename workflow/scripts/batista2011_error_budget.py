@@ -4,7 +4,7 @@ from _helpers import configure_logging
 from batista2011_common import TABLES, standalone, write_table
 
 from accelcal.batista.experiment import filter_kwargs, scenario_from_config
-from accelcal.batista.montecarlo import filter_error_budget, stream
+from accelcal.batista.montecarlo import filter_error_budget, run_streams
 
 if "snakemake" not in globals():
     snakemake = standalone("batista2011_error_budget", output=[TABLES["error_budget"]])
@@ -12,8 +12,9 @@ if "snakemake" not in globals():
 log = configure_logging(snakemake)
 cfg = snakemake.params.cfg
 f = cfg["filter"]
-eb = filter_error_budget(scenario_from_config(cfg, "changing"), int(f["error_budget_runs"]),
-                         stream(cfg["seed"], "error_budget"), steady_from_s=float(f["steady_from_s"]),
+eb = filter_error_budget(scenario_from_config(cfg, "changing"),
+                         run_streams(cfg["seed"], "error_budget", range(int(f["error_budget_runs"]))),
+                         steady_from_s=float(f["steady_from_s"]),
                          **filter_kwargs(cfg))
 log.info("steady-state RMS per noise source:\n%s", eb.pivot(index="state", columns="source", values="rms_error"))
 write_table(eb, snakemake.output[0])

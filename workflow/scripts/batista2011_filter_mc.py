@@ -1,24 +1,32 @@
-"""Monte Carlo of the online filter on the changing-ω trajectory (Figs. 6-8)."""
+"""One chunk of the filter Monte Carlo on the changing-ω trajectory (Figs. 6-8): the runs
+``params.runs = [first, stop)``, each from its own random stream."""
 
 import time
 
 from _helpers import configure_logging
-from batista2011_common import TABLES, standalone, write_table
+from batista2011_common import OUT, standalone, write_table
 
 from accelcal.batista.experiment import filter_kwargs, scenario_from_config
-from accelcal.batista.montecarlo import filter_montecarlo, stream
+from accelcal.batista.montecarlo import filter_montecarlo, run_streams
 
-if "snakemake" not in globals():
-    snakemake = standalone("batista2011_filter_mc", output={"runs": TABLES["filter_runs"],
-                                                             "summary": TABLES["filter_summary"]})
+if "snakemake" not in globals():  # standalone: the whole Monte Carlo as one chunk
+    from batista2011_common import stage_config
+
+    _f = stage_config()["filter"]
+    snakemake = standalone("batista2011_filter_mc", output={"runs": f"{OUT}/chunks/filter_runs_0.csv.gz",
+                                                             "moments": f"{OUT}/chunks/filter_moments_0.csv.gz"},
+                           runs=[0, int(_f["runs"])])
 
 log = configure_logging(snakemake)
 cfg = snakemake.params.cfg
 f = cfg["filter"]
+first, stop = (int(x) for x in snakemake.params.runs)
 sc = scenario_from_config(cfg, "changing")
+ids = range(first, stop)
 t0 = time.perf_counter()
-mc = filter_montecarlo(sc, int(f["runs"]), stream(cfg["seed"], "filter"), **filter_kwargs(cfg),
+mc = filter_montecarlo(sc, run_streams(cfg["seed"], "filter", ids), **filter_kwargs(cfg), run_ids=ids,
                        record_every_s=float(f["record_every_s"]), summary_every_s=float(f["summary_every_s"]))
-log.info("%d runs x %d steps in %.1f s", int(f["runs"]), len(sc.t), time.perf_counter() - t0)
-write_table(mc.runs, snakemake.output.runs, float_format="%.6g")
-write_table(mc.summary, snakemake.output.summary, float_format="%.6g")
+log.info("runs %d-%d x %d steps in %.1f s", first, stop - 1, len(sc.t), time.perf_counter() - t0)
+# lossless: the merge combines these into the statistics over all runs
+write_table(mc.runs, snakemake.output.runs, float_format="%.17g")
+write_table(mc.moments, snakemake.output.moments, float_format="%.17g")

@@ -6,7 +6,7 @@ from _helpers import configure_logging
 from batista2011_common import TABLES, standalone, write_table
 
 from accelcal.batista.experiment import filter_kwargs, scenario_from_config
-from accelcal.batista.montecarlo import filter_montecarlo, gramian_table, observability_table, stream
+from accelcal.batista.montecarlo import filter_montecarlo, gramian_table, observability_table, run_streams
 
 if "snakemake" not in globals():
     snakemake = standalone("batista2011_observability", output={"table": TABLES["observability"],
@@ -18,7 +18,8 @@ o = cfg["observability"]
 tables, grams = [], []
 for case in ("changing", "constant"):
     sc = scenario_from_config(cfg, case)
-    mc = filter_montecarlo(sc, int(o["runs"]), stream(cfg["seed"], f"observability_{case}"), **filter_kwargs(cfg),
+    rngs = run_streams(cfg["seed"], f"observability_{case}", range(int(o["runs"])))
+    mc = filter_montecarlo(sc, rngs, **filter_kwargs(cfg),
                            record_every_s=float(o["record_every_s"]), summary_every_s=float(o["record_every_s"]))
     tables.append(observability_table(mc, o["axis_body"], case))
     n = int(round(float(o["gramian_window_s"]) / sc.dt)) + 1

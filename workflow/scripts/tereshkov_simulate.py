@@ -1,5 +1,6 @@
-"""Monte Carlo runs of the Tereshkov estimator: one tidy table per scenario (one estimator
-loop for all scenarios of equal duration) and the wall times."""
+"""One job's share of the Monte Carlo runs of the Tereshkov estimator: one tidy table per
+scenario (one estimator loop for all scenarios of equal duration) and the wall times.
+Run r of a scenario belongs to job ``r mod jobs``; tereshkov_merge.py joins the jobs."""
 
 import pandas as pd
 from _helpers import configure_logging, mock_snakemake
@@ -7,21 +8,23 @@ from tereshkov_common import stage_config, write_table
 
 from accelcal.tereshkov.montecarlo import run_scenarios
 
-if "snakemake" not in globals():
+if "snakemake" not in globals():  # standalone: the main scenarios as one job
     _sc = ["field", "straight", "artificial"]
+    _d = "results/tereshkov/chunks"
     snakemake = mock_snakemake(
         "tereshkov_simulate",
-        output={**{s: f"results/tereshkov/{s}.csv.gz" for s in _sc}, "timing": "results/tereshkov/timing_main.csv"},
-        params={"cfg": stage_config(), "scenarios": _sc},
+        output={**{s: f"{_d}/{s}_0.csv.gz" for s in _sc}, "timing": f"{_d}/timing_main_0.csv"},
+        params={"cfg": stage_config(), "scenarios": _sc, "job": 0, "jobs": 1},
     )
 
 log = configure_logging(snakemake)
-out = run_scenarios(snakemake.params.cfg, list(snakemake.params.scenarios))
+job, jobs = int(snakemake.params.job), int(snakemake.params.jobs)
+out = run_scenarios(snakemake.params.cfg, list(snakemake.params.scenarios), job=job, jobs=jobs)
 rows = []
 for name, (df, timing) in out.items():
-    log.info("%s: %d runs x %d steps in %.1f s (estimator %.1f s, loop shared by %s); table %d rows in %.1f s",
-             name, timing["runs"], timing["steps"], timing["wall_s"], timing["estimator_s"], timing["merged_with"],
-             len(df), timing["tidy_s"])
+    log.info("%s (job %d of %d): %d runs x %d steps in %.1f s (estimator %.1f s, loop shared by %s); "
+             "table %d rows in %.1f s", name, job + 1, jobs, timing["runs"], timing["steps"], timing["wall_s"],
+             timing["estimator_s"], timing["merged_with"], len(df), timing["tidy_s"])
     write_table(df, getattr(snakemake.output, name))
     rows.append(timing)
 write_table(pd.DataFrame(rows), snakemake.output.timing)

@@ -15,7 +15,11 @@
   rotation axis; the observability Gramian.
 * :func:`filter_cost`: wall time per step of the filter.
 
-Every random draw comes from the ``numpy.random.Generator`` passed in.
+Every random draw comes from the ``numpy.random.Generator`` passed in.  The Monte Carlos
+take one generator per run (:func:`run_streams`), so that a run's numbers do not depend
+on which other runs share its job: the workflow splits the runs into chunks (separate
+jobs, e.g. on a cluster) and merges them (:func:`merge_filter_moments`) to the same
+tables as one job would write.
 """
 
 from __future__ import annotations
@@ -50,6 +54,13 @@ _LOWER = ([0, 1, 1, 2, 2, 2], [0, 0, 1, 0, 1, 2])
 def stream(seed: int, name: str) -> np.random.Generator:
     """Independent random stream per experiment: derived from the master seed and a name."""
     return np.random.default_rng([int(seed), zlib.crc32(name.encode())])
+
+
+def run_streams(seed: int, name: str, run_ids) -> list[np.random.Generator]:
+    """One independent random stream per run: derived from the master seed, the
+    experiment's name and the run's number (not from its position in a job)."""
+    key = zlib.crc32(name.encode())
+    return [np.random.default_rng([int(seed), key, int(r)]) for r in run_ids]
 
 
 def _group(name: str) -> str:
@@ -105,8 +116,8 @@ DATASETS = {"quadratic": True, "linear": False}  # data with the paper's F2, and
 METHODS = ("batista2011", "batista2011_linear", "full_lls")
 
 
-def calibration_montecarlo(design: CalibrationDesign, runs: int, rng: np.random.Generator, tol: float = 1e-10,
-                           max_iter: int = 50, chunk: int = 50) -> pd.DataFrame:
+def calibration_montecarlo(design: CalibrationDesign, rngs, tol: float = 1e-10, max_iter: int = 50,
+                           chunk: int = 50, run_ids=None) -> pd.DataFrame:
     """Monte Carlo of Table I against the truth, with two baselines on the same noise.
 
     Each run draws white noise of std ``design.noise_std`` on every sample of every
@@ -122,6 +133,18 @@ def calibration_montecarlo(design: CalibrationDesign, runs: int, rng: np.random.
     ``b`` and ``M`` are also derived from the Table I estimates, so that all methods
     are compared on the same quantities.
 
+    Parameters
+    ----------
+    design : CalibrationDesign
+    rngs : sequence of numpy.random.Generator
+        One per run (:func:`run_streams`); run ``i`` draws its noise from ``rngs[i]`` only.
+    tol, max_iter : float, int
+        Stopping rule of Table I's Gauss-Newton steps.
+    chunk : int
+        Runs estimated together (vectorised); does not change any number.
+    run_ids : array-like of int, optional
+        The runs' numbers in the ``run`` column (default ``0 .. len(rngs) - 1``).
+
     Returns
     -------
     pandas.DataFrame
@@ -133,11 +156,15 @@ def calibration_montecarlo(design: CalibrationDesign, runs: int, rng: np.random.
     mus = {d: design.window_means(q) for d, q in DATASETS.items()}
     truths = {d: design.truth(q) for d, q in DATASETS.items()}
     dtruth = {d: derived_quantities(v) for d, v in truths.items()}
+    runs = len(rngs)
+    all_ids = np.arange(runs) if run_ids is None else np.asarray(run_ids, int)
+    if len(all_ids) != runs:
+        raise ValueError(f"{len(all_ids)} run ids for {runs} random streams")
     frames = []
     for start in range(0, runs, chunk):
         T = min(chunk, runs - start)
-        noise = design.noise_std * rng.standard_normal((T, K, n, 3))
-        run_ids = np.arange(start, start + T)
+        noise = design.noise_std * np.stack([g.standard_normal((K, n, 3)) for g in rngs[start:start + T]])
+        run_ids = all_ids[start:start + T]
         for data, quad in DATASETS.items():
             stats = WindowStatistics.from_samples(mus[data][None, :, None, :] + noise)
             for method, quadratic in (("batista2011", True), ("batista2011_linear", False)):
@@ -325,13 +352,14 @@ def filter_scenario(attitude: Attitude, bias, noise_acc, noise_gyro_deg_s, noise
                           float(np.deg2rad(noise_gyro_deg_s)), float(noise_vel))
 
 
-def _measurements(sc: FilterScenario, idx: np.ndarray, rng: np.random.Generator, runs: int):
-    """Noisy ``a_m``, ``ω_m`` and ``y`` at sample indices ``idx`` for ``runs`` runs, each (runs, len, 3)."""
+def _measurements(sc: FilterScenario, idx: np.ndarray, rngs):
+    """Noisy ``a_m``, ``ω_m`` and ``y`` at sample indices ``idx``, one run per generator in
+    ``rngs``, each (runs, len, 3).  Consecutive calls continue each run's stream."""
     s = sc.signals
-    shape = (runs, len(idx), 3)
-    a = s["a"][idx] + sc.bias + sc.noise_acc * rng.standard_normal(shape)
-    w = sc.attitude.omega[idx] + sc.noise_gyro * rng.standard_normal(shape)
-    y = s["v"][idx] + sc.noise_vel * rng.standard_normal(shape)
+    z = np.stack([g.standard_normal((3, len(idx), 3)) for g in rngs])  # (runs, a|ω|y, len, 3)
+    a = s["a"][idx] + sc.bias + sc.noise_acc * z[:, 0]
+    w = sc.attitude.omega[idx] + sc.noise_gyro * z[:, 1]
+    y = s["v"][idx] + sc.noise_vel * z[:, 2]
     return a, w, y
 
 
@@ -447,22 +475,28 @@ class FilterMonteCarlo:
 
     ``runs``: one row per run × recorded time (errors ``e_<state>`` = estimate − truth);
     ``summary``: one row per summary time × state (``mean_error``, ``std_error``,
-    ``rms_error``, ``filter_sigma``, ``run0_error``); ``P``: the filter covariance at
-    the times of ``runs`` (n_rec, 9, 9).
+    ``rms_error``, ``filter_sigma``, ``run0_error``: the error of the lowest-numbered
+    run, ``n_runs``); ``moments``: the same statistics in mergeable form (see
+    :func:`merge_filter_moments`); ``P``: the filter covariance at the times of
+    ``runs`` (n_rec, 9, 9).
     """
 
     runs: pd.DataFrame
     summary: pd.DataFrame
+    moments: pd.DataFrame
     P: np.ndarray
 
 
-def filter_montecarlo(sc: FilterScenario, runs: int, rng: np.random.Generator, P0_diag, xi=PAPER_XI,
-                      theta=PAPER_THETA, record_every_s: float = 2.0, summary_every_s: float = 0.1,
-                      block: int = 500, sub_block: int = 25, covariance=None) -> FilterMonteCarlo:
+def filter_montecarlo(sc: FilterScenario, rngs, P0_diag, xi=PAPER_XI, theta=PAPER_THETA,
+                      record_every_s: float = 2.0, summary_every_s: float = 0.1, block: int = 500,
+                      sub_block: int = 25, covariance=None, run_ids=None) -> FilterMonteCarlo:
     """Monte Carlo of the filter over sensor noise on a shared trajectory.
 
-    Every run draws its own accelerometer, gyro and velocity noise; its initial estimate
-    is :func:`initial_estimate` of its first samples.
+    Every run draws its own accelerometer, gyro and velocity noise from its own
+    generator (``rngs``, one per run, :func:`run_streams`); its initial estimate is
+    :func:`initial_estimate` of its first samples.  ``run_ids`` numbers the runs in the
+    tables (default ``0 .. len(rngs) - 1``): a chunk of a larger Monte Carlo passes its
+    runs' numbers and streams, and :func:`merge_filter_moments` combines the chunks.
 
     The covariance recursion of the Kalman filter depends on the data only through
     ``ω`` in ``A(t)``.  Along a shared trajectory it is computed once (along the true
@@ -477,6 +511,10 @@ def filter_montecarlo(sc: FilterScenario, runs: int, rng: np.random.Generator, P
     -------
     FilterMonteCarlo
     """
+    runs = len(rngs)
+    ids = np.arange(runs) if run_ids is None else np.asarray(run_ids, int)
+    if runs == 0 or len(ids) != runs:
+        raise ValueError(f"{len(ids)} run ids for {runs} random streams (need at least one run)")
     t, dt = sc.t, sc.dt
     n = len(t)
     if covariance is None:
@@ -487,11 +525,11 @@ def filter_montecarlo(sc: FilterScenario, runs: int, rng: np.random.Generator, P
     summ = np.unique(np.round(np.arange(0, t[-1] + 1e-9, summary_every_s) / dt).astype(int))
     rec, summ = rec[rec < n], summ[summ < n]
     both = np.union1d(rec, summ)
-    a, w, y = _measurements(sc, np.array([0]), rng, runs)
+    a, w, y = _measurements(sc, np.array([0]), rngs)
     st = _FilterState(initial_estimate(a[:, 0], y[:, 0]), a[:, 0], w[:, 0], both, dt)
     for k0 in range(1, n, block):
         idx = np.arange(k0, min(k0 + block, n))
-        a, w, y = _measurements(sc, idx, rng, runs)
+        a, w, y = _measurements(sc, idx, rngs)
         for j0 in range(0, len(idx), sub_block):  # small sub-blocks keep the (B, 3, 3, T) arrays in cache
             sl = slice(j0, j0 + sub_block)
             st.run_block(a[:, sl], w[:, sl], y[:, sl], gains, k0 + j0)
@@ -499,18 +537,60 @@ def filter_montecarlo(sc: FilterScenario, runs: int, rng: np.random.Generator, P
     pos = {k: i for i, k in enumerate(both)}
     ri = [pos[k] for k in rec]
     si = [pos[k] for k in summ]
-    per_run = pd.DataFrame({"run": np.repeat(np.arange(runs), len(rec)), "t": np.tile(t[rec], runs)})
+    per_run = pd.DataFrame({"run": np.repeat(ids, len(rec)), "t": np.tile(t[rec], runs)})
     for j, s in enumerate(STATES):
         per_run[f"e_{s}"] = err[:, ri, j].ravel()
-    sig = np.sqrt(np.einsum("kii->ki", P_all[summ]))
     e = err[:, si]
-    summary = pd.DataFrame({
-        "t": np.repeat(t[summ], 9), "state": np.tile(STATES, len(summ)),
-        "mean_error": e.mean(axis=0).ravel(), "std_error": e.std(axis=0, ddof=1).ravel() if runs > 1 else np.nan,
-        "rms_error": np.sqrt((e**2).mean(axis=0)).ravel(), "filter_sigma": sig.ravel(),
-        "run0_error": e[0].ravel(), "n_runs": runs,
+    mean = e.mean(axis=0)
+    first = int(np.argmin(ids))
+    moments = pd.DataFrame({
+        "t": np.repeat(t[summ], 9), "state": np.tile(STATES, len(summ)), "n": runs,
+        "mean": mean.ravel(), "m2": ((e - mean) ** 2).sum(axis=0).ravel(),
+        "first_run": int(ids[first]), "first_error": e[first].ravel(),
+        "filter_sigma": np.sqrt(np.einsum("kii->ki", P_all[summ])).ravel(),
     })
-    return FilterMonteCarlo(runs=per_run, summary=summary, P=P_all[rec])
+    return FilterMonteCarlo(runs=per_run, summary=filter_summary(moments), moments=moments, P=P_all[rec])
+
+
+def merge_filter_moments(parts) -> pd.DataFrame:
+    """Combine the ``moments`` of chunks of one Monte Carlo (disjoint runs, same times).
+
+    Means and sums of squared deviations combine exactly (Chan et al.'s pairwise
+    update), so the merged statistics equal those of one job over all runs up to
+    rounding (~1e-16 relative).
+    """
+    parts = list(parts)
+    if not parts:
+        raise ValueError("no Monte Carlo chunks to merge")
+    key = parts[0][["t", "state"]].reset_index(drop=True)
+    for p in parts[1:]:
+        if len(p) != len(key) or not (p["state"].to_numpy() == key["state"].to_numpy()).all() \
+                or not np.array_equal(p["t"].to_numpy(), key["t"].to_numpy()):
+            raise ValueError("Monte Carlo chunks with different summary times cannot be merged")
+    n_i = np.stack([p["n"].to_numpy(float) for p in parts])
+    mean_i = np.stack([p["mean"].to_numpy() for p in parts])
+    n = n_i.sum(axis=0)
+    mean = (n_i * mean_i).sum(axis=0) / n
+    m2 = np.stack([p["m2"].to_numpy() for p in parts]).sum(axis=0) + (n_i * (mean_i - mean) ** 2).sum(axis=0)
+    first = int(np.argmin([p["first_run"].iloc[0] for p in parts]))
+    return key.assign(n=n.astype(int), mean=mean, m2=m2, first_run=parts[first]["first_run"].to_numpy(),
+                      first_error=parts[first]["first_error"].to_numpy(),
+                      filter_sigma=parts[0]["filter_sigma"].to_numpy())
+
+
+def filter_summary(moments: pd.DataFrame) -> pd.DataFrame:
+    """The per-time statistics over runs from (merged) ``moments``: columns ``t, state,
+    mean_error, std_error, rms_error, filter_sigma, run0_error, n_runs``."""
+    n = moments["n"].to_numpy(float)
+    m2 = moments["m2"].to_numpy()
+    mean = moments["mean"].to_numpy()
+    with np.errstate(invalid="ignore", divide="ignore"):
+        std = np.where(n > 1, np.sqrt(m2 / (n - 1)), np.nan)
+    return pd.DataFrame({
+        "t": moments["t"].to_numpy(), "state": moments["state"].to_numpy(), "mean_error": mean,
+        "std_error": std, "rms_error": np.sqrt(m2 / n + mean**2), "filter_sigma": moments["filter_sigma"].to_numpy(),
+        "run0_error": moments["first_error"].to_numpy(), "n_runs": moments["n"].to_numpy(),
+    })
 
 
 def filter_example(sc: FilterScenario, rng: np.random.Generator, P0_diag, xi=PAPER_XI, theta=PAPER_THETA,
@@ -523,7 +603,7 @@ def filter_example(sc: FilterScenario, rng: np.random.Generator, P0_diag, xi=PAP
         Columns ``t, state, estimate, truth, sigma``.
     """
     idx = np.arange(len(sc.t))
-    a, w, y = (m[0] for m in _measurements(sc, idx, rng, 1))
+    a, w, y = (m[0] for m in _measurements(sc, idx, [rng]))
     every = max(1, int(round(record_every_s / sc.dt)))
     r = kalman_filter(sc.t, a, w, y, initial_estimate(a[0], y[0]), np.asarray(P0_diag, float), xi, theta, every)
     truth = sc.x_true()[::every]
@@ -544,7 +624,7 @@ def filter_cost(sc: FilterScenario, rng: np.random.Generator, P0_diag, xi=PAPER_
     steps = min(steps, len(sc.t))
     t = sc.t[:steps]
     idx = np.arange(steps)
-    a, w, y = _measurements(sc, idx, rng, runs)
+    a, w, y = _measurements(sc, idx, rng.spawn(runs))
     x0 = initial_estimate(a[:, 0], y[:, 0])
     P0 = np.asarray(P0_diag, float)
 
@@ -568,9 +648,10 @@ def filter_cost(sc: FilterScenario, rng: np.random.Generator, P0_diag, xi=PAPER_
                          for name, r, s in rows])
 
 
-def filter_error_budget(sc: FilterScenario, runs: int, rng: np.random.Generator, P0_diag, steady_from_s: float,
-                        xi=PAPER_XI, theta=PAPER_THETA) -> pd.DataFrame:
-    """Steady-state RMS error per state with one noise source at a time (and all together).
+def filter_error_budget(sc: FilterScenario, rngs, P0_diag, steady_from_s: float, xi=PAPER_XI,
+                        theta=PAPER_THETA) -> pd.DataFrame:
+    """Steady-state RMS error per state with one noise source at a time (and all together),
+    over ``len(rngs)`` runs (one generator per run; the sources are run one after the other).
 
     Returns
     -------
@@ -584,7 +665,7 @@ def filter_error_budget(sc: FilterScenario, runs: int, rng: np.random.Generator,
     cov = covariance_sequence(sc.t, sc.attitude.omega, np.asarray(P0_diag, float), xi, theta, return_covariance=True)
     for name, (na, ng, nv) in levels.items():
         one = FilterScenario(sc.attitude, sc.signals, sc.bias, na, ng, nv)
-        mc = filter_montecarlo(one, runs, rng, P0_diag, xi, theta, record_every_s=sc.t[-1], summary_every_s=1.0,
+        mc = filter_montecarlo(one, rngs, P0_diag, xi, theta, record_every_s=sc.t[-1], summary_every_s=1.0,
                                covariance=cov)
         d = mc.summary[mc.summary["t"] >= steady_from_s]
         rms = d.groupby("state", sort=False)["rms_error"].apply(lambda r: float(np.sqrt(np.mean(r**2))))
@@ -654,10 +735,13 @@ __all__ = [
     "filter_example",
     "filter_montecarlo",
     "filter_scenario",
+    "filter_summary",
     "gramian_table",
     "initial_estimate",
     "lls_comparison",
+    "merge_filter_moments",
     "observability_table",
+    "run_streams",
     "shared_gain_filter",
     "stream",
 ]

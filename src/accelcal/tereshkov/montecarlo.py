@@ -323,10 +323,50 @@ def _take_runs(res: TereshkovResult, idx) -> TereshkovResult:
                    accel_time=res.accel_time[idx], C=res.C[idx])
 
 
-def run_scenarios(cfg: dict, scenarios) -> dict[str, tuple[pd.DataFrame, dict]]:
+def job_share(sb: ScenarioBatch, job: int, jobs: int) -> ScenarioBatch:
+    """The rows of ``sb`` whose run number ``r`` has ``r % jobs == job`` (every variant,
+    angle and kind of those runs), with their row number in the whole batch in the
+    ``batch_row`` column, so that :func:`merge_job_tables` restores the order of one job.
+
+    Each run draws its noise from its own seed (:class:`VehicleBatch`), so a run's
+    numbers do not depend on the job it is in.
+    """
+    if not 0 <= job < jobs:
+        raise InvalidParameterError(f"job {job} is not in 0 .. {jobs - 1}")
+    idx = np.flatnonzero(sb.groups["run"].to_numpy() % jobs == job)
+    b = sb.batch
+    batch = VehicleBatch(b.path.take(idx), b.sensors, b.C_bs[idx], b.gyro_bias[idx], b.accel_bias[idx], b.seeds[idx])
+    return ScenarioBatch(batch, sb.groups.iloc[idx].assign(batch_row=idx).reset_index(drop=True))
+
+
+def merge_job_tables(tables) -> pd.DataFrame:
+    """The tidy tables of the jobs of one scenario (:func:`job_share`) as one table, in
+    the order one job writes: sensor, axis, row of the whole batch, time."""
+    df = pd.concat(list(tables), ignore_index=True)
+    if "batch_row" not in df:
+        raise InvalidParameterError("the job tables have no batch_row column (not made by job_share)")
+    sensor = df["sensor"].map({s: i for i, s in enumerate(SENSORS + ("attitude",))})
+    order = np.lexsort((df["t"].to_numpy(), df["batch_row"].to_numpy(), df["axis"].to_numpy(), sensor.to_numpy()))
+    return df.iloc[order].drop(columns="batch_row").reset_index(drop=True)
+
+
+def merge_job_timings(timings: pd.DataFrame) -> pd.DataFrame:
+    """Wall times of the jobs of each scenario summed (``jobs``: how many): the compute
+    cost of the Monte Carlo, whatever the split."""
+    cols = ["runs", "wall_s", "estimator_s", "tidy_s"]
+    first = timings.groupby("scenario", sort=False).first().drop(columns=cols)
+    out = timings.groupby("scenario", sort=False)[cols].sum().join(first)
+    out["jobs"] = timings.groupby("scenario", sort=False).size()
+    return out.reset_index()[["scenario"] + [c for c in timings.columns if c != "scenario"] + ["jobs"]]
+
+
+def run_scenarios(cfg: dict, scenarios, job: int = 0, jobs: int | None = None) -> dict[str, tuple[pd.DataFrame, dict]]:
     """Several scenarios (names as in :func:`build_scenario`, ``sweep`` included) through
     one estimator loop per run duration: the loop costs per step, not per run, so
     batching scenarios together is cheaper than running them one after the other.
+
+    With ``jobs`` given, only the share ``job`` of the runs (:func:`job_share`; the tables
+    have a ``batch_row`` column for :func:`merge_job_tables`).
 
     Returns ``{scenario: (tidy table, timing)}``; the timing of a merged loop is
     reported for each of its scenarios (with ``merged_with``).
@@ -334,6 +374,8 @@ def run_scenarios(cfg: dict, scenarios) -> dict[str, tuple[pd.DataFrame, dict]]:
     mc = cfg.get("monte_carlo", {})
     params = estimator_params(cfg)
     built = {name: build_scenario(cfg, name) for name in scenarios}
+    if jobs is not None:
+        built = {name: job_share(sb, job, jobs) for name, sb in built.items()}
     by_duration: dict[float, list[str]] = {}
     for name, sb in built.items():
         by_duration.setdefault(sb.batch.path.duration, []).append(name)
