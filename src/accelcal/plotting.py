@@ -12,6 +12,7 @@ writing to :func:`save_figure`.
 
 from __future__ import annotations
 
+import glob
 import os
 import tempfile
 from pathlib import Path
@@ -54,6 +55,10 @@ def style(method: str) -> dict:
 
 def _atomic_savefig(fig, path: Path, fmt: str, **kwargs) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
+    # a writer of this file killed mid-write (SIGKILL skips the clean-up below) left its
+    # temporary file; Snakemake runs one job per output at a time, so it is no live writer's
+    for stale in path.parent.glob(f".{glob.escape(path.name)}.*.tmp"):
+        stale.unlink(missing_ok=True)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     os.close(fd)
     try:

@@ -10,6 +10,11 @@ Needs from common.smk: FIGURES, CLAIM_STAGES, log_path, figure_outputs, SMALL.
 import os
 import re
 
+from snakemake.exceptions import WorkflowError
+
+from accelcal.measured.data import DatasetError
+from accelcal.measured.sources import check_source_available
+
 FIGURES.extend(["measured_static_detection", "measured_calibration", "measured_residuals"])
 CLAIM_STAGES.append("measured")
 
@@ -28,13 +33,34 @@ REPORT_TABLES.extend([
 ] + [("measured", "imucal's Ferraris calibration against accelcal", p) for p in MEASURED_PEER])
 
 
+class MeasuredDataError(WorkflowError):
+    """A configured recording that is not local and cannot be downloaded (one line)."""
+
+
+def check_measured_data(recordings, data_dir, resources_dir):
+    """Fail before any job runs if a recording is in neither data_dir nor the download
+    cache and its URL does not answer (accelcal.measured.sources.check_source_available:
+    the network is asked only for a file that is not local, with a short timeout)."""
+    try:
+        for name in recordings:
+            check_source_available(name, data_dir, resources_dir)
+    except DatasetError as e:
+        raise MeasuredDataError(f"missing measured data: {e}") from None
+
+
+check_measured_data(MEASURED_RECORDINGS, MEASURED_DATA_DIR, MEASURED["resources_dir"])
+
+
 wildcard_constraints:
     recording="|".join(re.escape(r) for r in MEASURED_RECORDINGS),
 
 
 rule measured_fetch:
     """Locate (shared copy) or download and verify (sha256) every file of one recording;
-    the manifest records which path was used.  No data file enters the repository."""
+    the manifest records which path was used.  No data file enters the repository.
+    High priority: when a download is needed it runs first, before the long Monte Carlo
+    jobs, so that a failing download stops the run early."""
+    priority: 100
     output:
         "results/measured/data/{recording}.json",
     params:

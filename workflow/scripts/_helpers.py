@@ -9,6 +9,7 @@ $ACCELCAL_CONFIG) and use the workflow's default paths relative to the current d
 
 from __future__ import annotations
 
+import glob
 import gzip
 import logging
 import os
@@ -68,6 +69,14 @@ def stage_config(stage: str) -> dict:
     return load_config()[stage]
 
 
+def remove_stale_temporaries(path: Path, suffix: str = ".tmp") -> None:
+    """Delete ``.<name>.*<suffix>`` beside ``path``: temporary files of an earlier writer of
+    the same file that was killed mid-write (SIGKILL skips its clean-up).  Snakemake runs one
+    job per output at a time, so such a file is never another live writer's."""
+    for stale in path.parent.glob(f".{glob.escape(path.name)}.*{suffix}"):
+        stale.unlink(missing_ok=True)
+
+
 def write_csv(df, path: str | os.PathLike, **kwargs) -> Path:
     """Write a CSV atomically: a temporary file in the target directory, then rename.
 
@@ -76,6 +85,7 @@ def write_csv(df, path: str | os.PathLike, **kwargs) -> Path:
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    remove_stale_temporaries(path)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     os.close(fd)
     try:

@@ -1,7 +1,13 @@
-"""Locate or download (and verify) the files of one measured recording; write its manifest."""
+"""Locate or download (and verify) the files of one measured recording; write its manifest.
+
+A failure (checksum mismatch, download error) is one line in the log and on stderr and
+exit status 1, not a traceback: the message says which file and what to do."""
+
+import sys
 
 from _helpers import configure_logging, mock_snakemake
 
+from accelcal.measured.data import DatasetError
 from accelcal.measured.sources import fetch_source, manifest, write_json_atomic
 
 if "snakemake" not in globals():
@@ -14,7 +20,11 @@ if "snakemake" not in globals():
 
 log = configure_logging(snakemake)
 name = snakemake.wildcards.recording
-paths = fetch_source(name, snakemake.params.data_dir, snakemake.params.resources_dir)
+try:
+    paths = fetch_source(name, snakemake.params.data_dir, snakemake.params.resources_dir)
+except DatasetError as e:
+    log.error("%s: recording %s: %s", type(e).__name__, name, e)
+    sys.exit(1)
 m = manifest(name, paths)
 for f, v in m["files"].items():
     log.info("%s/%s: %s (sha256 %s, verified)", name, f, v["path"], v["sha256"])

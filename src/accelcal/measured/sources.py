@@ -27,7 +27,7 @@ from pathlib import Path
 from ..errors import RecordingError
 from ..recording import (NominalConversion, Recording, nominal_conversion, read_imucal_section_list,
                          read_imucal_session, read_imutk_ascii, read_mpu6050_csv, write_recording)
-from .data import fetch_file, sha256_file
+from .data import DatasetError, check_available, fetch_file, remove_stale_temporaries, sha256_file
 
 
 @dataclass(frozen=True)
@@ -99,6 +99,18 @@ def fetch_source(name: str, data_dir=None, resources_dir="resources") -> dict[st
     return {f: fetch_file(s.dataset, f, data_dir, resources_dir) for f in s.files}
 
 
+def check_source_available(name: str, data_dir=None, resources_dir="resources") -> None:
+    """:func:`accelcal.measured.data.check_available` for every file of recording ``name``
+    (the network only for a file that is not local); :class:`DatasetError` naming the
+    recording if one is neither local nor downloadable."""
+    s = source(name)
+    for f in s.files:
+        try:
+            check_available(s.dataset, f, data_dir, resources_dir)
+        except DatasetError as e:
+            raise DatasetError(f"recording {name}: {e}") from None
+
+
 def manifest(name: str, paths: dict[str, Path]) -> dict:
     """JSON-ready record of where each file was taken from and its verified sha256."""
     s = source(name)
@@ -110,6 +122,7 @@ def write_json_atomic(path, obj) -> None:
     """Write JSON to ``path`` via a temporary file and a rename."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
+    remove_stale_temporaries(path, ".tmp")
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     try:
         with os.fdopen(fd, "w") as f:
@@ -158,5 +171,5 @@ def convert(name: str, paths: dict[str, Path], out_csv) -> Recording:
     return rec
 
 
-__all__ = ["FERRARIS_STATIC", "SOURCES", "Source", "convert", "fetch_source", "manifest", "read_manifest",
+__all__ = ["FERRARIS_STATIC", "SOURCES", "Source", "check_source_available", "convert", "fetch_source", "manifest", "read_manifest",
            "read_source", "section_list", "source", "write_json_atomic"]

@@ -1,0 +1,397 @@
+"""Resilience (issue 8): a missing measured dataset fails before any job runs, a failing
+fetch job fails in one line, and an interrupted run (hard kill or Ctrl-C) leaves only
+whole files behind and resumes without redoing finished jobs.
+
+Offline is simulated with proxy variables pointing at a closed local port
+(http://127.0.0.1:9): urllib honours them, so every download and reachability check is
+refused at once, on any machine, without a test-only switch in the code.
+"""
+
+import gzip
+import hashlib
+import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+import urllib.request
+from pathlib import Path
+
+import pandas as pd
+import pytest
+import yaml
+
+from accelcal.measured.data import DATASETS, DatasetError, check_available, local_file
+from accelcal.measured.sources import SOURCES, check_source_available
+
+REPO = Path(__file__).resolve().parents[1]
+SNAKEMAKE = Path(sys.executable).with_name("snakemake")
+CI = REPO / "config" / "ci.yaml"
+SHARED = (REPO / ".." / "shared" / "data").resolve()
+
+_CLOSED_PORT = "http://127.0.0.1:9"
+OFFLINE = {"http_proxy": _CLOSED_PORT, "https_proxy": _CLOSED_PORT, "HTTP_PROXY": _CLOSED_PORT,
+           "HTTPS_PROXY": _CLOSED_PORT, "no_proxy": "", "NO_PROXY": ""}
+
+
+def snakemake_cmd(workdir, *args):
+    """As tests/test_workflow.py: the repository's workflow (and its profiles/default) with
+    `workdir` as working directory."""
+    return [str(SNAKEMAKE), "--snakefile", str(REPO / "Snakefile"), "--directory", str(workdir),
+            "--scheduler", "greedy", *map(str, args)]
+
+
+def snakemake(workdir, *args, env=None, timeout=600):
+    return subprocess.run(snakemake_cmd(workdir, *args), cwd=REPO, capture_output=True, text=True,
+                          timeout=timeout, env=dict(os.environ, **(env or {})))
+
+
+def measured_overlay(path, data_dir, resources_dir):
+    path.write_text(f"measured:\n  data_dir: {data_dir}\n  resources_dir: {resources_dir}\n")
+    return path
+
+
+# --- missing dataset: fail before any job --------------------------------------------------
+
+
+@pytest.mark.parametrize("dry_run", [True, False], ids=["dry_run", "run"])
+def test_missing_dataset_fails_before_any_job(tmp_path, dry_run):
+    data_dir, cache = tmp_path / "no_data", tmp_path / "no_cache"
+    data_dir.mkdir()
+    cache.mkdir()
+    overlay = measured_overlay(tmp_path / "offline.yaml", data_dir, cache)
+    workdir = tmp_path / "work"
+    proc = snakemake(workdir, "all", "--configfile", CI, overlay, "--cores", "1", *["-n"] * dry_run,
+                     env=OFFLINE, timeout=120)
+    out = proc.stdout + proc.stderr
+    assert proc.returncode != 0, out
+    lines = [ln for ln in out.splitlines() if ln.startswith("missing measured data:")]
+    assert len(lines) == 1, out
+    first = SOURCES[next(iter(yaml.safe_load(CI.read_text())["measured"]["recordings"]))]  # checked first
+    line = lines[0]
+    # the recording, where it was looked for, the URL and what to do
+    assert f"recording {first.name}:" in line, line
+    assert str(data_dir / first.dataset) in line and str(cache / first.dataset) in line, line
+    assert DATASETS[first.dataset][first.data_file].url in line and "unreachable" in line, line
+    assert "copy the dataset folder into" in line and "network access" in line, line
+    assert "Traceback" not in out
+    assert not (workdir / "results").exists(), "a job ran despite the missing dataset"
+    assert not list(cache.rglob("*")), "the check downloaded (or started to)"
+
+
+def test_data_in_the_download_cache_needs_no_network(tmp_path):
+    """Offline, with the data only in the download cache (resources_dir, relative to the
+    working directory): the workflow plans normally.  A network request would be refused and
+    fail the run, so this also shows that local data means no request."""
+    workdir = tmp_path / "work"
+    cache = workdir / "cache"
+    cache.mkdir(parents=True)
+    for dataset in DATASETS:
+        (cache / dataset).symlink_to(SHARED / dataset)  # no copy of the data
+    overlay = measured_overlay(tmp_path / "cache.yaml", tmp_path / "no_data", "cache")
+    proc = snakemake(workdir, "-n", "all", "--configfile", CI, overlay, "--cores", "1", env=OFFLINE, timeout=120)
+    assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
+    assert "measured_fetch" in proc.stdout + proc.stderr
+
+
+def test_check_uses_no_network_when_the_data_is_local(tmp_path, monkeypatch):
+    def no_network(*args, **kwargs):
+        raise AssertionError("network used although the data is local")
+
+    monkeypatch.setattr(urllib.request, "urlopen", no_network)
+    for name in SOURCES:
+        check_source_available(name, SHARED, tmp_path / "cache")  # the shared copy
+    assert local_file("imu_tk_xsens", "xsens_acc.mat", tmp_path / "none", SHARED) == SHARED / "imu_tk_xsens" / "xsens_acc.mat"
+
+
+def test_check_asks_the_url_only_when_not_local(tmp_path):
+    src = tmp_path / "upstream.mat"
+    src.write_text("1 2 3 4\n")
+    # not local, URL answers: fine (the download itself happens in the fetch job)
+    check_available("imu_tk_xsens", "xsens_acc.mat", tmp_path / "a", tmp_path / "b", url=src.as_uri())
+    # not local, URL dead: one line naming the file, the folders and the URL
+    dead = (tmp_path / "gone.mat").as_uri()
+    with pytest.raises(DatasetError) as e:
+        check_available("imu_tk_xsens", "xsens_acc.mat", tmp_path / "a", tmp_path / "b", url=dead)
+    msg = str(e.value)
+    assert "\n" not in msg and dead in msg and str(tmp_path / "a" / "imu_tk_xsens") in msg, msg
+    assert "imu_tk_xsens/xsens_acc.mat" in msg and str(tmp_path / "b" / "imu_tk_xsens") in msg
+
+
+def test_fetch_job_fails_in_one_line_on_a_damaged_copy(tmp_path):
+    """A shared copy with the wrong sha256 passes the existence check before the run; the
+    fetch job then stops with one line (no traceback) and writes no manifest."""
+    data_dir = tmp_path / "data"
+    data_dir.mkdir()
+    for dataset in ("imu_tk_xsens", "imucal_ferraris"):
+        (data_dir / dataset).symlink_to(SHARED / dataset)
+    damaged = data_dir / "mpu6050_suarez" / "example_data_calibration.csv"
+    damaged.parent.mkdir()
+    damaged.write_text("t,ax,ay,az\n0,1,2,3\n")
+    overlay = measured_overlay(tmp_path / "damaged.yaml", data_dir, tmp_path / "cache")
+    workdir = tmp_path / "work"
+    proc = snakemake(workdir, "results/measured/data/mpu6050.json", "--configfile", CI, overlay, "--cores", "1",
+                     env=OFFLINE, timeout=120)
+    out = proc.stdout + proc.stderr
+    assert proc.returncode != 0, out
+    assert "Traceback" not in out, out
+    log = (workdir / "results" / "logs" / "measured" / "fetch_mpu6050.log").read_text().splitlines()
+    assert len(log) == 1, log
+    assert "recording mpu6050:" in log[0] and str(damaged) in log[0] and "does not match" in log[0], log[0]
+    assert not (workdir / "results" / "measured" / "data" / "mpu6050.json").exists()
+
+
+def test_fetch_runs_before_the_monte_carlo_jobs(tmp_path):
+    """measured_fetch has a high priority: with one core and a Monte Carlo job ready at the
+    same time, the fetch runs first (a failing download stops the run before the long jobs)."""
+    # Without the priority, Snakemake picks among ready jobs in no fixed order: the fetch
+    # would come first in about one run of three here.
+    workdir = tmp_path / "work"
+    mc = ["results/burkhard2024/mc/n24_s0.001_g0.csv.gz", "results/burkhard2024/mc/n4_s0.0001_g0.csv.gz"]
+    proc = snakemake(workdir, *mc, "results/measured/data/xsens_mti.json", "--configfile", CI, "--cores", "1",
+                     timeout=300)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    started = re.findall(r"^(?:local)?rule (\w+):", proc.stdout + proc.stderr, flags=re.M)
+    assert started == ["measured_fetch", "burkhard2024_mc", "burkhard2024_mc"], started
+
+
+# --- stale temporary files of the atomic writers ---------------------------------------------
+
+
+_KILLED_WRITER = """
+import os, signal, sys
+sys.path.insert(0, {scripts!r})
+import matplotlib.pyplot as plt
+import pandas as pd
+from _helpers import write_csv
+from accelcal.measured.sources import write_json_atomic
+from accelcal.plotting import save_figure
+
+# a hard kill at the worst moment: the temporary file is complete, the rename not done
+os.replace = lambda src, dst: os.kill(os.getpid(), signal.SIGKILL)
+{call}
+"""
+
+WRITERS = {
+    "write_csv": ("write_csv(pd.DataFrame({{'a': range(1000)}}), {target!r})", "table.csv"),
+    "save_figure": ("save_figure(plt.figure(), {target!r})", "figure.png"),
+    "write_json_atomic": ("write_json_atomic({target!r}, {{'a': 1}})", "manifest.json"),
+}
+
+
+@pytest.mark.parametrize("writer", sorted(WRITERS))
+def test_a_killed_atomic_writer_leaves_no_output_and_the_next_write_cleans_up(tmp_path, writer):
+    """SIGKILL skips a writer's clean-up: what it leaves is a hidden temporary file beside
+    the target (never a partial target); the next write of the same file removes it."""
+    call, name = WRITERS[writer]
+    target = tmp_path / name
+    code = _KILLED_WRITER.format(scripts=str(REPO / "workflow" / "scripts"), call=call.format(target=str(target)))
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == -signal.SIGKILL, proc.stderr
+    left = sorted(p.name for p in tmp_path.iterdir())
+    assert not target.exists() and len(left) == 1 and TEMPORARY.match(left[0]), left
+    assert left[0].startswith(f".{name}."), left
+    other = tmp_path / ".other.csv.k1ll3d.tmp"  # another file's temporary: not this writer's
+    other.write_bytes(b"x")
+    subprocess.run([sys.executable, "-c", code.replace("os.replace = ", "_ = ")], check=True, timeout=120)
+    check_whole(target)
+    assert sorted(p.name for p in tmp_path.iterdir() if TEMPORARY.match(p.name)) == [other.name]
+
+
+# --- interrupted run: resume -------------------------------------------------------------------
+
+#: A cheap stage target at CI scale: 8 Monte Carlo jobs, the gather job, the timing
+#: benchmark and the claims (about 30 s on one core).
+TARGET = "results/claims/burkhard2024.csv"
+_JOB = re.compile(r"^(?:local)?rule (\w+):\n((?:    .*\n)+)", re.M)
+
+
+def jobs_in(text):
+    """{jobid: (rule, outputs)} of the job blocks Snakemake printed."""
+    out = {}
+    for rule, body in _JOB.findall(text):
+        fields = dict(ln.strip().split(": ", 1) for ln in body.splitlines() if ": " in ln)
+        out[int(fields["jobid"])] = (rule, tuple(fields["output"].split(", ")))
+    return out
+
+
+def finished_jobs(text):
+    return {int(j) for j in re.findall(r"^Finished jobid: (\d+)", text, flags=re.M)}
+
+
+def sha256(path):
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+TEMPORARY = re.compile(r"^\..*\.(tmp|part)$")
+
+
+def check_whole(path):
+    """Raise if ``path`` is not a whole file of its type (a truncated file fails)."""
+    name = path.name
+    if name.endswith(".csv.gz"):
+        with gzip.open(path, "rb") as f:  # a truncated gzip stream raises EOFError
+            pd.read_csv(f)
+    elif name.endswith((".csv", ".tsv")):
+        # pandas parses a CSV cut mid-line too; the writers end every line with a newline
+        assert path.read_bytes().endswith(b"\n"), f"{path}: ends mid-line"
+        pd.read_csv(path, sep="\t" if name.endswith(".tsv") else ",")
+    elif name.endswith(".json"):
+        json.loads(path.read_text())
+    elif name.endswith(".png"):
+        assert path.read_bytes().endswith(b"IEND\xaeB`\x82"), f"{path}: PNG without its IEND trailer"
+    elif name.endswith(".pdf"):
+        assert path.read_bytes().rstrip().endswith(b"%%EOF"), f"{path}: PDF without its %%EOF trailer"
+    elif name.endswith(".log"):
+        pass  # logs grow line by line by design: not outputs
+    else:
+        raise AssertionError(f"{path}: no completeness check for this kind of file")
+
+
+def test_completeness_check_rejects_truncated_files(tmp_path):
+    import matplotlib.pyplot as plt
+
+    from accelcal.plotting import save_figure
+
+    with gzip.open(tmp_path / "t.csv.gz", "wt") as f:
+        f.write("a,b\n" + "".join(f"{i},{i * i}\n" for i in range(20000)))
+    png, pdf = save_figure(plt.figure(), tmp_path / "f")
+    (tmp_path / "m.json").write_text('{"a": [1, 2]}')
+    pd.DataFrame({"a": [1.5, 2.25, 3.125]}).to_csv(tmp_path / "t.csv", index=False)
+    for p in (tmp_path / "t.csv.gz", png, pdf, tmp_path / "m.json", tmp_path / "t.csv"):
+        check_whole(p)
+        raw = p.read_bytes()
+        p.write_bytes(raw[: len(raw) // 2])
+        with pytest.raises(Exception):  # noqa: B017 (any reader error: EOFError, AssertionError, ...)
+            check_whole(p)
+
+
+def survey(results):
+    """(whole files, temporary leftovers) under results/; every non-temporary file checked."""
+    files, temporaries = [], []
+    for p in sorted(results.rglob("*")):
+        if p.is_file():
+            if TEMPORARY.match(p.name):
+                temporaries.append(p)
+            else:
+                check_whole(p)
+                files.append(p)
+    return files, temporaries
+
+
+def comparable(results):
+    """As test_ci_reruns_are_byte_identical: every result's sha256, except logs, benchmarks,
+    wall-time measurements ("timing" in the path) and the speed claims computed from them."""
+    out = {}
+    for p in sorted(results.rglob("*")):
+        rel = p.relative_to(results)
+        if not p.is_file() or {"logs", "benchmarks"} & set(rel.parts) or "timing" in str(rel):
+            continue
+        if rel.parts[0] == "claims":
+            ledger = pd.read_csv(p, dtype=str, keep_default_na=False)
+            out[rel] = ledger[~ledger["claim_id"].str.startswith("speed_")].to_csv(index=False)
+        else:
+            out[rel] = sha256(p)
+    return out
+
+
+@pytest.fixture(scope="module")
+def uninterrupted(tmp_path_factory):
+    workdir = tmp_path_factory.mktemp("uninterrupted")
+    proc = snakemake(workdir, TARGET, "--configfile", CI, "--cores", "1")
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    return workdir, jobs_in(proc.stdout + proc.stderr)
+
+
+def interrupt(workdir, sig, min_finished=3, timeout=300):
+    """Start the run in its own process group; once `min_finished` Monte Carlo jobs have
+    finished and the next job has started, send `sig` to the whole group (a hard crash or
+    a Ctrl-C).  Returns the Snakemake output, the finished and the running job ids."""
+    console = workdir.with_name(workdir.name + ".console")
+    with open(console, "w") as sink:
+        proc = subprocess.Popen(snakemake_cmd(workdir, TARGET, "--configfile", CI, "--cores", "1"), cwd=REPO,
+                                stdout=sink, stderr=subprocess.STDOUT, start_new_session=True)
+    t0 = time.monotonic()
+    try:
+        while True:
+            assert proc.poll() is None, "the run ended before it could be interrupted:\n" + console.read_text()
+            assert time.monotonic() - t0 < timeout, "no interruption point reached:\n" + console.read_text()
+            text = console.read_text()
+            jobs, done = jobs_in(text), finished_jobs(text)
+            mc_done = [j for j in done if jobs.get(j, ("",))[0] == "burkhard2024_mc"]
+            running = set(jobs) - done
+            if len(mc_done) >= min_finished and running:
+                time.sleep(1.0)  # inside the running job's script, not at its start
+                break
+            time.sleep(0.05)
+        text = console.read_text()
+        os.killpg(proc.pid, sig)
+        proc.wait(timeout=120)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    # nothing of the group may survive (a job still writing would spoil the checks)
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:
+        try:
+            os.killpg(proc.pid, 0)
+        except ProcessLookupError:
+            break
+        time.sleep(0.1)
+    else:
+        raise AssertionError("processes of the interrupted run survive")
+    text = console.read_text()  # Ctrl-C: Snakemake reports what it cancelled
+    jobs, done = jobs_in(text), finished_jobs(text)
+    return text, done, set(jobs) - done, jobs
+
+
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGINT], ids=["SIGKILL", "SIGINT"])
+def test_interrupted_run_resumes_without_redoing_finished_jobs(tmp_path, uninterrupted, sig):
+    ref_dir, ref_jobs = uninterrupted
+    workdir = tmp_path / "work"
+    workdir.mkdir()
+    t0 = time.perf_counter()
+    text, done, running, jobs = interrupt(workdir, sig)
+    results = workdir / "results"
+    assert running, text
+
+    # (a) only whole files; list what the interruption left
+    files, temporaries = survey(results)
+    finished = {o: (sha256(results.parent / o), (results.parent / o).stat().st_mtime_ns)
+                for j in done for o in jobs[j][1]}
+    assert all((results.parent / o).is_file() for o in finished)
+    print(f"{sig.name}: {len(done)} jobs finished, running {[jobs[j][0] for j in running]}; "
+          f"{len(files)} whole files, temporaries left: {[str(p.relative_to(results)) for p in temporaries]}")
+
+    # (b) the dry run of the resumed run plans exactly the unfinished jobs
+    proc = snakemake(workdir, "--dry-run", TARGET, "--configfile", CI, "--cores", "1", timeout=120)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    planned = {o for _, outputs in jobs_in(proc.stdout + proc.stderr).values() for o in outputs}
+    every = {o for _, outputs in ref_jobs.values() for o in outputs}
+    assert not planned & set(finished), f"finished jobs planned again: {sorted(planned & set(finished))}"
+    assert planned == every - set(finished), sorted(planned ^ (every - set(finished)))
+    assert {o for j in running for o in jobs[j][1]} <= planned  # the interrupted job is redone
+
+    # (c) the resumed run completes, leaves the finished outputs alone and equals an
+    # uninterrupted run.  Ctrl-C releases Snakemake's lock on the working directory; a hard
+    # kill cannot, and Snakemake refuses to start until `--unlock` (its error says so).
+    locks = list((workdir / ".snakemake" / "locks").glob("*"))
+    if sig == signal.SIGKILL:
+        proc = snakemake(workdir, "--unlock", TARGET, "--configfile", CI, timeout=120)
+        assert proc.returncode == 0, proc.stderr[-3000:]
+    else:
+        assert not locks, locks
+    proc = snakemake(workdir, TARGET, "--configfile", CI, "--cores", "1")
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    for o, (digest, mtime) in finished.items():
+        p = results.parent / o
+        assert (sha256(p), p.stat().st_mtime_ns) == (digest, mtime), f"{o} was rewritten"
+    _, temporaries = survey(results)
+    assert not temporaries, f"temporary files left after the resumed run: {temporaries}"
+    mine, ref = comparable(results), comparable(ref_dir / "results")
+    assert mine.keys() == ref.keys(), sorted(set(mine) ^ set(ref))
+    assert [k for k in ref if mine[k] != ref[k]] == []
+    print(f"{sig.name}: interrupt + dry run + resume {time.perf_counter() - t0:.1f} s")
