@@ -23,6 +23,7 @@ import pandas as pd
 import pytest
 import yaml
 
+from accelcal.atomic import atomic_output, remove_stale_temporaries
 from accelcal.measured.data import DATASETS, DatasetError, check_available, local_file
 from accelcal.measured.sources import SOURCES, check_source_available
 
@@ -157,47 +158,148 @@ def test_fetch_runs_before_the_monte_carlo_jobs(tmp_path):
     assert started == ["measured_fetch", "burkhard2024_mc", "burkhard2024_mc"], started
 
 
-# --- stale temporary files of the atomic writers ---------------------------------------------
+# --- atomic writers: whole or nothing, and a killed writer's temporary is cleaned up -------------
+
+
+def current_umask():
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+@pytest.mark.parametrize("interrupt", [ValueError, KeyboardInterrupt])
+def test_atomic_output_keeps_the_old_file_when_the_writer_fails(tmp_path, interrupt):
+    target = tmp_path / "sub" / "table.csv"
+    with atomic_output(target) as tmp:  # creates the folder
+        tmp.write_text("old\n")
+    with pytest.raises(interrupt), atomic_output(target) as tmp:
+        tmp.write_text("half")
+        raise interrupt("writer failed")
+    assert target.read_text() == "old\n"
+    assert [p.name for p in target.parent.iterdir()] == ["table.csv"]  # no temporary left
+
+
+def test_atomic_output_gives_normal_permissions(tmp_path):
+    """mkstemp creates the temporary file private (0o600); an output is for reading, so it
+    ends with the mode of a normally created file."""
+    target = tmp_path / "report.html"
+    with atomic_output(target) as tmp:
+        assert tmp.parent == tmp_path and tmp.name.startswith(".report.html.") and tmp.name.endswith(".tmp")
+        tmp.write_text("x")
+    assert target.stat().st_mode & 0o777 == 0o666 & ~current_umask()
+
+
+def test_remove_stale_temporaries_takes_only_this_targets_leftovers(tmp_path):
+    names = {
+        ".table.csv.k1ll3d_0.tmp": False,  # a killed writer's leftover of table.csv: removed
+        ".table.csv.k1ll3d_0.part": True,  # other suffix
+        ".table.csv.gz.k1ll3d_0.tmp": True,  # temporary of table.csv.gz (may be writing now)
+        ".other.csv.k1ll3d_0.tmp": True,  # another file's
+        "table.csv": True,  # the target itself
+    }
+    for n in names:
+        (tmp_path / n).write_bytes(b"x")
+    remove_stale_temporaries(tmp_path / "table.csv", ".tmp")
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(n for n, kept in names.items() if kept)
 
 
 _KILLED_WRITER = """
 import os, signal, sys
 sys.path.insert(0, {scripts!r})
-import matplotlib.pyplot as plt
-import pandas as pd
-from _helpers import write_csv
-from accelcal.measured.sources import write_json_atomic
-from accelcal.plotting import save_figure
-
-# a hard kill at the worst moment: the temporary file is complete, the rename not done
-os.replace = lambda src, dst: os.kill(os.getpid(), signal.SIGKILL)
+{setup}
+if {kill}:
+    # a hard kill at the worst moment: the temporary file is complete, the rename not done
+    os.replace = lambda src, dst: os.kill(os.getpid(), signal.SIGKILL)
 {call}
 """
 
+#: Every atomic writer of the project: (setup, call, target relative to the test's folder).
+#: The call is formatted with the target, the input folder ``inputs``, the download cache
+#: ``cache`` and the upstream file of the download (``url``, ``sha``).
 WRITERS = {
-    "write_csv": ("write_csv(pd.DataFrame({{'a': range(1000)}}), {target!r})", "table.csv"),
-    "save_figure": ("save_figure(plt.figure(), {target!r})", "figure.png"),
-    "write_json_atomic": ("write_json_atomic({target!r}, {{'a': 1}})", "manifest.json"),
+    "write_csv": ("import pandas as pd\nfrom _helpers import write_csv",
+                  "write_csv(pd.DataFrame({{'a': range(1000)}}), {target!r})", "out/table.csv"),
+    "write_csv_gz": ("import pandas as pd\nfrom _helpers import write_csv",
+                     "write_csv(pd.DataFrame({{'a': range(1000)}}), {target!r})", "out/table.csv.gz"),
+    "save_figure": ("import matplotlib.pyplot as plt\nfrom accelcal.plotting import save_figure",
+                    "save_figure(plt.figure(), {target!r})", "out/figure.png"),
+    "write_json_atomic": ("from accelcal.measured.sources import write_json_atomic",
+                          "write_json_atomic({target!r}, {{'a': 1}})", "out/manifest.json"),
+    "write_report": ("from accelcal.report import write_report",
+                     "write_report('<!DOCTYPE html>\\n<html><body>x</body></html>\\n', {target!r})", "out/report.html"),
+    "write_recording": ("import numpy as np\nfrom accelcal.recording import Recording, write_recording",
+                        "write_recording({target!r}, Recording(np.arange(500.0), np.full((500, 3), 0.25), None, ''))",
+                        "out/recording.csv"),
+    "write_counts_csv": ("import numpy as np\nfrom accelcal.discrepancy.benchmark import write_counts_csv\n"
+                         "from accelcal.recording import Recording",
+                         "write_counts_csv({target!r}, Recording(np.arange(500.0), np.full((500, 3), 415.0), None, ''))",
+                         "out/counts.csv"),
+    "download": ("from accelcal.measured.data import fetch_file",
+                 "fetch_file('imu_tk_xsens', 'xsens_acc.mat', resources_dir={cache!r}, url={url!r}, sha256={sha!r})",
+                 "cache/imu_tk_xsens/xsens_acc.mat"),
+    "discrepancy_measured": ("import json, runpy\nfrom types import SimpleNamespace",
+                             "runpy.run_path({script!r}, init_globals={{'snakemake': SimpleNamespace(rule='r', "
+                             "input=SimpleNamespace(csv={inputs!r} + '/rec.csv'), output=[{target!r}], "
+                             "params=SimpleNamespace(**json.load(open({inputs!r} + '/params.json'))), "
+                             "log=[{inputs!r} + '/log'], wildcards=SimpleNamespace(recording='xsens_mti'))}})",
+                             "out/xsens_mti.json"),
 }
 
 
+@pytest.fixture(scope="module")
+def writer_inputs(tmp_path_factory):
+    """Inputs of the writers that read something: the download's upstream file, and the
+    recording and parameters of workflow/scripts/discrepancy_measured.py (a quick
+    stochastic layer: its bootstrap is the cost)."""
+    from accelcal.discrepancy import benchmark as B
+    from accelcal.discrepancy.detect import Rules
+    from accelcal.recording import write_recording
+
+    inputs = tmp_path_factory.mktemp("inputs")
+    upstream = inputs / "upstream.mat"
+    upstream.write_text("".join(f"{i} 1 2 3\n" for i in range(2000)))
+    session = B.Session()
+    rec, _ = B.simulate_case("none", 0.0, 0, seed=5, session=session, rules=Rules())
+    write_recording(inputs / "rec.csv", rec)
+    cfg = yaml.safe_load(CI.read_text())["discrepancy"]
+    params = {"g": session.g, "rules": cfg["rules"], "stochastic": dict(cfg["stochastic"], n_boot=19, n_resim=1)}
+    (inputs / "params.json").write_text(json.dumps(params))
+    return {"inputs": str(inputs), "url": upstream.as_uri(), "sha": sha256(upstream),
+            "script": str(REPO / "workflow" / "scripts" / "discrepancy_measured.py")}
+
+
 @pytest.mark.parametrize("writer", sorted(WRITERS))
-def test_a_killed_atomic_writer_leaves_no_output_and_the_next_write_cleans_up(tmp_path, writer):
+def test_a_killed_atomic_writer_leaves_no_output_and_the_next_write_cleans_up(tmp_path, writer, writer_inputs):
     """SIGKILL skips a writer's clean-up: what it leaves is a hidden temporary file beside
-    the target (never a partial target); the next write of the same file removes it."""
-    call, name = WRITERS[writer]
-    target = tmp_path / name
-    code = _KILLED_WRITER.format(scripts=str(REPO / "workflow" / "scripts"), call=call.format(target=str(target)))
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    the target (never a partial target); the next write of the same file removes it, and
+    only it, and writes the target whole with normal permissions."""
+    setup, call, rel = WRITERS[writer]
+    target = tmp_path / rel
+    suffix = ".part" if writer == "download" else ".tmp"
+    call = call.format(target=str(target), cache=str(tmp_path / "cache"), **writer_inputs)
+
+    def run(kill):
+        code = _KILLED_WRITER.format(scripts=str(REPO / "workflow" / "scripts"), setup=setup, call=call, kill=kill)
+        return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+
+    proc = run(kill=True)
     assert proc.returncode == -signal.SIGKILL, proc.stderr
-    left = sorted(p.name for p in tmp_path.iterdir())
+    left = sorted(p.name for p in target.parent.iterdir())
     assert not target.exists() and len(left) == 1 and TEMPORARY.match(left[0]), left
-    assert left[0].startswith(f".{name}."), left
-    other = tmp_path / ".other.csv.k1ll3d.tmp"  # another file's temporary: not this writer's
-    other.write_bytes(b"x")
-    subprocess.run([sys.executable, "-c", code.replace("os.replace = ", "_ = ")], check=True, timeout=120)
-    check_whole(target)
-    assert sorted(p.name for p in tmp_path.iterdir() if TEMPORARY.match(p.name)) == [other.name]
+    assert left[0].startswith(f".{target.name}.") and left[0].endswith(suffix), left
+    # temporaries of other files: another target's, and one of a target whose name starts
+    # with this one's (its writer may be running now); neither is this writer's to remove
+    others = [target.parent / f".other.csv.k1ll3d{suffix}", target.parent / f".{target.name}.gz.k1ll3d{suffix}"]
+    for other in others:
+        other.write_bytes(b"x")
+    proc = run(kill=False)
+    assert proc.returncode == 0, proc.stderr
+    if writer == "download":
+        assert sha256(target) == writer_inputs["sha"]
+    else:
+        check_whole(target)
+    assert target.stat().st_mode & 0o777 == 0o666 & ~current_umask()
+    assert sorted(p.name for p in target.parent.iterdir() if TEMPORARY.match(p.name)) == sorted(o.name for o in others)
 
 
 # --- interrupted run: resume -------------------------------------------------------------------
@@ -244,6 +346,8 @@ def check_whole(path):
         assert path.read_bytes().endswith(b"IEND\xaeB`\x82"), f"{path}: PNG without its IEND trailer"
     elif name.endswith(".pdf"):
         assert path.read_bytes().rstrip().endswith(b"%%EOF"), f"{path}: PDF without its %%EOF trailer"
+    elif name.endswith(".html"):
+        assert path.read_bytes().rstrip().endswith(b"</html>"), f"{path}: HTML without its closing tag"
     elif name.endswith(".log"):
         pass  # logs grow line by line by design: not outputs
     else:
@@ -259,8 +363,9 @@ def test_completeness_check_rejects_truncated_files(tmp_path):
         f.write("a,b\n" + "".join(f"{i},{i * i}\n" for i in range(20000)))
     png, pdf = save_figure(plt.figure(), tmp_path / "f")
     (tmp_path / "m.json").write_text('{"a": [1, 2]}')
+    (tmp_path / "r.html").write_text("<!DOCTYPE html>\n<html><body>x</body></html>\n")
     pd.DataFrame({"a": [1.5, 2.25, 3.125]}).to_csv(tmp_path / "t.csv", index=False)
-    for p in (tmp_path / "t.csv.gz", png, pdf, tmp_path / "m.json", tmp_path / "t.csv"):
+    for p in (tmp_path / "t.csv.gz", png, pdf, tmp_path / "m.json", tmp_path / "r.html", tmp_path / "t.csv"):
         check_whole(p)
         raw = p.read_bytes()
         p.write_bytes(raw[: len(raw) // 2])

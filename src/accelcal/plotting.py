@@ -12,9 +12,7 @@ writing to :func:`save_figure`.
 
 from __future__ import annotations
 
-import glob
 import os
-import tempfile
 from pathlib import Path
 
 import matplotlib
@@ -22,6 +20,8 @@ import matplotlib
 matplotlib.use("Agg")  # before pyplot: no display, deterministic raster backend
 
 import matplotlib.pyplot as plt  # noqa: E402
+
+from .atomic import atomic_output  # noqa: E402
 
 DPI = 150
 PNG_METADATA = {"Software": None}
@@ -53,21 +53,6 @@ def style(method: str) -> dict:
     return METHOD_STYLE.get(method, {"color": "k", "marker": ".", "label": method})
 
 
-def _atomic_savefig(fig, path: Path, fmt: str, **kwargs) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    # a writer of this file killed mid-write (SIGKILL skips the clean-up below) left its
-    # temporary file; Snakemake runs one job per output at a time, so it is no live writer's
-    for stale in path.parent.glob(f".{glob.escape(path.name)}.*.tmp"):
-        stale.unlink(missing_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    os.close(fd)
-    try:
-        fig.savefig(tmp, format=fmt, dpi=DPI, **kwargs)
-        os.replace(tmp, path)
-    finally:
-        Path(tmp).unlink(missing_ok=True)
-
-
 def save_figure(fig, stem: str | os.PathLike) -> tuple[Path, Path]:
     """Write ``<stem>.png`` and ``<stem>.pdf`` deterministically and atomically; close ``fig``.
 
@@ -78,8 +63,10 @@ def save_figure(fig, stem: str | os.PathLike) -> tuple[Path, Path]:
         stem = stem.with_suffix("")
     png, pdf = stem.with_name(stem.name + ".png"), stem.with_name(stem.name + ".pdf")
     try:
-        _atomic_savefig(fig, png, "png", metadata=PNG_METADATA)
-        _atomic_savefig(fig, pdf, "pdf", metadata=PDF_METADATA)
+        with atomic_output(png) as tmp:
+            fig.savefig(tmp, format="png", dpi=DPI, metadata=PNG_METADATA)
+        with atomic_output(pdf) as tmp:
+            fig.savefig(tmp, format="pdf", dpi=DPI, metadata=PDF_METADATA)
     finally:
         plt.close(fig)
     return png, pdf

@@ -18,13 +18,13 @@ from __future__ import annotations
 import csv
 import json
 import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from .atomic import atomic_output
 from .errors import RecordingError
 
 #: Fewest samples a recording may have: below this nothing (rest, noise) can be estimated.
@@ -264,16 +264,10 @@ def write_recording(path, rec: Recording) -> None:
     data = {"t": rec.t, "ax": rec.acc[:, 0], "ay": rec.acc[:, 1], "az": rec.acc[:, 2]}
     if rec.temp is not None:
         data["temp"] = rec.temp
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", newline="") as f:
-            pd.DataFrame(data).to_csv(f, index=False)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)  # atomic on POSIX: readers see the old or the new file, never half
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_output(path) as tmp, open(tmp, "w", newline="") as f:
+        pd.DataFrame(data).to_csv(f, index=False)
+        f.flush()
+        os.fsync(f.fileno())
 
 
 # --------------------------------------------------------------------------- public formats

@@ -22,7 +22,6 @@ import io
 import numbers
 import os
 import re
-import tempfile
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -31,6 +30,7 @@ import numpy as np
 import pandas as pd
 import yaml
 
+from .atomic import atomic_output
 from .claims import COLUMNS, PAPERS, VERDICTS
 
 #: Sections of the page that hold figures: (key, title, figure-id prefixes).  A figure id
@@ -423,17 +423,8 @@ def build_report(*, claims: str | os.PathLike, figures: Mapping[str, str | os.Pa
 def write_report(text: str, path: str | os.PathLike) -> Path:
     """Write the page atomically (a temporary file beside it, then rename)."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes it private; a report is for reading
-        os.replace(tmp, path)
-    finally:
-        Path(tmp).unlink(missing_ok=True)
+    with atomic_output(path) as tmp:
+        tmp.write_text(text, encoding="utf-8")
     return path
 
 

@@ -9,15 +9,15 @@ $ACCELCAL_CONFIG) and use the workflow's default paths relative to the current d
 
 from __future__ import annotations
 
-import glob
 import gzip
 import logging
 import os
 import sys
-import tempfile
 from pathlib import Path
 
 import yaml
+
+from accelcal.atomic import atomic_output
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -69,14 +69,6 @@ def stage_config(stage: str) -> dict:
     return load_config()[stage]
 
 
-def remove_stale_temporaries(path: Path, suffix: str = ".tmp") -> None:
-    """Delete ``.<name>.*<suffix>`` beside ``path``: temporary files of an earlier writer of
-    the same file that was killed mid-write (SIGKILL skips its clean-up).  Snakemake runs one
-    job per output at a time, so such a file is never another live writer's."""
-    for stale in path.parent.glob(f".{glob.escape(path.name)}.*{suffix}"):
-        stale.unlink(missing_ok=True)
-
-
 def write_csv(df, path: str | os.PathLike, **kwargs) -> Path:
     """Write a CSV atomically: a temporary file in the target directory, then rename.
 
@@ -84,18 +76,11 @@ def write_csv(df, path: str | os.PathLike, **kwargs) -> Path:
     in the gzip header, so that rerunning a job gives byte-identical files.
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    remove_stale_temporaries(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    os.close(fd)
-    try:
+    with atomic_output(path) as tmp:
         if path.name.endswith(".gz"):
             text = df.to_csv(index=False, **kwargs).encode()
             with open(tmp, "wb") as raw, gzip.GzipFile(filename="", mode="wb", fileobj=raw, mtime=0) as gz:
                 gz.write(text)
         else:
             df.to_csv(tmp, index=False, **kwargs)
-        os.replace(tmp, path)
-    finally:
-        Path(tmp).unlink(missing_ok=True)
     return path

@@ -1,12 +1,10 @@
 """Both layers of the discrepancy workflow on one measured recording (the JSON of `accelcal discrepancy`)."""
 
 import json
-import os
-import tempfile
-from pathlib import Path
 
 from _helpers import configure_logging, load_config, mock_snakemake
 
+from accelcal.atomic import atomic_output
 from accelcal.discrepancy.detect import Rules
 from accelcal.discrepancy.report import StochasticSettings, analyse
 from accelcal.measured.sources import source
@@ -31,13 +29,9 @@ analysis = analyse(rec, p.g, rules=Rules.from_config(p.rules), stochastic=Stocha
                    unit=unit)
 out = analysis.to_dict()
 out.update({"recording": name, "g": p.g, "unit": unit})
-path = Path(snakemake.output[0])
-path.parent.mkdir(parents=True, exist_ok=True)
-fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-with os.fdopen(fd, "w") as fh:
+with atomic_output(snakemake.output[0]) as tmp, open(tmp, "w") as fh:
     json.dump(_finite_json(out), fh, indent=1, sort_keys=False)
     fh.write("\n")
-os.replace(tmp, path)
 s = analysis.deterministic.summary()
 log.info("%s: %d poses, effect %s (outcome %s), gap %.3g -> %.3g, not identifiable: %s; stochastic: %s", name,
          s["n_poses"], analysis.deterministic.effect, analysis.deterministic.outcome, s["gap_before"], s["gap_after"],

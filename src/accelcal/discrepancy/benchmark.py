@@ -32,6 +32,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from ..atomic import atomic_output
 from ..errors import AccelcalError
 from ..measured.evaluation import residual_sigma
 from ..model import m_from_params
@@ -212,11 +213,6 @@ def write_counts_csv(path, rec: Recording) -> None:
 
     ``read_recording`` returns the same numbers: counts are integers, ``t`` and ``temp``
     are written with 10 significant digits (they are multiples of 0.01)."""
-    import os
-    import tempfile
-    from pathlib import Path
-
-    path = Path(path)
     acc = np.asarray(rec.acc)
     if not np.array_equal(acc, np.round(acc)):
         raise AccelcalError("write_counts_csv needs integer counts")
@@ -224,13 +220,8 @@ def write_counts_csv(path, rec: Recording) -> None:
                        "az": acc[:, 2].astype(np.int64)})
     if rec.temp is not None:
         df["temp"] = rec.temp
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    os.close(fd)
-    try:
+    with atomic_output(path) as tmp:
         df.to_csv(tmp, index=False, float_format="%.10g")
-        os.replace(tmp, path)
-    finally:
-        Path(tmp).unlink(missing_ok=True)
 
 
 # --------------------------------------------------------------------------- detection

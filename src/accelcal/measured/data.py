@@ -21,17 +21,16 @@ verified download is byte-identical to the shared copy.
 
 from __future__ import annotations
 
-import glob
 import hashlib
 import http.client
 import os
-import tempfile
 import urllib.error
 import urllib.request
 from dataclasses import dataclass
 from pathlib import Path
 from urllib.parse import quote
 
+from ..atomic import atomic_output
 from ..errors import AccelcalError
 
 
@@ -157,21 +156,10 @@ def fetch_file(dataset: str, filename: str, data_dir=None, resources_dir="resour
                      shared_hint=None if data_dir is None else Path(data_dir) / dataset / filename)
 
 
-def remove_stale_temporaries(path: Path, suffix: str) -> None:
-    """Delete ``.<name>.*<suffix>`` beside ``path``: temporary files of an earlier writer of
-    the same file that was killed mid-write (SIGKILL skips its clean-up).  Snakemake runs
-    one job per output at a time, so such a file is never another live writer's."""
-    for stale in path.parent.glob(f".{glob.escape(path.name)}.*{suffix}"):
-        stale.unlink(missing_ok=True)
-
-
 def _download(url: str, dest: Path, want: str, timeout: float, shared_hint: Path | None) -> Path:
-    dest.parent.mkdir(parents=True, exist_ok=True)
-    remove_stale_temporaries(dest, ".part")
-    fd, tmp = tempfile.mkstemp(dir=dest.parent, prefix=f".{dest.name}.", suffix=".part")
     h = hashlib.sha256()
-    try:
-        with os.fdopen(fd, "wb") as out:
+    with atomic_output(dest, suffix=".part") as tmp:
+        with open(tmp, "wb") as out:
             try:
                 with urllib.request.urlopen(url, timeout=timeout) as resp:  # noqa: S310 (pinned URLs)
                     for block in iter(lambda: resp.read(_CHUNK), b""):
@@ -184,13 +172,9 @@ def _download(url: str, dest: Path, want: str, timeout: float, shared_hint: Path
             out.flush()
             os.fsync(out.fileno())
         got = h.hexdigest()
-        if got != want:
+        if got != want:  # raised inside the block: the download is deleted, never renamed into place
             raise DatasetError(f"download of {url}: sha256 {got[:12]}… does not match the expected {want[:12]}… "
                                "(file changed upstream or corrupted in transit)")
-        os.replace(tmp, dest)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
     return dest
 
 

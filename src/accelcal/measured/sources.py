@@ -19,15 +19,14 @@ name                      dataset               unit    content
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..atomic import atomic_output
 from ..errors import RecordingError
 from ..recording import (NominalConversion, Recording, nominal_conversion, read_imucal_section_list,
                          read_imucal_session, read_imutk_ascii, read_mpu6050_csv, write_recording)
-from .data import DatasetError, check_available, fetch_file, remove_stale_temporaries, sha256_file
+from .data import DatasetError, check_available, fetch_file, sha256_file
 
 
 @dataclass(frozen=True)
@@ -120,18 +119,9 @@ def manifest(name: str, paths: dict[str, Path]) -> dict:
 
 def write_json_atomic(path, obj) -> None:
     """Write JSON to ``path`` via a temporary file and a rename."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    remove_stale_temporaries(path, ".tmp")
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w") as f:
-            json.dump(obj, f, indent=2)
-            f.write("\n")
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_output(path) as tmp, open(tmp, "w") as f:
+        json.dump(obj, f, indent=2)
+        f.write("\n")
 
 
 def read_manifest(path) -> dict[str, Path]:
