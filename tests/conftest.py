@@ -1,3 +1,9 @@
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -20,3 +26,36 @@ def truth(rng):
 def make_poses(rng, truth, n, noise, identity=False):
     M = np.eye(3) if identity else truth["M"]
     return simulate_poses(random_directions(rng, n), G, M, truth["bias"], noise, rng)
+
+
+REPO = Path(__file__).resolve().parents[1]
+CI_CONFIG = REPO / "config" / "ci.yaml"
+
+
+def run_snakemake(workdir, *args, timeout=600):
+    """The repository's workflow with ``workdir`` as working directory (results go there)."""
+    cmd = [str(Path(sys.executable).with_name("snakemake")), "--snakefile", str(REPO / "Snakefile"),
+           "--directory", str(workdir), "--cores", "2", "--scheduler", "greedy", *map(str, args)]
+    return subprocess.run(cmd, cwd=REPO, capture_output=True, text=True, timeout=timeout)
+
+
+@pytest.fixture(scope="session")
+def ci_workflow(tmp_path_factory):
+    """`snakemake all` on the CI config, once per test session (the most expensive step of
+    the suite): ``(workdir, process, wall time [s])``.  Tests that change files work on
+    :func:`ci_workflow_copy`."""
+    workdir = tmp_path_factory.mktemp("ci_workflow")
+    t0 = time.perf_counter()
+    proc = run_snakemake(workdir, "all", "--configfile", CI_CONFIG)
+    elapsed = time.perf_counter() - t0
+    assert proc.returncode == 0, proc.stderr[-4000:]
+    return workdir, proc, elapsed
+
+
+def copy_of_ci_workflow(ci_workflow, dest: Path) -> Path:
+    """A copy of the CI run (results and Snakemake's records, modification times kept) that
+    a test may rerun or rewrite without touching the others' view."""
+    src = ci_workflow[0]
+    shutil.copytree(src / "results", dest / "results")
+    shutil.copytree(src / ".snakemake", dest / ".snakemake", ignore=shutil.ignore_patterns("log", "locks"))
+    return dest

@@ -13,6 +13,8 @@ import yaml
 
 from accelcal.burkhard2024.grid import experiments_from_config, grid_points
 
+from .conftest import copy_of_ci_workflow
+
 REPO = Path(__file__).resolve().parents[1]
 SNAKEMAKE = Path(sys.executable).with_name("snakemake")
 CI = REPO / "config" / "ci.yaml"
@@ -27,11 +29,10 @@ def snakemake(workdir, *args, config=CI, timeout=600):
 
 
 @pytest.fixture(scope="module")
-def stage(tmp_path_factory):
-    workdir = tmp_path_factory.mktemp("burkhard2024")
-    proc = snakemake(workdir, "burkhard2024")
-    assert proc.returncode == 0, proc.stderr[-4000:]
-    return workdir
+def stage(ci_workflow, tmp_path_factory):
+    """A copy of the session's CI run (tests/conftest.py), which holds the whole stage:
+    the rerun test below rewrites files."""
+    return copy_of_ci_workflow(ci_workflow, tmp_path_factory.mktemp("burkhard2024"))
 
 
 def test_one_monte_carlo_job_per_grid_point(stage):

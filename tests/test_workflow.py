@@ -6,7 +6,6 @@ import os
 import shutil
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pandas as pd
@@ -15,6 +14,8 @@ import yaml
 
 from accelcal.claims import COLUMNS, PAPERS, VERDICTS, verdict_changes
 from accelcal.plotting import RC, save_figure
+
+from .conftest import copy_of_ci_workflow
 
 REPO = Path(__file__).resolve().parents[1]
 SNAKEMAKE = Path(sys.executable).with_name("snakemake")
@@ -29,13 +30,9 @@ def snakemake(workdir, *args, timeout=600):
 
 
 @pytest.fixture(scope="module")
-def ci_run(tmp_path_factory):
-    workdir = tmp_path_factory.mktemp("workflow")
-    t0 = time.perf_counter()
-    proc = snakemake(workdir, "all", "--configfile", CI)
-    elapsed = time.perf_counter() - t0
-    assert proc.returncode == 0, proc.stderr[-4000:]
-    return workdir, proc, elapsed
+def ci_run(ci_workflow):
+    """The session's CI run (tests/conftest.py); the forced-rerun test works on a copy."""
+    return ci_workflow
 
 
 def target_rules(workdir):
@@ -91,7 +88,7 @@ def test_ci_verdicts_match_the_expected_verdicts(ci_run):
     assert not changes, "claims ledger differs from the expected verdicts:\n" + "\n".join(changes)
 
 
-def test_ci_reruns_are_byte_identical(ci_run):
+def test_ci_reruns_are_byte_identical(ci_run, tmp_path):
     """Determinism: forcing a representative subset of jobs to rerun with the same config
     (Monte Carlo grid points, a calibration Monte Carlo, real-data tables, a benchmark's
     detection, figures and the ledger) rewrites identical bytes.  Wall-time measurements
@@ -99,7 +96,7 @@ def test_ci_reruns_are_byte_identical(ci_run):
     report that shows them (its byte-identity from identical inputs is tests/test_report.py's)."""
     import hashlib
 
-    workdir = ci_run[0]
+    workdir = copy_of_ci_workflow(ci_run, tmp_path / "copy")
     rules = ["burkhard2024_mc", "burkhard2024_summary", "batista2011_calibration_mc", "measured_tables",
              "tereshkov_summary", "discrepancy_detect", "burkhard2024_figures", "batista2011_fig4_plot", "claims"]
     results = workdir / "results"
