@@ -1,3 +1,5 @@
+import fcntl
+import json
 import shutil
 import subprocess
 import sys
@@ -40,16 +42,28 @@ def run_snakemake(workdir, *args, timeout=600):
 
 
 @pytest.fixture(scope="session")
-def ci_workflow(tmp_path_factory):
+def ci_workflow(tmp_path_factory, worker_id):
     """`snakemake all` on the CI config, once per test session (the most expensive step of
-    the suite): ``(workdir, process, wall time [s])``.  Tests that change files work on
-    :func:`ci_workflow_copy`."""
-    workdir = tmp_path_factory.mktemp("ci_workflow")
-    t0 = time.perf_counter()
-    proc = run_snakemake(workdir, "all", "--configfile", CI_CONFIG)
-    elapsed = time.perf_counter() - t0
-    assert proc.returncode == 0, proc.stderr[-4000:]
-    return workdir, proc, elapsed
+    the suite): ``(workdir, stderr, wall time [s])``.  Tests that change files work on
+    :func:`copy_of_ci_workflow`.
+
+    The tests run in parallel (pytest-xdist, pyproject addopts); the first worker that
+    needs the run makes it while holding a lock in the session's shared temporary folder,
+    and the others wait for it and reuse it (the run itself uses both cores).
+    """
+    shared = tmp_path_factory.getbasetemp() if worker_id == "master" else tmp_path_factory.getbasetemp().parent
+    workdir, record = shared / "ci_workflow", shared / "ci_workflow.json"
+    with open(shared / "ci_workflow.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
+        if not record.exists():
+            workdir.mkdir()
+            t0 = time.perf_counter()
+            proc = run_snakemake(workdir, "all", "--configfile", CI_CONFIG)
+            record.write_text(json.dumps({"returncode": proc.returncode, "stderr": proc.stderr,
+                                          "elapsed": time.perf_counter() - t0}))
+        run = json.loads(record.read_text())
+    assert run["returncode"] == 0, run["stderr"][-4000:]
+    return workdir, run["stderr"], run["elapsed"]
 
 
 def copy_of_ci_workflow(ci_workflow, dest: Path) -> Path:
