@@ -15,18 +15,11 @@ import yaml
 from accelcal.claims import COLUMNS, PAPERS, VERDICTS, verdict_changes
 from accelcal.plotting import RC, save_figure
 
-from .conftest import copy_of_ci_workflow
+from .conftest import copy_of_ci_workflow, run_snakemake
 
 REPO = Path(__file__).resolve().parents[1]
-SNAKEMAKE = Path(sys.executable).with_name("snakemake")
 CI = REPO / "config" / "ci.yaml"
-
-
-def snakemake(workdir, *args, timeout=600):
-    """Run the repository's workflow with `workdir` as working directory (results go there)."""
-    cmd = [str(SNAKEMAKE), "--snakefile", str(REPO / "Snakefile"), "--directory", str(workdir),
-           "--cores", "2", "--scheduler", "greedy", *map(str, args)]
-    return subprocess.run(cmd, cwd=REPO, capture_output=True, text=True, timeout=timeout)
+snakemake = run_snakemake  # the repository's workflow with a working directory (tests/conftest.py)
 
 
 @pytest.fixture(scope="module")
