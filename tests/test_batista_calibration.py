@@ -9,7 +9,7 @@ from accelcal.batista.crlb import calibration_crlb, derived_quantities, pack, wi
 from accelcal.batista.model import (PAPER_B_PRIME, PAPER_F2, PAPER_F_INV, PAPER_NOISE, accelerometer_output,
                                     correct_measurement, euler_to_rotation, gravity_in_table,
                                     specific_force_at_rest)
-from accelcal.batista.montecarlo import (asymptotic_bias, calibration_bounds, calibration_design,
+from accelcal_repro.batista2011.montecarlo import (asymptotic_bias, calibration_bounds, calibration_design,
                                          calibration_montecarlo, calibration_summary, lls_comparison)
 
 G = 9.81
@@ -181,7 +181,7 @@ def test_chunked_calibration_monte_carlo_equals_one_job(design):
     """The runs of a chunk draw from their own streams: split into jobs, the same table."""
     import pandas as pd
 
-    from accelcal.batista.montecarlo import run_streams
+    from accelcal_repro.batista2011.montecarlo import run_streams
 
     whole = calibration_montecarlo(design, run_streams(3, "calibration", range(6)), chunk=4)
     parts = [calibration_montecarlo(design, run_streams(3, "calibration", ids), run_ids=ids, chunk=4)

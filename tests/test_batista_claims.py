@@ -9,14 +9,14 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from accelcal.batista.claims import (batista_claims, bias_convergence_time, calibration_claims,
+from accelcal_repro.batista2011.claims import (batista_claims, bias_convergence_time, calibration_claims,
                                      experimental_claims, filter_claims, observability_claims, settling_time)
 from accelcal.batista.model import PAPER_B_PRIME, PAPER_F2, PAPER_F_INV, PAPER_FILTER_BIAS, PAPER_NOISE
-from accelcal.batista.montecarlo import (calibration_bounds, calibration_design, calibration_montecarlo,
+from accelcal_repro.batista2011.montecarlo import (calibration_bounds, calibration_design, calibration_montecarlo,
                                          calibration_summary, filter_montecarlo, filter_scenario, gramian_table,
                                          observability_table)
-from accelcal.batista.trajectory import constant_axis_attitude, euler_sinusoid_attitude
-from accelcal.claims import COLUMNS, validate_rows
+from accelcal_repro.batista2011.trajectory import constant_axis_attitude, euler_sinusoid_attitude
+from accelcal_repro.claims import COLUMNS, validate_rows
 
 P0 = np.repeat([0.01**2, 0.2**2, 0.2**2], 3)
 AXIS = [1.0, 0.0, 0.0]

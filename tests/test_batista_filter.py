@@ -8,10 +8,10 @@ from accelcal import InputShapeError, NonFiniteError
 from accelcal.batista.filter import (PAPER_XI, covariance_sequence, discretize_van_loan, kalman_filter,
                                      observability_gramian, process_noise, rotation_blocks, system_matrix, transition)
 from accelcal.batista.model import PAPER_FILTER_BIAS, skew
-from accelcal.batista.montecarlo import (_blocks_bkt, _measurements, filter_montecarlo, filter_scenario,
+from accelcal_repro.batista2011.montecarlo import (_blocks_bkt, _measurements, filter_montecarlo, filter_scenario,
                                          gramian_table, initial_estimate, observability_table, shared_gain_filter)
-from accelcal.batista.claims import steady_mean, steady_state
-from accelcal.batista.trajectory import constant_axis_attitude, euler_sinusoid_attitude
+from accelcal_repro.batista2011.claims import steady_mean, steady_state
+from accelcal_repro.batista2011.trajectory import constant_axis_attitude, euler_sinusoid_attitude
 
 P0 = np.repeat([0.01**2, 0.2**2, 0.2**2], 3)
 AXIS = np.array([1.0, 0.0, 0.0])
@@ -174,7 +174,7 @@ def test_bad_input_is_rejected():
 def test_chunked_monte_carlo_merges_to_the_single_job_tables():
     """Runs split over jobs (run_streams per run number) merge to the numbers of one job;
     a chunk that drew the wrong runs' noise would not."""
-    from accelcal.batista.montecarlo import filter_summary, merge_filter_moments, run_streams
+    from accelcal_repro.batista2011.montecarlo import filter_summary, merge_filter_moments, run_streams
 
     sc = _scenario(_changing(20.0))
     kw = dict(record_every_s=5.0, summary_every_s=1.0)

@@ -2,8 +2,8 @@
 on tables built from deliberately wrong estimators.
 
 The tables are computed in-process with the library calls the workflow's scripts make
-(accelcal.montecarlo on the grid points of config/ci.yaml), and judged with the same
-check functions (accelcal.burkhard2024.checks) as the claims ledger.  A wrong estimator
+(accelcal_repro.montecarlo on the grid points of config/ci.yaml), and judged with the same
+check functions (accelcal_repro.burkhard2024.checks) as the claims ledger.  A wrong estimator
 replaces one method at the points of the experiment it is meant to break (every point
 keeps its own random stream, so right and wrong tables share their data).
 """
@@ -17,13 +17,13 @@ import pytest
 import yaml
 
 from accelcal import bias_lls_batch, full_lls_batch
-from accelcal.burkhard2024 import checks
-from accelcal.burkhard2024.analysis import limit_onsets, lls_limit, relative_errors
-from accelcal.burkhard2024.claims import burkhard2024_claims
-from accelcal.burkhard2024.grid import experiments_from_config, grid_points
-from accelcal.claims import validate_rows
-from accelcal.montecarlo import compare_methods, mc_point, summarize
-from accelcal.timing import summarize_timing
+from accelcal_repro.burkhard2024 import checks
+from accelcal_repro.burkhard2024.analysis import limit_onsets, lls_limit, relative_errors
+from accelcal_repro.burkhard2024.claims import burkhard2024_claims
+from accelcal_repro.burkhard2024.grid import experiments_from_config, grid_points
+from accelcal_repro.claims import validate_rows
+from accelcal_repro.montecarlo import compare_methods, mc_point, summarize
+from accelcal_repro.timing import summarize_timing
 
 REPO = Path(__file__).resolve().parents[1]
 CFG = yaml.safe_load((REPO / "config" / "ci.yaml").read_text())["burkhard2024"]

@@ -6,7 +6,7 @@ import pandas as pd
 import pytest
 import yaml
 
-from accelcal.burkhard2024.grid import EXPERIMENTS, Experiment, experiments_from_config, grid_points, point_key, select
+from accelcal_repro.burkhard2024.grid import EXPERIMENTS, Experiment, experiments_from_config, grid_points, point_key, select
 
 REPO = Path(__file__).resolve().parents[1]
 

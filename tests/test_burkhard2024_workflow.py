@@ -11,7 +11,7 @@ import pandas as pd
 import pytest
 import yaml
 
-from accelcal.burkhard2024.grid import experiments_from_config, grid_points
+from accelcal_repro.burkhard2024.grid import experiments_from_config, grid_points
 
 from .conftest import copy_of_ci_workflow
 

@@ -5,7 +5,7 @@ The Burkhard (2024) claims are tested in tests/test_burkhard2024_checks.py."""
 import pandas as pd
 import pytest
 
-from accelcal.claims import COLUMNS, Claim, LedgerError, assemble_ledger, at_least, validate_rows
+from accelcal_repro.claims import COLUMNS, Claim, LedgerError, assemble_ledger, at_least, validate_rows
 
 CLAIM = Claim("burkhard2024", "demo", "A demo claim. Rule: reproduced if value >= 10", "≈35×")
 

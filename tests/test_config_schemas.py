@@ -208,8 +208,8 @@ def test_every_key_is_required_and_no_other_key_allowed():
 def test_named_choices_match_the_library():
     """The schemas' enums are the names the code accepts (a renamed estimator, recording or
     option would otherwise pass the schema and fail in a job, or the reverse)."""
-    from accelcal.measured.calibrate import MIN_POSES, MODEL
-    from accelcal.measured.sources import FERRARIS_STATIC, SOURCES
+    from accelcal_repro.measured.calibrate import MIN_POSES, MODEL
+    from accelcal_repro.measured.sources import FERRARIS_STATIC, SOURCES
     from accelcal.tereshkov.errors import InvalidParameterError
     from accelcal.tereshkov.estimator import TereshkovParams
 

@@ -5,7 +5,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from accelcal.discrepancy import benchmark as B
+from accelcal_repro.discrepancy import benchmark as B
 from accelcal.discrepancy import detect as D
 from accelcal.discrepancy.effects import EFFECT_IDS
 

@@ -11,7 +11,7 @@ import pytest
 import yaml
 
 from accelcal import cli
-from accelcal.discrepancy import benchmark as B
+from accelcal_repro.discrepancy import benchmark as B
 from accelcal.discrepancy import report
 from accelcal.discrepancy.detect import Rules
 from accelcal.recording import Recording, write_recording

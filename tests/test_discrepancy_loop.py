@@ -4,11 +4,11 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from accelcal.discrepancy import benchmark as B
+from accelcal_repro.discrepancy import benchmark as B
 from accelcal.discrepancy.detect import Rules, critical_noncentrality, discrepancy, holm, identifiability
 from accelcal.discrepancy.effects import EFFECT_IDS
 from accelcal.discrepancy.fit import evaluate, fit, fit_at, forward, lopo, pose_data
-from accelcal.measured.evaluation import residual_sigma
+from accelcal.evaluation import residual_sigma
 from accelcal.model import m_from_params
 from accelcal.simulation import classic_directions, random_directions
 

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 from accelcal.errors import AccelcalError, RecordingError, TooFewPosesError
-from accelcal.measured.calibrate import FULL_PARAMETERS, calibrate_recording
-from accelcal.measured.data import DatasetError, fetch_file
-from accelcal.measured.sources import convert, fetch_source, read_source, section_list, source
+from accelcal_repro.measured.calibrate import FULL_PARAMETERS, calibrate_recording
+from accelcal_repro.measured.data import DatasetError, fetch_file
+from accelcal_repro.measured.sources import convert, fetch_source, read_source, section_list, source
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 pytestmark = pytest.mark.skipif(not DATA.is_dir(), reason="shared/data not available")

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pandas as pd
 
-from accelcal.claims import COLUMNS, validate_rows
-from accelcal.measured.claims import measured_claims
+from accelcal_repro.claims import COLUMNS, validate_rows
+from accelcal_repro.measured.claims import measured_claims
 
 
 def tables():

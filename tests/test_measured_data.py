@@ -1,4 +1,4 @@
-"""accelcal.measured.data: shared copy, verified download (file:// URLs), checksum and network failures."""
+"""accelcal_repro.measured.data: shared copy, verified download (file:// URLs), checksum and network failures."""
 
 from __future__ import annotations
 
@@ -11,9 +11,10 @@ from pathlib import Path
 import pytest
 
 from accelcal.errors import AccelcalError
-from accelcal.measured import data as md
-from accelcal.measured.data import DATASETS, DatasetError, fetch_file, sha256_file
-from accelcal.measured.sources import SOURCES, fetch_source
+from accelcal_repro.measured import data as md
+from accelcal.atomic import sha256_file
+from accelcal_repro.measured.data import DATASETS, DatasetError, fetch_file
+from accelcal_repro.measured.sources import SOURCES, fetch_source
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 needs_data = pytest.mark.skipif(not DATA.is_dir(), reason="shared/data not available")

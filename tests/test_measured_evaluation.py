@@ -1,4 +1,4 @@
-"""accelcal.measured.evaluation on simulated poses, where the truth and the noise are known."""
+"""accelcal.evaluation on simulated poses, where the truth and the noise are known."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from accelcal import bias_lls, full_lls
-from accelcal.measured import evaluation as ev
+from accelcal import evaluation as ev
 from accelcal.model import m_from_params
 from accelcal.simulation import random_directions, simulate_poses
 

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from accelcal.measured.peer import ferraris_comparison, implied_scale, lq
+from accelcal_repro.measured.peer import ferraris_comparison, implied_scale, lq
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "imucal_ferraris"
 SESSION, SECTIONS = DATA / "example_ferraris_session.csv", DATA / "example_ferraris_session_list.json"

@@ -70,9 +70,9 @@ def test_truncated_recording_fails_the_fetch_with_one_line(tmp_path):
 def test_figures_from_real_tables(tmp_path):
     import pandas as pd
 
-    from accelcal.measured.calibrate import calibrate_recording
-    from accelcal.measured.figures import plot_calibration, plot_residuals, plot_static_detection
-    from accelcal.measured.sources import fetch_source, read_source, section_list
+    from accelcal_repro.measured.calibrate import calibrate_recording
+    from accelcal_repro.measured.figures import plot_calibration, plot_residuals, plot_static_detection
+    from accelcal_repro.measured.sources import fetch_source, read_source, section_list
     from accelcal.plotting import save_figure
 
     mcs, recs = [], {}

@@ -5,7 +5,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from accelcal.montecarlo import (
+from accelcal_repro.montecarlo import (
     compare_methods,
     crlb_batch,
     grid_seed,
@@ -17,7 +17,7 @@ from accelcal.montecarlo import (
     summarize,
     summarize_mc_timing,
 )
-from accelcal.timing import run_benchmark, summarize_timing, time_batched, time_interleaved
+from accelcal_repro.timing import run_benchmark, summarize_timing, time_batched, time_interleaved
 from accelcal.uncertainty import crlb
 
 ALL = ["full_lls", "full_als", "full_nlls", "bias_lls", "bias_nlls"]

@@ -1,4 +1,4 @@
-"""The reproduction report (accelcal.report, workflow/scripts/report.py): built from a small
+"""The reproduction report (accelcal_repro.report, workflow/scripts/report.py): built from a small
 fake results tree; every figure id appears, verdicts are colour-coded, rebuilding gives the
 same bytes, and broken inputs give one-line errors."""
 
@@ -14,9 +14,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 import pandas as pd  # noqa: E402
 import pytest  # noqa: E402
 
-from accelcal.claims import COLUMNS  # noqa: E402
+from accelcal_repro.claims import COLUMNS  # noqa: E402
 from accelcal.plotting import save_figure  # noqa: E402
-from accelcal.report import (  # noqa: E402
+from accelcal_repro.report import (  # noqa: E402
     VERDICT_COLOURS,
     ReportError,
     build_report,

@@ -2,7 +2,7 @@
 
 import pandas as pd
 
-from accelcal.claims import COLUMNS, expected_verdicts, verdict_changes
+from accelcal_repro.claims import COLUMNS, expected_verdicts, verdict_changes
 
 
 def ledger(*rows):

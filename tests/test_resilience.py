@@ -24,8 +24,8 @@ import pytest
 import yaml
 
 from accelcal.atomic import atomic_output, remove_stale_temporaries
-from accelcal.measured.data import DATASETS, DatasetError, check_available, local_file
-from accelcal.measured.sources import SOURCES, check_source_available
+from accelcal_repro.measured.data import DATASETS, DatasetError, check_available, local_file
+from accelcal_repro.measured.sources import SOURCES, check_source_available
 
 REPO = Path(__file__).resolve().parents[1]
 SNAKEMAKE = Path(sys.executable).with_name("snakemake")
@@ -223,18 +223,18 @@ WRITERS = {
                      "write_csv(pd.DataFrame({{'a': range(1000)}}), {target!r})", "out/table.csv.gz"),
     "save_figure": ("import matplotlib.pyplot as plt\nfrom accelcal.plotting import save_figure",
                     "save_figure(plt.figure(), {target!r})", "out/figure.png"),
-    "write_json_atomic": ("from accelcal.measured.sources import write_json_atomic",
+    "write_json_atomic": ("from accelcal.atomic import write_json_atomic",
                           "write_json_atomic({target!r}, {{'a': 1}})", "out/manifest.json"),
-    "write_report": ("from accelcal.report import write_report",
+    "write_report": ("from accelcal_repro.report import write_report",
                      "write_report('<!DOCTYPE html>\\n<html><body>x</body></html>\\n', {target!r})", "out/report.html"),
     "write_recording": ("import numpy as np\nfrom accelcal.recording import Recording, write_recording",
                         "write_recording({target!r}, Recording(np.arange(500.0), np.full((500, 3), 0.25), None, ''))",
                         "out/recording.csv"),
-    "write_counts_csv": ("import numpy as np\nfrom accelcal.discrepancy.benchmark import write_counts_csv\n"
+    "write_counts_csv": ("import numpy as np\nfrom accelcal_repro.discrepancy.benchmark import write_counts_csv\n"
                          "from accelcal.recording import Recording",
                          "write_counts_csv({target!r}, Recording(np.arange(500.0), np.full((500, 3), 415.0), None, ''))",
                          "out/counts.csv"),
-    "download": ("from accelcal.measured.data import fetch_file",
+    "download": ("from accelcal_repro.measured.data import fetch_file",
                  "fetch_file('imu_tk_xsens', 'xsens_acc.mat', resources_dir={cache!r}, url={url!r}, sha256={sha!r})",
                  "cache/imu_tk_xsens/xsens_acc.mat"),
     "discrepancy_measured": ("import json, runpy\nfrom types import SimpleNamespace",
@@ -251,7 +251,7 @@ def writer_inputs(tmp_path_factory):
     """Inputs of the writers that read something: the download's upstream file, and the
     recording and parameters of workflow/scripts/discrepancy_measured.py (a quick
     stochastic layer: its bootstrap is the cost)."""
-    from accelcal.discrepancy import benchmark as B
+    from accelcal_repro.discrepancy import benchmark as B
     from accelcal.discrepancy.detect import Rules
     from accelcal.recording import write_recording
 

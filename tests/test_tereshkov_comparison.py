@@ -5,7 +5,7 @@ import pytest
 
 pytest.importorskip("accelcal.batista.filter")
 
-from accelcal.tereshkov.comparison import comparison_summary, run_comparison  # noqa: E402
+from accelcal_repro.tereshkov.comparison import comparison_summary, run_comparison  # noqa: E402
 
 CFG = {"seed": 3, "imu": {"rate_hz": 10}, "gnss": {"rate_hz": 10},
        "vehicle": {"straight_s": [20, 30], "turn_deg": [360, 360], "turn_rate_dps": [8, 10]},

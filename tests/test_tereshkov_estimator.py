@@ -5,11 +5,11 @@ import numpy as np
 import pytest
 
 from accelcal.errors import AccelcalError, InputShapeError, NonFiniteError
-from accelcal.tereshkov import (InvalidParameterError, SensorSpec, TereshkovParams, VehicleBatch,
-                                accel_bias_from_torque, field_path, run_estimator, sensor_chunks, stack_paths,
+from accelcal.tereshkov import (InvalidParameterError, TereshkovParams, accel_bias_from_torque, run_estimator,
                                 steady_state_torque)
+from accelcal_repro.tereshkov.vehicle import SensorSpec, VehicleBatch, field_path, sensor_chunks, stack_paths
 from accelcal.tereshkov.estimator import concat_results
-from accelcal.tereshkov.vehicle import DEG
+from accelcal_repro.tereshkov.vehicle import DEG
 
 NOISE_FREE = SensorSpec(imu_rate=25.0, gnss_rate=5.0, gyro_noise=0.0, accel_noise=0.0, gnss_sigma_h=0.0,
                         gnss_sigma_v=0.0)

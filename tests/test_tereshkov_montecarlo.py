@@ -5,10 +5,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from accelcal.claims import COLUMNS
-from accelcal.tereshkov import estimator, montecarlo as mc
-from accelcal.tereshkov.claims import tereshkov_claims
-from accelcal.tereshkov.montecarlo import convergence_time
+from accelcal_repro.claims import COLUMNS
+from accelcal.tereshkov import estimator
+from accelcal_repro.tereshkov import montecarlo as mc
+from accelcal_repro.tereshkov.claims import tereshkov_claims
+from accelcal_repro.tereshkov.montecarlo import convergence_time
 
 CFG = {
     "seed": 11,

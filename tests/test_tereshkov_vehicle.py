@@ -5,12 +5,11 @@ import numpy as np
 import pytest
 
 from accelcal.errors import InputShapeError
-from accelcal.tereshkov import (InvalidParameterError, SensorSpec, TereshkovParams, VehicleBatch, field_path,
-                                installation_dcm, run_estimator, sensor_chunks, stack_paths, straight_path,
-                                vehicle_state)
+from accelcal.tereshkov import InvalidParameterError, TereshkovParams, run_estimator
 from accelcal.tereshkov.estimator import concat_results
-from accelcal.tereshkov.montecarlo import equivalent_accel_bias
-from accelcal.tereshkov.vehicle import DEG, G
+from accelcal_repro.tereshkov.montecarlo import equivalent_accel_bias
+from accelcal_repro.tereshkov.vehicle import (DEG, G, SensorSpec, VehicleBatch, field_path, installation_dcm,
+                                              sensor_chunks, stack_paths, straight_path, vehicle_state)
 
 
 @pytest.fixture(scope="module")

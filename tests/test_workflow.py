@@ -12,7 +12,7 @@ import pandas as pd
 import pytest
 import yaml
 
-from accelcal.claims import COLUMNS, PAPERS, VERDICTS, verdict_changes
+from accelcal_repro.claims import COLUMNS, PAPERS, VERDICTS, verdict_changes
 from accelcal.plotting import RC, save_figure
 
 from .conftest import copy_of_ci_workflow, run_snakemake

@@ -11,7 +11,7 @@ import sys
 
 import pandas as pd
 
-from accelcal.claims import expected_verdicts, read_claims
+from accelcal_repro.claims import expected_verdicts, read_claims
 
 if len(sys.argv) != 2:
     sys.exit("usage: expected_verdicts.py results/claims.csv")

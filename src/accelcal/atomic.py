@@ -13,6 +13,8 @@ next write of the same target removes it (:func:`remove_stale_temporaries`).
 from __future__ import annotations
 
 import glob
+import hashlib
+import json
 import os
 import tempfile
 from collections.abc import Iterator
@@ -99,3 +101,19 @@ def atomic_output(path: str | os.PathLike, suffix: str = ".tmp") -> Iterator[Pat
 
 
 __all__ = ["atomic_output", "remove_stale_temporaries"]
+
+
+def write_json_atomic(path, obj) -> None:
+    """Write JSON to ``path`` via a temporary file and a rename."""
+    with atomic_output(path) as tmp, open(tmp, "w") as f:
+        json.dump(obj, f, indent=2)
+        f.write("\n")
+
+
+def sha256_file(path) -> str:
+    """Hex sha256 of a file, read in chunks."""
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 16), b""):
+            h.update(block)
+    return h.hexdigest()

@@ -13,9 +13,8 @@ from pathlib import Path
 import numpy as np
 
 from . import ESTIMATORS, __version__
+from .atomic import sha256_file, write_json_atomic
 from .errors import AccelcalError
-from .measured.data import sha256_file
-from .measured.sources import write_json_atomic
 from .results import _finite_json
 
 MODEL_HELP = """\

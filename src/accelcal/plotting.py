@@ -5,7 +5,7 @@ time stamps or software versions in the metadata, so that rerunning a figure giv
 byte-identical files; each file is written to a temporary name in the target
 directory and renamed, so a figure is never left half written.
 
-Each stage's figure functions (e.g. :mod:`accelcal.burkhard2024.figures`) take the
+Each stage's figure functions (e.g. :mod:`accelcal_repro.burkhard2024.figures`) take the
 stage's tables, return a Figure drawn with :data:`RC` and :func:`style`, and leave the
 writing to :func:`save_figure`.
 """

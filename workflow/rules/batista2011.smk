@@ -48,7 +48,7 @@ BATISTA_FIGURE_INPUTS = {
 def batista_chunk_runs(section, chunk):
     """[first, last + 1) run numbers of job ``chunk`` of ``section`` (calibration or filter):
     ``jobs`` contiguous blocks of nearly equal size.  Each run draws from its own stream
-    (accelcal.batista.montecarlo.run_streams), so the split changes no number."""
+    (accelcal_repro.batista2011.montecarlo.run_streams), so the split changes no number."""
     c = BATISTA[section]
     edges = [round(i * c["runs"] / c["jobs"]) for i in range(c["jobs"] + 1)]
     return [edges[int(chunk)], edges[int(chunk) + 1]]

@@ -3,7 +3,7 @@ the compute-time claim, and where the closed form stops being enough.  Config: t
 `burkhard2024` mapping (workflow/schemas/burkhard2024.schema.yaml).
 
 The experiments of the config (one per panel) are merged into one Monte Carlo job per grid
-point (pose count, noise std, g error; accelcal.burkhard2024.grid.grid_points); the data
+point (pose count, noise std, g error; accelcal_repro.burkhard2024.grid.grid_points); the data
 come from the random stream of (pose count, noise std), so the g errors of a point share
 their trials.  A gather job writes the tidy table and its summaries, from which the
 figures and the claims are computed.
@@ -14,7 +14,7 @@ figure_outputs, SMALL.
 
 import re
 
-from accelcal.burkhard2024.grid import experiments_from_config, grid_points
+from accelcal_repro.burkhard2024.grid import experiments_from_config, grid_points
 
 BURKHARD = config["burkhard2024"]
 #: Monte Carlo jobs: point key (e.g. n24_s0.0001) -> {n_poses, noise_std, cases}

@@ -83,7 +83,7 @@ def _check_ranges(section, schema_path, prefix):
 
 def _check_batista2011(b):
     s = b["calibration"]["schedule"]
-    # accelcal.batista.trajectory.StepSchedule: the window must miss the transition
+    # accelcal_repro.batista2011.trajectory.StepSchedule: the window must miss the transition
     if not s["transition_s"] <= s["window_start_s"] <= s["step_s"] - s["window_s"]:
         raise _config_error("batista2011.calibration.schedule.window_start_s",
                             f"the data window {s['window_start_s']}-{s['window_start_s'] + s['window_s']} s "
@@ -132,7 +132,7 @@ def _check_tereshkov(t):
 
 
 def _check_measured(m):
-    # The six static positions of the Ferraris session list (accelcal.measured.sources.
+    # The six static positions of the Ferraris session list (accelcal_repro.measured.sources.
     # FERRARIS_STATIC) are fewer than the full models need (calibrate.MIN_POSES["full"] = 10).
     ferraris = m["recordings"].get("imucal_ferraris")
     if ferraris and ferraris["pose_selection"] == "section_list":

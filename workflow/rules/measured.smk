@@ -12,8 +12,8 @@ import re
 
 from snakemake.exceptions import WorkflowError
 
-from accelcal.measured.data import DatasetError
-from accelcal.measured.sources import check_source_available
+from accelcal_repro.measured.data import DatasetError
+from accelcal_repro.measured.sources import check_source_available
 
 FIGURES.extend(["measured_static_detection", "measured_calibration", "measured_residuals"])
 CLAIM_STAGES.append("measured")
@@ -39,7 +39,7 @@ class MeasuredDataError(WorkflowError):
 
 def check_measured_data(recordings, data_dir, resources_dir):
     """Fail before any job runs if a recording is in neither data_dir nor the download
-    cache and its URL does not answer (accelcal.measured.sources.check_source_available:
+    cache and its URL does not answer (accelcal_repro.measured.sources.check_source_available:
     the network is asked only for a file that is not local, with a short timeout)."""
     try:
         for name in recordings:

@@ -6,8 +6,8 @@ import time
 from _helpers import configure_logging
 from batista2011_common import OUT, standalone, write_table
 
-from accelcal.batista.experiment import design_from_config
-from accelcal.batista.montecarlo import calibration_montecarlo, run_streams
+from accelcal_repro.batista2011.experiment import design_from_config
+from accelcal_repro.batista2011.montecarlo import calibration_montecarlo, run_streams
 
 if "snakemake" not in globals():  # standalone: the whole Monte Carlo as one chunk
     from batista2011_common import stage_config

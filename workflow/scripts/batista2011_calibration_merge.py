@@ -4,8 +4,8 @@ import pandas as pd
 from _helpers import configure_logging
 from batista2011_common import OUT, TABLES, standalone, write_table
 
-from accelcal.batista.experiment import design_from_config
-from accelcal.batista.montecarlo import calibration_bounds, calibration_summary, lls_comparison
+from accelcal_repro.batista2011.experiment import design_from_config
+from accelcal_repro.batista2011.montecarlo import calibration_bounds, calibration_summary, lls_comparison
 
 if "snakemake" not in globals():
     snakemake = standalone("batista2011_calibration_merge",

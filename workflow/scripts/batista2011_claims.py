@@ -4,8 +4,8 @@ import pandas as pd
 from _helpers import configure_logging
 from batista2011_common import TABLES, standalone, write_table
 
-from accelcal.batista.claims import batista_claims
-from accelcal.claims import verdict_counts
+from accelcal_repro.batista2011.claims import batista_claims
+from accelcal_repro.claims import verdict_counts
 
 if "snakemake" not in globals():
     snakemake = standalone("batista2011_claims",

@@ -4,8 +4,8 @@ import pandas as pd
 from _helpers import configure_logging
 from batista2011_common import TABLES, standalone
 
-from accelcal.batista import figures
-from accelcal.batista.experiment import changing_attitude, constant_attitude, design_from_config
+from accelcal_repro.batista2011 import figures
+from accelcal_repro.batista2011.experiment import changing_attitude, constant_attitude, design_from_config
 from accelcal.plotting import save_figure
 
 if "snakemake" not in globals():

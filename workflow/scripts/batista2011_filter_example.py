@@ -3,8 +3,8 @@
 from _helpers import configure_logging
 from batista2011_common import TABLES, standalone, write_table
 
-from accelcal.batista.experiment import filter_kwargs, scenario_from_config
-from accelcal.batista.montecarlo import filter_example, stream
+from accelcal_repro.batista2011.experiment import filter_kwargs, scenario_from_config
+from accelcal_repro.batista2011.montecarlo import filter_example, stream
 
 if "snakemake" not in globals():
     snakemake = standalone("batista2011_filter_example", output=[TABLES["filter_example"]])

@@ -4,7 +4,7 @@ import pandas as pd
 from _helpers import configure_logging
 from batista2011_common import OUT, TABLES, standalone, write_table
 
-from accelcal.batista.montecarlo import filter_summary, merge_filter_moments
+from accelcal_repro.batista2011.montecarlo import filter_summary, merge_filter_moments
 
 if "snakemake" not in globals():
     snakemake = standalone("batista2011_filter_merge",

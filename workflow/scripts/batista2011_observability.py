@@ -5,8 +5,8 @@ import pandas as pd
 from _helpers import configure_logging
 from batista2011_common import TABLES, standalone, write_table
 
-from accelcal.batista.experiment import filter_kwargs, scenario_from_config
-from accelcal.batista.montecarlo import filter_montecarlo, gramian_table, observability_table, run_streams
+from accelcal_repro.batista2011.experiment import filter_kwargs, scenario_from_config
+from accelcal_repro.batista2011.montecarlo import filter_montecarlo, gramian_table, observability_table, run_streams
 
 if "snakemake" not in globals():
     snakemake = standalone("batista2011_observability", output={"table": TABLES["observability"],

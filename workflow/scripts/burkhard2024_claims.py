@@ -3,9 +3,9 @@
 import pandas as pd
 from _helpers import configure_logging, mock_snakemake, write_csv
 
-from accelcal.burkhard2024.claims import burkhard2024_claims
-from accelcal.burkhard2024.grid import experiments_from_config
-from accelcal.claims import verdict_counts
+from accelcal_repro.burkhard2024.claims import burkhard2024_claims
+from accelcal_repro.burkhard2024.grid import experiments_from_config
+from accelcal_repro.claims import verdict_counts
 
 if "snakemake" not in globals():
     from _helpers import stage_config

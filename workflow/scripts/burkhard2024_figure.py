@@ -4,8 +4,8 @@ lls_limit, timing); output ``<figure>_png`` / ``<figure>_pdf`` for each."""
 import pandas as pd
 from _helpers import configure_logging, mock_snakemake
 
-from accelcal.burkhard2024 import figures
-from accelcal.burkhard2024.grid import experiments_from_config
+from accelcal_repro.burkhard2024 import figures
+from accelcal_repro.burkhard2024.grid import experiments_from_config
 from accelcal.plotting import save_figure
 
 if "snakemake" not in globals():

@@ -5,12 +5,12 @@ import time
 
 from _helpers import configure_logging, mock_snakemake, stage_config, write_csv
 
-from accelcal.montecarlo import mc_point
+from accelcal_repro.montecarlo import mc_point
 
 if "snakemake" not in globals():
     import sys
 
-    from accelcal.burkhard2024.grid import experiments_from_config, grid_points
+    from accelcal_repro.burkhard2024.grid import experiments_from_config, grid_points
 
     _cfg = stage_config("burkhard2024")
     _points = grid_points(experiments_from_config(_cfg["experiments"]))

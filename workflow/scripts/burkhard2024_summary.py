@@ -4,9 +4,9 @@ errors across the noise range, the LLS limit and the Monte Carlo wall times."""
 import pandas as pd
 from _helpers import configure_logging, mock_snakemake, write_csv
 
-from accelcal.burkhard2024.analysis import limit_onsets, lls_limit, relative_errors
-from accelcal.burkhard2024.grid import experiments_from_config
-from accelcal.montecarlo import CASE_KEYS, compare_methods, summarize, summarize_mc_timing
+from accelcal_repro.burkhard2024.analysis import limit_onsets, lls_limit, relative_errors
+from accelcal_repro.burkhard2024.grid import experiments_from_config
+from accelcal_repro.montecarlo import CASE_KEYS, compare_methods, summarize, summarize_mc_timing
 
 if "snakemake" not in globals():
     import glob

@@ -4,7 +4,7 @@ each pose count, and the batched closed forms' throughput."""
 import pandas as pd
 from _helpers import configure_logging, mock_snakemake, write_csv
 
-from accelcal.timing import run_benchmark, summarize_timing
+from accelcal_repro.timing import run_benchmark, summarize_timing
 
 if "snakemake" not in globals():
     from _helpers import stage_config

@@ -2,7 +2,7 @@
 
 from _helpers import configure_logging, mock_snakemake, write_csv
 
-from accelcal.claims import assemble_ledger, verdict_counts
+from accelcal_repro.claims import assemble_ledger, verdict_counts
 
 if "snakemake" not in globals():
     import glob

@@ -5,7 +5,7 @@ from pathlib import Path
 import pandas as pd
 from _helpers import configure_logging, load_config, mock_snakemake, write_csv
 
-from accelcal.discrepancy.benchmark import detect_case
+from accelcal_repro.discrepancy.benchmark import detect_case
 from accelcal.discrepancy.detect import Rules
 from accelcal.errors import AccelcalError
 from accelcal.recording import read_recording

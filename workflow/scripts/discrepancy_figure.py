@@ -6,6 +6,7 @@ import pandas as pd
 from _helpers import configure_logging, load_config, mock_snakemake
 
 from accelcal.discrepancy import figures as F
+from accelcal_repro.discrepancy import figures as benchmark_figures
 from accelcal.plotting import save_figure
 
 if "snakemake" not in globals():
@@ -20,11 +21,11 @@ log = configure_logging(snakemake)
 fid = snakemake.params.figure
 if fid == "discrepancy_confusion":
     scores = pd.read_csv(snakemake.input.scores, keep_default_na=False, na_values=[""])
-    fig = F.plot_confusion(scores, snakemake.params.confusion_size, snakemake.params.rules["alpha"])
+    fig = benchmark_figures.plot_confusion(scores, snakemake.params.confusion_size, snakemake.params.rules["alpha"])
 elif fid == "discrepancy_power":
     summ = pd.read_csv(snakemake.input.summary)
     fpr = summ[(summ.effect == "none") & (summ.metric == "false_positive_rate")]["value"]
-    fig = F.plot_power(pd.read_csv(snakemake.input.rates), snakemake.params.rules["power"],
+    fig = benchmark_figures.plot_power(pd.read_csv(snakemake.input.rates), snakemake.params.rules["power"],
                        snakemake.params.rules["alpha"], float(fpr.iloc[0]) if len(fpr) else None)
 else:
     reports = {}

@@ -5,7 +5,7 @@ from pathlib import Path
 import pandas as pd
 from _helpers import configure_logging, load_config, mock_snakemake, write_csv
 
-from accelcal.discrepancy.benchmark import Session, chunk, plan, simulate_case, write_counts_csv
+from accelcal_repro.discrepancy.benchmark import Session, chunk, plan, simulate_case, write_counts_csv
 from accelcal.discrepancy.detect import Rules
 
 if "snakemake" not in globals():

@@ -7,7 +7,7 @@ from _helpers import configure_logging, load_config, mock_snakemake
 from accelcal.atomic import atomic_output
 from accelcal.discrepancy.detect import Rules
 from accelcal.discrepancy.report import StochasticSettings, analyse
-from accelcal.measured.sources import source
+from accelcal_repro.measured.sources import source
 from accelcal.recording import read_recording
 from accelcal.results import _finite_json
 

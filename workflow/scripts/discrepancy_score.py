@@ -3,7 +3,7 @@
 import pandas as pd
 from _helpers import configure_logging, load_config, mock_snakemake, write_csv
 
-from accelcal.discrepancy.benchmark import rates, score_cases, summary
+from accelcal_repro.discrepancy.benchmark import rates, score_cases, summary
 
 if "snakemake" not in globals():
     _cfg = load_config()["discrepancy"]

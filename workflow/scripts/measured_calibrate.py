@@ -2,8 +2,8 @@
 
 from _helpers import configure_logging, mock_snakemake, write_csv
 
-from accelcal.measured.calibrate import TABLES, calibrate_recording
-from accelcal.measured.sources import read_manifest, section_list
+from accelcal_repro.measured.calibrate import TABLES, calibrate_recording
+from accelcal_repro.measured.sources import read_manifest, section_list
 from accelcal.recording import read_recording
 
 if "snakemake" not in globals():

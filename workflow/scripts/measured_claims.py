@@ -3,8 +3,8 @@
 import pandas as pd
 from _helpers import configure_logging, mock_snakemake, write_csv
 
-from accelcal.claims import verdict_counts
-from accelcal.measured.claims import measured_claims
+from accelcal_repro.claims import verdict_counts
+from accelcal_repro.measured.claims import measured_claims
 
 if "snakemake" not in globals():
     snakemake = mock_snakemake(

@@ -2,7 +2,7 @@
 
 from _helpers import configure_logging, mock_snakemake
 
-from accelcal.measured.sources import convert, read_manifest
+from accelcal_repro.measured.sources import convert, read_manifest
 
 if "snakemake" not in globals():
     snakemake = mock_snakemake("measured_convert", input={"manifest": "results/measured/data/xsens_mti.json"},

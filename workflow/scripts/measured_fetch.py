@@ -7,8 +7,9 @@ import sys
 
 from _helpers import configure_logging, mock_snakemake
 
-from accelcal.measured.data import DatasetError
-from accelcal.measured.sources import fetch_source, manifest, write_json_atomic
+from accelcal_repro.measured.data import DatasetError
+from accelcal.atomic import write_json_atomic
+from accelcal_repro.measured.sources import fetch_source, manifest
 
 if "snakemake" not in globals():
     from measured_common import measured_config

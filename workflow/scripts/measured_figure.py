@@ -3,7 +3,7 @@
 import pandas as pd
 from _helpers import configure_logging, mock_snakemake
 
-from accelcal.measured.figures import plot_calibration, plot_residuals, plot_static_detection
+from accelcal_repro.measured.figures import plot_calibration, plot_residuals, plot_static_detection
 from accelcal.plotting import save_figure
 from accelcal.recording import read_recording
 

@@ -3,8 +3,8 @@
 import pandas as pd
 from _helpers import configure_logging, mock_snakemake, write_csv
 
-from accelcal.measured.peer import ferraris_comparison
-from accelcal.measured.sources import FERRARIS_STATIC, read_manifest
+from accelcal_repro.measured.peer import ferraris_comparison
+from accelcal_repro.measured.sources import FERRARIS_STATIC, read_manifest
 
 if "snakemake" not in globals():
     from measured_common import measured_config

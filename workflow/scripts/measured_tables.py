@@ -3,7 +3,7 @@
 import pandas as pd
 from _helpers import configure_logging, mock_snakemake, write_csv
 
-from accelcal.measured.calibrate import TABLES
+from accelcal_repro.measured.calibrate import TABLES
 
 if "snakemake" not in globals():
     from measured_common import measured_config

@@ -1,4 +1,4 @@
-"""results/report.html: the one page a reviewer opens first (accelcal.report).
+"""results/report.html: the one page a reviewer opens first (accelcal_repro.report).
 
 The benchmark files (results/benchmarks/) are read as they are when this job runs: the
 rule depends on every figure and the claims ledger, so every job of the workflow has
@@ -10,7 +10,7 @@ from pathlib import Path
 
 from _helpers import REPO, configure_logging, mock_snakemake
 
-from accelcal.report import ReportError, build_report, load_conclusions, write_report
+from accelcal_repro.report import ReportError, build_report, load_conclusions, write_report
 
 if "snakemake" not in globals():
     # Standalone: every figure in results/figures/ with the caption of the same name.

@@ -4,8 +4,8 @@ import pandas as pd
 from _helpers import configure_logging, mock_snakemake
 from tereshkov_common import stage_config, write_table
 
-from accelcal.claims import verdict_counts
-from accelcal.tereshkov.claims import tereshkov_claims
+from accelcal_repro.claims import verdict_counts
+from accelcal_repro.tereshkov.claims import tereshkov_claims
 
 if "snakemake" not in globals():
     _d = "results/tereshkov"

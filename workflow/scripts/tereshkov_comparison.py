@@ -4,7 +4,7 @@ bias estimates and a summary with convergence, steady-state error and cost per s
 from _helpers import configure_logging, mock_snakemake
 from tereshkov_common import stage_config, write_table
 
-from accelcal.tereshkov.comparison import comparison_summary, run_comparison
+from accelcal_repro.tereshkov.comparison import comparison_summary, run_comparison
 
 if "snakemake" not in globals():
     snakemake = mock_snakemake(

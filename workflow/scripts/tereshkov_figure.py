@@ -7,7 +7,7 @@ from _helpers import configure_logging, mock_snakemake
 from tereshkov_common import stage_config
 
 from accelcal.plotting import save_figure
-from accelcal.tereshkov import figures
+from accelcal_repro.tereshkov import figures
 
 if "snakemake" not in globals():
     import sys

@@ -3,7 +3,7 @@
 from _helpers import configure_logging, mock_snakemake
 from tereshkov_common import stage_config, write_table
 
-from accelcal.tereshkov.montecarlo import heading_table
+from accelcal_repro.tereshkov.montecarlo import heading_table
 
 if "snakemake" not in globals():
     snakemake = mock_snakemake("tereshkov_headings", output=["results/tereshkov/headings.csv"],

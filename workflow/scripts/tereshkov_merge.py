@@ -5,7 +5,7 @@ import pandas as pd
 from _helpers import configure_logging, mock_snakemake
 from tereshkov_common import stage_config, write_table
 
-from accelcal.tereshkov.montecarlo import merge_job_tables, merge_job_timings
+from accelcal_repro.tereshkov.montecarlo import merge_job_tables, merge_job_timings
 
 if "snakemake" not in globals():  # standalone: the outputs of the standalone simulate runs (one job each)
     _d = "results/tereshkov"

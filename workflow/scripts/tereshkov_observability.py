@@ -4,7 +4,7 @@ import pandas as pd
 from _helpers import configure_logging, mock_snakemake
 from tereshkov_common import stage_config, write_table
 
-from accelcal.tereshkov.montecarlo import observability_table
+from accelcal_repro.tereshkov.montecarlo import observability_table
 
 if "snakemake" not in globals():
     snakemake = mock_snakemake(

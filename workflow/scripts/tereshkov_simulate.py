@@ -6,7 +6,7 @@ import pandas as pd
 from _helpers import configure_logging, mock_snakemake
 from tereshkov_common import stage_config, write_table
 
-from accelcal.tereshkov.montecarlo import run_scenarios
+from accelcal_repro.tereshkov.montecarlo import run_scenarios
 
 if "snakemake" not in globals():  # standalone: the main scenarios as one job
     _sc = ["field", "straight", "artificial"]

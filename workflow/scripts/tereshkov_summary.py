@@ -5,7 +5,7 @@ import pandas as pd
 from _helpers import configure_logging, mock_snakemake
 from tereshkov_common import stage_config, write_table
 
-from accelcal.tereshkov.montecarlo import artificial_summary, convergence_summary, sweep_summary
+from accelcal_repro.tereshkov.montecarlo import artificial_summary, convergence_summary, sweep_summary
 
 if "snakemake" not in globals():
     _d = "results/tereshkov"

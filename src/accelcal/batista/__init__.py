@@ -1,13 +1,13 @@
 """Batista, Silvestre, Oliveira, Cardeira (2011): table calibration and online bias/gravity filter.
 
 * :mod:`~accelcal.batista.model`: eq. (2) ``a_m = F [a + F2 a²] + b + n``, rotations;
-* :mod:`~accelcal.batista.trajectory`: stepped table attitudes, continuous attitudes;
+* :mod:`~accelcal_repro.batista2011.trajectory`: stepped table attitudes, continuous attitudes;
 * :mod:`~accelcal.batista.calibration`: Table I (SVD null vectors, quadratic iteration);
 * :mod:`~accelcal.batista.crlb`: Cramér–Rao bound of the calibration design;
 * :mod:`~accelcal.batista.filter`: the Kalman filter of eq. (7), exact discretisation;
-* :mod:`~accelcal.batista.montecarlo`: Monte Carlo experiments as tidy tables;
-* :mod:`~accelcal.batista.claims`, :mod:`~accelcal.batista.figures`,
-  :mod:`~accelcal.batista.experiment`: ledger rows, figures, config → experiments.
+* :mod:`~accelcal_repro.batista2011.montecarlo`: Monte Carlo experiments as tidy tables;
+* :mod:`~accelcal_repro.batista2011.claims`, :mod:`~accelcal_repro.batista2011.figures`,
+  :mod:`~accelcal_repro.batista2011.experiment`: ledger rows, figures, config → experiments.
 
 >>> from accelcal.batista import calibrate, kalman_filter
 """

@@ -288,7 +288,7 @@ def covariance_sequence(t, omega, P0, xi=PAPER_XI, theta=PAPER_THETA, return_cov
 
     The covariance recursion of the filter depends on the data only through ``ω`` in
     ``A(t)``; along a shared trajectory it can be computed once and its gains applied to
-    many Monte Carlo runs (see :func:`accelcal.batista.montecarlo.filter_montecarlo`).
+    many Monte Carlo runs (see :func:`accelcal_repro.batista2011.montecarlo.filter_montecarlo`).
 
     Returns
     -------

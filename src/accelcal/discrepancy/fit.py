@@ -4,7 +4,7 @@ Data.  A :class:`PoseData` holds the pose means ``z_i`` (data unit), the pose ti
 temperatures (centred: ``Δt_i``, ``ΔT_i``) and the noise-predicted standard deviation
 ``σ_i`` of each pose residual, ``σ_i² = Σ_k (∂r_i/∂z_ik)² se_ik²`` from the per-pose
 standard errors ``se_ik`` of the static detection (which account for correlated
-samples; :func:`accelcal.measured.evaluation.residual_sigma`).  ``σ_i`` is computed once,
+samples; :func:`accelcal.evaluation.residual_sigma`).  ``σ_i`` is computed once,
 at the closed-form (full LLS) fit, and then held fixed, so that every model of a
 recording is fitted to, and compared on, the same weighted data.
 
@@ -110,7 +110,7 @@ def pose_data(z, g: float, mean_std, t, temp=None, sigma=None) -> PoseData:
         degenerate poses: the same one-line errors as ``accelcal calibrate``).
     """
     from .. import full_lls
-    from ..measured.evaluation import residual_sigma
+    from ..evaluation import residual_sigma
 
     z = np.asarray(z, float)
     mean_std = np.asarray(mean_std, float)

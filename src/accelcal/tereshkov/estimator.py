@@ -60,7 +60,10 @@ import numpy as np
 
 from .errors import InputShapeError, InvalidParameterError, NonFiniteError
 from .rotations import euler_to_dcm, skew
-from .vehicle import DEG, G
+
+#: Standard gravity [m/s²] and one degree [rad].
+G = 9.80665
+DEG = np.pi / 180.0
 
 STRAIGHT, TURN, OTHER = 0, 1, 2
 #: The attitude matrix is replaced by its nearest rotation every this many steps (the

@@ -1,0 +1,418 @@
+"""Calibrating one measured recording: static detection → pose set → every estimator → tidy tables.
+
+Units.  The full models are fitted to the pose means as stored (raw counts for the
+Xsens and MPU-6050 files) with g in m/s², so that ``M`` carries the sensitivity in
+counts per m/s² and ``b`` is in counts (as in IMU-TK).  The bias-only models fix
+``M = I`` and therefore need z and g in one unit: they are fitted to the pose means
+converted with the recording's *nominal* conversion (``(z - offset) / counts_per_unit``,
+:func:`accelcal.recording.nominal_conversion`), and their bias is converted back to the
+file unit for the tables (``offset + counts_per_unit · b``).  Where the true sensitivity
+differs from the nominal one, the bias-only model is wrong by that much, and its
+residuals and χ² show it.  Residuals are in m/s² for every estimator.
+
+Pose sets.  All detected rests are used for the hand-placed sessions (Xsens, MPU-6050).
+For the imucal Ferraris session the six rests that overlap the section list's static
+positions (x_p ... z_a) are used, labelled by it: the other detected rests lie before,
+between or after the three 360° rotations, in the same three "parallel" orientations
+as x_p, y_p, z_p (the rotation sections turn the sensor about the vertical axis), so
+adding them only re-weights three of the six orientations (up to 4 rests for x_p
+against 1 for x_a), and it is the six-position design that imucal's Ferraris
+calibration, the peer, uses.  ``pose_selection='all'`` uses every rest instead.
+"""
+
+from __future__ import annotations
+
+import time
+import zlib
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from accelcal import bias_lls, bias_nlls, full_als, full_lls, full_nlls
+from accelcal.errors import AccelcalError, RecordingError
+from accelcal.recording import Recording
+from accelcal.static import StaticPoses, detect_static_recording
+from accelcal import evaluation as ev
+from .sources import FERRARIS_STATIC, source
+
+#: Model of each estimator (the workflow's names: the functions of :mod:`accelcal`).
+MODEL = {"full_lls": "full", "full_als": "full", "full_nlls": "full", "bias_lls": "bias", "bias_nlls": "bias"}
+_FUNCTIONS = {"full_lls": full_lls, "full_nlls": full_nlls, "bias_lls": bias_lls, "bias_nlls": bias_nlls}
+#: Fewest poses each model's estimators accept (q + 1).
+MIN_POSES = {"full": 10, "bias": 4}
+AXES = ("x", "y", "z")
+#: The per-recording tables, by file stem (``results/measured/<recording>/<stem>.csv``).
+TABLES = ("poses", "params", "pose_errors", "summary", "agreement", "nominal")
+FULL_PARAMETERS = (*(f"bias_{a}" for a in AXES), *(f"sensitivity_{a}" for a in AXES),
+                   "nonorth_xy", "nonorth_zx", "nonorth_zy")
+BIAS_PARAMETERS = FULL_PARAMETERS[:3]
+
+
+@dataclass(frozen=True)
+class PoseSet:
+    """The static poses an estimator is fitted to (rows in time order).
+
+    ``detected`` holds each pose's index among all detected rests.
+    """
+
+    recording: str
+    means: np.ndarray
+    mean_std: np.ndarray
+    noise_std: np.ndarray
+    t_start: np.ndarray
+    t_end: np.ndarray
+    n_samples: np.ndarray
+    labels: tuple[str, ...]
+    detected: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.means)
+
+    @property
+    def t_mid(self) -> np.ndarray:
+        return 0.5 * (self.t_start + self.t_end)
+
+
+@dataclass(frozen=True)
+class Frame:
+    """What one estimator sees: pose means ``z`` and their standard errors in its unit, g,
+    and the map of its bias back to the file unit (``offset + scale · b``)."""
+
+    z: np.ndarray
+    mean_std: np.ndarray
+    g: float
+    offset: np.ndarray
+    scale: np.ndarray
+
+
+@dataclass
+class MeasuredCalibration:
+    """Every table of one recording (tidy: one row per recording × estimator × parameter or pose)."""
+
+    recording: str
+    poses: pd.DataFrame
+    params: pd.DataFrame
+    pose_errors: pd.DataFrame
+    summary: pd.DataFrame
+    agreement: pd.DataFrame
+    nominal: pd.DataFrame
+    results: dict = field(default_factory=dict, repr=False)
+    pose_set: PoseSet | None = field(default=None, repr=False)
+    detected: StaticPoses | None = field(default=None, repr=False)
+
+
+# --------------------------------------------------------------------------- poses
+
+
+def select_poses(name: str, detected: StaticPoses, sections: dict | None = None,
+                 selection: str = "section_list") -> tuple[np.ndarray, list[str]]:
+    """Indices (into ``detected``) of the poses to fit, and a label for every detected rest.
+
+    Parameters
+    ----------
+    name : str
+        Recording name (for messages).
+    detected : StaticPoses
+    sections : dict, optional
+        imucal section list ``{name: (start, end)}`` (sample positions, end exclusive).
+    selection : {'section_list', 'all'}
+        With a section list: the rests matching its six static positions, or every rest.
+
+    Returns
+    -------
+    used : ndarray of int
+    labels : list of str, one per detected rest (``'x_p'`` etc. where a section matches
+        it, else ``'rest<k>'``).
+
+    Raises
+    ------
+    RecordingError
+        A static section that no detected rest covers by at least half, or two sections
+        on one rest.
+    """
+    n = len(detected)
+    labels = [f"rest{k:02d}" for k in range(n)]
+    if sections is None:
+        return np.arange(n), labels
+    if selection not in ("section_list", "all"):
+        raise AccelcalError(f"pose_selection must be 'section_list' or 'all', got {selection!r}")
+    iv = detected.intervals
+    matched = []
+    for key in FERRARIS_STATIC:
+        if key not in sections:
+            raise RecordingError(f"{name}: section list lacks the static position {key!r}")
+        a, b = sections[key]
+        overlap = np.clip(np.minimum(iv[:, 1], b) - np.maximum(iv[:, 0], a), 0, None)
+        j = int(np.argmax(overlap))
+        if overlap[j] < 0.5 * (b - a):
+            raise RecordingError(f"{name}: no detected rest covers half of section {key!r} (samples {a}-{b})")
+        if j in matched:
+            raise RecordingError(f"{name}: sections {labels[j]!r} and {key!r} fall on the same detected rest")
+        matched.append(j)
+        labels[j] = key
+    used = np.arange(n) if selection == "all" else np.array(sorted(matched))
+    return used, labels
+
+
+def pose_set(name: str, detected: StaticPoses, used, labels) -> PoseSet:
+    used = np.asarray(used, int)
+    return PoseSet(recording=name, means=detected.means[used], mean_std=detected.mean_std[used],
+                   noise_std=detected.noise_std[used], t_start=detected.t_start[used],
+                   t_end=detected.t_end[used], n_samples=detected.n_samples[used],
+                   labels=tuple(labels[k] for k in used), detected=used)
+
+
+def poses_table(name: str, detected: StaticPoses, used, labels) -> pd.DataFrame:
+    """One row per detected rest, with ``used`` marking the fitted ones."""
+    d = {"recording": name, "pose": np.arange(len(detected)), "label": labels,
+         "t_start": detected.t_start, "t_end": detected.t_end, "n_samples": detected.n_samples,
+         "start_index": detected.intervals[:, 0], "stop_index": detected.intervals[:, 1]}
+    for k, a in enumerate(AXES):
+        d[f"mean_{a}"] = detected.means[:, k]
+    for k, a in enumerate(AXES):
+        d[f"mean_std_{a}"] = detected.mean_std[:, k]
+    for k, a in enumerate(AXES):
+        d[f"noise_std_{a}"] = detected.noise_std[:, k]
+    d["used"] = np.isin(np.arange(len(detected)), used)
+    return pd.DataFrame(d)
+
+
+# --------------------------------------------------------------------------- estimators
+
+
+def frame(ps: PoseSet, estimator: str, g: float, conversion) -> Frame:
+    """The data ``estimator`` is fitted to (module docstring: units)."""
+    if MODEL[estimator] == "full":
+        return Frame(ps.means, ps.mean_std, g, np.zeros(3), np.ones(3))
+    return Frame(conversion.to_si(ps.means), ps.mean_std / conversion.counts_per_unit, g,
+                 np.asarray(conversion.offset, float), np.asarray(conversion.counts_per_unit, float))
+
+
+def make_fit(estimator: str, fr: Frame):
+    """``fit(z) -> result`` for ``estimator`` with g (and ALS's noise level) bound in.
+
+    ALS gets the RMS of the pose-mean standard errors (all poses and axes) as its
+    known noise level, rather than estimating it from a handful of poses.
+    """
+    if estimator not in MODEL:
+        raise AccelcalError(f"unknown estimator {estimator!r}; known: {', '.join(MODEL)}")
+    if estimator == "full_als":
+        noise = float(np.sqrt(np.mean(fr.mean_std ** 2)))
+        return lambda z: full_als(z, fr.g, noise_std=noise)
+    f = _FUNCTIONS[estimator]
+    return lambda z: f(z, fr.g)
+
+
+def parameter_names(estimator: str) -> tuple[str, ...]:
+    return FULL_PARAMETERS if MODEL[estimator] == "full" else BIAS_PARAMETERS
+
+
+def parameter_vector(result, fr: Frame) -> np.ndarray:
+    """Reported parameters: bias (file unit), sensitivity ``1 + s`` (file unit per m/s²
+    for counts, dimensionless for m/s²) and non-orthogonality [deg]."""
+    b = fr.offset + fr.scale * result.bias
+    if result.model == "bias":
+        return b
+    return np.concatenate([b, 1.0 + result.scale_factors, result.nonorthogonality_deg])
+
+
+def _se_vector(se_b, se_s, se_th_deg, fr: Frame, model: str) -> np.ndarray:
+    b = fr.scale * np.asarray(se_b, float)
+    if model == "bias":
+        return b
+    return np.concatenate([b, np.asarray(se_s, float), np.asarray(se_th_deg, float)])
+
+
+def parameter_units(estimator: str, unit: str) -> tuple[str, ...]:
+    sens = "counts/(m/s^2)" if unit == "counts" else "1"
+    u = (unit,) * 3
+    return u if MODEL[estimator] == "bias" else (*u, *(sens,) * 3, *("deg",) * 3)
+
+
+# --------------------------------------------------------------------------- one recording
+
+
+def calibrate_recording(name: str, rec: Recording, *, g: float, estimators, sections=None,
+                        pose_selection: str = "section_list", n_boot: int = 200, seed: int = 0,
+                        level: float = 0.95, min_valid_fraction: float = 0.95,
+                        static_kw: dict | None = None) -> MeasuredCalibration:
+    """Detect the poses of ``rec``, fit every estimator, evaluate, and tabulate.
+
+    Parameters
+    ----------
+    name : str
+        Recording name (key of :data:`accelcal_repro.measured.sources.SOURCES`).
+    rec : Recording
+        The recording in its file unit.
+    g : float
+        Local gravity [m/s²].
+    estimators : sequence of str
+        Names from :data:`MODEL`.  An estimator the pose count does not allow raises
+        :class:`~accelcal.errors.TooFewPosesError` (a configuration error, not a result).
+    sections : dict, optional
+        imucal section list (selects the Ferraris poses).
+    pose_selection : {'section_list', 'all'}
+    n_boot : int
+        Bootstrap replicates (the same resampled poses for every estimator).
+    seed : int
+        Seed of the bootstrap; combined with the recording name.
+    level : float
+        Confidence level of the intervals.
+    min_valid_fraction : float
+        Fewest valid bootstrap replicates (fraction) for a bootstrap interval.
+    static_kw : dict, optional
+        Keyword arguments of :func:`accelcal.static.detect_static`.
+
+    Returns
+    -------
+    MeasuredCalibration
+    """
+    src = source(name)
+    conv = src.conversion
+    unknown = [e for e in estimators if e not in MODEL]
+    if unknown:
+        raise AccelcalError(f"{name}: unknown estimator(s) {', '.join(unknown)}; known: {', '.join(MODEL)}")
+    detected = detect_static_recording(rec, **(static_kw or {}))
+    used, labels = select_poses(name, detected, sections, pose_selection)
+    ps = pose_set(name, detected, used, labels)
+    rng = np.random.default_rng([int(seed), zlib.crc32(name.encode())])
+    idx = ev.bootstrap_indices(len(ps), int(n_boot), rng)
+
+    param_rows, pose_rows, summary_rows = [], [], []
+    boot, results = {}, {}
+    for est in estimators:
+        model = MODEL[est]
+        fr = frame(ps, est, g, conv)
+        fit = make_fit(est, fr)
+        t0 = time.perf_counter()
+        try:
+            r = fit(fr.z)
+        except AccelcalError as e:  # e.g. too few poses for the full model: name the recording
+            raise type(e)(f"{name}, {est}: {e}") from None
+        seconds = time.perf_counter() - t0
+        results[est] = r
+        names = parameter_names(est)
+        q = 9 if model == "full" else 3
+        values = parameter_vector(r, fr)
+        se = r.standard_errors
+        se_v = _se_vector(se["bias"], se.get("scale_factors"), se.get("nonorthogonality_deg"), fr, model)
+        nse = ev.noise_standard_errors(fr.z, fr.mean_std, r.M, r.bias, model)
+        nse_v = _se_vector(nse[:3], nse[3:6], np.rad2deg(nse[6:9]), fr, model)
+
+        # residuals against the noise
+        sigma = ev.residual_sigma(fr.z, fr.mean_std, r.M, r.bias)
+        chi = ev.chi2_test(r.residuals, sigma, q)
+        n = len(ps)
+        lo, lo_note = ev.lopo(fit, fr.z, g, MIN_POSES[model])
+
+        # bootstrap over poses
+        t1 = time.perf_counter()
+        samples, valid = ev.bootstrap(fit, lambda res, fr=fr: parameter_vector(res, fr), fr.z, idx,
+                                      MIN_POSES[model], len(names))
+        boot_seconds = time.perf_counter() - t1
+        frac = float(valid.mean()) if len(valid) else 0.0
+        if len(valid) and frac >= min_valid_fraction:
+            ci_lo, ci_hi = ev.percentile_ci(samples[valid], level)
+            method = "bootstrap_percentile"
+        else:
+            ci_lo, ci_hi = ev.noise_interval(values, nse_v, chi, level)
+            method = "linearised_noise"
+        boot[est] = (samples, valid, method)
+        boot_se = np.nanstd(samples[valid], axis=0, ddof=1) if valid.sum() > 1 else np.full(len(names), np.nan)
+
+        units = parameter_units(est, src.unit)
+        for k, p in enumerate(names):
+            param_rows.append({"recording": name, "estimator": est, "model": model, "parameter": p,
+                               "unit": units[k], "value": values[k], "se": se_v[k], "se_noise": nse_v[k],
+                               "boot_se": boot_se[k], "ci_low": ci_lo[k], "ci_high": ci_hi[k],
+                               "ci_method": method, "ci_level": level})
+
+        u = np.linalg.solve(r.M, (fr.z - r.bias).T).T
+        u /= np.linalg.norm(u, axis=1, keepdims=True)
+        for i in range(n):
+            pose_rows.append({"recording": name, "estimator": est, "pose": i, "label": ps.labels[i],
+                              "detected_pose": int(ps.detected[i]), "t_start": ps.t_start[i],
+                              "t_end": ps.t_end[i], "t_mid": ps.t_mid[i], "u_x": u[i, 0], "u_y": u[i, 1],
+                              "u_z": u[i, 2], "residual": r.residuals[i], "sigma_pred": sigma[i],
+                              "z_score": r.residuals[i] / sigma[i], "lopo_error": lo[i]})
+
+        dof_share = max(chi.dof, 0) / n
+        pred_rms = float(np.sqrt(np.mean(sigma ** 2)))
+        finite_lo = lo[np.isfinite(lo)]
+        summary_rows.append({
+            "recording": name, "estimator": est, "model": model, "g": g, "unit": src.unit,
+            "n_poses": n, "n_params": q, "dof": chi.dof,
+            "residual_rms": r.residual_rms, "predicted_rms": pred_rms,
+            "rms_ratio": r.residual_rms / (pred_rms * np.sqrt(dof_share)) if dof_share > 0 else np.nan,
+            "chi2": chi.chi2, "reduced_chi2": chi.reduced, "p_value": chi.p_value, "excess": chi.excess,
+            "lopo_n": int(finite_lo.size),
+            "lopo_rms": float(np.sqrt(np.mean(finite_lo ** 2))) if finite_lo.size else np.nan,
+            "lopo_max_abs": float(np.max(np.abs(finite_lo))) if finite_lo.size else np.nan,
+            "lopo_note": lo_note, "n_boot": int(n_boot), "boot_valid_fraction": frac, "ci_method": method,
+            "fit_seconds": seconds, "boot_seconds": boot_seconds,
+        })
+
+    params = pd.DataFrame(param_rows)
+    return MeasuredCalibration(
+        recording=name, poses=poses_table(name, detected, used, labels), params=params,
+        pose_errors=pd.DataFrame(pose_rows), summary=pd.DataFrame(summary_rows),
+        agreement=agreement_table(name, params, boot, level), nominal=nominal_table(name, params, conv, src.unit),
+        results=results, pose_set=ps, detected=detected)
+
+
+def agreement_table(name: str, params: pd.DataFrame, boot: dict, level: float) -> pd.DataFrame:
+    """Pairwise differences of the shared parameters of every pair of estimators.
+
+    ``diff_ci_*`` is the paired-bootstrap percentile interval of the difference, over
+    replicates valid for both (NaN if either estimator's intervals are not bootstrap ones).
+    """
+    rows = []
+    ests = list(dict.fromkeys(params["estimator"]))
+    for i, a in enumerate(ests):
+        for b in ests[i + 1:]:
+            pa = params[params.estimator == a].set_index("parameter")
+            pb = params[params.estimator == b].set_index("parameter")
+            shared = [p for p in pa.index if p in pb.index]
+            sa, va, ma = boot[a]
+            sb, vb, mb = boot[b]
+            both = va & vb
+            use_boot = ma.startswith("bootstrap") and mb.startswith("bootstrap") and both.any()
+            for p in shared:
+                ka, kb = list(pa.index).index(p), list(pb.index).index(p)
+                d = pa.loc[p, "value"] - pb.loc[p, "value"]
+                if use_boot:
+                    dd = sa[both, ka] - sb[both, kb]
+                    lo, hi = np.quantile(dd, [(1 - level) / 2, (1 + level) / 2])
+                    se = float(np.std(dd, ddof=1)) if dd.size > 1 else np.nan
+                else:
+                    lo = hi = se = np.nan
+                rows.append({"recording": name, "parameter": p, "unit": pa.loc[p, "unit"], "estimator_a": a,
+                             "estimator_b": b, "diff": d, "diff_boot_se": se, "diff_ci_low": lo, "diff_ci_high": hi,
+                             "diff_over_se_a": d / pa.loc[p, "se"] if pa.loc[p, "se"] > 0 else np.nan})
+    return pd.DataFrame(rows, columns=["recording", "parameter", "unit", "estimator_a", "estimator_b", "diff",
+                                       "diff_boot_se", "diff_ci_low", "diff_ci_high", "diff_over_se_a"])
+
+
+def nominal_table(name: str, params: pd.DataFrame, conv, unit: str) -> pd.DataFrame:
+    """Estimated sensitivities against the nominal ones (recordings in counts, full models)."""
+    cols = ["recording", "estimator", "axis", "value", "ci_low", "ci_high", "nominal", "rel_diff_pct",
+            "rel_ci_low_pct", "rel_ci_high_pct"]
+    if unit != "counts":
+        return pd.DataFrame(columns=cols)
+    rows = []
+    for k, a in enumerate(AXES):
+        sel = params[params.parameter == f"sensitivity_{a}"]
+        nom = float(conv.counts_per_unit[k])
+        for _, r in sel.iterrows():
+            rows.append({"recording": name, "estimator": r.estimator, "axis": a, "value": r.value,
+                         "ci_low": r.ci_low, "ci_high": r.ci_high, "nominal": nom,
+                         "rel_diff_pct": 100 * (r.value / nom - 1), "rel_ci_low_pct": 100 * (r.ci_low / nom - 1),
+                         "rel_ci_high_pct": 100 * (r.ci_high / nom - 1)})
+    return pd.DataFrame(rows, columns=cols)
+
+
+__all__ = ["BIAS_PARAMETERS", "FULL_PARAMETERS", "Frame", "MIN_POSES", "MODEL", "MeasuredCalibration", "PoseSet",
+           "TABLES", "agreement_table", "calibrate_recording", "frame", "make_fit", "nominal_table", "parameter_names",
+           "parameter_vector", "pose_set", "poses_table", "select_poses"]
+

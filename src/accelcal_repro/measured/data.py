@@ -1,0 +1,241 @@
+"""Getting the measured recordings: the shared copy if present, else a verified download.
+
+The three public recordings (``shared/data/README.md``) are inputs, never part of the
+repository.  :func:`fetch_file` returns a local path for one file of one dataset:
+
+1. ``<data_dir>/<dataset>/<file>`` (the shared copy, ``../shared/data`` from the project
+   root) if it exists; its sha256 must match :data:`DATASETS`, else
+   :class:`DatasetError` (a damaged shared copy is reported, not silently replaced);
+2. else ``<resources_dir>/<dataset>/<file>`` if an earlier download left it there and it
+   verifies;
+3. else a download from the pinned public URL with :mod:`urllib` into a temporary file
+   beside the target, verified, then renamed (atomic: a reader sees no file or the whole
+   verified file, never part of one).
+
+Every failure (no shared copy and no network, a checksum mismatch) is one
+:class:`DatasetError` with a one-line message.  :func:`check_available` makes the same
+"local or downloadable?" decision before a run starts (existence and one short request,
+no download), so that the workflow fails before any job rather than in the middle.  URLs point at fixed commits, so a
+verified download is byte-identical to the shared copy.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import http.client
+import os
+import urllib.error
+import urllib.request
+from dataclasses import dataclass
+from pathlib import Path
+from urllib.parse import quote
+
+from accelcal.atomic import atomic_output, sha256_file
+from accelcal.errors import AccelcalError
+
+
+class DatasetError(AccelcalError):
+    """A measured dataset that cannot be found, downloaded or verified."""
+
+
+@dataclass(frozen=True)
+class FileSpec:
+    """One public file: where it comes from and its sha256."""
+
+    url: str
+    sha256: str
+
+
+def _raw(repo: str, commit: str, path: str) -> str:
+    return f"https://raw.githubusercontent.com/{repo}/{commit}/{quote(path)}"
+
+
+_XSENS = ("Kyle-ak/imu_tk", "7780270fb9a227c79323199303f23989e689a89d")
+_IMUCAL = ("mad-lab-fau/imucal", "8716e4c50bbb7044918b747f38b26cb0a6420910")
+_MPU = ("tomisuarez2/ImuCalibration", "c86ea2531da0da7929b884b52d8955c0ea0615ff")
+
+#: ``{dataset: {file: FileSpec}}``, from ``shared/data/README.md`` (source, commit, sha256).
+DATASETS: dict[str, dict[str, FileSpec]] = {
+    "imu_tk_xsens": {
+        "xsens_acc.mat": FileSpec(_raw(*_XSENS, "bin/test_data/xsens_acc.mat"),
+                                  "335a234736ff4dd8741118283d5d4cd389ac54b04d00e6cd8d48ca3e532b7510"),
+        "xsens_gyro.mat": FileSpec(_raw(*_XSENS, "bin/test_data/xsens_gyro.mat"),
+                                   "e0d6cc7ccbc996aba3dae5063e97360a8b765ad1dffd02eae8ec69820eb37c1d"),
+    },
+    "imucal_ferraris": {
+        "example_ferraris_session.csv": FileSpec(
+            _raw(*_IMUCAL, "example_data/example_ferraris_session.csv"),
+            "18a3b4f83b9526bc9ce9c32461c4e7c787ea239596ad091ce0d293662c0aae3d"),
+        "example_ferraris_session_list.json": FileSpec(
+            _raw(*_IMUCAL, "example_data/example_ferraris_session_list.json"),
+            "d21e4170b7918ea05d8fa6f247d694250275f42ede28224535c328dad1ca8ace"),
+        "annotated_session.csv": FileSpec(
+            _raw(*_IMUCAL, "example_data/annotated_session.csv"),
+            "bd4b8f3b4b270d76327523d886d9b056c3b6da405420824b62267fbce30379ff"),
+    },
+    "mpu6050_suarez": {
+        "example_data_calibration.csv": FileSpec(
+            _raw(*_MPU, "calibration data/example_data_calibration.csv"),
+            "e6185b2814aa51fcb981048de5c00481af53aee568ed8ce209f46004a228cf54"),
+    },
+}
+
+#: Seconds before a download attempt gives up.
+TIMEOUT_S = 60.0
+_CHUNK = 1 << 16
+
+
+
+def spec(dataset: str, filename: str) -> FileSpec:
+    """The :class:`FileSpec` of one file; :class:`DatasetError` if unknown."""
+    try:
+        return DATASETS[dataset][filename]
+    except KeyError:
+        known = ", ".join(f"{d}/{f}" for d, files in DATASETS.items() for f in files)
+        raise DatasetError(f"unknown measured file {dataset}/{filename}; known: {known}") from None
+
+
+def fetch_file(dataset: str, filename: str, data_dir=None, resources_dir="resources", *,
+               url: str | None = None, sha256: str | None = None, timeout: float = TIMEOUT_S) -> Path:
+    """Local path of one measured file, from the shared copy or a verified download.
+
+    Parameters
+    ----------
+    dataset, filename : str
+        Keys of :data:`DATASETS` (e.g. ``'imu_tk_xsens'``, ``'xsens_acc.mat'``).
+    data_dir : str or Path, optional
+        Folder holding the shared copy (``<data_dir>/<dataset>/<filename>``); None or a
+        missing folder means "no shared copy".
+    resources_dir : str or Path
+        Where downloads go (``<resources_dir>/<dataset>/<filename>``).
+    url, sha256 : str, optional
+        Override the table (tests use a ``file://`` URL and a known checksum).
+    timeout : float
+        Seconds for the download.
+
+    Returns
+    -------
+    Path
+        An existing file whose sha256 matches.
+
+    Raises
+    ------
+    DatasetError
+        Shared copy or earlier download with the wrong checksum, download failure (no
+        network, HTTP error) or a downloaded file with the wrong checksum.
+    """
+    s = spec(dataset, filename) if url is None or sha256 is None else None
+    url = url if url is not None else s.url
+    want = (sha256 if sha256 is not None else s.sha256).lower()
+
+    if data_dir is not None:
+        shared = Path(data_dir) / dataset / filename
+        if shared.is_file():
+            got = sha256_file(shared)
+            if got != want:
+                raise DatasetError(f"{shared}: sha256 {got[:12]}… does not match the expected {want[:12]}… "
+                                   "(damaged or different shared copy)")
+            return shared
+
+    local = Path(resources_dir) / dataset / filename
+    if local.is_file():
+        got = sha256_file(local)
+        if got == want:
+            return local
+        raise DatasetError(f"{local}: sha256 {got[:12]}… does not match the expected {want[:12]}…; "
+                           "delete it to download again")
+    return _download(url, local, want, timeout,
+                     shared_hint=None if data_dir is None else Path(data_dir) / dataset / filename)
+
+
+def _download(url: str, dest: Path, want: str, timeout: float, shared_hint: Path | None) -> Path:
+    h = hashlib.sha256()
+    with atomic_output(dest, suffix=".part") as tmp:
+        with open(tmp, "wb") as out:
+            try:
+                with urllib.request.urlopen(url, timeout=timeout) as resp:  # noqa: S310 (pinned URLs)
+                    for block in iter(lambda: resp.read(_CHUNK), b""):
+                        h.update(block)
+                        out.write(block)
+            except (OSError, ValueError, http.client.HTTPException) as e:  # URLError is an OSError
+                reason = getattr(e, "reason", None) or e
+                where = f"no shared copy at {shared_hint} and " if shared_hint is not None else ""
+                raise DatasetError(f"{where}download of {url} failed ({' '.join(str(reason).split())})") from None
+            out.flush()
+            os.fsync(out.fileno())
+        got = h.hexdigest()
+        if got != want:  # raised inside the block: the download is deleted, never renamed into place
+            raise DatasetError(f"download of {url}: sha256 {got[:12]}… does not match the expected {want[:12]}… "
+                               "(file changed upstream or corrupted in transit)")
+    return dest
+
+
+def local_file(dataset: str, filename: str, data_dir=None, resources_dir="resources") -> Path | None:
+    """Where :func:`fetch_file` would find the file without a download, None if nowhere.
+
+    Existence only (no checksum): this is the cheap check made before a run starts;
+    :func:`fetch_file` verifies the file when the run uses it.  The download cache holds
+    only verified files (a download is renamed into place after its check).
+    """
+    for folder in (data_dir, resources_dir):
+        if folder is not None and (Path(folder) / dataset / filename).is_file():
+            return Path(folder) / dataset / filename
+    return None
+
+
+#: Seconds the reachability check waits for an answer (it runs before every workflow
+#: run that lacks a local copy, so it must be short).
+CHECK_TIMEOUT_S = 5.0
+
+
+def unreachable_reason(url: str, timeout: float = CHECK_TIMEOUT_S) -> str | None:
+    """None if ``url`` answers a HEAD request, else why not (one line).
+
+    A server that refuses HEAD (405, 501) is asked with GET instead; nothing is read.
+    """
+    for method in ("HEAD", "GET"):
+        try:
+            with urllib.request.urlopen(urllib.request.Request(url, method=method),  # noqa: S310
+                                        timeout=timeout):
+                return None
+        except urllib.error.HTTPError as e:
+            if method == "HEAD" and e.code in (405, 501):
+                continue
+            return f"HTTP {e.code} {e.reason}"
+        except (OSError, ValueError, http.client.HTTPException) as e:  # URLError is an OSError
+            return " ".join(str(getattr(e, "reason", None) or e).split())
+    return None  # pragma: no cover (the GET attempt always returns)
+
+
+def check_available(dataset: str, filename: str, data_dir=None, resources_dir="resources", *,
+                    url: str | None = None, timeout: float = CHECK_TIMEOUT_S) -> None:
+    """Fail early, with one line, if a file is not local and cannot be downloaded either.
+
+    The network is used only when the file is in neither ``data_dir`` nor
+    ``resources_dir`` (:func:`local_file`): one short request (:func:`unreachable_reason`).
+
+    Raises
+    ------
+    DatasetError
+        The file is not local and its URL does not answer; the message names the file,
+        the folders looked in, the URL and what to do.
+    """
+    if local_file(dataset, filename, data_dir, resources_dir) is not None:
+        return
+    url = url if url is not None else spec(dataset, filename).url
+    reason = unreachable_reason(url, timeout)
+    if reason is not None:
+        looked = [str(Path(d) / dataset) for d in (data_dir, resources_dir) if d is not None]
+        raise DatasetError(f"{dataset}/{filename} is not in {' nor in '.join(looked)} and its download {url} "
+                           f"is unreachable ({reason}); copy the dataset folder into {looked[0]} "
+                           "(see shared/data/README.md) or run with network access")
+
+
+def fetch_dataset(dataset: str, data_dir=None, resources_dir="resources", files=None) -> dict[str, Path]:
+    """:func:`fetch_file` for several files of one dataset (all of them by default)."""
+    names = list(DATASETS[dataset]) if files is None else list(files)
+    return {f: fetch_file(dataset, f, data_dir, resources_dir) for f in names}
+
+
+__all__ = ["CHECK_TIMEOUT_S", "DATASETS", "DatasetError", "FileSpec", "check_available", "fetch_dataset", "fetch_file",
+           "local_file", "spec", "unreachable_reason"]

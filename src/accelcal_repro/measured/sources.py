@@ -1,0 +1,159 @@
+"""The measured recordings: which files, which reader, which unit and nominal conversion.
+
+Three public recordings (``shared/data/README.md``), named by what they are:
+
+========================  ====================  ======  ==========================================
+name                      dataset               unit    content
+========================  ====================  ======  ==========================================
+``xsens_mti``             ``imu_tk_xsens``      counts  Xsens MTi, ~38 hand-placed poses (IMU-TK)
+``mpu6050``               ``mpu6050_suarez``    counts  MPU-6050, ~10 hand-placed poses
+``imucal_ferraris``       ``imucal_ferraris``   m/s²    Ferraris session: 6 static positions
+                                                        (x_p ... z_a) and 3 rotations
+========================  ====================  ======  ==========================================
+
+:func:`read_source` reads the original file with the readers of
+:mod:`accelcal.recording`; :func:`convert` writes the canonical CSV of the CLI
+(``t,ax,ay,az``), which is what the calibration step reads.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+from accelcal.atomic import atomic_output, sha256_file, write_json_atomic
+from accelcal.errors import RecordingError
+from accelcal.recording import (NominalConversion, Recording, nominal_conversion, read_imucal_section_list,
+                         read_imucal_session, read_imutk_ascii, read_mpu6050_csv, write_recording)
+from .data import DatasetError, check_available, fetch_file
+
+
+@dataclass(frozen=True)
+class Source:
+    """One measured recording.
+
+    Attributes
+    ----------
+    name : str
+        Name used in file names and tables.
+    dataset : str
+        Folder of ``shared/data`` (key of :data:`accelcal_repro.measured.data.DATASETS`).
+    data_file : str
+        The accelerometer recording.
+    extra_files : tuple of str
+        Other files the analysis needs (the imucal section list).
+    fmt : str
+        Reader: ``'imutk_ascii'``, ``'mpu6050'`` or ``'imucal_session'``.
+    nominal : str
+        Key of :func:`accelcal.recording.nominal_conversion`.
+    unit : str
+        Unit of the file's acceleration values, ``'counts'`` or ``'m/s^2'``.
+    description : str
+    """
+
+    name: str
+    dataset: str
+    data_file: str
+    extra_files: tuple[str, ...]
+    fmt: str
+    nominal: str
+    unit: str
+    description: str
+
+    @property
+    def files(self) -> tuple[str, ...]:
+        return (self.data_file, *self.extra_files)
+
+    @property
+    def conversion(self) -> NominalConversion:
+        return nominal_conversion(self.nominal)
+
+
+SOURCES: dict[str, Source] = {
+    "xsens_mti": Source("xsens_mti", "imu_tk_xsens", "xsens_acc.mat", (), "imutk_ascii", "imutk_xsens", "counts",
+                        "Xsens MTi, IMU-TK example session (hand-placed static poses)"),
+    "mpu6050": Source("mpu6050", "mpu6050_suarez", "example_data_calibration.csv", (), "mpu6050", "mpu6050",
+                      "counts", "InvenSense MPU-6050, tomisuarez2/ImuCalibration example (hand-placed poses)"),
+    "imucal_ferraris": Source("imucal_ferraris", "imucal_ferraris", "example_ferraris_session.csv",
+                              ("example_ferraris_session_list.json",), "imucal_session", "imucal_session", "m/s^2",
+                              "imucal example Ferraris session (six static positions, three rotations)"),
+}
+
+#: The static sections of a Ferraris session list, in imucal's order.
+FERRARIS_STATIC = ("x_p", "x_a", "y_p", "y_a", "z_p", "z_a")
+
+
+def source(name: str) -> Source:
+    """The :class:`Source` called ``name``; :class:`RecordingError` if unknown."""
+    try:
+        return SOURCES[name]
+    except KeyError:
+        raise RecordingError(f"unknown measured recording {name!r}; known: {', '.join(SOURCES)}") from None
+
+
+def fetch_source(name: str, data_dir=None, resources_dir="resources") -> dict[str, Path]:
+    """Local paths of every file of recording ``name`` (see :func:`accelcal_repro.measured.data.fetch_file`)."""
+    s = source(name)
+    return {f: fetch_file(s.dataset, f, data_dir, resources_dir) for f in s.files}
+
+
+def check_source_available(name: str, data_dir=None, resources_dir="resources") -> None:
+    """:func:`accelcal_repro.measured.data.check_available` for every file of recording ``name``
+    (the network only for a file that is not local); :class:`DatasetError` naming the
+    recording if one is neither local nor downloadable."""
+    s = source(name)
+    for f in s.files:
+        try:
+            check_available(s.dataset, f, data_dir, resources_dir)
+        except DatasetError as e:
+            raise DatasetError(f"recording {name}: {e}") from None
+
+
+def manifest(name: str, paths: dict[str, Path]) -> dict:
+    """JSON-ready record of where each file was taken from and its verified sha256."""
+    s = source(name)
+    return {"recording": name, "dataset": s.dataset, "unit": s.unit, "description": s.description,
+            "files": {f: {"path": str(p), "sha256": sha256_file(p)} for f, p in paths.items()}}
+
+
+
+def read_manifest(path) -> dict[str, Path]:
+    """``{file: path}`` from a manifest written by :func:`manifest`."""
+    try:
+        m = json.loads(Path(path).read_text())
+        return {f: Path(v["path"]) for f, v in m["files"].items()}
+    except (OSError, ValueError, KeyError, TypeError) as e:
+        raise RecordingError(f"{path}: not a measured-data manifest ({type(e).__name__})") from None
+
+
+def read_source(name: str, paths: dict[str, Path]) -> Recording:
+    """Read the original accelerometer file of recording ``name`` (units as stored)."""
+    s = source(name)
+    p = paths[s.data_file]
+    if s.fmt == "imutk_ascii":
+        return read_imutk_ascii(p)
+    if s.fmt == "mpu6050":
+        return read_mpu6050_csv(p)
+    if s.fmt == "imucal_session":
+        return read_imucal_session(p)
+    raise RecordingError(f"unknown format {s.fmt!r}")  # pragma: no cover (table is fixed)
+
+
+def section_list(name: str, paths: dict[str, Path]) -> dict[str, tuple[int, int]] | None:
+    """The imucal section list of ``name`` (half-open sample ranges), None if it has none."""
+    s = source(name)
+    js = [f for f in s.extra_files if f.endswith(".json")]
+    return read_imucal_section_list(paths[js[0]]) if js else None
+
+
+def convert(name: str, paths: dict[str, Path], out_csv) -> Recording:
+    """Read recording ``name`` and write it as canonical CSV ``t,ax,ay,az`` (atomically)."""
+    rec = read_source(name, paths)
+    Path(out_csv).parent.mkdir(parents=True, exist_ok=True)
+    write_recording(out_csv, rec)
+    return rec
+
+
+__all__ = ["FERRARIS_STATIC", "SOURCES", "Source", "check_source_available", "convert", "fetch_source", "manifest", "read_manifest",
+           "read_source", "section_list", "source"]

@@ -1,0 +1,67 @@
+"""The core library knows nothing of the reproductions that use it.
+
+``accelcal`` is what a person calibrating an IMU imports; ``accelcal_repro`` (the paper
+reproductions, the measured-data stage, the discrepancy benchmark, the report) imports
+it, never the reverse.  The core needs only the numerical stack; matplotlib (the
+``plots`` extra) only where figures are drawn.
+"""
+
+import ast
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+SRC = Path(__file__).resolve().parents[1] / "src"
+CORE = SRC / "accelcal"
+#: Third-party packages the core may import anywhere, and where matplotlib is allowed.
+CORE_DEPENDENCIES = {"numpy", "scipy", "pandas", "casadi"}
+PLOTTING_MODULES = {"plotting.py", "discrepancy/figures.py", "discrepancy/stochastic.py"}
+
+
+def _imports(path: Path):
+    """Top-level names of every module ``path`` imports (also inside functions)."""
+    tree = ast.parse(path.read_text(), filename=str(path))
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                yield alias.name.split(".")[0], node.lineno
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            yield node.module.split(".")[0], node.lineno
+
+
+def _core_files():
+    return sorted(CORE.rglob("*.py"))
+
+
+def test_core_never_imports_the_reproductions():
+    wrong = [f"{p.relative_to(SRC)}:{line}" for p in _core_files() for name, line in _imports(p)
+             if name == "accelcal_repro"]
+    assert not wrong, f"accelcal imports accelcal_repro at {', '.join(wrong)}"
+
+
+def test_core_depends_only_on_the_numerical_stack():
+    stdlib = set(sys.stdlib_module_names)
+    bad = []
+    for p in _core_files():
+        rel = p.relative_to(CORE).as_posix()
+        allowed = CORE_DEPENDENCIES | {"accelcal"} | ({"matplotlib"} if rel in PLOTTING_MODULES else set())
+        bad += [f"{rel}:{line} imports {name}" for name, line in _imports(p) if name not in stdlib | allowed]
+    assert not bad, "; ".join(bad)
+
+
+def test_the_boundary_check_sees_a_wrong_import(tmp_path):
+    # the scanner must catch a lazy import inside a function, not only top-level ones
+    f = tmp_path / "m.py"
+    f.write_text("def f():\n    from accelcal_repro.claims import Claim\n    import snakemake\n")
+    assert {n for n, _ in _imports(f)} == {"accelcal_repro", "snakemake"}
+
+
+@pytest.mark.parametrize("module", ["accelcal", "accelcal.cli"])
+def test_importing_the_core_loads_no_workflow_package(module):
+    code = (f"import sys, {module}\n"
+            "bad = sorted(m for m in ('accelcal_repro', 'snakemake', 'matplotlib', 'jinja2', 'yaml') if m in sys.modules)\n"
+            "print(','.join(bad))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
+    assert out == "", f"import {module} loaded {out}"
