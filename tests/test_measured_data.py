@@ -103,10 +103,9 @@ def test_table_matches_the_data_readme():
     rows = dict(re.findall(r"^\| (\S+) \| ([0-9a-f]{64}) \|$", readme, flags=re.M))
     table = {f: s.sha256 for files in DATASETS.values() for f, s in files.items()}
     assert rows == table
-    commits = re.findall(r"commit\s+`?([0-9a-f]{40})", readme.replace("\n", " "))
-    assert len(commits) == 3
-    for commit in commits:
-        assert any(commit in s.url for files in DATASETS.values() for s in files.values())
+    commits = set(re.findall(r"commit\s+`?([0-9a-f]{40})", readme.replace("\n", " ")))
+    pinned = {re.search(r"/([0-9a-f]{40})/", s.url).group(1) for files in DATASETS.values() for s in files.values()}
+    assert commits == pinned
 
 
 @needs_data

@@ -53,6 +53,18 @@ def _raw(repo: str, commit: str, path: str) -> str:
 _XSENS = ("Kyle-ak/imu_tk", "7780270fb9a227c79323199303f23989e689a89d")
 _IMUCAL = ("mad-lab-fau/imucal", "8716e4c50bbb7044918b747f38b26cb0a6420910")
 _MPU = ("tomisuarez2/ImuCalibration", "c86ea2531da0da7929b884b52d8955c0ea0615ff")
+_FORK = ("GetOverMassif/imu_tk", "92022128c1dad9d7ef7f46d6d82b0d9a10a58e22")
+_FASTAHRS_1 = ("vspruyt/FastAhrs", "62347ae9d6c1c7531939da5535ed6a9a79769c33")
+_FASTAHRS_2 = ("vspruyt/FastAhrs", "b7016d56b13aa405cfbc7bdf145201879f0336ee")
+_SMAC = ("SMAC-Group/imudata", "dd603068355f2dfa757a474645cd327c5cb6dbb5")
+_FORK_SHA256 = {
+    "data2/acc_data.txt": "f621b1fa75d327acdadac6e506aa416466d4290f4db209c80651e6cee7482bd3",
+    "data2/gyro_data.txt": "9c83d1b7864f7df3f1dd34d24875bce9485596d70911b6a9ad915c5b813ae54f",
+    "data3/acc_data.txt": "b908e8626ac1c2df61638b1c7a54e1cc346f584473707c17928c22140d4f40c5",
+    "data3/gyro_data.txt": "94b02855ce68f757d1d2eb23a6c5655ccc2812e21b676e38cd39b015524f1333",
+    "data4/acc_data.txt": "1719259ab4282c263cbc2a27f49532d724adc00736fa560cc9b06d8addc11b73",
+    "data4/gyro_data.txt": "28c766723cd680661c81e8590c8dc6b06aea61d6536ff2aa38dceaaea8fb0411",
+}
 
 #: ``{dataset: {file: FileSpec}}``, from ``shared/data/README.md`` (source, commit, sha256).
 DATASETS: dict[str, dict[str, FileSpec]] = {
@@ -77,6 +89,18 @@ DATASETS: dict[str, dict[str, FileSpec]] = {
         "example_data_calibration.csv": FileSpec(
             _raw(*_MPU, "calibration data/example_data_calibration.csv"),
             "e6185b2814aa51fcb981048de5c00481af53aee568ed8ce209f46004a228cf54"),
+    },
+    # one IMU, three hand-placed sessions (data2, data3, data4), IMU-TK's ASCII layout
+    "imutk_fork_sessions": {f: FileSpec(_raw(*_FORK, f"data/{f}"), s) for f, s in _FORK_SHA256.items()},
+    "fastahrs_fxos8700": {
+        "data_sample.csv": FileSpec(_raw(*_FASTAHRS_1, "notebooks/data_sample.csv"),
+                                    "29d9fc9eca89152280d0158c969dd4a74d33f2e9e7e94e2c50747e1a4bc503ee"),
+        "data_sample2.csv": FileSpec(_raw(*_FASTAHRS_2, "notebooks/data_sample2.csv"),
+                                     "c6f068238e402991238935f3173a5815d77484a9ade15dc9200810a48c294428"),
+    },
+    "smac_adis16405": {
+        "adis_16405_imu1.rda": FileSpec(_raw(*_SMAC, "data/adis_16405_imu1.rda"),
+                                        "1eb09074beabd7cfc15b402cb8043b5302f6e4edfd9e4ebfbf8117436f8b9fa9"),
     },
 }
 
