@@ -13,15 +13,12 @@ import jsonschema
 import pytest
 import yaml
 
+from tests.configs import ci_config, load_config
 from tests.test_workflow import CI, REPO, snakemake
 
 DEFAULT = REPO / "config" / "config.yaml"
 SCHEMAS = REPO / "workflow" / "schemas"
 STAGES = ("batista2011", "tereshkov", "measured")
-
-
-def ci_config():
-    return yaml.safe_load(CI.read_text())
 
 
 def schema(stage):
@@ -175,7 +172,7 @@ def test_valid_configs_at_the_edges_pass_the_dry_run(tmp_path, stage):
 
 @pytest.mark.parametrize("config", [DEFAULT, CI], ids=["config.yaml", "ci.yaml"])
 def test_both_configs_validate(config):
-    cfg = yaml.safe_load(config.read_text())
+    cfg = load_config(config.name)
     for stage in STAGES:
         s = schema(stage)
         jsonschema.Draft202012Validator.check_schema(s)

@@ -17,6 +17,8 @@ from accelcal.discrepancy.detect import Rules
 from accelcal.recording import Recording, write_recording
 from accelcal.simulation import random_directions, simulate_recording
 
+from tests.configs import load_config
+
 ROOT = Path(__file__).resolve().parents[1]
 SESSION = B.Session()
 #: A quick stochastic layer for the tests (the bootstrap is its cost); the defaults are checked below.
@@ -133,7 +135,7 @@ def test_cli_defaults_are_the_configured_rules():
     """The CLI and the workflow must apply the same rules: config/config.yaml's section
     holds the library defaults (config/ci.yaml may only shrink the stochastic bootstrap)."""
     for name in ("config.yaml", "ci.yaml"):
-        cfg = yaml.safe_load((ROOT / "config" / name).read_text())["discrepancy"]
+        cfg = load_config(name)["discrepancy"]
         assert Rules.from_config(cfg["rules"]) == Rules(), name
     cfg = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())["discrepancy"]
     assert report.StochasticSettings.from_config(cfg["stochastic"]) == report.DEFAULT_STOCHASTIC

@@ -15,6 +15,8 @@ import pandas as pd
 import pytest
 import yaml
 
+from tests.configs import ci_config
+
 REPO = Path(__file__).resolve().parents[1]
 DATA = REPO.parent / "shared" / "data"
 SNAKEMAKE = Path(sys.executable).with_name("snakemake")
@@ -22,7 +24,7 @@ pytestmark = pytest.mark.skipif(not DATA.is_dir(), reason="shared/data not avail
 
 
 def _config(**bench):
-    cfg = yaml.safe_load((REPO / "config" / "ci.yaml").read_text())
+    cfg = ci_config()
     cfg = {"measured": cfg["measured"], "discrepancy": cfg["discrepancy"]}
     cfg["measured"]["data_dir"] = str(DATA)
     d = cfg["discrepancy"]

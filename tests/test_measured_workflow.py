@@ -13,6 +13,8 @@ from pathlib import Path
 import pytest
 import yaml
 
+from tests.configs import ci_config
+
 REPO = Path(__file__).resolve().parents[1]
 DATA = REPO.parent / "shared" / "data"
 SNAKEMAKE = Path(sys.executable).with_name("snakemake")
@@ -20,7 +22,7 @@ pytestmark = pytest.mark.skipif(not DATA.is_dir(), reason="shared/data not avail
 
 
 def workflow(tmp_path, data_dir) -> Path:
-    cfg = yaml.safe_load((REPO / "config" / "ci.yaml").read_text())
+    cfg = ci_config()
     cfg = {"measured": cfg["measured"]}
     cfg["measured"]["data_dir"] = str(data_dir)
     (tmp_path / "config.yaml").write_text(yaml.safe_dump(cfg))
