@@ -2,28 +2,14 @@
 errors across the noise range, the LLS limit and the Monte Carlo wall times."""
 
 import pandas as pd
-from _helpers import configure_logging, mock_snakemake, write_csv
+from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 
 from accelcal_repro.burkhard2024.analysis import limit_onsets, lls_limit, relative_errors
 from accelcal_repro.burkhard2024.grid import experiments_from_config
 from accelcal_repro.montecarlo import CASE_KEYS, compare_methods, summarize, summarize_mc_timing
 
-if "snakemake" not in globals():
-    import glob
-
-    from _helpers import stage_config
-
-    _cfg = stage_config("burkhard2024")
-    _d = "results/burkhard2024"
-    snakemake = mock_snakemake(
-        "burkhard2024_summary",
-        input={"tables": sorted(glob.glob(f"{_d}/mc/*.csv.gz")), "timings": sorted(glob.glob(f"{_d}/mc_timing/*.csv"))},
-        output={k: f"{_d}/{k}.csv" for k in ("summary", "comparisons", "relative_errors", "mc_timing",
-                                               "mc_timing_summary")}
-        | {"table": f"{_d}/mc.csv.gz", "limit": f"{_d}/lls_limit.csv", "onsets": f"{_d}/lls_limit_onsets.csv"},
-        params={"experiments": _cfg["experiments"], "paper_noise_range": _cfg["claims"]["paper_noise_range"],
-                "z": _cfg["claims"]["z"], "min_effect": _cfg["lls_limit"]["min_effect"]},
-    )
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("burkhard2024_summary")
 
 log = configure_logging(snakemake)
 p = snakemake.params

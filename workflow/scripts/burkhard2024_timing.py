@@ -2,21 +2,12 @@
 each pose count, and the batched closed forms' throughput."""
 
 import pandas as pd
-from _helpers import configure_logging, mock_snakemake, write_csv
+from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 
 from accelcal_repro.timing import run_benchmark, summarize_timing
 
-if "snakemake" not in globals():
-    from _helpers import stage_config
-
-    _cfg = stage_config("burkhard2024")
-    _d = "results/burkhard2024"
-    snakemake = mock_snakemake(
-        "burkhard2024_timing_run",
-        output={"single": f"{_d}/timing.csv", "batch": f"{_d}/timing_batch.csv", "summary": f"{_d}/timing_summary.csv"},
-        params={"seed": _cfg["seed"], "g": _cfg["g"], "timing": _cfg["timing"],
-                "als_known_noise": _cfg["als_known_noise"]},
-    )
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("burkhard2024_timing_run")
 
 log = configure_logging(snakemake)
 p = snakemake.params

@@ -3,19 +3,15 @@
 from pathlib import Path
 
 import pandas as pd
-from _helpers import configure_logging, load_config, mock_snakemake, write_csv
+from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 
 from accelcal_repro.discrepancy.benchmark import detect_case
 from accelcal.discrepancy.detect import Rules
 from accelcal.errors import AccelcalError
 from accelcal.recording import read_recording
 
-if "snakemake" not in globals():
-    _cfg = load_config()["discrepancy"]
-    snakemake = mock_snakemake(
-        "discrepancy_detect", input={"recordings": "results/discrepancy/benchmark/recordings/chunk_0"},
-        output=["results/discrepancy/benchmark/detections/chunk_0.csv"],
-        params={"g": _cfg["benchmark"]["session"]["g"], "rules": _cfg["rules"]}, wildcards={"chunk": "0"})
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("discrepancy_detect", chunk="0")
 
 log = configure_logging(snakemake)
 rules = Rules.from_config(snakemake.params.rules)

@@ -3,19 +3,14 @@
 import json
 
 import pandas as pd
-from _helpers import configure_logging, load_config, mock_snakemake
+from _helpers import configure_logging, mock_snakemake_from_argv
 
 from accelcal.discrepancy import figures as F
 from accelcal_repro.discrepancy import figures as benchmark_figures
 from accelcal.plotting import save_figure
 
-if "snakemake" not in globals():
-    _cfg = load_config()["discrepancy"]
-    snakemake = mock_snakemake(
-        "discrepancy_power_figure",
-        input={"rates": "results/discrepancy/benchmark/rates.csv", "summary": "results/discrepancy/benchmark/summary.csv"},
-        output={"png": "results/figures/discrepancy_power.png", "pdf": "results/figures/discrepancy_power.pdf"},
-        params={"figure": "discrepancy_power", "rules": _cfg["rules"]})
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("discrepancy_power_figure")
 
 log = configure_logging(snakemake)
 fid = snakemake.params.figure

@@ -3,20 +3,13 @@
 from pathlib import Path
 
 import pandas as pd
-from _helpers import configure_logging, load_config, mock_snakemake, write_csv
+from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 
 from accelcal_repro.discrepancy.benchmark import Session, chunk, plan, simulate_case, write_counts_csv
 from accelcal.discrepancy.detect import Rules
 
-if "snakemake" not in globals():
-    _cfg = load_config()["discrepancy"]
-    snakemake = mock_snakemake(
-        "discrepancy_generate",
-        output={"recordings": "results/discrepancy/benchmark/recordings/chunk_0",
-                "key": "results/discrepancy/benchmark/key/chunk_0.csv"},
-        params={"chunk": 0, "chunks": _cfg["benchmark"]["chunks"], "seed": _cfg["seed"],
-                "benchmark": _cfg["benchmark"], "rules": _cfg["rules"]},
-        wildcards={"chunk": "0"})
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("discrepancy_generate", chunk="0")
 
 log = configure_logging(snakemake)
 p = snakemake.params

@@ -2,7 +2,7 @@
 
 import json
 
-from _helpers import configure_logging, load_config, mock_snakemake
+from _helpers import configure_logging, mock_snakemake_from_argv
 
 from accelcal.atomic import atomic_output
 from accelcal.discrepancy.detect import Rules
@@ -11,14 +11,8 @@ from accelcal_repro.measured.sources import source
 from accelcal.recording import read_recording
 from accelcal.results import _finite_json
 
-if "snakemake" not in globals():
-    _cfg = load_config()
-    snakemake = mock_snakemake(
-        "discrepancy_measured_report", input={"csv": "results/measured/xsens_mti.csv"},
-        output=["results/discrepancy/measured/xsens_mti.json"],
-        params={"g": _cfg["measured"]["recordings"]["xsens_mti"]["g"], "rules": _cfg["discrepancy"]["rules"],
-                "stochastic": _cfg["discrepancy"]["stochastic"]},
-        wildcards={"recording": "xsens_mti"})
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("discrepancy_measured_report", recording="xsens_mti")
 
 log = configure_logging(snakemake)
 name = snakemake.wildcards.recording

@@ -1,20 +1,12 @@
 """Benchmark scoring: join detections and key; rates per effect and size; the summary with verdicts."""
 
 import pandas as pd
-from _helpers import configure_logging, load_config, mock_snakemake, write_csv
+from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 
 from accelcal_repro.discrepancy.benchmark import rates, score_cases, summary
 
-if "snakemake" not in globals():
-    _cfg = load_config()["discrepancy"]
-    _n = _cfg["benchmark"]["chunks"]
-    snakemake = mock_snakemake(
-        "discrepancy_score",
-        input={"key": [f"results/discrepancy/benchmark/key/chunk_{k}.csv" for k in range(_n)],
-               "detections": [f"results/discrepancy/benchmark/detections/chunk_{k}.csv" for k in range(_n)]},
-        output={"scores": "results/discrepancy/benchmark/scores.csv", "rates": "results/discrepancy/benchmark/rates.csv",
-                "summary": "results/discrepancy/benchmark/summary.csv"},
-        params={"rules": _cfg["rules"], "confusion_size": _cfg["benchmark"]["confusion_size_mde"]})
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("discrepancy_score")
 
 log = configure_logging(snakemake)
 key = pd.concat([pd.read_csv(f) for f in snakemake.input.key], ignore_index=True)

@@ -5,17 +5,10 @@ import json
 
 import numpy as np
 import pandas as pd
-from _helpers import configure_logging, load_config, mock_snakemake, write_csv
+from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 
-if "snakemake" not in globals():
-    _cfg = load_config()["discrepancy"]
-    snakemake = mock_snakemake(
-        "discrepancy_summary",
-        input={"benchmark": "results/discrepancy/benchmark/summary.csv",
-               "reports": [f"results/discrepancy/measured/{r}.json" for r in _cfg["recordings"]],
-               "measured_summary": "results/measured/summary.csv"},
-        output={"summary": "results/discrepancy/summary.csv", "candidates": "results/discrepancy/measured.csv"},
-        params={"recordings": _cfg["recordings"]})
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("discrepancy_summary")
 
 log = configure_logging(snakemake)
 COLUMNS = ["section", "recording", "effect", "metric", "value", "ci_low", "ci_high", "n", "target", "verdict", "rule"]
