@@ -109,7 +109,7 @@ BROKEN = {
     "measured_unknown_recording": (changed({"measured.recordings.adis16475": {"g": 9.81,
                                                                              "estimators": ["full_lls"]}}),
                                    "measured.recordings: 'adis16475' is not one of ['xsens_mti', 'mpu6050', "
-                                   "'imucal_ferraris']"),
+                                   "'imucal_ferraris', 'imutk_fork_data2'"),
     "measured_bad_estimator": (changed({"measured.recordings.xsens_mti.estimators": ["full_lls", "magic"]}),
                                "measured.recordings.xsens_mti.estimators.1: 'magic' is not one of"),
     "measured_missing_key": (changed({"measured.bootstrap.level": DELETE}),

@@ -163,8 +163,13 @@ def pose_set(name: str, detected: StaticPoses, used, labels) -> PoseSet:
                    labels=tuple(labels[k] for k in used), detected=used)
 
 
-def poses_table(name: str, detected: StaticPoses, used, labels) -> pd.DataFrame:
-    """One row per detected rest, with ``used`` marking the fitted ones."""
+def poses_table(name: str, detected: StaticPoses, used, labels, t) -> pd.DataFrame:
+    """One row per detected rest, with ``used`` marking the fitted ones.
+
+    ``noise_reference`` and ``reference_t_start``/``_t_end`` (the same on every row of a
+    recording) say where the detection's noise level came from
+    (:attr:`accelcal.static.StaticPoses.reference`) and which stretch it was.
+    """
     d = {"recording": name, "pose": np.arange(len(detected)), "label": labels,
          "t_start": detected.t_start, "t_end": detected.t_end, "n_samples": detected.n_samples,
          "start_index": detected.intervals[:, 0], "stop_index": detected.intervals[:, 1]}
@@ -175,6 +180,10 @@ def poses_table(name: str, detected: StaticPoses, used, labels) -> pd.DataFrame:
     for k, a in enumerate(AXES):
         d[f"noise_std_{a}"] = detected.noise_std[:, k]
     d["used"] = np.isin(np.arange(len(detected)), used)
+    a, b = detected.init_rest
+    d["noise_reference"] = detected.reference
+    d["reference_t_start"] = float(t[a])
+    d["reference_t_end"] = float(t[b - 1])
     return pd.DataFrame(d)
 
 
@@ -355,7 +364,7 @@ def calibrate_recording(name: str, rec: Recording, *, g: float, estimators, sect
 
     params = pd.DataFrame(param_rows)
     return MeasuredCalibration(
-        recording=name, poses=poses_table(name, detected, used, labels), params=params,
+        recording=name, poses=poses_table(name, detected, used, labels, rec.t), params=params,
         pose_errors=pd.DataFrame(pose_rows), summary=pd.DataFrame(summary_rows),
         agreement=agreement_table(name, params, boot, level), nominal=nominal_table(name, params, conv, src.unit),
         results=results, pose_set=ps, detected=detected)
