@@ -16,6 +16,7 @@ mis-labelled file is worse than one that refuses to run.
 from __future__ import annotations
 
 import csv
+import io
 import re
 import json
 import os
@@ -66,6 +67,12 @@ class Recording:
     notes : tuple of str
         What a reader assumed that the user should know (time made from a sample index,
         unit taken from a header...): the CLI prints them.
+    unit : {'m/s^2', 'counts'} or None
+        Unit of ``acc`` when the file or the user said it (data in g or mg are converted
+        to m/s² when read, :mod:`accelcal.units`); None when unknown.
+    time_column : tuple (str, ndarray of str), or None
+        The file's time column as written (name, values), so that a corrected copy can
+        keep it (``accelcal apply``); None when the file has none.
     """
 
     t: np.ndarray
@@ -75,6 +82,8 @@ class Recording:
     intervals: np.ndarray | None = None
     labels: tuple[str, ...] | None = None
     notes: tuple[str, ...] = ()
+    unit: str | None = None
+    time_column: tuple | None = None
 
     def __post_init__(self):
         t = np.array(self.t, dtype=float)
@@ -94,6 +103,9 @@ class Recording:
         object.__setattr__(self, "intervals", intervals)
         object.__setattr__(self, "labels", labels)
         object.__setattr__(self, "notes", tuple(self.notes))
+        if self.unit not in (None, "m/s^2", "counts"):
+            raise RecordingError(f"{self.source}: unit {self.unit!r}; a Recording holds m/s^2 or counts "
+                                 "(convert g and mg when reading)")
 
     @property
     def n(self) -> int:
@@ -184,17 +196,25 @@ def nominal_conversion(kind: str) -> NominalConversion | None:
 # --------------------------------------------------------------------------- parsing
 
 
-def _read_table(path, what: str, **kw) -> pd.DataFrame:
-    """Read a delimited text file as strings; every failure becomes a one-line RecordingError."""
+def _read_table(path, what: str, text: str | None = None, **kw) -> pd.DataFrame:
+    """Read a delimited text file as strings; every failure becomes a one-line RecordingError.
+
+    ``text``: the file's content when already read (:func:`accelcal.readers.load_text`
+    undoes gzip); ``path`` then only names the file in messages.
+    """
     path = Path(path)
-    if not path.is_file():
-        raise RecordingError(f"{path}: no such file" if not path.exists() else f"{path}: not a file")
-    if path.stat().st_size == 0:
+    if text is None:
+        if not path.is_file():
+            raise RecordingError(f"{path}: no such file" if not path.exists() else f"{path}: not a file")
+        if path.stat().st_size == 0:
+            raise RecordingError(f"{path}: empty file (expected {what})")
+    elif not text:
         raise RecordingError(f"{path}: empty file (expected {what})")
     try:
         # dtype=str + na_filter=False: nothing is coerced behind our back; empty fields
         # (short or blank lines) stay '' and are reported by _to_float with their line.
-        return pd.read_csv(path, dtype=str, na_filter=False, skip_blank_lines=False, **kw)
+        return pd.read_csv(path if text is None else io.StringIO(text), dtype=str, na_filter=False,
+                           skip_blank_lines=False, **kw)
     except pd.errors.EmptyDataError:
         raise RecordingError(f"{path}: no data (expected {what})") from None
     except pd.errors.ParserError as e:
@@ -358,13 +378,13 @@ def write_recording(path, rec: Recording) -> None:
 # --------------------------------------------------------------------------- public formats
 
 
-def read_imutk_ascii(path) -> Recording:
+def read_imutk_ascii(path, text: str | None = None) -> Recording:
     """Read an IMU-TK ASCII file (e.g. ``xsens_acc.mat``): whitespace-separated time, x, y, z.
 
     Values are returned as stored (raw counts for the Xsens example; see
     ``nominal_conversion('imutk_xsens')``).
     """
-    df = _drop_trailing_blank(_read_table(path, "4 whitespace-separated columns (t x y z)",
+    df = _drop_trailing_blank(_read_table(path, "4 whitespace-separated columns (t x y z)", text,
                                           sep=r"\s+", header=None))
     if df.shape[1] != 4:
         raise RecordingError(f"{path}: {df.shape[1]} columns, expected 4 (t x y z) in an IMU-TK ASCII file")
@@ -373,7 +393,7 @@ def read_imutk_ascii(path) -> Recording:
     return Recording(t, np.column_stack([x, y, z]), None, str(path))
 
 
-def read_imucal_session(csv_path, rate_hz: float = IMUCAL_RATE_HZ) -> Recording:
+def read_imucal_session(csv_path, rate_hz: float = IMUCAL_RATE_HZ, text: str | None = None) -> Recording:
     """Read an imucal Ferraris session CSV (``n_samples, gyr_*, acc_*``; acc in m/s²).
 
     ``n_samples`` is the sample counter (0, 1, 2, ... in the example: checked to be
@@ -381,14 +401,15 @@ def read_imucal_session(csv_path, rate_hz: float = IMUCAL_RATE_HZ) -> Recording:
     columns are validated but not returned.
     """
     cols = ("n_samples", "gyr_x", "gyr_y", "gyr_z", "acc_x", "acc_y", "acc_z")
-    df = _drop_trailing_blank(_read_table(csv_path, "an imucal session CSV"))
+    df = _drop_trailing_blank(_read_table(csv_path, "an imucal session CSV", text))
     _require(df, cols, csv_path)
     # Gyro columns are checked too: a damaged gyro field means a damaged file.
     v = {c: _to_float(df, c, csv_path, first_line=2) for c in cols}
     _check_counter(v["n_samples"], "n_samples", csv_path, first_line=2)
     t = v["n_samples"] / rate_hz
     _check_time(t, csv_path, first_line=2)
-    return Recording(t, np.column_stack([v["acc_x"], v["acc_y"], v["acc_z"]]), None, str(csv_path))
+    return Recording(t, np.column_stack([v["acc_x"], v["acc_y"], v["acc_z"]]), None, str(csv_path), unit="m/s^2",
+                     notes=(f"imucal session: t = n_samples / {rate_hz:g} Hz (the file has no rate)",))
 
 
 def read_imucal_section_list(json_path) -> dict[str, tuple[int, int]]:
@@ -418,7 +439,8 @@ def read_imucal_section_list(json_path) -> dict[str, tuple[int, int]]:
     return out
 
 
-def read_imucal_annotated(csv_path, rate_hz: float = IMUCAL_RATE_HZ) -> tuple[Recording, np.ndarray]:
+def read_imucal_annotated(csv_path, rate_hz: float = IMUCAL_RATE_HZ,
+                          text: str | None = None) -> tuple[Recording, np.ndarray]:
     """Read imucal's annotated session (``part, samples, acc_*, gyr_*``, raw counts).
 
     The file is grouped by section, not in time order; rows are sorted by the
@@ -432,7 +454,7 @@ def read_imucal_annotated(csv_path, rate_hz: float = IMUCAL_RATE_HZ) -> tuple[Re
         Section label of each sample (``x_p``, ..., ``z_rot``), in time order.
     """
     cols = ("part", "samples", "acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z")
-    df = _drop_trailing_blank(_read_table(csv_path, "an imucal annotated session CSV"))
+    df = _drop_trailing_blank(_read_table(csv_path, "an imucal annotated session CSV", text))
     _require(df, cols, csv_path)
     v = {c: _to_float(df, c, csv_path, first_line=2) for c in cols[1:]}
     s = v["samples"]
@@ -444,10 +466,10 @@ def read_imucal_annotated(csv_path, rate_hz: float = IMUCAL_RATE_HZ) -> tuple[Re
     acc = np.column_stack([v["acc_x"], v["acc_y"], v["acc_z"]])[order]
     t = s[order] / rate_hz
     _check_time(t, csv_path, first_line=2)
-    return Recording(t, acc, None, str(csv_path)), parts
+    return Recording(t, acc, None, str(csv_path), unit="counts"), parts
 
 
-def read_mpu6050_csv(path) -> Recording:
+def read_mpu6050_csv(path, text: str | None = None) -> Recording:
     """Read the MPU-6050 calibration CSV of tomisuarez2/ImuCalibration.
 
     Layout: four ``key,value`` lines (``Fs,100``, ``Logging Type,0``,
@@ -455,7 +477,7 @@ def read_mpu6050_csv(path) -> Recording:
     and raw int16 counts.  ``t = row / Fs``.  See ``nominal_conversion('mpu6050')``.
     """
     path = Path(path)
-    meta = _read_table(path, "an MPU-6050 CSV (Fs line, 3 metadata lines, header ax,ay,az,...)",
+    meta = _read_table(path, "an MPU-6050 CSV (Fs line, 3 metadata lines, header ax,ay,az,...)", text,
                        header=None, nrows=4, names=["key", "value"])
     if len(meta) < 4 or meta.iloc[0, 0].strip() != "Fs":
         raise RecordingError(f"{path}: expected 4 metadata lines starting with 'Fs,<rate>'")
@@ -465,7 +487,7 @@ def read_mpu6050_csv(path) -> Recording:
         fs = float("nan")
     if not np.isfinite(fs) or fs <= 0:
         raise RecordingError(f"{path}: invalid sampling rate Fs={meta.iloc[0, 1]!r}")
-    df = _drop_trailing_blank(_read_table(path, "an MPU-6050 CSV", skiprows=4))
+    df = _drop_trailing_blank(_read_table(path, "an MPU-6050 CSV", text, skiprows=4))
     cols = ("ax", "ay", "az", "gx", "gy", "gz")
     _require(df, cols, path)
     if len(df) == 0:
@@ -474,7 +496,7 @@ def read_mpu6050_csv(path) -> Recording:
     acc = np.column_stack([v["ax"], v["ay"], v["az"]])
     t = np.arange(len(df)) / fs
     _check_time(t, path, first_line=6)
-    return Recording(t, acc, None, str(path))
+    return Recording(t, acc, None, str(path), unit="counts", notes=(f"MPU-6050 log: t = row / Fs = {fs:g} Hz",))
 
 
 def _require(df: pd.DataFrame, cols, path) -> None:
@@ -504,7 +526,7 @@ _UNIT_LINE = re.compile(r"^\s*Type:\s*Acceleration\s*\((.+)\)\s*$", re.IGNORECAS
 BLOCK_RATE_TOLERANCE = 0.02
 
 
-def read_block_log(path) -> Recording:
+def read_block_log(path, text: str | None = None) -> Recording:
     """Read a serial-monitor log whose poses are separate blocks of ``x, y, z`` rows.
 
     Layout (vspruyt/FastAhrs ``data_sample*.csv``, FXOS8700): an optional sensor banner
@@ -520,7 +542,10 @@ def read_block_log(path) -> Recording:
     blocks is taken as zero (stated in :attr:`Recording.notes`).
     """
     path = Path(path)
-    lines = _text_lines(path, "a block log (>>> Gathering data for N seconds... then x, y, z rows)")
+    what = "a block log (>>> Gathering data for N seconds... then x, y, z rows)"
+    lines = _text_lines(path, what) if text is None else text.splitlines()
+    if not lines:
+        raise RecordingError(f"{path}: empty file (expected {what})")
     rows, blocks, seconds, unit = [], [], [], None
     current = None  # index into blocks of the block being filled, None outside a block
     for no, line in enumerate(lines, start=1):
@@ -574,10 +599,17 @@ def read_block_log(path) -> Recording:
     notes = [f"no time stamps: t = sample index / {rate:g} Hz (rows per block over its stated seconds); "
              "the time between blocks is unknown and taken as zero",
              f"{len(blocks)} blocks read as known static intervals"]
+    canonical = None
     if unit:
+        from .units import G0, acceleration_unit
+
+        canonical = acceleration_unit(unit)
+        if canonical in ("g", "mg"):
+            acc = acc * (G0 if canonical == "g" else G0 * 1e-3)
+            canonical = "m/s^2"
         notes.append(f"unit from the banner: {unit}")
     return Recording(t, acc, None, str(path), intervals=[(a, b) for a, b, _ in blocks],
-                     labels=tuple(f"block{k:02d}" for k in range(len(blocks))), notes=tuple(notes))
+                     labels=tuple(f"block{k:02d}" for k in range(len(blocks))), notes=tuple(notes), unit=canonical)
 
 
 def _text_lines(path: Path, what: str) -> list[str]:
