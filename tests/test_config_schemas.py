@@ -205,16 +205,16 @@ def test_every_key_is_required_and_no_other_key_allowed():
 def test_named_choices_match_the_library():
     """The schemas' enums are the names the code accepts (a renamed estimator, recording or
     option would otherwise pass the schema and fail in a job, or the reverse)."""
-    from accelcal_repro.measured.calibrate import MIN_POSES, MODEL
+    from accelcal.registry import ESTIMATORS
     from accelcal_repro.measured.sources import FERRARIS_STATIC, SOURCES
     from accelcal.tereshkov.errors import InvalidParameterError
     from accelcal.tereshkov.estimator import TereshkovParams
 
     rec = schema("measured")["properties"]["recordings"]
     assert set(rec["propertyNames"]["enum"]) == set(rec["properties"]) == set(SOURCES)
-    assert set(schema("measured")["$defs"]["estimators"]["items"]["enum"]) == set(MODEL)
+    assert set(schema("measured")["$defs"]["estimators"]["items"]["enum"]) == set(ESTIMATORS)
     # the cross-field rule's numbers: six static positions, ten poses for a full model
-    assert len(FERRARIS_STATIC) == 6 and MIN_POSES["full"] == 10
+    assert len(FERRARIS_STATIC) == 6 and ESTIMATORS["full_lls"].min_poses == 10
     formulas = schema("tereshkov")["properties"]["estimator"]["properties"]["accel_formula"]["enum"]
     for f in formulas:
         TereshkovParams(accel_formula=f)

@@ -35,9 +35,8 @@ from pathlib import Path
 
 from accelcal.atomic import atomic_output, sha256_file, write_json_atomic
 from accelcal.errors import RecordingError
-from accelcal.recording import (NominalConversion, Recording, nominal_conversion, read_block_log,
-                                read_imucal_section_list, read_imucal_session, read_imutk_ascii, read_mpu6050_csv,
-                                write_recording)
+from accelcal.readers import read
+from accelcal.recording import NominalConversion, Recording, nominal_conversion, read_imucal_section_list, write_recording
 from .data import DatasetError, check_available, fetch_file
 
 
@@ -146,19 +145,20 @@ def read_manifest(path) -> dict[str, Path]:
         raise RecordingError(f"{path}: not a measured-data manifest ({type(e).__name__})") from None
 
 
+#: Each source format as :func:`accelcal.readers.read` names it.
+READER_FORMAT = {"imutk_ascii": "csv", "mpu6050": "mpu6050", "imucal_session": "imucal", "block_log": "block-log"}
+
+
 def read_source(name: str, paths: dict[str, Path]) -> Recording:
-    """Read the original accelerometer file of recording ``name`` (units as stored)."""
+    """Read the original accelerometer file of recording ``name`` (units as stored) with the
+    readers of ``accelcal calibrate`` (:func:`accelcal.readers.read`), so that the workflow
+    and the CLI see the same numbers.  IMU-TK ASCII is read as a plain table (headerless
+    t, x, y, z), which is what the CLI detects it as."""
     s = source(name)
-    p = paths[s.data_file]
-    if s.fmt == "imutk_ascii":
-        return read_imutk_ascii(p)
-    if s.fmt == "mpu6050":
-        return read_mpu6050_csv(p)
-    if s.fmt == "imucal_session":
-        return read_imucal_session(p)
-    if s.fmt == "block_log":
-        return read_block_log(p)
-    raise RecordingError(f"unknown format {s.fmt!r}")  # pragma: no cover (table is fixed)
+    return read(paths[s.data_file], format=READER_FORMAT[s.fmt], unit=_UNIT[s.unit])
+
+
+_UNIT = {"counts": "counts", "m/s^2": "m/s2"}
 
 
 def section_list(name: str, paths: dict[str, Path]) -> dict[str, tuple[int, int]] | None:
