@@ -35,16 +35,13 @@ import pandas as pd
 
 from accelcal.als import full_als
 from accelcal.errors import AccelcalError
-from accelcal.lls import bias_lls, bias_lls_batch, full_lls, full_lls_batch
+from accelcal.registry import ESTIMATORS
 from .montecarlo import grid_seed, min_poses
-from accelcal.nlls import bias_nlls, full_nlls
 from accelcal.simulation import random_directions, sample_truth, simulate_poses
 
-#: Single-problem estimators timed (``f(z, g)``; ALS gets the noise std in :func:`run_benchmark`).
-SINGLE_METHODS: dict[str, Callable] = {
-    "full_lls": full_lls, "full_als": full_als, "full_nlls": full_nlls, "bias_lls": bias_lls, "bias_nlls": bias_nlls,
-}
-BATCH_METHODS: dict[str, Callable] = {"full_lls_batch": full_lls_batch, "bias_lls_batch": bias_lls_batch}
+#: Single-problem estimators timed (``f(z, g)``; ALS gets the noise std in :func:`run_benchmark`): the registry's.
+SINGLE_METHODS: dict[str, Callable] = {name: e.load() for name, e in ESTIMATORS.items()}
+BATCH_METHODS: dict[str, Callable] = {f"{name}_batch": e.load_batch() for name, e in ESTIMATORS.items() if e.batch}
 #: The NLLS baseline each closed form is compared with.
 BASELINE = {"full_lls": "full_nlls", "full_als": "full_nlls", "bias_lls": "bias_nlls",
             "full_lls_batch": "full_nlls", "bias_lls_batch": "bias_nlls"}
@@ -224,14 +221,14 @@ def run_benchmark(seed: int, g: float, noise_std: float, n_poses: Sequence[int],
         zf = make_problems(np.random.default_rng(ss_single), n_problems, n, g, noise_std)
         zb = make_problems(np.random.default_rng(ss_single), n_problems, n, g, noise_std, identity_m=True)
         here = {m: f for m, f in fns.items() if n >= min_poses(m)}
-        problems = {m: (zb if m.startswith("bias") else zf) for m in here}
+        problems = {m: (zb if ESTIMATORS[m].model == "bias" else zf) for m in here}
         for il in interleavings:
             singles.append(time_interleaved(problems, g, here, repeats, interleave=il).assign(n_poses=n))
         bm = [m for m in batch_methods if n >= min_poses(m.removesuffix("_batch"))]
         if bm and batch_problems > 0:
             zbf = make_problems(np.random.default_rng(ss_batch), batch_problems, n, g, noise_std)
             zbb = make_problems(np.random.default_rng(ss_batch), batch_problems, n, g, noise_std, identity_m=True)
-            bproblems = {m: (zbb if m.startswith("bias") else zbf) for m in bm}
+            bproblems = {m: (zbb if ESTIMATORS[m.removesuffix("_batch")].model == "bias" else zbf) for m in bm}
             batches.append(time_batched(bproblems, g, {m: BATCH_METHODS[m] for m in bm}, batch_repeats)
                            .assign(n_poses=n))
     single = pd.concat(singles, ignore_index=True)
