@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 
 from accelcal.plotting import RC, style
+from accelcal.registry import model_of
 from .sources import source
 
 #: Display names of the recordings.
@@ -226,7 +227,7 @@ def plot_residuals(pose_errors: pd.DataFrame):
             ests = list(dict.fromkeys(d.estimator))
             for col, prefix in ((0, "full"), (1, "bias")):
                 ax = axes[row, col]
-                es = [e for e in ests if e.startswith(prefix)]
+                es = [e for e in ests if model_of(e) == prefix]
                 if not es:
                     ax.text(0.5, 0.5, "full model not identifiable\n(6 orientations < 10 poses)"
                             if prefix == "full" else "no bias-only fit", transform=ax.transAxes,
