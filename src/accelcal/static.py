@@ -164,6 +164,9 @@ def detect_static(t, acc, *, init_duration: float | None = None, window: float =
         raise AccelcalError("need window > 0, threshold_factor > 1, min_duration >= 0 and trim >= 0")
     n = t.size
     fs = 1.0 / float(np.median(np.diff(t)))
+    if window * fs < 3:
+        raise RecordingError(f"the {window:g} s variance window holds {window * fs:.2g} samples at {fs:.4g} Hz; it "
+                             "needs at least 3: give a longer --window, or check the time unit (--time-unit)")
     w = max(3, int(round(window * fs)) | 1)  # odd, so the window is centred on a sample
     h = w // 2
     if n < 3 * w:
