@@ -68,7 +68,7 @@ _ACC = re.compile(r"^(?:field)?(?:imu)?(?:linear)?(?:acc|accel|accl|acceleration
 _ACC_AXIS_FIRST = re.compile(r"^(?P<axis>[xyz])(?:acc|accel|acceleration|a)$")
 _TIME = {"t", "time", "times", "timestamp", "timestamps", "ts", "stamp", "sec", "secs", "seconds", "elapsed",
          "elapsedtime", "datetime", "date", "clock", "millis", "micros", "nanos", "tsec", "fieldheaderstamp",
-         "headerstamp", "%time", "timeus", "timems", "timens", "times"}
+         "headerstamp", "%time", "timeus", "timems", "timens", "zeit", "zeitstempel", "tiempo", "temps", "tempo"}
 _TIME_UNIT_BY_NAME = {"millis": "ms", "micros": "us", "nanos": "ns", "timems": "ms", "timeus": "us", "timens": "ns"}
 _TEMP = {"temp", "temperature", "imutemp", "dietemp", "temperaturec", "tempc", "thermometer"}
 _POSE = {"pose", "poseid", "staticpose", "posename"}
@@ -345,7 +345,8 @@ def read_table(path, *, text: str | None = None, columns=None, unit: str | None 
     notes: list[str] = []
     if text is None:
         text, notes = load_text(path)
-    numbered = [(no, ln) for no, ln in enumerate(text.splitlines(), start=1) if ln.strip() and not _is_comment(ln)]
+    all_lines = text.splitlines()
+    numbered = [(no, ln) for no, ln in enumerate(all_lines, start=1) if ln.strip() and not _is_comment(ln)]
     if not numbered:
         raise RecordingError(f"{path}: only comments and blank lines, no data")
     try:
@@ -359,6 +360,9 @@ def read_table(path, *, text: str | None = None, columns=None, unit: str | None 
             r = r[:-1]
         rows.append(r)
     header, first = _find_header(rows, k, dc)
+    if header is None and first == 0:  # a header that looks like a comment: rostopic's '%time,field...'
+        rows, numbered, header = _comment_header(all_lines, numbered, rows, delim, k)
+        first = 1 if header is not None else 0
     preamble = [(numbered[i][0], rows[i]) for i in range(first if header is None else header)]
     data = rows[first:]
     lines = [numbered[i][0] for i in range(first, len(rows))]
@@ -399,6 +403,18 @@ def read_table(path, *, text: str | None = None, columns=None, unit: str | None 
         time_column = (names[roles["t"]].strip() if names is not None else "t", column("t").astype(str))
     return Recording(t, acc, temp, str(path), intervals=iv, labels=labels, notes=tuple(n for n in notes if n),
                      unit=unit_name, time_column=time_column)
+
+
+def _comment_header(all_lines, numbered, rows, delim, k):
+    """The comment line just above the data as the header, if it has the data's field
+    count and names (``%time,field.header.seq,...`` of ``rostopic echo -p``)."""
+    above = numbered[0][0] - 1  # 1-based line number of the line above the first data row
+    if above < 1 or not _is_comment(all_lines[above - 1]):
+        return rows, numbered, None
+    cand = _split(all_lines[above - 1].strip(), delim)
+    if len(cand) != k or sum(1 for c in cand if _NUMBER.match(c)) > 0:
+        return rows, numbered, None
+    return [cand] + rows, [(above, all_lines[above - 1])] + numbered, 0
 
 
 def _find_header(rows, k: int, dc: bool) -> tuple[int | None, int]:
@@ -499,6 +515,10 @@ def _find_roles(names, roles: dict, path) -> None:
         hits = sorted(set(hits))
         if role in roles or not hits:
             continue
+        if role == "t" and len(hits) > 1 and {_norm(names[i]) for i in hits} == {"%time", "fieldheaderstamp"}:
+            # rostopic echo -p: %time is when the message was received, the header stamp
+            # when the sensor sampled it
+            hits = [i for i in hits if _norm(names[i]) == "fieldheaderstamp"]
         if len(hits) > 1:
             raise RecordingError(f"{path}: {len(hits)} columns could be {role} ({', '.join(names[i] for i in hits)}); "
                                  f"choose one with --columns {role}=NAME")
@@ -681,7 +701,7 @@ def _datetime_time(s, path, label, lines):
                     break
         raise RecordingError(f"{path}: {label}: {s[bad][:30]!r} at line {lines[bad]} is neither a number nor an "
                              "ISO 8601 date-time; pass --rate HZ to time the samples by their index")
-    ns = ts.to_numpy().astype("datetime64[ns]").astype(np.int64)
+    ns = ts.dt.tz_localize(None).to_numpy().astype("datetime64[ns]").astype(np.int64)
     t = (ns - ns[0]).astype(float) * 1e-9
     _check_increasing(t, path, label, lines)
     rate_hz = 1.0 / float(np.median(np.diff(t)))
