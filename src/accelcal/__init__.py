@@ -3,6 +3,15 @@ beyond) from static poses, with the closed forms of Burkhard et al. (2024), a co
 (ALS) correction, an iterative CasADi/IPOPT baseline and the Cramér–Rao bound.
 
 >>> from accelcal import full_lls, bias_lls, full_nlls, bias_nlls
+
+A recording, calibrated, saved, loaded and applied:
+
+>>> import accelcal
+>>> rec = accelcal.read("session.csv")                          # any supported format
+>>> cal, poses = accelcal.calibrate_recording(rec, 9.80665, "full_lls")
+>>> cal.quality.warnings                                         # () when the fit can be trusted
+>>> cal.save("calibration.json")
+>>> accelcal.load_calibration("calibration.json").apply(rec.acc, t=rec.t, temp=rec.temp)
 """
 
 from .als import full_als
@@ -22,20 +31,21 @@ from . import nlls
 from .nlls import bias_nlls, full_nlls, nlls_batch
 from .results import BatchResult, CalibrationResult, LLSResult, NLLSResult
 from .uncertainty import CramerRaoBound, crlb, crlb_mean
+from . import registry as _registry
+from .calibration import Calibration, calibrate_recording, load_calibration
+from .readers import read
 
 __version__ = "0.1.0"
 
-#: Estimators by the names the CLI and the workflow use.
-ESTIMATORS = {
-    "full-lls": full_lls,
-    "full-als": full_als,
-    "full-nlls": full_nlls,
-    "bias-lls": bias_lls,
-    "bias-nlls": bias_nlls,
-}
+#: Estimator functions by the names the CLI uses, from the one registry (accelcal.registry).
+ESTIMATORS = {e.cli_name: e.load() for e in _registry.ESTIMATORS.values()}
 
 __all__ = [
     "ESTIMATORS",
+    "Calibration",
+    "calibrate_recording",
+    "load_calibration",
+    "read",
     "AccelcalError",
     "BatchResult",
     "CalibrationResult",
