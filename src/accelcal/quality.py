@@ -20,7 +20,8 @@ session 0.8-1) and the *hemisphere bias* ``|mean u_i|`` (0 for a balanced set, 1
 all poses point one way).
 
 Warnings (:data:`RULES`; a clean fit has none), each a plain sentence for a
-``warning:`` line:
+``warning:`` line, with a short code in ``flags`` (``few_dof``, ``excess``,
+``few_orientations``, ``one_sided``) for tables:
 
 * fewer degrees of freedom than parameters (``dof < q``): the residuals cannot check
   the fit (a 10-pose full fit has one);
@@ -68,6 +69,7 @@ class FitQuality:
     coverage: float
     hemisphere_bias: float
     warnings: tuple[str, ...]
+    flags: tuple[str, ...] = ()
 
     @property
     def trustworthy(self) -> bool:
@@ -77,6 +79,7 @@ class FitQuality:
     def to_dict(self) -> dict:
         d = asdict(self)
         d["warnings"] = list(self.warnings)
+        d["flags"] = list(self.flags)
         d["trustworthy"] = self.trustworthy
         d["rules"] = dict(RULES)
         return d
@@ -86,6 +89,7 @@ class FitQuality:
         keys = {f for f in cls.__dataclass_fields__}
         v = {k: d[k] for k in keys if k in d}
         v["warnings"] = tuple(v.get("warnings", ()))
+        v["flags"] = tuple(v.get("flags", ()))
         for k in ("residual_rms", "predicted_rms", "excess", "chi2", "p_value", "coverage", "hemisphere_bias"):
             v[k] = float("nan") if v.get(k) is None else float(v[k])
         return cls(**v)
@@ -161,20 +165,24 @@ def assess(z, mean_std, M, bias, residuals, n_parameters: int, model: str,
     hemi = float(np.linalg.norm(u.mean(axis=0)))
     q = n_parameters
     need = q + 1 if min_poses is None else min_poses
-    warnings = []
+    warnings, flags = [], []
     if chi.dof < q:
+        flags.append("few_dof")
         warnings.append(f"only {max(chi.dof, 0)} degree(s) of freedom ({len(z)} poses for {q} parameters): the "
                         "residuals cannot check the fit, and the ± rest on the pose noise alone; record at least "
                         f"{2 * q} poses in distinct orientations")
     if chi.dof > 0 and excess > RULES["excess"] and chi.p_value < RULES["p_value"]:
+        flags.append("excess")
         warnings.append(f"pose residuals are {excess:.3g}x what the pose noise predicts (chi2/dof = "
                         f"{chi.reduced:.3g} on {chi.dof} dof, p = {chi.p_value:.2g}): the model misses an effect "
                         "(nonlinearity, drift, temperature, a disturbed pose) or the noise is not white; the ± "
                         "include this factor; run `accelcal discrepancy` on the recording")
     if distinct < need:
+        flags.append("few_orientations")
         warnings.append(f"only {distinct} distinct orientations among {len(z)} poses (10 deg apart), fewer than the "
                         f"{need} this model needs: turn the sensor to new orientations between rests")
     if hemi > RULES["hemisphere"] or cover < RULES["coverage"]:
+        flags.append("one_sided")
         warnings.append(f"the poses cover {100 * cover:.0f}% of the sphere (within 30 deg) and lean to one side "
                         f"(|mean direction| = {hemi:.2f}): scale and non-orthogonality are extrapolated; add poses "
                         "on the other side")
@@ -187,7 +195,7 @@ def assess(z, mean_std, M, bias, residuals, n_parameters: int, model: str,
                          n_poses=len(z), n_parameters=q, dof=int(chi.dof), residual_rms=float(np.sqrt(np.mean(r * r))),
                          predicted_rms=float(np.sqrt(np.mean(sigma ** 2))), excess=float(excess),
                          chi2=float(chi.chi2), p_value=float(chi.p_value), distinct_orientations=int(distinct),
-                         coverage=cover, hemisphere_bias=hemi, warnings=tuple(warnings))
+                         coverage=cover, hemisphere_bias=hemi, warnings=tuple(warnings), flags=tuple(flags))
     return quality, se
 
 

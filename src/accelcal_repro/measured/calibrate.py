@@ -360,7 +360,7 @@ def calibrate_recording(name: str, rec: Recording, *, g: float, estimators, sect
             "lopo_max_abs": float(np.max(np.abs(finite_lo))) if finite_lo.size else np.nan,
             "lopo_note": lo_note, "n_boot": int(n_boot), "boot_valid_fraction": frac, "ci_method": method,
             "distinct_orientations": qa.distinct_orientations, "coverage": qa.coverage,
-            "warnings": " | ".join(qa.warnings), "fit_seconds": seconds, "boot_seconds": boot_seconds,
+            "warnings": " ".join(qa.flags), "fit_seconds": seconds, "boot_seconds": boot_seconds,
         })
 
     params = pd.DataFrame(param_rows)

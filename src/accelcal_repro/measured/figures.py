@@ -160,8 +160,10 @@ def plot_calibration(params: pd.DataFrame, peer: pd.DataFrame | None = None, nom
                 ax.plot(np.arange(3) + dodge(len(ests)), dev, ls="none", ms=7, **PEER_STYLE)
             ax.axhline(0, color="k", lw=0.6)
             ax.set_xticks(range(3), [f"b{a}\n{refv.get(f'bias_{a}', np.nan):.6g}" for a in "xyz"], fontsize=7)
-            ax.set_ylabel(f"bias − {style(ref)['label']} [mm/s²]", fontsize=7.5)
-            ax.set_title(f"{_title(rec)}: bias [{unit}]", fontsize=8, loc="left")
+            via = "\n(counts via nominal sensitivity)" if unit == "counts" else ""
+            ax.set_ylabel(f"bias − {style(ref)['label']} [mm/s²]{via}", fontsize=7)
+            ax.set_xlabel(f"{style(ref)['label']} value [{unit.replace('^2', '²')}]", fontsize=6.5, labelpad=1)
+            ax.set_title(f"{_title(rec)}: bias", fontsize=8, loc="left")
 
             # --- sensitivity relative to nominal
             ax = axes[row, 1]
