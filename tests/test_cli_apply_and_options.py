@@ -238,3 +238,12 @@ def test_discrepancy_report_applies_its_named_effect(effect, tmp_path, monkeypat
     assert with_effect < 0.7 * base, (with_effect, base)
     code, err = run("apply", tmp_path / "d.json", path, "--out", tmp_path / "o.csv")
     assert code == 0 and f"effects applied: {effect}" in err, err
+
+
+@needs_data
+def test_too_few_orientations_is_named_as_the_cause(tmp_path):
+    """imucal's session: 13 rests but 6 orientations; the full model's failure says why."""
+    code, err = run("calibrate", DATA / "imucal_ferraris" / "example_ferraris_session.csv", "--g", 9.81,
+                    "--out", tmp_path / "i.json")
+    assert code == 2 and "only 6 distinct orientations" in err and "bias-only" in err
+    assert len(err.strip().splitlines()) == 1 and not (tmp_path / "i.json").exists()

@@ -45,7 +45,8 @@ from typing import ClassVar
 
 import numpy as np
 
-from .errors import AccelcalError, TooFewPosesError
+from .errors import (AccelcalError, DegeneratePosesError, NotConvergedError, NotPositiveDefiniteError,
+                     TooFewPosesError)
 from .registry import ESTIMATORS, estimator
 from .units import G0, acceleration_unit
 
@@ -641,7 +642,10 @@ def calibrate_poses(poses, g: float, method: str = "full_lls", *, unit: str | No
     if len(z) < est.min_poses:
         raise TooFewPosesError(f"{len(z)} static poses found, {est.cli_name} needs at least {est.min_poses}")
     noise = pose_noise_std(se) if est.needs_noise else None
-    r = est.fit(z, g, noise_std=noise)
+    try:
+        r = est.fit(z, g, noise_std=noise)
+    except (DegeneratePosesError, NotPositiveDefiniteError, NotConvergedError) as e:
+        raise _orientation_cause(e, z, est) from None
     quality, se_noise = assess(z, se, r.M, r.bias, r.residuals, est.n_parameters, est.model, est.min_poses)
     extra = {k: getattr(r, k) for k in _RESULT_FIELDS[est.name]}
     if est.needs_noise:
@@ -656,6 +660,30 @@ def calibrate_poses(poses, g: float, method: str = "full_lls", *, unit: str | No
         input_unit=input_unit,
         standard_errors=dict(r.standard_errors), standard_errors_noise=se_noise, quality=quality,
         residuals=np.asarray(r.residuals), poses=pose_table, provenance=dict(provenance or {}), **extra)
+
+
+def _raw_directions(z) -> np.ndarray:
+    """Pose directions before any fit: about the centre of the best sphere through the poses
+    (the bias-only LLS, which needs no g), so that raw counts with a large offset work too."""
+    z = np.asarray(z, float)
+    try:
+        centre = estimator("bias_lls").fit(z, 1.0).bias
+    except AccelcalError:
+        centre = z.mean(axis=0)
+    d = z - centre
+    return d / np.linalg.norm(d, axis=1, keepdims=True)
+
+
+def _orientation_cause(err: AccelcalError, z, est) -> AccelcalError:
+    """A failed fit on poses that repeat too few orientations says so (the likely cause)."""
+    from .quality import distinct_orientations
+
+    k = distinct_orientations(_raw_directions(z))
+    if k >= est.min_poses:
+        return err
+    return DegeneratePosesError(f"{len(z)} poses but only {k} distinct orientations (10 deg apart): {est.cli_name} "
+                                f"needs at least {est.min_poses}; turn the sensor to new orientations between rests "
+                                f"(or use a bias-only method, >= 4) [{err}]")
 
 
 def calibrate_recording(rec, g: float, method: str = "full_lls", *, static: dict | None = None,
@@ -723,8 +751,7 @@ class _Poses:
 def _too_few_hint(rec, poses, est) -> str:
     from .quality import distinct_orientations
 
-    u = poses.means / np.linalg.norm(poses.means, axis=1, keepdims=True)
-    k = distinct_orientations(u)
+    k = distinct_orientations(_raw_directions(poses.means)) if len(poses) >= 4 else len(poses)
     rate = rec.rate
     if not 1.0 <= rate <= 20000.0:
         return (f"the sampling rate is {rate:.4g} Hz from the time column: if its unit is not seconds, pass "
