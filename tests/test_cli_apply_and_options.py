@@ -247,3 +247,32 @@ def test_too_few_orientations_is_named_as_the_cause(tmp_path):
                     "--out", tmp_path / "i.json")
     assert code == 2 and "only 6 distinct orientations" in err and "bias-only" in err
     assert len(err.strip().splitlines()) == 1 and not (tmp_path / "i.json").exists()
+
+
+def test_sensitivity_converts_counts_for_the_bias_only_models(sim, tmp_path):
+    rec = sim[0]
+    counts = np.round(np.array([120.0, -340.0, 610.0]) + rec["acc"] / G * 16384)
+    p = tmp_path / "counts.csv"
+    pd.DataFrame({"t": rec["t"], "ax": counts[:, 0], "ay": counts[:, 1], "az": counts[:, 2]}).to_csv(p, index=False)
+    code, err = run("calibrate", p, "--method", "bias-lls", "--out", tmp_path / "a.json")
+    assert code == 2 and "raw counts" in err
+    code, err = run("calibrate", p, "--method", "bias-lls", "--sensitivity", "16384", "--zero", "120,-340,610",
+                    "--out", tmp_path / "b.json")
+    assert code == 0 and "converted to m/s^2 by the nominal sensitivity" in err, err
+    js = json.loads((tmp_path / "b.json").read_text())
+    assert js["unit"] == "m/s^2" and js["input"]["unit"] == "counts"
+    np.testing.assert_allclose(js["input"]["sensitivity"], 16384 / G)
+    # apply takes the raw counts and gives m/s²
+    code, err = run("apply", tmp_path / "b.json", p, "--out", tmp_path / "o.csv")
+    assert code == 0, err
+    out = pd.read_csv(tmp_path / "o.csv")
+    assert abs(np.median(np.linalg.norm(out[["ax", "ay", "az"]].to_numpy(), axis=1)) - G) < 0.2
+    for bad, words in ((["--zero", "5"], "--zero needs --sensitivity"), (["--sensitivity", "16384/furlong"], "per g"),
+                       (["--sensitivity", "a,b"], "one or three numbers")):
+        code, err = run("calibrate", p, "--out", tmp_path / "c.json", *bad)
+        assert code == 2 and words in err and not (tmp_path / "c.json").exists(), err
+    m = tmp_path / "ms2.csv"
+    pd.DataFrame({"t": rec["t"], "ax": rec["acc"][:, 0], "ay": rec["acc"][:, 1], "az": rec["acc"][:, 2]}).to_csv(
+        m, index=False)
+    code, err = run("calibrate", m, "--sensitivity", "16384", "--out", tmp_path / "d.json")
+    assert code == 2 and "converts raw counts" in err

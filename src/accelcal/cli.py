@@ -175,6 +175,11 @@ def _parser() -> argparse.ArgumentParser:
     c.add_argument("--figures", type=Path, default=None, metavar="DIR",
                    help="also draw calibration_coverage (.png, .pdf): the pose directions on the sphere")
     _reader_options(c)
+    n = c.add_argument_group("raw counts to m/s^2 before the fit (the bias-only models need it)")
+    n.add_argument("--sensitivity", metavar="S[,S,S][/g|/m/s2]",
+                   help="the data sheet's sensitivity, counts per g (default) or per m/s2; then M is the gain "
+                        "relative to it and b is in m/s^2")
+    n.add_argument("--zero", metavar="C[,C,C]", help="the output at zero specific force [counts] (default 0)")
     _static_options(c)
     c.set_defaults(func=_calibrate)
 
@@ -258,6 +263,44 @@ def _static_settings(args, rec) -> dict:
     return kw
 
 
+def _nominal(args, rec):
+    """The --sensitivity/--zero conversion of raw counts to m/s^2, or None."""
+    if args.sensitivity is None:
+        if args.zero is not None:
+            raise AccelcalError("--zero needs --sensitivity (counts per g or per m/s2)")
+        return None
+    if rec.unit != "counts":
+        raise AccelcalError(f"--sensitivity converts raw counts, but the data are read as {rec.unit} "
+                            "(pass --unit counts if they are counts)")
+    import numpy as np
+
+    from .recording import NominalConversion
+    from .units import G0
+
+    def triple(text, what):
+        try:
+            v = np.array([float(x) for x in text.split(",")])
+        except ValueError:
+            raise AccelcalError(f"{what} must be one or three numbers separated by commas, got {text!r}") from None
+        if v.size not in (1, 3) or not np.all(np.isfinite(v)):
+            raise AccelcalError(f"{what} must be one or three numbers separated by commas, got {text!r}")
+        return np.broadcast_to(v, (3,)).astype(float)
+
+    text, per = args.sensitivity, "g"
+    if "/" in text:
+        text, per = text.split("/", 1)
+    per = per.strip().lower().replace("²", "2").replace("^", "")
+    if per not in ("g", "m/s2"):
+        raise AccelcalError(f"--sensitivity: counts per g or per m/s2, got per {per!r}")
+    sens = triple(text, "--sensitivity")
+    if not np.all(sens > 0):
+        raise AccelcalError("--sensitivity must be positive")
+    cpu = sens / G0 if per == "g" else sens
+    zero = np.zeros(3) if args.zero is None else triple(args.zero, "--zero")
+    return NominalConversion(zero, cpu, None, f"--sensitivity {args.sensitivity}" +
+                             (f" --zero {args.zero}" if args.zero else ""))
+
+
 def _rate_hint(rec) -> str:
     rate = rec.rate
     if 1.0 <= rate <= 20000.0:
@@ -287,7 +330,7 @@ def _calibrate(args) -> int:
     method = args.method
     with _step(f"detecting static poses and estimating {method} from {rec.n} samples"):
         try:
-            cal, poses = calibrate_recording(rec, g, method, static=static)
+            cal, poses = calibrate_recording(rec, g, method, static=static, conversion=_nominal(args, rec))
         except RecordingError as e:
             raise RecordingError(f"{e}{_rate_hint(rec)}") from None
     prov = {**_provenance(args, t0), "g_source": "--g" if args.g is not None else "standard gravity (no --g)"}
@@ -325,7 +368,9 @@ def _summary(cal, poses, rec, args) -> None:
              "quietest_stretch": "noise reference: the quietest 2 s (no initial rest)",
              "known_intervals": "known static intervals"}[poses.reference]
     g_note = f"g = {cal.g:g} m/s^2" + ("" if args.g is not None else " (standard gravity: pass --g for the local value)")
-    lines = [f"{est.cli_name}: {cal.n_poses} poses ({where}); data in {cal.unit}; {g_note}"]
+    data = cal.unit if cal.input_unit in (None, cal.unit) else \
+        f"{cal.input_unit}, converted to {cal.unit} by the nominal sensitivity"
+    lines = [f"{est.cli_name}: {cal.n_poses} poses ({where}); data in {data}; {g_note}"]
     lines += [f"  read: {n}" for n in rec.notes if n]
     if poses.reference_note:
         lines.append(f"  {poses.reference_note}")
@@ -366,9 +411,10 @@ def _apply(args) -> int:
 
     cal = load_calibration(args.calibration)
     rec = _read(args)
-    if cal.unit is not None and rec.unit != cal.unit:
-        raise AccelcalError(f"{args.recording} is read as {rec.unit} but {args.calibration} was fitted to "
-                            f"{cal.unit}: pass --unit {'counts' if cal.unit == 'counts' else 'm/s2 (or g, mg)'}")
+    expected = cal.input_unit or cal.unit
+    if expected is not None and rec.unit != ("counts" if expected == "counts" else "m/s^2"):
+        raise AccelcalError(f"{args.recording} is read as {rec.unit} but {args.calibration} was made from "
+                            f"{expected}: pass --unit {'counts' if expected == 'counts' else 'm/s2 (or g, mg)'}")
     effects = () if args.no_effects else cal.effects
     drift = [e for e in effects if e.id == "bias_drift"]
     if drift and cal.provenance.get("recording_sha256") != sha256_file(args.recording):
