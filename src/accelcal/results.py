@@ -180,9 +180,12 @@ class BatchResult:
 
     ``valid`` marks trials where the estimator produced a model (for the full LLS:
     Ŝ positive definite and λ > 0); invalid trials hold NaN, never a number.
+    ``status`` (estimators that record why a trial failed, e.g. ALS): ``'ok'`` or the
+    name of the error the single-problem estimator raised on that trial.
     """
 
     method: str
     bias: np.ndarray  # (T, 3)
     M: np.ndarray  # (T, 3, 3)
     valid: np.ndarray  # (T,) bool
+    status: np.ndarray | None = None  # (T,) str

@@ -62,6 +62,7 @@ rule burkhard2024_mc:
         truth=BURKHARD["truth"],
         trials=BURKHARD["trials"],
         als_known_noise=BURKHARD["als_known_noise"],
+        nlls_known_noise=BURKHARD["nlls_known_noise"],
     log:
         log_path("burkhard2024/mc_{bk_point}"),
     benchmark:

@@ -20,7 +20,7 @@ t0 = time.perf_counter()
 table, timing = mc_point(
     seed=int(p.seed), n_poses=int(pt["n_poses"]), noise_std=float(pt["noise_std"]), cases=pt["cases"],
     trials=int(p.trials), g=float(p.g), truth_ranges={k: tuple(v) for k, v in p.truth.items()},
-    als_known_noise=bool(p.als_known_noise),
+    als_known_noise=bool(p.als_known_noise), nlls_known_noise=bool(p.nlls_known_noise),
 )
 invalid = (~table["valid"]).groupby([table["data_model"], table["g_error"], table["method"]]).sum()
 log.info("%d poses, noise %g: %d cases x %d trials in %.1f s; invalid trials: %s", pt["n_poses"], pt["noise_std"],

@@ -1,0 +1,590 @@
+"""Compiled kernels of the closed forms (full LLS, bias-only LLS, ALS), single and batched.
+
+The same algorithms as the numpy routes of :mod:`accelcal.lls` and :mod:`accelcal.als`
+(see their docstrings for the mathematics and the certification of the fast route),
+as scalar loops compiled by numba (:mod:`accelcal.kernels`).  Every kernel returns a
+status per problem and leaves the decisions it cannot certify to the reference
+implementation, so that errors and doubtful cases take exactly the reference's path:
+
+* ``OK`` (0): the estimate is in the output arrays;
+* ``REFERENCE`` (1): hand the problem to the reference (non-finite or all-zero poses,
+  geometry not clearly three-dimensional, Gram-matrix route not certified);
+* ``NO_ELLIPSOID`` (2): the estimate is no ellipsoid (Ŝ not positive definite, λ <= 0);
+* ``NON_FINITE`` (3): NaN or infinite poses (batched kernels).
+
+Imported only through :func:`accelcal.kernels.compiled` (it imports numba).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .kernels import jit
+
+OK, REFERENCE, NO_ELLIPSOID, NON_FINITE = 0, 1, 2, 3
+
+# Constants of the fast route, as in accelcal.lls (the tolerances a caller may change,
+# MIN_GAP and EIGVEC_TOL, are arguments).
+_NULLSPACE_RATIO2 = 9.0
+_EPS = np.finfo(np.float64).eps
+_MATVEC_ROUNDING = 10 * _EPS
+_CANCELLATION = 4 * math.sqrt(_EPS)
+_SHIFT = 1e-13
+_ROUNDS = 3
+_COPLANAR_TOL = 1e-3
+_MOMENT_SHIFT = 2.0 * _COPLANAR_TOL  # _MOMENT_MARGIN * COPLANAR_TOL of accelcal.validation
+_MIN_SPREAD = 1e-8
+
+
+# ----------------------------------------------------------------------------- helpers
+@jit
+def _cholesky(A, L, m):
+    """Lower Cholesky factor ``L`` of the leading ``m x m`` block of ``A``; False if that
+    block is not positive definite (a pivot <= 0 or NaN)."""
+    for j in range(m):
+        s = A[j, j]
+        for p in range(j):
+            s -= L[j, p] * L[j, p]
+        if not s > 0.0:
+            return False
+        d = math.sqrt(s)
+        L[j, j] = d
+        for i in range(j + 1, m):
+            t = A[i, j]
+            for p in range(j):
+                t -= L[i, p] * L[j, p]
+            L[i, j] = t / d
+    return True
+
+
+@jit
+def _chol_solve(L, b, x, m):
+    """``x = (L Lᵀ)⁻¹ b`` (``x`` may be ``b``)."""
+    for i in range(m):
+        s = b[i]
+        for p in range(i):
+            s -= L[i, p] * x[p]
+        x[i] = s / L[i, i]
+    for i in range(m - 1, -1, -1):
+        s = x[i]
+        for p in range(i + 1, m):
+            s -= L[p, i] * x[p]
+        x[i] = s / L[i, i]
+
+
+@jit
+def _normal_matrix(z, k, N):
+    """``N = XᵀX`` (10x10, upper and lower) of the design of eq. (3) of the poses ``z / k``."""
+    for i in range(10):
+        for j in range(10):
+            N[i, j] = 0.0
+    f = np.empty(10)
+    for p in range(z.shape[0]):
+        x, y, w = z[p, 0] / k, z[p, 1] / k, z[p, 2] / k
+        f[0], f[1], f[2] = x * x, y * y, w * w
+        f[3], f[4], f[5] = x * (2.0 * y), x * (2.0 * w), y * (2.0 * w)
+        f[6], f[7], f[8], f[9] = -2.0 * x, -2.0 * y, -2.0 * w, 1.0
+        for i in range(10):
+            fi = f[i]
+            for j in range(i, 10):
+                N[i, j] += fi * f[j]
+    for i in range(10):
+        for j in range(i):
+            N[i, j] = N[j, i]
+
+
+@jit
+def _scatter_is_clearly_3d(a, b, c, d, e, f, sum_sq):
+    """:func:`accelcal.validation.scatter_is_clearly_3d` for the scatter
+    ``[[a, b, c], [b, d, e], [c, e, f]]``."""
+    tr = a + d + f
+    if not tr > _MIN_SPREAD * sum_sq:
+        return False
+    a, b, c, d, e, f = a / tr - _MOMENT_SHIFT, b / tr, c / tr, d / tr - _MOMENT_SHIFT, e / tr, f / tr - _MOMENT_SHIFT
+    if not a > 0:
+        return False
+    d2 = d - b * b / a
+    if not d2 > 0:
+        return False
+    e2 = e - b * c / a
+    return f - c * c / a - e2 * e2 / d2 > 0
+
+
+@jit
+def _geometry_from_normal_matrix(N, n):
+    """:func:`accelcal.validation.geometry_is_clearly_fine` from row 9 of ``N`` (the
+    column sums of X: Σ zs², 2 Σ zx zy, ..., -2 Σ zs, n), as in :func:`accelcal.lls.full_lls`."""
+    xx, yy, zz = N[9, 0], N[9, 1], N[9, 2]
+    xy, xz, yz = 0.5 * N[9, 3], 0.5 * N[9, 4], 0.5 * N[9, 5]
+    sx, sy, sz = -0.5 * N[9, 6], -0.5 * N[9, 7], -0.5 * N[9, 8]
+    mx, my, mz = sx / n, sy / n, sz / n
+    return _scatter_is_clearly_3d(xx - n * mx * mx, xy - n * mx * my, xz - n * mx * mz, yy - n * my * my,
+                                  yz - n * my * mz, zz - n * mz * mz, xx + yy + zz)
+
+
+@jit
+def _null_vector(N, x, L, min_gap, eigvec_tol):
+    """Θ̂ (unnormalised, in ``x``) of the full LLS from ``N`` (overwritten) by inverse
+    iteration, certified as in :func:`accelcal.lls._null_vector`.  Returns ``|x|``, or
+    -1 when the route cannot certify it."""
+    tr = 0.0
+    for i in range(10):
+        tr += N[i, i]
+    delta = 0.0
+    if not _cholesky(N, L, 10):  # N singular to rounding (noise-free poses): N + δI
+        delta = _SHIFT * tr
+        for i in range(10):
+            N[i, i] += delta
+        if not _cholesky(N, L, 10):
+            return -1.0
+    for i in range(10):
+        x[i] = 0.0
+    x[0] = x[1] = x[2] = 1.0
+    x[9] = -1.0
+    _chol_solve(L, x, x, 10)
+    y = np.empty(10)
+    for _ in range(_ROUNDS):
+        _chol_solve(L, x, x, 10)
+        xx = 0.0
+        xy = 0.0
+        yy = 0.0
+        for i in range(10):
+            s = 0.0
+            for j in range(10):
+                s += N[i, j] * x[j]
+            y[i] = s
+            xx += x[i] * x[i]
+            xy += x[i] * s
+            yy += s * s
+        rho = xy / xx
+        res = math.sqrt(max(yy / xx - rho * rho, 0.0)) + _MATVEC_ROUNDING * tr + _CANCELLATION * abs(rho)
+        rho -= delta
+        bound = max(_NULLSPACE_RATIO2 * rho, min_gap * tr)
+        if res <= eigvec_tol * (bound - rho):
+            for i in range(9):
+                N[i, i] -= bound + delta
+            return math.sqrt(xx) if _cholesky(N, L, 9) else -1.0
+        norm = math.sqrt(xx)
+        for i in range(10):
+            x[i] /= norm
+        _chol_solve(L, x, x, 10)
+    return -1.0
+
+
+@jit
+def _theta_to_model(theta, g_scaled, out):
+    """Eqs. (4)-(6) as :func:`accelcal.lls._theta_to_model_single`: ``out`` = (b (3),
+    M row-major (9), λ) for the Θ given; False if the estimate is no ellipsoid."""
+    S11, S22, S33, S12, S13, S23 = theta[0], theta[1], theta[2], theta[3], theta[4], theta[5]
+    r1, r2, r3, d = theta[6], theta[7], theta[8], theta[9]
+    if S11 + S22 + S33 < 0:
+        S11, S22, S33, S12, S13, S23 = -S11, -S22, -S33, -S12, -S13, -S23
+        r1, r2, r3, d = -r1, -r2, -r3, -d
+    m2 = S11 * S22 - S12 * S12
+    det = S11 * (S22 * S33 - S23 * S23) - S12 * (S12 * S33 - S23 * S13) + S13 * (S12 * S23 - S22 * S13)
+    if S11 <= 0 or m2 <= 0 or det <= 0:
+        return False
+    c11, c22, c33 = S22 * S33 - S23 * S23, S11 * S33 - S13 * S13, m2
+    c12, c13, c23 = S13 * S23 - S12 * S33, S12 * S23 - S13 * S22, S12 * S13 - S11 * S23
+    b1 = (c11 * r1 + c12 * r2 + c13 * r3) / det
+    b2 = (c12 * r1 + c22 * r2 + c23 * r3) / det
+    b3 = (c13 * r1 + c23 * r2 + c33 * r3) / det
+    quad = b1 * r1 + b2 * r2 + b3 * r3 - d
+    if not quad > 0:
+        return False
+    lam = g_scaled * g_scaled / quad
+    S11, S22, S33, S12, S13, S23 = lam * S11, lam * S22, lam * S33, lam * S12, lam * S13, lam * S23
+    a6 = math.sqrt(S33)
+    a5, a4 = S23 / a6, S13 / a6
+    a3 = math.sqrt(S22 - a5 * a5)
+    a2 = (S12 - a4 * a5) / a3
+    a1 = math.sqrt(S11 - a2 * a2 - a4 * a4)
+    m11, m22, m33 = 1 / a1, 1 / a3, 1 / a6
+    m21 = -a2 * m11 / a3
+    m32 = -a5 * m22 / a6
+    m31 = -(a4 * m11 + a5 * m21) / a6
+    out[0], out[1], out[2] = b1, b2, b3
+    out[3], out[4], out[5] = m11, 0.0, 0.0
+    out[6], out[7], out[8] = m21, m22, 0.0
+    out[9], out[10], out[11] = m31, m32, m33
+    out[12] = lam
+    return True
+
+
+@jit
+def _sum_squares(z):
+    s = 0.0
+    for p in range(z.shape[0]):
+        s += z[p, 0] * z[p, 0] + z[p, 1] * z[p, 1] + z[p, 2] * z[p, 2]
+    return s
+
+
+@jit
+def _all_finite(z):
+    for p in range(z.shape[0]):
+        for a in range(3):
+            if not math.isfinite(z[p, a]):
+                return False
+    return True
+
+
+# ----------------------------------------------------------------------------- full LLS
+@jit
+def _full_lls(z, g, min_gap, eigvec_tol, out, N, L, x):
+    """Full LLS of one problem into ``out`` = (b (3), M (9), λ of the unit Θ̂); status."""
+    n = z.shape[0]
+    k = math.sqrt(_sum_squares(z) / n)
+    if not (math.isfinite(k) and k > 0):
+        return REFERENCE
+    _normal_matrix(z, k, N)
+    if not _geometry_from_normal_matrix(N, n):
+        return REFERENCE
+    norm = _null_vector(N, x, L, min_gap, eigvec_tol)
+    if norm < 0:
+        return REFERENCE
+    if not _theta_to_model(x, g / k, out):
+        return NO_ELLIPSOID
+    out[0] *= k
+    out[1] *= k
+    out[2] *= k
+    out[12] *= norm
+    return OK
+
+
+@jit
+def full_lls(z, g, min_gap, eigvec_tol, out):
+    """Full LLS of poses ``z`` (n, 3) into ``out`` (13,): b, M row-major, λ; status."""
+    return _full_lls(z, g, min_gap, eigvec_tol, out, np.empty((10, 10)), np.empty((10, 10)), np.empty(10))
+
+
+@jit
+def full_lls_batch(z, g, min_gap, eigvec_tol, bias, M, status):
+    """Full LLS of every trial of ``z`` (T, n, 3): ``bias`` (T, 3), ``M`` (T, 3, 3) (NaN
+    unless OK), ``status`` (T,)."""
+    N = np.empty((10, 10))
+    L = np.empty((10, 10))
+    x = np.empty(10)
+    out = np.empty(13)
+    for t in range(z.shape[0]):
+        zt = z[t]
+        s = _full_lls(zt, g, min_gap, eigvec_tol, out, N, L, x)
+        if s == REFERENCE and not _all_finite(zt):
+            s = NON_FINITE
+        status[t] = s
+        if s == OK:
+            for i in range(3):
+                bias[t, i] = out[i]
+                for j in range(3):
+                    M[t, i, j] = out[3 + 3 * i + j]
+        else:
+            for i in range(3):
+                bias[t, i] = math.nan
+                for j in range(3):
+                    M[t, i, j] = math.nan
+
+
+# ----------------------------------------------------------------------------- bias-only LLS
+@jit
+def _bias_lls(z, out):
+    """Bias-only LLS of one problem (the centred 3x3 normal equations of
+    :func:`accelcal.lls.bias_lls`): ``out`` = (b (3), c); status."""
+    n = z.shape[0]
+    sum_sq = _sum_squares(z)
+    if not math.isfinite(sum_sq):
+        return REFERENCE
+    p1, p2, p3 = z[0, 0], z[0, 1], z[0, 2]
+    sx = sy = sz = 0.0
+    xx = xy = xz = yy = yz = zz = 0.0
+    xq = yq = zq = 0.0
+    for i in range(n):
+        cx, cy, cz = z[i, 0] - p1, z[i, 1] - p2, z[i, 2] - p3
+        x2, y2, z2 = cx * cx, cy * cy, cz * cz
+        q = x2 + y2 + z2
+        sx += cx
+        sy += cy
+        sz += cz
+        xx += x2
+        yy += y2
+        zz += z2
+        xy += cx * cy
+        xz += cx * cz
+        yz += cy * cz
+        xq += cx * q
+        yq += cy * q
+        zq += cz * q
+    mx, my, mz = sx / n, sy / n, sz / n
+    a, b, c = xx - sx * mx, xy - sx * my, xz - sx * mz
+    d, e, f = yy - sy * my, yz - sy * mz, zz - sz * mz
+    if not _scatter_is_clearly_3d(a, b, c, d, e, f, sum_sq):
+        return REFERENCE
+    mean_cc = (xx + yy + zz) / n
+    h1, h2, h3 = xq - sx * mean_cc, yq - sy * mean_cc, zq - sz * mean_cc
+    # Cholesky of the scatter, as accelcal.lls._solve_spd3
+    l11 = math.sqrt(a)
+    l21, l31 = b / l11, c / l11
+    l22 = math.sqrt(d - l21 * l21)
+    l32 = (e - l31 * l21) / l22
+    l33 = math.sqrt(f - l31 * l31 - l32 * l32)
+    y1 = h1 / l11
+    y2 = (h2 - l21 * y1) / l22
+    y3 = (h3 - l31 * y1 - l32 * y2) / l33
+    x3 = y3 / l33
+    x2 = (y2 - l32 * x3) / l22
+    x1 = (y1 - l21 * x2 - l31 * x3) / l11
+    b1, b2, b3 = 0.5 * x1 + p1, 0.5 * x2 + p2, 0.5 * x3 + p3
+    out[0], out[1], out[2] = b1, b2, b3
+    out[3] = sum_sq / n - 2 * ((mx + p1) * b1 + (my + p2) * b2 + (mz + p3) * b3)
+    return OK
+
+
+@jit
+def bias_lls(z, out):
+    """Bias-only LLS of poses ``z`` (n, 3) into ``out`` (4,): b, c; status."""
+    return _bias_lls(z, out)
+
+
+@jit
+def bias_lls_batch(z, bias, status):
+    """Bias-only LLS of every trial of ``z`` (T, n, 3) into ``bias`` (T, 3); status (T,)."""
+    out = np.empty(4)
+    for t in range(z.shape[0]):
+        zt = z[t]
+        s = _bias_lls(zt, out)
+        if s == REFERENCE and not _all_finite(zt):
+            s = NON_FINITE
+        status[t] = s
+        if s == OK:
+            bias[t, 0], bias[t, 1], bias[t, 2] = out[0], out[1], out[2]
+        else:
+            bias[t, 0] = bias[t, 1] = bias[t, 2] = math.nan
+
+
+# ----------------------------------------------------------------------------- ALS
+#: ALS statuses: no noise level below σ = 1 (scaled) makes Ψ singular; (batch) the
+#: LLS was fine but the ALS estimate is no ellipsoid.
+NO_NOISE_LEVEL = 4
+ALS_NO_ELLIPSOID = 8
+
+
+@jit
+def _jacobi_eigh(A, w, V, vectors):
+    """Eigenvalues ``w`` (unsorted) and, if ``vectors``, eigenvectors (columns of ``V``)
+    of the symmetric 10x10 ``A`` (upper triangle read and destroyed), by the cyclic
+    Jacobi method with thresholds (Rutishauser; Numerical Recipes ``jacobi``): accurate
+    to rounding also for the eigenvalues near zero that ALS looks for."""
+    n = 10
+    b = np.empty(n)
+    zacc = np.zeros(n)
+    for i in range(n):
+        b[i] = w[i] = A[i, i]
+        if vectors:
+            for j in range(n):
+                V[i, j] = 0.0
+            V[i, i] = 1.0
+    for sweep in range(50):
+        sm = 0.0
+        for p in range(n - 1):
+            for q in range(p + 1, n):
+                sm += abs(A[p, q])
+        if sm == 0.0:
+            return
+        tresh = 0.2 * sm / (n * n) if sweep < 3 else 0.0
+        for p in range(n - 1):
+            for q in range(p + 1, n):
+                apq = A[p, q]
+                gg = 100.0 * abs(apq)
+                if sweep > 3 and abs(w[p]) + gg == abs(w[p]) and abs(w[q]) + gg == abs(w[q]):
+                    A[p, q] = 0.0
+                elif abs(apq) > tresh:
+                    h = w[q] - w[p]
+                    if abs(h) + gg == abs(h):
+                        t = apq / h
+                    else:
+                        theta = 0.5 * h / apq
+                        t = 1.0 / (abs(theta) + math.sqrt(1.0 + theta * theta))
+                        if theta < 0.0:
+                            t = -t
+                    c = 1.0 / math.sqrt(1.0 + t * t)
+                    s = t * c
+                    tau = s / (1.0 + c)
+                    h = t * apq
+                    zacc[p] -= h
+                    zacc[q] += h
+                    w[p] -= h
+                    w[q] += h
+                    A[p, q] = 0.0
+                    for j in range(p):
+                        g1, h1 = A[j, p], A[j, q]
+                        A[j, p] = g1 - s * (h1 + g1 * tau)
+                        A[j, q] = h1 + s * (g1 - h1 * tau)
+                    for j in range(p + 1, q):
+                        g1, h1 = A[p, j], A[j, q]
+                        A[p, j] = g1 - s * (h1 + g1 * tau)
+                        A[j, q] = h1 + s * (g1 - h1 * tau)
+                    for j in range(q + 1, n):
+                        g1, h1 = A[p, j], A[q, j]
+                        A[p, j] = g1 - s * (h1 + g1 * tau)
+                        A[q, j] = h1 + s * (g1 - h1 * tau)
+                    if vectors:
+                        for j in range(n):
+                            g1, h1 = V[j, p], V[j, q]
+                            V[j, p] = g1 - s * (h1 + g1 * tau)
+                            V[j, q] = h1 + s * (g1 - h1 * tau)
+        for i in range(n):
+            b[i] += zacc[i]
+            w[i] = b[i]
+            zacc[i] = 0.0
+
+
+@jit
+def _correction_terms(N, T1, T2, P1, P2):
+    """``Ψ1 = T1 · N[9]``, ``Ψ2 = N[9, 9] T2`` (:func:`accelcal.als.corrected_matrix_terms`)."""
+    for i in range(10):
+        for j in range(10):
+            s = 0.0
+            for l in range(10):
+                s += T1[i, j, l] * N[9, l]
+            P1[i, j] = s
+            P2[i, j] = N[9, 9] * T2[i, j]
+
+
+@jit
+def _psi(N, P1, P2, v, A):
+    for i in range(10):
+        for j in range(10):
+            A[i, j] = N[i, j] + v * P1[i, j] + (v * v) * P2[i, j]
+
+
+@jit
+def _lam_min(N, P1, P2, v, A, w, V):
+    _psi(N, P1, P2, v, A)
+    _jacobi_eigh(A, w, V, False)
+    m = w[0]
+    for i in range(1, 10):
+        m = min(m, w[i])
+    return m
+
+
+@jit
+def _noise_var(N, P1, P2, A, w, V):
+    """σ² (scaled) at which Ψ(σ²) becomes singular, as :func:`accelcal.als._noise_var_from`:
+    the same bracket and scipy's ``brentq`` (xtol 1e-16, rtol 1e-12, 100 iterations).
+    Returns -1 if there is no root below 1 (NO_NOISE_LEVEL), -2 if Brent's method did not
+    converge (the reference decides)."""
+    if _lam_min(N, P1, P2, 0.0, A, w, V) <= 0:
+        return 0.0
+    hi = 1e-6
+    while _lam_min(N, P1, P2, hi, A, w, V) > 0:
+        hi *= 4
+        if hi > 1.0:
+            return -1.0
+    xtol, rtol = 1e-16, 1e-12
+    xpre, xcur = 0.0, hi
+    xblk = fblk = spre = scur = 0.0
+    fpre = _lam_min(N, P1, P2, xpre, A, w, V)
+    fcur = _lam_min(N, P1, P2, xcur, A, w, V)
+    if fpre == 0:
+        return xpre
+    if fcur == 0:
+        return xcur
+    for _ in range(100):
+        if fpre != 0 and fcur != 0 and (fpre < 0) != (fcur < 0):
+            xblk, fblk = xpre, fpre
+            spre = scur = xcur - xpre
+        if abs(fblk) < abs(fcur):
+            xpre, xcur, xblk = xcur, xblk, xcur
+            fpre, fcur, fblk = fcur, fblk, fcur
+        delta = (xtol + rtol * abs(xcur)) / 2
+        sbis = (xblk - xcur) / 2
+        if fcur == 0 or abs(sbis) < delta:
+            return xcur
+        if abs(spre) > delta and abs(fcur) < abs(fpre):
+            if xpre == xblk:
+                stry = -fcur * (xcur - xpre) / (fcur - fpre)
+            else:
+                dpre = (fpre - fcur) / (xpre - xcur)
+                dblk = (fblk - fcur) / (xblk - xcur)
+                stry = -fcur * (fblk * dblk - fpre * dpre) / (dblk * dpre * (fblk - fpre))
+            if 2 * abs(stry) < min(abs(spre), 3 * abs(sbis) - delta):
+                spre, scur = scur, stry
+            else:
+                spre = scur = sbis
+        else:
+            spre = scur = sbis
+        xpre, fpre = xcur, fcur
+        if abs(scur) > delta:
+            xcur += scur
+        else:
+            xcur += delta if sbis > 0 else -delta
+        fcur = _lam_min(N, P1, P2, xcur, A, w, V)
+    return -2.0
+
+
+@jit
+def _full_als(z, g, noise_std, T1, T2, out, ev, N, P1, P2, A, V, theta):
+    """ALS of one problem whose full LLS succeeded: ``out`` = (b, M, λ of the unit Θ̂,
+    σ² in input units), ``ev`` the eigenvalues of Ψ ascending; status."""
+    n = z.shape[0]
+    k = math.sqrt(_sum_squares(z) / n)
+    _normal_matrix(z, k, N)
+    _correction_terms(N, T1, T2, P1, P2)
+    if math.isnan(noise_std):
+        var = _noise_var(N, P1, P2, A, ev, V)
+        if var == -1.0:
+            return NO_NOISE_LEVEL
+        if var < 0:
+            return REFERENCE
+    else:
+        var = (noise_std / k) ** 2
+    _psi(N, P1, P2, var, A)
+    _jacobi_eigh(A, ev, V, True)
+    imin = 0
+    for i in range(1, 10):
+        if ev[i] < ev[imin]:
+            imin = i
+    for i in range(10):
+        theta[i] = V[i, imin]
+    ev.sort()
+    if not _theta_to_model(theta, g / k, out):
+        return NO_ELLIPSOID
+    out[0] *= k
+    out[1] *= k
+    out[2] *= k
+    out[13] = var * k * k
+    return OK
+
+
+@jit
+def full_als(z, g, noise_std, T1, T2, out, ev):
+    """ALS of poses ``z`` (n, 3) whose full LLS succeeded (``noise_std`` NaN: estimated):
+    ``out`` (14,) = b, M, λ, σ²; ``ev`` (10,) the eigenvalues of Ψ ascending; status."""
+    return _full_als(z, g, noise_std, T1, T2, out, ev, np.empty((10, 10)), np.empty((10, 10)),
+                     np.empty((10, 10)), np.empty((10, 10)), np.empty((10, 10)), np.empty(10))
+
+
+@jit
+def full_als_batch(z, g, noise_std, T1, T2, min_gap, eigvec_tol, bias, M, status):
+    """ALS of every trial of ``z`` (T, n, 3): the full LLS kernel first (its status if it
+    fails: REFERENCE, NO_ELLIPSOID, NON_FINITE), then ALS (NO_ELLIPSOID + 8 if ALS gives
+    no ellipsoid, NO_NOISE_LEVEL, REFERENCE)."""
+    N, P1, P2, A, V, L = (np.empty((10, 10)), np.empty((10, 10)), np.empty((10, 10)), np.empty((10, 10)),
+                          np.empty((10, 10)), np.empty((10, 10)))
+    x, ev, theta = np.empty(10), np.empty(10), np.empty(10)
+    out = np.empty(14)
+    for t in range(z.shape[0]):
+        zt = z[t]
+        s = _full_lls(zt, g, min_gap, eigvec_tol, out, N, L, x)
+        if s == REFERENCE and not _all_finite(zt):
+            s = NON_FINITE
+        if s == OK:
+            s = _full_als(zt, g, noise_std, T1, T2, out, ev, N, P1, P2, A, V, theta)
+            if s == NO_ELLIPSOID:
+                s = ALS_NO_ELLIPSOID
+        status[t] = s
+        for i in range(3):
+            bias[t, i] = out[i] if s == OK else math.nan
+            for j in range(3):
+                M[t, i, j] = out[3 + 3 * i + j] if s == OK else math.nan
+
