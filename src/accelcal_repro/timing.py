@@ -205,6 +205,7 @@ def run_benchmark(seed: int, g: float, noise_std: float, n_poses: Sequence[int],
                   single_methods: Sequence[str] = tuple(SINGLE_METHODS),
                   batch_methods: Sequence[str] = tuple(BATCH_METHODS),
                   interleavings: Sequence[str] = ("block", "problem"), als_known_noise: bool = True,
+                  nlls_known_noise: bool = True,
                   stage: str = "burkhard2024_timing") -> tuple[pd.DataFrame, pd.DataFrame]:
     """The whole benchmark, one pose count after the other: problems from the stream
     ``grid_seed(seed, stage, n)``, interleaved single-problem timings (every
@@ -217,6 +218,9 @@ def run_benchmark(seed: int, g: float, noise_std: float, n_poses: Sequence[int],
     fns = {m: SINGLE_METHODS[m] for m in single_methods}
     if "full_als" in fns and als_known_noise:  # as in the Monte Carlo: ALS is told the noise std
         fns["full_als"] = partial(full_als, noise_std=noise_std)
+    for m in ("full_nlls", "bias_nlls"):  # and NLLS, for its stopping tolerance
+        if m in fns and nlls_known_noise:
+            fns[m] = partial(SINGLE_METHODS[m], noise_std=noise_std)
     singles, batches = [], []
     for n in n_poses:
         n = int(n)

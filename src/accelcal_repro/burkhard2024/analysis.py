@@ -179,4 +179,4 @@ def limit_onsets(limit: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-__all__ = ["LIMIT_METHODS", "LIMIT_PAIRS", "limit_onsets", "lls_limit", "relative_errors"]
+__all__ = ["LIMIT_METHODS", "LIMIT_PAIRS", "efficiency", "limit_onsets", "lls_limit", "relative_errors"]
