@@ -538,17 +538,12 @@ def _bias_lls_batch_normal(z) -> BatchResult:
     HtH = np.einsum("tni,tnj->tij", H, H)
     Hty = np.einsum("tni,tn->ti", H, y)
     T = len(z)
-    try:
-        sol = np.linalg.solve(HtH, Hty[..., None])[..., 0]
-        valid = np.ones(T, bool)
-    except np.linalg.LinAlgError:  # a trial with exactly singular normal equations (one plane,
-        sol = np.full((T, 4), np.nan)  # all poses equal): NaN and valid=False, the others solved
-        valid = np.zeros(T, bool)
-        for t in range(T):
-            try:
-                sol[t] = np.linalg.solve(HtH[t], Hty[t])
-                valid[t] = True
-            except np.linalg.LinAlgError:
-                pass
+    # a trial whose normal equations are singular to working precision (all poses equal,
+    # noise-free poses in one plane) determines no bias: NaN and valid=False, not an
+    # exception for the whole batch nor digits of rounding noise
+    valid = np.linalg.cond(HtH) < 1.0 / np.finfo(float).eps
+    sol = np.full((T, 4), np.nan)
+    if valid.any():
+        sol[valid] = np.linalg.solve(HtH[valid], Hty[valid][..., None])[..., 0]
     return BatchResult(method="bias_lls", bias=sol[:, :3] * k[:, None],
                        M=np.broadcast_to(np.eye(3), (T, 3, 3)).copy(), valid=valid)
