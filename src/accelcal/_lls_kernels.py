@@ -40,56 +40,154 @@ _MIN_SPREAD = 1e-8
 
 # ----------------------------------------------------------------------------- helpers
 @jit
-def _cholesky(A, L, m):
-    """Lower Cholesky factor ``L`` of the leading ``m x m`` block of ``A``; False if that
-    block is not positive definite (a pivot <= 0 or NaN)."""
+def _ldl(A, L, dinv, D, W, m):
+    """``A = L D Lᵀ`` of the leading ``m x m`` block of ``A`` (unit lower ``L``, strictly
+    lower part written; ``dinv`` = 1/D); False if that block is not positive definite
+    (a pivot <= 0 or NaN), which is exactly when its Cholesky factorisation fails.
+    No square roots and one division per column: this runs for every Monte Carlo trial.
+    ``D``, ``W``: workspace (10,)."""
     for j in range(m):
-        s = A[j, j]
+        d = A[j, j]
         for p in range(j):
-            s -= L[j, p] * L[j, p]
-        if not s > 0.0:
+            w = L[j, p] * D[p]
+            W[p] = w
+            d -= L[j, p] * w
+        if not d > 0.0:
             return False
-        d = math.sqrt(s)
-        L[j, j] = d
+        D[j] = d
+        inv = 1.0 / d
+        dinv[j] = inv
         for i in range(j + 1, m):
             t = A[i, j]
             for p in range(j):
-                t -= L[i, p] * L[j, p]
-            L[i, j] = t / d
+                t -= L[i, p] * W[p]
+            L[i, j] = t * inv
     return True
 
 
 @jit
-def _chol_solve(L, b, x, m):
-    """``x = (L Lᵀ)⁻¹ b`` (``x`` may be ``b``)."""
+def _ldl_solve(L, dinv, x, m):
+    """``x <- (L D Lᵀ)⁻¹ x`` in place."""
     for i in range(m):
-        s = b[i]
+        s = x[i]
         for p in range(i):
             s -= L[i, p] * x[p]
-        x[i] = s / L[i, i]
+        x[i] = s
+    for i in range(m):
+        x[i] *= dinv[i]
     for i in range(m - 1, -1, -1):
         s = x[i]
         for p in range(i + 1, m):
             s -= L[p, i] * x[p]
-        x[i] = s / L[i, i]
+        x[i] = s
 
 
 @jit
 def _normal_matrix(z, k, N):
-    """``N = XᵀX`` (10x10, upper and lower) of the design of eq. (3) of the poses ``z / k``."""
-    for i in range(10):
-        for j in range(10):
-            N[i, j] = 0.0
-    f = np.empty(10)
+    """``N = XᵀX`` (10x10, upper and lower) of the design of eq. (3) of the poses ``z / k``.
+
+    Every entry of N is a coefficient (a power of two) times a moment ``Σ x^a y^b w^c``
+    of degree <= 4 of the scaled poses: the 34 moments are summed (34 products per pose
+    instead of the 55 of ``XᵀX``) and N is assembled from them."""
+    r = 1.0 / k
+    s_x = s_y = s_w = 0.0
+    s_xx = s_xy = s_xw = s_yy = s_yw = s_ww = 0.0
+    s_xxx = s_xxy = s_xxw = s_xyy = s_xyw = s_xww = s_yyy = s_yyw = s_yww = s_www = 0.0
+    s_xxxx = s_xxxy = s_xxxw = s_xxyy = s_xxyw = s_xxww = s_xyyy = s_xyyw = s_xyww = s_xwww = 0.0
+    s_yyyy = s_yyyw = s_yyww = s_ywww = s_wwww = 0.0
     for p in range(z.shape[0]):
-        x, y, w = z[p, 0] / k, z[p, 1] / k, z[p, 2] / k
-        f[0], f[1], f[2] = x * x, y * y, w * w
-        f[3], f[4], f[5] = x * (2.0 * y), x * (2.0 * w), y * (2.0 * w)
-        f[6], f[7], f[8], f[9] = -2.0 * x, -2.0 * y, -2.0 * w, 1.0
-        for i in range(10):
-            fi = f[i]
-            for j in range(i, 10):
-                N[i, j] += fi * f[j]
+        x, y, w = z[p, 0] * r, z[p, 1] * r, z[p, 2] * r
+        xx, xy, xw, yy, yw, ww = x * x, x * y, x * w, y * y, y * w, w * w
+        s_x += x
+        s_y += y
+        s_w += w
+        s_xx += xx
+        s_xy += xy
+        s_xw += xw
+        s_yy += yy
+        s_yw += yw
+        s_ww += ww
+        s_xxx += xx * x
+        s_xxy += xx * y
+        s_xxw += xx * w
+        s_xyy += xy * y
+        s_xyw += xy * w
+        s_xww += xw * w
+        s_yyy += yy * y
+        s_yyw += yy * w
+        s_yww += yw * w
+        s_www += ww * w
+        s_xxxx += xx * xx
+        s_xxxy += xx * xy
+        s_xxxw += xx * xw
+        s_xxyy += xx * yy
+        s_xxyw += xx * yw
+        s_xxww += xx * ww
+        s_xyyy += xy * yy
+        s_xyyw += xy * yw
+        s_xyww += xy * ww
+        s_xwww += xw * ww
+        s_yyyy += yy * yy
+        s_yyyw += yy * yw
+        s_yyww += yy * ww
+        s_ywww += yw * ww
+        s_wwww += ww * ww
+    n = float(z.shape[0])
+    N[0, 0] = s_xxxx
+    N[0, 1] = s_xxyy
+    N[0, 2] = s_xxww
+    N[0, 3] = 2.0 * s_xxxy
+    N[0, 4] = 2.0 * s_xxxw
+    N[0, 5] = 2.0 * s_xxyw
+    N[0, 6] = -2.0 * s_xxx
+    N[0, 7] = -2.0 * s_xxy
+    N[0, 8] = -2.0 * s_xxw
+    N[0, 9] = s_xx
+    N[1, 1] = s_yyyy
+    N[1, 2] = s_yyww
+    N[1, 3] = 2.0 * s_xyyy
+    N[1, 4] = 2.0 * s_xyyw
+    N[1, 5] = 2.0 * s_yyyw
+    N[1, 6] = -2.0 * s_xyy
+    N[1, 7] = -2.0 * s_yyy
+    N[1, 8] = -2.0 * s_yyw
+    N[1, 9] = s_yy
+    N[2, 2] = s_wwww
+    N[2, 3] = 2.0 * s_xyww
+    N[2, 4] = 2.0 * s_xwww
+    N[2, 5] = 2.0 * s_ywww
+    N[2, 6] = -2.0 * s_xww
+    N[2, 7] = -2.0 * s_yww
+    N[2, 8] = -2.0 * s_www
+    N[2, 9] = s_ww
+    N[3, 3] = 4.0 * s_xxyy
+    N[3, 4] = 4.0 * s_xxyw
+    N[3, 5] = 4.0 * s_xyyw
+    N[3, 6] = -4.0 * s_xxy
+    N[3, 7] = -4.0 * s_xyy
+    N[3, 8] = -4.0 * s_xyw
+    N[3, 9] = 2.0 * s_xy
+    N[4, 4] = 4.0 * s_xxww
+    N[4, 5] = 4.0 * s_xyww
+    N[4, 6] = -4.0 * s_xxw
+    N[4, 7] = -4.0 * s_xyw
+    N[4, 8] = -4.0 * s_xww
+    N[4, 9] = 2.0 * s_xw
+    N[5, 5] = 4.0 * s_yyww
+    N[5, 6] = -4.0 * s_xyw
+    N[5, 7] = -4.0 * s_yyw
+    N[5, 8] = -4.0 * s_yww
+    N[5, 9] = 2.0 * s_yw
+    N[6, 6] = 4.0 * s_xx
+    N[6, 7] = 4.0 * s_xy
+    N[6, 8] = 4.0 * s_xw
+    N[6, 9] = -2.0 * s_x
+    N[7, 7] = 4.0 * s_yy
+    N[7, 8] = 4.0 * s_yw
+    N[7, 9] = -2.0 * s_y
+    N[8, 8] = 4.0 * s_ww
+    N[8, 9] = -2.0 * s_w
+    N[9, 9] = n
     for i in range(10):
         for j in range(i):
             N[i, j] = N[j, i]
@@ -125,28 +223,29 @@ def _geometry_from_normal_matrix(N, n):
 
 
 @jit
-def _null_vector(N, x, L, min_gap, eigvec_tol):
+def _null_vector(N, x, L, wk, min_gap, eigvec_tol):
     """Θ̂ (unnormalised, in ``x``) of the full LLS from ``N`` (overwritten) by inverse
-    iteration, certified as in :func:`accelcal.lls._null_vector`.  Returns ``|x|``, or
-    -1 when the route cannot certify it."""
+    iteration, certified as in :func:`accelcal.lls._null_vector` (there with LAPACK's
+    Cholesky, here with LDLᵀ: the same test of positive definiteness).  Returns ``|x|``,
+    or -1 when the route cannot certify it.  ``wk``: workspace (30,)."""
+    dinv, D, W = wk[:10], wk[10:20], wk[20:30]
     tr = 0.0
     for i in range(10):
         tr += N[i, i]
     delta = 0.0
-    if not _cholesky(N, L, 10):  # N singular to rounding (noise-free poses): N + δI
+    if not _ldl(N, L, dinv, D, W, 10):  # N singular to rounding (noise-free poses): N + δI
         delta = _SHIFT * tr
         for i in range(10):
             N[i, i] += delta
-        if not _cholesky(N, L, 10):
+        if not _ldl(N, L, dinv, D, W, 10):
             return -1.0
     for i in range(10):
         x[i] = 0.0
     x[0] = x[1] = x[2] = 1.0
     x[9] = -1.0
-    _chol_solve(L, x, x, 10)
-    y = np.empty(10)
+    _ldl_solve(L, dinv, x, 10)
     for _ in range(_ROUNDS):
-        _chol_solve(L, x, x, 10)
+        _ldl_solve(L, dinv, x, 10)
         xx = 0.0
         xy = 0.0
         yy = 0.0
@@ -154,7 +253,6 @@ def _null_vector(N, x, L, min_gap, eigvec_tol):
             s = 0.0
             for j in range(10):
                 s += N[i, j] * x[j]
-            y[i] = s
             xx += x[i] * x[i]
             xy += x[i] * s
             yy += s * s
@@ -165,11 +263,11 @@ def _null_vector(N, x, L, min_gap, eigvec_tol):
         if res <= eigvec_tol * (bound - rho):
             for i in range(9):
                 N[i, i] -= bound + delta
-            return math.sqrt(xx) if _cholesky(N, L, 9) else -1.0
-        norm = math.sqrt(xx)
+            return math.sqrt(xx) if _ldl(N, L, dinv, D, W, 9) else -1.0
+        scale = 1.0 / math.sqrt(xx)
         for i in range(10):
-            x[i] /= norm
-        _chol_solve(L, x, x, 10)
+            x[i] *= scale
+        _ldl_solve(L, dinv, x, 10)
     return -1.0
 
 
@@ -232,7 +330,7 @@ def _all_finite(z):
 
 # ----------------------------------------------------------------------------- full LLS
 @jit
-def _full_lls(z, g, min_gap, eigvec_tol, out, N, L, x):
+def _full_lls(z, g, min_gap, eigvec_tol, out, N, L, x, wk):
     """Full LLS of one problem into ``out`` = (b (3), M (9), λ of the unit Θ̂); status."""
     n = z.shape[0]
     k = math.sqrt(_sum_squares(z) / n)
@@ -241,7 +339,7 @@ def _full_lls(z, g, min_gap, eigvec_tol, out, N, L, x):
     _normal_matrix(z, k, N)
     if not _geometry_from_normal_matrix(N, n):
         return REFERENCE
-    norm = _null_vector(N, x, L, min_gap, eigvec_tol)
+    norm = _null_vector(N, x, L, wk, min_gap, eigvec_tol)
     if norm < 0:
         return REFERENCE
     if not _theta_to_model(x, g / k, out):
@@ -256,7 +354,8 @@ def _full_lls(z, g, min_gap, eigvec_tol, out, N, L, x):
 @jit
 def full_lls(z, g, min_gap, eigvec_tol, out):
     """Full LLS of poses ``z`` (n, 3) into ``out`` (13,): b, M row-major, λ; status."""
-    return _full_lls(z, g, min_gap, eigvec_tol, out, np.empty((10, 10)), np.empty((10, 10)), np.empty(10))
+    return _full_lls(z, g, min_gap, eigvec_tol, out, np.empty((10, 10)), np.empty((10, 10)), np.empty(10),
+                     np.empty(30))
 
 
 @jit
@@ -266,10 +365,11 @@ def full_lls_batch(z, g, min_gap, eigvec_tol, bias, M, status):
     N = np.empty((10, 10))
     L = np.empty((10, 10))
     x = np.empty(10)
+    wk = np.empty(30)
     out = np.empty(13)
     for t in range(z.shape[0]):
         zt = z[t]
-        s = _full_lls(zt, g, min_gap, eigvec_tol, out, N, L, x)
+        s = _full_lls(zt, g, min_gap, eigvec_tol, out, N, L, x, wk)
         if s == REFERENCE and not _all_finite(zt):
             s = NON_FINITE
         status[t] = s
@@ -571,11 +671,11 @@ def full_als_batch(z, g, noise_std, T1, T2, min_gap, eigvec_tol, bias, M, status
     no ellipsoid, NO_NOISE_LEVEL, REFERENCE)."""
     N, P1, P2, A, V, L = (np.empty((10, 10)), np.empty((10, 10)), np.empty((10, 10)), np.empty((10, 10)),
                           np.empty((10, 10)), np.empty((10, 10)))
-    x, ev, theta = np.empty(10), np.empty(10), np.empty(10)
+    x, ev, theta, wk = np.empty(10), np.empty(10), np.empty(10), np.empty(30)
     out = np.empty(14)
     for t in range(z.shape[0]):
         zt = z[t]
-        s = _full_lls(zt, g, min_gap, eigvec_tol, out, N, L, x)
+        s = _full_lls(zt, g, min_gap, eigvec_tol, out, N, L, x, wk)
         if s == REFERENCE and not _all_finite(zt):
             s = NON_FINITE
         if s == OK:
