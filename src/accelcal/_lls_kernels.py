@@ -333,6 +333,8 @@ def _all_finite(z):
 def _full_lls(z, g, min_gap, eigvec_tol, out, N, L, x, wk):
     """Full LLS of one problem into ``out`` = (b (3), M (9), λ of the unit Θ̂); status."""
     n = z.shape[0]
+    if z.shape[1] != 3 or n < 10:  # the reference raises the error
+        return REFERENCE
     k = math.sqrt(_sum_squares(z) / n)
     if not (math.isfinite(k) and k > 0):
         return REFERENCE
@@ -352,10 +354,21 @@ def _full_lls(z, g, min_gap, eigvec_tol, out, N, L, x, wk):
 
 
 @jit
-def full_lls(z, g, min_gap, eigvec_tol, out):
-    """Full LLS of poses ``z`` (n, 3) into ``out`` (13,): b, M row-major, λ; status."""
-    return _full_lls(z, g, min_gap, eigvec_tol, out, np.empty((10, 10)), np.empty((10, 10)), np.empty(10),
-                     np.empty(30))
+def full_lls(z, g, min_gap, eigvec_tol, bias, M):
+    """Full LLS of poses ``z`` (n, 3) into ``bias`` (3,) and ``M`` (3, 3).
+
+    Returns λ (of the unit Θ̂; NaN if g is), or ``-REFERENCE`` / ``-NO_ELLIPSOID`` (one
+    float crosses the Python boundary faster than a tuple)."""
+    out = np.empty(13)
+    s = _full_lls(z, g, min_gap, eigvec_tol, out, np.empty((10, 10)), np.empty((10, 10)), np.empty(10),
+                  np.empty(30))
+    if s != OK:
+        return -float(s)
+    for i in range(3):
+        bias[i] = out[i]
+        for j in range(3):
+            M[i, j] = out[3 + 3 * i + j]
+    return out[12]
 
 
 @jit
@@ -391,6 +404,8 @@ def _bias_lls(z, out):
     """Bias-only LLS of one problem (the centred 3x3 normal equations of
     :func:`accelcal.lls.bias_lls`): ``out`` = (b (3), c); status."""
     n = z.shape[0]
+    if z.shape[1] != 3 or n < 4:  # the reference raises the error
+        return REFERENCE
     sum_sq = _sum_squares(z)
     if not math.isfinite(sum_sq):
         return REFERENCE
@@ -440,9 +455,14 @@ def _bias_lls(z, out):
 
 
 @jit
-def bias_lls(z, out):
-    """Bias-only LLS of poses ``z`` (n, 3) into ``out`` (4,): b, c; status."""
-    return _bias_lls(z, out)
+def bias_lls(z, bias):
+    """Bias-only LLS of poses ``z`` (n, 3) into ``bias`` (3,); returns c of eq. (7), or NaN
+    where the reference must decide (c is finite whenever the kernel succeeds)."""
+    out = np.empty(4)
+    if _bias_lls(z, out) != OK:
+        return math.nan
+    bias[0], bias[1], bias[2] = out[0], out[1], out[2]
+    return out[3]
 
 
 @jit

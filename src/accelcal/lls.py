@@ -284,19 +284,19 @@ def full_lls(z, g: float) -> LLSResult:
 
 def _full_lls_compiled(K, z, g) -> LLSResult:
     """:func:`full_lls` by the compiled kernel (the fast route of :func:`_full_lls_numpy`
-    as one compiled loop); what it cannot certify goes to the SVD."""
-    z = pose_array(z, "full")
-    if not z.flags.c_contiguous:
-        z = np.ascontiguousarray(z)
-    out = np.empty(13)
-    status = K.full_lls(z, _float_or_nan(g), MIN_GAP, EIGVEC_TOL, out)
-    if status == K.REFERENCE:
+    as one compiled loop); what it cannot certify, and every input error, goes to the SVD."""
+    poses = np.ascontiguousarray(z, dtype=float)
+    if poses.ndim != 2:
         return _full_lls_svd(z, g)
+    bias, M = np.empty(3), np.empty((3, 3))
+    lam = K.full_lls(poses, _float_or_nan(g), MIN_GAP, EIGVEC_TOL, bias, M)
+    if lam == -K.REFERENCE:
+        return _full_lls_svd(poses, g)
     g = check_g(g)
-    if status == K.NO_ELLIPSOID:
+    if lam == -K.NO_ELLIPSOID:
         raise NotPositiveDefiniteError(_NO_ELLIPSOID)
-    return LLSResult._trusted(method="full_lls", bias=out[:3], M=out[3:12].reshape(3, 3), g=g, poses=z,
-                              lam=float(out[12]), c=math.nan, noise_var=math.nan)
+    return LLSResult._trusted(method="full_lls", bias=bias, M=M, g=g, poses=poses, lam=lam, c=math.nan,
+                              noise_var=math.nan)
 
 
 def _float_or_nan(g) -> float:
@@ -378,16 +378,17 @@ def bias_lls(z, g: float) -> LLSResult:
 
 def _bias_lls_compiled(K, z, g) -> LLSResult:
     """:func:`bias_lls` by the compiled kernel (the centred normal equations of
-    :func:`_bias_lls_numpy`); what it cannot certify goes to ``lstsq``."""
-    z = pose_array(z, "bias")
-    if not z.flags.c_contiguous:
-        z = np.ascontiguousarray(z)
-    out = np.empty(4)
-    if K.bias_lls(z, out) == K.REFERENCE:
+    :func:`_bias_lls_numpy`); what it cannot certify, and every input error, goes to ``lstsq``."""
+    poses = np.ascontiguousarray(z, dtype=float)
+    if poses.ndim != 2:
         return _bias_lls_lstsq(z, g)
+    bias = np.empty(3)
+    c = K.bias_lls(poses, bias)
+    if c != c:  # NaN: the reference decides
+        return _bias_lls_lstsq(poses, g)
     g = check_g(g)
-    return LLSResult._trusted(method="bias_lls", bias=out[:3], M=_EYE3.copy(), g=g, poses=z, lam=math.nan,
-                              c=float(out[3]), noise_var=math.nan)
+    return LLSResult._trusted(method="bias_lls", bias=bias, M=_EYE3.copy(), g=g, poses=poses, lam=math.nan, c=c,
+                              noise_var=math.nan)
 
 
 def _bias_lls_numpy(z, g) -> LLSResult:

@@ -49,7 +49,7 @@ class CalibrationResult:
         cached property such as ``singular_values``.
         """
         obj = object.__new__(cls)
-        obj.__dict__.update(values)
+        object.__setattr__(obj, "__dict__", values)  # the fresh dict of the keyword arguments
         return obj
 
     @property
