@@ -113,8 +113,10 @@ rule burkhard2024_summary:
 
 
 rule burkhard2024_timing_run:
-    """Benchmark: per-problem time of every method side by side, per pose count, and the
-    batched closed forms' throughput.
+    """Benchmark: per-problem time of every method side by side, per pose count (the
+    closed forms with the compiled kernels and with the numpy reference implementations),
+    and the batched closed forms' throughput.  The estimator part of the `benchmark`
+    target (workflow/rules/benchmark.smk) and the source of the speed claims.
 
     threads = all cores: Snakemake then runs it alone, so no other job perturbs the clock.
     """
@@ -127,6 +129,7 @@ rule burkhard2024_timing_run:
         g=BURKHARD["g"],
         timing=BURKHARD["timing"],
         als_known_noise=BURKHARD["als_known_noise"],
+        nlls_known_noise=BURKHARD["nlls_known_noise"],
     log:
         log_path("burkhard2024/timing_run"),
     benchmark:
