@@ -167,6 +167,7 @@ def backend(request, monkeypatch):
 
     if request.param == "numba" and kernels._resolve("auto") != "numba":
         pytest.skip("numba not installed")
+    monkeypatch.setattr(kernels, "_choice", request.param)
     monkeypatch.setattr(kernels, "_backend", request.param)
     return request.param
 

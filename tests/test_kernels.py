@@ -28,7 +28,7 @@ G = 9.8055
 
 @pytest.fixture(autouse=True)
 def _restore_backend():
-    previous = kernels.backend()
+    previous = kernels.choice()
     yield
     kernels.set_backend(previous)
 
@@ -379,3 +379,20 @@ def test_backend_choice_from_the_environment():
     assert kernels._resolve("auto") == "numba"
     with pytest.raises(ValueError, match="ACCELCAL_KERNELS"):
         kernels._resolve("fortran")
+
+
+def test_auto_loads_numba_for_batches_and_filters_not_for_one_problem():
+    """Under ``auto`` a one-off single-problem call stays in numpy (no numba start-up);
+    a batched call loads the kernels, and single-problem calls use them from then on."""
+    code = ("import sys, numpy as np\n"
+            "from accelcal import full_lls, bias_lls, full_lls_batch, kernels\n"
+            "from accelcal.simulation import random_directions, simulate_poses\n"
+            "rng = np.random.default_rng(0)\n"
+            "z = simulate_poses(random_directions(rng, 24), 9.8, np.eye(3), np.full(3, 0.01), 1e-4, rng)\n"
+            "full_lls(z, 9.8); bias_lls(z, 9.8)\n"
+            "before = 'numba' in sys.modules\n"
+            "full_lls_batch(z[None], 9.8)\n"
+            "print(kernels.choice(), before, 'numba' in sys.modules, kernels.compiled('_lls_kernels', single=True) is not None)\n")
+    env = {k: v for k, v in os.environ.items() if k != "ACCELCAL_KERNELS"}
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["auto", "False", "True", "True"]

@@ -145,7 +145,7 @@ def full_als(z, g: float, noise_std: float | None = None) -> LLSResult:
     # the LLS it corrects validates z and g and raises the same errors (degenerate poses,
     # no ellipsoid) as the LLS would
     lls = full_lls(z, g)
-    K = compiled(_KERNELS)
+    K = compiled(_KERNELS, single=True)
     if K is not None:
         return _full_als_compiled(K, lls.poses, lls.g, noise_std)
     return _full_als_numpy(lls.poses, lls.g, noise_std)

@@ -14,13 +14,21 @@ maintained by Anaconda/NVIDIA with a release every few months, and is an optiona
 dependency: without it (``pip install accelcal`` without the ``fast`` extra) the numpy
 implementations run, with identical results.
 
-Selection, per process (environment variable ``ACCELCAL_KERNELS``):
+Selection, per process (environment variable ``ACCELCAL_KERNELS``, or :func:`set_backend`):
 
-* ``auto`` (default): the compiled kernels when numba can be imported, else numpy;
-* ``numpy``: the numpy reference implementations only;
-* ``numba``: the compiled kernels, an :class:`ImportError` if numba is missing.
+* ``auto`` (default): with numba installed, the batched estimators and the filters run
+  compiled (numba is imported at their first call); the single-problem estimators
+  (:func:`~accelcal.full_lls`, :func:`~accelcal.bias_lls`, :func:`~accelcal.full_als`)
+  run compiled once the kernels are loaded in the process, and in numpy before: numba's
+  start-up (importing it and initialising its compiler, about 0.5 s of CPU) costs more
+  than ten thousand numpy solves, so a one-off calibration (the command line, a
+  bootstrap of a recording) never pays it;
+* ``numba``: every estimator and filter compiled (an :class:`ImportError` if numba is
+  missing);
+* ``numpy``: the numpy reference implementations only.
 
-:func:`set_backend` switches at run time (the tests compare both paths this way).
+Without numba, ``auto`` is ``numpy``.  The two paths give the same numbers to rounding
+(``tests/test_kernels.py``).
 
 Nothing here imports numba until a kernel is first needed, so ``import accelcal``
 stays cheap.  The first call of each kernel compiles it (seconds); ``cache=True``
@@ -40,16 +48,23 @@ import warnings
 #: Values of ``ACCELCAL_KERNELS``.
 BACKENDS = ("auto", "numpy", "numba")
 
-_backend: str | None = None
+_choice: str | None = None  # auto, numpy or numba: what was asked for
+_backend: str | None = None  # numba or numpy: what runs
 _loaded: dict[str, object] = {}
 _cache_warned = False
 
 
+def choice() -> str:
+    """The backend asked for: ``'auto'``, ``'numpy'`` or ``'numba'`` ($ACCELCAL_KERNELS)."""
+    if _choice is None:
+        set_backend(os.environ.get("ACCELCAL_KERNELS", "auto").strip().lower() or "auto")
+    return _choice
+
+
 def backend() -> str:
-    """The backend in use: ``'numba'`` or ``'numpy'`` (resolving ``auto`` once)."""
-    global _backend
+    """The backend in use: ``'numba'`` or ``'numpy'``."""
     if _backend is None:
-        _backend = _resolve(os.environ.get("ACCELCAL_KERNELS", "auto").strip().lower() or "auto")
+        choice()
     return _backend
 
 
@@ -69,18 +84,25 @@ def _resolve(choice: str) -> str:
     return "numpy"
 
 
-def set_backend(choice: str) -> str:
-    """Switch to ``choice`` (one of :data:`BACKENDS`) and return the previous backend."""
-    global _backend
-    previous = backend()
+def set_backend(choice: str) -> str | None:
+    """Ask for ``choice`` (one of :data:`BACKENDS`); returns the previous choice (None if
+    none had been made), which restores it."""
+    global _choice, _backend
+    previous = _choice
+    if choice is None:
+        _choice = _backend = None
+        return previous
     _backend = _resolve(choice)
+    _choice = choice
     return previous
 
 
-def compiled(module: str):
-    """The kernel module ``accelcal.<module>`` if the compiled backend is in use, else None.
+def compiled(module: str, single: bool = False):
+    """The kernel module ``accelcal.<module>`` if it is to run compiled, else None.
 
-    Imported (and numba with it) on the first call; a dictionary lookup after that.
+    ``single``: the caller solves one problem; under ``auto`` it gets the kernels only
+    once some kernel module is loaded in this process (see the module docstring).  The
+    module (and numba with it) is imported on the first call; a dictionary lookup after.
     """
     global _backend
     if _backend != "numba" and backend() != "numba":
@@ -89,16 +111,29 @@ def compiled(module: str):
         return _loaded[module]
     except KeyError:
         pass
+    if single and _choice == "auto" and not _loaded:
+        return None
     try:
         mod = _loaded[module] = importlib.import_module(f"accelcal.{module}")
     except ImportError as exc:  # numba found but not importable (broken install, wrong llvmlite)
-        if os.environ.get("ACCELCAL_KERNELS", "auto").strip().lower() == "numba":
+        if _choice == "numba":
             raise
         warnings.warn(f"accelcal: numba cannot be imported ({exc}); using the numpy implementations",
                       RuntimeWarning, stacklevel=2)
         _backend = "numpy"
         return None
     return mod
+
+
+def load() -> None:
+    """Load every kernel module now (numba's start-up paid here), so that the
+    single-problem estimators run compiled under ``auto`` too; nothing without numba."""
+    for module in KERNEL_MODULES:
+        compiled(module)
+
+
+#: Every kernel module (relative to the accelcal package).
+KERNEL_MODULES = ("_lls_kernels", "batista._filter_kernels", "tereshkov._estimator_kernels")
 
 
 def jit(*args, **options):
@@ -128,4 +163,4 @@ def jit(*args, **options):
     return decorate(args[0]) if args and callable(args[0]) else decorate
 
 
-__all__ = ["BACKENDS", "backend", "compiled", "jit", "set_backend"]
+__all__ = ["BACKENDS", "KERNEL_MODULES", "backend", "choice", "compiled", "jit", "load", "set_backend"]

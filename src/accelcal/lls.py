@@ -276,7 +276,7 @@ def full_lls(z, g: float) -> LLSResult:
     TooFewPosesError, DegeneratePosesError, NonFiniteError, InputShapeError,
     NotPositiveDefiniteError
     """
-    K = compiled(_KERNELS)
+    K = compiled(_KERNELS, single=True)
     if K is not None:
         return _full_lls_compiled(K, z, g)
     return _full_lls_numpy(z, g)
@@ -370,7 +370,7 @@ def bias_lls(z, g: float) -> LLSResult:
     -------
     LLSResult
     """
-    K = compiled(_KERNELS)
+    K = compiled(_KERNELS, single=True)
     if K is not None:
         return _bias_lls_compiled(K, z, g)
     return _bias_lls_numpy(z, g)

@@ -87,36 +87,42 @@ def _row(name, backend, value, unit, goal, at_least, judged) -> dict:
             "goal": float(goal) if goal is not None else np.nan, "meets_goal": met}
 
 
-_BACKEND_LS = {"numba": "-", "numpy": ":", "casadi": "-", "": "-"}
-
-
 def plot_cost(estimators: pd.DataFrame, filters: pd.DataFrame, compile_times: pd.DataFrame, stages: pd.DataFrame,
               interleave: str = "block"):
     """(a) Time per problem vs pose count of every estimator, one problem at a time
     (markers) and batched (per problem, dashed), compiled kernels solid, numpy reference
     dotted; (b) cost per step of the filters; (c) first-call time of each compiled kernel
     with an empty and with a filled disk cache; (d) job-seconds per workflow stage."""
+    from matplotlib.lines import Line2D
+
     t = estimators if "backend" in estimators else estimators.assign(backend="")
     with plt.rc_context({**RC, "axes.titlesize": 8.5}):
-        fig, axes = plt.subplots(2, 2, figsize=(9.0, 7.6), layout="constrained")
+        fig, axes = plt.subplots(2, 2, figsize=(9.5, 8.0), layout="constrained")
         ax = axes[0, 0]
         single = t[(t["mode"] == "single") & (t["interleave"] == interleave)]
-        for m in ("full_lls", "full_als", "full_nlls", "bias_lls", "bias_nlls"):
-            for be in sorted(set(single.loc[single["method"] == m, "backend"])):
-                d = single[(single["method"] == m) & (single["backend"] == be)].sort_values("n_poses")
-                st = style(m)
-                ax.plot(d["n_poses"], 1e6 * d["median_s"], ls=_BACKEND_LS.get(be, "-"), marker=st["marker"],
-                        color=st["color"], ms=4, mfc="none", lw=1.0, label=f"{st['label']} [{be}]")
         batch = t[t["mode"] == "batch"]
-        for m in ("full_lls_batch", "bias_lls_batch", "full_als_batch"):
-            for be in sorted(set(batch.loc[batch["method"] == m, "backend"])):
-                d = batch[(batch["method"] == m) & (batch["backend"] == be)].sort_values("n_poses")
+        methods = []
+        for m, rows, batched in [(m, single, False) for m in ("full_lls", "full_als", "full_nlls", "bias_lls",
+                                                             "bias_nlls")] + \
+                                [(m, batch, True) for m in ("full_lls_batch", "full_als_batch", "bias_lls_batch")]:
+            for be in sorted(set(rows.loc[rows["method"] == m, "backend"])):
+                d = rows[(rows["method"] == m) & (rows["backend"] == be)].sort_values("n_poses")
                 st = style(m)
-                ax.plot(d["n_poses"], 1e6 * d["median_s"], ls="--" if be == "numba" else (0, (1, 3)),
-                        marker="D", ms=3, color=st["color"], lw=1.0, label=f"{st['label']} [{be}]")
+                ax.plot(d["n_poses"], 1e6 * d["median_s"], ls=_line(be, batched), marker=st["marker"],
+                        color=st["color"], ms=3.5 if batched else 4, mfc="none" if not batched else st["color"],
+                        lw=1.0)
+                if m not in methods:
+                    methods.append(m)
+        handles = [Line2D([], [], color=style(m)["color"], marker=style(m)["marker"], ls="none",
+                          mfc=style(m)["color"] if m.endswith("_batch") else "none", label=style(m)["label"])
+                   for m in methods]
+        handles += [Line2D([], [], color="0.3", ls=_line(be, b), label=lab) for be, b, lab in (
+            ("numba", False, "compiled (numba)"), ("numpy", False, "numpy reference"),
+            ("casadi", False, "CasADi/IPOPT"), ("numba", True, "batched, compiled"),
+            ("numpy", True, "batched, numpy"))]
+        ax.legend(handles=handles, fontsize=5.5, ncol=3, loc="upper center", bbox_to_anchor=(0.5, -0.14))
         ax.set(xscale="log", yscale="log", xlabel="number of poses", ylabel="wall time per problem [µs]",
                title="(a) estimators: time per problem")
-        ax.legend(fontsize=5.3, ncol=2, loc="upper center", bbox_to_anchor=(0.5, -0.13))
         _barh(axes[0, 1], [(f"{r['filter']}: {r['implementation']}", r["backend"],
                             r["us_per_step"] if r["runs"] == 1 else r["us_per_run_step"]) for _, r in filters.iterrows()],
               "µs per step (per run for the batched rows)", "(b) filters: cost per step")
@@ -129,6 +135,13 @@ def plot_cost(estimators: pd.DataFrame, filters: pd.DataFrame, compile_times: pd
               "seconds, summed over the stage's jobs", "(d) workflow stages: job-seconds of the last run",
               colors=("C7", "C0"))
     return fig
+
+
+def _line(backend: str, batched: bool):
+    """Line style of an implementation: solid compiled/CasADi, dotted numpy; dashed batched."""
+    if batched:
+        return "--" if backend == "numba" else (0, (1, 2.5))
+    return ":" if backend == "numpy" else "-"
 
 
 def _barh(ax, items, xlabel: str, title: str, colors=("C0", "C1")) -> None:
@@ -154,7 +167,8 @@ def _barh(ax, items, xlabel: str, title: str, colors=("C0", "C1")) -> None:
     if positive and max(positive) / min(positive) > 50:
         ax.set_xscale("log")
     ax.set(xlabel=xlabel, title=title)
-    ax.legend(fontsize=6, loc="lower right")
+    ax.margins(x=0.15)
+    ax.legend(fontsize=6, loc="best")
 
 
 __all__ = ["headline", "plot_cost"]

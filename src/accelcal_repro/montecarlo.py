@@ -307,6 +307,7 @@ def mc_point(seed: int, n_poses: int, noise_std: float, cases: Iterable, trials:
         g_assumed = g + g_error
         for method in methods:
             model = method_model(method)
+            table[method](z[:1], g_assumed, noise_std)  # untimed warm-up: kernels loaded, solver built
             t0 = time.perf_counter()
             est = table[method](z, g_assumed, noise_std)
             timings.append((int(n_poses), float(noise_std), data_model, g_error, method, trials,

@@ -128,7 +128,7 @@ def time_interleaved(problems: Mapping, g: float, methods: Mapping, repeats: int
     if len(T) != 1:
         raise ValueError("every method must get the same number of problems")
     T = T.pop()
-    previous = kernels.backend()
+    previous = kernels.choice()
     for m in keys:  # warm-up (solver build, kernels, caches), untimed
         _switch(_label(m)[1])
         _call(methods[m], problems[m][0], g)
@@ -175,7 +175,7 @@ def time_batched(problems: Mapping, g: float, methods: Mapping, repeats: int,
     Returns ``method, backend, repeat, n_problems, seconds, problems_per_s``.
     """
     keys = list(methods)
-    previous = kernels.backend()
+    previous = kernels.choice()
     rows = []
     try:
         for m in keys:
@@ -347,7 +347,7 @@ def filter_timing(batista_cost: Callable[[], pd.DataFrame], tereshkov_data: Mapp
     from accelcal.tereshkov.estimator import run_estimator
 
     backends = tuple(backends or available_backends())
-    previous = kernels.backend()
+    previous = kernels.choice()
     d = tereshkov_data
     R, n = d["gyro"].shape[:2]
     rows = []

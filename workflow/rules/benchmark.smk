@@ -79,6 +79,8 @@ rule timing_stages:
         benchmarks_dir="results/benchmarks",
     log:
         log_path("benchmark/stages"),
+    benchmark:
+        bench_path("benchmark/stages"),
     threads: 1
     resources:
         **SMALL,

@@ -66,6 +66,7 @@ rule burkhard2024_mc:
         trials=BURKHARD["trials"],
         als_known_noise=BURKHARD["als_known_noise"],
         nlls_known_noise=BURKHARD["nlls_known_noise"],
+        kernels=BURKHARD["mc_kernels"],
     log:
         log_path("burkhard2024/mc_{bk_point}"),
     benchmark:

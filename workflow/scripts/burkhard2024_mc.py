@@ -5,6 +5,7 @@ import time
 
 from _helpers import configure_logging, load_config, mock_snakemake_from_argv, write_csv
 
+from accelcal import kernels
 from accelcal_repro.montecarlo import mc_point
 
 if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
@@ -15,6 +16,7 @@ if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_
 
 log = configure_logging(snakemake)
 p = snakemake.params
+kernels.set_backend(p.kernels)
 pt = p.point
 t0 = time.perf_counter()
 table, timing = mc_point(
