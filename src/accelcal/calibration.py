@@ -648,7 +648,7 @@ def calibrate_poses(poses, g: float, method: str = "full_lls", *, unit: str | No
         raise _orientation_cause(e, z, est) from None
     quality, se_noise = assess(z, se, r.M, r.bias, r.residuals, est.n_parameters, est.model, est.min_poses)
     extra = {k: getattr(r, k) for k in _RESULT_FIELDS[est.name]}
-    if est.needs_noise:
+    if "noise_source" in CALIBRATION_CLASSES[est.name]._method_field_names():
         extra["noise_source"] = "rests: RMS of the pose-mean standard errors"
     labels = getattr(poses, "labels", None)
     pose_table = {"t_start": poses.t_start, "t_end": poses.t_end, "mean": z, "mean_std": se,

@@ -11,15 +11,16 @@ name           model   min poses  needs g    noise    family       what
 =============  ======  =========  =========  =======  ===========  ======================================
 ``full_lls``   full    10         yes        no       closed form  Burkhard et al. 2024, eqs. 3-6 (SVD)
 ``full_als``   full    10         yes        yes      closed form  full LLS without its O(σ²) bias
-``full_nlls``  full    10         yes        no       iterative    CasADi/IPOPT from b = 0, M = I
+``full_nlls``  full    10         yes        yes      iterative    CasADi/IPOPT from b = 0, M = I
 ``bias_lls``   bias    4          no         no       closed form  eq. 7, M = I; b does not depend on g
-``bias_nlls``  bias    4          yes        no       iterative    CasADi/IPOPT with M = I
+``bias_nlls``  bias    4          yes        yes      iterative    CasADi/IPOPT with M = I
 =============  ======  =========  =========  =======  ===========  ======================================
 
 *needs g*: the estimate depends on the gravity magnitude (every estimator takes g; the
 bias-only LLS bias does not change with it).  *noise*: the estimator uses the noise
-level of the pose means; ALS is given it (:meth:`Estimator.fit`, ``noise_std``), from the
-rests where a recording has them, else estimates it from the poses.
+level of the pose means (:meth:`Estimator.fit`, ``noise_std``): ALS for its correction
+(else it estimates it from the poses), NLLS for its stopping tolerance (else IPOPT's
+default).  A calibration gives them the level measured at the rests.
 """
 
 from __future__ import annotations
@@ -55,8 +56,10 @@ class Estimator:
     family : {'closed_form', 'iterative'}
     conditioning : str
         ``'module:function'`` giving the singular values that describe how well the poses
-        determine the estimate (:attr:`accelcal.results.LLSResult.singular_values`).
+        determine the estimate (:attr:`accelcal.results.LLSResult.singular_values`):
+        ``f(model, poses)``, or ``f(poses, noise_var)`` when ``conditioning_uses_noise``.
     description : str
+    conditioning_uses_noise : bool
     """
 
     name: str
@@ -68,6 +71,7 @@ class Estimator:
     family: str
     conditioning: str
     description: str
+    conditioning_uses_noise: bool = False
 
     @property
     def n_parameters(self) -> int:
@@ -116,15 +120,15 @@ ESTIMATORS: dict[str, Estimator] = {e.name: e for e in (
     Estimator("full_lls", "full", "accelcal.lls:full_lls", "accelcal.lls:full_lls_batch", True, False,
               "closed_form", "accelcal.lls:design_singular_values",
               "closed form (SVD), bias + scale + non-orthogonality (Burkhard et al. 2024)"),
-    Estimator("full_als", "full", "accelcal.als:full_als", None, True, True, "closed_form",
+    Estimator("full_als", "full", "accelcal.als:full_als", "accelcal.als:full_als_batch", True, True, "closed_form",
               "accelcal.als:moment_singular_values",
-              "full LLS with its O(noise^2) bias removed (adjusted least squares)"),
-    Estimator("full_nlls", "full", "accelcal.nlls:full_nlls", None, True, False, "iterative",
+              "full LLS with its O(noise^2) bias removed (adjusted least squares)", conditioning_uses_noise=True),
+    Estimator("full_nlls", "full", "accelcal.nlls:full_nlls", None, True, True, "iterative",
               "accelcal.lls:design_singular_values", "iterative (CasADi/IPOPT) from b = 0, M = I"),
     Estimator("bias_lls", "bias", "accelcal.lls:bias_lls", "accelcal.lls:bias_lls_batch", False, False,
               "closed_form", "accelcal.lls:design_singular_values",
               "closed form with M = I; the bias does not depend on g"),
-    Estimator("bias_nlls", "bias", "accelcal.nlls:bias_nlls", None, True, False, "iterative",
+    Estimator("bias_nlls", "bias", "accelcal.nlls:bias_nlls", None, True, True, "iterative",
               "accelcal.lls:design_singular_values", "iterative with M = I"),
 )}
 

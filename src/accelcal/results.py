@@ -50,7 +50,7 @@ class CalibrationResult:
         cached property such as ``singular_values``.
         """
         obj = object.__new__(cls)
-        obj.__dict__.update(values)
+        object.__setattr__(obj, "__dict__", values)  # the fresh dict of the keyword arguments
         return obj
 
     @property
@@ -166,7 +166,7 @@ class LLSResult(CalibrationResult):
         # imports no estimator: lls and als build these results.
         est = estimator(self.method)
         f = est.load_conditioning()
-        return f(self.poses, self.noise_var) if est.needs_noise else f(self.model, self.poses)
+        return f(self.poses, self.noise_var) if est.conditioning_uses_noise else f(self.model, self.poses)
 
     def _extra_fields(self) -> tuple[str, ...]:
         return ("singular_values",) + super()._extra_fields()
@@ -187,9 +187,12 @@ class BatchResult:
 
     ``valid`` marks trials where the estimator produced a model (for the full LLS:
     Ŝ positive definite and λ > 0); invalid trials hold NaN, never a number.
+    ``status`` (estimators that record why a trial failed, e.g. ALS): ``'ok'`` or the
+    name of the error the single-problem estimator raised on that trial.
     """
 
     method: str
     bias: np.ndarray  # (T, 3)
     M: np.ndarray  # (T, 3, 3)
     valid: np.ndarray  # (T,) bool
+    status: np.ndarray | None = None  # (T,) str

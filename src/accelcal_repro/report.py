@@ -177,8 +177,9 @@ def embed_png(path: str | os.PathLike, width: int = FIGURE_WIDTH) -> str:
 
 def read_benchmarks(directory: str | os.PathLike) -> pd.DataFrame:
     """Every Snakemake benchmark file under ``directory`` (``<stage>/<job>.tsv`` or
-    ``<stage>.tsv``): one row per job with its stage, wall time ``s`` [s] (summed over
-    repeats) and peak resident memory ``max_rss`` [MB] (max over repeats; NaN if not
+    ``<stage>.tsv``): one row per job with its stage, wall time ``s`` [s] and CPU time
+    ``cpu_s`` [s] (Snakemake's ``cpu_time``; both summed over repeats, NaN if not
+    measured) and peak resident memory ``max_rss`` [MB] (max over repeats; NaN if not
     measured).  Empty when there are none."""
     directory = Path(directory)
     rows = []
@@ -191,18 +192,21 @@ def read_benchmarks(directory: str | os.PathLike) -> pd.DataFrame:
         if "s" not in t:
             raise ReportError(f"benchmark file {f} has no column 's' (wall time)")
         rss = pd.to_numeric(t["max_rss"], errors="coerce") if "max_rss" in t else pd.Series(dtype=float)
+        cpu = pd.to_numeric(t["cpu_time"], errors="coerce") if "cpu_time" in t else pd.Series(dtype=float)
         rows.append({"stage": rel.split("/")[0], "job": rel,
                      "s": float(pd.to_numeric(t["s"], errors="coerce").sum()),
+                     "cpu_s": float(cpu.sum()) if cpu.notna().any() else float("nan"),
                      "max_rss": float(rss.max()) if rss.notna().any() else float("nan")})
-    return pd.DataFrame(rows, columns=["stage", "job", "s", "max_rss"])
+    return pd.DataFrame(rows, columns=["stage", "job", "s", "cpu_s", "max_rss"])
 
 
 def stage_times(bench: pd.DataFrame) -> pd.DataFrame:
-    """Per stage: number of jobs, summed wall time [s], largest peak memory [MB]."""
+    """Per stage: number of jobs, summed wall time and CPU time [s], largest peak memory [MB]."""
     if bench.empty:
-        return pd.DataFrame(columns=["stage", "jobs", "s", "max_rss"])
+        return pd.DataFrame(columns=["stage", "jobs", "s", "cpu_s", "max_rss"])
     g = bench.groupby("stage", sort=True)
-    return pd.DataFrame({"jobs": g.size(), "s": g["s"].sum(), "max_rss": g["max_rss"].max()}).reset_index()
+    return pd.DataFrame({"jobs": g.size(), "s": g["s"].sum(), "cpu_s": g["cpu_s"].sum(min_count=1),
+                         "max_rss": g["max_rss"].max()}).reset_index()
 
 
 _PIN = re.compile(r"^([A-Za-z0-9_.\-]+)==([^\s;\\]+)\s*(?:;\s*([^\\]*?))?\s*\\?\s*$")
@@ -455,8 +459,9 @@ def build_report(*, claims: str | os.PathLike, figures: Mapping[str, str | os.Pa
         times = '<p class="note">No benchmark files found.</p>'
     else:
         per_stage = stage_times(bench).rename(columns={"s": "wall time [s] (sum of jobs)",
+                                                       "cpu_s": "CPU time [s] (sum of jobs)",
                                                        "max_rss": "largest peak memory [MB]"})
-        per_job = bench.rename(columns={"s": "wall time [s]", "max_rss": "peak memory [MB]"})
+        per_job = bench.rename(columns={"s": "wall time [s]", "cpu_s": "CPU time [s]", "max_rss": "peak memory [MB]"})
         times = (f"{html_table(per_stage)}<p>Total over all jobs: {bench['s'].sum():.1f} s.</p>"
                  f"<details><summary>Per job</summary>{html_table(per_job, max_rows=1000)}</details>")
     body.append('<section><h2 id="walltime">Wall time per stage</h2><p class="note">From Snakemake\'s benchmark files '

@@ -279,16 +279,25 @@ def nonorth_error_in_range(summary: pd.DataFrame, exp: Experiment, range_pct: Se
 
 
 # --------------------------------------------------------------------------- compute time
-def speedup(timing_summary: pd.DataFrame, method: str, n_poses: int, interleave: str, min_ratio: float) -> Check:
+def speedup(timing_summary: pd.DataFrame, method: str, n_poses: int, interleave: str, min_ratio: float,
+            backend: str | None = None) -> Check:
     """Speed-up of an LLS over its NLLS baseline: the median of the paired per-problem
-    ratios t_NLLS / t_LLS at ``n_poses`` (``interleave`` timings).  Rule: ≥ ``min_ratio``."""
+    ratios t_NLLS / t_LLS at ``n_poses`` (``interleave`` timings), of the ``backend``
+    (default: the library's default, the compiled kernels if they were timed).  Rule:
+    ≥ ``min_ratio``."""
+    from ..timing import preferred_backend
+
     t = timing_summary
+    if "backend" in t:
+        backend = backend if backend is not None else preferred_backend(t, method)
+        t = t[t["backend"] == backend]
     sel = t[(t["mode"] == "single") & (t["method"] == method) & (t["interleave"] == interleave)
             & (t["n_poses"] == n_poses)]
     if len(sel) != 1:
         return Check(np.nan, False, f"timing summary has {len(sel)} rows for {method} ({interleave}, {n_poses} poses)")
     r = sel.iloc[0]
-    detail = (f"median paired ratio {r['baseline']}/{method} = {r['speedup_median']:.1f}x "
+    which = f" [{backend}]" if backend else ""
+    detail = (f"median paired ratio {r['baseline']}/{method}{which} = {r['speedup_median']:.1f}x "
               f"(IQR {r['speedup_q25']:.1f}-{r['speedup_q75']:.1f}x, n={int(r['n_timings'])}; "
               f"median {1e6 * r['median_s']:.0f} us vs {1e6 * r['median_s'] * r['speedup_of_medians']:.0f} us)")
     return Check(float(r["speedup_median"]), bool(r["speedup_median"] >= min_ratio), detail)

@@ -175,35 +175,43 @@ def plot_fig1d(summary: pd.DataFrame, exp: Experiment, g: float):
 def plot_timing(timing_summary: pd.DataFrame, mc_timing: pd.DataFrame | None = None, interleave: str = "block",
                 headline_n: int = 24):
     """Compute time: (a) median wall time per problem vs pose count for every method
-    (bars: IQR; dashed: batched closed forms per problem), (b) the speed-ups NLLS/LLS
-    (median of paired per-problem ratios, bars: IQR) with the paper's values, and the
-    ratio per Monte Carlo trial (batched closed form, loops for NLLS) where available."""
-    t = timing_summary
+    (bars: IQR; the compiled kernels solid, the numpy reference implementations dotted;
+    dashed: batched closed forms per problem), (b) the speed-ups NLLS/LLS (median of paired
+    per-problem ratios, bars: IQR) with the paper's values, and the ratio per Monte Carlo
+    trial (batched closed form, loops for NLLS) where available."""
+    t = timing_summary if "backend" in timing_summary else timing_summary.assign(backend="")
     single = t[(t["mode"] == "single") & (t["interleave"] == interleave)]
     batch = t[t["mode"] == "batch"]
+
+    def backends(d, m):
+        """(backend, line style, label suffix) of the rows of method ``m``: compiled first."""
+        bes = sorted(set(d.loc[d["method"] == m, "backend"]), key=lambda b: (b != "numba", b))
+        return [(b, "-" if b in ("numba", "", "casadi") or len(bes) == 1 else ":",
+                 " (numpy)" if b == "numpy" and len(bes) > 1 else "") for b in bes]
+
     with plt.rc_context(RC):
-        fig, (ax, axs) = plt.subplots(1, 2, figsize=(7.6, 4.4), layout="constrained")
+        fig, (ax, axs) = plt.subplots(1, 2, figsize=(7.6, 4.6), layout="constrained")
         for m in ("full_lls", "full_als", "full_nlls", "bias_lls", "bias_nlls"):
-            d = single[single["method"] == m].sort_values("n_poses")
-            if len(d):
+            for be, ls, suffix in backends(single, m):
+                d = single[(single["method"] == m) & (single["backend"] == be)].sort_values("n_poses")
                 ax.errorbar(d["n_poses"], 1e6 * d["median_s"],
                             yerr=[1e6 * (d["median_s"] - d["q25_s"]), 1e6 * (d["q75_s"] - d["median_s"])],
-                            capsize=2, elinewidth=0.7, **_kw(m))
+                            capsize=2, elinewidth=0.7, **_kw(m, ls=ls, label=style(m)["label"] + suffix))
         for m in ("full_lls_batch", "bias_lls_batch"):
-            d = batch[batch["method"] == m].sort_values("n_poses")
-            if len(d):
-                ax.plot(d["n_poses"], 1e6 * d["median_s"], **_kw(m, ls="--", marker="D", ms=3))
+            for be, ls, suffix in backends(batch, m):
+                d = batch[(batch["method"] == m) & (batch["backend"] == be)].sort_values("n_poses")
+                ax.plot(d["n_poses"], 1e6 * d["median_s"], **_kw(m, ls="--" if ls == "-" else ":", marker="D", ms=3,
+                                                                  label=style(m)["label"] + suffix))
         ax.set(xscale="log", yscale="log", xlabel="number of poses", ylabel="wall time per problem [µs]",
                title=f"(a) time per problem ({interleave}-interleaved)")
-        ax.legend(fontsize=6, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2)
+        ax.legend(fontsize=5.5, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2)
         for m, base in (("full_lls", "full_nlls"), ("bias_lls", "bias_nlls"), ("full_als", "full_nlls")):
-            d = single[single["method"] == m].sort_values("n_poses")
-            if not len(d):
-                continue
-            lab = f"{style(base)['label']} / {style(m)['label']}"
-            axs.errorbar(d["n_poses"], d["speedup_median"],
-                         yerr=[d["speedup_median"] - d["speedup_q25"], d["speedup_q75"] - d["speedup_median"]],
-                         capsize=2, elinewidth=0.7, **_kw(m, label=lab))
+            for be, ls, suffix in backends(single, m):
+                d = single[(single["method"] == m) & (single["backend"] == be)].sort_values("n_poses")
+                lab = f"{style(base)['label']} / {style(m)['label']}{suffix}"
+                axs.errorbar(d["n_poses"], d["speedup_median"],
+                             yerr=[d["speedup_median"] - d["speedup_q25"], d["speedup_q75"] - d["speedup_median"]],
+                             capsize=2, elinewidth=0.7, **_kw(m, ls=ls, label=lab))
             if m in PAPER_SPEEDUP:
                 axs.axhline(PAPER_SPEEDUP[m], color=style(m)["color"], ls=":", lw=1.2,
                             label=f"paper ≈{PAPER_SPEEDUP[m]:g}× ({'full' if model_of(m) == 'full' else 'bias-only'})")
@@ -217,7 +225,7 @@ def plot_timing(timing_summary: pd.DataFrame, mc_timing: pd.DataFrame | None = N
         axs.axvline(headline_n, color="0.6", lw=0.8)
         axs.set(xscale="log", yscale="log", xlabel="number of poses", ylabel="speed-up NLLS / closed form",
                 title="(b) speed-up NLLS / closed form")
-        axs.legend(fontsize=6, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2)
+        axs.legend(fontsize=5.5, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2)
     return fig
 
 
