@@ -24,7 +24,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from .atomic import atomic_output
 from .errors import RecordingError
@@ -196,12 +195,14 @@ def nominal_conversion(kind: str) -> NominalConversion | None:
 # --------------------------------------------------------------------------- parsing
 
 
-def _read_table(path, what: str, text: str | None = None, **kw) -> pd.DataFrame:
+def _read_table(path, what: str, text: str | None = None, **kw):
     """Read a delimited text file as strings; every failure becomes a one-line RecordingError.
 
     ``text``: the file's content when already read (:func:`accelcal.readers.load_text`
     undoes gzip); ``path`` then only names the file in messages.
     """
+    import pandas as pd  # here, not at import: the plain-table reader and the CLI's help do without it
+
     path = Path(path)
     if text is None:
         if not path.is_file():
@@ -224,7 +225,7 @@ def _read_table(path, what: str, text: str | None = None, **kw) -> pd.DataFrame:
         raise RecordingError(f"{path}: not a text file (undecodable bytes), expected {what}") from None
 
 
-def _drop_trailing_blank(df: pd.DataFrame) -> pd.DataFrame:
+def _drop_trailing_blank(df):
     """Drop blank lines at the end of the file (harmless); blank lines inside stay errors."""
     blank = (df == "").all(axis=1).to_numpy()
     n = len(df)
@@ -233,7 +234,7 @@ def _drop_trailing_blank(df: pd.DataFrame) -> pd.DataFrame:
     return df.iloc[:n]
 
 
-def _to_float(df: pd.DataFrame, col, path, first_line: int, name: str | None = None) -> np.ndarray:
+def _to_float(df, col, path, first_line: int, name: str | None = None) -> np.ndarray:
     """Strictly convert one string column: non-numeric and non-finite values are errors.
 
     ``first_line`` is the 1-based file line of the first data row, so that messages
@@ -241,6 +242,8 @@ def _to_float(df: pd.DataFrame, col, path, first_line: int, name: str | None = N
     """
     name = col if name is None else name
     s = df[col].str.strip()
+    import pandas as pd
+
     x = pd.to_numeric(s, errors="coerce").to_numpy(dtype=float)
     bad = np.isnan(x) & ~s.str.lower().isin(_NAN_SPELLINGS).to_numpy()
     if bad.any():
@@ -370,6 +373,8 @@ def write_recording(path, rec: Recording) -> None:
     if rec.intervals is not None:
         data[POSE_COLUMN] = labels_from_intervals(rec.intervals, rec.labels, rec.n)
     with atomic_output(path) as tmp, open(tmp, "w", newline="") as f:
+        import pandas as pd
+
         pd.DataFrame(data).to_csv(f, index=False)
         f.flush()
         os.fsync(f.fileno())
@@ -499,7 +504,7 @@ def read_mpu6050_csv(path, text: str | None = None) -> Recording:
     return Recording(t, acc, None, str(path), unit="counts", notes=(f"MPU-6050 log: t = row / Fs = {fs:g} Hz",))
 
 
-def _require(df: pd.DataFrame, cols, path) -> None:
+def _require(df, cols, path) -> None:
     df.columns = [str(c).strip() for c in df.columns]
     missing = [c for c in cols if c not in df.columns]
     if missing:
