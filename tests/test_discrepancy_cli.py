@@ -85,7 +85,7 @@ def _bad(tmp_path):
     cases = {}
     p = tmp_path / "cols.csv"
     pd.DataFrame({"time": good.t, "x": good.acc[:, 0]}).to_csv(p, index=False)
-    cases["cols"] = (p, "missing column")
+    cases["cols"] = (p, "--columns")
     p = tmp_path / "nan.csv"
     acc = good.acc.copy()
     acc[500, 1] = np.nan
