@@ -41,41 +41,54 @@ The neglected terms are of the order of (noise / g)² relative (≈ 1e-8 for a M
 mean), far below anything the tests resolve.  Whitened by ``σ`` and projected on the
 ``n − 3`` orthonormal contrasts ``L`` orthogonal to the three bias columns (which removes
 the bias and, with it, the ambiguity of the generalised covariance), the data are
-``y = Lᵀ r₀/σ ~ N(−X β, I + q K_τ)`` with ``X`` the other columns (six scale and
+``y = Lᵀ r₀/σ ~ N(−X β, s (I + q K_τ))`` with ``X`` the other columns (six scale and
 misalignment parameters, the named effects, the candidate) and ``q`` the wander
-variance relative to the white one.  ``K_τ`` is diagonalised once per ``τ`` of a grid
+variance relative to the white one, the whole times a white scale ``s`` (the rests' standard
+errors can be off by a common factor: the static detection's are about 20 % high on white
+noise, and a wander faster than the poses adds white-like noise).  ``K_τ`` is diagonalised
+once per ``τ`` of a grid
 (five per decade from a tenth of the shortest pose to ten session lengths, then the
 random walk), so every likelihood on the grid costs ``O(n p)``.
 
-Estimation (REML).  The wander ``(s, τ)`` is estimated jointly with the calibration by
-restricted maximum likelihood: ``−2ℓ_R = log|Σ| + log|XᵀΣ⁻¹X| + yᵀ P y``.  Confidence
+Estimation (REML).  The noise ``(s, q, τ)`` is estimated jointly with the calibration by
+restricted maximum likelihood: ``−2ℓ_R = log|Σ| + log|XᵀΣ⁻¹X| + yᵀ P y``, ``s``
+profiled analytically (``ŝ = yᵀPy/(m − p)`` at ``Σ = s (I + q K_τ)``).  Confidence
 intervals are profile-likelihood intervals: the range of a quantity over the set where
-``−2ℓ_R`` is within ``χ²₁(0.95) = 3.84`` of its minimum (on a fine grid: ten per
-decade).  Intervals that reach the ends of the grid are reported open (the data cannot
+``−2ℓ_R`` is within ``χ²₁(0.95) = 3.84`` of its minimum; the estimate and the intervals
+are taken on a fine grid (ten values per decade of ``τ`` and of ``q``: a resolution of
+±12 %, well inside any interval the poses give).  Intervals that reach the ends of the grid are reported open (the data cannot
 bound them); a wander the contrasts cannot see is reported as not estimated with the
 reason, never replaced by white noise silently.
 
 Tests (likelihood ratio, parametric bootstrap).  Current model vs current + effect: the
 likelihood ratio ``LR = −2 (ℓ₀ − ℓ₁)`` of the maximum likelihoods over the parameters
-*and* the wander, each model re-estimating ``(q, τ)`` on the same grid.  Its null
-distribution is not χ²₃ (estimated covariance, ``τ`` undefined at ``q = 0``, small
-samples), so the p-value comes from ``n_boot`` data sets simulated under the fitted
-null (the current model with its REML wander) and refitted with both models exactly as
-the data: ``p = (1 + #{LR* ≥ LR})/(n_boot + 1)``.  Because ``LR`` is invariant to the
-fixed effects of the null, the bootstrap needs only the noise model; and since ``LR`` is
-asymptotically pivotal (χ²₃ whatever ``(q, τ)``), the bootstrap p-value is second-order
-accurate.  Its guarantee: effect-free recordings whose noise is white + a wander of
-this family get an effect named with probability ≤ α (up to the Monte Carlo error of
-a finite ``n_boot``), however large the wander.  A wander outside the family (several
-Gauss–Markov components, flicker) is approximated by the nearest member; the tests
-check the false-positive rate on such sessions.
+*and* the noise, each model re-estimating ``(s, q, τ)`` (``s`` analytically, ``(q, τ)`` on
+the same grid).  Its null distribution is not χ²₃: maximum likelihood underestimates a
+variance by the share of the fixed effects, more so for the larger model, and the wander
+trades off against slow effects, so ``LR`` is stretched (by 1.2–1.6 for most effects and
+up to 3 for ``bias_drift`` under a random-walk-like wander: ``bartlett`` in the output).
+The p-value comes from ``n_boot`` data sets simulated under the fitted null (the current
+model with its REML noise) and refitted with both models exactly as the data:
+``p = (1 + #{LR* ≥ LR})/(n_boot + 1)``.  Because ``LR`` is invariant to the fixed effects
+of the null and to the scale ``s``, the bootstrap needs only ``(q, τ)``; and since ``LR``
+is asymptotically pivotal (χ²₃ whatever the noise parameters), the bootstrap p-value is
+second-order accurate (a scale-only, Bartlett-type correction was tried and rejected: on
+sessions with three Gauss–Markov components it gave 8 % false positives at α = 5 %).
+Its guarantee: effect-free recordings whose noise is of this family get an effect named
+with probability ≤ α (up to the Monte Carlo error of a finite ``n_boot``), however
+large the wander.  A wander outside the family (several Gauss–Markov components,
+flicker) is approximated by the nearest member; the tests check the false-positive rate
+on such sessions.
 
-Outliers.  The GLS studentised residual of pose ``i``, ``t_i = (P r)_i / sqrt(P_ii)``
-(the mean-shift statistic for that pose alone: ``N(0, 1)`` when the noise model is
-right), with ``P`` the GLS residual projector at the REML wander; the family of the
-``n`` poses is tested with ``max_i |t_i|`` against its bootstrap distribution (the
-same replicates, each at its own REML wander), which accounts for the multiplicity and
-the correlation between poses exactly.
+Outliers.  Pose ``i`` is an outlier when its residual is shifted: the mean-shift model
+adds a free shift to that pose alone (equivalent to leaving it out).  Its likelihood
+ratio against the current model, with the wander re-estimated under both (so that an
+outlier cannot hide by inflating the wander estimate), is ``(P r)_i² / P_ii``
+minimised over the grid (a rank-one update of the GLS fit; ``P`` the GLS residual
+projector, ``(P r)_i / sqrt(P_ii)`` the studentised residual).  The family of the ``n``
+poses is tested with the largest of these ratios against the same statistic on the
+bootstrap replicates, which accounts for the multiplicity and the correlation between
+poses exactly.
 
 Leave-one-pose-out.  ``(P r)_i / P_ii`` is the error of predicting pose ``i`` from the
 others under the GLS model, including the wander's conditional mean given the
@@ -95,18 +108,23 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import optimize, stats
+from scipy import stats
 
 from ..errors import AccelcalError
-from .stochastic import pose_difference_variance
+from .stochastic import pose_difference_variance  # noqa: F401 (re-exported for the loop)
 
-#: Relative wander variance ``q`` (over the white variance of the contrasts) the tests profile over.
-Q_REL_GRID = np.concatenate([[0.0], np.logspace(-2.0, 3.0, 31)])
+#: Relative wander variance ``q`` (over the white variance of the contrasts) the tests
+#: profile over: 0, then three per decade (the likelihood is smooth in log q: the grid
+#: maximum is within a few hundredths of the continuous one, the same for data and replicates).
+Q_REL_GRID = np.concatenate([[0.0], np.logspace(-2.0, 3.0, 16)])
 #: Correlation times per decade of the grid of the tests, and of the report's profile.
 TAU_PER_DECADE = 5
 TAU_PER_DECADE_FINE = 10
 #: ``χ²₁`` quantile of the 95 % profile-likelihood intervals.
 CHI2_95 = float(stats.chi2.isf(0.05, 1))
+#: Residual degrees of freedom (poses − parameters) the wander's two parameters need at
+#: least (a variance from 6 degrees of freedom has a relative standard error of 58 %).
+MIN_WANDER_DOF = 6
 #: Instantaneous poses (no intervals known) are given this duration [s].
 POINT_DURATION = 1e-3
 
@@ -252,10 +270,10 @@ def problem(r, J, sigma, grad, starts, durations, taus=None, notes=()) -> Proble
         raise WanderError("the poses do not determine the three biases (degenerate orientations)")
     L = U[:, 3:]
     X0 = L.T @ (J[:, 3:] / sigma[:, None])
-    if n - J.shape[1] < 2:
+    if n - J.shape[1] < MIN_WANDER_DOF:
         raise WanderError(f"{n} poses leave {n - J.shape[1]} residual degrees of freedom for {J.shape[1]} "
-                          "parameters: the bias wander (2 parameters) cannot be estimated; need at least "
-                          f"{J.shape[1] + 2} poses")
+                          f"parameters: the bias wander (size and correlation time) needs at least "
+                          f"{MIN_WANDER_DOF}, i.e. {J.shape[1] + MIN_WANDER_DOF} poses")
     y = L.T @ (r / sigma)
     taus = tau_grid(durations, float(np.max(starts + durations) - np.min(starts))) if taus is None else taus
     prob = Problem(y, X0, L, sigma, grad, starts, durations, np.asarray(taus, float),
@@ -266,60 +284,102 @@ def problem(r, J, sigma, grad, starts, durations, taus=None, notes=()) -> Proble
 # --------------------------------------------------------------------------- likelihood on the grid
 
 
-def profile(prob: Problem, X: np.ndarray, Y: np.ndarray, qrel) -> tuple[np.ndarray, np.ndarray]:
-    """``−2 log`` likelihood (ML, constants dropped) of every data set over the grid.
+@dataclass(frozen=True)
+class Surface:
+    """Likelihood of data sets over the grid of ``(τ, q)``, the white scale ``s`` profiled out.
 
-    Parameters
-    ----------
-    prob : Problem
-    X : ndarray (m, p)
-        Fixed-effect columns of the model (contrasts).
-    Y : ndarray (B, m)
-        Data sets (contrasts).
-    qrel : ndarray (Q,) or (T, Q)
-        Relative wander variances (the same for every τ, or one row per τ).
+    ``quad`` (B, T, Q): ``yᵀ P y`` with ``P`` the GLS residual projector of ``I + q K_τ``;
+    ``logdet`` (T, Q): ``log|I + q K_τ|``; ``logdet_a`` (T, Q): ``log|Xᵀ(I + q K_τ)⁻¹X|``;
+    ``m`` contrasts, ``p`` columns; ``shift_quad`` (B, T, Q, n) or None: ``quad`` of the
+    model with a free shift of each pose.  With ``Σ = s (I + q K_τ)``, maximising over
+    ``s`` gives ``ŝ = quad/m`` (ML) or ``quad/(m − p)`` (REML)::
 
-    Returns
-    -------
-    ml : ndarray (B, T, Q)
-        ``log|Σ| + yᵀ P y`` (P the GLS residual projector).
-    reml_add : ndarray (T, Q)
-        ``log|XᵀΣ⁻¹X|``: REML = ``ml + reml_add``.
+        −2ℓ   = m log(quad) + logdet               (+ constants)
+        −2ℓ_R = (m − p) log(quad) + logdet + logdet_a
+    """
+
+    quad: np.ndarray
+    logdet: np.ndarray
+    logdet_a: np.ndarray
+    m: int
+    p: int
+    shift_quad: np.ndarray | None = None
+
+    @property
+    def ml(self) -> np.ndarray:
+        return self.m * np.log(np.clip(self.quad, 1e-300, None)) + self.logdet[None]
+
+    @property
+    def reml(self) -> np.ndarray:
+        return (self.m - self.p) * np.log(np.clip(self.quad, 1e-300, None)) + self.logdet[None] + self.logdet_a[None]
+
+    def ml_min(self) -> np.ndarray:
+        """Grid minimum of ``−2ℓ`` per data set (B,)."""
+        return self.ml.reshape(self.ml.shape[0], -1).min(axis=1)
+
+    def shift_ml_min(self) -> np.ndarray:
+        """Grid minimum of ``−2ℓ`` of the model with pose ``i`` shifted, per data set (B, n)."""
+        ml = self.m * np.log(np.clip(self.shift_quad, 1e-300, None)) + self.logdet[None, :, :, None]
+        return ml.reshape(ml.shape[0], -1, ml.shape[-1]).min(axis=1)
+
+
+def profile(prob: Problem, X: np.ndarray, Y: np.ndarray, qrel, shifts: bool = False) -> Surface:
+    """The likelihood :class:`Surface` of data sets ``Y`` (B, m) under the model with columns
+    ``X`` (m, p), over the grid ``prob.taus`` × ``qrel`` ((Q,), or (T, Q): one row per τ).
+
+    ``shifts``: also the model with a free shift of pose ``i``'s residual, for every pose
+    (the outlier model): ``quad − (P r)_i²/P_ii`` (a rank-one update of the GLS fit, ``P``
+    the residual projector in the pose space).
     """
     qrel = np.asarray(qrel, float)
     Y = np.atleast_2d(Y)
     T = prob.taus.size
-    Q = qrel.shape[-1]
-    B = Y.shape[0]
+    q = np.broadcast_to(qrel, (T, qrel.shape[-1]))            # (T, Q)
     p = X.shape[1]
-    ml = np.empty((B, T, Q))
-    reml_add = np.empty((T, Q))
-    for t in range(T):
-        q = qrel[t] if qrel.ndim == 2 else qrel
-        V = prob.V[t]
-        Yr = Y @ V                                # (B, m)
-        Xr = V.T @ X                              # (m, p)
-        one = 1.0 + q[:, None] * prob.lam[t][None, :]   # (Q, m)
-        w = 1.0 / one
-        quad = (Yr * Yr) @ w.T                    # (B, Q)
+    Yr = Y[None] @ prob.V                                      # (T, B, m): rotated data
+    one = 1.0 + q[:, :, None] * prob.lam[:, None, :]           # (T, Q, m)
+    w = 1.0 / one
+    quad = (Yr * Yr) @ w.transpose(0, 2, 1)                    # (T, B, Q)
+    logdet = np.log(one).sum(axis=2)                           # (T, Q)
+    logdet_a = np.zeros(q.shape)
+    resid = Yr.transpose(0, 2, 1)[:, None]                     # (T, 1, m, B) before the fixed effects
+    if p:
+        Xr = prob.V.transpose(0, 2, 1) @ X                     # (T, m, p)
+        B = Y.shape[0]
+        # A = Xrᵀ diag(w) Xr and b = Xrᵀ diag(w) Yrᵀ for every q, each as one product
+        # over m (one matrix product per τ: BLAS, not a batch of small ones)
+        XX = (Xr[:, :, :, None] * Xr[:, :, None, :]).reshape(T, -1, p * p)
+        A = (w @ XX).reshape(T, -1, p, p)                      # (T, Q, p, p)
+        XY = (Xr[:, :, :, None] * Yr.transpose(0, 2, 1)[:, :, None, :]).reshape(T, -1, p * B)
+        b = (w @ XY).reshape(T, -1, p, B)                      # (T, Q, p, B)
+        ci = np.linalg.inv(np.linalg.cholesky(A))
+        u = ci @ b                                             # c⁻¹ b
+        quad = quad - np.einsum("tqpb,tqpb->tbq", u, u)
+        logdet_a = -2.0 * np.log(np.diagonal(ci, axis1=2, axis2=3)).sum(axis=2)
+    quad = quad.transpose(1, 0, 2)                             # (B, T, Q)
+    shift_quad = None
+    if shifts:
+        LV = prob.L @ prob.V                                   # (T, n, m): poses from rotated contrasts
         if p:
-            WX = w[:, :, None] * Xr[None]         # (Q, m, p)
-            A = Xr.T[None] @ WX                   # (Q, p, p)
-            b = WX.transpose(0, 2, 1) @ Yr.T      # (Q, p, B)
-            ci = np.linalg.inv(np.linalg.cholesky(A))
-            u = ci @ b                            # c⁻¹ b
-            quad = quad - np.sum(u * u, axis=1).T
-            reml_add[t] = -2.0 * np.log(np.diagonal(ci, axis1=1, axis2=2)).sum(axis=1)
+            beta = np.swapaxes(ci, 2, 3) @ u                   # (T, Q, p, B)
+            resid = resid - Xr[:, None] @ beta                 # (T, Q, m, B)
+            H = np.swapaxes(Xr[:, None] * w[:, :, :, None], 2, 3) @ np.swapaxes(LV, 1, 2)[:, None]
+            CH = ci @ H                                        # (T, Q, p, n)
+            d = np.swapaxes((LV * LV) @ np.swapaxes(w, 1, 2), 1, 2) - np.einsum("tqpn,tqpn->tqn", CH, CH)
         else:
-            reml_add[t] = 0.0
-        ml[:, t, :] = np.log(one).sum(axis=1)[None, :] + quad
-    return ml, reml_add
+            d = np.swapaxes((LV * LV) @ np.swapaxes(w, 1, 2), 1, 2)
+        z = LV[:, None] @ (w[:, :, :, None] * resid)           # (T, Q, n, B): (P r)_i
+        gain = z * z / np.clip(d, 1e-300, None)[..., None]
+        shift_quad = np.clip(quad.transpose(1, 2, 0)[:, :, None, :] - gain, 1e-300, None)  # (T, Q, n, B)
+        shift_quad = shift_quad.transpose(3, 0, 1, 2)          # (B, T, Q, n)
+    return Surface(quad, logdet, logdet_a, prob.m, p, shift_quad)
 
 
 def gls_projector(prob: Problem, X: np.ndarray, t: int, q: float) -> np.ndarray:
-    """GLS residual projector in the whitened pose space, ``L P_c Lᵀ`` (n, n), at ``(t, q)``:
-    ``P_c = Σ⁻¹ − Σ⁻¹X(XᵀΣ⁻¹X)⁻¹XᵀΣ⁻¹`` in the contrasts.  ``(P r/σ)_i`` is the GLS
-    residual of pose ``i`` in precision form (bias included as a fixed effect)."""
+    """GLS residual projector in the whitened pose space, ``L P_c Lᵀ`` (n, n), at ``(t, q)``
+    for the unit white scale: ``P_c = Σ⁻¹ − Σ⁻¹X(XᵀΣ⁻¹X)⁻¹XᵀΣ⁻¹``, ``Σ = I + q K_τ`` in the
+    contrasts.  ``(P r/σ)_i`` is the GLS residual of pose ``i`` in precision form (bias
+    included as a fixed effect)."""
     V = prob.V[t]
     w = 1.0 / (1.0 + q * prob.lam[t])
     Si = (V * w) @ V.T
@@ -331,14 +391,15 @@ def gls_projector(prob: Problem, X: np.ndarray, t: int, q: float) -> np.ndarray:
     return prob.L @ Pc @ prob.L.T
 
 
-def studentised(prob: Problem, X: np.ndarray, t: int, q: float, Y=None) -> tuple[np.ndarray, np.ndarray]:
-    """GLS studentised residuals ``(P r)_i/sqrt(P_ii)`` and leave-one-pose-out prediction
-    errors ``(P r)_i/P_ii`` (both in units of σ) of data ``Y`` (B, m) (default: the data)."""
+def studentised(prob: Problem, X: np.ndarray, t: int, q: float, Y=None, scale: float = 1.0):
+    """GLS studentised residuals ``(P r)_i/sqrt(s P_ii)`` and leave-one-pose-out prediction
+    errors ``(P r)_i/P_ii`` (in units of σ) of data ``Y`` (B, m) (default: the data), at the
+    wander ``(t, q)`` and white scale ``s``."""
     P = gls_projector(prob, X, t, q)
     d = np.clip(np.diag(P), 1e-300, None)
     Y = prob.y[None] if Y is None else np.atleast_2d(Y)
     Pr = (Y @ prob.L.T) @ P.T                       # (B, n)
-    return Pr / np.sqrt(d), Pr / d
+    return Pr / np.sqrt(scale * d), Pr / d
 
 
 # --------------------------------------------------------------------------- fitted wander
@@ -346,10 +407,13 @@ def studentised(prob: Problem, X: np.ndarray, t: int, q: float, Y=None) -> tuple
 
 @dataclass(frozen=True)
 class WanderFit:
-    """REML estimate of the wander under one model, with its profile-likelihood intervals.
+    """REML estimate of the noise model ``s (I + q K_τ)`` under one model, with its
+    profile-likelihood intervals.
 
-    ``q_rel`` relative to the white variance of the contrasts (the tests' scale),
-    ``q_abs`` in the data unit squared (``s²``; ``K²`` for the random walk).
+    ``white_scale`` = ``ŝ`` (variance of the white part over the rests' prediction);
+    ``q_rel`` the wander's variance relative to the white one in the contrasts (the tests'
+    scale), ``q_abs`` in the data unit squared (``s_w²``, the wander's variance; ``K²`` for
+    the random walk), ``size`` its std, ``K`` its short-lag random-walk coefficient.
     """
 
     t: int
@@ -358,106 +422,90 @@ class WanderFit:
     q_abs: float
     size: float
     K: float
+    white_scale: float
     reml: float
-    ml_min: float
     size_ci: tuple
     tau_ci: tuple
     K_ci: tuple
+    white_scale_ci: tuple
     excess_ci: tuple
     at_bound: tuple
-    estimable: bool
-    reason: str
 
     @property
     def present(self) -> bool:
         return self.q_rel > 0
 
 
-def fit_wander(prob: Problem, X: np.ndarray, fine: bool = True) -> WanderFit:
-    """REML estimate of the wander for fixed-effect columns ``X``, with 95 % profile intervals.
+#: Relative variances of the report's grid: 0, then ten per decade.
+Q_REL_FINE = np.concatenate([[0.0], np.logspace(-3.0, 4.0, 71)])
+#: White-scale factors (over the conditional estimate) the report's intervals scan.
+S_FACTORS = np.logspace(-1.0, 1.0, 81)
 
-    ``fine``: intervals on a grid of ten ``τ`` per decade and a fine absolute-size grid
-    (what the report uses); otherwise the test grid only.
+
+def fit_wander(prob: Problem, X: np.ndarray, fine: bool = True) -> WanderFit:
+    """REML estimate of ``(s, q, τ)`` for fixed-effect columns ``X``, with 95 % profile intervals.
+
+    ``fine``: estimate and intervals on a grid of ten ``τ`` and ten ``q`` per decade (what
+    the report uses); otherwise the test grid, without intervals.
     """
-    ml, add = profile(prob, X, prob.y[None], Q_REL_GRID)
-    reml = ml[0] + add
-    t, k = np.unravel_index(int(np.argmin(reml)), reml.shape)
-    ml_min = float(ml[0].min())
     if not fine:
-        return _wander_from(prob, int(t), float(Q_REL_GRID[k]), float(reml[t, k]), ml_min, (), (), (), (), (), True, "")
-    # fine grid: τ ten per decade, absolute size around the estimate
+        sf = profile(prob, X, prob.y[None], Q_REL_GRID)
+        reml = sf.reml[0]
+        t, k = np.unravel_index(int(np.argmin(reml)), reml.shape)
+        s_hat = float(sf.quad[0, t, k]) / max(sf.m - sf.p, 1)
+        return _wander_at(prob, int(t), float(Q_REL_GRID[k]), s_hat, float(reml[t, k]))
     fp = prob.with_taus(tau_grid(prob.durations, prob.span, TAU_PER_DECADE_FINE))
-    # absolute q grid per τ: q_rel from 1e-3 to 1e4 at 10 per decade, converted per τ
-    qrel_fine = np.concatenate([[0.0], np.logspace(-3.0, 4.0, 71)])
-    mlf, addf = profile(fp, X, fp.y[None], qrel_fine)
-    dev = mlf[0] + addf
+    sf = profile(fp, X, fp.y[None], Q_REL_FINE)
+    nu = max(sf.m - sf.p, 1)
+    quad = sf.quad[0]                                           # (T, Q)
+    dev = sf.reml[0]
     tf, kf = np.unravel_index(int(np.argmin(dev)), dev.shape)
     best = float(dev[tf, kf])
-    inside = dev <= best + CHI2_95
+    s_hat = quad / nu
+    # the full deviance over (τ, q, s): s = f ŝ(τ, q) adds nu (ln f + 1/f − 1)
+    extra = nu * (np.log(S_FACTORS) + 1.0 / S_FACTORS - 1.0)  # (S,)
+    inside = (dev[:, :, None] + extra[None, None, :]) <= best + CHI2_95   # (T, Q, S)
     taus = fp.taus
-    qabs = qrel_fine[None, :] / fp.scale[:, None]
+    s_full = s_hat[:, :, None] * S_FACTORS[None, None, :]
+    q_abs = s_full * Q_REL_FINE[None, :, None] / fp.scale[:, None, None]
+    rw = np.isinf(taus)[:, None, None]
     with np.errstate(divide="ignore", invalid="ignore"):
-        size = np.where(np.isinf(taus)[:, None], np.inf, np.sqrt(qabs))
-        K = np.where(np.isinf(taus)[:, None], np.sqrt(qabs), np.sqrt(2 * qabs / taus[:, None]))
-    # excess: RMS of the wander's contribution relative to the white variance, sqrt(1 + q mean λ) = sqrt(1 + q)
-    excess = np.broadcast_to(np.sqrt(1.0 + qrel_fine)[None, :], dev.shape)
-    finite_q = inside & (qrel_fine[None, :] > 0)
+        size = np.where(rw, np.inf, np.sqrt(q_abs))
+        K = np.where(rw, np.sqrt(q_abs), np.sqrt(2 * q_abs / np.where(rw, 1.0, taus[:, None, None])))
+    # the residual excess the model predicts on average: sqrt(s (1 + q)) (mean eigenvalue 1)
+    excess = np.sqrt(s_full * (1.0 + Q_REL_FINE[None, :, None]))
+    wander = inside & (Q_REL_FINE[None, :, None] > 0)
     bound = []
     if inside[:, -1].any():
         bound.append("size: upper end of the grid (q_rel 1e4)")
-    if finite_q[-1].any() or finite_q[-2].any():
+    if wander[-1].any() or wander[-2].any():
         bound.append("tau: the interval reaches the random walk (no upper bound)")
-    if finite_q[0].any():
+    if wander[0].any():
         bound.append("tau: lower end of the grid")
+    if inside[:, :, 0].any() or inside[:, :, -1].any():
+        bound.append("white scale: end of the scanned range (x0.1 - x10 of its estimate)")
 
     def rng(a, mask):
         v = a[mask]
-        v = v[np.isfinite(v)] if not np.any(np.isinf(v)) else v
         return (float(np.min(v)), float(np.max(v))) if v.size else (float("nan"), float("nan"))
 
-    tau_mask = finite_q
-    tau_ci = rng(np.broadcast_to(taus[:, None], dev.shape), tau_mask) if tau_mask.any() else (float("nan"),) * 2
-    size_ci = rng(size, inside)
-    K_ci = rng(K, inside)
-    if inside[:, 0].any():  # q = 0 inside the interval: the lower ends are 0
+    tau_ci = rng(np.broadcast_to(taus[:, None, None], inside.shape), wander)
+    size_ci, K_ci = rng(size, inside), rng(K, inside)
+    if inside[:, 0, :].any():  # q = 0 inside the region: the lower ends are 0
         size_ci, K_ci = (0.0, size_ci[1]), (0.0, K_ci[1])
-    excess_ci = rng(excess, inside)
-    # the point estimate: the fine grid's best, refined in (log q, log τ) unless at q = 0 or the random walk
-    t_hat, q_hat = int(tf), float(qrel_fine[kf])
-    out = _wander_from(fp, t_hat, q_hat, best, ml_min, size_ci, tau_ci, K_ci, excess_ci, tuple(bound), True, "")
-    if q_hat > 0 and np.isfinite(fp.taus[t_hat]):
-        out = _refine(prob, X, out)
-    return out
+    out = _wander_at(fp, int(tf), float(Q_REL_FINE[kf]), float(s_hat[tf, kf]), best)
+    return WanderFit(**{**out.__dict__, "size_ci": size_ci, "tau_ci": tau_ci, "K_ci": K_ci,
+                        "white_scale_ci": rng(s_full, inside), "excess_ci": rng(excess, inside),
+                        "at_bound": tuple(bound)})
 
 
-def _wander_from(prob, t, q_rel, reml, ml_min, size_ci, tau_ci, K_ci, excess_ci, bound, ok, reason) -> WanderFit:
+def _wander_at(prob: Problem, t: int, q_rel: float, s_hat: float, reml: float) -> WanderFit:
     tau = float(prob.taus[t])
-    q_abs = q_rel / float(prob.scale[t])
-    s, K = gm_variance(q_abs, tau)
-    return WanderFit(t=t, q_rel=q_rel, tau=tau, q_abs=q_abs, size=s, K=K, reml=reml, ml_min=ml_min,
-                     size_ci=tuple(size_ci), tau_ci=tuple(tau_ci), K_ci=tuple(K_ci), excess_ci=tuple(excess_ci),
-                     at_bound=tuple(bound), estimable=ok, reason=reason)
-
-
-def _refine(prob: Problem, X: np.ndarray, w: WanderFit) -> WanderFit:
-    """Continuous REML optimum in (log q_abs, log τ) from the grid's best point."""
-    def dev(v):
-        tau, qa = math.exp(v[1]), math.exp(v[0])
-        pp = prob.with_taus([tau])
-        ml, add = profile(pp, X, pp.y[None], np.array([qa * pp.scale[0]]))
-        return float(ml[0, 0, 0] + add[0, 0])
-
-    x0 = np.array([math.log(w.q_abs), math.log(w.tau)])
-    res = optimize.minimize(dev, x0, method="Nelder-Mead",
-                            options={"xatol": 1e-3, "fatol": 1e-6, "maxiter": 200})
-    if not (res.fun <= w.reml):
-        return w
-    tau, qa = math.exp(res.x[1]), math.exp(res.x[0])
-    pp = prob.with_taus([tau])
-    s, K = gm_variance(qa, tau)
-    return WanderFit(t=w.t, q_rel=qa * float(pp.scale[0]), tau=tau, q_abs=qa, size=s, K=K, reml=float(res.fun),
-                     ml_min=w.ml_min, size_ci=w.size_ci, tau_ci=w.tau_ci, K_ci=w.K_ci, excess_ci=w.excess_ci,
-                     at_bound=w.at_bound, estimable=True, reason="")
+    q_abs = s_hat * q_rel / float(prob.scale[t])
+    size, K = gm_variance(q_abs, tau)
+    nan2 = (float("nan"), float("nan"))
+    return WanderFit(t=t, q_rel=q_rel, tau=tau, q_abs=q_abs, size=size, K=K, white_scale=s_hat, reml=reml,
+                     size_ci=nan2, tau_ci=nan2, K_ci=nan2, white_scale_ci=nan2, excess_ci=nan2, at_bound=())
 
 
 # --------------------------------------------------------------------------- tests
@@ -468,11 +516,14 @@ class RoundTests:
     """Bootstrap tests of one round: every candidate's LR and the outlier family."""
 
     lr: np.ndarray              # (k,) observed LR per candidate
-    p_values: np.ndarray        # (k,) bootstrap p-values
-    outlier_t: np.ndarray       # (n,) studentised residuals of the data (current model, REML wander)
-    outlier_p: float            # bootstrap p-value of max |t|
-    outlier_pose: int           # index (into the current pose set) of max |t|
-    null_wander: WanderFit      # the wander the bootstrap simulates (current model, REML)
+    p_values: np.ndarray        # (k,) bootstrap p-values (1 + #{LR* ≥ LR})/(n_boot + 1)
+    bartlett: np.ndarray        # (k,) mean(LR*)/3: how much estimating the noise stretches LR
+    outlier_t: np.ndarray       # (n,) studentised residuals of the data (current model, null noise)
+    outlier_p: float            # bootstrap p-value of the largest mean-shift LR
+    outlier_pose: int           # index (into the current pose set) of the largest mean-shift LR
+    outlier_lr: float           # that likelihood ratio
+    null_wander: WanderFit      # the noise the bootstrap simulates (current model, REML; the most
+                                #   outlying pose free when outliers are tested)
     n_boot: int
 
 
@@ -480,58 +531,66 @@ def round_tests(prob: Problem, X_alts: list, rng: np.random.Generator, n_boot: i
                 outliers: bool = True) -> RoundTests:
     """Likelihood-ratio tests current (``prob.X0``) vs current + each ``X_alts[k]``
     (contrast columns, appended to X0) and the outlier family, all calibrated on the same
-    ``n_boot`` data sets simulated under the current model with its REML wander."""
+    ``n_boot`` data sets simulated under the current model with its REML noise."""
     X0 = prob.X0
-    null = fit_wander(prob, X0, fine=False)
-    ml0, add0 = profile(prob, X0, prob.y[None], Q_REL_GRID)
-    m0 = float(ml0[0].min())
-    lr = np.empty(len(X_alts))
+    sf0 = profile(prob, X0, prob.y[None], Q_REL_GRID, shifts=outliers)
+    m0 = float(sf0.ml_min()[0])
+    if outliers:
+        # the noise the bootstrap simulates is estimated with the most outlying pose's
+        # residual free, so that one disturbed pose cannot inflate it (under the null it
+        # only costs that pose)
+        worst = int(np.argmax(m0 - sf0.shift_ml_min()[0]))
+        null = fit_wander(prob, np.hstack([X0, prob.L.T[:, [worst]]]), fine=False)
+    else:
+        null = fit_wander(prob, X0, fine=False)
     Xs = [np.hstack([X0, Xa]) for Xa in X_alts]
-    for k, X1 in enumerate(Xs):
-        ml1, _ = profile(prob, X1, prob.y[None], Q_REL_GRID)
-        lr[k] = max(m0 - float(ml1[0].min()), 0.0)
-    # bootstrap under the null: y* = V diag(sqrt(1 + q λ)) z
+    lr = np.array([max(m0 - float(profile(prob, X1, prob.y[None], Q_REL_GRID).ml_min()[0]), 0.0) for X1 in Xs])
+    # bootstrap under the null: y* = V diag(sqrt(1 + q λ)) z (the scale s does not change any LR)
     V, lam = prob.V[null.t], prob.lam[null.t]
     Z = rng.standard_normal((n_boot, prob.m))
     Ystar = (Z * np.sqrt(1.0 + null.q_rel * lam)[None, :]) @ V.T
-    ml0s, _ = profile(prob, X0, Ystar, Q_REL_GRID)
-    m0s = ml0s.reshape(n_boot, -1).min(axis=1)
+    sfs = profile(prob, X0, Ystar, Q_REL_GRID, shifts=outliers)
+    m0s = sfs.ml_min()
     tol = 1e-9 * max(1.0, float(np.max(lr, initial=0.0)))
     p = np.empty(len(X_alts))
+    scale = np.empty(len(X_alts))
     for k, X1 in enumerate(Xs):
-        ml1s, _ = profile(prob, X1, Ystar, Q_REL_GRID)
-        lrs = np.maximum(m0s - ml1s.reshape(n_boot, -1).min(axis=1), 0.0)
+        lrs = np.maximum(m0s - profile(prob, X1, Ystar, Q_REL_GRID).ml_min(), 0.0)
         p[k] = (1 + np.sum(lrs >= lr[k] - tol)) / (n_boot + 1)
-    t_obs, _ = studentised(prob, X0, null.t, null.q_rel)
+        scale[k] = float(np.mean(lrs)) / X_alts[k].shape[1]
+    t_obs, _ = studentised(prob, X0, null.t, null.q_rel, scale=null.white_scale)
     t_obs = t_obs[0]
-    o_p, o_i = float("nan"), -1
+    o_p, o_i, o_lr = float("nan"), -1, float("nan")
     if outliers:
-        # each replicate at its own REML wander (grid)
-        reml_s = ml0s + add0[None]
-        arg = reml_s.reshape(n_boot, -1).argmin(axis=1)
-        ts, qs = np.unravel_index(arg, reml_s.shape[1:])
-        tmax = np.empty(n_boot)
-        for key in set(zip(ts.tolist(), qs.tolist())):
-            sel = (ts == key[0]) & (qs == key[1])
-            tt, _ = studentised(prob, X0, key[0], float(Q_REL_GRID[key[1]]), Ystar[sel])
-            tmax[sel] = np.abs(tt).max(axis=1)
-        o_i = int(np.argmax(np.abs(t_obs)))
-        obs = float(np.abs(t_obs[o_i]))
-        o_p = float((1 + np.sum(tmax >= obs * (1 - 1e-12))) / (n_boot + 1))
-    return RoundTests(lr=lr, p_values=p, outlier_t=t_obs, outlier_p=o_p, outlier_pose=o_i, null_wander=null,
-                      n_boot=int(n_boot))
+        # the mean-shift likelihood ratio of each pose, the noise re-estimated with the
+        # shift (so an outlier cannot hide by inflating it): its maximum over the poses
+        # against the same statistic on the replicates
+        lr_pose = np.maximum(m0 - sf0.shift_ml_min()[0], 0.0)
+        o_i = int(np.argmax(lr_pose))
+        o_lr = float(lr_pose[o_i])
+        lrs_max = np.maximum(m0s[:, None] - sfs.shift_ml_min(), 0.0).max(axis=1)
+        o_p = float((1 + np.sum(lrs_max >= o_lr - 1e-9 * max(1.0, o_lr))) / (n_boot + 1))
+    return RoundTests(lr=lr, p_values=p, bartlett=scale, outlier_t=t_obs, outlier_p=o_p, outlier_pose=o_i,
+                      outlier_lr=o_lr, null_wander=null, n_boot=int(n_boot))
 
 
 # --------------------------------------------------------------------------- information, MDE, GLS
 
 
-def effect_information(prob: Problem, X0: np.ndarray, Xe: np.ndarray, t: int, q: float) -> dict:
+def effect_information(prob: Problem, X0: np.ndarray, Xe: np.ndarray, t: int | None = None, q: float = 0.0,
+                       sigma_c: np.ndarray | None = None) -> dict:
     """Fisher information of an effect block ``Xe`` profiled over ``X0``: under the wander
-    ``(t, q)`` (``colored``), under white noise (``white``) and under white noise of the same
-    mean variance (``scaled_white``: what a common scale factor would give)."""
-    V = prob.V[t]
-    w = 1.0 / (1.0 + q * prob.lam[t])
-    Si = (V * w) @ V.T
+    ``(t, q)`` or the contrast covariance ``sigma_c`` (``colored``), under white noise
+    (``white``) and under white noise of the same mean variance (``scaled_white``: what a
+    common scale factor would give)."""
+    if sigma_c is None:
+        V = prob.V[t]
+        w = 1.0 / (1.0 + q * prob.lam[t])
+        Si = (V * w) @ V.T
+        mean_var = float(np.mean(1.0 + q * prob.lam[t]))
+    else:
+        Si = np.linalg.inv(sigma_c)
+        mean_var = float(np.trace(sigma_c)) / prob.m
 
     def info(S):
         SX = S @ X0
@@ -539,37 +598,87 @@ def effect_information(prob: Problem, X0: np.ndarray, Xe: np.ndarray, t: int, q:
         return Xe.T @ P @ Xe
 
     I_white = info(np.eye(prob.m))
-    mean_var = float(np.mean(1.0 + q * prob.lam[t]))
     return {"colored": info(Si), "white": I_white, "scaled_white": I_white / mean_var}
 
 
-def gls_step(prob: Problem, X: np.ndarray, t: int, q: float) -> tuple[np.ndarray, np.ndarray]:
-    """GLS estimate of the linearised parameter change ``β`` (``y ≈ −X β``) and its covariance."""
+def contrast_covariance(prob: Problem, terms: dict) -> np.ndarray:
+    """Contrast covariance ``I + K`` of the white per-pose noise plus a noise model ``terms``
+    (as :func:`simulate_interval_means` takes it, several components allowed) projected
+    like the wander: the truth of a simulation, for its MDE."""
+    S = np.eye(prob.m)
+    for k, v in terms.items():
+        for vi in (v if isinstance(v, list) else [v]):
+            D = pose_difference_variance(k, vi, prob.starts, prob.durations)
+            K = -0.5 * (prob.grad @ prob.grad.T) * D / prob.sigma[:, None] / prob.sigma[None, :]
+            S = S + prob.L.T @ K @ prob.L
+    return S
+
+
+def gls_step(prob: Problem, X: np.ndarray, t: int, q: float, scale: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """GLS estimate of the linearised parameter change ``β`` (``y ≈ −X β``) and its covariance
+    under ``scale (I + q K_τ)``."""
     V = prob.V[t]
     w = 1.0 / (1.0 + q * prob.lam[t])
     Si = (V * w) @ V.T
     A = X.T @ Si @ X
     cov = np.linalg.inv(A)
     beta = -cov @ (X.T @ Si @ prob.y)
-    return beta, cov
+    return beta, scale * cov
 
 
-def at(prob: Problem, tau: float, q_abs: float) -> tuple[Problem, float]:
-    """The one-τ problem of a wander ``(τ, q_abs)`` and its relative variance there."""
-    p1 = prob.with_taus([tau])
-    return p1, float(q_abs * p1.scale[0])
+def at(prob: Problem, w: WanderFit) -> tuple[Problem, float]:
+    """The one-τ problem of a fitted noise ``w`` and its relative wander variance there
+    (``q_abs = s q / scale_τ``: the same wander whatever the grid it was found on)."""
+    p1 = prob.with_taus([w.tau])
+    return p1, float(w.q_abs * p1.scale[0] / w.white_scale) if w.white_scale > 0 else 0.0
 
 
-def excess_distribution(prob: Problem, X: np.ndarray, t: int, q: float) -> np.ndarray:
-    """Eigenvalues ``μ`` of ``(I − H) Σ_c (I − H)`` (``H`` the unweighted hat of ``X``):
-    under the noise model the weighted χ² of the least-squares residuals is ``Σ μ_k χ²₁``."""
+def excess_distribution(prob: Problem, X: np.ndarray, t: int, q: float, scale: float = 1.0) -> np.ndarray:
+    """Eigenvalues ``μ`` of ``(I − H) Σ_c (I − H)`` (``H`` the unweighted hat of ``X``,
+    ``Σ_c = scale (I + q K_τ)``): under the noise model the weighted χ² of the least-squares
+    residuals is ``Σ μ_k χ²₁``."""
     Q, _ = np.linalg.qr(X) if X.shape[1] else (np.zeros((prob.m, 0)), None)
     R = np.eye(prob.m) - Q @ Q.T
-    S = prob.sigma_c(t, q)
+    S = scale * prob.sigma_c(t, q)
     mu = np.linalg.eigvalsh(R @ S @ R)
     return np.clip(mu, 0.0, None)
 
 
-__all__ = ["CHI2_95", "Problem", "Q_REL_GRID", "at", "RoundTests", "WanderError", "WanderFit", "effect_information",
+
+# --------------------------------------------------------------------------- simulation
+
+
+def simulate_interval_means(rng: np.random.Generator, terms: dict, starts, durations, size: int = 3) -> np.ndarray:
+    """Exact Gaussian draws of the interval means of a noise model, ``size`` independent axes.
+
+    Parameters
+    ----------
+    terms : dict
+        Noise model ``{term: coefficient}`` as :func:`accelcal.discrepancy.stochastic.model_avar`
+        takes it (two-parameter terms: ``(coefficient, shape)``); for several components of
+        one term pass a list of values, e.g. ``{"gauss_markov": [(s1, 3.0), (s2, 30.0)]}``.
+    starts, durations : array_like (n,)
+
+    Returns
+    -------
+    ndarray (n, size)
+        Interval means up to a common constant per axis (what a model with a bias sees):
+        drawn from ``−D/2 + c 11ᵀ`` with ``D`` the exact variogram of the interval means
+        and ``c`` large enough to make it positive definite.
+    """
+    starts, durations = np.asarray(starts, float), np.asarray(durations, float)
+    D = np.zeros((starts.size, starts.size))
+    for k, v in terms.items():
+        for vi in (v if isinstance(v, list) else [v]):
+            D = D + pose_difference_variance(k, vi, starts, durations)
+    n = starts.size
+    c = float(np.max(D)) * n + 1e-300
+    Cv = -0.5 * D + c
+    ev, vec = np.linalg.eigh(0.5 * (Cv + Cv.T))
+    root = vec * np.sqrt(np.clip(ev, 0.0, None))
+    return root @ rng.standard_normal((n, size))
+
+
+__all__ = ["CHI2_95", "Problem", "contrast_covariance", "Q_REL_GRID", "at", "RoundTests", "Surface", "WanderError", "WanderFit", "effect_information",
            "excess_distribution", "fit_wander", "gls_projector", "gls_step", "gm_variance", "problem", "profile",
-           "round_tests", "studentised", "tau_grid", "wander_kernel"]
+           "round_tests", "simulate_interval_means", "studentised", "tau_grid", "wander_kernel"]

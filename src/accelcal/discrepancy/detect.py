@@ -106,6 +106,10 @@ class Rules:
             raise AccelcalError(f"n_boot must be an integer >= 19 (p-values down to 0.05), got {self.n_boot}")
         if self.max_outliers < 0 or not self.max_wander_inflation >= 1:
             raise AccelcalError("need max_outliers >= 0 and max_wander_inflation >= 1")
+        family = len(self.candidates) + bool(self.outlier_pose)
+        if self.null == "colored" and (self.n_boot + 1) * self.alpha < family * (1 - 1e-9):
+            raise AccelcalError(f"n_boot = {self.n_boot} cannot reach Holm's first level alpha/{family} (the smallest "
+                                f"bootstrap p-value is 1/(n_boot + 1)): use n_boot >= {int(np.ceil(family / self.alpha)) - 1}")
         if not 0 < self.alpha < 1 or not 0 < self.power < 1:
             raise AccelcalError(f"need 0 < alpha < 1 and 0 < power < 1, got {self.alpha}, {self.power}")
         if self.correction not in CORRECTIONS:
@@ -316,6 +320,9 @@ class Candidate:
     wander_inflation: float = float("nan")
     confounded_with_wander: bool = False
     wander_alt: dict = field(default_factory=dict)
+    ambiguous_with: tuple = ()
+    dominated: bool = False
+    bartlett: float = float("nan")
 
     @property
     def passed(self) -> bool:
@@ -325,6 +332,7 @@ class Candidate:
         d = asdict(self)
         d["reasons"] = list(self.reasons)
         d["dof"] = list(self.dof)
+        d["ambiguous_with"] = list(self.ambiguous_with)
         d["passed"] = self.passed
         d["parameters"] = list(EFFECTS[self.effect].parameters)
         d["unit"] = EFFECTS[self.effect].unit
@@ -370,6 +378,9 @@ class DiscrepancyResult:
     def not_identifiable_reasons(self) -> dict:
         out = {c.effect: list(c.reasons) for c in self.candidates if c.round == 1 and not c.identifiable}
         if self.candidates and self.rules.null == "colored":
+            for c in self.candidates:
+                if c.ambiguous_with and c.effect not in self.effects:
+                    out.setdefault(c.effect, list(c.reasons))
             last = max(c.round for c in self.candidates)
             for c in self.candidates:
                 if c.round == last and c.effect not in self.effects and c.effect not in out:
