@@ -234,19 +234,23 @@ def test_outlier_pose_is_named_with_its_index_and_removed():
 
 def test_two_effects_are_both_named():
     """Quadratic and temperature, each at 3x its MDE under the noise (white + the realistic
-    wander), in the same session: both in `effects`, in any order, on at least 3 of 4
-    recordings (the second is tested after the first is in the model)."""
-    rules = Rules(candidates=("quadratic", "cubic", "bias_drift", "temperature"), n_boot=119)
-    both = 0
-    for seed in range(4):
+    wander), in the same session, random directions.  Whenever the loop names one of them
+    first it names the other in the next round (the second effect keeps its power once the
+    first is in the model: 13 of 13 in a run of 16), and both are named on at least 5 of 8
+    recordings (13 of 16 measured; the misses name nothing: in round 1 each effect is
+    tested with the other one unmodelled, which inflates the fitted wander)."""
+    rules = Rules(candidates=("quadratic", "cubic", "bias_drift", "temperature"), n_boot=199)
+    both = first = 0
+    for seed in range(8):
         rng = np.random.default_rng(200 + seed)
         _, truth = session(np.random.default_rng(300 + seed), None)
-        phi_q = 3 * true_mde_direction(truth, "quadratic", THREE_GM, rules, 4, [1.0, -0.6, 0.4])
-        phi_t = 3 * true_mde_direction(truth, "temperature", THREE_GM, rules, 4, [-0.5, 1.0, 0.7])
+        phi_q = 3 * true_mde_direction(truth, "quadratic", THREE_GM, rules, 4, rng.standard_normal(3))
+        phi_t = 3 * true_mde_direction(truth, "temperature", THREE_GM, rules, 4, rng.standard_normal(3))
         d, _ = _session_like(truth, rng, THREE_GM, {"quadratic": phi_q, "temperature": phi_t})
         res = discrepancy(d, rules)
+        first += res.effect in ("quadratic", "temperature")
         both += set(res.effects) >= {"quadratic", "temperature"}
-    assert both >= 3, both
+    assert both == first and both >= 5, (both, first)
 
 
 def test_temperature_that_follows_time_cannot_be_told_from_a_drift():
