@@ -85,7 +85,10 @@ def test_scoring_catches_a_fitter_that_ignores_the_effect(monkeypatch):
     """A fitter that returns the current model for current + effect (effect fixed at 0) never
     sees anything: accuracy at >= 1 MDE collapses and the scoring's verdict fails."""
     rows = [(e, 3.0, r) for e in EFFECT_IDS for r in range(3)]
-    _, good = _benchmark(rows, RULES)
+    # the blind fitter replaces the nonlinear fit the white null's F-test compares; the colored
+    # null tests on the linearised columns (tests/test_discrepancy_colored.py checks it)
+    rules = D.Rules(null="white")
+    _, good = _benchmark(rows, rules)
     assert all(_verdict(good, e, "accuracy_ge_1mde").verdict == "pass" for e in EFFECT_IDS)
 
     real_fit = D.fit
@@ -99,7 +102,7 @@ def test_scoring_catches_a_fitter_that_ignores_the_effect(monkeypatch):
         return fit_at(data, effects, np.concatenate([base.p, np.zeros(3)]))
 
     monkeypatch.setattr(D, "fit", blind_fit)
-    _, bad = _benchmark(rows, RULES)
+    _, bad = _benchmark(rows, rules)
     for e in EFFECT_IDS:
         v = _verdict(bad, e, "accuracy_ge_1mde")
         assert v.verdict == "fail" and v.value == 0.0, v
