@@ -22,6 +22,6 @@ summ = A.session_check_summary(check)
 write_csv(check, snakemake.output.check)
 write_csv(summ, snakemake.output.summary)
 for r in summ.itertuples():
-    log.info("axis %s: %d pieces, pose-mean excess %.2f, wander/white %.2f, reference/observed %.2f, layer/observed %s",
-             r.axis, r.pieces, r.excess_observed, r.wander_over_white, r.reference_over_observed,
+    log.info("axis %s: %d pieces, pose-mean excess %.2f, reference/observed %.2f, layer/observed %s",
+             r.axis, r.pieces, r.excess_observed, r.reference_over_observed,
              f"{r.layer_over_observed:.2f}" if "layer_over_observed" in summ else "-")

@@ -16,14 +16,14 @@ Three questions, each a tidy table (figures and claims are computed from them):
 3. **What do calibration-length rests predict?** (:func:`session_check`): the record
    is cut into disjoint pieces laid out as the benchmark's session (an initial rest, then
    ``n_poses − 1`` short rests between motions); on each piece the pose means are taken
-   over the trimmed rests exactly as a calibration would.  The *observed* wander is the
-   scatter of those pose means about their session mean beyond white noise, pooled over
-   pieces and axes; it is compared with what (a) white noise alone, (b) the reference
-   model of question 2 and (c) the stochastic layer run on the piece's own rests (the
-   ≤ 10 s view of issue 13's Xsens session) predict for the same layout
-   (:func:`accelcal.discrepancy.stochastic.pose_difference_variance`).  The ratio
-   predicted / observed is the check: 1 when a model extrapolates correctly from its τ
-   range to the session.
+   over the trimmed rests exactly as a calibration would.  The *observed* scatter of
+   those pose means about their session mean, pooled over pieces and axes, is compared
+   with what the calibration's own standard errors imply (its ratio is the excess the
+   loop sees) and with what (a) the reference model of question 2 and (b) the stochastic
+   layer run on the piece's own rests (the ≤ 10 s view of issue 13's Xsens session)
+   predict for the same layout (:func:`accelcal.discrepancy.stochastic.pose_difference_variance`).
+   The ratio predicted / observed is the check: 1 when a model extrapolates correctly
+   from its τ range to the session.
 """
 
 from __future__ import annotations
@@ -136,25 +136,25 @@ def session_layout(session) -> tuple[np.ndarray, int]:
     return _trimmed_windows(session, session.n_samples), session.n_samples
 
 
-def _predicted_wander(model: dict, starts, durations, fs) -> float:
-    """Mean over poses of the centred pose-mean variance of the model's non-white terms."""
-    v = 0.0
-    for term, value in model.items():
-        if term == "white":
-            continue
-        v = v + np.diag(centred(pose_difference_variance(term, value, starts, durations))).mean()
-    return float(v)
+def _predicted_scatter(model: dict, starts, durations) -> float:
+    """Mean over poses of the variance of the pose-mean errors about their session mean that
+    a noise model (all its terms, white included) predicts: ``mean diag(−½ P D P)``."""
+    return float(sum(np.diag(centred(pose_difference_variance(term, value, starts, durations))).mean()
+                     for term, value in model.items()))
 
 
 def session_check(acc: np.ndarray, fs: float, session, reference: list[dict], *, n_layer: int, seed: int,
                   n_boot: int, n_resim: int, candidates) -> pd.DataFrame:
-    """Observed vs predicted pose-mean wander on disjoint session-shaped pieces of the record (module docstring).
+    """Observed vs predicted pose-mean scatter on disjoint session-shaped pieces of the record (module docstring).
 
-    Returns one row per (piece, axis): ``observed_var`` (centred pose-mean variance minus the
-    white part, pooled over poses), ``white_var`` (white noise alone: the per-pose
-    sample variance over the rest length, which is what a calibration's standard errors
-    say), ``reference_var`` (reference model), and for the first ``n_layer`` pieces
-    ``layer_var`` and ``layer_terms`` (stochastic layer on the piece's rests).
+    Returns one row per (piece, axis), variances in (m/s²)²: ``observed_var``, the mean
+    over poses of the squared deviation of the pose means from their session mean;
+    ``se_var``, what the calibration's own standard errors imply for it,
+    ``(1 − 1/n) mean(se²)`` with ``se`` the static detection's standard error of each
+    pose mean (:func:`accelcal.static.detect_static`: the loop's pose noise);
+    ``reference_var`` and ``reference_white_var``, the same predicted by the reference
+    model and by its white term alone; for the first ``n_layer`` pieces ``layer_var``
+    and ``layer_terms`` (stochastic layer on the piece's own rests).
     """
     win, n = session_layout(session)
     starts, durations = win[:, 0] / fs, (win[:, 1] - win[:, 0]) / fs
@@ -164,53 +164,49 @@ def session_check(acc: np.ndarray, fs: float, session, reference: list[dict], *,
         piece = acc[k * n:(k + 1) * n]
         segs = rest_segments(piece, win)
         means = np.array([s.mean(axis=0) for s in segs])
-        # the standard error a calibration gives each pose mean (static detection: sample
-        # variance times the integrated autocorrelation time over the samples)
-        white = np.array([s.var(axis=0, ddof=1) * _integrated_autocorr_time(s) / len(s) for s in segs])
+        se2 = np.array([s.var(axis=0, ddof=1) * _integrated_autocorr_time(s) / len(s) for s in segs])
         layer = None
         if k < n_layer:
             layer = stochastic_layer(segs, fs, seed=seed + k, n_boot=n_boot, n_resim=n_resim, intervals=win,
                                      candidates=candidates)
+        n_p = len(segs)
         for j, ax in enumerate(AXES):
             dev = means[:, j] - means[:, j].mean()
-            n_p = len(dev)
-            obs_total = float(dev @ dev / (n_p - 1))  # unbiased for the centred variance of iid means
-            white_c = float(white[:, j].mean())
-            row = {"piece": k, "axis": ax, "n_poses": n_p, "observed_total_var": obs_total, "white_var": white_c,
-                   "observed_var": obs_total - white_c,
-                   "reference_var": _predicted_wander(reference[j], starts, durations, fs)}
+            row = {"piece": k, "axis": ax, "n_poses": n_p, "observed_var": float(dev @ dev / n_p),
+                   "se_var": float((1 - 1 / n_p) * se2[:, j].mean()),
+                   "reference_var": _predicted_scatter(reference[j], starts, durations),
+                   "reference_white_var": _predicted_scatter({"white": reference[j]["white"]}, starts, durations)}
             if layer is not None:
                 a = layer.axes[j]
                 row["layer_terms"] = "+".join(a.named) or "none"
-                row["layer_var"] = _predicted_wander(a.model_after, starts, durations, fs)
+                row["layer_var"] = _predicted_scatter(a.model_after, starts, durations)
             rows.append(row)
     return pd.DataFrame(rows)
 
 
 def session_check_summary(check: pd.DataFrame) -> pd.DataFrame:
-    """Per axis and pooled: observed wander / white, and predicted / observed for the reference and the layer,
-    with 95 % intervals over pieces (t interval of the per-piece means)."""
+    """Per axis and pooled: the observed pose-mean scatter with its 95 % interval over pieces
+    (t interval of the per-piece values), the excess over the calibration's standard errors
+    (``excess_observed`` = sqrt(observed / se), what the loop sees), and predicted / observed
+    for the reference model and for the stochastic layer on ≤ 10 s rests."""
     from scipy import stats
 
     rows = []
     for ax, d in [*check.groupby("axis"), ("all", check)]:
-        by_piece = d.groupby("piece")[["observed_var", "white_var", "reference_var", "observed_total_var"]].mean()
+        by_piece = d.groupby("piece")[["observed_var", "se_var", "reference_var", "reference_white_var"]].mean()
         m = len(by_piece)
         obs = by_piece.observed_var
-        se = float(obs.std(ddof=1) / math.sqrt(m)) if m > 1 else float("nan")
-        tq = float(stats.t.ppf(0.975, m - 1)) if m > 1 else float("nan")
-        o = float(obs.mean())
-        w = float(by_piece.white_var.mean())
-        row = {"axis": ax, "pieces": m, "observed_wander_var": o, "observed_wander_ci_low": o - tq * se,
-               "observed_wander_ci_high": o + tq * se, "white_var": w,
-               "excess_observed": math.sqrt(float(by_piece.observed_total_var.mean()) / w),
-               "wander_over_white": math.sqrt(max(o, 0.0) / w), "reference_var": float(by_piece.reference_var.mean()),
-               "reference_over_observed": float(by_piece.reference_var.mean()) / o if o > 0 else float("nan")}
+        half = float(stats.t.ppf(0.975, m - 1) * obs.std(ddof=1) / math.sqrt(m)) if m > 1 else float("nan")
+        o, se, ref = float(obs.mean()), float(by_piece.se_var.mean()), float(by_piece.reference_var.mean())
+        row = {"axis": ax, "pieces": m, "observed_var": o, "observed_ci_low": o - half, "observed_ci_high": o + half,
+               "se_var": se, "excess_observed": math.sqrt(o / se), "wander_over_white": math.sqrt(max(o - se, 0) / se),
+               "reference_var": ref, "reference_white_var": float(by_piece.reference_white_var.mean()),
+               "reference_over_observed": ref / o}
         if "layer_var" in d and d["layer_var"].notna().any():
             lay = d.dropna(subset=["layer_var"])
             obs_l = float(lay.observed_var.mean())
             row.update(layer_pieces=int(lay.piece.nunique()), layer_var=float(lay.layer_var.mean()),
-                       layer_over_observed=float(lay.layer_var.mean()) / obs_l if obs_l > 0 else float("nan"),
+                       layer_over_observed=float(lay.layer_var.mean()) / obs_l,
                        layer_terms=";".join(sorted(set(lay.layer_terms))))
         rows.append(row)
     return pd.DataFrame(rows)

@@ -234,19 +234,19 @@ def plot_adis_allan(curves: pd.DataFrame, allan: pd.DataFrame, check: pd.DataFra
         d = check.set_index("axis")
         rows = [a for a in [*axes, "all"] if a in d.index]
         x = np.arange(len(rows))
-        obs = np.sqrt(d.loc[rows, "observed_wander_var"].clip(lower=0))
-        lo = np.sqrt(d.loc[rows, "observed_wander_ci_low"].clip(lower=0))
-        hi = np.sqrt(d.loc[rows, "observed_wander_ci_high"].clip(lower=0))
-        ax.bar(x - 0.27, 1e3 * np.sqrt(d.loc[rows, "white_var"]), 0.18, color="0.7", label="white (pose SE)")
+        obs = np.sqrt(d.loc[rows, "observed_var"])
+        lo = np.sqrt(d.loc[rows, "observed_ci_low"].clip(lower=0))
+        hi = np.sqrt(d.loc[rows, "observed_ci_high"])
+        ax.bar(x - 0.27, 1e3 * np.sqrt(d.loc[rows, "se_var"]), 0.18, color="0.7", label="calibration's pose SE")
         ax.bar(x - 0.09, 1e3 * obs, 0.18, color="k", yerr=1e3 * np.vstack([obs - lo, hi - obs]), capsize=2,
-               label="observed wander (95% CI)")
+               label="observed (95% CI over pieces)")
         ax.bar(x + 0.09, 1e3 * np.sqrt(d.loc[rows, "reference_var"]), 0.18, color="C3", label="reference model")
         if "layer_var" in d:
             ax.bar(x + 0.27, 1e3 * np.sqrt(d.loc[rows, "layer_var"]), 0.18, color="C0",
                    label=f"layer on ≤10 s rests ({int(d['layer_pieces'].max())} pieces)")
         ax.set_xticks(x, rows)
-        ax.set_ylabel("pose-mean std about the session mean [mm/s²]")
-        ax.set_title(f"pose-mean wander, {int(d['pieces'].max())} pieces", fontsize=9)
+        ax.set_ylabel("pose-mean scatter about the session mean [mm/s²]")
+        ax.set_title(f"pose-mean scatter, {int(d['pieces'].max())} pieces", fontsize=9)
         ax.legend(fontsize=6, loc="upper left")
         fig.suptitle("ADIS16405, 2.78 h at rest: Allan deviation and what it means for the pose means of a "
                      "calibration session", fontsize=9)
