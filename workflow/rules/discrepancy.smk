@@ -27,11 +27,17 @@ from snakemake.exceptions import WorkflowError
 from accelcal_repro.measured.data import DatasetError, check_available
 
 DISCREPANCY = config["discrepancy"]
+DISCREPANCY_SESSIONS = DISCREPANCY["sessions"]
 DISCREPANCY_FIGURES = ["discrepancy_fpr", "discrepancy_confusion", "discrepancy_power", "discrepancy_rows",
-                       "discrepancy_adis_allan", "discrepancy_measured_before_after", "discrepancy_allan"]
+                       "discrepancy_adis_allan", "discrepancy_measured_before_after", "discrepancy_allan",
+                       "discrepancy_sessions"] + (["discrepancy_stability"] if DISCREPANCY_SESSIONS["same_imu"] else [])
 FIGURES.extend(DISCREPANCY_FIGURES)
 CLAIM_STAGES.append("discrepancy")
 REPORT_TABLES.extend([
+    ("discrepancy", "Real sessions: pose-residual excess observed and predicted by the joint model",
+     "results/discrepancy/sessions/excess.csv"),
+    ("discrepancy", "Real sessions re-simulated before and after what the loop names: gap to the measured residuals",
+     "results/discrepancy/sessions/gaps.csv"),
     ("discrepancy", "Discrepancy benchmark per noise profile: false-positive rate (colored and white null), "
      "naming accuracy, outliers and pairs", "results/discrepancy/benchmark/headline.csv"),
     ("discrepancy", "ADIS16405: observed and predicted pose-mean wander on session-shaped pieces",
@@ -67,6 +73,11 @@ def _discrepancy_check():
     unknown = [p for p in bench["power_curve"]["profiles"] if p not in DISCREPANCY_PROFILES]
     if unknown:
         raise _config_error("discrepancy.benchmark.power_curve.profiles", f"{', '.join(unknown)} not in profiles")
+    for group, members in DISCREPANCY_SESSIONS["same_imu"].items():
+        missing = [m for m in members if m not in DISCREPANCY_RECORDINGS]
+        if missing:
+            raise _config_error(f"discrepancy.sessions.same_imu.{group}",
+                                f"{', '.join(missing)} not in discrepancy.recordings")
     if DISCREPANCY_NEEDS_XSENS and "xsens_mti" not in DISCREPANCY_RECORDINGS:
         raise _config_error("discrepancy.benchmark.profiles",
                             "a profile is fitted to xsens_mti, which is not in discrepancy.recordings")
@@ -251,6 +262,57 @@ rule discrepancy_measured_report:
         "../scripts/discrepancy_measured.py"
 
 
+rule discrepancy_session:
+    """One real session re-simulated under the model before and after what the loop named,
+    through the same pose extraction and base fit as the measured data."""
+    input:
+        report="results/discrepancy/measured/{recording}.json",
+        csv="results/measured/{recording}.csv",
+    output:
+        sims="results/discrepancy/sessions/{recording}_resim.csv.gz",
+        gap="results/discrepancy/sessions/{recording}_gap.csv",
+    params:
+        sessions=DISCREPANCY_SESSIONS,
+    log:
+        log_path("discrepancy/session_{recording}"),
+    benchmark:
+        bench_path("discrepancy/session_{recording}"),
+    threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=15,  # default config: 200 re-simulations of about 0.05 s
+    script:
+        "../scripts/discrepancy_session.py"
+
+
+rule discrepancy_sessions_tables:
+    """Every real session: what is named, excess observed vs predicted, the re-simulation gaps,
+    the evidence per candidate, and the session-to-session stability of one IMU."""
+    input:
+        reports=expand("results/discrepancy/measured/{recording}.json", recording=DISCREPANCY_RECORDINGS),
+        gaps=expand("results/discrepancy/sessions/{recording}_gap.csv", recording=DISCREPANCY_RECORDINGS),
+    output:
+        named="results/discrepancy/sessions/named.csv",
+        excess="results/discrepancy/sessions/excess.csv",
+        gaps="results/discrepancy/sessions/gaps.csv",
+        evidence="results/discrepancy/sessions/evidence.csv",
+        estimates="results/discrepancy/sessions/estimates.csv",
+        stability="results/discrepancy/sessions/stability.csv",
+    params:
+        recordings=DISCREPANCY_RECORDINGS,
+        same_imu=DISCREPANCY_SESSIONS["same_imu"],
+        alpha=DISCREPANCY["rules"]["alpha"],
+    log:
+        log_path("discrepancy/sessions"),
+    benchmark:
+        bench_path("discrepancy/sessions"),
+    threads: 1
+    resources:
+        **SMALL,
+    script:
+        "../scripts/discrepancy_sessions.py"
+
+
 rule discrepancy_summary:
     """results/discrepancy/summary.csv (benchmark scores + measured findings) and the
     tidy table of every measured candidate test (results/discrepancy/measured.csv)."""
@@ -311,6 +373,12 @@ DISCREPANCY_FIGURE_INPUTS = {
         "reports": expand("results/discrepancy/measured/{recording}.json", recording=DISCREPANCY_RECORDINGS)},
     "discrepancy_allan": {
         "reports": expand("results/discrepancy/measured/{recording}.json", recording=DISCREPANCY_RECORDINGS)},
+    "discrepancy_sessions": {
+        "reports": expand("results/discrepancy/measured/{recording}.json", recording=DISCREPANCY_RECORDINGS),
+        "sims": expand("results/discrepancy/sessions/{recording}_resim.csv.gz", recording=DISCREPANCY_RECORDINGS),
+        "gaps": "results/discrepancy/sessions/gaps.csv"},
+    "discrepancy_stability": {"stability": "results/discrepancy/sessions/stability.csv",
+                              "estimates": "results/discrepancy/sessions/estimates.csv"},
 }
 
 
@@ -367,11 +435,13 @@ rule discrepancy_adis_reference:
 
 
 rule discrepancy_measured:
-    """The real recordings: both layers' reports and the two figures."""
+    """The real recordings: both layers' reports, the session study and its figures."""
     input:
         expand("results/discrepancy/measured/{recording}.json", recording=DISCREPANCY_RECORDINGS),
-        expand("results/figures/{f}.{ext}", f=("discrepancy_measured_before_after", "discrepancy_allan"),
-               ext=("png", "pdf")),
+        "results/discrepancy/sessions/stability.csv",
+        expand("results/figures/{f}.{ext}", ext=("png", "pdf"),
+               f=[f for f in DISCREPANCY_FIGURES if f in ("discrepancy_measured_before_after", "discrepancy_allan",
+                                                          "discrepancy_sessions", "discrepancy_stability")]),
 
 
 rule discrepancy:

@@ -40,6 +40,11 @@ elif fid == "discrepancy_rows":
     fig = BF.plot_rows(table(inp.rates), p.profiles)
 elif fid == "discrepancy_adis_allan":
     fig = BF.plot_adis_allan(table(inp.curves), table(inp.allan), table(inp.check))
+elif fid == "discrepancy_sessions":
+    sims = {n: pd.read_csv(f) for n, f in zip(p.recordings, inp.sims)}
+    fig = BF.plot_sessions(reports(), sims, table(inp.gaps))
+elif fid == "discrepancy_stability":
+    fig = BF.plot_stability(table(inp.stability), table(inp.estimates))
 elif fid == "discrepancy_measured_before_after":
     fig = F.plot_before_after(reports())
 elif fid == "discrepancy_allan":

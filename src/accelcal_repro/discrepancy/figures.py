@@ -253,5 +253,81 @@ def plot_adis_allan(curves: pd.DataFrame, allan: pd.DataFrame, check: pd.DataFra
     return fig
 
 
+def wander_named(report: dict) -> bool:
+    nm = report.get("noise_model") or {}
+    return bool(nm.get("estimated")) and nm.get("term") not in (None, "none")
+
+
+def plot_sessions(reports: dict, sims: dict, gaps: pd.DataFrame):
+    """Per real session: the distribution (ECDF) of the measured normalised pose residuals
+    |r/σ| of the base model against those of the session re-simulated with the model before
+    (base calibration, white noise of the rests) and after (what the loop named added)."""
+    names = list(reports)
+    ncol = min(3, len(names))
+    nrow = math.ceil(len(names) / ncol)
+    with plt.rc_context(RC):
+        fig, axs = plt.subplots(nrow, ncol, figsize=(3.8 * ncol, 3.0 * nrow + 0.5), layout="constrained",
+                                squeeze=False)
+        for ax, name in zip(axs.flat, names):
+            rep = reports[name]
+            meas = np.abs(np.array(rep["poses"]["residual_before"]) / np.array(rep["poses"]["sigma"]))
+            x = np.sort(meas)
+            ax.step(x, np.arange(1, x.size + 1) / x.size, where="post", color="k", lw=1.6, label="measured")
+            g = gaps[gaps.recording == name].set_index("model")
+            nothing = not rep.get("effects") and not wander_named(rep)
+            for model, col in (("before", "C0"), ("after", "C3")):
+                if model == "after" and nothing:  # nothing named: the model after is the one before
+                    continue
+                z = sims[name]
+                z = np.sort(np.abs(z[(z.model == model) & (z.pose >= 0)].z.to_numpy()))
+                if not z.size or model not in g.index:
+                    continue
+                r = g.loc[model]
+                ax.plot(z, np.arange(1, z.size + 1) / z.size, color=col, lw=1.1,
+                        label=f"re-simulated, {model}: excess {r.excess_sim_median:.2f}, KS {r.ks_distance:.2f}")
+            named = "+".join(rep.get("effects", [])) or "no effect"
+            nm = rep.get("noise_model") or {}
+            wander = nm.get("process", "") if wander_named(rep) else "no wander"
+            ax.set_title(f"{name}: {rep['n_poses']} poses, excess {g.excess_measured.iloc[0]:.2f}\n"
+                         f"named: {named}; {wander}" if len(g) else f"{name}: {rep['n_poses']} poses (no dof)",
+                         fontsize=7.5)
+            ax.set_xlabel("|pose residual| / its white noise σ_i", fontsize=7.5)
+            ax.legend(fontsize=5.5, loc="lower right")
+        for ax in axs.flat[len(names):]:
+            ax.set_visible(False)
+        axs[0, 0].set_ylabel("cumulative share of poses")
+        fig.suptitle("Real sessions re-simulated before / after what the loop names: gap to the measured residuals",
+                     fontsize=8.5)
+    return fig
+
+
+def plot_stability(stability: pd.DataFrame, estimates: pd.DataFrame):
+    """Sessions of one IMU: every parameter per session with its standard error, relative to
+    the weighted mean over the sessions, with Cochran's test (Holm-adjusted p) in the title."""
+    pars = list(dict.fromkeys(stability.parameter))
+    ncol = min(5, len(pars))
+    nrow = math.ceil(len(pars) / ncol)
+    with plt.rc_context(RC):
+        fig, axs = plt.subplots(nrow, ncol, figsize=(2.4 * ncol, 2.3 * nrow + 0.6), layout="constrained",
+                                squeeze=False)
+        for ax, par in zip(axs.flat, pars):
+            st = stability[stability.parameter == par].iloc[0]
+            e = estimates[(estimates.parameter == par) & estimates.recording.isin(
+                [c[6:] for c in stability.columns if c.startswith("value_") and np.isfinite(st[c])])]
+            x = np.arange(len(e))
+            ax.errorbar(x, e.value - st.weighted_mean, yerr=1.96 * e.se, fmt="o", ms=4, capsize=2,
+                        color="C2" if st.stable else "C3")
+            ax.axhline(0, color="0.5", lw=0.8)
+            ax.set_xticks(x, [r.split("_")[-1] for r in e.recording], fontsize=7)
+            ax.set_title(f"{par}: {'stable' if st.stable else 'NOT stable'}\np_adj {st.p_adjusted:.2g}, "
+                         f"spread {st.spread_over_se:.1f} se", fontsize=7.5)
+            ax.tick_params(axis="y", labelsize=6)
+        for ax in axs.flat[len(pars):]:
+            ax.set_visible(False)
+        fig.suptitle("One IMU, several sessions: each parameter minus its weighted mean over the sessions "
+                     "(95% intervals); green: consistent within their uncertainty (Cochran's Q, Holm)", fontsize=8.5)
+    return fig
+
+
 __all__ = ["COLORS", "LABELS", "NULL_STYLE", "plot_adis_allan", "plot_confusion", "plot_fpr", "plot_power",
-           "plot_rows"]
+           "plot_rows", "plot_sessions", "plot_stability"]
