@@ -384,6 +384,19 @@ def null_available(null: str) -> bool:
     return null == "white" or "null" in {f.name for f in dataclasses.fields(Rules)}
 
 
+def nulls_for(truth: str, nulls: dict) -> list[str]:
+    """The null hypotheses to run on a recording of row ``truth``: config ``benchmark.nulls``
+    maps each null to ``all``, ``effect_free`` (only the ``none`` rows) or ``none``; the
+    nulls this library lacks are left out (:func:`null_available`)."""
+    out = []
+    for null, rows in nulls.items():
+        if rows not in ("all", "effect_free", "none"):
+            raise AccelcalError(f"benchmark.nulls.{null}: {rows!r} is not all, effect_free or none")
+        if null_available(null) and (rows == "all" or (rows == "effect_free" and truth == NONE)):
+            out.append(null)
+    return out
+
+
 def rules_with_null(rules: Rules, null: str) -> Rules:
     """``rules`` testing under ``null`` (:func:`null_available` must hold)."""
     if not null_available(null):
@@ -456,5 +469,5 @@ def detect_case(rec: Recording, g: float, rules: Rules) -> dict:
 
 
 __all__ = ["CONSTANT_TEMPERATURE", "ERROR", "NONE", "NOT_IDENTIFIABLE", "NULLS", "OUTLIER", "Oracle", "Session",
-           "check_truth", "chunk", "detect_case", "detect_nulls", "effects_of", "expected_outcome", "null_available",
+           "check_truth", "chunk", "detect_case", "detect_nulls", "effects_of", "nulls_for", "expected_outcome", "null_available",
            "plan", "rules_with_null", "simulate_case"]
