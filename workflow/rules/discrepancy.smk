@@ -48,7 +48,7 @@ DISCREPANCY_CHUNKS = list(range(DISCREPANCY_BENCH["chunks"]))
 DISCREPANCY_RECORDINGS = list(DISCREPANCY["recordings"])
 DISCREPANCY_PROFILES = [p["name"] for p in DISCREPANCY_BENCH["profiles"]]
 #: Profiles that need the Xsens report (its stochastic layer's fit) or the ADIS record.
-DISCREPANCY_NEEDS_XSENS = any(p.get("fitted") == "xsens_mti" for p in DISCREPANCY_BENCH["profiles"])
+DISCREPANCY_NEEDS_XSENS = any(p.get("fitted") in ("xsens_mti", "xsens_mti_joint") for p in DISCREPANCY_BENCH["profiles"])
 DISCREPANCY_NEEDS_RECORD = any(p.get("real") for p in DISCREPANCY_BENCH["profiles"])
 ADIS_DATASET, ADIS_FILE = "smac_adis16405", "adis_16405_imu1.rda"
 #: As measured.smk: a relative data_dir is taken from the project root.
@@ -397,6 +397,7 @@ for _fid in DISCREPANCY_FIGURES:
             confusion_size=DISCREPANCY_BENCH["confusion_size_mde"],
             profiles=DISCREPANCY_PROFILES,
             curve_profiles=DISCREPANCY_BENCH["power_curve"]["profiles"],
+            sizes=DISCREPANCY_BENCH["sizes_mde"],
             recordings=DISCREPANCY_RECORDINGS,
         log:
             log_path(f"discrepancy/{_fid}_figure"),

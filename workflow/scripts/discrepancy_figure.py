@@ -35,7 +35,7 @@ if fid == "discrepancy_fpr":
 elif fid == "discrepancy_confusion":
     fig = BF.plot_confusion(table(inp.scores), p.confusion_size, p.profiles)
 elif fid == "discrepancy_power":
-    fig = BF.plot_power(table(inp.rates), p.rules["power"], p.profiles, p.curve_profiles)
+    fig = BF.plot_power(table(inp.rates), p.rules["power"], p.profiles, p.curve_profiles, p.sizes)
 elif fid == "discrepancy_rows":
     fig = BF.plot_rows(table(inp.rates), p.profiles)
 elif fid == "discrepancy_adis_allan":

@@ -19,7 +19,12 @@ session = Session.from_config(bench["session"])
 fitted = {"adis16405": A.reference_profile_source(pd.read_csv(snakemake.input.models), session.rate)}
 if snakemake.input.xsens:
     with open(snakemake.input.xsens[0]) as f:
-        fitted["xsens_mti"] = P.xsens_source(json.load(f))
+        xsens = json.load(f)
+    wanted = {p.get("fitted") for p in bench["profiles"]}
+    if "xsens_mti" in wanted:
+        fitted["xsens_mti"] = P.xsens_source(xsens)
+    if "xsens_mti_joint" in wanted:
+        fitted["xsens_mti_joint"] = P.joint_source(xsens, "xsens_mti")
 profiles = P.build_profiles(bench["profiles"], session, fitted=fitted)
 write_json_atomic(snakemake.output.profiles, {n: p.to_dict() for n, p in profiles.items()})
 table = pd.DataFrame(P.profile_table(profiles, session))

@@ -76,8 +76,8 @@ def plot_fpr(summary: pd.DataFrame, profiles_table: pd.DataFrame, alpha: float, 
                       "(exact 95% CI)", fontsize=8)
         ax.set_xlim(0, max(0.25, float(np.nanmax(fp.ci_high)) * 1.12) if len(fp) else 1)
         ax.set_ylim(-0.6, len(profiles) - 0.4)
-        ax.set_title(f"Effect-free sessions per noise profile (✗ = {main}-null verdict fails); wander = pose-mean "
-                     "std of the non-white noise / white pose-mean std", fontsize=8)
+        ax.set_title(f"Effect-free sessions per noise profile (✗ = {main}-null verdict fails)\nwander = pose-mean "
+                     "std of the profile's non-white noise / white pose-mean std", fontsize=8)
         ax.legend(loc="lower right", fontsize=6.5)
     return fig
 
@@ -105,10 +105,10 @@ def plot_confusion(scores: pd.DataFrame, size_mde: float, profiles, null: str | 
             ax.imshow(F, cmap="Blues", vmin=0, vmax=1, aspect="auto")
             for i, t in enumerate(truths):
                 exp = d[d.truth == t].expected.iloc[0] if (d.truth == t).any() else ""
-                first = exp.split("+")[0]
-                if first in cols:
-                    j = cols.index(first)
-                    ax.add_patch(plt.Rectangle((j - 0.5, i - 0.5), 1, 1, fill=False, ec="C3", lw=1.0))
+                for e in exp.split("+"):  # a pair: either effect may come first
+                    if e in cols:
+                        j = cols.index(e)
+                        ax.add_patch(plt.Rectangle((j - 0.5, i - 0.5), 1, 1, fill=False, ec="C3", lw=1.0))
                 for j in range(len(cols)):
                     if F[i, j] >= 0.05:
                         ax.text(j, i, f"{F[i, j]:.2f}".lstrip("0"), ha="center", va="center", fontsize=5,
@@ -121,14 +121,15 @@ def plot_confusion(scores: pd.DataFrame, size_mde: float, profiles, null: str | 
         for ax in axs.flat[len(profiles):]:
             ax.set_visible(False)
         fig.suptitle(f"Outcome of the loop ({null} null) per hidden row at {size_mde:g} × its oracle MDE "
-                     f"(red box: the correct first outcome; two effects: the first of the pair; "
+                     f"(red box: a correct first outcome; two effects: either of the pair; "
                      f"rows: hidden, columns: named first)", fontsize=8.5)
     return fig
 
 
-def plot_power(rates: pd.DataFrame, power: float, profiles, curve_profiles):
+def plot_power(rates: pd.DataFrame, power: float, profiles, curve_profiles, sizes):
     """Top: detection rate vs size for the power-curve profiles (colored null solid, white
-    dashed); bottom: naming accuracy (effect named first) per profile at each size, colored null."""
+    dashed); bottom: naming accuracy (effect named first) per profile at the main ``sizes``
+    (every profile has them), colored null."""
     effects = [e for e in EFFECT_IDS if e in set(rates.truth)]
     main = _main_null(rates.null)
     cmap = plt.get_cmap("tab10")
@@ -144,7 +145,8 @@ def plot_power(rates: pd.DataFrame, power: float, profiles, curve_profiles):
                         continue
                     yerr = np.vstack([r.detection_rate - r.detection_ci_low, r.detection_ci_high - r.detection_rate])
                     ax.errorbar(r.size_mde * (1 + 0.02 * k), r.detection_rate, yerr=yerr, color=cmap(k), ls=ls,
-                                marker="o", ms=3, lw=1, capsize=1.5, label=f"{prof}, {null}" if j == 0 else None)
+                                marker="o", ms=3, lw=1, capsize=1.5,
+                                label=f"profile {prof}, {null} null" if j == 0 else None)
             ax.plot([1.0], [power], marker="*", color="k", ms=9, ls="none",
                     label=f"oracle test's power at 1 MDE ({power:g})" if j == 0 else None)
             ax.set_xscale("log")
@@ -157,13 +159,14 @@ def plot_power(rates: pd.DataFrame, power: float, profiles, curve_profiles):
             ax = axs[1, j]
             r = rates[(rates.truth == e) & (rates.null == main)]
             x = np.arange(len(profiles))
-            for k, s in enumerate(sorted(set(r.size_mde))):
+            main_sizes = sorted(sizes)
+            for k, s in enumerate(main_sizes):
                 rs = r[np.isclose(r.size_mde, s)].set_index("profile").reindex(profiles)
                 if rs.accuracy.isna().all():
                     continue
                 yerr = np.vstack([rs.accuracy - rs.accuracy_ci_low, rs.accuracy_ci_high - rs.accuracy])
-                ax.errorbar(x + 0.12 * (k - 1), rs.accuracy, yerr=yerr, ls="none", marker="o", ms=3, capsize=1.5,
-                            lw=0.8, color=plt.get_cmap("viridis")(k / max(1, len(set(r.size_mde)) - 1)),
+                ax.errorbar(x + 0.2 * (k - (len(main_sizes) - 1) / 2), rs.accuracy, yerr=yerr, ls="none", marker="o",
+                            ms=3, capsize=1.5, lw=0.8, color=plt.get_cmap("viridis")(k / max(1, len(main_sizes) - 1)),
                             label=f"{s:g} MDE" if j == 0 else None)
             ax.set_xticks(x, profiles, rotation=90, fontsize=6)
             ax.set_ylim(-0.02, 1.02)

@@ -25,9 +25,11 @@ moved) before the samples are rounded to integer counts.  Three kinds:
     ``Σ_k e^{−4π²k²s²}/(2π²k²)`` over a uniform fraction ``f``, which no sample scatter
     reveals: the "raw counts with rounding" profile.
 
-* **fitted** (``fitted: xsens_mti`` or ``fitted: adis16405``): the noise model fitted
-  to a real sensor, in counts: the Xsens session's stochastic-layer fit of its rests
-  (results/discrepancy/measured/xsens_mti.json, already in counts), or the ADIS16405
+* **fitted** (``fitted: xsens_mti``, ``xsens_mti_joint`` or ``adis16405``): the noise
+  model fitted to a real sensor, in counts: the Xsens session's stochastic-layer fit of its
+  rests (results/discrepancy/measured/xsens_mti.json, already in counts), the joint
+  model's bias wander estimated from the Xsens pose residuals with the white noise of its
+  rests (:func:`joint_source`), or the ADIS16405
   model fitted to its 2.78 h Allan deviation (:mod:`accelcal_repro.discrepancy.adis`),
   rescaled so that its white term equals the session's (the ratio of wander to white
   noise is the ADIS's own).
@@ -63,7 +65,7 @@ FLICKER_FLOOR = math.sqrt(2 * math.log(2) / math.pi)
 #: Names of the real noise records a profile can draw from.
 REAL_RECORDS = ("adis16405",)
 #: Sources of fitted profiles.
-FITTED_SOURCES = ("xsens_mti", "adis16405")
+FITTED_SOURCES = ("xsens_mti", "xsens_mti_joint", "adis16405")
 AXIS_PERMUTATIONS = tuple(permutations(range(3)))
 
 
@@ -319,10 +321,40 @@ def xsens_source(report: dict) -> dict:
             "description": f"Xsens MTi session, stochastic layer on its rests (named: {named})"}
 
 
+def joint_source(report: dict, name: str) -> dict:
+    """A ``fitted`` entry of :func:`build_profiles` from a report's joint noise model (the colored
+    null's REML bias wander, the same on every axis) with the white noise of its rests: per-axis
+    sample standard deviation whose mean over a rest has the rests' standard errors."""
+    nm = report.get("noise_model") or {}
+    if not nm.get("estimated"):
+        raise ProfileError(f"the {name} report has no joint wander estimate: "
+                           + (nm.get("reason") or "the colored null did not run"))
+    p = report["poses"]
+    se = np.array(p["mean_std"], float)
+    n = np.array(p["n_samples"], float)
+    fs = float(report.get("rate") or (report.get("stochastic") or {}).get("fs") or 0.0)
+    if not fs > 0:
+        raise ProfileError(f"the {name} report does not give its sampling rate")
+    white = np.sqrt(np.mean(se ** 2 * n[:, None], axis=0))
+    models = []
+    for a in range(3):
+        m = {"white": float(white[a]) / math.sqrt(fs)}
+        if nm.get("term") not in (None, "none"):
+            if nm.get("process") == "random_walk":
+                m["random_walk"] = float(nm["random_walk_K"])
+            else:
+                m["gauss_markov"] = (float(nm["size"]), float(nm["tau_s"]))
+        models.append(m)
+    return {"models": models, "fs": fs, "unit_to_counts": 1.0, "white_match": False,
+            "description": f"{name}: the joint model's bias wander ({nm.get('process', 'none')}) and the rests' white "
+                           f"noise"}
+
+
 def profile_table(profiles: dict, session) -> list[dict]:
     """One row per profile and axis: the terms, the white noise, and what the profile does to
-    the pose means of the session: RMS over poses of the non-white pose-mean standard deviation
-    about the session mean, in counts and relative to the white one (``wander_over_white``)."""
+    the pose means of the session: RMS over poses of the pose-mean standard deviation beyond the
+    samples' own white noise and rounding (the time-correlated terms, and the rounding bias of
+    sub-count noise), in counts and relative to the white one (``wander_over_white``)."""
     from .benchmark import _trimmed_windows
 
     win = _trimmed_windows(session, session.n_samples)
@@ -331,10 +363,10 @@ def profile_table(profiles: dict, session) -> list[dict]:
     rows = []
     for name, p in profiles.items():
         C = pose_mean_covariance(p, starts, durations, n_s, session.rate)
-        white_only = NoiseProfile(name, p.white)
-        Cw = pose_mean_covariance(white_only, starts, durations, n_s, session.rate)
         for a, ax in enumerate("xyz"):
-            vw = float(np.mean(np.diag(Cw[a])))
+            # white = the samples' own noise and their rounding (what the pose SE shows); the
+            # rest (rounding bias of sub-count noise, time-correlated terms) is the wander
+            vw = float(np.mean((p.white[a] ** 2 + 1.0 / 12.0) / n_s))
             vx = float(np.mean(np.diag(C[a]))) - vw
             terms = "+".join(["white"] + [t for t, _ in p.components])
             rows.append({"profile": name, "kind": p.kind, "axis": ax, "terms": terms, "real": p.real,
@@ -349,4 +381,4 @@ def profile_table(profiles: dict, session) -> list[dict]:
 __all__ = ["AXIS_PERMUTATIONS", "FITTED_SOURCES", "FLICKER_FLOOR", "NoiseProfile", "ProfileError", "REAL_RECORDS",
            "build_profiles", "centred", "independent_recordings", "pose_mean_covariance", "pose_mean_white",
            "profile_table", "record_windows", "residual_covariance", "rounding_bias_variance", "session_length",
-           "simulate_profile", "xsens_source"]
+           "joint_source", "simulate_profile", "xsens_source"]
