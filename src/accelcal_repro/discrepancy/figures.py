@@ -150,8 +150,8 @@ def plot_power(rates: pd.DataFrame, power: float, profiles, curve_profiles, size
             ax.plot([1.0], [power], marker="*", color="k", ms=9, ls="none",
                     label=f"oracle test's power at 1 MDE ({power:g})" if j == 0 else None)
             ax.set_xscale("log")
-            sizes = sorted(set(rates.size_mde[rates.truth == e]))
-            ax.set_xticks(sizes, [f"{s:g}" for s in sizes])
+            ticks = sorted(set(rates.size_mde[rates.truth == e]))
+            ax.set_xticks(ticks, [f"{t:g}" for t in ticks])
             ax.minorticks_off()
             ax.set_ylim(-0.02, 1.02)
             ax.set_title(LABELS[e], fontsize=9)
