@@ -21,11 +21,12 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
-import yaml
 
 from accelcal.atomic import atomic_output, remove_stale_temporaries
 from accelcal_repro.measured.data import DATASETS, DatasetError, check_available, local_file
 from accelcal_repro.measured.sources import SOURCES, check_source_available
+
+from tests.configs import ci_config
 
 REPO = Path(__file__).resolve().parents[1]
 SNAKEMAKE = Path(sys.executable).with_name("snakemake")
@@ -70,7 +71,7 @@ def test_missing_dataset_fails_before_any_job(tmp_path, dry_run):
     assert proc.returncode != 0, out
     lines = [ln for ln in out.splitlines() if ln.startswith("missing measured data:")]
     assert len(lines) == 1, out
-    first = SOURCES[next(iter(yaml.safe_load(CI.read_text())["measured"]["recordings"]))]  # checked first
+    first = SOURCES[next(iter(ci_config()["measured"]["recordings"]))]  # checked first
     line = lines[0]
     # the recording, where it was looked for, the URL and what to do
     assert f"recording {first.name}:" in line, line
@@ -257,7 +258,7 @@ def writer_inputs(tmp_path_factory):
     session = B.Session()
     rec, _ = B.simulate_case("none", 0.0, 0, seed=5, session=session, rules=Rules())
     write_recording(inputs / "rec.csv", rec)
-    cfg = yaml.safe_load(CI.read_text())["discrepancy"]
+    cfg = ci_config()["discrepancy"]
     params = {"g": session.g, "rules": cfg["rules"], "stochastic": dict(cfg["stochastic"], n_boot=19, n_resim=1)}
     (inputs / "params.json").write_text(json.dumps(params))
     return {"inputs": str(inputs), "url": upstream.as_uri(), "sha": sha256(upstream),
