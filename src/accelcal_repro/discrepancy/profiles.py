@@ -373,7 +373,9 @@ def profile_table(profiles: dict, session) -> list[dict]:
                          "white_counts": p.white[a], "pose_mean_white_counts": math.sqrt(vw),
                          "wander_pose_mean_counts": math.sqrt(max(vx, 0.0)),
                          "wander_over_white": math.sqrt(max(vx, 0.0) / vw),
-                         "components": "; ".join(f"{t}={v[a]}" for t, v in p.components),
+                         "components": "; ".join(f"{t}=" + (f"({float(v[a][0]):.4g}, {float(v[a][1]):.4g} s)"
+                                                           if isinstance(v[a], tuple) else f"{float(v[a]):.4g}")
+                                                 for t, v in p.components),
                          "description": p.description})
     return rows
 
