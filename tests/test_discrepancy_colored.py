@@ -214,12 +214,15 @@ def test_wander_estimate_covers_the_simulated_size_and_time_constant():
 
 
 def test_outlier_pose_is_named_with_its_index_and_removed():
-    """One pose shifted by 8 of its sigmas in a session with the realistic wander: named
-    `outlier_pose` with its index and time; the gap shrinks without it; the report keeps it."""
+    """One pose shifted by 12 of its white sigmas (about 6.5 sigmas of the whole noise) in a
+    session with the realistic wander: named `outlier_pose` with its index and time, on at
+    least 3 of 4 recordings (12 of 12 measured with all candidates; at 8 white sigmas 6 of
+    12: the max-LR family over 30 poses under the wander needs about 4.5 sigmas); the gap
+    shrinks without it and the report keeps the pose, marked excluded."""
     found = 0
     for seed in range(4):
         rng = np.random.default_rng(100 + seed)
-        d, truth = session(rng, THREE_GM, outlier=(17, 8.0))
+        d, truth = session(rng, THREE_GM, outlier=(17, 12.0))
         res = discrepancy(d, FAST)
         out = res.to_dict()
         if res.outcome == W.OUTLIER:
@@ -227,7 +230,7 @@ def test_outlier_pose_is_named_with_its_index_and_removed():
             found += o["pose"] == 17
             assert o["t"] == pytest.approx(truth["tmid"][17])
             assert o["gap_after"] < o["gap_before"]
-            assert abs(o["shift_sigma"]) > 4
+            assert abs(o["shift_sigma"]) > 6
             assert out["poses"]["excluded"] == [17] and len(out["poses"]["residual_after"]) == 30
     assert found >= 3, found
 

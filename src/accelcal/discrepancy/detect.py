@@ -1,5 +1,14 @@
 """The deterministic layer: which candidate effect do the pose residuals ask for?
 
+Two noise models for the null hypothesis (``Rules.null``).  ``colored`` (the default):
+white per-pose noise times a common scale plus a bias wander estimated jointly with the
+calibration, likelihood-ratio tests calibrated by a parametric bootstrap, outlier poses,
+ambiguity between candidates and with the wander (:mod:`.colored`, :mod:`.wander_loop`).
+``white``: the loop described below, white per-pose noise times a common scale and
+F-tests (issue 7's loop, kept unchanged as the benchmark's negative control: on sessions
+whose bias wanders it names ``bias_drift`` far more often than α).  Both share the
+identifiability checks, the result class and its JSON.
+
 Given :class:`~accelcal.discrepancy.fit.PoseData`, the loop fits the base model (bias,
 scale, non-orthogonality: 9 parameters), treats it as the simulation of the experiment,
 and tests every candidate effect of the library as a nested extension of it:

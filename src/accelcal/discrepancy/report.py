@@ -217,6 +217,7 @@ def noise_implication(det: DiscrepancyResult, stoch, starts, durations, alpha: f
         "verdict": verdict,
         "explains_excess": bool(np.isfinite(p) and p >= alpha),
         "extra_residual_std": c["wander_residual_std"],
+        "white_scale": nm.get("white_scale"),
         "allan_check": allan_check(nm, stoch) if stoch is not None else {"verdict": "no rests analysed"},
         "rests_only": rests,
     }

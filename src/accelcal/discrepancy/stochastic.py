@@ -1032,7 +1032,7 @@ TERM_LABELS = {"white": "white", "quantization": "quantization", "bias_instabili
                "random_walk": "random walk", "drift_ramp": "drift ramp", "gauss_markov": "Gauss-Markov", "sinusoid": "sinusoid"}
 
 
-def plot_allan(fig_or_axes, result: StochasticResult, title: str = ""):
+def plot_allan(fig_or_axes, result: StochasticResult, title: str = "", wander_check: dict | None = None):
     """Measured vs simulated Allan deviation, before and after the named terms, one panel per axis.
 
     Draws, per axis: the measured ADEV (all rests pooled) with its 68 % interval, the
@@ -1047,6 +1047,10 @@ def plot_allan(fig_or_axes, result: StochasticResult, title: str = ""):
     result : StochasticResult
     title : str
         Figure title (only when a figure is given).
+    wander_check : dict, optional
+        ``noise_implication["allan_check"]`` of the report: also draws what the bias wander
+        estimated from the pose residuals predicts (white + wander, with the band of its
+        95 % interval, green), where the check compared it (markers).
 
     Returns
     -------
@@ -1084,6 +1088,16 @@ def plot_allan(fig_or_axes, result: StochasticResult, title: str = ""):
                         label="white + named, re-simulated")
             ax.set(xscale="log", yscale="log", xlabel="averaging time τ [s]")
             ax.set_title(f"{a.axis}: + {named}\ngap {a.gap_before:.1f} → {a.gap_after:.1f}", fontsize=8.5)
+            wc = (wander_check or {}).get("axes", {}).get(a.axis)
+            if wc:
+                tw = np.asarray(wc["taus"], float)
+                band = np.asarray(wc["adev_predicted_band"], float)
+                ax.fill_between(tw, band[:, 0], np.minimum(band[:, 1], 10 * np.nanmax(a.adev_measured)), color="C2",
+                                alpha=0.18, lw=0, label="white + bias wander from the poses (95 %)")
+                ax.plot(tw, wc["adev_predicted"], color="C2", lw=1.2)
+                cmp = np.asarray(wc["compared"], bool)
+                ax.plot(tw[cmp], np.asarray(wc["adev_predicted"], float)[cmp], "D", color="C2", ms=3.5,
+                        mfc="none", label=f"compared: {wc['verdict']}")
         axs[0].set_ylabel(f"Allan deviation [{result.unit}]")
         axs[0].legend(loc="lower left", fontsize=6.5)
         if isinstance(fig_or_axes, Figure) and title:

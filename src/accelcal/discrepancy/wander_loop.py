@@ -148,137 +148,152 @@ def _gls_estimate(prob: C.Problem, X1: np.ndarray, w1: C.WanderFit, aug: Fit, sl
 
 def discrepancy_colored(data: PoseData, rules: Rules) -> DiscrepancyResult:
     """The loop of the module docstring on one pose set (``rules.null == 'colored'``)."""
-    cands, skipped = applicable(data, rules.candidates)
+    cands, _ = applicable(data, rules.candidates)
     base = fit(data)
     lopo_base = lopo(base, data)
     rng_seq = np.random.SeedSequence([int(rules.seed), 13])
-    cur_data, current = data, base
-    named, outliers, rows, errors, outlier_tests = [], [], [], [], []
-    ambiguous: set[str] = set()
-    n_effects = 0
+    st = _State(data, base)
     rnd = 0
-    prob = None
-    wander_error = ""
     while True:
         rnd += 1
-        remaining = [e for e in cands if e not in named and e not in ambiguous] if n_effects < rules.max_rounds else []
-        test_outliers = rules.outlier_pose and len(outliers) < rules.max_outliers
+        remaining = ([e for e in cands if e not in st.named and e not in st.ambiguous]
+                     if st.n_effects < rules.max_rounds else [])
+        test_outliers = rules.outlier_pose and len(st.outliers) < rules.max_outliers
         if not remaining and not test_outliers:
             break
         try:
-            prob = linearise(cur_data, current)
+            prob = linearise(st.data, st.current)
         except C.WanderError as err:
-            wander_error = str(err)
-            prob = None
+            st.wander_error = str(err)
             for eid in remaining:
-                ident = identifiability(cur_data, current, eid, rules, len(remaining))
-                rows.append(_untested(ident, rnd, (*ident.reasons, f"bias wander cannot be estimated: {err}")))
+                ident = identifiability(st.data, st.current, eid, rules, len(remaining))
+                st.rows.append(_untested(ident, rnd, (*ident.reasons, f"bias wander cannot be estimated: {err}")))
             break
-        null = C.fit_wander(prob, prob.X0, fine=False)
-        tested, untested = [], []
-        for eid in remaining:
-            row = _prepare(cur_data, current, prob, null, eid, rules, len(remaining), rnd)
-            (tested if row["identifiable"] else untested).append(row)
-        rt = C.round_tests(prob, [r["Xe"] for r in tested], np.random.default_rng(rng_seq.spawn(1)[0]),
-                           rules.n_boot, outliers=test_outliers)
-        fam = [float(v) for v in rt.p_values] + ([rt.outlier_p] if test_outliers else [])
-        padj = holm(fam, rules.correction)
-        n = len(cur_data)
-        cand_rows = []
-        lo0 = C.studentised(prob, prob.X0, null.t, null.q_rel)[1][0]
-        press0 = float(np.sum(lo0 ** 2))
-        for k, r in enumerate(tested):
-            X1 = np.hstack([prob.X0, r["Xe"]])
-            w1 = C.fit_wander(prob, X1, fine=False)
-            # leave-one-pose-out under one covariance for both models (the alternative's REML
-            # wander): the comparison then measures what the effect adds out of sample, not a
-            # change of the wander's kriging
-            lo1 = C.studentised(prob, X1, w1.t, w1.q_rel)[1][0]
-            lo0c = C.studentised(prob, prob.X0, w1.t, w1.q_rel)[1][0]
-            press1, press0c = float(np.sum(lo1 ** 2)), float(np.sum(lo0c ** 2))
-            lr = float(rt.lr[k])
-            dbic = -lr + 3.0 * math.log(n)
-            est, se, aug, err = [float("nan")] * 3, [float("nan")] * 3, None, ""
-            try:
-                aug = fit(cur_data, (*current.effects, r["effect"]), p0=current.p)
-            except AccelcalError as e:
-                err = f"{r['effect']}: fit failed: {e}"
-                errors.append(err)
-            se_noise = [float("nan")] * 3
-            if aug is not None:
-                i = len(current.effects)
-                sl = slice(9 + 3 * i, 12 + 3 * i)
-                est, se = _gls_estimate(prob, X1, w1, aug, sl)
-                se_noise = aug.standard_errors(False)[sl].tolist()
-            ok = bool(np.isfinite(padj[k]) and padj[k] <= rules.alpha) and aug is not None
-            c = Candidate(**r["common"], statistic=lr, dof=(3, n - current.q - 3), p_value=float(rt.p_values[k]),
-                          bartlett=float(rt.bartlett[k]),
-                          p_adjusted=float(padj[k]), delta_bic=dbic, lopo_gap_current=gap(lo0),
-                          lopo_gap=gap(lo1), estimate=est, se=se, se_noise=se_noise, passed_test=ok,
-                          passed_bic=bool(dbic < -rules.bic_threshold),
-                          passed_lopo=bool(press1 < (1 - rules.lopo_min_improvement) * press0c),
-                          test="likelihood ratio, parametric bootstrap under the fitted noise",
-                          mde_white=r["mde_white"], wander_inflation=r["inflation"],
-                          wander_alt=_wander_dict(w1))
-            if not c.passed and r["inflation"] > rules.max_wander_inflation:
-                c = Candidate(**{**asdict(c), "reasons": c.reasons, "confounded_with_wander": True})
-            if err:
-                c = Candidate(**{**asdict(c), "reasons": (*c.reasons, err)})
-            cand_rows.append((c, aug, r["Xe"]))
-        cand_rows = _resolve_ambiguous(prob, cand_rows, rules.alpha)
-        for eid in {c.effect for c, _, _ in cand_rows if c.ambiguous_with}:
-            ambiguous.add(eid)
-        for r in untested:
-            cand_rows.append((_untested_from(r), None, None))
-        out_row = None
-        if test_outliers:
-            i = rt.outlier_pose
-            out_row = {"round": rnd, "pose": int(cur_data.pose_index[i]), "t": float(cur_data.t[i]),
-                       "statistic": rt.outlier_lr, "studentised": float(rt.outlier_t[i]),
-                       "p_value": rt.outlier_p, "p_adjusted": float(padj[-1]),
-                       "delta_bic": -rt.outlier_lr + 2.0 * math.log(n),
-                       "passed_test": bool(padj[-1] <= rules.alpha), "named": False}
-        # choose
-        passing = [(c.p_value, c.delta_bic, "effect", c, a) for c, a, _ in cand_rows
-                   if c.passed and not c.ambiguous_with and not c.dominated]
-        if out_row is not None and out_row["passed_test"]:
-            passing.append((out_row["p_value"], out_row["delta_bic"], OUTLIER, None, None))
-        # the bootstrap p-values saturate at 1/(n_boot + 1): among what passed, the strongest
-        # evidence (smallest ΔBIC) is named first
-        best = min(passing, key=lambda x: (x[1], x[0])) if passing else None
-        for c, _, _ in cand_rows:
-            rows.append(Candidate(**{**asdict(c), "reasons": c.reasons,
-                                     "named": best is not None and best[3] is c}))
+        rng = np.random.default_rng(rng_seq.spawn(1)[0])
+        cand_rows, out_row, rt = _round(st, prob, remaining, test_outliers, rules, rnd, rng)
+        best = _choose(cand_rows, out_row)
+        st.rows += [Candidate(**{**asdict(c), "reasons": c.reasons, "named": best is not None and best[3] is c})
+                    for c, _, _ in cand_rows]
         if out_row is not None:
             out_row["named"] = best is not None and best[2] == OUTLIER
-            outlier_tests.append(out_row)
+            st.outlier_tests.append(out_row)
         if best is None:
             break
         if best[2] == OUTLIER:
-            i = rt.outlier_pose
-            keep = np.arange(len(cur_data)) != i
-            new_data = cur_data.subset(keep)
-            try:
-                new = fit(new_data, current.effects, p0=current.p)
-            except AccelcalError as e:
-                errors.append(f"refit without pose {int(cur_data.pose_index[i])} failed: {e}")
+            if not _drop_outlier(st, rt.outlier_pose, out_row):
                 break
-            r_pred = _predict(cur_data.subset(np.array([i])), new)
-            outliers.append({"pose": int(cur_data.pose_index[i]), "t": float(cur_data.t[i]),
-                             "shift": r_pred, "shift_sigma": r_pred / float(cur_data.sigma[i]),
-                             "statistic": out_row["statistic"], "studentised": out_row["studentised"],
-                             "p": out_row["p_value"],
-                             "p_adjusted": out_row["p_adjusted"], "round": rnd,
-                             "gap_before": gap(current.weighted), "gap_after": gap(new.weighted)})
-            named.append(OUTLIER)
-            cur_data, current = new_data, new
         else:
-            c, aug = best[3], best[4]
-            named.append(c.effect)
-            n_effects += 1
-            current = aug
-    return _result(data, rules, base, lopo_base, cur_data, current, named, outliers, rows, skipped, errors,
-                   outlier_tests, wander_error)
+            st.named.append(best[3].effect)
+            st.n_effects += 1
+            st.current = best[4]
+    return _result(data, rules, base, lopo_base, st)
+
+
+class _State:
+    """What the loop has named so far, and the pose set and model it stands at."""
+
+    def __init__(self, data: PoseData, base: Fit):
+        self.data, self.current = data, base
+        self.named, self.outliers, self.rows, self.errors, self.outlier_tests = [], [], [], [], []
+        self.ambiguous: set[str] = set()
+        self.n_effects = 0
+        self.wander_error = ""
+
+
+def _round(st: _State, prob: C.Problem, remaining, test_outliers: bool, rules: Rules, rnd: int, rng):
+    """One round: identifiability, the bootstrap tests, Holm, ΔBIC, LOPO, ambiguity.
+
+    Returns the candidate rows ``(Candidate, augmented fit, columns)``, the outlier row
+    (or None) and the round's :class:`~.colored.RoundTests`.
+    """
+    null = C.fit_wander(prob, prob.X0, fine=False)
+    prepared = [_prepare(st.data, st.current, prob, null, eid, rules, len(remaining), rnd) for eid in remaining]
+    tested = [r for r in prepared if r["identifiable"]]
+    rt = C.round_tests(prob, [r["Xe"] for r in tested], rng, rules.n_boot, outliers=test_outliers)
+    padj = holm([float(v) for v in rt.p_values] + ([rt.outlier_p] if test_outliers else []), rules.correction)
+    lo0 = C.studentised(prob, prob.X0, null.t, null.q_rel)[1][0]
+    cand_rows = [_tested_candidate(st, prob, r, rt, k, padj[k], lo0, rules) for k, r in enumerate(tested)]
+    cand_rows = _resolve_ambiguous(prob, cand_rows, rules.alpha)
+    st.ambiguous |= {c.effect for c, _, _ in cand_rows if c.ambiguous_with}
+    cand_rows += [(_untested_from(r), None, None) for r in prepared if not r["identifiable"]]
+    out_row = None
+    if test_outliers:
+        i, n = rt.outlier_pose, len(st.data)
+        out_row = {"round": rnd, "pose": int(st.data.pose_index[i]), "t": float(st.data.t[i]),
+                   "statistic": rt.outlier_lr, "studentised": float(rt.outlier_t[i]),
+                   "p_value": rt.outlier_p, "p_adjusted": float(padj[-1]),
+                   "delta_bic": -rt.outlier_lr + 2.0 * math.log(n),
+                   "passed_test": bool(padj[-1] <= rules.alpha), "named": False}
+    return cand_rows, out_row, rt
+
+
+def _tested_candidate(st: _State, prob: C.Problem, r: dict, rt: C.RoundTests, k: int, p_adj: float,
+                      lo0: np.ndarray, rules: Rules):
+    """The :class:`Candidate` row of a tested effect, with its augmented weighted fit."""
+    X1 = np.hstack([prob.X0, r["Xe"]])
+    w1 = C.fit_wander(prob, X1, fine=False)
+    # leave-one-pose-out under one covariance for both models (the alternative's REML noise):
+    # the comparison then measures what the effect adds out of sample, not a change of the
+    # wander's kriging
+    lo1 = C.studentised(prob, X1, w1.t, w1.q_rel)[1][0]
+    lo0c = C.studentised(prob, prob.X0, w1.t, w1.q_rel)[1][0]
+    n = len(st.data)
+    lr = float(rt.lr[k])
+    dbic = -lr + 3.0 * math.log(n)
+    est, se, se_noise, aug, err = [float("nan")] * 3, [float("nan")] * 3, [float("nan")] * 3, None, ""
+    try:
+        aug = fit(st.data, (*st.current.effects, r["effect"]), p0=st.current.p)
+    except AccelcalError as e:
+        err = f"{r['effect']}: fit failed: {e}"
+        st.errors.append(err)
+    if aug is not None:
+        sl = slice(9 + 3 * len(st.current.effects), 12 + 3 * len(st.current.effects))
+        est, se = _gls_estimate(prob, X1, w1, aug, sl)
+        se_noise = aug.standard_errors(False)[sl].tolist()
+    c = Candidate(**r["common"], statistic=lr, dof=(3, n - st.current.q - 3), p_value=float(rt.p_values[k]),
+                  bartlett=float(rt.bartlett[k]), p_adjusted=float(p_adj), delta_bic=dbic,
+                  lopo_gap_current=gap(lo0), lopo_gap=gap(lo1), estimate=est, se=se, se_noise=se_noise,
+                  passed_test=bool(np.isfinite(p_adj) and p_adj <= rules.alpha and aug is not None),
+                  passed_bic=bool(dbic < -rules.bic_threshold),
+                  passed_lopo=bool(np.sum(lo1 ** 2) < (1 - rules.lopo_min_improvement) * np.sum(lo0c ** 2)),
+                  test="likelihood ratio, parametric bootstrap under the fitted noise",
+                  mde_white=r["mde_white"], wander_inflation=r["inflation"], wander_alt=_wander_dict(w1))
+    confounded = not c.passed and r["inflation"] > rules.max_wander_inflation
+    c = Candidate(**{**asdict(c), "reasons": (*c.reasons, *([err] if err else [])),
+                     "confounded_with_wander": confounded})
+    return c, aug, r["Xe"]
+
+
+def _choose(cand_rows: list, out_row: dict | None):
+    """The result to name: among what passed (and is neither ambiguous nor dominated), the
+    strongest evidence, the smallest ΔBIC (the bootstrap p-values saturate at
+    ``1/(n_boot + 1)`` and cannot rank strong results).  ``(p, ΔBIC, kind, Candidate, fit)``
+    or None."""
+    passing = [(c.p_value, c.delta_bic, "effect", c, a) for c, a, _ in cand_rows
+               if c.passed and not c.ambiguous_with and not c.dominated]
+    if out_row is not None and out_row["passed_test"]:
+        passing.append((out_row["p_value"], out_row["delta_bic"], OUTLIER, None, None))
+    return min(passing, key=lambda x: (x[1], x[0])) if passing else None
+
+
+def _drop_outlier(st: _State, i: int, out_row: dict) -> bool:
+    """Name pose ``i`` (of the current pose set) an outlier and refit without it."""
+    keep = np.arange(len(st.data)) != i
+    new_data = st.data.subset(keep)
+    try:
+        new = fit(new_data, st.current.effects, p0=st.current.p)
+    except AccelcalError as e:
+        st.errors.append(f"refit without pose {int(st.data.pose_index[i])} failed: {e}")
+        return False
+    r_pred = _predict(st.data.subset(np.array([i])), new)
+    st.outliers.append({"pose": int(st.data.pose_index[i]), "t": float(st.data.t[i]), "shift": r_pred,
+                        "shift_sigma": r_pred / float(st.data.sigma[i]), "statistic": out_row["statistic"],
+                        "studentised": out_row["studentised"], "p": out_row["p_value"],
+                        "p_adjusted": out_row["p_adjusted"], "round": out_row["round"],
+                        "gap_before": gap(st.current.weighted), "gap_after": gap(new.weighted)})
+    st.named.append(OUTLIER)
+    st.data, st.current = new_data, new
+    return True
 
 
 def _resolve_ambiguous(prob: C.Problem, cand_rows: list, alpha: float) -> list:
@@ -377,23 +392,25 @@ def _untested_from(row) -> Candidate:
     return Candidate(**row["common"], test="not tested", mde_white=row["mde_white"])
 
 
-def _result(data, rules, base, lopo_base, cur_data, current, named, outliers, rows, skipped, errors, outlier_tests,
-            wander_error) -> DiscrepancyResult:
-    lopo_final = lopo(current, cur_data) if not outliers else _lopo_full(current, cur_data, data)
+def _result(data: PoseData, rules: Rules, base: Fit, lopo_base: np.ndarray, st: _State) -> DiscrepancyResult:
+    cur_data, current = st.data, st.current
+    lopo_final = lopo(current, cur_data) if not st.outliers else _lopo_full(current, cur_data, data)
     wander, prob, colored = None, None, {}
+    wander_error = st.wander_error
     try:
         prob = linearise(cur_data, current)
         wander = C.fit_wander(prob, prob.X0, fine=True)
     except C.WanderError as err:
         wander_error = wander_error or str(err)
-    except (AccelcalError, np.linalg.LinAlgError, ValueError) as err:  # e.g. the REML refinement
-        errors.append(f"bias wander fit failed: {err}")
+    except (AccelcalError, np.linalg.LinAlgError, ValueError) as err:
+        st.errors.append(f"noise model fit failed: {err}")
     if wander is not None:
         colored = _colored_summary(data, base, prob, wander, cur_data, current)
-    nm = noise_model_dict(wander, prob, wander_error)
-    return DiscrepancyResult(tuple(named), tuple(rows), skipped, base, current, lopo_base, lopo_final, data, rules,
-                             noise_model=nm, outliers=tuple(outliers), outlier_tests=tuple(outlier_tests),
-                             errors=tuple(errors), final_data=cur_data, colored=colored)
+    _, skipped = applicable(data, rules.candidates)
+    return DiscrepancyResult(tuple(st.named), tuple(st.rows), skipped, base, current, lopo_base, lopo_final, data,
+                             rules, noise_model=noise_model_dict(wander, prob, wander_error),
+                             outliers=tuple(st.outliers), outlier_tests=tuple(st.outlier_tests),
+                             errors=tuple(st.errors), final_data=cur_data, colored=colored)
 
 
 def _lopo_full(current: Fit, cur_data: PoseData, data: PoseData) -> np.ndarray:
