@@ -224,7 +224,9 @@ rule discrepancy_timing:
     benchmark files: not byte-identical on a rerun (hence 'timing' in the name)."""
     input:
         chunks=expand(bench_path("discrepancy/chunk_{chunk}"), chunk=DISCREPANCY_CHUNKS),
-        other=[bench_path(f"discrepancy/{j}") for j in ("adis", "profiles", "score")],
+        other=[bench_path(f"discrepancy/{j}") for j in ("adis", "profiles", "score", "discrepancy_fpr_figure",
+                                                        "discrepancy_confusion_figure", "discrepancy_power_figure",
+                                                        "discrepancy_rows_figure")],
     output:
         "results/discrepancy/benchmark/timing.csv",
     params:
