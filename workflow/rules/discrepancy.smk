@@ -344,6 +344,7 @@ rule discrepancy_claims:
         summary="results/discrepancy/benchmark/summary.csv",
         profiles="results/discrepancy/benchmark/profiles.csv",
         adis="results/discrepancy/adis/session_check_summary.csv",
+        stability="results/discrepancy/sessions/stability.csv",
     output:
         "results/claims/discrepancy.csv",
     params:

@@ -136,7 +136,9 @@ def excess_rows(name: str, report: dict) -> dict:
     obs = report.get("excess_observed", report.get("excess_before"))
     pred = report.get("excess_predicted", float("nan"))
     nm = report.get("noise_model") or {}
-    ci = nm.get("excess_ci") or [float("nan"), float("nan")]
+    ci = report.get("excess_predicted_interval") or nm.get("excess_ci") or [float("nan"), float("nan")]
+    ci = [float("nan") if v is None else v for v in ci]
+    pred = float("nan") if pred is None else pred
 
     def share(p):
         return (p ** 2 - 1) / (obs ** 2 - 1) if obs is not None and obs > 1 and p is not None else float("nan")
