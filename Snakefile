@@ -40,6 +40,7 @@ include: "workflow/rules/batista2011.smk"
 include: "workflow/rules/tereshkov.smk"
 include: "workflow/rules/measured.smk"
 include: "workflow/rules/discrepancy.smk"
+include: "workflow/rules/benchmark.smk"
 include: "workflow/rules/claims.smk"
 include: "workflow/rules/report.smk"
 
