@@ -328,11 +328,12 @@ def plot_stability(stability: pd.DataFrame, estimates: pd.DataFrame):
             ax.set_title(f"{par}: {'stable' if st.stable else 'NOT stable'}\np_adj {st.p_adjusted:.2g} "
                          f"(scatter only: {p_alt:.2g})", fontsize=7)
             ax.tick_params(axis="y", labelsize=6)
+            ax.set_ylabel({"b": "bias [data unit]", "s": "scale factor [-]", "t": "angle [rad]"}[par[0]], fontsize=6.5)
         for ax in axs.flat[len(pars):]:
             ax.set_visible(False)
         fig.suptitle("One IMU, several sessions: each parameter minus its weighted mean over the sessions (95% "
-                     "intervals, the rests' noise inflated by any excess); green: consistent (Cochran's Q, Holm); in "
-                     "brackets the p with the residual scatter alone as yardstick", fontsize=8)
+                     "intervals, the rests' noise inflated by any excess)\ngreen: consistent (Cochran's Q, Holm); in "
+                     "brackets the adjusted p with the residual scatter alone as yardstick", fontsize=8)
     return fig
 
 
