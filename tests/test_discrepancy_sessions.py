@@ -24,7 +24,6 @@ def _report(profile, seed=3):
 
 def test_resimulating_a_white_session_reproduces_its_residuals():
     rec, rep = _report(P.NoiseProfile("white", (SESSION.noise_counts,) * 3))
-    np.testing.assert_allclose(SS.white_per_sample(rep), SESSION.noise_counts, rtol=0.15)
     sims = SS.resimulate(rec, rep, n_rep=12, seed=1)
     assert (sims[sims.pose < 0].z == 0).all()  # no replicate failed
     gaps = pd.DataFrame(SS.gap_rows("w", rep, sims)).set_index("model")

@@ -224,7 +224,9 @@ rule discrepancy_timing:
     benchmark files: not byte-identical on a rerun (hence 'timing' in the name)."""
     input:
         chunks=expand(bench_path("discrepancy/chunk_{chunk}"), chunk=DISCREPANCY_CHUNKS),
-        other=[bench_path(f"discrepancy/{j}") for j in ("adis", "profiles", "score")],
+        other=[bench_path(f"discrepancy/{j}") for j in ("adis", "profiles", "score", "discrepancy_fpr_figure",
+                                                        "discrepancy_confusion_figure", "discrepancy_power_figure",
+                                                        "discrepancy_rows_figure")],
     output:
         "results/discrepancy/benchmark/timing.csv",
     params:
@@ -342,6 +344,7 @@ rule discrepancy_claims:
         summary="results/discrepancy/benchmark/summary.csv",
         profiles="results/discrepancy/benchmark/profiles.csv",
         adis="results/discrepancy/adis/session_check_summary.csv",
+        stability="results/discrepancy/sessions/stability.csv",
     output:
         "results/claims/discrepancy.csv",
     params:

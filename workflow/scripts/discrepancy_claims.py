@@ -15,7 +15,8 @@ p = snakemake.params
 rows = discrepancy_claims(pd.read_csv(snakemake.input.summary, keep_default_na=False, na_values=[""]),
                           pd.read_csv(snakemake.input.profiles), pd.read_csv(snakemake.input.adis),
                           alpha=p.rules["alpha"], power=p.rules["power"],
-                          nulls=[n for n, rows in p.nulls.items() if rows != "none" and null_available(n)])
+                          nulls=[n for n, rows in p.nulls.items() if rows != "none" and null_available(n)],
+                          stability=pd.read_csv(snakemake.input.stability))
 for r in rows.itertuples():
     log.info("%s/%s: %s (%s)", r.paper, r.claim_id, r.verdict, r.reproduced_value)
 log.info("verdicts: %s", verdict_counts(rows))

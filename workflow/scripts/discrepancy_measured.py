@@ -10,6 +10,7 @@ from accelcal.discrepancy.report import StochasticSettings, analyse
 from accelcal_repro.measured.sources import source
 from accelcal.recording import read_recording
 from accelcal.results import _finite_json
+from accelcal_repro.discrepancy.sessions import with_disjoint_rests
 
 if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
     snakemake = mock_snakemake_from_argv("discrepancy_measured_report", recording="xsens_mti")
@@ -17,12 +18,16 @@ if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_
 log = configure_logging(snakemake)
 name = snakemake.wildcards.recording
 p = snakemake.params
-rec = read_recording(snakemake.input.csv)
+rec, note = with_disjoint_rests(read_recording(snakemake.input.csv))
+if note:
+    log.warning("%s: %s", name, note)
 unit = source(name).unit
 analysis = analyse(rec, p.g, rules=Rules.from_config(p.rules), stochastic=StochasticSettings.from_config(p.stochastic),
                    unit=unit)
 out = analysis.to_dict()
-out.update({"recording": name, "g": p.g, "unit": unit})
+out.update({"recording": name, "g": p.g, "unit": unit, "rate": rec.rate})
+if note:
+    out["notes"] = [*out.get("notes", []), note]
 with atomic_output(snakemake.output[0]) as tmp, open(tmp, "w") as fh:
     json.dump(_finite_json(out), fh, indent=1, sort_keys=False)
     fh.write("\n")

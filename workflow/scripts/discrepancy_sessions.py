@@ -20,8 +20,11 @@ named = [r for n, rep in reports.items() for r in SS.named_rows(n, rep)]
 excess = [SS.excess_rows(n, rep) for n, rep in reports.items()]
 evidence = [r for n, rep in reports.items() for r in SS.evidence_rows(n, rep)]
 estimates = pd.DataFrame([r for n, rep in reports.items() for r in SS.estimates_of(n, rep)])
-stability = [SS.stability_rows(estimates[estimates.recording.isin(members)], p.alpha).assign(group=group)
-             for group, members in p.same_imu.items()]
+# the yardstick: the rests' noise inflated by any excess (se), and for comparison the
+# residual scatter alone (se_scaled, smaller where the residuals scatter less than the rests say)
+stability = [SS.stability_rows(estimates[estimates.recording.isin(members)], p.alpha, se).assign(group=group,
+                                                                                               yardstick=se)
+             for group, members in p.same_imu.items() for se in ("se", "se_scaled")]
 write_csv(pd.DataFrame(named), snakemake.output.named)
 write_csv(pd.DataFrame(excess), snakemake.output.excess)
 write_csv(pd.concat([pd.read_csv(g) for g in snakemake.input.gaps], ignore_index=True), snakemake.output.gaps)

@@ -70,6 +70,36 @@ ADIS_SHORT = Claim(
     "4.28 vs 2.91 (Xsens)")
 
 
+STABILITY = Claim(
+    "batista2011", "sec6b_stability_public_sessions",
+    "Sec. VI-B, tested on public sessions of one IMU (IMU-TK fork, data2/3/4): over sessions, scale and "
+    "cross-axis terms do not change significantly while the bias changes: reproduced iff every scale factor and "
+    "non-orthogonality angle is consistent across the sessions (Cochran's Q on the base model's estimates with "
+    "the larger of the rests' and the residuals' standard errors, Holm over the 9 parameters, level alpha) and at "
+    "least one bias component is not",
+    "qualitative (their unit, tests on different days)")
+SESSIONS = "results/discrepancy/sessions/stability.csv"
+
+
+def _stability_row(stability: pd.DataFrame | None) -> dict:
+    if stability is None or not len(stability):
+        return STABILITY.not_reproducible("no group of sessions of one IMU configured (discrepancy.sessions.same_imu)")
+    alt = stability[stability.yardstick == "se_scaled"].set_index("parameter")
+    st = stability[stability.yardstick == "se"].set_index("parameter")
+    scale = [p for p in st.index if p.startswith(("s_", "theta_"))]
+    bias = [p for p in st.index if p.startswith("b_")]
+    moved_bias = [p for p in bias if not bool(st.loc[p, "stable"])]
+    moved_other = [p for p in scale if not bool(st.loc[p, "stable"])]
+    ok = not moved_other and bool(moved_bias)
+    return STABILITY.judge(len(moved_other), passed=ok, fmt="{:.0f} scale/angle parameters moved",
+                           evidence=f"{SESSIONS}: not stable (Holm-adjusted p < alpha): "
+                                    f"{', '.join(moved_bias + moved_other) or 'none'}; bias spread "
+                                    + ", ".join(f"{p} {st.loc[p, 'spread']:.3g} ({st.loc[p, 'spread_over_se']:.1f} se)"
+                                                for p in bias)
+                                    + "; yardstick: the rests' noise inflated by any excess (the residual scatter alone "
+                                    f"would call not stable: {', '.join(p for p in alt.index if not bool(alt.loc[p, 'stable'])) or 'none'})")
+
+
 def _fpr(summary, null):
     return summary[(summary.null == null) & (summary.metric == "false_positive_rate")]
 
@@ -157,10 +187,11 @@ def _adis_rows(check: pd.DataFrame) -> list[dict]:
 
 
 def discrepancy_claims(summary: pd.DataFrame, profiles_table: pd.DataFrame, adis_check: pd.DataFrame, *,
-                       alpha: float, power: float, nulls) -> pd.DataFrame:
+                       alpha: float, power: float, nulls, stability: pd.DataFrame | None = None) -> pd.DataFrame:
     """Ledger rows (:data:`accelcal_repro.claims.COLUMNS`) of the discrepancy stage."""
     rows = _fpr_rows(summary, profiles_table, alpha, nulls) + _accuracy_rows(summary, power, nulls)
     rows += _adis_rows(adis_check)
+    rows.append(_stability_row(stability))
     return validate_rows(pd.DataFrame(rows, columns=list(COLUMNS)), source="discrepancy claims")
 
 

@@ -307,6 +307,8 @@ def plot_sessions(reports: dict, sims: dict, gaps: pd.DataFrame):
 def plot_stability(stability: pd.DataFrame, estimates: pd.DataFrame):
     """Sessions of one IMU: every parameter per session with its standard error, relative to
     the weighted mean over the sessions, with Cochran's test (Holm-adjusted p) in the title."""
+    alt = stability[stability.yardstick == "se_scaled"].set_index("parameter")
+    stability = stability[stability.yardstick == "se"]
     pars = list(dict.fromkeys(stability.parameter))
     ncol = min(5, len(pars))
     nrow = math.ceil(len(pars) / ncol)
@@ -322,13 +324,16 @@ def plot_stability(stability: pd.DataFrame, estimates: pd.DataFrame):
                         color="C2" if st.stable else "C3")
             ax.axhline(0, color="0.5", lw=0.8)
             ax.set_xticks(x, [r.split("_")[-1] for r in e.recording], fontsize=7)
-            ax.set_title(f"{par}: {'stable' if st.stable else 'NOT stable'}\np_adj {st.p_adjusted:.2g}, "
-                         f"spread {st.spread_over_se:.1f} se", fontsize=7.5)
+            p_alt = alt.loc[par, "p_adjusted"] if par in alt.index else float("nan")
+            ax.set_title(f"{par}: {'stable' if st.stable else 'NOT stable'}\np_adj {st.p_adjusted:.2g} "
+                         f"(scatter only: {p_alt:.2g})", fontsize=7)
             ax.tick_params(axis="y", labelsize=6)
+            ax.set_ylabel({"b": "bias [data unit]", "s": "scale factor [-]", "t": "angle [rad]"}[par[0]], fontsize=6.5)
         for ax in axs.flat[len(pars):]:
             ax.set_visible(False)
-        fig.suptitle("One IMU, several sessions: each parameter minus its weighted mean over the sessions "
-                     "(95% intervals); green: consistent within their uncertainty (Cochran's Q, Holm)", fontsize=8.5)
+        fig.suptitle("One IMU, several sessions: each parameter minus its weighted mean over the sessions (95% "
+                     "intervals, the rests' noise inflated by any excess)\ngreen: consistent (Cochran's Q, Holm); in "
+                     "brackets the adjusted p with the residual scatter alone as yardstick", fontsize=8)
     return fig
 
 

@@ -323,8 +323,9 @@ def xsens_source(report: dict) -> dict:
 
 def joint_source(report: dict, name: str) -> dict:
     """A ``fitted`` entry of :func:`build_profiles` from a report's joint noise model (the colored
-    null's REML bias wander, the same on every axis) with the white noise of its rests: per-axis
-    sample standard deviation whose mean over a rest has the rests' standard errors."""
+    null's REML bias wander, the same on every axis) with the white noise of its rests: the
+    per-axis sample standard deviation whose mean over a rest has the rest's standard error
+    (the static detection's, which counts the samples' correlation), median over the rests."""
     nm = report.get("noise_model") or {}
     if not nm.get("estimated"):
         raise ProfileError(f"the {name} report has no joint wander estimate: "
@@ -335,7 +336,7 @@ def joint_source(report: dict, name: str) -> dict:
     fs = float(report.get("rate") or (report.get("stochastic") or {}).get("fs") or 0.0)
     if not fs > 0:
         raise ProfileError(f"the {name} report does not give its sampling rate")
-    white = np.sqrt(np.mean(se ** 2 * n[:, None], axis=0))
+    white = np.sqrt(np.median(se ** 2 * n[:, None], axis=0))  # median: a few long, drifting rests inflate the mean
     models = []
     for a in range(3):
         m = {"white": float(white[a]) / math.sqrt(fs)}
