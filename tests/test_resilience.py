@@ -231,10 +231,6 @@ WRITERS = {
     "write_recording": ("import numpy as np\nfrom accelcal.recording import Recording, write_recording",
                         "write_recording({target!r}, Recording(np.arange(500.0), np.full((500, 3), 0.25), None, ''))",
                         "out/recording.csv"),
-    "write_counts_csv": ("import numpy as np\nfrom accelcal_repro.discrepancy.benchmark import write_counts_csv\n"
-                         "from accelcal.recording import Recording",
-                         "write_counts_csv({target!r}, Recording(np.arange(500.0), np.full((500, 3), 415.0), None, ''))",
-                         "out/counts.csv"),
     "download": ("from accelcal_repro.measured.data import fetch_file",
                  "fetch_file('imu_tk_xsens', 'xsens_acc.mat', resources_dir={cache!r}, url={url!r}, sha256={sha!r})",
                  "cache/imu_tk_xsens/xsens_acc.mat"),

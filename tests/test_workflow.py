@@ -122,7 +122,7 @@ def test_ci_reruns_are_byte_identical(ci_run, tmp_path):
     changed = sorted(str(k) for k in before if before[k] != after[k])
     assert not changed, f"rerun changed {changed}"
     out = proc.stdout + proc.stderr
-    for rule in ("burkhard2024_mc", "batista2011_calibration_mc", "tereshkov_simulate", "discrepancy_detect"):
+    for rule in ("burkhard2024_mc", "batista2011_calibration_mc", "tereshkov_simulate", "discrepancy_chunk"):
         assert rule in out, rule  # the jobs did rerun
 
 

@@ -83,12 +83,12 @@ def test_every_script_mocks_a_rule_that_runs_it(workflow, script):
 
 
 def test_mock_snakemake_gives_the_rules_paths():
-    smk = _helpers.mock_snakemake("discrepancy_detect", chunk="3")
-    assert list(smk.output) == ["results/discrepancy/benchmark/detections/chunk_3.csv"]
-    assert smk.input.recordings == "results/discrepancy/benchmark/recordings/chunk_3"
-    assert smk.log == ["results/logs/discrepancy/detect_3.log"]
+    smk = _helpers.mock_snakemake("discrepancy_chunk", chunk="3")
+    assert smk.output.detections == "results/discrepancy/benchmark/detections/chunk_3.csv"
+    assert smk.input.profiles == "results/discrepancy/benchmark/profiles.json"
+    assert smk.log == ["results/logs/discrepancy/chunk_3.log"]
     assert smk.config["discrepancy"]["benchmark"]["chunks"] == 16  # the default config
-    ci = _helpers.mock_snakemake("discrepancy_detect", configfile=CI_CONFIG, chunk="0")
+    ci = _helpers.mock_snakemake("discrepancy_chunk", configfile=CI_CONFIG, chunk="0")
     assert ci.config["discrepancy"]["benchmark"]["chunks"] == 2
 
 

@@ -4,6 +4,15 @@ beyond) from static poses, with the closed forms of Burkhard et al. (2024), a co
 
 >>> from accelcal import full_lls, bias_lls, full_nlls, bias_nlls
 
+A recording, calibrated, saved, loaded and applied:
+
+>>> import accelcal
+>>> rec = accelcal.read("session.csv")                          # any supported format
+>>> cal, poses = accelcal.calibrate_recording(rec, 9.80665, "full_lls")
+>>> cal.quality.warnings                                         # () when the fit can be trusted
+>>> cal.save("calibration.json")
+>>> accelcal.load_calibration("calibration.json").apply(rec.acc, t=rec.t, temp=rec.temp)
+
 Names are loaded on first use (module ``__getattr__``, PEP 562): ``import accelcal``
 imports neither numpy nor scipy, casadi, pandas or numba, so that the command line
 starts at once; ``from accelcal import full_nlls`` imports what that function needs
@@ -35,23 +44,17 @@ _LAZY = {
     "bias_nlls": "nlls", "full_nlls": "nlls", "nlls_batch": "nlls",
     "BatchResult": "results", "CalibrationResult": "results", "LLSResult": "results", "NLLSResult": "results",
     "CramerRaoBound": "uncertainty", "crlb": "uncertainty", "crlb_mean": "uncertainty",
+    "Calibration": "calibration", "calibrate_recording": "calibration", "load_calibration": "calibration",
+    "read": "readers",
 }
-
-#: Estimators by the names the CLI and the workflow use: name -> (submodule, function).
-_ESTIMATORS = {
-    "full-lls": ("lls", "full_lls"),
-    "full-als": ("als", "full_als"),
-    "full-nlls": ("nlls", "full_nlls"),
-    "bias-lls": ("lls", "bias_lls"),
-    "bias-nlls": ("nlls", "bias_nlls"),
-}
-
 
 def __getattr__(name: str):
     if name in _LAZY:
         value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
-    elif name == "ESTIMATORS":
-        value = {key: getattr(importlib.import_module(f".{mod}", __name__), fn) for key, (mod, fn) in _ESTIMATORS.items()}
+    elif name == "ESTIMATORS":  # estimator functions by the CLI's names, from the one registry
+        from .registry import ESTIMATORS as registry
+
+        value = {e.cli_name: e.load() for e in registry.values()}
     else:
         try:  # a submodule: accelcal.nlls, accelcal.batista, ...
             value = importlib.import_module(f".{name}", __name__)
@@ -69,6 +72,10 @@ def __dir__():
 
 __all__ = [
     "ESTIMATORS",
+    "Calibration",
+    "calibrate_recording",
+    "load_calibration",
+    "read",
     "AccelcalError",
     "BatchResult",
     "CalibrationResult",

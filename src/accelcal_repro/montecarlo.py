@@ -53,7 +53,7 @@ from accelcal.lls import bias_lls_batch, full_lls_batch
 from accelcal.model import dM_dparams, params_from_m
 from accelcal.nlls import nlls_batch
 from accelcal.simulation import random_directions, sample_truth, simulate_poses
-from accelcal.validation import N_UNKNOWNS
+from accelcal.registry import ESTIMATORS, estimator
 
 #: Gravity of the Burkhard simulations (Sec. 2).
 G_BURKHARD = 9.8055
@@ -61,10 +61,10 @@ G_BURKHARD = 9.8055
 #: A batch estimator: ``(z (T, n, 3), g, noise_std) -> dict(bias (T,3), M (T,3,3), valid (T,), status (T,))``.
 BatchEstimator = Callable[[np.ndarray, float, float], dict]
 
-#: Every method, in the order tables and figures use.
-METHODS = ("full_lls", "full_als", "full_nlls", "bias_lls", "bias_nlls")
-FULL_METHODS = METHODS[:3]
-BIAS_METHODS = METHODS[3:]
+#: Every method, in the order tables and figures use (the registry's).
+METHODS = tuple(ESTIMATORS)
+FULL_METHODS = tuple(m for m in METHODS if ESTIMATORS[m].model == "full")
+BIAS_METHODS = tuple(m for m in METHODS if ESTIMATORS[m].model == "bias")
 #: The two data sets of a grid point (see the module docstring).
 DATA_MODELS = ("full", "bias")
 #: Axis labels of the error columns.
@@ -115,13 +115,13 @@ BATCH_ESTIMATORS: dict[str, BatchEstimator] = {
 
 
 def method_model(method: str) -> str:
-    """'bias' for a bias-only method (it assumes M = I), else 'full'."""
-    return "bias" if method.startswith("bias") else "full"
+    """'bias' for a bias-only method (it assumes M = I), else 'full' (:mod:`accelcal.registry`)."""
+    return estimator(method).model
 
 
 def min_poses(method: str) -> int:
     """Fewest poses a method accepts: q + 1 for q unknowns (10 full, 4 bias-only; paper Sec. 1.2)."""
-    return N_UNKNOWNS[method_model(method)] + 1
+    return estimator(method).min_poses
 
 
 def grid_seed(seed: int, stage: str, *values: float) -> np.random.SeedSequence:

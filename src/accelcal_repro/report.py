@@ -82,7 +82,10 @@ td.num{text-align:right;font-variant-numeric:tabular-nums}
 pre{background:#f7f7f7;padding:.8em;overflow-x:auto;font-size:.82em}
 mark{background:#ffe57a}
 .note{color:#555;font-size:.9em}
-.tablewrap{overflow-x:auto}
+.tablewrap{overflow:auto;max-height:40em}
+thead th{position:sticky;top:0}
+h4{margin:.9em 0 .2em;font-size:.95em}
+details summary{cursor:pointer;color:#3b78c2;font-size:.9em;margin:.3em 0}
 """
 
 
@@ -247,18 +250,70 @@ def _fmt(x) -> str:
     return str(x)
 
 
-def html_table(df: pd.DataFrame, max_rows: int = 200) -> str:
-    """A data frame as an HTML table (numbers right-aligned, 4 significant digits)."""
+def _rows_html(df: pd.DataFrame) -> str:
     head = "".join(f"<th>{_esc(c)}</th>" for c in df.columns)
     body = []
-    for row in df.head(max_rows).itertuples(index=False):
+    for row in df.itertuples(index=False):
         cells = []
         for v in row:
             num = isinstance(v, numbers.Number) and not isinstance(v, (bool, np.bool_))
             cells.append(f'<td class="num">{_esc(_fmt(v))}</td>' if num else f"<td>{_esc(_fmt(v))}</td>")
         body.append("<tr>" + "".join(cells) + "</tr>")
+    return f'<div class="tablewrap"><table><thead><tr>{head}</tr></thead><tbody>{"".join(body)}</tbody></table></div>'
+
+
+def html_table(df: pd.DataFrame, max_rows: int = 200) -> str:
+    """A data frame as an HTML table (numbers right-aligned, 4 significant digits)."""
     more = f'<p class="note">{len(df) - max_rows} more rows in the file.</p>' if len(df) > max_rows else ""
-    return f'<div class="tablewrap"><table><thead><tr>{head}</tr></thead><tbody>{"".join(body)}</tbody></table></div>{more}'
+    return _rows_html(df.head(max_rows)) + more
+
+
+#: How the report shows its wide or long summary tables: the columns to read first (the
+#: others in an "all columns" block), one sub-table per value of ``group``, and at most
+#: ``rows`` rows before a "more rows" block.  A table without a view gets the default.
+TABLE_VIEWS = {
+    "results/measured/summary.csv": {
+        "columns": ["estimator", "n_poses", "dof", "residual_rms", "predicted_rms", "excess", "p_value",
+                    "lopo_rms", "ci_method", "distinct_orientations", "coverage", "warnings"],
+        "group": "recording"},
+    "results/measured/nominal.csv": {"group": "recording"},
+    "results/discrepancy/summary.csv": {
+        "columns": ["recording", "effect", "metric", "value", "ci_low", "ci_high", "n", "target", "verdict"],
+        "group": "section"},
+}
+DEFAULT_VIEW = {"max_columns": 12, "rows": 25}
+
+
+def view_table(df: pd.DataFrame, view: Mapping | None = None) -> str:
+    """A summary table made readable: key columns first, groups, long tables folded.
+
+    Parameters
+    ----------
+    df : DataFrame
+    view : mapping, optional
+        ``columns`` (shown; default the first ``max_columns``), ``group`` (a column:
+        one sub-table per value, in order of appearance), ``rows`` (shown before the rest
+        is folded).  Columns the file lacks are skipped, so a table that grows a column
+        still renders.
+    """
+    view = {**DEFAULT_VIEW, **(view or {})}
+    group = view.get("group") if view.get("group") in df.columns else None
+    wanted = [c for c in view.get("columns", df.columns[: view["max_columns"]]) if c in df.columns and c != group]
+    hidden = [c for c in df.columns if c not in wanted and c != group]
+    parts = []
+    groups = [(None, df)] if group is None else [(k, df[df[group] == k]) for k in dict.fromkeys(df[group])]
+    for key, d in groups:
+        if key is not None:
+            parts.append(f"<h4>{_esc(group)}: {_esc(key if key == key else '')}</h4>")
+        shown = d[wanted]
+        n = view["rows"]
+        parts.append(_rows_html(shown.head(n)))
+        if len(shown) > n:
+            parts.append(f"<details><summary>{len(shown) - n} more rows</summary>{_rows_html(shown.iloc[n:])}</details>")
+    if hidden:
+        parts.append(f'<details><summary>all {len(df.columns)} columns ({", ".join(hidden[:8])}'
+                     f'{", ..." if len(hidden) > 8 else ""} not shown above)</summary>{_rows_html(df)}</details>')
+    return "".join(parts)
 
 
 def verdict_cell(verdict: str) -> str:
@@ -372,7 +427,7 @@ def build_report(*, claims: str | os.PathLike, figures: Mapping[str, str | os.Pa
             body.append(f"<h3>{_esc(title_t)} <span class=\"fid\">{_esc(path.as_posix())}</span></h3>")
             if path.is_file():
                 try:
-                    body.append(html_table(pd.read_csv(path)))
+                    body.append(view_table(pd.read_csv(path), TABLE_VIEWS.get(path.as_posix())))
                 except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as e:
                     raise ReportError(f"table {path} is not a readable CSV: {str(e).splitlines()[0]}") from None
             else:

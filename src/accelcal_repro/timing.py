@@ -47,20 +47,15 @@ import numpy as np
 import pandas as pd
 
 from accelcal import kernels
-from accelcal.als import full_als, full_als_batch
 from accelcal.errors import AccelcalError
-from accelcal.lls import bias_lls, bias_lls_batch, full_lls, full_lls_batch
-from accelcal.nlls import bias_nlls, full_nlls
+from accelcal.registry import ESTIMATORS
 from accelcal.simulation import random_directions, sample_truth, simulate_poses
 
 from .montecarlo import grid_seed, min_poses
 
-#: Single-problem estimators timed (``f(z, g)``; ALS and NLLS get the noise std in :func:`run_benchmark`).
-SINGLE_METHODS: dict[str, Callable] = {
-    "full_lls": full_lls, "full_als": full_als, "full_nlls": full_nlls, "bias_lls": bias_lls, "bias_nlls": bias_nlls,
-}
-BATCH_METHODS: dict[str, Callable] = {"full_lls_batch": full_lls_batch, "bias_lls_batch": bias_lls_batch,
-                                      "full_als_batch": full_als_batch}
+#: Single-problem estimators timed (``f(z, g)``; ALS and NLLS get the noise std in :func:`run_benchmark`): the registry's.
+SINGLE_METHODS: dict[str, Callable] = {name: e.load() for name, e in ESTIMATORS.items()}
+BATCH_METHODS: dict[str, Callable] = {f"{name}_batch": e.load_batch() for name, e in ESTIMATORS.items() if e.batch}
 #: The NLLS baseline each closed form is compared with.
 BASELINE = {"full_lls": "full_nlls", "full_als": "full_nlls", "bias_lls": "bias_nlls",
             "full_lls_batch": "full_nlls", "bias_lls_batch": "bias_nlls", "full_als_batch": "full_nlls"}
@@ -279,13 +274,13 @@ def run_benchmark(seed: int, g: float, noise_std: float, n_poses: Sequence[int],
     backends = tuple(backends or available_backends())
     fns = {m: SINGLE_METHODS[m] for m in single_methods}
     if "full_als" in fns and als_known_noise:  # as in the Monte Carlo: ALS is told the noise std
-        fns["full_als"] = partial(full_als, noise_std=noise_std)
+        fns["full_als"] = partial(SINGLE_METHODS["full_als"], noise_std=noise_std)
     for m in ("full_nlls", "bias_nlls"):  # and NLLS, for its stopping tolerance
         if m in fns and nlls_known_noise:
             fns[m] = partial(SINGLE_METHODS[m], noise_std=noise_std)
     bfns = {m: BATCH_METHODS[m] for m in batch_methods}
     if "full_als_batch" in bfns and als_known_noise:
-        bfns["full_als_batch"] = partial(full_als_batch, noise_std=noise_std)
+        bfns["full_als_batch"] = partial(BATCH_METHODS["full_als_batch"], noise_std=noise_std)
     singles, batches = [], []
     for n in n_poses:
         n = int(n)
@@ -294,14 +289,14 @@ def run_benchmark(seed: int, g: float, noise_std: float, n_poses: Sequence[int],
         zb = make_problems(np.random.default_rng(ss_single), n_problems, n, g, noise_std, identity_m=True)
         here = {(m, be if m in COMPILED_METHODS else NO_BACKEND): f for m, f in fns.items() if n >= min_poses(m)
                 for be in (backends if m in COMPILED_METHODS else (NO_BACKEND,))}
-        problems = {k: (zb if k[0].startswith("bias") else zf) for k in here}
+        problems = {k: (zb if ESTIMATORS[k[0]].model == "bias" else zf) for k in here}
         for il in interleavings:
             singles.append(time_interleaved(problems, g, here, repeats, interleave=il).assign(n_poses=n))
         bm = {(m, be): f for m, f in bfns.items() if n >= min_poses(m.removesuffix("_batch")) for be in backends}
         if bm and batch_problems > 0:
             zbf = make_problems(np.random.default_rng(ss_batch), batch_problems, n, g, noise_std)
             zbb = make_problems(np.random.default_rng(ss_batch), batch_problems, n, g, noise_std, identity_m=True)
-            bproblems = {k: (zbb if k[0].startswith("bias") else zbf) for k in bm}
+            bproblems = {k: (zbb if ESTIMATORS[k[0].removesuffix("_batch")].model == "bias" else zbf) for k in bm}
             batches.append(time_batched(bproblems, g, bm, batch_repeats).assign(n_poses=n))
     single = pd.concat(singles, ignore_index=True)
     single = single[["n_poses"] + [c for c in single.columns if c != "n_poses"]]
@@ -401,7 +396,6 @@ import json, sys, time
 t0 = time.perf_counter()
 import numpy as np
 from accelcal import kernels
-from accelcal.als import full_als, full_als_batch
 from accelcal.lls import bias_lls, bias_lls_batch, full_lls, full_lls_batch
 from accelcal.batista.filter import covariance_sequence, kalman_filter
 from accelcal.tereshkov.estimator import run_estimator

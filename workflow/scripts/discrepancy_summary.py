@@ -11,9 +11,10 @@ if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_
     snakemake = mock_snakemake_from_argv("discrepancy_summary")
 
 log = configure_logging(snakemake)
-COLUMNS = ["section", "recording", "effect", "metric", "value", "ci_low", "ci_high", "n", "target", "verdict", "rule"]
+COLUMNS = ["section", "null", "profile", "recording", "effect", "metric", "value", "ci_low", "ci_high", "n",
+           "n_independent", "target", "verdict", "rule"]
 bench = pd.read_csv(snakemake.input.benchmark, keep_default_na=False, na_values=[""])
-bench.insert(1, "recording", "")
+bench.insert(3, "recording", "")
 measured_stage = pd.read_csv(snakemake.input.measured_summary)
 
 rows, cand_rows = [], []
@@ -22,9 +23,10 @@ for name, path in zip(snakemake.params.recordings, snakemake.input.reports):
         rep = json.load(f)
 
     def row(metric, value, effect=rep["effect"], verdict="", rule="", target=np.nan):
-        rows.append({"section": "measured", "recording": name, "effect": effect, "metric": metric,
-                     "value": np.nan if value is None else value, "ci_low": np.nan, "ci_high": np.nan,
-                     "n": rep["n_poses"], "target": target, "verdict": verdict, "rule": rule})
+        rows.append({"section": "measured", "null": "", "profile": "", "recording": name, "effect": effect,
+                     "metric": metric, "value": np.nan if value is None else value, "ci_low": np.nan,
+                     "ci_high": np.nan, "n": rep["n_poses"], "n_independent": np.nan, "target": target,
+                     "verdict": verdict, "rule": rule})
 
     named = "+".join(rep["effects"]) or "none"
     row("outcome", np.nan, verdict=rep["outcome"],

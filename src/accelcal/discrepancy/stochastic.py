@@ -98,7 +98,10 @@ smallest ``ΔBIC`` is named when its adjusted p-value is below ``alpha`` *and*
 ``max_terms`` terms.  Step 1 is a level-``alpha`` test of "white is enough", so
 white-only data get a term named with probability ≤ ``alpha`` per axis.  Standard
 errors: standard deviation of the refitted coefficients over the ``n_boot`` bootstrap
-sets of the final model.
+sets of the final model.  Step 1's null (white only) is the same on every axis up to its scale ``N``, and the
+statistics (deviances, LR, ΔBIC) are scale-free, so one bootstrap at ``N = 1`` serves all
+axes (its coefficients times each axis's ``N`` give the standard errors): exact, and a
+third of the cost of a bootstrap per axis.
 
 Gap (one definition, before and after).  The rests are re-simulated ``n_resim`` times
 with the fitted model (same segment lengths; white-only fit "before", final model
@@ -842,6 +845,11 @@ def stochastic_layer(segments, fs: float, *, seed: int, alpha: float = 0.05, max
     m_oth = allan.m[allan.m <= max((s.shape[0] for s in others), default=0) // 2]
     allan_oth = allan_variance(others, fs, m=m_oth) if others and m_oth.size else None
 
+    # Step 1's null (white only) is the same for every axis up to the scale N, and its
+    # statistics are scale-free: one bootstrap at N = 1 serves all axes (exact).
+    unit_white = NoiseFit(("white",), np.array([1.0]), float("nan"), 0.0)
+    shared = _bootstrap(np.random.default_rng(np.random.SeedSequence([int(seed), 1 << 20])), unit_white, lengths,
+                        float(fs), allan.m, allan.edf, allan.taus, list(cand) if max_terms > 0 else [], n_boot)
     axes = []
     for j in range(d):
         boot_seq, resim_seq = np.random.SeedSequence([int(seed), j]).spawn(2)
@@ -851,7 +859,8 @@ def stochastic_layer(segments, fs: float, *, seed: int, alpha: float = 0.05, max
         homog = {"taus": homog["taus"], "adev_ratio": np.asarray(homog["adev_ratio"])[:, j] if len(homog["taus"])
                  else [], "p_value": np.asarray(homog["p_value"])[:, j] if len(homog["taus"]) else []}
         axes.append(_one_axis(names[j], allan, j, lengths, float(fs), cand, alpha, max_terms, n_boot, n_resim,
-                              np.random.default_rng(boot_seq), resim_seq, starts, durations, adev_long, homog))
+                              np.random.default_rng(boot_seq), resim_seq, starts, durations, adev_long, homog,
+                              shared))
     notes = ("intervals not given: pose times assume the rests back to back",) if intervals is None else ()
     return StochasticResult(fs=float(fs), seed=int(seed), alpha=float(alpha), candidates=cand, n_boot=int(n_boot),
                             n_resim=int(n_resim), segment_lengths=lengths, axes=tuple(axes), unit=unit, notes=notes)
@@ -893,7 +902,7 @@ def _fit_table(fit: NoiseFit, coefs: np.ndarray, shapes: np.ndarray, fs: float, 
 
 
 def _one_axis(name, allan: AllanVariance, j, lengths, fs, cand, alpha, max_terms, n_boot, n_resim, rng,
-              resim_seq, starts, durations, adev_long, homog) -> AxisStochastic:
+              resim_seq, starts, durations, adev_long, homog, shared=None) -> AxisStochastic:
     taus, edf, m = allan.taus, allan.edf, allan.m
     avar = allan.avar[:, j]
     log_n = math.log(taus.size)
@@ -911,7 +920,11 @@ def _one_axis(name, allan: AllanVariance, j, lengths, fs, cand, alpha, max_terms
             break
         alts = {k: fit_avar(taus, avar, edf, current.term_ids + (k,), fs) for k in remaining}
         lr_obs = np.array([max(current.deviance - alts[k].deviance, 0.0) for k in remaining])
-        coefs, shapes, lr_boot = _bootstrap(rng, current, lengths, fs, m, edf, taus, remaining, n_boot)
+        if current.term_ids == ("white",) and shared is not None and list(remaining) == list(cand):
+            n_white = current.coefficients["white"]
+            coefs, shapes, lr_boot = shared[0] * n_white, shared[1], shared[2]
+        else:
+            coefs, shapes, lr_boot = _bootstrap(rng, current, lengths, fs, m, edf, taus, remaining, n_boot)
         boot_current = (coefs, shapes)
         if table_before is None:
             table_before = _fit_table(before, coefs, shapes, fs, taus.max())
@@ -938,6 +951,10 @@ def _one_axis(name, allan: AllanVariance, j, lengths, fs, cand, alpha, max_terms
         named.append(remaining[best])
         current = alts[remaining[best]]
         boot_current = None
+    if boot_current is None and current.term_ids == ("white",) and shared is not None:
+        boot_current = (shared[0] * current.coefficients["white"], shared[1])
+        if table_before is None:
+            table_before = _fit_table(before, *boot_current, fs, taus.max())
     if boot_current is None:  # the final model was never the null of a test: bootstrap its standard errors
         coefs, shapes, _ = _bootstrap(rng, current, lengths, fs, m, edf, taus, [], n_boot)
         boot_current = (coefs, shapes)
@@ -959,6 +976,9 @@ def _one_axis(name, allan: AllanVariance, j, lengths, fs, cand, alpha, max_terms
 
     resim = {}
     for label, fit in (("before", before), ("after", after)):
+        if label == "after" and fit is before:  # nothing named: the same simulation (common random numbers)
+            resim[label] = resim["before"]
+            continue
         rng_r = np.random.default_rng(resim_seq)  # same state for both: common random numbers
         sims = simulate_segments(rng_r, lengths, fs, fit.model, size=n_resim)
         resim[label] = np.sqrt(allan_variance(sims, fs, m=m).avar.mean(axis=1))

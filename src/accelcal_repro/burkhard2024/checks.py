@@ -22,6 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from accelcal.registry import model_of
+
 from ..montecarlo import min_poses
 from .grid import Experiment, select
 
@@ -188,7 +190,7 @@ def decreases_with_poses(summary: pd.DataFrame, exp: Experiment, factor: float, 
     for m in exp.methods:
         d = s[s["method"] == m].sort_values("n_poses")
         expected = [n for n in sorted(exp.n_poses) if n >= min_poses(m)]
-        for q in (("bias",) if m.startswith("bias") else ("bias", "scale", "nonorth")):
+        for q in (("bias",) if model_of(m) == "bias" else ("bias", "scale", "nonorth")):
             rms, se = d[f"{q}_rms"].to_numpy(float), d[f"{q}_rms_se"].to_numpy(float)
             if d["n_poses"].tolist() != expected or len(rms) < 2 or not np.isfinite(rms).all():
                 drops.append(np.nan)
