@@ -95,6 +95,23 @@ def test_compile_timing_refuses_unknown_calls():
         timing.compile_timing(["full_lls", "warp_drive"])
 
 
+def test_first_call_script_names_every_call_and_defines_what_they_use():
+    """The script run in fresh processes by compile_timing: its calls are FIRST_CALLS and
+    every name they use is defined (checked without running them: that compiles)."""
+    script = timing._FIRST_CALLS
+    head = script[:script.index("wanted = ")]
+    namespace = {}
+    exec(compile(head.replace("import numba\n", ""), "<first calls>", "exec"), namespace)
+    assert [name for name, _ in namespace["calls"]] == list(timing.FIRST_CALLS)
+    import builtins
+    import dis
+
+    for name, call in namespace["calls"]:
+        used = {i.argval for i in dis.get_instructions(call) if i.opname in ("LOAD_GLOBAL", "LOAD_NAME")}
+        missing = sorted(n for n in used if n not in namespace and not hasattr(builtins, n))
+        assert not missing, (name, missing)
+
+
 def _tables():
     est = pd.DataFrame([
         {"n_poses": 24, "mode": "single", "interleave": "block", "method": "full_lls", "backend": "numba",

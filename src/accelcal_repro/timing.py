@@ -396,6 +396,7 @@ import json, sys, time
 t0 = time.perf_counter()
 import numpy as np
 from accelcal import kernels
+from accelcal.als import full_als, full_als_batch
 from accelcal.lls import bias_lls, bias_lls_batch, full_lls, full_lls_batch
 from accelcal.batista.filter import covariance_sequence, kalman_filter
 from accelcal.tereshkov.estimator import run_estimator
