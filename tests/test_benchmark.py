@@ -123,7 +123,7 @@ def _tables():
         {"n_poses": 24, "mode": "single", "interleave": "block", "method": "full_nlls", "backend": "casadi",
          "median_s": 1.2e-3, "speedup_median": np.nan, "problems_per_s": 800.0},
         {"n_poses": 24, "mode": "batch", "interleave": "block", "method": "bias_lls_batch", "backend": "numba",
-         "median_s": 2e-7, "speedup_median": np.nan, "problems_per_s": 5e6},
+         "median_s": 2e-7, "speedup_median": np.nan, "problems_per_s": 3e6, "problems_per_cpu_s": 5e6},
         {"n_poses": 10, "mode": "single", "interleave": "block", "method": "full_lls", "backend": "numba",
          "median_s": 1e-4, "speedup_median": 40.0, "problems_per_s": 1e4},
     ])
@@ -133,7 +133,7 @@ def _tables():
         {"filter": "batista", "implementation": "kalman_filter (own covariance, 1 run)", "backend": "numpy",
          "runs": 1, "steps": 10, "seconds": 1e-3, "us_per_step": 100.0, "us_per_run_step": 100.0},
         {"filter": "tereshkov", "implementation": "run_estimator (1 run)", "backend": "numba",
-         "runs": 1, "steps": 10, "seconds": 3e-5, "us_per_step": 3.0, "us_per_run_step": 3.0},
+         "runs": 1, "steps": 10, "seconds": 3e-5, "cpu_seconds": 1e-5, "us_per_step": 3.0, "us_per_run_step": 3.0},
     ])
     compile_times = pd.DataFrame({"call": ["import numba", "full_lls", "bias_lls"], "cold_s": [0.3, 5.0, 1.0],
                                   "cached_s": [0.3, 0.4, 0.01]})
@@ -149,9 +149,11 @@ def test_headline_judges_the_default_implementation_against_the_goals():
     assert h.loc[("speed-up full NLLS / full LLS", "numba"), "meets_goal"] == "yes"
     assert h.loc[("speed-up full NLLS / full LLS", "numpy"), "meets_goal"] == ""  # the reference is not judged
     assert h.loc[("speed-up bias-only NLLS / bias-only LLS", "numba"), "meets_goal"] == "no"
-    assert h.loc[("batched bias-only LLS", "numba"), "meets_goal"] == "yes"
+    assert h.loc[("batched bias-only LLS", "numba"), "meets_goal"] == "no"  # 3e6/s of wall time
+    assert h.loc[("batched bias-only LLS (CPU time)", "numba"), "meets_goal"] == "yes"  # 5e6/s of CPU time
     assert h.loc[("Batista filter (own covariance), one run", "numba"), "meets_goal"] == "yes"
     assert h.loc[("Tereshkov estimator, one run", "numba"), "meets_goal"] == "no"  # 3 us > 2 us
+    assert h.loc[("Tereshkov estimator, one run (CPU time)", "numba"), "value"] == pytest.approx(1.0)
     assert h.loc[("full LLS, one problem", "numba"), "value"] == pytest.approx(4.0)  # 24 poses, in µs
     assert h.loc[("first calls of the compiled kernels, empty cache (compilation)", "numba"), "value"] == \
         pytest.approx(6.0)  # the kernels, not the imports
