@@ -200,14 +200,16 @@ def _scatter_is_clearly_3d(a, b, c, d, e, f, sum_sq):
     tr = a + d + f
     if not tr > _MIN_SPREAD * sum_sq:
         return False
-    a, b, c, d, e, f = a / tr - _MOMENT_SHIFT, b / tr, c / tr, d / tr - _MOMENT_SHIFT, e / tr, f / tr - _MOMENT_SHIFT
+    r = 1.0 / tr
+    a, b, c, d, e, f = a * r - _MOMENT_SHIFT, b * r, c * r, d * r - _MOMENT_SHIFT, e * r, f * r - _MOMENT_SHIFT
     if not a > 0:
         return False
-    d2 = d - b * b / a
+    ia = 1.0 / a
+    d2 = d - b * b * ia
     if not d2 > 0:
         return False
-    e2 = e - b * c / a
-    return f - c * c / a - e2 * e2 / d2 > 0
+    e2 = e - b * c * ia
+    return f - c * c * ia - e2 * e2 / d2 > 0
 
 
 @jit
@@ -517,18 +519,21 @@ def _bias_lls(z, out):
         return REFERENCE
     mean_cc = (xx + yy + zz) / n
     h1, h2, h3 = xq - sx * mean_cc, yq - sy * mean_cc, zq - sz * mean_cc
-    # Cholesky of the scatter, as accelcal.lls._solve_spd3
+    # Cholesky of the scatter, as accelcal.lls._solve_spd3 (reciprocal pivots: three
+    # divisions instead of nine, this runs for every trial of a batch)
     l11 = math.sqrt(a)
-    l21, l31 = b / l11, c / l11
+    i11 = 1.0 / l11
+    l21, l31 = b * i11, c * i11
     l22 = math.sqrt(d - l21 * l21)
-    l32 = (e - l31 * l21) / l22
-    l33 = math.sqrt(f - l31 * l31 - l32 * l32)
-    y1 = h1 / l11
-    y2 = (h2 - l21 * y1) / l22
-    y3 = (h3 - l31 * y1 - l32 * y2) / l33
-    x3 = y3 / l33
-    x2 = (y2 - l32 * x3) / l22
-    x1 = (y1 - l21 * x2 - l31 * x3) / l11
+    i22 = 1.0 / l22
+    l32 = (e - l31 * l21) * i22
+    i33 = 1.0 / math.sqrt(f - l31 * l31 - l32 * l32)
+    y1 = h1 * i11
+    y2 = (h2 - l21 * y1) * i22
+    y3 = (h3 - l31 * y1 - l32 * y2) * i33
+    x3 = y3 * i33
+    x2 = (y2 - l32 * x3) * i22
+    x1 = (y1 - l21 * x2 - l31 * x3) * i11
     b1, b2, b3 = 0.5 * x1 + p1, 0.5 * x2 + p2, 0.5 * x3 + p3
     out[0], out[1], out[2] = b1, b2, b3
     out[3] = sum_sq / n - 2 * ((mx + p1) * b1 + (my + p2) * b2 + (mz + p3) * b3)
@@ -547,8 +552,9 @@ def bias_lls(z, bias):
 
 
 @jit
-def bias_lls_batch(z, bias, status):
-    """Bias-only LLS of every trial of ``z`` (T, n, 3) into ``bias`` (T, 3); status (T,)."""
+def bias_lls_batch(z, bias, M, status):
+    """Bias-only LLS of every trial of ``z`` (T, n, 3) into ``bias`` (T, 3), ``M`` (T, 3, 3)
+    the identity of the model; status (T,)."""
     out = np.empty(4)
     for t in range(z.shape[0]):
         zt = z[t]
@@ -560,6 +566,9 @@ def bias_lls_batch(z, bias, status):
             bias[t, 0], bias[t, 1], bias[t, 2] = out[0], out[1], out[2]
         else:
             bias[t, 0] = bias[t, 1] = bias[t, 2] = math.nan
+        for i in range(3):
+            for j in range(3):
+                M[t, i, j] = 1.0 if i == j else 0.0
 
 
 # ----------------------------------------------------------------------------- ALS

@@ -534,8 +534,8 @@ def bias_lls_batch(z, g: float) -> BatchResult:
         return _bias_lls_batch_normal(z)
     z = np.ascontiguousarray(z)
     T = len(z)
-    bias, status = np.empty((T, 3)), np.empty(T, np.int8)
-    K.bias_lls_batch(z, bias, status)
+    bias, M, status = np.empty((T, 3)), np.empty((T, 3, 3)), np.empty(T, np.int8)
+    K.bias_lls_batch(z, bias, M, status)
     if (status == K.NON_FINITE).any():
         raise NonFiniteError(_NON_FINITE)
     check_g(g)
@@ -544,7 +544,7 @@ def bias_lls_batch(z, g: float) -> BatchResult:
     if len(ref):
         r = _bias_lls_batch_normal(z[ref])
         bias[ref], valid[ref] = r.bias, r.valid
-    return BatchResult(method="bias_lls", bias=bias, M=np.broadcast_to(_EYE3, (T, 3, 3)).copy(), valid=valid)
+    return BatchResult(method="bias_lls", bias=bias, M=M, valid=valid)
 
 
 def _bias_lls_batch_normal(z) -> BatchResult:
