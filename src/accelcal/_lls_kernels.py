@@ -200,14 +200,16 @@ def _scatter_is_clearly_3d(a, b, c, d, e, f, sum_sq):
     tr = a + d + f
     if not tr > _MIN_SPREAD * sum_sq:
         return False
-    a, b, c, d, e, f = a / tr - _MOMENT_SHIFT, b / tr, c / tr, d / tr - _MOMENT_SHIFT, e / tr, f / tr - _MOMENT_SHIFT
+    r = 1.0 / tr
+    a, b, c, d, e, f = a * r - _MOMENT_SHIFT, b * r, c * r, d * r - _MOMENT_SHIFT, e * r, f * r - _MOMENT_SHIFT
     if not a > 0:
         return False
-    d2 = d - b * b / a
+    ia = 1.0 / a
+    d2 = d - b * b * ia
     if not d2 > 0:
         return False
-    e2 = e - b * c / a
-    return f - c * c / a - e2 * e2 / d2 > 0
+    e2 = e - b * c * ia
+    return f - c * c * ia - e2 * e2 / d2 > 0
 
 
 @jit
@@ -372,19 +374,100 @@ def full_lls(z, g, min_gap, eigvec_tol, bias, M):
 
 
 @jit
+def _full_lls_svd(z, g, out, X, V, theta):
+    """Full LLS of one problem from the singular vectors of the scaled design matrix X
+    (eq. 3), by one-sided (Hestenes) Jacobi, which computes them to the accuracy of the
+    SVD (no XᵀX formed): the batch's fallback where the Gram route cannot certify its
+    answer.  Returns REFERENCE where the null space is not clearly one-dimensional (the
+    SVD's rank test of :func:`accelcal.lls._full_lls_svd`: any vector of it would be
+    an answer, and the reference's choice is LAPACK's), else OK or NO_ELLIPSOID."""
+    n = z.shape[0]
+    if z.shape[1] != 3 or n < 10:
+        return REFERENCE
+    k = math.sqrt(_sum_squares(z) / n)
+    if not (math.isfinite(k) and k > 0):
+        return REFERENCE
+    for p in range(n):
+        x, y, w = z[p, 0] / k, z[p, 1] / k, z[p, 2] / k
+        X[p, 0], X[p, 1], X[p, 2] = x * x, y * y, w * w
+        X[p, 3], X[p, 4], X[p, 5] = 2 * x * y, 2 * x * w, 2 * y * w
+        X[p, 6], X[p, 7], X[p, 8], X[p, 9] = -2 * x, -2 * y, -2 * w, 1.0
+    for i in range(10):
+        for j in range(10):
+            V[i, j] = 1.0 if i == j else 0.0
+    for _ in range(60):
+        rotated = False
+        for a in range(9):
+            for b in range(a + 1, 10):
+                alpha = beta = gamma = 0.0
+                for p in range(n):
+                    alpha += X[p, a] * X[p, a]
+                    beta += X[p, b] * X[p, b]
+                    gamma += X[p, a] * X[p, b]
+                if abs(gamma) <= _EPS * math.sqrt(alpha * beta):
+                    continue
+                rotated = True
+                zeta = (beta - alpha) / (2.0 * gamma)
+                t = (1.0 if zeta >= 0 else -1.0) / (abs(zeta) + math.sqrt(1.0 + zeta * zeta))
+                c = 1.0 / math.sqrt(1.0 + t * t)
+                sn = c * t
+                for p in range(n):
+                    xa, xb = X[p, a], X[p, b]
+                    X[p, a] = c * xa - sn * xb
+                    X[p, b] = sn * xa + c * xb
+                for p in range(10):
+                    va, vb = V[p, a], V[p, b]
+                    V[p, a] = c * va - sn * vb
+                    V[p, b] = sn * va + c * vb
+        if not rotated:
+            break
+    # singular values: the column norms; the smallest, the next and the largest
+    s1 = 0.0
+    i10 = 0
+    s10 = math.inf
+    for j in range(10):
+        sj = 0.0
+        for p in range(n):
+            sj += X[p, j] * X[p, j]
+        sj = math.sqrt(sj)
+        theta[j] = sj  # scratch
+        s1 = max(s1, sj)
+        if sj < s10:
+            s10, i10 = sj, j
+    s9 = math.inf
+    for j in range(10):
+        if j != i10:
+            s9 = min(s9, theta[j])
+    if s9 < 3.0 * s10 or s9 < 1e-10 * s1:  # NULLSPACE_RATIO of accelcal.lls
+        return REFERENCE
+    for j in range(10):
+        theta[j] = V[j, i10]
+    if not _theta_to_model(theta, g / k, out):
+        return NO_ELLIPSOID
+    out[0] *= k
+    out[1] *= k
+    out[2] *= k
+    return OK
+
+
+@jit
 def full_lls_batch(z, g, min_gap, eigvec_tol, bias, M, status):
     """Full LLS of every trial of ``z`` (T, n, 3): ``bias`` (T, 3), ``M`` (T, 3, 3) (NaN
-    unless OK), ``status`` (T,)."""
+    unless OK), ``status`` (T,).  Trials the Gram route cannot certify are solved by
+    :func:`_full_lls_svd`; those whose null space is not clearly one-dimensional, or whose
+    poses are not finite, are left to the caller (REFERENCE, NON_FINITE)."""
     N = np.empty((10, 10))
     L = np.empty((10, 10))
     x = np.empty(10)
     wk = np.empty(30)
     out = np.empty(13)
+    X = np.empty((z.shape[1], 10))
+    V = np.empty((10, 10))
     for t in range(z.shape[0]):
         zt = z[t]
         s = _full_lls(zt, g, min_gap, eigvec_tol, out, N, L, x, wk)
-        if s == REFERENCE and not _all_finite(zt):
-            s = NON_FINITE
+        if s == REFERENCE:
+            s = NON_FINITE if not _all_finite(zt) else _full_lls_svd(zt, g, out, X, V, x)
         status[t] = s
         if s == OK:
             for i in range(3):
@@ -436,18 +519,21 @@ def _bias_lls(z, out):
         return REFERENCE
     mean_cc = (xx + yy + zz) / n
     h1, h2, h3 = xq - sx * mean_cc, yq - sy * mean_cc, zq - sz * mean_cc
-    # Cholesky of the scatter, as accelcal.lls._solve_spd3
+    # Cholesky of the scatter, as accelcal.lls._solve_spd3 (reciprocal pivots: three
+    # divisions instead of nine, this runs for every trial of a batch)
     l11 = math.sqrt(a)
-    l21, l31 = b / l11, c / l11
+    i11 = 1.0 / l11
+    l21, l31 = b * i11, c * i11
     l22 = math.sqrt(d - l21 * l21)
-    l32 = (e - l31 * l21) / l22
-    l33 = math.sqrt(f - l31 * l31 - l32 * l32)
-    y1 = h1 / l11
-    y2 = (h2 - l21 * y1) / l22
-    y3 = (h3 - l31 * y1 - l32 * y2) / l33
-    x3 = y3 / l33
-    x2 = (y2 - l32 * x3) / l22
-    x1 = (y1 - l21 * x2 - l31 * x3) / l11
+    i22 = 1.0 / l22
+    l32 = (e - l31 * l21) * i22
+    i33 = 1.0 / math.sqrt(f - l31 * l31 - l32 * l32)
+    y1 = h1 * i11
+    y2 = (h2 - l21 * y1) * i22
+    y3 = (h3 - l31 * y1 - l32 * y2) * i33
+    x3 = y3 * i33
+    x2 = (y2 - l32 * x3) * i22
+    x1 = (y1 - l21 * x2 - l31 * x3) * i11
     b1, b2, b3 = 0.5 * x1 + p1, 0.5 * x2 + p2, 0.5 * x3 + p3
     out[0], out[1], out[2] = b1, b2, b3
     out[3] = sum_sq / n - 2 * ((mx + p1) * b1 + (my + p2) * b2 + (mz + p3) * b3)
@@ -466,8 +552,9 @@ def bias_lls(z, bias):
 
 
 @jit
-def bias_lls_batch(z, bias, status):
-    """Bias-only LLS of every trial of ``z`` (T, n, 3) into ``bias`` (T, 3); status (T,)."""
+def bias_lls_batch(z, bias, M, status):
+    """Bias-only LLS of every trial of ``z`` (T, n, 3) into ``bias`` (T, 3), ``M`` (T, 3, 3)
+    the identity of the model; status (T,)."""
     out = np.empty(4)
     for t in range(z.shape[0]):
         zt = z[t]
@@ -479,6 +566,9 @@ def bias_lls_batch(z, bias, status):
             bias[t, 0], bias[t, 1], bias[t, 2] = out[0], out[1], out[2]
         else:
             bias[t, 0] = bias[t, 1] = bias[t, 2] = math.nan
+        for i in range(3):
+            for j in range(3):
+                M[t, i, j] = 1.0 if i == j else 0.0
 
 
 # ----------------------------------------------------------------------------- ALS

@@ -220,23 +220,33 @@ def _null_vector(N: np.ndarray) -> tuple[np.ndarray, float] | None:
     it), or None when the fast route cannot certify it (see the module docstring); the
     caller then takes the SVD.
 
-    Inverse iteration with the Cholesky factor of N.  After every second solve the
-    residual bound is checked; once it holds, the gap is certified.
+    Inverse iteration with the inverse of the Cholesky factor of N (numpy's LAPACK:
+    scipy.linalg, 0.5 s to import, is not needed for one calibration).
+    After every second solve the residual bound is checked; once it holds, the gap is
+    certified.
     """
-    from scipy.linalg import lapack  # here: scipy.linalg costs 0.5 s to import
-
     diag = N.ravel()[::11]  # a view of the diagonal
     tr = sum(diag.tolist())
-    U, x, info = lapack.dposv(N, _START)  # Cholesky factor and the first solve
+    L = _cholesky(N)
     delta = 0.0
-    if info != 0:  # N singular to rounding (σ10 ≈ 0: noise-free poses): use N + δI
+    if L is None:  # N singular to rounding (σ10 ≈ 0: noise-free poses): use N + δI
         delta = _SHIFT * tr
         diag += delta
-        U, x, info = lapack.dposv(N, _START)
-        if info != 0:
+        L = _cholesky(N)
+        if L is None:
             return None
+    # L⁻¹ once, then matrix-vector products (each numpy.linalg call costs microseconds);
+    # an inexact solve could only delay or deny the certificate, which is computed with N
+    # itself, never pass a wrong Θ̂
+    Linv = np.linalg.inv(L)
+    LinvT = Linv.T
+
+    def solve(b):
+        return LinvT.dot(Linv.dot(b))
+
+    x = solve(_START)
     for _ in range(_ROUNDS):
-        x = lapack.dpotrs(U, x)[0]  # two solves per round
+        x = solve(x)  # two solves per round
         y = N.dot(x)  # (N + δI) x
         xx = x.dot(x)
         rho = x.dot(y) / xx  # Rayleigh quotient of N + δI
@@ -252,9 +262,17 @@ def _null_vector(N: np.ndarray) -> tuple[np.ndarray, float] | None:
             # λmin of the leading 9x9 block <= second-smallest eigenvalue (Cauchy
             # interlacing): a Cholesky of that block minus the bound proves the gap.
             diag[:9] -= bound + delta
-            return (x, math.sqrt(xx)) if lapack.dpotrf(N[:9, :9])[1] == 0 else None
-        x = lapack.dpotrs(U, x / math.sqrt(xx))[0]  # keep the iterate O(1) between rounds
+            return (x, math.sqrt(xx)) if _cholesky(N[:9, :9]) is not None else None
+        x = solve(x / math.sqrt(xx))  # keep the iterate O(1) between rounds
     return None
+
+
+def _cholesky(A: np.ndarray) -> np.ndarray | None:
+    """Lower Cholesky factor of the symmetric ``A``, or None if it is not positive definite."""
+    try:
+        return np.linalg.cholesky(A)
+    except np.linalg.LinAlgError:
+        return None
 
 
 def full_lls(z, g: float) -> LLSResult:
@@ -516,8 +534,8 @@ def bias_lls_batch(z, g: float) -> BatchResult:
         return _bias_lls_batch_normal(z)
     z = np.ascontiguousarray(z)
     T = len(z)
-    bias, status = np.empty((T, 3)), np.empty(T, np.int8)
-    K.bias_lls_batch(z, bias, status)
+    bias, M, status = np.empty((T, 3)), np.empty((T, 3, 3)), np.empty(T, np.int8)
+    K.bias_lls_batch(z, bias, M, status)
     if (status == K.NON_FINITE).any():
         raise NonFiniteError(_NON_FINITE)
     check_g(g)
@@ -526,7 +544,7 @@ def bias_lls_batch(z, g: float) -> BatchResult:
     if len(ref):
         r = _bias_lls_batch_normal(z[ref])
         bias[ref], valid[ref] = r.bias, r.valid
-    return BatchResult(method="bias_lls", bias=bias, M=np.broadcast_to(_EYE3, (T, 3, 3)).copy(), valid=valid)
+    return BatchResult(method="bias_lls", bias=bias, M=M, valid=valid)
 
 
 def _bias_lls_batch_normal(z) -> BatchResult:

@@ -44,6 +44,7 @@ FIGURE_SECTIONS = (
      ("tereshkov_", "bias_convergence_comparison")),
     ("measured", "Measured data: public recordings calibrated without ground truth", ("measured_",)),
     ("discrepancy", "Discrepancy: where simulation and measured data disagree, and the missing effect", ("discrepancy_",)),
+    ("benchmark", "Benchmark: where the compute time goes (estimators, filters, compilation, stages)", ("timing_",)),
 )
 OTHER_SECTION = ("other", "Other figures")
 

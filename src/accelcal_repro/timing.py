@@ -169,7 +169,9 @@ def time_batched(problems: Mapping, g: float, methods: Mapping, repeats: int,
     interleaved per repeat (rotating order), after an untimed warm-up; keys as in
     :func:`time_interleaved`.
 
-    Returns ``method, backend, repeat, n_problems, seconds, problems_per_s``.
+    Returns ``method, backend, repeat, n_problems, seconds, problems_per_s`` and the
+    CPU time of the call (``cpu_seconds``, ``time.thread_time``: on a loaded machine a
+    call of a few milliseconds may wait for a core, which its wall time counts).
     """
     keys = list(methods)
     previous = kernels.choice()
@@ -184,13 +186,14 @@ def time_batched(problems: Mapping, g: float, methods: Mapping, repeats: int,
                 name, backend = _label(m)
                 _switch(backend)
                 z = problems[m]
-                t0 = clock()
+                c0, t0 = time.thread_time(), clock()
                 methods[m](z, g)
-                dt = clock() - t0
-                rows.append((name, backend, r, len(z), dt, len(z) / dt))
+                dt, cpu = clock() - t0, time.thread_time() - c0
+                rows.append((name, backend, r, len(z), dt, len(z) / dt, cpu))
     finally:
         kernels.set_backend(previous)
-    return pd.DataFrame(rows, columns=["method", "backend", "repeat", "n_problems", "seconds", "problems_per_s"])
+    return pd.DataFrame(rows, columns=["method", "backend", "repeat", "n_problems", "seconds", "problems_per_s",
+                                       "cpu_seconds"])
 
 
 def _q(x, q):
@@ -224,10 +227,14 @@ def summarize_timing(single: pd.DataFrame, batched: pd.DataFrame | None = None,
         batched = _with_backend(batched)
         for (n, m, be), d in batched.groupby(["n_poses", "method", "backend"], sort=False):
             t = (d["seconds"] / d["n_problems"]).to_numpy()
+            cpu = d["cpu_seconds"] if "cpu_seconds" in d else pd.Series(np.nan, index=d.index)
             rows.append({"n_poses": n, "mode": "batch", "interleave": "block", "method": m, "backend": be,
                          "n_timings": len(t), "median_s": _q(t, 0.5), "q25_s": _q(t, 0.25), "q75_s": _q(t, 0.75),
-                         "problems_per_s": float(np.median(d["problems_per_s"]))})
+                         "problems_per_s": float(np.median(d["problems_per_s"])),
+                         "problems_per_cpu_s": float(np.median(d["n_problems"] / cpu))})
     out = pd.DataFrame(rows)
+    if "problems_per_cpu_s" not in out:
+        out["problems_per_cpu_s"] = np.nan
     out["iqr_s"] = out["q75_s"] - out["q25_s"]
     out["baseline"] = ""
     for col in ("speedup_median", "speedup_q25", "speedup_q75", "speedup_of_medians"):
@@ -316,13 +323,15 @@ def preferred_backend(table: pd.DataFrame, method: str) -> str:
 
 
 # ----------------------------------------------------------------------------- filters
-def _best(f: Callable[[], object], repeat: int) -> float:
-    out = []
+def _best(f: Callable[[], object], repeat: int) -> tuple[float, float]:
+    """Smallest wall time and smallest CPU time (``time.thread_time``) of ``repeat`` calls."""
+    wall, cpu = [], []
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        c0, t0 = time.thread_time(), time.perf_counter()
         f()
-        out.append(time.perf_counter() - t0)
-    return min(out)
+        wall.append(time.perf_counter() - t0)
+        cpu.append(time.thread_time() - c0)
+    return min(wall), min(cpu)
 
 
 def filter_timing(batista_cost: Callable[[], pd.DataFrame], tereshkov_data: Mapping, repeat: int = 3,
@@ -352,21 +361,23 @@ def filter_timing(batista_cost: Callable[[], pd.DataFrame], tereshkov_data: Mapp
         for be in backends:
             kernels.set_backend(be)
             batista_cost(50)  # warm-up
-            c = batista_cost(None)
+            c = batista_cost(None)  # filter_cost measures wall time only
             rows += [{"filter": "batista", "implementation": r["implementation"], "backend": be, "runs": r["runs"],
-                      "steps": r["steps"], "seconds": r["seconds"]} for _, r in c.iterrows()]
+                      "steps": r["steps"], "seconds": r["seconds"], "cpu_seconds": np.nan} for _, r in c.iterrows()]
             for runs in (1, R):
                 args = [d[k][:runs] for k in ("gyro", "accel", "f_ext", "course", "speed")]
                 run_estimator(*[a[:, :100] for a in args], d["dt"], d["params"], record_every=100)
-                secs = _best(lambda: run_estimator(*args, d["dt"], d["params"], record_every=100), repeat)
+                secs, cpu = _best(lambda: run_estimator(*args, d["dt"], d["params"], record_every=100), repeat)
                 rows.append({"filter": "tereshkov", "backend": be, "runs": runs, "steps": n, "seconds": secs,
+                             "cpu_seconds": cpu,
                              "implementation": "run_estimator (1 run)" if runs == 1 else f"run_estimator ({R} runs)"})
     finally:
         kernels.set_backend(previous)
     out = pd.DataFrame(rows)
     out["us_per_step"] = 1e6 * out["seconds"] / out["steps"]
     out["us_per_run_step"] = out["us_per_step"] / out["runs"]
-    return out[["filter", "implementation", "backend", "runs", "steps", "seconds", "us_per_step", "us_per_run_step"]]
+    return out[["filter", "implementation", "backend", "runs", "steps", "seconds", "cpu_seconds", "us_per_step",
+                "us_per_run_step"]]
 
 
 def tereshkov_inputs(cfg: Mapping, runs: int, duration_s: float) -> dict:
