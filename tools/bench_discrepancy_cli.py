@@ -39,6 +39,7 @@ RATE = 100.0
 INIT_REST_S = 30.0
 REST_S = 12.0
 MOVE_S = 2.6
+FLICKER_B = 0.3  # counts
 
 
 def make_recording(path: Path) -> dict:
@@ -56,14 +57,17 @@ def make_recording(path: Path) -> dict:
                              init_rest_s=INIT_REST_S)
     n = len(sim["t"])
     pose_white = 3.3 / np.sqrt(REST_S * RATE)
-    wander = simulate_noise(rng, n, RATE, {"gauss_markov": (pose_white, 120.0)}, size=3)
+    # a flicker floor the rests see (Allan floor 0.664 B = 0.2 counts, like the Xsens rests at
+    # 5-10 s: the stochastic layer names terms and bootstraps again) and a slow wander
+    noise = {"gauss_markov": (pose_white, 120.0), "bias_instability": FLICKER_B}
+    wander = simulate_noise(rng, n, RATE, noise, size=3)
     acc = np.round(sim["acc"] + wander)
     t = sim["t"]
     temp = np.round(25.0 + 4.0 * np.sin(2 * np.pi * 1.5 * t / t[-1] + 0.7), 2)
     write_recording(path, Recording(t, acc, temp, "bench_discrepancy_cli"))
     return {"n_poses": N_POSES, "rate_hz": RATE, "duration_s": float(t[-1] + 1 / RATE), "samples": int(n),
             "seed": SEED, "noise_counts": 3.3, "wander": {"gauss_markov_sigma_counts": float(pose_white),
-                                                          "tau_s": 120.0}}
+                                                          "tau_s": 120.0, "flicker_B_counts": FLICKER_B}}
 
 
 def _loadavg() -> list[float]:
@@ -78,6 +82,8 @@ def main(argv=None) -> int:
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--out", type=Path, default=Path("results/bench/discrepancy_cli.json"))
     ap.add_argument("--label", default="current")
+    ap.add_argument("--recording", type=Path, default=None,
+                    help="use this recording (generated there first if missing): the same file for two checkouts")
     ap.add_argument("--default-threads", action="store_true",
                     help="leave BLAS/OpenMP threads at their defaults (what a user gets) instead of 1")
     ap.add_argument("--pin", action="store_true",
@@ -87,8 +93,8 @@ def main(argv=None) -> int:
     env = {**os.environ} if args.default_threads else {**os.environ, **one}
     pin = ["taskset", "-c", "0"] if args.pin and shutil.which("taskset") else []
     with tempfile.TemporaryDirectory() as tmp:
-        rec = Path(tmp) / "rec.csv"
-        desc = make_recording(rec)
+        rec = args.recording or Path(tmp) / "rec.csv"
+        desc = make_recording(rec) if not rec.exists() else {"file": str(rec), "n_poses": N_POSES, "seed": SEED}
         walls, cpus, named = [], [], None
         load_before = _loadavg()
         for i in range(args.repeat):

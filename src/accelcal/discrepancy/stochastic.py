@@ -350,10 +350,14 @@ def _simulate_term(k: str, v: float, shape, rng: np.random.Generator, n: int, fs
 
 def _kasdin_flicker(rng: np.random.Generator, n: int, cols: int) -> np.ndarray:
     """Flicker (1/f) noise: the Kasdin–Walter filter ``h_k = h_{k-1} (k − 1/2)/k`` on unit white noise."""
+    from scipy.fft import next_fast_len
+
     k = np.arange(1, n)
     h = np.concatenate([[1.0], np.cumprod((k - 0.5) / k)])
     w = rng.standard_normal((n, cols))
-    nfft = 2 * n  # zero padding: linear, not circular, convolution
+    # zero padding to at least 2n - 1: linear, not circular, convolution; a length with
+    # small prime factors (2n itself can have a large one, e.g. 2 x 1741, and FFT slowly)
+    nfft = next_fast_len(2 * n, real=True)
     spec = np.fft.rfft(w, nfft, axis=0) * np.fft.rfft(h, nfft)[:, None]
     return np.fft.irfft(spec, nfft, axis=0)[:n]
 
@@ -403,14 +407,17 @@ def _nnls_batch(A: np.ndarray, b: np.ndarray) -> np.ndarray:
     """
     G, _, p = A.shape
     best_x = np.zeros((G, p))
-    best = np.einsum("gk,gk->g", b, b)
+    bb = np.einsum("gk,gk->g", b, b)
+    best = bb.copy()
+    # the Gram matrix and Aᵀb once; a support's objective is bᵀb − 2 xᵀAᵀb + xᵀ(AᵀA)x
+    gram_all = np.einsum("gki,gkj->gij", A, A)
+    rhs_all = np.einsum("gki,gk->gi", A, b)
     for s in range(1, p + 1):
         for idx in combinations(range(p), s):
-            As = A[:, :, idx]
-            gram = np.einsum("gki,gkj->gij", As, As) + 1e-12 * np.eye(s)
-            x = np.linalg.solve(gram, np.einsum("gki,gk->gi", As, b)[..., None])[..., 0]
-            res = np.einsum("gki,gi->gk", As, x) - b
-            obj = np.einsum("gk,gk->g", res, res)
+            gram = gram_all[:, idx][:, :, idx] + 1e-12 * np.eye(s)
+            rhs = rhs_all[:, idx]
+            x = np.linalg.solve(gram, rhs[..., None])[..., 0]
+            obj = bb - 2 * np.einsum("gi,gi->g", x, rhs) + np.einsum("gi,gij,gj->g", x, gram_all[:, idx][:, :, idx], x)
             ok = np.all(x >= 0, axis=1) & (obj < best)
             best = np.where(ok, obj, best)
             best_x[ok] = 0.0
@@ -426,6 +433,10 @@ def _irls(H: np.ndarray, y: np.ndarray, edf: np.ndarray, max_iter: int = 200, to
     in ``c``, and plain scoring can cycle); each problem stops when its deviance changes
     by less than ``tol`` relative.
     """
+    from . import _fast
+
+    if _fast.AVAILABLE:  # the same algorithm, compiled (accelcal[fast])
+        return _fast.irls_gamma(H, y, edf, max_iter, tol)
     G = y.shape[0]
     floor = 1e-12 * y.max(axis=1, keepdims=True)
     sw = np.sqrt(edf)
