@@ -206,6 +206,91 @@ def evidence_rows(name: str, report: dict) -> list[dict]:
     return rows
 
 
+#: What a session of few orientations cannot test, and why (the loop's own limits).
+FEW_POSES_LIMITS = {
+    "calibration (bias, scale, non-orthogonality)": "the 9-parameter model needs at least 10 distinct orientations",
+    "every effect of the library": "an effect adds 3 parameters to the 9 of the model: at least 13 poses; quadratic "
+                                   "and cubic are also invisible on the six faces (absorbed by the bias and the scale)",
+    "bias wander (colored null)": "the wander's size and correlation time need at least 6 residual degrees of "
+                                  "freedom beyond the 9-parameter model: at least 15 poses",
+    "outlier poses": "a pose left out must leave the 9-parameter model determined: at least 11 poses",
+}
+
+
+def few_poses_rows(name: str, rec: Recording, measured_summary: pd.DataFrame, stochastic) -> tuple[list, list]:
+    """A session of too few orientations for the loop (imucal's Ferraris session: six): what can be
+    tested — the bias-only fits' residual excess (results/measured/summary.csv) and the rests'
+    noise terms (the stochastic layer on every rest) — and what cannot, with the reason.
+
+    Returns (named rows, excess rows) in the form of :func:`named_rows` and :func:`excess_rows`.
+    """
+    from accelcal.discrepancy.stochastic import rest_segments, stochastic_layer
+
+    poses = poses_of(rec)
+    named = []
+
+    def row(layer, item, kind, value="", ci=""):
+        named.append({"recording": name, "layer": layer, "item": item, "kind": kind, "value": value, "ci": ci})
+
+    try:
+        st = stochastic_layer(rest_segments(rec.acc, poses.intervals), rec.rate, seed=stochastic.seed,
+                              alpha=stochastic.alpha, max_terms=stochastic.max_terms,
+                              candidates=stochastic.candidates, intervals=poses.intervals,
+                              n_boot=stochastic.n_boot, n_resim=stochastic.n_resim)
+        for a in st.axes:
+            row(f"stochastic (rests, axis {a.axis})", "+".join(t for t in a.named if t != "none") or "none", "allan",
+                f"{len(poses.intervals)} rests, Allan gap {a.gap_before:.2f} -> {a.gap_after:.2f}")
+    except AccelcalError as e:
+        row("stochastic (rests)", "not_run", "", str(e).splitlines()[0])
+    for item, why in FEW_POSES_LIMITS.items():
+        row("deterministic" if "wander" not in item else "stochastic (joint)", item, "not_testable", why)
+    excess = []
+    for r in measured_summary[measured_summary.recording == name].itertuples():
+        excess.append({"recording": name, "n_poses": int(r.n_poses), "excess_observed": float(r.excess),
+                       "excess_predicted": float("nan"), "excess_predicted_ci_low": float("nan"),
+                       "excess_predicted_ci_high": float("nan"), "explained": float("nan"),
+                       "explained_ci_low": float("nan"), "explained_ci_high": float("nan"),
+                       "excess_status": f"{r.estimator}: chi2/dof {float(r.reduced_chi2):.3g} on {int(r.dof)} dof",
+                       "verdict": "bias-only model (M = I): the excess includes the unit's scale factors"})
+    return named, excess
+
+
+def diagnostics_row(name: str, rec: Recording, report: dict) -> dict:
+    """Evidence about an excess that neither an effect nor the wander explains.
+
+    * ``within_pose_drift``: RMS over poses and axes of the difference between the means of
+      the second and the first half of each pose, in units of its standard error
+      (``2 se``: each half has ``√2 se``): 1 for stationary rests; larger when the poses
+      settle or creep while they are averaged (a pose offset that is not noise between poses).
+    * ``half_consistency``: correlation over poses of the base-model residuals computed from
+      the first halves and from the second halves: near 1 when the residuals are a property
+      of the pose (placement, orientation), near 0 when they are noise.
+    * ``time_spearman``, ``time_p``: rank correlation of the normalised residuals with the pose
+      time (a drift or a slow wander orders them in time).
+    """
+    p = report["poses"]
+    ranges = _rest_ranges(rec, report)
+    se = np.array(p["mean_std"], float)
+    acc = np.asarray(rec.acc, float)
+    z1, z2, drift = [], [], []
+    for i, (a, b) in enumerate(ranges):
+        h = (a + b) // 2
+        m1, m2 = acc[a:h].mean(axis=0), acc[h:b].mean(axis=0)
+        z1.append(m1)
+        z2.append(m2)
+        drift.append((m2 - m1) / (2 * se[i]))
+    data = pose_data_of(report)
+    halves = []
+    for z in (np.array(z1), np.array(z2)):
+        half = pose_data(z, data.g, data.mean_std * math.sqrt(2), data.t, data.temp, sigma=data.sigma * math.sqrt(2))
+        halves.append(fit(half).residuals)
+    r = np.array(p["residual_before"], float) / np.array(p["sigma"], float)
+    rho, pval = stats.spearmanr(np.array(p["t"], float), r)
+    return {"recording": name, "n_poses": len(ranges), "within_pose_drift": float(np.sqrt(np.mean(np.square(drift)))),
+            "half_consistency": float(np.corrcoef(halves[0], halves[1])[0, 1]),
+            "time_spearman": float(rho), "time_p": float(pval)}
+
+
 # --------------------------------------------------------------------------- re-simulation
 
 
@@ -389,5 +474,5 @@ def estimates_of(name: str, report: dict, which: str = "before") -> list[dict]:
              "se_scaled": v["se"], "se_noise": v["se_noise"]} for k, v in m.items()]
 
 
-__all__ = ["BASE_PARAMETERS", "GAP_COLUMNS", "poses_of", "with_disjoint_rests", "base_residuals", "estimates_of", "evidence_rows", "excess_rows", "gap_rows",
+__all__ = ["BASE_PARAMETERS", "FEW_POSES_LIMITS", "GAP_COLUMNS", "diagnostics_row", "few_poses_rows", "poses_of", "with_disjoint_rests", "base_residuals", "estimates_of", "evidence_rows", "excess_rows", "gap_rows",
            "named_rows", "pose_data_of", "resimulate", "simulate_session", "stability_rows", "wander_components"]
