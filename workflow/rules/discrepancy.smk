@@ -372,6 +372,8 @@ rule discrepancy_claims:
         profiles="results/discrepancy/benchmark/profiles.csv",
         adis="results/discrepancy/adis/session_check_summary.csv",
         stability="results/discrepancy/sessions/stability.csv",
+        excess="results/discrepancy/sessions/excess.csv",
+        gaps="results/discrepancy/sessions/gaps.csv",
     output:
         "results/claims/discrepancy.csv",
     params:

@@ -272,23 +272,28 @@ def diagnostics_row(name: str, rec: Recording, report: dict) -> dict:
     ranges = _rest_ranges(rec, report)
     se = np.array(p["mean_std"], float)
     acc = np.asarray(rec.acc, float)
-    z1, z2, drift = [], [], []
+    drift = []
     for i, (a, b) in enumerate(ranges):
         h = (a + b) // 2
-        m1, m2 = acc[a:h].mean(axis=0), acc[h:b].mean(axis=0)
-        z1.append(m1)
-        z2.append(m2)
-        drift.append((m2 - m1) / (2 * se[i]))
-    data = pose_data_of(report)
-    halves = []
-    for z in (np.array(z1), np.array(z2)):
-        half = pose_data(z, data.g, data.mean_std * math.sqrt(2), data.t, data.temp, sigma=data.sigma * math.sqrt(2))
-        halves.append(fit(half).residuals)
+        drift.append((acc[h:b].mean(axis=0) - acc[a:h].mean(axis=0)) / (2 * se[i]))
     r = np.array(p["residual_before"], float) / np.array(p["sigma"], float)
     rho, pval = stats.spearmanr(np.array(p["t"], float), r)
     return {"recording": name, "n_poses": len(ranges), "within_pose_drift": float(np.sqrt(np.mean(np.square(drift)))),
-            "half_consistency": float(np.corrcoef(halves[0], halves[1])[0, 1]),
+            "half_consistency": half_consistency(rec, ranges, pose_data_of(report)),
             "time_spearman": float(rho), "time_p": float(pval)}
+
+
+def half_consistency(rec: Recording, ranges, data) -> float:
+    """Correlation over poses of the base-model residuals fitted to the means of the first and of
+    the second half of each pose (:func:`diagnostics_row`)."""
+    acc = np.asarray(rec.acc, float)
+    halves = []
+    for part in (0, 1):
+        z = np.array([acc[a:(a + b) // 2].mean(axis=0) if part == 0 else acc[(a + b) // 2:b].mean(axis=0)
+                      for a, b in ranges])
+        half = pose_data(z, data.g, data.mean_std * math.sqrt(2), data.t, data.temp, sigma=data.sigma * math.sqrt(2))
+        halves.append(fit(half).residuals)
+    return float(np.corrcoef(halves[0], halves[1])[0, 1])
 
 
 # --------------------------------------------------------------------------- re-simulation
@@ -376,8 +381,9 @@ def resimulate(rec: Recording, report: dict, *, n_rep: int, seed: int, white_onl
     """Normalised base-model residuals of ``n_rep`` re-simulations per model (module docstring).
 
     Returns one row per (model, replicate, pose): ``model`` ('before'/'after'), ``replicate``,
-    ``pose``, ``z`` (= r/σ); replicates whose pose extraction or fit fails are skipped and
-    counted in the ``failed`` rows (``pose = -1``).
+    ``pose``, ``z`` (= r/σ), and the replicate's ``half_consistency`` (:func:`half_consistency`);
+    replicates whose pose extraction or fit fails are skipped and counted in the ``failed``
+    rows (``pose = -1``).
     """
     before = NoiseProfile("before", (0.0, 0.0, 0.0))  # the rests' own noise (simulate_session)
     after = NoiseProfile("after", (0.0, 0.0, 0.0), () if white_only_after else wander_components(report))
@@ -387,28 +393,42 @@ def resimulate(rec: Recording, report: dict, *, n_rep: int, seed: int, white_onl
         for k in range(n_rep):
             rng = np.random.default_rng([seed, k])  # common random numbers across the two models
             try:
-                z = base_residuals(simulate_session(rec, report, which, prof, rng), report["g"])
+                sim = simulate_session(rec, report, which, prof, rng)
+                z = base_residuals(sim, report["g"])
+                hc = half_consistency(sim, sim.intervals, pose_data_of(report))
             except AccelcalError:
                 failed += 1
                 continue
-            rows += [{"model": which, "replicate": k, "pose": i, "z": float(v)} for i, v in enumerate(z)]
-        rows.append({"model": which, "replicate": -1, "pose": -1, "z": float(failed)})
+            rows += [{"model": which, "replicate": k, "pose": i, "z": float(v), "half_consistency": hc}
+                     for i, v in enumerate(z)]
+        rows.append({"model": which, "replicate": -1, "pose": -1, "z": float(failed), "half_consistency": np.nan})
     return pd.DataFrame(rows)
 
 
 GAP_COLUMNS = ["recording", "model", "replicates", "failed", "rms_measured", "rms_simulated", "rms_ratio",
                "ks_distance", "ks_p_value", "excess_measured", "excess_sim_median", "excess_sim_q025",
-               "excess_sim_q975", "excess_measured_quantile"]
+               "excess_sim_q975", "excess_measured_quantile", "half_consistency_measured",
+               "half_consistency_sim_median", "half_consistency_sim_q025", "half_consistency_sim_q975"]
 
 
-def gap_rows(name: str, report: dict, sims: pd.DataFrame) -> list[dict]:
-    """Measured vs re-simulated normalised residuals: RMS ratio, KS distance, and the measured
-    excess against the simulated distribution of the excess, per model."""
+def _quantiles(v: pd.Series, prefix: str) -> dict:
+    v = v.dropna()
+    if not len(v):
+        return {f"{prefix}_{k}": np.nan for k in ("median", "q025", "q975")}
+    return {f"{prefix}_median": float(v.median()), f"{prefix}_q025": float(v.quantile(0.025)),
+            f"{prefix}_q975": float(v.quantile(0.975))}
+
+
+def gap_rows(name: str, report: dict, sims: pd.DataFrame, rec: Recording | None = None) -> list[dict]:
+    """Measured vs re-simulated normalised residuals: RMS ratio, KS distance, the measured excess
+    against the simulated distribution of the excess, and (given the recording) the measured
+    consistency of the two halves of each pose against the simulated one, per model."""
     meas = np.array(report["poses"]["residual_before"], float) / np.array(report["poses"]["sigma"], float)
     dof = report.get("dof_before", len(meas) - 9)
     if dof < 1:
         return []
     exc_meas = math.sqrt(float(meas @ meas) / dof)
+    hc_meas = half_consistency(rec, _rest_ranges(rec, report), pose_data_of(report)) if rec is not None else np.nan
     rows = []
     for which, d in sims[sims.pose >= 0].groupby("model", sort=False):
         z = d.z.to_numpy()
@@ -421,7 +441,9 @@ def gap_rows(name: str, report: dict, sims: pd.DataFrame) -> list[dict]:
                      "ks_distance": float(ks.statistic), "ks_p_value": float(ks.pvalue),
                      "excess_measured": exc_meas, "excess_sim_median": float(per_rep.median()),
                      "excess_sim_q025": float(per_rep.quantile(0.025)), "excess_sim_q975": float(per_rep.quantile(0.975)),
-                     "excess_measured_quantile": float(np.mean(per_rep <= exc_meas))})
+                     "excess_measured_quantile": float(np.mean(per_rep <= exc_meas)),
+                     "half_consistency_measured": hc_meas, **_quantiles(d.groupby("replicate").half_consistency.first(),
+                                                                        "half_consistency_sim")})
     return rows
 
 
