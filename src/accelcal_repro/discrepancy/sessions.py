@@ -185,24 +185,30 @@ def excess_rows(name: str, report: dict) -> dict:
 
 
 def evidence_rows(name: str, report: dict) -> list[dict]:
-    """Per candidate of round 1: its test and the share of the excess χ² its estimate removes."""
-    chi0, dof0 = report.get("chi2_before"), report.get("dof_before")
+    """Per candidate of round 1: its test (as the loop ran it), its estimate in standard errors,
+    and the share of the base model's excess χ² (``χ²₀ − dof₀``, white weights) that fitting it
+    removes, ``(χ²₀ − χ²₁)/(χ²₀ − dof₀)``: what the effect could explain if it were real."""
+    data = pose_data_of(report)
+    try:
+        base = fit(data)
+    except AccelcalError:
+        return []
     rows = []
     for c in report.get("candidates", []):
         if c.get("round") != 1:
             continue
         est, se = np.array(c["estimate"], float), np.array(c["se"], float)
-        stat = c.get("statistic", float("nan"))
-        # F = ((χ²₀ − χ²₁)/3) / (χ²₁/dof₁)  →  χ²₀ − χ²₁ = 3 F χ²₁/dof₁, with χ²₁ = χ²₀ − that
-        dof1 = c.get("dof", [3, 0])[1]
-        removed = float("nan")
-        if chi0 and dof1 and np.isfinite(stat):
-            removed = chi0 * 3 * stat / (dof1 + 3 * stat)
+        share = float("nan")
+        if base.chi2 > base.dof:
+            try:
+                share = (base.chi2 - fit(data, (c["effect"],), p0=base.p).chi2) / (base.chi2 - base.dof)
+            except AccelcalError:
+                pass
         rows.append({"recording": name, "candidate": c["effect"], "identifiable": c["identifiable"],
                      "reasons": "; ".join(c.get("reasons", [])), "p_value": c.get("p_value"),
                      "p_adjusted": c.get("p_adjusted"), "passed": c.get("passed"), "named": c.get("named"),
                      "max_abs_z": float(np.nanmax(np.abs(est / se))) if np.all(se > 0) else float("nan"),
-                     "share_of_excess_chi2": removed / (chi0 - dof0) if chi0 and chi0 > dof0 else float("nan")})
+                     "share_of_excess_chi2": share})
     return rows
 
 
