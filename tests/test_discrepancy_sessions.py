@@ -57,3 +57,35 @@ def test_stability_flags_the_parameter_that_moved():
     st = SS.stability_rows(pd.DataFrame(rows), alpha=0.05).set_index("parameter")
     assert bool(st.loc["s_x", "stable"]) and not bool(st.loc["b_x", "stable"])
     assert st.loc["b_x", "p_adjusted"] < 1e-6 and st.loc["b_x", "dof"] == 2
+
+
+def test_diagnostics_tell_pose_offsets_from_noise():
+    """Residuals that are a property of the pose (an offset held through the whole rest) agree
+    between the two halves of each rest; residuals of white noise do not."""
+    import dataclasses
+
+    rec, rep = _report(P.NoiseProfile("white", (SESSION.noise_counts,) * 3))
+    white = SS.diagnostics_row("w", rec, rep)
+    assert abs(white["half_consistency"]) < 0.5 and white["within_pose_drift"] == pytest.approx(1.0, abs=0.35)
+    ranges = SS._rest_ranges(rec, rep)
+    acc = np.array(rec.acc, float)
+    rng = np.random.default_rng(4)
+    for a, b in ranges:
+        acc[a:b] += rng.normal(0.0, 1.0, 3)  # a per-pose offset of several pose-mean standard errors
+    shifted = dataclasses.replace(rec, acc=acc)
+    rep2 = analyse(shifted, SESSION.g, rules=WHITE_RULES, stochastic=None).to_dict()
+    rep2["g"] = SESSION.g
+    d = SS.diagnostics_row("o", shifted, rep2)
+    assert d["half_consistency"] > 0.9 and d["within_pose_drift"] < 1.5
+
+
+def test_a_six_pose_session_says_what_cannot_be_tested():
+    rec, _ = _report(P.NoiseProfile("white", (SESSION.noise_counts,) * 3))
+    from accelcal.discrepancy.report import StochasticSettings
+
+    summary = pd.DataFrame([{"recording": "six", "estimator": "bias_lls", "n_poses": 6, "excess": 40.0,
+                             "reduced_chi2": 1600.0, "dof": 3}])
+    named, excess = SS.few_poses_rows("six", rec, summary, StochasticSettings(n_boot=19, n_resim=1))
+    kinds = {r["item"]: r["kind"] for r in named}
+    assert all(kinds[k] == "not_testable" for k in SS.FEW_POSES_LIMITS)
+    assert excess[0]["excess_observed"] == 40.0 and "3 dof" in excess[0]["excess_status"]

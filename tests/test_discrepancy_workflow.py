@@ -29,6 +29,7 @@ def _config(**bench):
     cfg["measured"]["data_dir"] = str(DATA)
     d = cfg["discrepancy"]
     d["recordings"] = ["mpu6050"]
+    d["sessions"].update(few_poses=[], same_imu={}, replicates=3)
     d["stochastic"].update(n_boot=19, n_resim=1)
     d["benchmark"].update(sizes_mde=[3.0], seeds=1, seeds_none=2, seeds_constant=1, confusion_size_mde=3.0,
                           chunks=2, power_curve={"profiles": ["white"], "sizes_mde": [1.0]},

@@ -73,6 +73,9 @@ def _discrepancy_check():
     unknown = [p for p in bench["power_curve"]["profiles"] if p not in DISCREPANCY_PROFILES]
     if unknown:
         raise _config_error("discrepancy.benchmark.power_curve.profiles", f"{', '.join(unknown)} not in profiles")
+    few = [r for r in DISCREPANCY_SESSIONS["few_poses"] if r not in config["measured"]["recordings"]]
+    if few:
+        raise _config_error("discrepancy.sessions.few_poses", f"{', '.join(few)} not in measured.recordings")
     for group, members in DISCREPANCY_SESSIONS["same_imu"].items():
         missing = [m for m in members if m not in DISCREPANCY_RECORDINGS]
         if missing:
@@ -287,17 +290,41 @@ rule discrepancy_session:
         "../scripts/discrepancy_session.py"
 
 
+rule discrepancy_few_poses:
+    """A session of too few orientations for the loop: what can be tested, and what cannot and why."""
+    input:
+        csv="results/measured/{recording}.csv",
+        measured_summary="results/measured/summary.csv",
+    output:
+        "results/discrepancy/sessions/{recording}_few_poses.json",
+    params:
+        stochastic=DISCREPANCY["stochastic"],
+    log:
+        log_path("discrepancy/few_poses_{recording}"),
+    benchmark:
+        bench_path("discrepancy/few_poses_{recording}"),
+    threads: 1
+    resources:
+        **SMALL,
+    script:
+        "../scripts/discrepancy_few_poses.py"
+
+
 rule discrepancy_sessions_tables:
     """Every real session: what is named, excess observed vs predicted, the re-simulation gaps,
     the evidence per candidate, and the session-to-session stability of one IMU."""
     input:
         reports=expand("results/discrepancy/measured/{recording}.json", recording=DISCREPANCY_RECORDINGS),
         gaps=expand("results/discrepancy/sessions/{recording}_gap.csv", recording=DISCREPANCY_RECORDINGS),
+        few_poses=expand("results/discrepancy/sessions/{recording}_few_poses.json",
+                         recording=DISCREPANCY_SESSIONS["few_poses"]),
+        csv=expand("results/measured/{recording}.csv", recording=DISCREPANCY_RECORDINGS),
     output:
         named="results/discrepancy/sessions/named.csv",
         excess="results/discrepancy/sessions/excess.csv",
         gaps="results/discrepancy/sessions/gaps.csv",
         evidence="results/discrepancy/sessions/evidence.csv",
+        diagnostics="results/discrepancy/sessions/diagnostics.csv",
         estimates="results/discrepancy/sessions/estimates.csv",
         stability="results/discrepancy/sessions/stability.csv",
     params:
@@ -345,6 +372,8 @@ rule discrepancy_claims:
         profiles="results/discrepancy/benchmark/profiles.csv",
         adis="results/discrepancy/adis/session_check_summary.csv",
         stability="results/discrepancy/sessions/stability.csv",
+        excess="results/discrepancy/sessions/excess.csv",
+        gaps="results/discrepancy/sessions/gaps.csv",
     output:
         "results/claims/discrepancy.csv",
     params:

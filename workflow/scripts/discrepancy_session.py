@@ -19,7 +19,7 @@ with open(snakemake.input.report) as f:
 rec = read_recording(snakemake.input.csv)
 rec, _ = SS.with_disjoint_rests(rec)  # the poses of the report (workflow/scripts/discrepancy_measured.py)
 sims = SS.resimulate(rec, report, n_rep=cfg["replicates"], seed=cfg["seed"])
-gaps = pd.DataFrame(SS.gap_rows(name, report, sims), columns=SS.GAP_COLUMNS)
+gaps = pd.DataFrame(SS.gap_rows(name, report, sims, rec), columns=SS.GAP_COLUMNS)
 write_csv(sims, snakemake.output.sims)
 write_csv(gaps, snakemake.output.gap)
 for r in gaps.itertuples():

@@ -296,6 +296,14 @@ def plot_sessions(reports: dict, sims: dict, gaps: pd.DataFrame):
                          fontsize=7.5)
             ax.set_xlabel("|pose residual| / its white noise σ_i", fontsize=7.5)
             ax.legend(fontsize=5.5, loc="lower right")
+            m = "after" if "after" in g.index and not nothing else "before"
+            if len(g) and "half_consistency_measured" in g and np.isfinite(g.loc[m, "half_consistency_measured"]):
+                r = g.loc[m]
+                ax.text(0.98, 0.45, f"halves of each pose agree (r):\nmeasured {r.half_consistency_measured:.2f}, "
+                        f"re-simulated {m} {r.half_consistency_sim_median:.2f}\n"
+                        f"[{r.half_consistency_sim_q025:.2f}, {r.half_consistency_sim_q975:.2f}]",
+                        transform=ax.transAxes, ha="right", va="center", fontsize=5.5,
+                        bbox={"fc": "w", "ec": "0.7", "lw": 0.5})
         for ax in axs.flat[len(names):]:
             ax.set_visible(False)
         axs[0, 0].set_ylabel("cumulative share of poses")

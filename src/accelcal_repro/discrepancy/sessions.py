@@ -185,25 +185,121 @@ def excess_rows(name: str, report: dict) -> dict:
 
 
 def evidence_rows(name: str, report: dict) -> list[dict]:
-    """Per candidate of round 1: its test and the share of the excess χ² its estimate removes."""
-    chi0, dof0 = report.get("chi2_before"), report.get("dof_before")
+    """Per candidate of round 1: its test (as the loop ran it), its estimate in standard errors,
+    and the share of the base model's excess χ² (``χ²₀ − dof₀``, white weights) that fitting it
+    removes, ``(χ²₀ − χ²₁)/(χ²₀ − dof₀)``: what the effect could explain if it were real."""
+    data = pose_data_of(report)
+    try:
+        base = fit(data)
+    except AccelcalError:
+        return []
     rows = []
     for c in report.get("candidates", []):
         if c.get("round") != 1:
             continue
         est, se = np.array(c["estimate"], float), np.array(c["se"], float)
-        stat = c.get("statistic", float("nan"))
-        # F = ((χ²₀ − χ²₁)/3) / (χ²₁/dof₁)  →  χ²₀ − χ²₁ = 3 F χ²₁/dof₁, with χ²₁ = χ²₀ − that
-        dof1 = c.get("dof", [3, 0])[1]
-        removed = float("nan")
-        if chi0 and dof1 and np.isfinite(stat):
-            removed = chi0 * 3 * stat / (dof1 + 3 * stat)
+        share = float("nan")
+        if base.chi2 > base.dof:
+            try:
+                share = (base.chi2 - fit(data, (c["effect"],), p0=base.p).chi2) / (base.chi2 - base.dof)
+            except AccelcalError:
+                pass
         rows.append({"recording": name, "candidate": c["effect"], "identifiable": c["identifiable"],
                      "reasons": "; ".join(c.get("reasons", [])), "p_value": c.get("p_value"),
                      "p_adjusted": c.get("p_adjusted"), "passed": c.get("passed"), "named": c.get("named"),
                      "max_abs_z": float(np.nanmax(np.abs(est / se))) if np.all(se > 0) else float("nan"),
-                     "share_of_excess_chi2": removed / (chi0 - dof0) if chi0 and chi0 > dof0 else float("nan")})
+                     "share_of_excess_chi2": share})
     return rows
+
+
+#: What a session of few orientations cannot test, and why (the loop's own limits).
+FEW_POSES_LIMITS = {
+    "calibration (bias, scale, non-orthogonality)": "the 9-parameter model needs at least 10 distinct orientations",
+    "every effect of the library": "an effect adds 3 parameters to the 9 of the model: at least 13 poses; quadratic "
+                                   "and cubic are also invisible on the six faces (absorbed by the bias and the scale)",
+    "bias wander (colored null)": "the wander's size and correlation time need at least 6 residual degrees of "
+                                  "freedom beyond the 9-parameter model: at least 15 poses",
+    "outlier poses": "a pose left out must leave the 9-parameter model determined: at least 11 poses",
+}
+
+
+def few_poses_rows(name: str, rec: Recording, measured_summary: pd.DataFrame, stochastic) -> tuple[list, list]:
+    """A session of too few orientations for the loop (imucal's Ferraris session: six): what can be
+    tested — the bias-only fits' residual excess (results/measured/summary.csv) and the rests'
+    noise terms (the stochastic layer on every rest) — and what cannot, with the reason.
+
+    Returns (named rows, excess rows) in the form of :func:`named_rows` and :func:`excess_rows`.
+    """
+    from accelcal.discrepancy.stochastic import rest_segments, stochastic_layer
+
+    poses = poses_of(rec)
+    named = []
+
+    def row(layer, item, kind, value="", ci=""):
+        named.append({"recording": name, "layer": layer, "item": item, "kind": kind, "value": value, "ci": ci})
+
+    try:
+        st = stochastic_layer(rest_segments(rec.acc, poses.intervals), rec.rate, seed=stochastic.seed,
+                              alpha=stochastic.alpha, max_terms=stochastic.max_terms,
+                              candidates=stochastic.candidates, intervals=poses.intervals,
+                              n_boot=stochastic.n_boot, n_resim=stochastic.n_resim)
+        for a in st.axes:
+            row(f"stochastic (rests, axis {a.axis})", "+".join(t for t in a.named if t != "none") or "none", "allan",
+                f"{len(poses.intervals)} rests, Allan gap {a.gap_before:.2f} -> {a.gap_after:.2f}")
+    except AccelcalError as e:
+        row("stochastic (rests)", "not_run", "", str(e).splitlines()[0])
+    for item, why in FEW_POSES_LIMITS.items():
+        row("deterministic" if "wander" not in item else "stochastic (joint)", item, "not_testable", why)
+    excess = []
+    for r in measured_summary[measured_summary.recording == name].itertuples():
+        excess.append({"recording": name, "n_poses": int(r.n_poses), "excess_observed": float(r.excess),
+                       "excess_predicted": float("nan"), "excess_predicted_ci_low": float("nan"),
+                       "excess_predicted_ci_high": float("nan"), "explained": float("nan"),
+                       "explained_ci_low": float("nan"), "explained_ci_high": float("nan"),
+                       "excess_status": f"{r.estimator}: chi2/dof {float(r.reduced_chi2):.3g} on {int(r.dof)} dof",
+                       "verdict": "bias-only model (M = I): the excess includes the unit's scale factors"})
+    return named, excess
+
+
+def diagnostics_row(name: str, rec: Recording, report: dict) -> dict:
+    """Evidence about an excess that neither an effect nor the wander explains.
+
+    * ``within_pose_drift``: RMS over poses and axes of the difference between the means of
+      the second and the first half of each pose, in units of its standard error
+      (``2 se``: each half has ``√2 se``): 1 for stationary rests; larger when the poses
+      settle or creep while they are averaged (a pose offset that is not noise between poses).
+    * ``half_consistency``: correlation over poses of the base-model residuals computed from
+      the first halves and from the second halves: near 1 when the residuals are a property
+      of the pose (placement, orientation), near 0 when they are noise.
+    * ``time_spearman``, ``time_p``: rank correlation of the normalised residuals with the pose
+      time (a drift or a slow wander orders them in time).
+    """
+    p = report["poses"]
+    ranges = _rest_ranges(rec, report)
+    se = np.array(p["mean_std"], float)
+    acc = np.asarray(rec.acc, float)
+    drift = []
+    for i, (a, b) in enumerate(ranges):
+        h = (a + b) // 2
+        drift.append((acc[h:b].mean(axis=0) - acc[a:h].mean(axis=0)) / (2 * se[i]))
+    r = np.array(p["residual_before"], float) / np.array(p["sigma"], float)
+    rho, pval = stats.spearmanr(np.array(p["t"], float), r)
+    return {"recording": name, "n_poses": len(ranges), "within_pose_drift": float(np.sqrt(np.mean(np.square(drift)))),
+            "half_consistency": half_consistency(rec, ranges, pose_data_of(report)),
+            "time_spearman": float(rho), "time_p": float(pval)}
+
+
+def half_consistency(rec: Recording, ranges, data) -> float:
+    """Correlation over poses of the base-model residuals fitted to the means of the first and of
+    the second half of each pose (:func:`diagnostics_row`)."""
+    acc = np.asarray(rec.acc, float)
+    halves = []
+    for part in (0, 1):
+        z = np.array([acc[a:(a + b) // 2].mean(axis=0) if part == 0 else acc[(a + b) // 2:b].mean(axis=0)
+                      for a, b in ranges])
+        half = pose_data(z, data.g, data.mean_std * math.sqrt(2), data.t, data.temp, sigma=data.sigma * math.sqrt(2))
+        halves.append(fit(half).residuals)
+    return float(np.corrcoef(halves[0], halves[1])[0, 1])
 
 
 # --------------------------------------------------------------------------- re-simulation
@@ -291,8 +387,9 @@ def resimulate(rec: Recording, report: dict, *, n_rep: int, seed: int, white_onl
     """Normalised base-model residuals of ``n_rep`` re-simulations per model (module docstring).
 
     Returns one row per (model, replicate, pose): ``model`` ('before'/'after'), ``replicate``,
-    ``pose``, ``z`` (= r/σ); replicates whose pose extraction or fit fails are skipped and
-    counted in the ``failed`` rows (``pose = -1``).
+    ``pose``, ``z`` (= r/σ), and the replicate's ``half_consistency`` (:func:`half_consistency`);
+    replicates whose pose extraction or fit fails are skipped and counted in the ``failed``
+    rows (``pose = -1``).
     """
     before = NoiseProfile("before", (0.0, 0.0, 0.0))  # the rests' own noise (simulate_session)
     after = NoiseProfile("after", (0.0, 0.0, 0.0), () if white_only_after else wander_components(report))
@@ -302,28 +399,42 @@ def resimulate(rec: Recording, report: dict, *, n_rep: int, seed: int, white_onl
         for k in range(n_rep):
             rng = np.random.default_rng([seed, k])  # common random numbers across the two models
             try:
-                z = base_residuals(simulate_session(rec, report, which, prof, rng), report["g"])
+                sim = simulate_session(rec, report, which, prof, rng)
+                z = base_residuals(sim, report["g"])
+                hc = half_consistency(sim, sim.intervals, pose_data_of(report))
             except AccelcalError:
                 failed += 1
                 continue
-            rows += [{"model": which, "replicate": k, "pose": i, "z": float(v)} for i, v in enumerate(z)]
-        rows.append({"model": which, "replicate": -1, "pose": -1, "z": float(failed)})
+            rows += [{"model": which, "replicate": k, "pose": i, "z": float(v), "half_consistency": hc}
+                     for i, v in enumerate(z)]
+        rows.append({"model": which, "replicate": -1, "pose": -1, "z": float(failed), "half_consistency": np.nan})
     return pd.DataFrame(rows)
 
 
 GAP_COLUMNS = ["recording", "model", "replicates", "failed", "rms_measured", "rms_simulated", "rms_ratio",
                "ks_distance", "ks_p_value", "excess_measured", "excess_sim_median", "excess_sim_q025",
-               "excess_sim_q975", "excess_measured_quantile"]
+               "excess_sim_q975", "excess_measured_quantile", "half_consistency_measured",
+               "half_consistency_sim_median", "half_consistency_sim_q025", "half_consistency_sim_q975"]
 
 
-def gap_rows(name: str, report: dict, sims: pd.DataFrame) -> list[dict]:
-    """Measured vs re-simulated normalised residuals: RMS ratio, KS distance, and the measured
-    excess against the simulated distribution of the excess, per model."""
+def _quantiles(v: pd.Series, prefix: str) -> dict:
+    v = v.dropna()
+    if not len(v):
+        return {f"{prefix}_{k}": np.nan for k in ("median", "q025", "q975")}
+    return {f"{prefix}_median": float(v.median()), f"{prefix}_q025": float(v.quantile(0.025)),
+            f"{prefix}_q975": float(v.quantile(0.975))}
+
+
+def gap_rows(name: str, report: dict, sims: pd.DataFrame, rec: Recording | None = None) -> list[dict]:
+    """Measured vs re-simulated normalised residuals: RMS ratio, KS distance, the measured excess
+    against the simulated distribution of the excess, and (given the recording) the measured
+    consistency of the two halves of each pose against the simulated one, per model."""
     meas = np.array(report["poses"]["residual_before"], float) / np.array(report["poses"]["sigma"], float)
     dof = report.get("dof_before", len(meas) - 9)
     if dof < 1:
         return []
     exc_meas = math.sqrt(float(meas @ meas) / dof)
+    hc_meas = half_consistency(rec, _rest_ranges(rec, report), pose_data_of(report)) if rec is not None else np.nan
     rows = []
     for which, d in sims[sims.pose >= 0].groupby("model", sort=False):
         z = d.z.to_numpy()
@@ -336,7 +447,9 @@ def gap_rows(name: str, report: dict, sims: pd.DataFrame) -> list[dict]:
                      "ks_distance": float(ks.statistic), "ks_p_value": float(ks.pvalue),
                      "excess_measured": exc_meas, "excess_sim_median": float(per_rep.median()),
                      "excess_sim_q025": float(per_rep.quantile(0.025)), "excess_sim_q975": float(per_rep.quantile(0.975)),
-                     "excess_measured_quantile": float(np.mean(per_rep <= exc_meas))})
+                     "excess_measured_quantile": float(np.mean(per_rep <= exc_meas)),
+                     "half_consistency_measured": hc_meas, **_quantiles(d.groupby("replicate").half_consistency.first(),
+                                                                        "half_consistency_sim")})
     return rows
 
 
@@ -389,5 +502,5 @@ def estimates_of(name: str, report: dict, which: str = "before") -> list[dict]:
              "se_scaled": v["se"], "se_noise": v["se_noise"]} for k, v in m.items()]
 
 
-__all__ = ["BASE_PARAMETERS", "GAP_COLUMNS", "poses_of", "with_disjoint_rests", "base_residuals", "estimates_of", "evidence_rows", "excess_rows", "gap_rows",
+__all__ = ["BASE_PARAMETERS", "FEW_POSES_LIMITS", "GAP_COLUMNS", "diagnostics_row", "few_poses_rows", "poses_of", "with_disjoint_rests", "base_residuals", "estimates_of", "evidence_rows", "excess_rows", "gap_rows",
            "named_rows", "pose_data_of", "resimulate", "simulate_session", "stability_rows", "wander_components"]
