@@ -3,6 +3,7 @@
 
 rule claims:
     """results/claims.csv from results/claims/<stage>.csv of every stage."""
+    localrule: True  # on a cluster: the login node (a concatenation)
     input:
         expand("results/claims/{stage}.csv", stage=CLAIM_STAGES),
     output:
