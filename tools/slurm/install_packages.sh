@@ -2,7 +2,8 @@
 # Install what start_single_node.sh needs from Debian (12: SLURM 22.05): slurmctld, slurmd,
 # slurm-client and munge, without recommends and without starting any service.
 #
-#     tools/slurm/install_packages.sh     # as root
+#     tools/slurm/install_packages.sh                  # as root
+#     tools/slurm/install_packages.sh --accounting     # also slurmdbd and mariadb-server
 #
 # Prints the packages it newly installed (dependencies included), one per line, so that
 # they can be removed again (`apt-get purge -y $(cat list)`); nothing if all were present.
@@ -10,6 +11,7 @@
 # apt-get, no network to the mirror).
 set -euo pipefail
 PKGS="slurmctld slurmd slurm-client munge"
+if [ "${1:-}" = --accounting ]; then PKGS="$PKGS slurmdbd mariadb-server"; fi
 fail() { echo "$*" >&2; exit 3; }
 
 [ "$(id -u)" -eq 0 ] || fail "not root (apt-get needs root)"
