@@ -14,7 +14,6 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-import yaml
 
 from accelcal import bias_lls_batch, full_lls_batch
 from accelcal_repro.burkhard2024 import checks
@@ -25,8 +24,10 @@ from accelcal_repro.claims import validate_rows
 from accelcal_repro.montecarlo import compare_methods, mc_point, summarize
 from accelcal_repro.timing import summarize_timing
 
+from tests.configs import ci_config
+
 REPO = Path(__file__).resolve().parents[1]
-CFG = yaml.safe_load((REPO / "config" / "ci.yaml").read_text())["burkhard2024"]
+CFG = ci_config()["burkhard2024"]
 EXPS = experiments_from_config(CFG["experiments"])
 R = CFG["claims"]
 RANGE = tuple(R["paper_noise_range"])

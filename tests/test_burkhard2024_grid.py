@@ -4,9 +4,10 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
-import yaml
 
 from accelcal_repro.burkhard2024.grid import EXPERIMENTS, Experiment, experiments_from_config, grid_points, point_key, select
+
+from tests.configs import load_config
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -40,7 +41,7 @@ def test_bad_experiments_are_rejected():
 
 @pytest.mark.parametrize("config", ["config.yaml", "ci.yaml"])
 def test_config_experiments_and_the_default_size(config):
-    cfg = yaml.safe_load((REPO / "config" / config).read_text())["burkhard2024"]
+    cfg = load_config(config)["burkhard2024"]
     exps = experiments_from_config(cfg["experiments"])
     assert tuple(exps) == EXPERIMENTS
     pts = grid_points(exps)

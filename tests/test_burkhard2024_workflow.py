@@ -13,12 +13,14 @@ import yaml
 
 from accelcal_repro.burkhard2024.grid import experiments_from_config, grid_points
 
+from tests.configs import ci_config
+
 from .conftest import copy_of_ci_workflow
 
 REPO = Path(__file__).resolve().parents[1]
 SNAKEMAKE = Path(sys.executable).with_name("snakemake")
 CI = REPO / "config" / "ci.yaml"
-CFG = yaml.safe_load(CI.read_text())["burkhard2024"]
+CFG = ci_config()["burkhard2024"]
 FIGURES = ["fig1a", "fig1b", "fig1c", "fig1d", "fig1e", "timing", "lls_limit"]
 
 
@@ -106,7 +108,7 @@ def test_rerun_of_a_job_and_the_scripts_standalone_are_byte_identical(stage, tmp
 
 
 def test_a_broken_stage_config_fails_before_any_job(tmp_path):
-    cfg = yaml.safe_load(CI.read_text())
+    cfg = ci_config()
     cfg["burkhard2024"]["experiments"]["fig1cd"]["g_error"] = [0.001, 0.01]
     path = tmp_path / "broken.yaml"
     path.write_text(yaml.safe_dump(cfg))

@@ -87,8 +87,8 @@ def _bad_cases(tmp_path, session):
     cases = {}
     (tmp_path / "empty.csv").write_text("")
     cases["empty"] = (tmp_path / "empty.csv", "full-lls", "empty")
-    good.rename(columns={"ay": "acc_y"}).to_csv(tmp_path / "cols.csv", index=False)
-    cases["columns"] = (tmp_path / "cols.csv", "full-lls", "ay")
+    good.rename(columns={"ay": "channel_2"}).to_csv(tmp_path / "cols.csv", index=False)
+    cases["columns"] = (tmp_path / "cols.csv", "full-lls", "--columns")
     bad = good.astype({"ax": object})
     bad.loc[500, "ax"] = "abc"
     bad.to_csv(tmp_path / "text.csv", index=False)
@@ -126,4 +126,4 @@ def test_bias_only_needs_one_unit(tmp_path):
     rng = np.random.default_rng(6)
     rec = simulate_recording(rng, classic_directions(12), G, 415 * np.eye(3), np.full(3, 32768.0), 2.0)
     p = _run("calibrate", _write(tmp_path / "c.csv", rec), "--g", G, "--method", "bias-lls", "--out", tmp_path / "o.json")
-    assert p.returncode == 2 and "same unit" not in p.stderr and "one unit" in p.stderr
+    assert p.returncode == 2 and "raw counts" in p.stderr and "full-lls" in p.stderr

@@ -13,15 +13,12 @@ import jsonschema
 import pytest
 import yaml
 
+from tests.configs import ci_config, load_config
 from tests.test_workflow import CI, REPO, snakemake
 
 DEFAULT = REPO / "config" / "config.yaml"
 SCHEMAS = REPO / "workflow" / "schemas"
 STAGES = ("batista2011", "tereshkov", "measured")
-
-
-def ci_config():
-    return yaml.safe_load(CI.read_text())
 
 
 def schema(stage):
@@ -112,7 +109,7 @@ BROKEN = {
     "measured_unknown_recording": (changed({"measured.recordings.adis16475": {"g": 9.81,
                                                                              "estimators": ["full_lls"]}}),
                                    "measured.recordings: 'adis16475' is not one of ['xsens_mti', 'mpu6050', "
-                                   "'imucal_ferraris']"),
+                                   "'imucal_ferraris', 'imutk_fork_data2'"),
     "measured_bad_estimator": (changed({"measured.recordings.xsens_mti.estimators": ["full_lls", "magic"]}),
                                "measured.recordings.xsens_mti.estimators.1: 'magic' is not one of"),
     "measured_missing_key": (changed({"measured.bootstrap.level": DELETE}),
@@ -175,7 +172,7 @@ def test_valid_configs_at_the_edges_pass_the_dry_run(tmp_path, stage):
 
 @pytest.mark.parametrize("config", [DEFAULT, CI], ids=["config.yaml", "ci.yaml"])
 def test_both_configs_validate(config):
-    cfg = yaml.safe_load(config.read_text())
+    cfg = load_config(config.name)
     for stage in STAGES:
         s = schema(stage)
         jsonschema.Draft202012Validator.check_schema(s)
@@ -208,16 +205,16 @@ def test_every_key_is_required_and_no_other_key_allowed():
 def test_named_choices_match_the_library():
     """The schemas' enums are the names the code accepts (a renamed estimator, recording or
     option would otherwise pass the schema and fail in a job, or the reverse)."""
-    from accelcal_repro.measured.calibrate import MIN_POSES, MODEL
+    from accelcal.registry import ESTIMATORS
     from accelcal_repro.measured.sources import FERRARIS_STATIC, SOURCES
     from accelcal.tereshkov.errors import InvalidParameterError
     from accelcal.tereshkov.estimator import TereshkovParams
 
     rec = schema("measured")["properties"]["recordings"]
     assert set(rec["propertyNames"]["enum"]) == set(rec["properties"]) == set(SOURCES)
-    assert set(schema("measured")["$defs"]["estimators"]["items"]["enum"]) == set(MODEL)
+    assert set(schema("measured")["$defs"]["estimators"]["items"]["enum"]) == set(ESTIMATORS)
     # the cross-field rule's numbers: six static positions, ten poses for a full model
-    assert len(FERRARIS_STATIC) == 6 and MIN_POSES["full"] == 10
+    assert len(FERRARIS_STATIC) == 6 and ESTIMATORS["full_lls"].min_poses == 10
     formulas = schema("tereshkov")["properties"]["estimator"]["properties"]["accel_formula"]["enum"]
     for f in formulas:
         TereshkovParams(accel_formula=f)

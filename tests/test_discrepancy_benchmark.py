@@ -1,61 +1,148 @@
-"""Benchmark of the discrepancy loop: plan and streams, key/detection separation, and a scoring
-that catches deliberately wrong detectors."""
+"""Benchmark of the discrepancy loop: plan and streams, noise profiles against their covariance,
+the oracle MDE, key/detection separation, and a scoring that catches deliberately wrong detectors."""
+
+import dataclasses
 
 import numpy as np
 import pandas as pd
 import pytest
 
-from accelcal_repro.discrepancy import benchmark as B
 from accelcal.discrepancy import detect as D
 from accelcal.discrepancy.effects import EFFECT_IDS
+from accelcal.recording import read_recording, write_recording
+from accelcal_repro.discrepancy import benchmark as B
+from accelcal_repro.discrepancy import profiles as P
+from accelcal_repro.discrepancy import scoring as S
 
 SESSION = B.Session()
 RULES = D.Rules()
+WHITE_RULES = B.rules_with_null(RULES, "white")
 SEED = 11
+PROFILES = P.build_profiles([{"name": "white"}, {"name": "gm_3x_session", "gauss_markov": [[3.0, "session"]]},
+                             {"name": "rounding", "noise_counts": 0.35},
+                             {"name": "gm_mix", "gauss_markov": [[1.0, 3.0], [1.0, 30.0], [1.0, 300.0]]}], SESSION)
+WHITE = PROFILES["white"]
 
 
 def test_plan_chunks_partition_the_plan():
-    plan = B.plan(EFFECT_IDS, [1.0, 3.0], 3, 5, 2)
-    assert len(plan) == 5 * 2 * 3 + 5 + 2 and plan.recording.is_unique
+    plan = B.plan(["white", "gm"], EFFECT_IDS, [1.0, 3.0], 3, 5, 2, pairs=[("quadratic", "temperature")],
+                  extra_sizes={"white": [0.5]})
+    per_profile = 5 + 5 * 2 * 3 + 2 * 3 + 2 * 3 + 2
+    assert len(plan) == 2 * per_profile + 5 * 3 and plan.recording.is_unique
+    assert set(plan.truth) == {B.NONE, *EFFECT_IDS, "quadratic+temperature", B.OUTLIER, B.CONSTANT_TEMPERATURE}
     parts = [B.chunk(plan, 4, k) for k in range(4)]
     assert sorted(pd.concat(parts).recording) == sorted(plan.recording)
     with pytest.raises(Exception):
         B.chunk(plan, 4, 4)
+    with pytest.raises(Exception, match="unknown benchmark row"):
+        B.plan(["white"], ["nonsense"], [1.0], 1, 1, 0)
 
 
 def test_each_recording_has_its_own_stream():
-    """Same row and replicate -> identical recording, whatever else runs; different -> different."""
-    a, ka = B.simulate_case("quadratic", 2.0, 3, seed=SEED, session=SESSION, rules=RULES)
-    b, kb = B.simulate_case("quadratic", 2.0, 3, seed=SEED, session=SESSION, rules=RULES)
-    c, _ = B.simulate_case("quadratic", 2.0, 4, seed=SEED, session=SESSION, rules=RULES)
+    """Same profile, row and replicate -> identical recording; different -> different."""
+    a, ka = B.simulate_case("quadratic", 2.0, 3, seed=SEED, session=SESSION, rules=RULES, profile=WHITE)
+    b, kb = B.simulate_case("quadratic", 2.0, 3, seed=SEED, session=SESSION, rules=RULES, profile=WHITE)
+    c, _ = B.simulate_case("quadratic", 2.0, 4, seed=SEED, session=SESSION, rules=RULES, profile=WHITE)
     np.testing.assert_array_equal(a.acc, b.acc)
     assert ka == kb
-    assert a.acc.shape != c.acc.shape or not np.array_equal(a.acc, c.acc)
-    # raw counts, as a 16-bit sensor writes them
-    np.testing.assert_array_equal(a.acc, np.round(a.acc))
-    # the injected size is the requested multiple of the MDE along the injected direction
-    d = np.array([ka[f"direction_{x}"] for x in "xyz"])
-    phi = np.array([ka[f"param_{x}"] for x in "xyz"])
-    np.testing.assert_allclose(phi, 2.0 * ka["mde_along"] * d)
+    assert not np.array_equal(a.acc, c.acc)
+    np.testing.assert_array_equal(a.acc, np.round(a.acc))  # raw counts, as a 16-bit sensor writes them
+    d = np.array([ka[f"direction_quadratic_{x}"] for x in "xyz"])
+    phi = np.array([ka[f"param_quadratic_{x}"] for x in "xyz"])
+    np.testing.assert_allclose(phi, 2.0 * ka["mde_along_quadratic"] * d)
 
 
-def test_detection_reads_only_the_recording():
-    rec, key = B.simulate_case("bias_drift", 3.0, 0, seed=SEED, session=SESSION, rules=RULES)
-    row = B.detect_case(rec, SESSION.g, RULES)
-    assert not set(row) & {"truth", "expected", "size_mde", "param_x", "direction_x"}
-    assert row["outcome"] == "bias_drift"
+def test_oracle_mde_is_the_loops_own_under_white_noise_and_larger_under_wander():
+    _, kw = B.simulate_case("bias_drift", 1.0, 0, seed=SEED, session=SESSION, rules=RULES, profile=WHITE)
+    assert kw["mde_along_bias_drift"] == pytest.approx(kw["mde_along_white_bias_drift"], rel=1e-9)
+    _, kg = B.simulate_case("bias_drift", 1.0, 0, seed=SEED, session=SESSION, rules=RULES,
+                            profile=PROFILES["gm_3x_session"])
+    # a bias wandering over the whole session hides a drift: its oracle MDE is several times the white one
+    assert kg["mde_along_bias_drift"] > 2.0 * kg["mde_along_white_bias_drift"]
 
 
-def _benchmark(rows, rules, seed=SEED):
+def _pose_means(rec):
+    win = B._trimmed_windows(SESSION, len(rec.t))
+    return np.array([rec.acc[a:b].mean(axis=0) for a, b in win])
+
+
+@pytest.mark.parametrize("name", ["gm_mix", "rounding"])
+def test_profile_noise_matches_its_pose_mean_covariance(name):
+    """The centred pose-mean variance of simulated noise agrees with pose_mean_covariance
+    (Monte Carlo over 300 sessions, each pose and axis; chi-square-size tolerance)."""
+    prof = PROFILES[name]
+    n = SESSION.n_samples
+    win = B._trimmed_windows(SESSION, n)
+    ns = (win[:, 1] - win[:, 0]).astype(float)
+    C = P.pose_mean_covariance(prof, win[:, 0] / SESSION.rate, ns / SESSION.rate, ns, SESSION.rate)
+    Pc = np.eye(len(ns)) - 1.0 / len(ns)
+    want = float(np.mean([np.diag(Pc @ C[a] @ Pc).mean() for a in range(3)]))
+    rng = np.random.default_rng(1)
+    got = []
+    for _ in range(300):
+        noise = P.simulate_profile(prof, rng, n, SESSION.rate)
+        # the true value of each pose falls anywhere between two counts
+        frac = rng.uniform(0, 1, (len(ns), 3))
+        m = np.array([np.round(noise[a:b] + frac[i]).mean(axis=0) - frac[i] for i, (a, b) in enumerate(win)])
+        got.append(((m - m.mean(axis=0)) ** 2).mean())
+    got = float(np.mean(got))
+    assert got == pytest.approx(want, rel=0.08), (got, want)
+
+
+def test_rounding_bias_is_what_sub_count_noise_leaves():
+    assert P.rounding_bias_variance(3.3) < 1e-12  # the Xsens-like session: rounding averages out
+    rng = np.random.default_rng(2)
+    f = rng.uniform(0, 1, 4000)
+    means = np.round(f[:, None] + 0.3 * rng.standard_normal((4000, 2000))).mean(axis=1) - f
+    assert np.var(means) - 0.3 ** 2 / 2000 == pytest.approx(P.rounding_bias_variance(0.3), rel=0.1)
+
+
+def test_real_profile_draws_disjoint_windows():
+    rec = np.arange(10 * 3, dtype=float).reshape(10, 3)
+    prof = P.NoiseProfile("r", (1.0, 1.0, 1.0), (), real="adis16405", real_scale=(1.0, 2.0, 3.0), kind="real")
+    rng = np.random.default_rng(0)
+    w0 = P.simulate_profile(prof, rng, 4, 100.0, replicate=0, records={"adis16405": rec})
+    w1 = P.simulate_profile(prof, rng, 4, 100.0, replicate=1, records={"adis16405": rec})
+    w2 = P.simulate_profile(prof, rng, 4, 100.0, replicate=2, records={"adis16405": rec})  # window 0, axes permuted
+    np.testing.assert_array_equal(w0, rec[:4] * [1, 2, 3])
+    np.testing.assert_array_equal(w1, rec[4:8] * [1, 2, 3])
+    assert not np.array_equal(w2, w0) and sorted(w2[0] / [1, 2, 3]) == sorted(rec[0])
+    with pytest.raises(P.ProfileError, match="needs the adis16405 noise record"):
+        P.simulate_profile(prof, rng, 4, 100.0)
+
+
+def test_profile_config_errors_are_one_line():
+    with pytest.raises(P.ProfileError, match="unknown keys"):
+        P.build_profiles([{"name": "x", "gauss_marko": [[1, 3]]}], SESSION)
+    with pytest.raises(P.ProfileError, match="no noise model of xsens_mti"):
+        P.build_profiles([{"name": "x", "fitted": "xsens_mti"}], SESSION)
+    with pytest.raises(P.ProfileError, match="stands alone"):
+        P.build_profiles([{"name": "x", "fitted": "adis16405", "random_walk": 1.0}], SESSION, fitted={"adis16405": {}})
+    with pytest.raises(P.ProfileError, match="distinct name"):
+        P.build_profiles([{"name": "x"}, {"name": "x"}], SESSION)
+
+
+def test_detection_reads_only_the_recording_and_the_csv_gives_the_same(tmp_path):
+    rec, key = B.simulate_case("bias_drift", 3.0, 0, seed=SEED, session=SESSION, rules=RULES, profile=WHITE)
+    rows = B.detect_nulls(rec, SESSION.g, RULES, ("white",))
+    assert not set(rows[0]) & {"truth", "expected", "size_mde", "param_bias_drift_x", "profile"}
+    assert rows[0]["outcome"] == "bias_drift"
+    write_recording(tmp_path / "r.csv", rec)
+    again = B.detect_nulls(read_recording(tmp_path / "r.csv"), SESSION.g, RULES, ("white",))
+    assert again[0]["outcome"] == rows[0]["outcome"]
+    assert again[0]["gap_before"] == pytest.approx(rows[0]["gap_before"], rel=1e-9)
+
+
+def _benchmark(rows, rules, profile=WHITE, seed=SEED):
     keys, dets = [], []
     for truth, size, rep in rows:
-        rec, key = B.simulate_case(truth, size, rep, seed=seed, session=SESSION, rules=RULES)
-        name = f"{truth}_{size:g}_{rep:04d}"
+        rec, key = B.simulate_case(truth, size, rep, seed=seed, session=SESSION, rules=RULES, profile=profile)
+        name = f"{profile.name}__{truth}_{size:g}_{rep:04d}"
         keys.append({"recording": name, **key})
         dets.append({"recording": name, **B.detect_case(rec, SESSION.g, rules)})
-    scores = B.score_cases(pd.DataFrame(keys), pd.DataFrame(dets))
-    rates = B.rates(scores)
-    return scores, B.summary(scores, rates, alpha=RULES.alpha, power=RULES.power, confusion_size=3.0)
+    scores = S.score_cases(pd.DataFrame(keys), pd.DataFrame(dets))
+    rates = S.rates(scores)
+    return scores, S.summary(scores, rates, alpha=RULES.alpha, power=RULES.power)
 
 
 def _verdict(summary, effect, metric):
@@ -71,21 +158,22 @@ def test_scoring_catches_a_test_without_multiple_comparison_control():
     """Five candidates each at level α with no Holm, no ΔBIC and no LOPO rule: about
     1 - 0.95⁵ ≈ 23 % of effect-free recordings get an effect named; the scoring's
     false-positive verdict fails.  The real rules on the same recordings pass."""
-    wrong = D.Rules(correction="none", bic_threshold=-np.inf, lopo_min_improvement=-np.inf)
+    wrong = dataclasses.replace(WHITE_RULES, correction="none", bic_threshold=-np.inf, lopo_min_improvement=-np.inf)
     _, bad = _benchmark(NULL_ROWS, wrong)
     fp_bad = _verdict(bad, B.NONE, "false_positive_rate")
     assert fp_bad.verdict == "fail" and fp_bad.ci_low > RULES.alpha, fp_bad
-    _, good = _benchmark(NULL_ROWS, RULES)
+    _, good = _benchmark(NULL_ROWS, WHITE_RULES)
     fp = _verdict(good, B.NONE, "false_positive_rate")
-    assert fp.verdict == "pass", fp
-    assert fp.value < fp_bad.value
+    assert fp.value < fp_bad.value and fp.ci_low <= RULES.alpha
 
 
 def test_scoring_catches_a_fitter_that_ignores_the_effect(monkeypatch):
     """A fitter that returns the current model for current + effect (effect fixed at 0) never
     sees anything: accuracy at >= 1 MDE collapses and the scoring's verdict fails."""
     rows = [(e, 3.0, r) for e in EFFECT_IDS for r in range(3)]
-    _, good = _benchmark(rows, RULES)
+    # the blind fitter replaces the nonlinear fit the white null's F-test compares; the colored
+    # null tests on the linearised columns (tests/test_discrepancy_colored.py checks it)
+    _, good = _benchmark(rows, WHITE_RULES)
     assert all(_verdict(good, e, "accuracy_ge_1mde").verdict == "pass" for e in EFFECT_IDS)
 
     real_fit = D.fit
@@ -99,32 +187,58 @@ def test_scoring_catches_a_fitter_that_ignores_the_effect(monkeypatch):
         return fit_at(data, effects, np.concatenate([base.p, np.zeros(3)]))
 
     monkeypatch.setattr(D, "fit", blind_fit)
-    _, bad = _benchmark(rows, RULES)
+    _, bad = _benchmark(rows, WHITE_RULES)
     for e in EFFECT_IDS:
         v = _verdict(bad, e, "accuracy_ge_1mde")
         assert v.verdict == "fail" and v.value == 0.0, v
 
 
+def _key(truth, **kw):
+    return {"recording": truth, "profile": "p", "truth": truth, "expected": B.expected_outcome(truth),
+            "effects_injected": "+".join(B.effects_of(truth)) or B.NONE, "size_mde": 3.0, "noise_window": -1,
+            "outlier_t": kw.get("outlier_t", np.nan)}
+
+
+def test_scoring_of_pairs_outliers_and_none():
+    keys = pd.DataFrame([_key("quadratic+temperature"), _key("quadratic+cubic"), _key(B.OUTLIER, outlier_t=100.0),
+                         _key("bias_drift"), _key(B.NONE)])
+    dets = pd.DataFrame([
+        {"recording": "quadratic+temperature", "null": "c", "outcome": "temperature", "effects": "temperature+quadratic"},
+        {"recording": "quadratic+cubic", "null": "c", "outcome": "quadratic", "effects": "quadratic+bias_drift"},
+        {"recording": B.OUTLIER, "null": "c", "outcome": B.OUTLIER, "effects": "", "outlier_t_detected": "250.000"},
+        {"recording": "bias_drift", "null": "c", "outcome": "bias_drift", "effects": "bias_drift"},
+        {"recording": B.NONE, "null": "c", "outcome": B.OUTLIER, "effects": "", "outlier_t_detected": "12.000"},
+    ])
+    sc = S.score_cases(keys, dets).set_index("recording")
+    assert sc.loc["quadratic+temperature", "correct"]          # both, in any order
+    assert not sc.loc["quadratic+cubic", "correct"] and sc.loc["quadratic+cubic", "detected"]  # one of two + a wrong one
+    assert not sc.loc[B.OUTLIER, "correct"]                    # named at the wrong pose
+    assert sc.loc["bias_drift", "correct"]
+    assert sc.loc[B.NONE, "false_positive"]                    # an outlier named on an effect-free session
+    dets.loc[2, "outlier_t_detected"] = "99.000;250.000"
+    assert S.score_cases(keys, dets).set_index("recording").loc[B.OUTLIER, "correct"]
+
+
+def test_effective_sample_size_of_clustered_outcomes():
+    x = np.r_[np.ones(10), np.zeros(30)]
+    assert S.effective_n(x) == 40
+    # outcomes identical within each of 4 windows: as informative as 4 recordings
+    assert S.effective_n(x, np.repeat(np.arange(4), 10)) == pytest.approx(4.0)
+    # outcomes unrelated to the windows: about as informative as 40
+    rng = np.random.default_rng(0)
+    y = rng.random(400) < 0.3
+    assert S.effective_n(y, np.tile(np.arange(40), 10)) > 300
+    lo, hi, ne = S.interval(x, np.repeat(np.arange(4), 10))
+    assert ne == pytest.approx(4.0) and hi - lo > 0.7
+
+
 def test_crossing_and_intervals():
-    assert B.crossing([0.5, 1, 2], [0.2, 0.5, 0.9], 0.5) == (pytest.approx(1.0), "")
-    s, _ = B.crossing([1, 2], [0.4, 0.8], 0.6)
+    assert S.crossing([0.5, 1, 2], [0.2, 0.5, 0.9], 0.5) == (pytest.approx(1.0), "")
+    s, _ = S.crossing([1, 2], [0.4, 0.8], 0.6)
     assert s == pytest.approx(np.sqrt(2))  # midway in log(size)
-    assert np.isnan(B.crossing([1, 2], [0.96, 1.0], 0.95)[0])
-    assert np.isnan(B.crossing([1, 2], [0.1, 0.2], 0.5)[0])
-    lo, hi = B.clopper_pearson(5, 100)
+    assert np.isnan(S.crossing([1, 2], [0.96, 1.0], 0.95)[0])
+    assert np.isnan(S.crossing([1, 2], [0.1, 0.2], 0.5)[0])
+    lo, hi = S.clopper_pearson(5, 100)
     assert lo == pytest.approx(0.01643, abs=1e-4) and hi == pytest.approx(0.11284, abs=1e-4)
-    lo, hi = B.clopper_pearson(0, 10)
+    lo, hi = S.clopper_pearson(0, 10)
     assert lo == 0 and hi == pytest.approx(0.30850, abs=1e-4)
-
-
-def test_counts_csv_round_trip(tmp_path):
-    from accelcal.recording import read_recording
-
-    rec, _ = B.simulate_case(B.NONE, 0.0, 0, seed=SEED, session=SESSION, rules=RULES)
-    B.write_counts_csv(tmp_path / "r.csv", rec)
-    back = read_recording(tmp_path / "r.csv")
-    np.testing.assert_array_equal(back.acc, rec.acc)
-    np.testing.assert_allclose(back.t, rec.t, rtol=0, atol=1e-9)
-    np.testing.assert_allclose(back.temp, rec.temp, rtol=0, atol=1e-9)
-    with pytest.raises(Exception):
-        B.write_counts_csv(tmp_path / "f.csv", type(rec)(rec.t, rec.acc + 0.5, None, ""))

@@ -164,10 +164,14 @@ def _run(truth, size, rep, seed=20240707, rules=RULES):
     return B.detect_case(rec, SESSION.g, rules), key
 
 
+NULL_RULES = {"colored": RULES, "white": Rules(null="white")}
+
+
+@pytest.mark.parametrize("null", sorted(NULL_RULES))
 @pytest.mark.parametrize("eid", EFFECT_IDS)
-def test_names_each_injected_effect(eid):
+def test_names_each_injected_effect(eid, null):
     for rep in range(2):
-        row, key = _run(eid, 4.0, rep)
+        row, key = _run(eid, 4.0, rep, rules=NULL_RULES[null])
         assert row["outcome"] == eid, (rep, row)
         # the estimate is the injected parameter within a few standard errors
         est = np.array([row[f"estimate_{a}"] for a in "xyz"])
@@ -176,25 +180,29 @@ def test_names_each_injected_effect(eid):
         assert np.all(np.abs(est - true) < 5 * se), (est, true, se)
 
 
-def test_names_none_on_effect_free_recordings():
-    outcomes = [_run(B.NONE, 0.0, rep)[0]["outcome"] for rep in range(4)]
+@pytest.mark.parametrize("null", sorted(NULL_RULES))
+def test_names_none_on_effect_free_recordings(null):
+    outcomes = [_run(B.NONE, 0.0, rep, rules=NULL_RULES[null])[0]["outcome"] for rep in range(4)]
     assert outcomes == ["none"] * 4
 
 
-def test_refuses_the_constant_temperature():
-    row, key = _run(B.CONSTANT_TEMPERATURE, 3.0, 0)
+@pytest.mark.parametrize("null", sorted(NULL_RULES))
+def test_refuses_the_constant_temperature(null):
+    row, key = _run(B.CONSTANT_TEMPERATURE, 3.0, 0, rules=NULL_RULES[null])
     assert key["temp_range"] == 0.0
     assert row["outcome"] == B.NOT_IDENTIFIABLE
     assert row["identifiable_temperature"] is False and row["identifiable_temperature_scale"] is False
     assert set(row["not_identifiable"].split("+")) == {"temperature", "temperature_scale"}
 
 
-def test_gap_shrinks_to_the_noise_after_the_refit():
+@pytest.mark.parametrize("null", sorted(NULL_RULES))
+def test_gap_shrinks_to_the_noise_after_the_refit(null):
     from accelcal.static import detect_static_recording
     from accelcal.discrepancy.fit import pose_data_from_static
 
+    rules = NULL_RULES[null]
     rec, _ = B.simulate_case("quadratic", 4.0, 0, seed=20240707, session=SESSION, rules=RULES)
-    res = discrepancy(pose_data_from_static(detect_static_recording(rec), SESSION.g), RULES)
+    res = discrepancy(pose_data_from_static(detect_static_recording(rec), SESSION.g), rules)
     s = res.summary()
     assert res.effects[0] == "quadratic"
     # before: far beyond what noise explains (χ² upper tail); after: consistent with it
@@ -204,11 +212,12 @@ def test_gap_shrinks_to_the_noise_after_the_refit():
     assert s["excess_status"] == "explained"
     # effect-free: the base model is already at the noise level
     rec0, _ = B.simulate_case(B.NONE, 0.0, 1, seed=20240707, session=SESSION, rules=RULES)
-    s0 = discrepancy(pose_data_from_static(detect_static_recording(rec0), SESSION.g), RULES).summary()
+    s0 = discrepancy(pose_data_from_static(detect_static_recording(rec0), SESSION.g), rules).summary()
     assert s0["excess_status"] == "no excess" and s0["gap_after"] == s0["gap_before"]
 
 
-def test_refit_rounds_name_two_effects():
+@pytest.mark.parametrize("null", sorted(NULL_RULES))
+def test_refit_rounds_name_two_effects(null):
     """Two hidden effects: the loop names both, one per round, and stops."""
     rng = np.random.default_rng(8)
     u = random_directions(rng, 40)
@@ -216,7 +225,7 @@ def test_refit_rounds_name_two_effects():
     dt, dT = t - t.mean(), T - T.mean()
     z = forward(G * u, M, b, {"bias_drift": [0.004, -0.003, 0.002], "quadratic": [1.5e-3, -1e-3, 1e-3]},
                 dt=dt, dtemp=dT) + 0.1 * rng.standard_normal((40, 3))
-    res = discrepancy(pose_data(z, G, ms, t, T), RULES)
+    res = discrepancy(pose_data(z, G, ms, t, T), NULL_RULES[null])
     assert set(res.effects) == {"bias_drift", "quadratic"}
     assert max(c.round for c in res.candidates) == 3  # round 3 tested the rest and named nothing
     assert not any(c.named for c in res.candidates if c.round == 3)

@@ -15,6 +15,8 @@ import pandas as pd
 import pytest
 import yaml
 
+from tests.configs import ci_config
+
 REPO = Path(__file__).resolve().parents[1]
 DATA = REPO.parent / "shared" / "data"
 SNAKEMAKE = Path(sys.executable).with_name("snakemake")
@@ -22,14 +24,17 @@ pytestmark = pytest.mark.skipif(not DATA.is_dir(), reason="shared/data not avail
 
 
 def _config(**bench):
-    cfg = yaml.safe_load((REPO / "config" / "ci.yaml").read_text())
+    cfg = ci_config()
     cfg = {"measured": cfg["measured"], "discrepancy": cfg["discrepancy"]}
     cfg["measured"]["data_dir"] = str(DATA)
     d = cfg["discrepancy"]
     d["recordings"] = ["mpu6050"]
     d["stochastic"].update(n_boot=19, n_resim=1)
     d["benchmark"].update(sizes_mde=[3.0], seeds=1, seeds_none=2, seeds_constant=1, confusion_size_mde=3.0,
-                          chunks=2, **bench)
+                          chunks=2, power_curve={"profiles": ["white"], "sizes_mde": [1.0]},
+                          profiles=[{"name": "white"}, {"name": "gm_1x_30s", "gauss_markov": [[1.0, 30.0]]},
+                                    {"name": "adis_real", "real": "adis16405"}], **bench)
+    d["adis"].update(layer_pieces=1, n_boot=19, n_resim=1)
     return cfg
 
 
@@ -43,9 +48,14 @@ def run(tmp_path, cfg, *targets, work="work"):
     return subprocess.run(cmd, capture_output=True, text=True, timeout=900)
 
 
-TABLES = ["results/discrepancy/benchmark/scores.csv", "results/discrepancy/benchmark/rates.csv",
-          "results/discrepancy/benchmark/summary.csv", "results/discrepancy/summary.csv",
-          "results/discrepancy/measured.csv", "results/discrepancy/measured/mpu6050.json"]
+TABLES = ["results/discrepancy/benchmark/scores.csv.gz", "results/discrepancy/benchmark/rates.csv",
+          "results/discrepancy/benchmark/summary.csv", "results/discrepancy/benchmark/headline.csv",
+          "results/discrepancy/benchmark/profiles.json", "results/discrepancy/summary.csv",
+          "results/discrepancy/measured.csv", "results/discrepancy/measured/mpu6050.json",
+          "results/discrepancy/adis/models.csv", "results/discrepancy/adis/session_check.csv",
+          "results/claims/discrepancy.csv"]
+FIGURES = ["discrepancy_fpr", "discrepancy_confusion", "discrepancy_power", "discrepancy_rows", "discrepancy_adis_allan",
+           "discrepancy_measured_before_after", "discrepancy_allan"]
 
 
 def test_stage_runs_and_reruns_byte_identical(tmp_path):
@@ -54,16 +64,20 @@ def test_stage_runs_and_reruns_byte_identical(tmp_path):
     assert p.returncode == 0, p.stderr[-3000:]
     w = tmp_path / "work"
     scores = pd.read_csv(w / TABLES[0], keep_default_na=False, na_values=[""])
-    assert len(scores) == 5 * 1 + 2 + 1  # five effects x one size x one seed, two effect-free, one constant T
-    assert not (w / "results/discrepancy/benchmark/recordings").exists() or \
-        not any((w / "results/discrepancy/benchmark/recordings").iterdir())  # temporary, removed
-    for f in ("discrepancy_confusion", "discrepancy_power", "discrepancy_measured_before_after", "discrepancy_allan"):
+    # per profile: two effect-free, five effects, the pair, the outlier, the constant temperature;
+    # the power-curve profile adds its 1 MDE size; one row per recording and null
+    assert scores.recording.nunique() == 3 * (2 + 5 + 1 + 1 + 1) + 5
+    assert set(scores.groupby("recording").size()) == {scores.null.nunique()}
+    assert (w / "results/discrepancy/benchmark/timing.csv").stat().st_size > 0
+    for f in FIGURES:
         for ext in ("png", "pdf"):
             assert (w / "results" / "figures" / f"{f}.{ext}").stat().st_size > 0
     summ = pd.read_csv(w / "results/discrepancy/summary.csv", keep_default_na=False, na_values=[""])
     assert {"benchmark", "measured"} == set(summ.section)
     assert summ[(summ.recording == "mpu6050") & (summ.metric == "outcome")].verdict.iloc[0] == "not_identifiable"
-    p = run(tmp_path, cfg, "discrepancy", work="again")
+    # the rerun makes only the tables and two figures (the other figures' jobs add time, not coverage)
+    p = run(tmp_path, cfg, *TABLES, "results/figures/discrepancy_confusion.png",
+            "results/figures/discrepancy_power.pdf", work="again")
     assert p.returncode == 0, p.stderr[-3000:]
     for t in TABLES + ["results/figures/discrepancy_confusion.png", "results/figures/discrepancy_power.pdf"]:
         assert (w / t).read_bytes() == (tmp_path / "again" / t).read_bytes(), t

@@ -13,6 +13,9 @@ from pathlib import Path
 import pytest
 import yaml
 
+from accelcal_repro.measured.data import DATASETS
+from tests.configs import ci_config
+
 REPO = Path(__file__).resolve().parents[1]
 DATA = REPO.parent / "shared" / "data"
 SNAKEMAKE = Path(sys.executable).with_name("snakemake")
@@ -20,7 +23,7 @@ pytestmark = pytest.mark.skipif(not DATA.is_dir(), reason="shared/data not avail
 
 
 def workflow(tmp_path, data_dir) -> Path:
-    cfg = yaml.safe_load((REPO / "config" / "ci.yaml").read_text())
+    cfg = ci_config()
     cfg = {"measured": cfg["measured"]}
     cfg["measured"]["data_dir"] = str(data_dir)
     (tmp_path / "config.yaml").write_text(yaml.safe_dump(cfg))
@@ -57,8 +60,9 @@ def test_truncated_recording_fails_the_fetch_with_one_line(tmp_path):
         (shared / d).mkdir(parents=True)
         raw = (DATA / d / "xsens_acc.mat").read_bytes()
         (shared / d / "xsens_acc.mat").write_bytes(raw[: len(raw) // 3])
-    for d in ("mpu6050_suarez", "imucal_ferraris"):  # the others intact: the parse-time check passes offline
-        (shared / d).symlink_to(DATA / d)
+    for d in DATASETS:  # the others intact: the parse-time check passes offline
+        if d != "imu_tk_xsens":
+            (shared / d).symlink_to(DATA / d)
     p = run(tmp_path, shared, "results/measured/xsens_mti.csv")
     assert p.returncode != 0
     log = (tmp_path / "work" / "results" / "logs" / "measured" / "fetch_xsens_mti.log").read_text()

@@ -18,6 +18,8 @@ CORE = SRC / "accelcal"
 #: Third-party packages the core may import anywhere, and where matplotlib is allowed.
 CORE_DEPENDENCIES = {"numpy", "scipy", "pandas", "casadi"}
 PLOTTING_MODULES = {"plotting.py", "discrepancy/figures.py", "discrepancy/stochastic.py"}
+#: numba (the optional ``fast`` extra) is imported by the kernel loader only, on first use.
+KERNEL_LOADER = "kernels.py"
 
 
 def _imports(path: Path):
@@ -46,7 +48,8 @@ def test_core_depends_only_on_the_numerical_stack():
     bad = []
     for p in _core_files():
         rel = p.relative_to(CORE).as_posix()
-        allowed = CORE_DEPENDENCIES | {"accelcal"} | ({"matplotlib"} if rel in PLOTTING_MODULES else set())
+        allowed = (CORE_DEPENDENCIES | {"accelcal"} | ({"matplotlib"} if rel in PLOTTING_MODULES else set())
+                   | ({"numba"} if rel == KERNEL_LOADER else set()))
         bad += [f"{rel}:{line} imports {name}" for name, line in _imports(p) if name not in stdlib | allowed]
     assert not bad, "; ".join(bad)
 
@@ -65,3 +68,48 @@ def test_importing_the_core_loads_no_workflow_package(module):
             "print(','.join(bad))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
     assert out == "", f"import {module} loaded {out}"
+
+
+def test_importing_accelcal_loads_nothing_heavy():
+    """``import accelcal`` (what ``accelcal --help`` needs first) loads no numerical
+    package: names are loaded on first use (PEP 562)."""
+    code = ("import sys, accelcal\n"
+            "print(','.join(sorted(m for m in ('numpy', 'scipy', 'casadi', 'pandas', 'numba') if m in sys.modules)))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
+    assert out == "", f"import accelcal loaded {out}"
+
+
+def test_estimators_load_casadi_scipy_and_numba_only_when_used():
+    code = ("import sys\n"
+            "from accelcal import full_lls, bias_lls, full_als, full_nlls, bias_nlls, ESTIMATORS\n"
+            "print(','.join(sorted(m for m in ('scipy', 'casadi', 'pandas', 'numba') if m in sys.modules)))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
+    assert out == "", f"importing the estimators loaded {out}"
+
+
+_BLOCK_NUMBA = """
+import sys
+class _NoNumba:
+    def find_spec(self, name, path=None, target=None):
+        if name == "numba" or name.startswith("numba."):
+            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+sys.meta_path.insert(0, _NoNumba())
+"""
+
+
+def test_core_works_without_numba():
+    """Without the ``fast`` extra the numpy implementations run (same API, same errors)."""
+    code = _BLOCK_NUMBA + (
+        "import numpy as np\n"
+        "from accelcal import full_lls, bias_lls, full_als, full_lls_batch, kernels, DegeneratePosesError\n"
+        "from accelcal.simulation import random_directions, simulate_poses\n"
+        "rng = np.random.default_rng(0)\n"
+        "z = simulate_poses(random_directions(rng, 24), 9.8, np.eye(3), np.full(3, 0.01), 1e-4, rng)\n"
+        "r = full_lls(z, 9.8); bias_lls(z, 9.8); full_als(z, 9.8, 1e-4); full_lls_batch(z[None], 9.8)\n"
+        "try:\n"
+        "    full_lls(np.column_stack([z[:, :2], np.zeros(24)]), 9.8)\n"
+        "except DegeneratePosesError:\n"
+        "    pass\n"
+        "print(kernels.backend(), 'numba' in sys.modules, np.abs(r.bias - 0.01).max() < 1e-3)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    assert out == ["numpy", "False", "True"]

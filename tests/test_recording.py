@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from accelcal.errors import RecordingError
-from accelcal.recording import (Recording, nominal_conversion, read_imucal_annotated, read_imucal_section_list,
-                                read_imucal_session, read_imutk_ascii, read_mpu6050_csv, read_recording,
+from accelcal.recording import (Recording, nominal_conversion, read_block_log, read_imucal_annotated,
+                                read_imucal_section_list, read_imucal_session, read_imutk_ascii, read_mpu6050_csv, read_recording,
                                 write_recording)
 
 
@@ -253,3 +253,73 @@ def test_public_readers_reject_empty_and_missing(tmp_path):
         _raises(empty, reader=reader)
     _raises(_csv(tmp_path, "{not json", "s.json"), reader=read_imucal_section_list)
     _raises(_csv(tmp_path, '{"x_p": {"start": 10, "end": 5}}', "s2.json"), reader=read_imucal_section_list)
+
+
+# --------------------------------------------------------------------------- known intervals
+
+
+def test_pose_column_round_trips_known_intervals(tmp_path):
+    rec = _rec(n=60)
+    rec = Recording(rec.t, rec.acc, rec.temp, "test", intervals=[(0, 20), (20, 35), (40, 60)],
+                    labels=("x_p", "x_a", "x_p"))
+    p = tmp_path / "out.csv"
+    write_recording(p, rec)
+    back = read_recording(p)
+    np.testing.assert_array_equal(back.intervals, [(0, 20), (20, 35), (40, 60)])
+    assert back.labels == ("x_p", "x_a", "x_p")
+    np.testing.assert_array_equal(back.acc, rec.acc)
+
+
+def test_pose_column_cannot_merge_touching_intervals_of_one_label(tmp_path):
+    rec = _rec(n=30)
+    rec = Recording(rec.t, rec.acc, None, "test", intervals=[(0, 10), (10, 20)], labels=("a", "a"))
+    with pytest.raises(RecordingError, match="cannot be written"):
+        write_recording(tmp_path / "out.csv", rec)
+    assert not (tmp_path / "out.csv").exists()
+
+
+@pytest.mark.parametrize("intervals, match", [([(5, 3)], "not a range"), ([(0, 10), (5, 20)], "overlap"),
+                                              ([(0, 100)], "not a range"), ([], "empty")])
+def test_bad_known_intervals_raise(intervals, match):
+    rec = _rec(n=50)
+    with pytest.raises(RecordingError, match=match):
+        Recording(rec.t, rec.acc, None, "test", intervals=intervals)
+
+
+@pytest.mark.parametrize("name, blocks", [("data_sample.csv", 18), ("data_sample2.csv", 20)])
+def test_read_block_log(data_dir, name, blocks):
+    rec = read_block_log(data_dir / "fastahrs_fxos8700" / name)
+    assert len(rec.intervals) == blocks and rec.n == 4000 * blocks
+    assert rec.rate == pytest.approx(400.0)
+    np.testing.assert_array_equal(np.diff(rec.intervals, axis=1), 4000)
+    assert any("no time stamps" in n for n in rec.notes)
+    # every block is a still pose (noise std well below 0.1 m/s²) with a magnitude within 10 % of g
+    # (this cheap sensor is off by up to 6 %: the calibration's job)
+    for a, b in rec.intervals:
+        assert 0.9 * 9.80665 < np.linalg.norm(rec.acc[a:b].mean(axis=0)) < 1.1 * 9.80665
+        assert rec.acc[a:b].std(axis=0).max() < 0.1
+
+
+def _block_log(blocks, rows=40, seconds=0.1):
+    lines = ["Sensor:       FXOS8700_A", "Type:         Acceleration (m/s2)", "x, y, z"]
+    for k in range(blocks):
+        lines += [">>> Place accelerometer ...", ">>> Type key when ready...",
+                  f">>> Gathering data for {seconds:g} seconds..."]
+        lines += [f"0.{k}1, -0.2, 9.8" for _ in range(rows)]
+    return lines
+
+
+def test_block_log_small(tmp_path):
+    rec = read_block_log(_csv(tmp_path, "\r\n".join(_block_log(3)) + "\r\n"))
+    assert len(rec.intervals) == 3 and rec.rate == pytest.approx(400.0) and "unit from the banner: m/s2" in rec.notes
+
+
+@pytest.mark.parametrize("edit, match", [
+    (lambda L: L[:-25], "truncated or interrupted"),                    # last block cut short
+    (lambda L: L[:8] + ["0.1, abc, 9.8"] + L[9:], "expected three numbers"),
+    (lambda L: L[:8] + ["0.1, 9.8"] + L[9:], "expected three numbers"),
+    (lambda L: [l for l in L if not l.startswith(">>> Gathering")], "no '>>> Gathering data"),
+    (lambda L: L[:-35], "has 5 rows"),
+])
+def test_damaged_block_log_raises(tmp_path, edit, match):
+    _raises(_csv(tmp_path, "\n".join(edit(_block_log(3))) + "\n"), reader=read_block_log, match=match)

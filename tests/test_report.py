@@ -110,7 +110,7 @@ def test_report_has_every_figure_conclusion_caption_and_table(tree):
     # package versions from the lock, wall time per stage
     assert "<td>snakemake-executor-plugin-slurm</td>" in page
     assert re.search(r"<td>batista2011</td><td class=\"num\">2</td><td class=\"num\">4\.75</td>"
-                     r"<td class=\"num\">150</td>", page)
+                     r"<td class=\"num\">2</td><td class=\"num\">150</td>", page)  # jobs, wall, CPU, memory
     # text from the inputs is escaped, not markup
     assert "<b>not markup</b>" not in page and "&lt;b&gt;not markup&lt;/b&gt;" in page
 
@@ -177,6 +177,7 @@ def test_benchmarks_are_grouped_by_stage(tree):
                                     "measured/fetch_xsens_mti"]
     per_stage = stage_times(bench).set_index("stage")
     assert per_stage.loc["batista2011", "s"] == pytest.approx(4.75)
+    assert per_stage.loc["batista2011", "cpu_s"] == pytest.approx(2.0)  # cpu_time 1 s per job
     assert per_stage.loc["batista2011", "max_rss"] == pytest.approx(150.0)
     assert per_stage.loc["batista2011", "jobs"] == 2
     assert per_stage.loc["claims", "s"] == pytest.approx(2.0)

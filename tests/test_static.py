@@ -10,7 +10,7 @@ import pytest
 from scipy.optimize import least_squares
 from scipy.signal import lfilter
 
-from accelcal.errors import RecordingError
+from accelcal.errors import AccelcalError, RecordingError
 from accelcal.recording import (nominal_conversion, read_imucal_annotated, read_imucal_section_list,
                                 read_imucal_session, read_imutk_ascii, read_mpu6050_csv)
 from accelcal.static import detect_static, detect_static_recording
@@ -177,24 +177,54 @@ def test_random_walk_motion_raises():
     assert "not at rest" in _one_line(e)
 
 
-def test_shaking_at_start_raises():
+def _shaking_at_start():
     rng = np.random.default_rng(2)
-    t, acc, _ = simulate(rng, random_dirs(rng, 8))
+    t, acc, truth = simulate(rng, random_dirs(rng, 8))
     acc[:500] += 0.2 * rng.standard_normal((500, 3))  # 5 s of vibration, 20× the noise
-    with pytest.raises(RecordingError) as e:
-        detect_static(t, acc)
-    assert "not at rest" in _one_line(e)
+    return t, acc, truth
 
 
-def test_rotation_at_start_raises():
+def _rotation_at_start():
     rng = np.random.default_rng(4)
     dirs = random_dirs(rng, 8)
-    t, acc, _ = simulate(rng, dirs)
+    t, acc, truth = simulate(rng, dirs)
     lead = G * _great_circle(np.array([1.0, 0, 0]), dirs[0], 300) + 0.01 * rng.standard_normal((300, 3))
-    acc = np.concatenate([lead, acc])
+    return np.arange(300 + len(acc)) / 100.0, np.concatenate([lead, acc]), truth
+
+
+@pytest.mark.parametrize("make", [_shaking_at_start, _rotation_at_start])
+def test_no_initial_rest_raises_when_the_initial_rest_is_required(make):
+    t, acc, _ = make()
     with pytest.raises(RecordingError) as e:
-        detect_static(np.arange(len(acc)) / 100.0, acc)
+        detect_static(t, acc, noise_reference="initial")
     assert "not at rest" in _one_line(e)
+
+
+@pytest.mark.parametrize("make", [_shaking_at_start, _rotation_at_start])
+def test_no_initial_rest_falls_back_to_the_quietest_stretch(make):
+    """The default ('auto') takes the noise level from the quietest 2 s, says why, and
+    finds the same poses (the first one shortened by the disturbed start)."""
+    t, acc, truth = make()
+    p = detect_static(t, acc)
+    assert p.reference == "quietest_stretch"
+    assert "not at rest" in p.reference_note and "quietest 2.0 s stretch" in p.reference_note
+    assert len(p) == len(truth)
+    z = (p.means - truth) / p.mean_std
+    assert np.abs(z).max() < 5.0
+
+
+def test_quietest_reference_can_be_forced():
+    rng = np.random.default_rng(3)
+    t, acc, _ = simulate(rng, random_dirs(rng, 10))
+    a, b = detect_static(t, acc), detect_static(t, acc, noise_reference="quietest")
+    assert a.reference == "initial_rest" and a.reference_note == "" and b.reference == "quietest_stretch"
+    assert len(a) == len(b) == 10
+
+
+def test_bad_noise_reference_raises():
+    t, acc, _ = simulate(np.random.default_rng(3), random_dirs(np.random.default_rng(3), 5))
+    with pytest.raises(AccelcalError, match="noise_reference"):
+        detect_static(t, acc, noise_reference="first")
 
 
 def test_init_duration_covering_motion_raises():

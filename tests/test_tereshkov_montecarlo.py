@@ -104,6 +104,7 @@ def _broken_eq14(u, rate_z, g, tau):
 
 
 def test_claims_reject_a_broken_estimator(tables, monkeypatch):
+    monkeypatch.setattr("accelcal.kernels._backend", "numpy")  # the broken formula is patched into the numpy loop
     monkeypatch.setattr(estimator, "_eq14", _broken_eq14)
     field, _ = mc.run_scenario(CFG, "field")
     summary = mc.convergence_summary(pd.concat([field, tables["straight"]]), SS)

@@ -3,9 +3,26 @@ beyond) from static poses, with the closed forms of Burkhard et al. (2024), a co
 (ALS) correction, an iterative CasADi/IPOPT baseline and the Cramér–Rao bound.
 
 >>> from accelcal import full_lls, bias_lls, full_nlls, bias_nlls
+
+Names are loaded on first use (module ``__getattr__``, PEP 562): ``import accelcal``
+imports neither numpy nor scipy, casadi, pandas or numba, so that the command line
+starts at once; ``from accelcal import full_nlls`` imports what that function needs
+(casadi only at its first solve).
+
+A recording, calibrated, saved, loaded and applied:
+
+>>> import accelcal
+>>> rec = accelcal.read("session.csv")                          # any supported format
+>>> cal, poses = accelcal.calibrate_recording(rec, 9.80665, "full_lls")
+>>> cal.quality.warnings                                         # () when the fit can be trusted
+>>> cal.save("calibration.json")
+>>> accelcal.load_calibration("calibration.json").apply(rec.acc, t=rec.t, temp=rec.temp)
 """
 
-from .als import full_als
+from __future__ import annotations
+
+import importlib
+
 from .errors import (
     AccelcalError,
     DegeneratePosesError,
@@ -16,26 +33,50 @@ from .errors import (
     RecordingError,
     TooFewPosesError,
 )
-from .lls import bias_lls, bias_lls_batch, full_lls, full_lls_batch
-from .model import m_from_params, params_from_m
-from . import nlls
-from .nlls import bias_nlls, full_nlls, nlls_batch
-from .results import BatchResult, CalibrationResult, LLSResult, NLLSResult
-from .uncertainty import CramerRaoBound, crlb, crlb_mean
 
 __version__ = "0.1.0"
 
-#: Estimators by the names the CLI and the workflow use.
-ESTIMATORS = {
-    "full-lls": full_lls,
-    "full-als": full_als,
-    "full-nlls": full_nlls,
-    "bias-lls": bias_lls,
-    "bias-nlls": bias_nlls,
+#: Public name -> submodule that defines it (imported on first access).
+_LAZY = {
+    "full_als": "als",
+    "bias_lls": "lls", "bias_lls_batch": "lls", "full_lls": "lls", "full_lls_batch": "lls",
+    "m_from_params": "model", "params_from_m": "model",
+    "bias_nlls": "nlls", "full_nlls": "nlls", "nlls_batch": "nlls",
+    "BatchResult": "results", "CalibrationResult": "results", "LLSResult": "results", "NLLSResult": "results",
+    "CramerRaoBound": "uncertainty", "crlb": "uncertainty", "crlb_mean": "uncertainty",
+    "Calibration": "calibration", "calibrate_recording": "calibration", "load_calibration": "calibration",
+    "read": "readers",
 }
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+    elif name == "ESTIMATORS":  # estimator functions by the CLI's names, from the one registry
+        from .registry import ESTIMATORS as registry
+
+        value = {e.cli_name: e.load() for e in registry.values()}
+    else:
+        try:  # a submodule: accelcal.nlls, accelcal.batista, ...
+            value = importlib.import_module(f".{name}", __name__)
+        except ModuleNotFoundError as exc:
+            if exc.name != f"{__name__}.{name}":
+                raise
+            raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(__all__))
+
 
 __all__ = [
     "ESTIMATORS",
+    "Calibration",
+    "calibrate_recording",
+    "load_calibration",
+    "read",
     "AccelcalError",
     "BatchResult",
     "CalibrationResult",

@@ -22,12 +22,16 @@ follows eqs. (4)-(6) exactly as for the full LLS.
 
 from __future__ import annotations
 
-import numpy as np
-from scipy.optimize import brentq
+import math
 
-from .errors import NotPositiveDefiniteError
-from .lls import _scale_single, _theta_to_model_single, full_lls, normal_matrix
-from .results import LLSResult
+import numpy as np
+
+from .errors import AccelcalError, NonFiniteError, NotPositiveDefiniteError
+from .kernels import compiled
+from .lls import (_KERNELS, EIGVEC_TOL, MIN_GAP, _float_or_nan, _scale_single, _theta_to_model_single, full_lls,
+                  normal_matrix)
+from .results import BatchResult, LLSResult
+from .validation import check_finite, check_g, pose_array
 
 # Feature j of a row of X is COEF[j] * zx^E[j,0] zy^E[j,1] zz^E[j,2] (eq. 3 ordering).
 _EXP = np.array([[2, 0, 0], [0, 2, 0], [0, 0, 2], [1, 1, 0], [1, 0, 1], [0, 1, 1],
@@ -84,6 +88,8 @@ def _correction_terms() -> tuple[np.ndarray, np.ndarray]:
 
 
 _T1, _T2 = _correction_terms()
+for _constant in (_T1, _T2):
+    _constant.setflags(write=False)
 
 
 def corrected_matrix_terms(N: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -98,6 +104,8 @@ def estimate_noise_var(z: np.ndarray) -> float:
 
 
 def _noise_var_from(N: np.ndarray) -> float:
+    from scipy.optimize import brentq  # here: scipy.optimize costs 0.6 s to import
+
     P1, P2 = corrected_matrix_terms(N)
 
     def lam_min(v):
@@ -110,7 +118,7 @@ def _noise_var_from(N: np.ndarray) -> float:
     while lam_min(hi) > 0:
         hi *= 4
         if hi > 1.0:  # scaled data have |z| ~ 1: a noise std of 1 g is no calibration
-            raise NotPositiveDefiniteError("ALS finds no noise level that makes the moments singular")
+            raise NotPositiveDefiniteError(_NO_NOISE_LEVEL)
     return brentq(lam_min, 0.0, hi, xtol=1e-16, rtol=1e-12)
 
 
@@ -137,7 +145,14 @@ def full_als(z, g: float, noise_std: float | None = None) -> LLSResult:
     # the LLS it corrects validates z and g and raises the same errors (degenerate poses,
     # no ellipsoid) as the LLS would
     lls = full_lls(z, g)
-    z, g = lls.poses, lls.g
+    K = compiled(_KERNELS, single=True)
+    if K is not None:
+        return _full_als_compiled(K, lls.poses, lls.g, noise_std)
+    return _full_als_numpy(lls.poses, lls.g, noise_std)
+
+
+def _full_als_numpy(z, g, noise_std) -> LLSResult:
+    """:func:`full_als` in numpy (``eigvalsh`` + ``brentq`` for σ², ``eigh`` for Θ̂)."""
     k = _scale_single(z)
     N = normal_matrix(z, k)  # Ψ(0): the moment matrix of the LLS, of z / k
     var = _noise_var_from(N) if noise_std is None else (float(noise_std) / k) ** 2
@@ -145,9 +160,70 @@ def full_als(z, g: float, noise_std: float | None = None) -> LLSResult:
     w, V = np.linalg.eigh(N + var * P1 + (var * var) * P2)
     b, M, lam, valid = _theta_to_model_single(V[:, 0], g / k)
     if not valid:
-        raise NotPositiveDefiniteError("ALS gives no ellipsoid (Ŝ not positive definite or λ <= 0)")
+        raise NotPositiveDefiniteError(_NO_ELLIPSOID)
     return LLSResult._trusted(method="full_als", bias=np.array(b) * k, M=M, g=g, poses=z, lam=lam,
                               c=float("nan"), noise_var=var * k * k, singular_values=np.sqrt(np.abs(w)))
+
+
+def _full_als_compiled(K, z, g, noise_std) -> LLSResult:
+    """:func:`full_als` by the compiled kernel (Jacobi eigenvalues, the same Brent search)."""
+    if not z.flags.c_contiguous:
+        z = np.ascontiguousarray(z)
+    out, ev = np.empty(14), np.empty(10)
+    status = K.full_als(z, g, math.nan if noise_std is None else float(noise_std), _T1, _T2, out, ev)
+    if status == K.REFERENCE:
+        return _full_als_numpy(z, g, noise_std)
+    if status == K.NO_NOISE_LEVEL:
+        raise NotPositiveDefiniteError(_NO_NOISE_LEVEL)
+    if status == K.NO_ELLIPSOID:
+        raise NotPositiveDefiniteError(_NO_ELLIPSOID)
+    return LLSResult._trusted(method="full_als", bias=out[:3], M=out[3:12].reshape(3, 3), g=g, poses=z,
+                              lam=float(out[12]), c=math.nan, noise_var=float(out[13]),
+                              singular_values=np.sqrt(np.abs(ev)))
+
+
+_NO_ELLIPSOID = "ALS gives no ellipsoid (Ŝ not positive definite or λ <= 0)"
+_NO_NOISE_LEVEL = "ALS finds no noise level that makes the moments singular"
+
+
+def full_als_batch(z, g: float, noise_std: float | None = None) -> BatchResult:
+    """:func:`full_als` over trials ``z`` (T, n, 3); a trial whose ALS (or the LLS it
+    corrects) fails is marked ``valid=False``, NaN, with the name of the error it raised
+    in ``status`` (``'ok'`` otherwise).
+
+    The compiled kernel runs every trial in one loop; trials it cannot decide (the LLS
+    needs the SVD, Brent's method did not converge) and the numpy backend run
+    :func:`full_als` one by one.
+    """
+    z = pose_array(z, "full", batched=True)
+    K = compiled(_KERNELS)
+    T = len(z)
+    bias, M = np.full((T, 3), np.nan), np.full((T, 3, 3), np.nan)
+    status = np.full(T, "ok", dtype=object)
+    if K is None:
+        check_finite(z)
+        check_g(g)
+        single = range(T)
+    else:
+        z = np.ascontiguousarray(z)
+        code = np.empty(T, np.int8)
+        K.full_als_batch(z, _float_or_nan(g), math.nan if noise_std is None else float(noise_std), _T1, _T2,
+                         MIN_GAP, EIGVEC_TOL, bias, M, code)
+        if (code == K.NON_FINITE).any():
+            raise NonFiniteError("pose measurements contain NaN or infinite values")
+        check_g(g)
+        status[(code == K.NO_ELLIPSOID) | (code == K.ALS_NO_ELLIPSOID) | (code == K.NO_NOISE_LEVEL)] = \
+            NotPositiveDefiniteError.__name__
+        single = np.flatnonzero(code == K.REFERENCE)
+    for t in single:
+        try:
+            r = full_als(z[t], g, noise_std)
+        except AccelcalError as e:
+            status[t] = type(e).__name__
+            continue
+        bias[t], M[t] = r.bias, r.M
+    valid = status == "ok"
+    return BatchResult(method="full_als", bias=bias, M=M, valid=valid.astype(bool), status=status.astype(str))
 
 
 def moment_singular_values(poses: np.ndarray, noise_var: float) -> np.ndarray:

@@ -48,12 +48,13 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.linalg import lapack
 
-from .errors import DegeneratePosesError, NotPositiveDefiniteError
+from .errors import DegeneratePosesError, NonFiniteError, NotPositiveDefiniteError
+from .kernels import compiled
 from .model import lower_from_gram
 from .results import BatchResult, LLSResult
-from .validation import check_g, check_poses, geometry_is_clearly_fine, pose_array, scatter_is_clearly_3d
+from .validation import (check_finite, check_g, check_poses, geometry_is_clearly_fine, pose_array,
+                         scatter_is_clearly_3d)
 
 #: The full system has a one-dimensional null space only if σ9 clearly exceeds σ10.
 #: For a well-spread pose set σ9/σ10 is of order g/noise (10³ and more); for a pose set
@@ -88,6 +89,9 @@ _LEFT[[0, 1, 2, 0, 0, 1, 0, 1, 2, 3], range(10)] = 1.0
 _RIGHT = np.zeros((4, 10))
 _RIGHT[[0, 1, 2, 1, 2, 2, 3, 3, 3, 3], range(10)] = [1.0, 1.0, 1.0, 2.0, 2.0, 2.0, -2.0, -2.0, -2.0, 1.0]
 _EYE3 = np.eye(3)
+#: The compiled kernels of this module (:mod:`accelcal._lls_kernels`, via :func:`accelcal.kernels.compiled`).
+_KERNELS = "_lls_kernels"
+_NON_FINITE = "pose measurements contain NaN or infinite values"
 for _constant in (_START, _LEFT, _RIGHT, _EYE3):
     _constant.setflags(write=False)  # shared by every call (LAPACK gets copies)
 
@@ -216,21 +220,33 @@ def _null_vector(N: np.ndarray) -> tuple[np.ndarray, float] | None:
     it), or None when the fast route cannot certify it (see the module docstring); the
     caller then takes the SVD.
 
-    Inverse iteration with the Cholesky factor of N.  After every second solve the
-    residual bound is checked; once it holds, the gap is certified.
+    Inverse iteration with the inverse of the Cholesky factor of N (numpy's LAPACK:
+    scipy.linalg, 0.5 s to import, is not needed for one calibration).
+    After every second solve the residual bound is checked; once it holds, the gap is
+    certified.
     """
     diag = N.ravel()[::11]  # a view of the diagonal
     tr = sum(diag.tolist())
-    U, x, info = lapack.dposv(N, _START)  # Cholesky factor and the first solve
+    L = _cholesky(N)
     delta = 0.0
-    if info != 0:  # N singular to rounding (σ10 ≈ 0: noise-free poses): use N + δI
+    if L is None:  # N singular to rounding (σ10 ≈ 0: noise-free poses): use N + δI
         delta = _SHIFT * tr
         diag += delta
-        U, x, info = lapack.dposv(N, _START)
-        if info != 0:
+        L = _cholesky(N)
+        if L is None:
             return None
+    # L⁻¹ once, then matrix-vector products (each numpy.linalg call costs microseconds);
+    # an inexact solve could only delay or deny the certificate, which is computed with N
+    # itself, never pass a wrong Θ̂
+    Linv = np.linalg.inv(L)
+    LinvT = Linv.T
+
+    def solve(b):
+        return LinvT.dot(Linv.dot(b))
+
+    x = solve(_START)
     for _ in range(_ROUNDS):
-        x = lapack.dpotrs(U, x)[0]  # two solves per round
+        x = solve(x)  # two solves per round
         y = N.dot(x)  # (N + δI) x
         xx = x.dot(x)
         rho = x.dot(y) / xx  # Rayleigh quotient of N + δI
@@ -246,9 +262,17 @@ def _null_vector(N: np.ndarray) -> tuple[np.ndarray, float] | None:
             # λmin of the leading 9x9 block <= second-smallest eigenvalue (Cauchy
             # interlacing): a Cholesky of that block minus the bound proves the gap.
             diag[:9] -= bound + delta
-            return (x, math.sqrt(xx)) if lapack.dpotrf(N[:9, :9])[1] == 0 else None
-        x = lapack.dpotrs(U, x / math.sqrt(xx))[0]  # keep the iterate O(1) between rounds
+            return (x, math.sqrt(xx)) if _cholesky(N[:9, :9]) is not None else None
+        x = solve(x / math.sqrt(xx))  # keep the iterate O(1) between rounds
     return None
+
+
+def _cholesky(A: np.ndarray) -> np.ndarray | None:
+    """Lower Cholesky factor of the symmetric ``A``, or None if it is not positive definite."""
+    try:
+        return np.linalg.cholesky(A)
+    except np.linalg.LinAlgError:
+        return None
 
 
 def full_lls(z, g: float) -> LLSResult:
@@ -270,6 +294,40 @@ def full_lls(z, g: float) -> LLSResult:
     TooFewPosesError, DegeneratePosesError, NonFiniteError, InputShapeError,
     NotPositiveDefiniteError
     """
+    K = compiled(_KERNELS, single=True)
+    if K is not None:
+        return _full_lls_compiled(K, z, g)
+    return _full_lls_numpy(z, g)
+
+
+def _full_lls_compiled(K, z, g) -> LLSResult:
+    """:func:`full_lls` by the compiled kernel (the fast route of :func:`_full_lls_numpy`
+    as one compiled loop); what it cannot certify, and every input error, goes to the SVD."""
+    poses = np.ascontiguousarray(z, dtype=float)
+    if poses.ndim != 2:
+        return _full_lls_svd(z, g)
+    bias, M = np.empty(3), np.empty((3, 3))
+    lam = K.full_lls(poses, _float_or_nan(g), MIN_GAP, EIGVEC_TOL, bias, M)
+    if lam == -K.REFERENCE:
+        return _full_lls_svd(poses, g)
+    g = check_g(g)
+    if lam == -K.NO_ELLIPSOID:
+        raise NotPositiveDefiniteError(_NO_ELLIPSOID)
+    return LLSResult._trusted(method="full_lls", bias=bias, M=M, g=g, poses=poses, lam=lam, c=math.nan,
+                              noise_var=math.nan)
+
+
+def _float_or_nan(g) -> float:
+    """``g`` as a float for a kernel, NaN if it is none (:func:`check_g` raises later,
+    after the pose checks, as in the reference)."""
+    try:
+        return float(g)
+    except (TypeError, ValueError):
+        return math.nan
+
+
+def _full_lls_numpy(z, g) -> LLSResult:
+    """:func:`full_lls` in numpy: the Gram-matrix route with LAPACK, else the SVD."""
     z = pose_array(z, "full")
     n = len(z)
     k = _scale_single(z)
@@ -330,6 +388,29 @@ def bias_lls(z, g: float) -> LLSResult:
     -------
     LLSResult
     """
+    K = compiled(_KERNELS, single=True)
+    if K is not None:
+        return _bias_lls_compiled(K, z, g)
+    return _bias_lls_numpy(z, g)
+
+
+def _bias_lls_compiled(K, z, g) -> LLSResult:
+    """:func:`bias_lls` by the compiled kernel (the centred normal equations of
+    :func:`_bias_lls_numpy`); what it cannot certify, and every input error, goes to ``lstsq``."""
+    poses = np.ascontiguousarray(z, dtype=float)
+    if poses.ndim != 2:
+        return _bias_lls_lstsq(z, g)
+    bias = np.empty(3)
+    c = K.bias_lls(poses, bias)
+    if c != c:  # NaN: the reference decides
+        return _bias_lls_lstsq(poses, g)
+    g = check_g(g)
+    return LLSResult._trusted(method="bias_lls", bias=bias, M=_EYE3.copy(), g=g, poses=poses, lam=math.nan, c=c,
+                              noise_var=math.nan)
+
+
+def _bias_lls_numpy(z, g) -> LLSResult:
+    """:func:`bias_lls` in numpy: the centred 3x3 normal equations, else ``lstsq``."""
     z = pose_array(z, "bias")
     n = len(z)
     flat = z.ravel()
@@ -404,9 +485,32 @@ def full_lls_batch(z, g: float) -> BatchResult:
     """Full LLS over many trials at once: ``z`` of shape ``(trials, poses, 3)``.
 
     Trials whose estimate is not an ellipsoid are marked ``valid=False`` and hold NaN.
+    The estimate of each trial is that of the SVD (:func:`_full_lls_batch_svd`, the
+    reference); the compiled kernel computes it by the certified Gram-matrix route of
+    :func:`full_lls` and hands the trials it cannot certify to the SVD.
     """
-    z = check_poses(z, "full", batched=True)
+    K = compiled(_KERNELS)
+    z = pose_array(z, "full", batched=True)
+    if K is None:
+        check_finite(z)
+        return _full_lls_batch_svd(z, check_g(g))
+    z = np.ascontiguousarray(z)
+    T = len(z)
+    bias, M, status = np.empty((T, 3)), np.empty((T, 3, 3)), np.empty(T, np.int8)
+    K.full_lls_batch(z, _float_or_nan(g), MIN_GAP, EIGVEC_TOL, bias, M, status)
+    if (status == K.NON_FINITE).any():
+        raise NonFiniteError(_NON_FINITE)
     g = check_g(g)
+    ref = np.flatnonzero(status == K.REFERENCE)
+    valid = status == K.OK
+    if len(ref):
+        r = _full_lls_batch_svd(z[ref], g)
+        bias[ref], M[ref], valid[ref] = r.bias, r.M, r.valid
+    return BatchResult(method="full_lls", bias=bias, M=M, valid=valid)
+
+
+def _full_lls_batch_svd(z, g: float) -> BatchResult:
+    """Reference batched full LLS: SVD of every scaled design matrix (eq. 3), eqs. (4)-(6)."""
     k = _scale(z)
     X = design_matrix(z / k[:, None, None])
     _, _, Vt = np.linalg.svd(X, full_matrices=False)
@@ -415,9 +519,36 @@ def full_lls_batch(z, g: float) -> BatchResult:
 
 
 def bias_lls_batch(z, g: float) -> BatchResult:
-    """Bias-only LLS over many trials at once: ``z`` of shape ``(trials, poses, 3)``."""
-    z = check_poses(z, "bias", batched=True)
+    """Bias-only LLS over many trials at once: ``z`` of shape ``(trials, poses, 3)``.
+
+    Trials whose poses do not determine the bias (singular normal equations) are marked
+    ``valid=False`` and hold NaN.  The compiled kernel solves each trial by the centred
+    normal equations of :func:`bias_lls` and hands the trials whose scatter is not
+    clearly three-dimensional to the reference (:func:`_bias_lls_batch_normal`).
+    """
+    K = compiled(_KERNELS)
+    z = pose_array(z, "bias", batched=True)
+    if K is None:
+        check_finite(z)
+        check_g(g)
+        return _bias_lls_batch_normal(z)
+    z = np.ascontiguousarray(z)
+    T = len(z)
+    bias, M, status = np.empty((T, 3)), np.empty((T, 3, 3)), np.empty(T, np.int8)
+    K.bias_lls_batch(z, bias, M, status)
+    if (status == K.NON_FINITE).any():
+        raise NonFiniteError(_NON_FINITE)
     check_g(g)
+    valid = status == K.OK
+    ref = np.flatnonzero(status == K.REFERENCE)
+    if len(ref):
+        r = _bias_lls_batch_normal(z[ref])
+        bias[ref], valid[ref] = r.bias, r.valid
+    return BatchResult(method="bias_lls", bias=bias, M=M, valid=valid)
+
+
+def _bias_lls_batch_normal(z) -> BatchResult:
+    """Reference batched bias-only LLS: normal equations of the scaled eq. (7)."""
     k = _scale(z)
     zs = z / k[:, None, None]
     H = np.concatenate([2 * zs, np.ones(zs.shape[:-1] + (1,))], axis=-1)
@@ -425,7 +556,13 @@ def bias_lls_batch(z, g: float) -> BatchResult:
     # Normal equations of a 4-column system scaled to O(1): condition² stays small.
     HtH = np.einsum("tni,tnj->tij", H, H)
     Hty = np.einsum("tni,tn->ti", H, y)
-    sol = np.linalg.solve(HtH, Hty[..., None])[..., 0]
     T = len(z)
+    # a trial whose normal equations are singular to working precision (all poses equal,
+    # noise-free poses in one plane) determines no bias: NaN and valid=False, not an
+    # exception for the whole batch nor digits of rounding noise
+    valid = np.linalg.cond(HtH) < 1.0 / np.finfo(float).eps
+    sol = np.full((T, 4), np.nan)
+    if valid.any():
+        sol[valid] = np.linalg.solve(HtH[valid], Hty[valid][..., None])[..., 0]
     return BatchResult(method="bias_lls", bias=sol[:, :3] * k[:, None],
-                       M=np.broadcast_to(np.eye(3), (T, 3, 3)).copy(), valid=np.ones(T, bool))
+                       M=np.broadcast_to(np.eye(3), (T, 3, 3)).copy(), valid=valid)

@@ -36,6 +36,7 @@ METHOD_STYLE = {
     "bias_nlls": {"color": "C4", "marker": "v", "label": "bias-only NLLS"},
     "full_lls_batch": {"color": "C0", "marker": "D", "label": "full LLS (batched)"},
     "bias_lls_batch": {"color": "C3", "marker": "D", "label": "bias-only LLS (batched)"},
+    "full_als_batch": {"color": "C2", "marker": "D", "label": "full ALS (batched)"},
 }
 
 RC = {

@@ -16,13 +16,14 @@ mis-labelled file is worse than one that refuses to run.
 from __future__ import annotations
 
 import csv
+import io
+import re
 import json
 import os
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from .atomic import atomic_output
 from .errors import RecordingError
@@ -32,6 +33,9 @@ MIN_ROWS = 10
 #: Columns of the canonical CSV.
 REQUIRED_COLUMNS = ("t", "ax", "ay", "az")
 OPTIONAL_COLUMNS = ("temp",)
+#: Optional column of the canonical CSV naming the known static pose of each sample
+#: (empty where the sensor is not in a known pose).
+POSE_COLUMN = "pose"
 #: Sampling rate of the imucal example sessions (imucal's examples and tests use it).
 IMUCAL_RATE_HZ = 204.8
 #: Spellings that pandas parses as NaN: reported as non-finite, not as non-numeric.
@@ -52,12 +56,33 @@ class Recording:
         Temperature [°C] if recorded.
     source : str
         Where the data came from (usually the file path).
+    intervals : ndarray of int, shape (k, 2), or None
+        Known static intervals ``[start, stop)`` (sample indices, sorted, disjoint), when
+        the file says where the sensor rests (a block log, a section list, a ``pose``
+        column).  :func:`accelcal.static.detect_static_recording` then uses them instead
+        of detecting rests.
+    labels : tuple of str, or None
+        One name per known interval (``x_p``, ``block03``, ...).
+    notes : tuple of str
+        What a reader assumed that the user should know (time made from a sample index,
+        unit taken from a header...): the CLI prints them.
+    unit : {'m/s^2', 'counts'} or None
+        Unit of ``acc`` when the file or the user said it (data in g or mg are converted
+        to m/s² when read, :mod:`accelcal.units`); None when unknown.
+    time_column : tuple (str, ndarray of str), or None
+        The file's time column as written (name, values), so that a corrected copy can
+        keep it (``accelcal apply``); None when the file has none.
     """
 
     t: np.ndarray
     acc: np.ndarray
     temp: np.ndarray | None
     source: str
+    intervals: np.ndarray | None = None
+    labels: tuple[str, ...] | None = None
+    notes: tuple[str, ...] = ()
+    unit: str | None = None
+    time_column: tuple | None = None
 
     def __post_init__(self):
         t = np.array(self.t, dtype=float)
@@ -67,12 +92,19 @@ class Recording:
             raise RecordingError(
                 f"{self.source}: inconsistent shapes t{t.shape}, acc{acc.shape}"
                 + ("" if temp is None else f", temp{temp.shape}"))
-        for a in (t, acc, temp):
+        intervals, labels = _check_intervals(self.intervals, self.labels, t.size, self.source)
+        for a in (t, acc, temp, intervals):
             if a is not None:
                 a.setflags(write=False)  # frozen means frozen: no in-place edits of shared data
         object.__setattr__(self, "t", t)
         object.__setattr__(self, "acc", acc)
         object.__setattr__(self, "temp", temp)
+        object.__setattr__(self, "intervals", intervals)
+        object.__setattr__(self, "labels", labels)
+        object.__setattr__(self, "notes", tuple(self.notes))
+        if self.unit not in (None, "m/s^2", "counts"):
+            raise RecordingError(f"{self.source}: unit {self.unit!r}; a Recording holds m/s^2 or counts "
+                                 "(convert g and mg when reading)")
 
     @property
     def n(self) -> int:
@@ -83,6 +115,27 @@ class Recording:
     def rate(self) -> float:
         """Sampling rate [Hz] from the median time step."""
         return 1.0 / float(np.median(np.diff(self.t)))
+
+
+def _check_intervals(intervals, labels, n: int, source: str):
+    """Known static intervals as a sorted, disjoint (k, 2) int array inside ``[0, n)``, with labels."""
+    if intervals is None:
+        if labels is not None:
+            raise RecordingError(f"{source}: interval labels without intervals")
+        return None, None
+    iv = np.array(intervals, dtype=np.int64).reshape(-1, 2)
+    if len(iv) == 0:
+        raise RecordingError(f"{source}: the list of known static intervals is empty")
+    if np.any(iv[:, 0] < 0) or np.any(iv[:, 1] > n) or np.any(iv[:, 1] - iv[:, 0] < 2):
+        k = int(np.flatnonzero((iv[:, 0] < 0) | (iv[:, 1] > n) | (iv[:, 1] - iv[:, 0] < 2))[0])
+        raise RecordingError(f"{source}: known static interval {k} (samples {iv[k, 0]}-{iv[k, 1]}) is not a range "
+                             f"of at least 2 samples inside the recording's {n}")
+    if np.any(np.diff(iv[:, 0]) <= 0) or np.any(iv[1:, 0] < iv[:-1, 1]):
+        raise RecordingError(f"{source}: known static intervals overlap or are not in time order")
+    labels = tuple(f"pose{k:02d}" for k in range(len(iv))) if labels is None else tuple(str(x) for x in labels)
+    if len(labels) != len(iv):
+        raise RecordingError(f"{source}: {len(labels)} labels for {len(iv)} known static intervals")
+    return iv, labels
 
 
 @dataclass(frozen=True)
@@ -118,6 +171,8 @@ _NOMINAL = {
     "mpu6050": ((0.0,) * 3, (16384.0 / _G0,) * 3, None,
                 "MPU-6050 datasheet, ±2 g range: 16384 counts per g"),
     "imucal_session": ((0.0,) * 3, (1.0,) * 3, None, "file already in m/s²"),
+    "imutk_fork": ((0.0,) * 3, (1.0,) * 3, None, "file already in m/s² (ROS IMU topic)"),
+    "fxos8700": ((0.0,) * 3, (1.0,) * 3, None, "file already in m/s² (Adafruit sensor driver)"),
 }
 
 
@@ -126,7 +181,7 @@ def nominal_conversion(kind: str) -> NominalConversion | None:
 
     Parameters
     ----------
-    kind : {'imutk_xsens', 'mpu6050', 'imucal_session', 'imucal_annotated'}
+    kind : {'imutk_xsens', 'mpu6050', 'imucal_session', 'imutk_fork', 'fxos8700', 'imucal_annotated'}
         The format.  ``'imucal_annotated'`` (raw counts of an unnamed sensor) returns None.
     """
     if kind == "imucal_annotated":
@@ -140,17 +195,27 @@ def nominal_conversion(kind: str) -> NominalConversion | None:
 # --------------------------------------------------------------------------- parsing
 
 
-def _read_table(path, what: str, **kw) -> pd.DataFrame:
-    """Read a delimited text file as strings; every failure becomes a one-line RecordingError."""
+def _read_table(path, what: str, text: str | None = None, **kw):
+    """Read a delimited text file as strings; every failure becomes a one-line RecordingError.
+
+    ``text``: the file's content when already read (:func:`accelcal.readers.load_text`
+    undoes gzip); ``path`` then only names the file in messages.
+    """
+    import pandas as pd  # here, not at import: the plain-table reader and the CLI's help do without it
+
     path = Path(path)
-    if not path.is_file():
-        raise RecordingError(f"{path}: no such file" if not path.exists() else f"{path}: not a file")
-    if path.stat().st_size == 0:
+    if text is None:
+        if not path.is_file():
+            raise RecordingError(f"{path}: no such file" if not path.exists() else f"{path}: not a file")
+        if path.stat().st_size == 0:
+            raise RecordingError(f"{path}: empty file (expected {what})")
+    elif not text:
         raise RecordingError(f"{path}: empty file (expected {what})")
     try:
         # dtype=str + na_filter=False: nothing is coerced behind our back; empty fields
         # (short or blank lines) stay '' and are reported by _to_float with their line.
-        return pd.read_csv(path, dtype=str, na_filter=False, skip_blank_lines=False, **kw)
+        return pd.read_csv(path if text is None else io.StringIO(text), dtype=str, na_filter=False,
+                           skip_blank_lines=False, **kw)
     except pd.errors.EmptyDataError:
         raise RecordingError(f"{path}: no data (expected {what})") from None
     except pd.errors.ParserError as e:
@@ -160,7 +225,7 @@ def _read_table(path, what: str, **kw) -> pd.DataFrame:
         raise RecordingError(f"{path}: not a text file (undecodable bytes), expected {what}") from None
 
 
-def _drop_trailing_blank(df: pd.DataFrame) -> pd.DataFrame:
+def _drop_trailing_blank(df):
     """Drop blank lines at the end of the file (harmless); blank lines inside stay errors."""
     blank = (df == "").all(axis=1).to_numpy()
     n = len(df)
@@ -169,7 +234,7 @@ def _drop_trailing_blank(df: pd.DataFrame) -> pd.DataFrame:
     return df.iloc[:n]
 
 
-def _to_float(df: pd.DataFrame, col, path, first_line: int, name: str | None = None) -> np.ndarray:
+def _to_float(df, col, path, first_line: int, name: str | None = None) -> np.ndarray:
     """Strictly convert one string column: non-numeric and non-finite values are errors.
 
     ``first_line`` is the 1-based file line of the first data row, so that messages
@@ -177,6 +242,8 @@ def _to_float(df: pd.DataFrame, col, path, first_line: int, name: str | None = N
     """
     name = col if name is None else name
     s = df[col].str.strip()
+    import pandas as pd
+
     x = pd.to_numeric(s, errors="coerce").to_numpy(dtype=float)
     bad = np.isnan(x) & ~s.str.lower().isin(_NAN_SPELLINGS).to_numpy()
     if bad.any():
@@ -243,7 +310,33 @@ def read_recording(path) -> Recording:
         raise RecordingError(f"{path}: header but no data rows")
     cols = {c: _to_float(df, c, path, first_line=2) for c in (*REQUIRED_COLUMNS, *OPTIONAL_COLUMNS) if c in df}
     _check_time(cols["t"], path, first_line=2)
-    return Recording(cols["t"], np.column_stack([cols["ax"], cols["ay"], cols["az"]]), cols.get("temp"), str(path))
+    intervals, labels = intervals_from_labels(df[POSE_COLUMN].to_numpy(dtype=str)) if POSE_COLUMN in df else (None, None)
+    return Recording(cols["t"], np.column_stack([cols["ax"], cols["ay"], cols["az"]]), cols.get("temp"), str(path),
+                     intervals=intervals, labels=labels)
+
+
+def intervals_from_labels(labels) -> tuple[np.ndarray | None, tuple[str, ...] | None]:
+    """Known static intervals from a per-sample label column: each run of one non-empty label.
+
+    Parameters
+    ----------
+    labels : array_like of str, shape (n,)
+        ``''`` (or ``'-'``) where the sensor is not in a known static pose.
+
+    Returns
+    -------
+    intervals : ndarray of int, shape (k, 2), or None if no sample is labelled
+    labels : tuple of str, or None
+    """
+    lab = np.char.strip(np.asarray(labels, dtype=str))
+    lab = np.where(lab == "-", "", lab)
+    change = np.flatnonzero(lab[1:] != lab[:-1]) + 1
+    starts = np.concatenate([[0], change])
+    stops = np.concatenate([change, [lab.size]])
+    keep = lab[starts] != ""
+    if not keep.any():
+        return None, None
+    return np.column_stack([starts[keep], stops[keep]]), tuple(lab[starts[keep]])
 
 
 def _is_number(s: str) -> bool:
@@ -252,6 +345,19 @@ def _is_number(s: str) -> bool:
     except ValueError:
         return False
     return True
+
+
+def labels_from_intervals(intervals, labels, n: int) -> np.ndarray:
+    """The per-sample label column of known static intervals (inverse of :func:`intervals_from_labels`)."""
+    out = np.full(n, "", dtype=object)
+    prev_stop, prev_label = -1, None
+    for (a, b), name in zip(intervals, labels):
+        if not name or name == "-" or name != name.strip() or (a == prev_stop and name == prev_label):
+            raise RecordingError(f"interval label {name!r} cannot be written as a pose column "
+                                 "(empty, padded, or equal to the label of the interval it touches)")
+        out[a:b] = name
+        prev_stop, prev_label = b, name
+    return out
 
 
 def write_recording(path, rec: Recording) -> None:
@@ -264,7 +370,11 @@ def write_recording(path, rec: Recording) -> None:
     data = {"t": rec.t, "ax": rec.acc[:, 0], "ay": rec.acc[:, 1], "az": rec.acc[:, 2]}
     if rec.temp is not None:
         data["temp"] = rec.temp
+    if rec.intervals is not None:
+        data[POSE_COLUMN] = labels_from_intervals(rec.intervals, rec.labels, rec.n)
     with atomic_output(path) as tmp, open(tmp, "w", newline="") as f:
+        import pandas as pd
+
         pd.DataFrame(data).to_csv(f, index=False)
         f.flush()
         os.fsync(f.fileno())
@@ -273,13 +383,13 @@ def write_recording(path, rec: Recording) -> None:
 # --------------------------------------------------------------------------- public formats
 
 
-def read_imutk_ascii(path) -> Recording:
+def read_imutk_ascii(path, text: str | None = None) -> Recording:
     """Read an IMU-TK ASCII file (e.g. ``xsens_acc.mat``): whitespace-separated time, x, y, z.
 
     Values are returned as stored (raw counts for the Xsens example; see
     ``nominal_conversion('imutk_xsens')``).
     """
-    df = _drop_trailing_blank(_read_table(path, "4 whitespace-separated columns (t x y z)",
+    df = _drop_trailing_blank(_read_table(path, "4 whitespace-separated columns (t x y z)", text,
                                           sep=r"\s+", header=None))
     if df.shape[1] != 4:
         raise RecordingError(f"{path}: {df.shape[1]} columns, expected 4 (t x y z) in an IMU-TK ASCII file")
@@ -288,7 +398,7 @@ def read_imutk_ascii(path) -> Recording:
     return Recording(t, np.column_stack([x, y, z]), None, str(path))
 
 
-def read_imucal_session(csv_path, rate_hz: float = IMUCAL_RATE_HZ) -> Recording:
+def read_imucal_session(csv_path, rate_hz: float = IMUCAL_RATE_HZ, text: str | None = None) -> Recording:
     """Read an imucal Ferraris session CSV (``n_samples, gyr_*, acc_*``; acc in m/s²).
 
     ``n_samples`` is the sample counter (0, 1, 2, ... in the example: checked to be
@@ -296,14 +406,15 @@ def read_imucal_session(csv_path, rate_hz: float = IMUCAL_RATE_HZ) -> Recording:
     columns are validated but not returned.
     """
     cols = ("n_samples", "gyr_x", "gyr_y", "gyr_z", "acc_x", "acc_y", "acc_z")
-    df = _drop_trailing_blank(_read_table(csv_path, "an imucal session CSV"))
+    df = _drop_trailing_blank(_read_table(csv_path, "an imucal session CSV", text))
     _require(df, cols, csv_path)
     # Gyro columns are checked too: a damaged gyro field means a damaged file.
     v = {c: _to_float(df, c, csv_path, first_line=2) for c in cols}
     _check_counter(v["n_samples"], "n_samples", csv_path, first_line=2)
     t = v["n_samples"] / rate_hz
     _check_time(t, csv_path, first_line=2)
-    return Recording(t, np.column_stack([v["acc_x"], v["acc_y"], v["acc_z"]]), None, str(csv_path))
+    return Recording(t, np.column_stack([v["acc_x"], v["acc_y"], v["acc_z"]]), None, str(csv_path), unit="m/s^2",
+                     notes=(f"imucal session: t = n_samples / {rate_hz:g} Hz (the file has no rate)",))
 
 
 def read_imucal_section_list(json_path) -> dict[str, tuple[int, int]]:
@@ -333,7 +444,8 @@ def read_imucal_section_list(json_path) -> dict[str, tuple[int, int]]:
     return out
 
 
-def read_imucal_annotated(csv_path, rate_hz: float = IMUCAL_RATE_HZ) -> tuple[Recording, np.ndarray]:
+def read_imucal_annotated(csv_path, rate_hz: float = IMUCAL_RATE_HZ,
+                          text: str | None = None) -> tuple[Recording, np.ndarray]:
     """Read imucal's annotated session (``part, samples, acc_*, gyr_*``, raw counts).
 
     The file is grouped by section, not in time order; rows are sorted by the
@@ -347,7 +459,7 @@ def read_imucal_annotated(csv_path, rate_hz: float = IMUCAL_RATE_HZ) -> tuple[Re
         Section label of each sample (``x_p``, ..., ``z_rot``), in time order.
     """
     cols = ("part", "samples", "acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z")
-    df = _drop_trailing_blank(_read_table(csv_path, "an imucal annotated session CSV"))
+    df = _drop_trailing_blank(_read_table(csv_path, "an imucal annotated session CSV", text))
     _require(df, cols, csv_path)
     v = {c: _to_float(df, c, csv_path, first_line=2) for c in cols[1:]}
     s = v["samples"]
@@ -359,10 +471,10 @@ def read_imucal_annotated(csv_path, rate_hz: float = IMUCAL_RATE_HZ) -> tuple[Re
     acc = np.column_stack([v["acc_x"], v["acc_y"], v["acc_z"]])[order]
     t = s[order] / rate_hz
     _check_time(t, csv_path, first_line=2)
-    return Recording(t, acc, None, str(csv_path)), parts
+    return Recording(t, acc, None, str(csv_path), unit="counts"), parts
 
 
-def read_mpu6050_csv(path) -> Recording:
+def read_mpu6050_csv(path, text: str | None = None) -> Recording:
     """Read the MPU-6050 calibration CSV of tomisuarez2/ImuCalibration.
 
     Layout: four ``key,value`` lines (``Fs,100``, ``Logging Type,0``,
@@ -370,7 +482,7 @@ def read_mpu6050_csv(path) -> Recording:
     and raw int16 counts.  ``t = row / Fs``.  See ``nominal_conversion('mpu6050')``.
     """
     path = Path(path)
-    meta = _read_table(path, "an MPU-6050 CSV (Fs line, 3 metadata lines, header ax,ay,az,...)",
+    meta = _read_table(path, "an MPU-6050 CSV (Fs line, 3 metadata lines, header ax,ay,az,...)", text,
                        header=None, nrows=4, names=["key", "value"])
     if len(meta) < 4 or meta.iloc[0, 0].strip() != "Fs":
         raise RecordingError(f"{path}: expected 4 metadata lines starting with 'Fs,<rate>'")
@@ -380,7 +492,7 @@ def read_mpu6050_csv(path) -> Recording:
         fs = float("nan")
     if not np.isfinite(fs) or fs <= 0:
         raise RecordingError(f"{path}: invalid sampling rate Fs={meta.iloc[0, 1]!r}")
-    df = _drop_trailing_blank(_read_table(path, "an MPU-6050 CSV", skiprows=4))
+    df = _drop_trailing_blank(_read_table(path, "an MPU-6050 CSV", text, skiprows=4))
     cols = ("ax", "ay", "az", "gx", "gy", "gz")
     _require(df, cols, path)
     if len(df) == 0:
@@ -389,10 +501,10 @@ def read_mpu6050_csv(path) -> Recording:
     acc = np.column_stack([v["ax"], v["ay"], v["az"]])
     t = np.arange(len(df)) / fs
     _check_time(t, path, first_line=6)
-    return Recording(t, acc, None, str(path))
+    return Recording(t, acc, None, str(path), unit="counts", notes=(f"MPU-6050 log: t = row / Fs = {fs:g} Hz",))
 
 
-def _require(df: pd.DataFrame, cols, path) -> None:
+def _require(df, cols, path) -> None:
     df.columns = [str(c).strip() for c in df.columns]
     missing = [c for c in cols if c not in df.columns]
     if missing:
@@ -408,3 +520,111 @@ def _check_counter(s: np.ndarray, name: str, path, first_line: int | None) -> No
         i = int(np.flatnonzero(d <= 0)[0]) + 1
         where = f"line {first_line + i}" if first_line is not None else f"sample {int(s[i])}"
         raise RecordingError(f"{path}: column {name!r} not strictly increasing (repeated at {where})")
+
+
+# --------------------------------------------------------------------------- block logs
+
+#: Prompt that opens a block of a serial-monitor block log (FastAhrs' FXOS8700 calibration sketch).
+_BLOCK_START = re.compile(r">>>\s*Gathering data for\s+([0-9.]+)\s*seconds", re.IGNORECASE)
+_UNIT_LINE = re.compile(r"^\s*Type:\s*Acceleration\s*\((.+)\)\s*$", re.IGNORECASE)
+#: Largest relative spread of the per-block sampling rates (rows / stated seconds).
+BLOCK_RATE_TOLERANCE = 0.02
+
+
+def read_block_log(path, text: str | None = None) -> Recording:
+    """Read a serial-monitor log whose poses are separate blocks of ``x, y, z`` rows.
+
+    Layout (vspruyt/FastAhrs ``data_sample*.csv``, FXOS8700): an optional sensor banner
+    (``Type: Acceleration (m/s2)`` gives the unit), a line ``x, y, z``, then per pose the
+    prompt lines ``>>> Place accelerometer ...``, ``>>> Type key when ready...``,
+    ``>>> Gathering data for 10 seconds...`` followed by rows ``x, y, z``.  Lines starting
+    with ``---`` (the monitor's own messages) and blank lines are skipped.
+
+    Each block is one known static interval (the sensor is placed, then logged): the
+    recording carries them as :attr:`Recording.intervals`.  The file has no time stamps:
+    the rate is the block's rows over its stated seconds (the same for every block, else
+    an error), ``t`` is the sample index over that rate, and the unknown time between
+    blocks is taken as zero (stated in :attr:`Recording.notes`).
+    """
+    path = Path(path)
+    what = "a block log (>>> Gathering data for N seconds... then x, y, z rows)"
+    lines = _text_lines(path, what) if text is None else text.splitlines()
+    if not lines:
+        raise RecordingError(f"{path}: empty file (expected {what})")
+    rows, blocks, seconds, unit = [], [], [], None
+    current = None  # index into blocks of the block being filled, None outside a block
+    for no, line in enumerate(lines, start=1):
+        s = line.strip()
+        if not s or s.startswith("---"):
+            continue
+        m = _BLOCK_START.search(s)
+        if m:
+            seconds.append(float(m.group(1)))
+            blocks.append([len(rows), len(rows), no])
+            current = len(blocks) - 1
+            continue
+        if s.startswith(">>>"):
+            current = None
+            continue
+        u = _UNIT_LINE.match(s)
+        if u:
+            unit = u.group(1).strip()
+            continue
+        if current is None:
+            continue  # banner, header 'x, y, z', anything before the first block
+        parts = s.split(",")
+        try:
+            vals = [float(x) for x in parts]
+        except ValueError:
+            vals = []
+        if len(vals) != 3 or not all(np.isfinite(vals)):
+            raise RecordingError(f"{path}: line {no}: expected three numbers 'x, y, z' in block {current}, "
+                                 f"got {s[:40]!r}")
+        rows.append(vals)
+        blocks[current][1] = len(rows)
+    if not blocks:
+        raise RecordingError(f"{path}: no '>>> Gathering data for N seconds' block found; not a block log "
+                             "(pass --format to choose another reader)")
+    empty = [k for k, (a, b, _) in enumerate(blocks) if b - a < MIN_ROWS]
+    if empty:
+        k = empty[0]
+        raise RecordingError(f"{path}: block {k} (line {blocks[k][2]}) has {blocks[k][1] - blocks[k][0]} rows; "
+                             f"need at least {MIN_ROWS} (truncated or interrupted log?)")
+    rates = np.array([(b - a) / sec if sec > 0 else np.nan for (a, b, _), sec in zip(blocks, seconds)])
+    if not np.all(np.isfinite(rates)):
+        raise RecordingError(f"{path}: a block states a duration of 0 seconds; cannot infer the sampling rate")
+    rate = float(np.median(rates))
+    off = np.flatnonzero(np.abs(rates / rate - 1) > BLOCK_RATE_TOLERANCE)
+    if off.size:
+        k = int(off[0])
+        raise RecordingError(f"{path}: block {k} (line {blocks[k][2]}) has {blocks[k][1] - blocks[k][0]} rows for "
+                             f"{seconds[k]:g} s where the others give {rate:g} Hz (truncated or interrupted block?)")
+    acc = np.array(rows, dtype=float)
+    t = np.arange(len(acc)) / rate
+    notes = [f"no time stamps: t = sample index / {rate:g} Hz (rows per block over its stated seconds); "
+             "the time between blocks is unknown and taken as zero",
+             f"{len(blocks)} blocks read as known static intervals"]
+    canonical = None
+    if unit:
+        from .units import G0, acceleration_unit
+
+        canonical = acceleration_unit(unit)
+        if canonical in ("g", "mg"):
+            acc = acc * (G0 if canonical == "g" else G0 * 1e-3)
+            canonical = "m/s^2"
+        notes.append(f"unit from the banner: {unit}")
+    return Recording(t, acc, None, str(path), intervals=[(a, b) for a, b, _ in blocks],
+                     labels=tuple(f"block{k:02d}" for k in range(len(blocks))), notes=tuple(notes), unit=canonical)
+
+
+def _text_lines(path: Path, what: str) -> list[str]:
+    """The lines of a text file; a missing, empty or binary file is a one-line RecordingError."""
+    if not path.is_file():
+        raise RecordingError(f"{path}: no such file" if not path.exists() else f"{path}: not a file")
+    raw = path.read_bytes()
+    if not raw:
+        raise RecordingError(f"{path}: empty file (expected {what})")
+    try:
+        return raw.decode("utf-8").splitlines()
+    except UnicodeDecodeError:
+        raise RecordingError(f"{path}: not a text file (undecodable bytes), expected {what}") from None

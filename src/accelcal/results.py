@@ -22,6 +22,7 @@ from functools import cached_property
 import numpy as np
 
 from .model import params_from_m
+from .registry import N_PARAMETERS, estimator, model_of
 from .uncertainty import pose_residuals, standard_errors
 
 
@@ -49,13 +50,13 @@ class CalibrationResult:
         cached property such as ``singular_values``.
         """
         obj = object.__new__(cls)
-        obj.__dict__.update(values)
+        object.__setattr__(obj, "__dict__", values)  # the fresh dict of the keyword arguments
         return obj
 
     @property
     def model(self) -> str:
-        """'bias' for the bias-only estimators (M = I), else 'full'."""
-        return "bias" if self.method.startswith("bias") else "full"
+        """'bias' for the bias-only estimators (M = I), else 'full' (:mod:`accelcal.registry`)."""
+        return model_of(self.method)
 
     @property
     def n_poses(self) -> int:
@@ -94,7 +95,16 @@ class CalibrationResult:
 
     @property
     def n_parameters(self) -> int:
-        return 3 if self.model == "bias" else 9
+        return N_PARAMETERS[self.model]
+
+    def apply(self, z) -> np.ndarray:
+        """Calibrated specific force ``M⁻¹(z - b)`` of raw samples ``z`` (..., 3), unit of g.
+
+        The plain model only; :class:`accelcal.calibration.Calibration` adds units,
+        fitted effects and a file format.
+        """
+        z = np.asarray(z, dtype=float)
+        return np.linalg.solve(self.M, (z - self.bias).reshape(-1, 3).T).T.reshape(z.shape)
 
     def to_dict(self) -> dict:
         """JSON-ready dictionary (the CLI's output format)."""
@@ -152,14 +162,11 @@ class LLSResult(CalibrationResult):
 
     @cached_property
     def singular_values(self) -> np.ndarray:
-        # imported here: lls and als build these results
-        if self.method == "full_als":
-            from .als import moment_singular_values
-
-            return moment_singular_values(self.poses, self.noise_var)
-        from .lls import design_singular_values
-
-        return design_singular_values(self.model, self.poses)
+        # The registry names the function (imported on first use), so that this module
+        # imports no estimator: lls and als build these results.
+        est = estimator(self.method)
+        f = est.load_conditioning()
+        return f(self.poses, self.noise_var) if est.conditioning_uses_noise else f(self.model, self.poses)
 
     def _extra_fields(self) -> tuple[str, ...]:
         return ("singular_values",) + super()._extra_fields()
@@ -180,9 +187,12 @@ class BatchResult:
 
     ``valid`` marks trials where the estimator produced a model (for the full LLS:
     Ŝ positive definite and λ > 0); invalid trials hold NaN, never a number.
+    ``status`` (estimators that record why a trial failed, e.g. ALS): ``'ok'`` or the
+    name of the error the single-problem estimator raised on that trial.
     """
 
     method: str
     bias: np.ndarray  # (T, 3)
     M: np.ndarray  # (T, 3, 3)
     valid: np.ndarray  # (T,) bool
+    status: np.ndarray | None = None  # (T,) str

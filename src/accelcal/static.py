@@ -58,6 +58,11 @@ DEFAULT_TRIM = 0.25
 #: still a rest.  A slow rotation gives ≈ 3.5 (B - 1) over B blocks; the real initial
 #: rests drift by 0.9 (Xsens, 51 blocks), 0.5 (MPU-6050), 0.3 (imucal).
 MAX_INIT_DRIFT = 3.0
+#: Largest drift of the quietest stretch's 4 block means [per-sample noise std] when it
+#: replaces a missing initial rest (:func:`_quietest_stretch`).  Stricter than
+#: ``MAX_INIT_DRIFT``: the stretch is short, so a rest drifts by little, and a stretch
+#: chosen for its low variance could otherwise be part of a slow motion.
+MAX_QUIET_DRIFT = 1.5
 
 
 @dataclass(frozen=True)
@@ -83,7 +88,14 @@ class StaticPoses:
     intervals : ndarray of int, shape (n_poses, 2)
         Sample index range ``[start, stop)`` of each pose.
     init_rest : tuple of int
-        Sample range ``[start, stop)`` whose noise set the threshold.
+        Sample range ``[start, stop)`` whose noise set the threshold (the first known
+        interval when the intervals were given).
+    reference : {'initial_rest', 'quietest_stretch', 'known_intervals'}
+        Where the noise reference came from: the recording's initial rest, its quietest
+        stretch (the recording does not start at rest), or no detection at all (the
+        recording's known static intervals were used as they are).
+    reference_note : str
+        Why the initial rest was not used (empty otherwise): the CLI prints it.
     """
 
     means: np.ndarray
@@ -96,6 +108,8 @@ class StaticPoses:
     temp: np.ndarray | None
     intervals: np.ndarray
     init_rest: tuple[int, int]
+    reference: str = "initial_rest"
+    reference_note: str = ""
 
     def __len__(self) -> int:
         return len(self.means)
@@ -104,7 +118,7 @@ class StaticPoses:
 def detect_static(t, acc, *, init_duration: float | None = None, window: float = DEFAULT_WINDOW,
                   threshold_factor: float = DEFAULT_THRESHOLD_FACTOR,
                   min_duration: float = DEFAULT_MIN_DURATION, trim: float = DEFAULT_TRIM,
-                  temp=None) -> StaticPoses:
+                  temp=None, noise_reference: str = "auto") -> StaticPoses:
     """Find the static poses of a raw recording.
 
     Parameters
@@ -125,6 +139,13 @@ def detect_static(t, acc, *, init_duration: float | None = None, window: float =
         Time [s] cut from each end of a pose that borders motion.
     temp : array_like, shape (n,), optional
         Temperature, averaged per pose.
+    noise_reference : {'auto', 'initial', 'quietest'}
+        Where the noise level comes from.  ``'initial'``: the initial rest, which must
+        pass the checks of :func:`_check_initial_rest` (IMU-TK's protocol).
+        ``'quietest'``: the quietest stretch of the recording (:func:`_quietest_stretch`).
+        ``'auto'`` (default): the initial rest, or, if the recording does not start at
+        rest and ``init_duration`` is not given, the quietest stretch, saying why in
+        :attr:`StaticPoses.reference_note`.
 
     Returns
     -------
@@ -143,6 +164,9 @@ def detect_static(t, acc, *, init_duration: float | None = None, window: float =
         raise AccelcalError("need window > 0, threshold_factor > 1, min_duration >= 0 and trim >= 0")
     n = t.size
     fs = 1.0 / float(np.median(np.diff(t)))
+    if window * fs < 3:
+        raise RecordingError(f"the {window:g} s variance window holds {window * fs:.2g} samples at {fs:.4g} Hz; it "
+                             "needs at least 3: give a longer --window, or check the time unit (--time-unit)")
     w = max(3, int(round(window * fs)) | 1)  # odd, so the window is centred on a sample
     h = w // 2
     if n < 3 * w:
@@ -152,29 +176,82 @@ def detect_static(t, acc, *, init_duration: float | None = None, window: float =
     m = int(round(trim * fs))
     n_min = max(int(np.ceil(min_duration * fs)), 2)
 
-    # Initial rest: from the data (first run below k × the first window's variance) or given.
-    if init_duration is None:
-        seed = v[h]  # variance of the first window; v[0] == seed, so the first run starts at 0
-        if seed <= 0:
-            raise RecordingError("the first window has zero variance: the sensor output is constant (stuck?)")
-        init = _spans(_runs(v < threshold_factor * seed)[:1], h, m, n)[0]
+    if noise_reference not in ("auto", "initial", "quietest"):
+        raise AccelcalError(f"noise_reference must be 'auto', 'initial' or 'quietest', got {noise_reference!r}")
+    reference, note = "initial_rest", ""
+    if noise_reference == "quietest":
+        init, vref = _quietest_stretch(acc, v, w, fs, "")
+        reference = "quietest_stretch"
     else:
-        n0 = int(round(init_duration * fs))
-        if not w <= n0 <= n:
-            raise RecordingError(f"init_duration {init_duration:g} s must cover one window ({window:g} s) "
-                                 f"and fit in the recording ({n / fs:.1f} s)")
-        init = (0, n0)
-    vref = _check_initial_rest(acc, v, init, w, threshold_factor, fs)
+        try:
+            init = _initial_segment(v, init_duration, window, threshold_factor, w, h, m, n, fs)
+            vref = _check_initial_rest(acc, v, init, w, threshold_factor, fs)
+        except RecordingError as e:
+            if noise_reference == "initial" or init_duration is not None:
+                raise
+            note = str(e)
+            init, vref = _quietest_stretch(acc, v, w, fs, note)
+            reference = "quietest_stretch"
+            note = (f"{note}; noise level taken from the quietest {(init[1] - init[0]) / fs:.1f} s stretch "
+                    f"(t = {t[init[0]]:.1f}-{t[init[1] - 1]:.1f} s)")
 
     spans = _spans(_runs(v < threshold_factor * vref), h, m, n)
     spans = spans[spans[:, 1] - spans[:, 0] >= n_min]
     if len(spans) == 0:
         raise RecordingError("no static interval found: the sensor never rests long enough")
-    return _pose_statistics(t, acc, temp, spans, init)
+    return _pose_statistics(t, acc, temp, spans, init, reference, note)
+
+
+def _initial_segment(v, init_duration, window, k, w, h, m, n, fs) -> tuple[int, int]:
+    """The initial rest: found from the data (first run below k × the first window's variance) or given."""
+    if init_duration is None:
+        seed = v[h]  # variance of the first window; v[0] == seed, so the first run starts at 0
+        if seed <= 0:
+            raise RecordingError("the first window has zero variance: the sensor output is constant (stuck?)")
+        return tuple(_spans(_runs(v < k * seed)[:1], h, m, n)[0])
+    n0 = int(round(init_duration * fs))
+    if not w <= n0 <= n:
+        raise RecordingError(f"init_duration {init_duration:g} s must cover one window ({window:g} s) "
+                             f"and fit in the recording ({n / fs:.1f} s)")
+    return (0, n0)
+
+
+def static_poses_from_intervals(t, acc, intervals, *, temp=None) -> StaticPoses:
+    """Pose statistics of known static intervals (no detection).
+
+    Parameters
+    ----------
+    t, acc, temp
+        As for :func:`detect_static`.
+    intervals : array_like of int, shape (k, 2)
+        ``[start, stop)`` sample ranges, sorted and disjoint, at least 2 samples each
+        (:attr:`accelcal.recording.Recording.intervals`).
+
+    Returns
+    -------
+    StaticPoses
+        ``reference='known_intervals'``; the noise statistics of each pose come from its
+        own samples, as for detected poses.
+    """
+    t, acc, temp = _validate(t, acc, temp)
+    spans = np.asarray(intervals, dtype=np.int64).reshape(-1, 2)
+    if len(spans) == 0 or np.any(spans[:, 0] < 0) or np.any(spans[:, 1] > t.size) \
+            or np.any(spans[:, 1] - spans[:, 0] < 2) or np.any(spans[1:, 0] < spans[:-1, 1]):
+        raise RecordingError("known static intervals must be sorted, disjoint sample ranges of at least "
+                             f"2 samples inside the recording's {t.size}")
+    return _pose_statistics(t, acc, temp, spans, tuple(int(x) for x in spans[0]), "known_intervals", "")
 
 
 def detect_static_recording(rec, **kw) -> StaticPoses:
-    """:func:`detect_static` on a :class:`~accelcal.recording.Recording` (uses its temperature)."""
+    """The static poses of a :class:`~accelcal.recording.Recording` (uses its temperature).
+
+    Its known static intervals (:attr:`~accelcal.recording.Recording.intervals`: a block
+    log's blocks, a section list, a ``pose`` column) when it carries them
+    (:func:`static_poses_from_intervals`; the detection settings ``kw`` are then unused),
+    else :func:`detect_static` with ``kw``.
+    """
+    if getattr(rec, "intervals", None) is not None:
+        return static_poses_from_intervals(rec.t, rec.acc, rec.intervals, temp=rec.temp)
     return detect_static(rec.t, rec.acc, temp=rec.temp, **kw)
 
 
@@ -271,6 +348,41 @@ def _check_initial_rest(acc, v, init, w, k, fs) -> float:
     return vref
 
 
+def _quietest_stretch(acc, v, w, fs, why: str) -> tuple[tuple[int, int], float]:
+    """The quietest stretch of ``2w + 1`` samples and the trace of its covariance.
+
+    The stretch whose loudest window (of the ``w + 2`` centred windows inside it) is the
+    quietest of the recording.  Being the minimum over the recording, its variance is
+    biased low (by about 15 % for a 2 s stretch among a few dozen independent ones): the
+    threshold is that much stricter, which keeps poses, not motion.  It must look like a
+    rest: split into 4 blocks, the block means may spread by at most
+    ``MAX_QUIET_DRIFT`` per-sample noise std on every axis (white noise: ≈ 0.3; the
+    quietest stretches of the real recordings: 0.1-0.55; a random walk of the same
+    window variance: ≥ 2), and its variance must not be zero.
+    """
+    n = acc.shape[0]
+    L = 2 * w + 1
+    if n < L:
+        raise RecordingError(f"recording too short for a noise reference: {n} samples, need {L}")
+    h = w // 2
+    centres = np.lib.stride_tricks.sliding_window_view(v[h:n - h], L - w + 1)
+    j = int(np.argmin(centres.max(axis=1)))
+    seg = acc[j:j + L]
+    vref = float(seg.var(axis=0, ddof=1).sum())
+    lead = f"{why}; " if why else ""
+    if vref <= 0:
+        raise RecordingError(f"{lead}the quietest stretch has zero variance: the sensor output is constant (stuck?)")
+    blocks = np.array_split(seg, 4)
+    means = np.array([b.mean(axis=0) for b in blocks])
+    within = np.sqrt(np.mean([b.var(axis=0, ddof=1) for b in blocks], axis=0))
+    drift = float(np.max((means.max(axis=0) - means.min(axis=0)) / np.where(within > 0, within, np.inf)))
+    if drift > MAX_QUIET_DRIFT:
+        raise RecordingError(f"{lead}its quietest {L / fs:.1f} s stretch is not at rest either (its mean drifts by "
+                             f"{drift:.1f} noise std): the sensor never holds still; record at least one still "
+                             f"stretch of {L / fs:.1f} s or give the rests with --intervals")
+    return (j, j + L), vref
+
+
 def _integrated_autocorr_time(x: np.ndarray) -> np.ndarray:
     """Integrated autocorrelation time of each column of ``x`` (n, 3), at least 1.
 
@@ -294,7 +406,7 @@ def _integrated_autocorr_time(x: np.ndarray) -> np.ndarray:
     return np.minimum(tau, n)
 
 
-def _pose_statistics(t, acc, temp, spans, init) -> StaticPoses:
+def _pose_statistics(t, acc, temp, spans, init, reference="initial_rest", note="") -> StaticPoses:
     k = len(spans)
     means, noise_std, mean_std = np.empty((k, 3)), np.empty((k, 3)), np.empty((k, 3))
     for i, (a, b) in enumerate(spans):
@@ -307,4 +419,4 @@ def _pose_statistics(t, acc, temp, spans, init) -> StaticPoses:
     return StaticPoses(means=means, t_start=t_start, t_end=t_end, t_mid=0.5 * (t_start + t_end),
                        n_samples=(spans[:, 1] - spans[:, 0]).astype(int), noise_std=noise_std,
                        mean_std=mean_std, temp=ptemp, intervals=spans.astype(int),
-                       init_rest=(int(init[0]), int(init[1])))
+                       init_rest=(int(init[0]), int(init[1])), reference=reference, reference_note=note)

@@ -82,10 +82,13 @@ def check_finite(z: np.ndarray) -> None:
 
 
 def check_g(g) -> float:
-    g = float(g)
-    if not math.isfinite(g) or g <= 0:
-        raise InputShapeError(f"gravity magnitude g must be a positive finite number, got {g}")
-    return g
+    try:
+        value = float(g)
+    except (TypeError, ValueError):
+        raise InputShapeError(f"gravity magnitude g must be a positive finite number, got {g!r}") from None
+    if not math.isfinite(value) or value <= 0:
+        raise InputShapeError(f"gravity magnitude g must be a positive finite number, got {value}")
+    return value
 
 
 def geometry_is_clearly_fine(s1, S2, n) -> bool:

@@ -25,7 +25,8 @@ every g error.
 
 Table (:func:`mc_point`, one row per trial × case × method)
 -----------------------------------------------------------
-``n_poses, noise_std, data_model, g_error, trial, method, model, valid, status``;
+``n_poses, noise_std, data_model, g_error, trial, method, model, valid, status,
+iterations`` (IPOPT's iterations for the NLLS, 0 for the closed forms);
 estimate - truth: ``bias_err_{x,y,z}`` [m/s²], ``scale_err_{x,y,z}`` [-],
 ``nonorth_err_{xy,zx,zy}`` [rad] (NaN for the bias-only methods, which do not estimate
 them) and their Euclidean norms ``*_err_norm``; the truth ``true_bias_*``,
@@ -47,13 +48,12 @@ from functools import partial
 import numpy as np
 import pandas as pd
 
-from accelcal.als import full_als
-from accelcal.errors import AccelcalError
+from accelcal.als import full_als_batch
 from accelcal.lls import bias_lls_batch, full_lls_batch
 from accelcal.model import dM_dparams, params_from_m
 from accelcal.nlls import nlls_batch
 from accelcal.simulation import random_directions, sample_truth, simulate_poses
-from accelcal.validation import N_UNKNOWNS
+from accelcal.registry import ESTIMATORS, estimator
 
 #: Gravity of the Burkhard simulations (Sec. 2).
 G_BURKHARD = 9.8055
@@ -61,10 +61,10 @@ G_BURKHARD = 9.8055
 #: A batch estimator: ``(z (T, n, 3), g, noise_std) -> dict(bias (T,3), M (T,3,3), valid (T,), status (T,))``.
 BatchEstimator = Callable[[np.ndarray, float, float], dict]
 
-#: Every method, in the order tables and figures use.
-METHODS = ("full_lls", "full_als", "full_nlls", "bias_lls", "bias_nlls")
-FULL_METHODS = METHODS[:3]
-BIAS_METHODS = METHODS[3:]
+#: Every method, in the order tables and figures use (the registry's).
+METHODS = tuple(ESTIMATORS)
+FULL_METHODS = tuple(m for m in METHODS if ESTIMATORS[m].model == "full")
+BIAS_METHODS = tuple(m for m in METHODS if ESTIMATORS[m].model == "bias")
 #: The two data sets of a grid point (see the module docstring).
 DATA_MODELS = ("full", "bias")
 #: Axis labels of the error columns.
@@ -84,32 +84,24 @@ def _lls_bias(z, g, noise_std):
 
 
 def _nlls(model):
-    def run(z, g, noise_std):
-        r = nlls_batch(z, g, model)
-        return {"bias": r["bias"], "M": r["M"], "valid": r["valid"], "status": r["status"].astype(str)}
+    def run(z, g, noise_std, known_noise: bool = True):
+        r = nlls_batch(z, g, model, noise_std=noise_std if known_noise else None)
+        return {"bias": r["bias"], "M": r["M"], "valid": r["valid"], "status": r["status"].astype(str),
+                "iterations": r["iterations"]}
     run.__name__ = f"{model}_nlls"
     return run
 
 
 def als_loop(z, g, noise_std, known_noise: bool = True) -> dict:
-    """:func:`accelcal.full_als` over trials; typed failures are recorded, not raised.
+    """:func:`accelcal.als.full_als_batch` (ALS on every trial); typed failures are
+    recorded in ``status``, not raised.
 
     ``known_noise``: pass the simulation's noise std to ALS (the project's default: a
     simulation knows it, and a real calibration measures it at rest) or let ALS
     estimate it from the poses.
     """
-    T = len(z)
-    out = {"bias": np.full((T, 3), np.nan), "M": np.full((T, 3, 3), np.nan),
-           "valid": np.zeros(T, bool), "status": np.empty(T, dtype=object)}
-    for i in range(T):
-        try:
-            r = full_als(z[i], g, noise_std=noise_std if known_noise else None)
-        except AccelcalError as e:
-            out["status"][i] = type(e).__name__
-            continue
-        out["bias"][i], out["M"][i], out["valid"][i], out["status"][i] = r.bias, r.M, True, "ok"
-    out["status"] = out["status"].astype(str)
-    return out
+    r = full_als_batch(z, g, noise_std=noise_std if known_noise else None)
+    return {"bias": r.bias, "M": r.M, "valid": r.valid, "status": r.status}
 
 
 #: The batch estimators of the Monte Carlo, by method name.
@@ -123,13 +115,13 @@ BATCH_ESTIMATORS: dict[str, BatchEstimator] = {
 
 
 def method_model(method: str) -> str:
-    """'bias' for a bias-only method (it assumes M = I), else 'full'."""
-    return "bias" if method.startswith("bias") else "full"
+    """'bias' for a bias-only method (it assumes M = I), else 'full' (:mod:`accelcal.registry`)."""
+    return estimator(method).model
 
 
 def min_poses(method: str) -> int:
     """Fewest poses a method accepts: q + 1 for q unknowns (10 full, 4 bias-only; paper Sec. 1.2)."""
-    return N_UNKNOWNS[method_model(method)] + 1
+    return estimator(method).min_poses
 
 
 def grid_seed(seed: int, stage: str, *values: float) -> np.random.SeedSequence:
@@ -255,7 +247,7 @@ def normalise_cases(cases: Iterable) -> list[tuple[str, float, tuple[str, ...]]]
 
 
 def mc_point(seed: int, n_poses: int, noise_std: float, cases: Iterable, trials: int, g: float = G_BURKHARD,
-             truth_ranges: Mapping | None = None, als_known_noise: bool = True,
+             truth_ranges: Mapping | None = None, als_known_noise: bool = True, nlls_known_noise: bool = True,
              estimators: Mapping[str, BatchEstimator] | None = None,
              stage: str = "burkhard2024") -> tuple[pd.DataFrame, pd.DataFrame]:
     """Monte Carlo of one grid point: every case on the point's data.
@@ -271,6 +263,9 @@ def mc_point(seed: int, n_poses: int, noise_std: float, cases: Iterable, trials:
         in the assumed g [m/s²] (assumed g = ``g + g_error``).
     trials : int
         Monte Carlo runs.
+    als_known_noise, nlls_known_noise : bool
+        Tell ALS (its correction) and NLLS (its stopping tolerance,
+        :func:`accelcal.nlls.solver_tol`) the noise std of the simulation.
     estimators : mapping, optional
         Replace or add batch estimators (tests inject deliberately wrong ones).
 
@@ -285,6 +280,8 @@ def mc_point(seed: int, n_poses: int, noise_std: float, cases: Iterable, trials:
     """
     table = dict(BATCH_ESTIMATORS)
     table["full_als"] = partial(als_loop, known_noise=als_known_noise)
+    for m in ("full_nlls", "bias_nlls"):
+        table[m] = partial(BATCH_ESTIMATORS[m], known_noise=nlls_known_noise)
     if estimators:
         table.update(estimators)
     cases = normalise_cases(cases)
@@ -310,6 +307,7 @@ def mc_point(seed: int, n_poses: int, noise_std: float, cases: Iterable, trials:
         g_assumed = g + g_error
         for method in methods:
             model = method_model(method)
+            table[method](z[:1], g_assumed, noise_std)  # untimed warm-up: kernels loaded, solver built
             t0 = time.perf_counter()
             est = table[method](z, g_assumed, noise_std)
             timings.append((int(n_poses), float(noise_std), data_model, g_error, method, trials,
@@ -318,7 +316,8 @@ def mc_point(seed: int, n_poses: int, noise_std: float, cases: Iterable, trials:
                     "data_model": np.full(trials, data_model, dtype=object), "g_error": np.full(trials, g_error),
                     "trial": np.arange(trials), "method": np.full(trials, method, dtype=object),
                     "model": np.full(trials, model, dtype=object),
-                    "valid": np.asarray(est["valid"], bool), "status": np.asarray(est["status"], dtype=object)}
+                    "valid": np.asarray(est["valid"], bool), "status": np.asarray(est["status"], dtype=object),
+                    "iterations": np.asarray(est.get("iterations", np.zeros(trials, int)), int)}
             cols.update(error_columns(est, truth, model, data_model))
             cols.update(truth_columns(truth, data_model))
             cols.update(bound(data_model, model))
@@ -397,7 +396,8 @@ def summarize(df: pd.DataFrame) -> pd.DataFrame:
     errors, the CRLB RMS over the same trials (``sqrt`` of the mean per-trial bound),
     RMS / CRLB with its standard error (:func:`rms_ratio`), the RMS of the relative
     errors ``||ŝ - s|| / ||s||`` and ``||θ̂ - θ|| / ||θ||`` (``*_rel_rms``, NaN for M = I
-    data) and the largest bias error."""
+    data), the largest bias error and the mean and largest iteration count
+    (``iterations_mean``, ``iterations_max``: IPOPT's for the NLLS, 0 for closed forms)."""
     rows = []
     for key, d in df.groupby(CASE_KEYS + ["method"], sort=False):
         v = d[d["valid"].astype(bool)]
@@ -410,6 +410,9 @@ def summarize(df: pd.DataFrame) -> pd.DataFrame:
         for q in ("scale", "nonorth"):
             row[f"{q}_rel_rms"], row[f"{q}_rel_rms_se"] = rms_and_se(relative_norm(v, q))
         row["bias_max"] = float(v["bias_err_norm"].max()) if len(v) else float("nan")
+        if "iterations" in d:  # iterative methods: IPOPT iterations over all trials (0 for closed forms)
+            it = d["iterations"].to_numpy(float)
+            row["iterations_mean"], row["iterations_max"] = float(it.mean()), float(it.max())
         rows.append(row)
     out = pd.DataFrame(rows)
     order = {m: i for i, m in enumerate(METHODS)}

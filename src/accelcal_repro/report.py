@@ -44,6 +44,7 @@ FIGURE_SECTIONS = (
      ("tereshkov_", "bias_convergence_comparison")),
     ("measured", "Measured data: public recordings calibrated without ground truth", ("measured_",)),
     ("discrepancy", "Discrepancy: where simulation and measured data disagree, and the missing effect", ("discrepancy_",)),
+    ("benchmark", "Benchmark: where the compute time goes (estimators, filters, compilation, stages)", ("timing_",)),
 )
 OTHER_SECTION = ("other", "Other figures")
 
@@ -81,7 +82,10 @@ td.num{text-align:right;font-variant-numeric:tabular-nums}
 pre{background:#f7f7f7;padding:.8em;overflow-x:auto;font-size:.82em}
 mark{background:#ffe57a}
 .note{color:#555;font-size:.9em}
-.tablewrap{overflow-x:auto}
+.tablewrap{overflow:auto;max-height:40em}
+thead th{position:sticky;top:0}
+h4{margin:.9em 0 .2em;font-size:.95em}
+details summary{cursor:pointer;color:#3b78c2;font-size:.9em;margin:.3em 0}
 """
 
 
@@ -174,8 +178,9 @@ def embed_png(path: str | os.PathLike, width: int = FIGURE_WIDTH) -> str:
 
 def read_benchmarks(directory: str | os.PathLike) -> pd.DataFrame:
     """Every Snakemake benchmark file under ``directory`` (``<stage>/<job>.tsv`` or
-    ``<stage>.tsv``): one row per job with its stage, wall time ``s`` [s] (summed over
-    repeats) and peak resident memory ``max_rss`` [MB] (max over repeats; NaN if not
+    ``<stage>.tsv``): one row per job with its stage, wall time ``s`` [s] and CPU time
+    ``cpu_s`` [s] (Snakemake's ``cpu_time``; both summed over repeats, NaN if not
+    measured) and peak resident memory ``max_rss`` [MB] (max over repeats; NaN if not
     measured).  Empty when there are none."""
     directory = Path(directory)
     rows = []
@@ -188,18 +193,21 @@ def read_benchmarks(directory: str | os.PathLike) -> pd.DataFrame:
         if "s" not in t:
             raise ReportError(f"benchmark file {f} has no column 's' (wall time)")
         rss = pd.to_numeric(t["max_rss"], errors="coerce") if "max_rss" in t else pd.Series(dtype=float)
+        cpu = pd.to_numeric(t["cpu_time"], errors="coerce") if "cpu_time" in t else pd.Series(dtype=float)
         rows.append({"stage": rel.split("/")[0], "job": rel,
                      "s": float(pd.to_numeric(t["s"], errors="coerce").sum()),
+                     "cpu_s": float(cpu.sum()) if cpu.notna().any() else float("nan"),
                      "max_rss": float(rss.max()) if rss.notna().any() else float("nan")})
-    return pd.DataFrame(rows, columns=["stage", "job", "s", "max_rss"])
+    return pd.DataFrame(rows, columns=["stage", "job", "s", "cpu_s", "max_rss"])
 
 
 def stage_times(bench: pd.DataFrame) -> pd.DataFrame:
-    """Per stage: number of jobs, summed wall time [s], largest peak memory [MB]."""
+    """Per stage: number of jobs, summed wall time and CPU time [s], largest peak memory [MB]."""
     if bench.empty:
-        return pd.DataFrame(columns=["stage", "jobs", "s", "max_rss"])
+        return pd.DataFrame(columns=["stage", "jobs", "s", "cpu_s", "max_rss"])
     g = bench.groupby("stage", sort=True)
-    return pd.DataFrame({"jobs": g.size(), "s": g["s"].sum(), "max_rss": g["max_rss"].max()}).reset_index()
+    return pd.DataFrame({"jobs": g.size(), "s": g["s"].sum(), "cpu_s": g["cpu_s"].sum(min_count=1),
+                         "max_rss": g["max_rss"].max()}).reset_index()
 
 
 _PIN = re.compile(r"^([A-Za-z0-9_.\-]+)==([^\s;\\]+)\s*(?:;\s*([^\\]*?))?\s*\\?\s*$")
@@ -242,18 +250,70 @@ def _fmt(x) -> str:
     return str(x)
 
 
-def html_table(df: pd.DataFrame, max_rows: int = 200) -> str:
-    """A data frame as an HTML table (numbers right-aligned, 4 significant digits)."""
+def _rows_html(df: pd.DataFrame) -> str:
     head = "".join(f"<th>{_esc(c)}</th>" for c in df.columns)
     body = []
-    for row in df.head(max_rows).itertuples(index=False):
+    for row in df.itertuples(index=False):
         cells = []
         for v in row:
             num = isinstance(v, numbers.Number) and not isinstance(v, (bool, np.bool_))
             cells.append(f'<td class="num">{_esc(_fmt(v))}</td>' if num else f"<td>{_esc(_fmt(v))}</td>")
         body.append("<tr>" + "".join(cells) + "</tr>")
+    return f'<div class="tablewrap"><table><thead><tr>{head}</tr></thead><tbody>{"".join(body)}</tbody></table></div>'
+
+
+def html_table(df: pd.DataFrame, max_rows: int = 200) -> str:
+    """A data frame as an HTML table (numbers right-aligned, 4 significant digits)."""
     more = f'<p class="note">{len(df) - max_rows} more rows in the file.</p>' if len(df) > max_rows else ""
-    return f'<div class="tablewrap"><table><thead><tr>{head}</tr></thead><tbody>{"".join(body)}</tbody></table></div>{more}'
+    return _rows_html(df.head(max_rows)) + more
+
+
+#: How the report shows its wide or long summary tables: the columns to read first (the
+#: others in an "all columns" block), one sub-table per value of ``group``, and at most
+#: ``rows`` rows before a "more rows" block.  A table without a view gets the default.
+TABLE_VIEWS = {
+    "results/measured/summary.csv": {
+        "columns": ["estimator", "n_poses", "dof", "residual_rms", "predicted_rms", "excess", "p_value",
+                    "lopo_rms", "ci_method", "distinct_orientations", "coverage", "warnings"],
+        "group": "recording"},
+    "results/measured/nominal.csv": {"group": "recording"},
+    "results/discrepancy/summary.csv": {
+        "columns": ["recording", "effect", "metric", "value", "ci_low", "ci_high", "n", "target", "verdict"],
+        "group": "section"},
+}
+DEFAULT_VIEW = {"max_columns": 12, "rows": 25}
+
+
+def view_table(df: pd.DataFrame, view: Mapping | None = None) -> str:
+    """A summary table made readable: key columns first, groups, long tables folded.
+
+    Parameters
+    ----------
+    df : DataFrame
+    view : mapping, optional
+        ``columns`` (shown; default the first ``max_columns``), ``group`` (a column:
+        one sub-table per value, in order of appearance), ``rows`` (shown before the rest
+        is folded).  Columns the file lacks are skipped, so a table that grows a column
+        still renders.
+    """
+    view = {**DEFAULT_VIEW, **(view or {})}
+    group = view.get("group") if view.get("group") in df.columns else None
+    wanted = [c for c in view.get("columns", df.columns[: view["max_columns"]]) if c in df.columns and c != group]
+    hidden = [c for c in df.columns if c not in wanted and c != group]
+    parts = []
+    groups = [(None, df)] if group is None else [(k, df[df[group] == k]) for k in dict.fromkeys(df[group])]
+    for key, d in groups:
+        if key is not None:
+            parts.append(f"<h4>{_esc(group)}: {_esc(key if key == key else '')}</h4>")
+        shown = d[wanted]
+        n = view["rows"]
+        parts.append(_rows_html(shown.head(n)))
+        if len(shown) > n:
+            parts.append(f"<details><summary>{len(shown) - n} more rows</summary>{_rows_html(shown.iloc[n:])}</details>")
+    if hidden:
+        parts.append(f'<details><summary>all {len(df.columns)} columns ({", ".join(hidden[:8])}'
+                     f'{", ..." if len(hidden) > 8 else ""} not shown above)</summary>{_rows_html(df)}</details>')
+    return "".join(parts)
 
 
 def verdict_cell(verdict: str) -> str:
@@ -367,7 +427,7 @@ def build_report(*, claims: str | os.PathLike, figures: Mapping[str, str | os.Pa
             body.append(f"<h3>{_esc(title_t)} <span class=\"fid\">{_esc(path.as_posix())}</span></h3>")
             if path.is_file():
                 try:
-                    body.append(html_table(pd.read_csv(path)))
+                    body.append(view_table(pd.read_csv(path), TABLE_VIEWS.get(path.as_posix())))
                 except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as e:
                     raise ReportError(f"table {path} is not a readable CSV: {str(e).splitlines()[0]}") from None
             else:
@@ -400,8 +460,9 @@ def build_report(*, claims: str | os.PathLike, figures: Mapping[str, str | os.Pa
         times = '<p class="note">No benchmark files found.</p>'
     else:
         per_stage = stage_times(bench).rename(columns={"s": "wall time [s] (sum of jobs)",
+                                                       "cpu_s": "CPU time [s] (sum of jobs)",
                                                        "max_rss": "largest peak memory [MB]"})
-        per_job = bench.rename(columns={"s": "wall time [s]", "max_rss": "peak memory [MB]"})
+        per_job = bench.rename(columns={"s": "wall time [s]", "cpu_s": "CPU time [s]", "max_rss": "peak memory [MB]"})
         times = (f"{html_table(per_stage)}<p>Total over all jobs: {bench['s'].sum():.1f} s.</p>"
                  f"<details><summary>Per job</summary>{html_table(per_job, max_rows=1000)}</details>")
     body.append('<section><h2 id="walltime">Wall time per stage</h2><p class="note">From Snakemake\'s benchmark files '

@@ -133,14 +133,19 @@ def _check_tereshkov(t):
 
 def _check_measured(m):
     # The six static positions of the Ferraris session list (accelcal_repro.measured.sources.
-    # FERRARIS_STATIC) are fewer than the full models need (calibrate.MIN_POSES["full"] = 10).
+    # FERRARIS_STATIC) are fewer than the full models need (accelcal.registry: min_poses).
+    from accelcal.registry import ESTIMATORS
+    from accelcal_repro.measured.sources import FERRARIS_STATIC
+
     ferraris = m["recordings"].get("imucal_ferraris")
     if ferraris and ferraris["pose_selection"] == "section_list":
-        full = [e for e in ferraris["estimators"] if e.startswith("full_")]
-        if full:
+        short = [e for e in ferraris["estimators"] if ESTIMATORS[e].min_poses > len(FERRARIS_STATIC)]
+        if short:
+            need = max(ESTIMATORS[e].min_poses for e in short)
             raise _config_error("measured.recordings.imucal_ferraris.estimators",
-                                f"{', '.join(full)} need at least 10 poses, pose_selection 'section_list' "
-                                "gives the session's 6 static positions (bias-only estimators only)")
+                                f"{', '.join(short)} need at least {need} poses, pose_selection 'section_list' "
+                                f"gives the session's {len(FERRARIS_STATIC)} static positions (bias-only "
+                                "estimators only)")
 
 
 def _check_burkhard2024(b):

@@ -97,9 +97,9 @@ rule measured_convert:
 
 
 rule measured_calibrate:
-    """Static detection, every configured estimator, χ², leave-one-pose-out, bootstrap."""
+    """Static detection, every configured estimator, χ², leave-one-pose-out, bootstrap; on
+    the original file, read with the readers of `accelcal calibrate`."""
     input:
-        csv="results/measured/{recording}.csv",
         manifest="results/measured/data/{recording}.json",
     output:
         **{t: f"results/measured/{{recording}}/{t}.csv" for t in MEASURED_TABLES},

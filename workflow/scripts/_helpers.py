@@ -3,8 +3,9 @@ the ``snakemake`` object so that every script also runs standalone (pypsa-eur st
 
     cd /work/main && .venv/bin/python workflow/scripts/foundation_claims.py
 
-Standalone runs read config/config.yaml next to the workflow (or the file named by
-$ACCELCAL_CONFIG) and use the workflow's default paths relative to the current directory.
+Standalone runs build the rule's job from the Snakefile (:func:`mock_snakemake`), with
+config/config.yaml extended by the file named in $ACCELCAL_CONFIG (e.g. config/ci.yaml),
+and use the rule's paths relative to the current directory.
 """
 
 from __future__ import annotations
@@ -22,30 +23,83 @@ from accelcal.atomic import atomic_output
 REPO = Path(__file__).resolve().parents[2]
 
 
-class _Named(list):
-    """A list whose items are also attributes, like Snakemake's input/output/log."""
-
-    def __init__(self, items=None, **named):
-        super().__init__(list(items or []) + list(named.values()))
-        self.__dict__.update(named)
-
-
 def load_config(path: str | os.PathLike | None = None) -> dict:
-    path = Path(path or os.environ.get("ACCELCAL_CONFIG") or REPO / "config" / "config.yaml")
-    with open(path) as f:
-        return yaml.safe_load(f)
+    """The workflow config as Snakemake builds it: config/config.yaml, extended key by key
+    by ``path`` (or $ACCELCAL_CONFIG), like ``--configfile``."""
+    from snakemake.utils import update_config
+
+    with open(REPO / "config" / "config.yaml") as f:
+        config = yaml.safe_load(f)
+    overlay = path or os.environ.get("ACCELCAL_CONFIG")
+    if overlay:
+        with open(overlay) as f:
+            update_config(config, yaml.safe_load(f) or {})
+    return config
 
 
-def mock_snakemake(rule: str, input=None, output=None, params=None, log=None, wildcards=None, threads=1):
-    """Stand-in for the ``snakemake`` object of a script run outside Snakemake."""
-    from types import SimpleNamespace
+def mock_snakemake(rule: str, configfile: str | os.PathLike | None = None, **wildcards):
+    """The ``snakemake`` object of ``rule`` for a script run outside Snakemake (pypsa-eur's
+    pattern): the Snakefile is parsed and the rule's job built, so its input, output, params,
+    log and threads are the workflow's own (one place for paths).
 
-    def named(x):
-        return _Named(x) if isinstance(x, (list, tuple)) else _Named(**(x or {}))
+    Parameters
+    ----------
+    rule : str
+        Rule name.
+    configfile : path, optional
+        Config overlay, as ``--configfile`` (default: $ACCELCAL_CONFIG, else none).
+    **wildcards
+        Values of the rule's wildcards (e.g. ``chunk="0"``).
 
-    return SimpleNamespace(rule=rule, input=named(input), output=named(output), params=named(params),
-                           log=named(log or [f"results/logs/{rule}.log"]), wildcards=named(wildcards),
-                           threads=threads, config=load_config())
+    Paths are relative to the current directory, which plays the role of
+    ``snakemake --directory``: run the script from the repository root (or a work folder).
+    """
+    import snakemake as sm
+    from snakemake.api import SnakemakeApi
+    from snakemake.iocontainers import Snakemake
+    from snakemake.settings.types import (
+        ConfigSettings,
+        DAGSettings,
+        DeploymentSettings,
+        OutputSettings,
+        ResourceSettings,
+        StorageSettings,
+        WorkflowSettings,
+    )
+
+    overlay = configfile or os.environ.get("ACCELCAL_CONFIG")
+    cwd = Path.cwd()
+    try:
+        with SnakemakeApi(OutputSettings()) as api:
+            workflow = api.workflow(
+                resource_settings=ResourceSettings(cores=1), storage_settings=StorageSettings(),
+                config_settings=ConfigSettings(configfiles=[Path(overlay).resolve()] if overlay else []),
+                workflow_settings=WorkflowSettings(), deployment_settings=DeploymentSettings(),
+                snakefile=REPO / "Snakefile", workdir=cwd)._workflow
+            workflow.dag_settings = DAGSettings(rerun_triggers=[])
+            workflow.global_resources = {}
+            job = sm.jobs.Job(workflow.get_rule(rule), sm.dag.DAG(workflow, rules=[workflow.get_rule(rule)]),
+                              wildcards)
+            smk = Snakemake(job.input, job.output, job.params, job.wildcards, job.threads, job.resources, job.log,
+                            workflow.config, rule, None)
+    finally:
+        os.chdir(cwd)  # the API changes into the work directory
+    for path in [*smk.log, *smk.output]:
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
+    return smk
+
+
+def mock_snakemake_from_argv(default_rule: str, **default_wildcards):
+    """:func:`mock_snakemake` for a script run from the command line::
+
+        python workflow/scripts/SCRIPT.py [RULE] [WILDCARD=VALUE ...]
+
+    RULE defaults to ``default_rule`` (scripts shared by several rules, such as the figure
+    scripts, take the rule's name); wildcards not given take ``default_wildcards``."""
+    args = sys.argv[1:]
+    rule = args.pop(0) if args and "=" not in args[0] else default_rule
+    wildcards = {**default_wildcards, **dict(a.split("=", 1) for a in args)}
+    return mock_snakemake(rule, **wildcards)
 
 
 def configure_logging(snakemake, level=logging.INFO) -> logging.Logger:
@@ -62,11 +116,6 @@ def configure_logging(snakemake, level=logging.INFO) -> logging.Logger:
 
     sys.excepthook = excepthook
     return log
-
-
-def stage_config(stage: str) -> dict:
-    """``config[stage]`` of the workflow config (for scripts run standalone)."""
-    return load_config()[stage]
 
 
 def write_csv(df, path: str | os.PathLike, **kwargs) -> Path:

@@ -3,18 +3,13 @@ the runs ``params.runs = [first, stop)``, each from its own random stream."""
 
 import time
 
-from _helpers import configure_logging
-from batista2011_common import OUT, standalone, write_table
+from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 
 from accelcal_repro.batista2011.experiment import design_from_config
 from accelcal_repro.batista2011.montecarlo import calibration_montecarlo, run_streams
 
-if "snakemake" not in globals():  # standalone: the whole Monte Carlo as one chunk
-    from batista2011_common import stage_config
-
-    _c = stage_config()["calibration"]
-    snakemake = standalone("batista2011_calibration_mc", output=[f"{OUT}/chunks/calibration_errors_0.csv.gz"],
-                           runs=[0, int(_c["runs"])])
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("batista2011_calibration_mc", chunk="0")
 
 log = configure_logging(snakemake)
 cfg = snakemake.params.cfg
@@ -29,4 +24,4 @@ errors = calibration_montecarlo(design, run_streams(cfg["seed"], "calibration", 
                                 max_iter=int(c["max_iter"]), chunk=int(c["chunk"]), run_ids=ids)
 log.info("%d runs in %.1f s", len(ids), time.perf_counter() - t0)
 # lossless: the merge computes the summaries from these numbers
-write_table(errors, snakemake.output[0], float_format="%.17g")
+write_csv(errors, snakemake.output[0], float_format="%.17g")

@@ -1,16 +1,13 @@
 """Table I Monte Carlo: the chunks merged, the CRLB, the summaries."""
 
 import pandas as pd
-from _helpers import configure_logging
-from batista2011_common import OUT, TABLES, standalone, write_table
+from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 
 from accelcal_repro.batista2011.experiment import design_from_config
 from accelcal_repro.batista2011.montecarlo import calibration_bounds, calibration_summary, lls_comparison
 
-if "snakemake" not in globals():
-    snakemake = standalone("batista2011_calibration_merge",
-                           input={"chunks": [f"{OUT}/chunks/calibration_errors_0.csv.gz"]},
-                           output={k: TABLES[k] for k in ("errors", "bounds", "summary", "comparison")})
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("batista2011_calibration_merge")
 
 log = configure_logging(snakemake)
 cfg = snakemake.params.cfg
@@ -26,8 +23,8 @@ comparison = lls_comparison(errors)
 bad = errors.groupby(["data", "method"])["converged"].apply(lambda s: int((~s).sum()))
 log.info("%d runs from %d chunks; non-converged (or invalid) rows per data/method: %s", runs,
          len(snakemake.input.chunks), bad.to_dict())
-write_table(errors, snakemake.output.errors, float_format="%.10g")
-write_table(bounds, snakemake.output.bounds)
-write_table(summary, snakemake.output.summary)
-write_table(comparison, snakemake.output.comparison)
+write_csv(errors, snakemake.output.errors, float_format="%.10g")
+write_csv(bounds, snakemake.output.bounds)
+write_csv(summary, snakemake.output.summary)
+write_csv(comparison, snakemake.output.comparison)
 log.info("comparison:\n%s", comparison.to_string())

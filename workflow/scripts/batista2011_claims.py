@@ -1,17 +1,13 @@
 """Claims of Batista et al. (2011), computed from the stage's result tables."""
 
 import pandas as pd
-from _helpers import configure_logging
-from batista2011_common import TABLES, standalone, write_table
+from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 
 from accelcal_repro.batista2011.claims import batista_claims
 from accelcal_repro.claims import verdict_counts
 
-if "snakemake" not in globals():
-    snakemake = standalone("batista2011_claims",
-                           input={k: TABLES[k] for k in ("summary", "filter_summary", "filter_runs", "observability",
-                                                         "gramian", "error_budget")},
-                           output=["results/claims/batista2011.csv"])
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("batista2011_claims")
 
 log = configure_logging(snakemake)
 cfg = snakemake.params.cfg
@@ -28,4 +24,4 @@ rows = batista_claims(
 for _, r in rows.iterrows():
     log.info("%s: %s (%s)", r["claim_id"], r["verdict"], r["reproduced_value"])
 log.info("verdicts: %s", verdict_counts(rows))
-write_table(rows, snakemake.output[0])
+write_csv(rows, snakemake.output[0])

@@ -1,20 +1,14 @@
 """Figures of the Batista (2011) stage; ``params.figure`` picks which."""
 
 import pandas as pd
-from _helpers import configure_logging
-from batista2011_common import TABLES, standalone
+from _helpers import configure_logging, mock_snakemake_from_argv
 
 from accelcal_repro.batista2011 import figures
 from accelcal_repro.batista2011.experiment import changing_attitude, constant_attitude, design_from_config
 from accelcal.plotting import save_figure
 
-if "snakemake" not in globals():
-    import sys
-
-    fid = sys.argv[1] if len(sys.argv) > 1 else "batista2011_fig4"
-    snakemake = standalone(f"{fid}_plot", input=TABLES,
-                           output={"png": f"results/figures/{fid}.png", "pdf": f"results/figures/{fid}.pdf"},
-                           figure=fid)
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("batista2011_fig4_plot")
 
 log = configure_logging(snakemake)
 cfg = snakemake.params.cfg

@@ -3,19 +3,13 @@
 
 import time
 
-from _helpers import configure_logging
-from batista2011_common import OUT, standalone, write_table
+from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 
 from accelcal_repro.batista2011.experiment import filter_kwargs, scenario_from_config
 from accelcal_repro.batista2011.montecarlo import filter_montecarlo, run_streams
 
-if "snakemake" not in globals():  # standalone: the whole Monte Carlo as one chunk
-    from batista2011_common import stage_config
-
-    _f = stage_config()["filter"]
-    snakemake = standalone("batista2011_filter_mc", output={"runs": f"{OUT}/chunks/filter_runs_0.csv.gz",
-                                                             "moments": f"{OUT}/chunks/filter_moments_0.csv.gz"},
-                           runs=[0, int(_f["runs"])])
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("batista2011_filter_mc", chunk="0")
 
 log = configure_logging(snakemake)
 cfg = snakemake.params.cfg
@@ -28,5 +22,5 @@ mc = filter_montecarlo(sc, run_streams(cfg["seed"], "filter", ids), **filter_kwa
                        record_every_s=float(f["record_every_s"]), summary_every_s=float(f["summary_every_s"]))
 log.info("runs %d-%d x %d steps in %.1f s", first, stop - 1, len(sc.t), time.perf_counter() - t0)
 # lossless: the merge combines these into the statistics over all runs
-write_table(mc.runs, snakemake.output.runs, float_format="%.17g")
-write_table(mc.moments, snakemake.output.moments, float_format="%.17g")
+write_csv(mc.runs, snakemake.output.runs, float_format="%.17g")
+write_csv(mc.moments, snakemake.output.moments, float_format="%.17g")

@@ -2,15 +2,13 @@
 
 import numpy as np
 import pandas as pd
-from _helpers import configure_logging
-from batista2011_common import TABLES, standalone, write_table
+from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 
 from accelcal_repro.batista2011.experiment import filter_kwargs, scenario_from_config
 from accelcal_repro.batista2011.montecarlo import filter_montecarlo, gramian_table, observability_table, run_streams
 
-if "snakemake" not in globals():
-    snakemake = standalone("batista2011_observability", output={"table": TABLES["observability"],
-                                                                 "gramian": TABLES["gramian"]})
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("batista2011_observability_mc")
 
 log = configure_logging(snakemake)
 cfg = snakemake.params.cfg
@@ -28,6 +26,6 @@ obs, gram = pd.concat(tables, ignore_index=True), pd.concat(grams, ignore_index=
 log.info("Gramian:\n%s", gram.to_string())
 last = obs[obs["t"] == obs["t"].max()]
 log.info("final RMS errors:\n%s", last.to_string())
-write_table(obs, snakemake.output.table, float_format="%.6g")
-write_table(gram, snakemake.output.gramian)
+write_csv(obs, snakemake.output.table, float_format="%.6g")
+write_csv(gram, snakemake.output.gramian)
 assert np.isfinite(gram["eig_ratio"]).all()

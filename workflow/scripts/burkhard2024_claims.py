@@ -1,23 +1,14 @@
 """Claims of the Burkhard (2024) stage, computed from its summary tables."""
 
 import pandas as pd
-from _helpers import configure_logging, mock_snakemake, write_csv
+from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 
 from accelcal_repro.burkhard2024.claims import burkhard2024_claims
 from accelcal_repro.burkhard2024.grid import experiments_from_config
 from accelcal_repro.claims import verdict_counts
 
-if "snakemake" not in globals():
-    from _helpers import stage_config
-
-    _d = "results/burkhard2024"
-    snakemake = mock_snakemake(
-        "burkhard2024_claims",
-        input={"summary": f"{_d}/summary.csv", "comparisons": f"{_d}/comparisons.csv",
-               "timing_summary": f"{_d}/timing_summary.csv", "mc_timing_summary": f"{_d}/mc_timing_summary.csv"},
-        output=["results/claims/burkhard2024.csv"],
-        params={"cfg": stage_config("burkhard2024")},
-    )
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("burkhard2024_claims")
 
 log = configure_logging(snakemake)
 cfg = snakemake.params.cfg

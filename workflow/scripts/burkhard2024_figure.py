@@ -2,25 +2,14 @@
 lls_limit, timing); output ``<figure>_png`` / ``<figure>_pdf`` for each."""
 
 import pandas as pd
-from _helpers import configure_logging, mock_snakemake
+from _helpers import configure_logging, mock_snakemake_from_argv
 
 from accelcal_repro.burkhard2024 import figures
 from accelcal_repro.burkhard2024.grid import experiments_from_config
 from accelcal.plotting import save_figure
 
-if "snakemake" not in globals():
-    import sys
-
-    from _helpers import stage_config
-
-    _figs = sys.argv[1:] or ["fig1a", "fig1b", "fig1c", "fig1d", "fig1e", "lls_limit", "timing"]
-    _d = "results/burkhard2024"
-    snakemake = mock_snakemake(
-        "burkhard2024_figures",
-        input={"summary": f"{_d}/summary.csv", "limit": f"{_d}/lls_limit.csv", "onsets": f"{_d}/lls_limit_onsets.csv",
-               "timing_summary": f"{_d}/timing_summary.csv", "mc_timing": f"{_d}/mc_timing_summary.csv"},
-        output={f"{f}_{ext}": f"results/figures/burkhard2024_{f}.{ext}" for f in _figs for ext in ("png", "pdf")},
-        params={"figures": _figs, "cfg": stage_config("burkhard2024")})
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("burkhard2024_figures")
 
 log = configure_logging(snakemake)
 cfg = snakemake.params.cfg

@@ -1,29 +1,16 @@
 """Gather the Burkhard grid points: tidy table, summaries, paired comparisons, relative
-errors across the noise range, the LLS limit and the Monte Carlo wall times."""
+errors across the noise range, the LLS limit, the estimators' RMS / CRLB with the NLLS
+iteration counts, and the Monte Carlo wall times."""
 
 import pandas as pd
-from _helpers import configure_logging, mock_snakemake, write_csv
+from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 
-from accelcal_repro.burkhard2024.analysis import limit_onsets, lls_limit, relative_errors
+from accelcal_repro.burkhard2024.analysis import efficiency, limit_onsets, lls_limit, relative_errors
 from accelcal_repro.burkhard2024.grid import experiments_from_config
 from accelcal_repro.montecarlo import CASE_KEYS, compare_methods, summarize, summarize_mc_timing
 
-if "snakemake" not in globals():
-    import glob
-
-    from _helpers import stage_config
-
-    _cfg = stage_config("burkhard2024")
-    _d = "results/burkhard2024"
-    snakemake = mock_snakemake(
-        "burkhard2024_summary",
-        input={"tables": sorted(glob.glob(f"{_d}/mc/*.csv.gz")), "timings": sorted(glob.glob(f"{_d}/mc_timing/*.csv"))},
-        output={k: f"{_d}/{k}.csv" for k in ("summary", "comparisons", "relative_errors", "mc_timing",
-                                               "mc_timing_summary")}
-        | {"table": f"{_d}/mc.csv.gz", "limit": f"{_d}/lls_limit.csv", "onsets": f"{_d}/lls_limit_onsets.csv"},
-        params={"experiments": _cfg["experiments"], "paper_noise_range": _cfg["claims"]["paper_noise_range"],
-                "z": _cfg["claims"]["z"], "min_effect": _cfg["lls_limit"]["min_effect"]},
-    )
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("burkhard2024_summary")
 
 log = configure_logging(snakemake)
 p = snakemake.params
@@ -37,11 +24,13 @@ rel = relative_errors(df, exps["fig1a"], p.paper_noise_range)
 limit = lls_limit(summary, comparisons, [exps["fig1a"], exps["lls_limit"], exps["efficiency"]], float(p.z),
                   float(p.min_effect))
 onsets = limit_onsets(limit)
+eff = efficiency(summary, [exps["fig1a"], exps["efficiency"]], float(p.g))
 timing = pd.concat([pd.read_csv(f) for f in snakemake.input.timings], ignore_index=True)
 timing = timing.sort_values(CASE_KEYS + ["method"], kind="stable", ignore_index=True)
 with pd.option_context("display.width", 220, "display.max_columns", 30, "display.float_format", "{:.4g}".format):
     log.info("relative errors across the noise range:\n%s", rel)
     log.info("where LLS leaves NLLS and the CRLB:\n%s", onsets)
+    log.info("RMS error / CRLB and NLLS iterations:\n%s", eff)
     log.info("Monte Carlo wall time per trial:\n%s", summarize_mc_timing(timing))
 write_csv(df, out.table, float_format="%.10g")
 write_csv(summary, out.summary)
@@ -49,5 +38,6 @@ write_csv(comparisons, out.comparisons)
 write_csv(rel, out.relative_errors)
 write_csv(limit, out.limit)
 write_csv(onsets, out.onsets)
+write_csv(eff, out.efficiency)
 write_csv(timing, out.mc_timing)
 write_csv(summarize_mc_timing(timing), out.mc_timing_summary)

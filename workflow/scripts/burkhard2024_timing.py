@@ -1,22 +1,14 @@
 """Benchmark: per-problem wall time of every method side by side (interleaved, one run) at
-each pose count, and the batched closed forms' throughput."""
+each pose count, compiled kernels and numpy reference, and the batched closed forms'
+throughput."""
 
 import pandas as pd
-from _helpers import configure_logging, mock_snakemake, write_csv
+from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 
-from accelcal_repro.timing import run_benchmark, summarize_timing
+from accelcal_repro.timing import available_backends, run_benchmark, summarize_timing
 
-if "snakemake" not in globals():
-    from _helpers import stage_config
-
-    _cfg = stage_config("burkhard2024")
-    _d = "results/burkhard2024"
-    snakemake = mock_snakemake(
-        "burkhard2024_timing_run",
-        output={"single": f"{_d}/timing.csv", "batch": f"{_d}/timing_batch.csv", "summary": f"{_d}/timing_summary.csv"},
-        params={"seed": _cfg["seed"], "g": _cfg["g"], "timing": _cfg["timing"],
-                "als_known_noise": _cfg["als_known_noise"]},
-    )
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("burkhard2024_timing_run")
 
 log = configure_logging(snakemake)
 p = snakemake.params
@@ -25,7 +17,8 @@ single, batch = run_benchmark(
     seed=int(p.seed), g=float(p.g), noise_std=float(t["noise_std"]), n_poses=[int(n) for n in t["n_poses"]],
     n_problems=int(t["problems"]), repeats=int(t["repeats"]), batch_problems=int(t["batch_problems"]),
     batch_repeats=int(t["batch_repeats"]), interleavings=list(t["interleavings"]),
-    als_known_noise=bool(p.als_known_noise),
+    als_known_noise=bool(p.als_known_noise), nlls_known_noise=bool(p.nlls_known_noise),
+    backends=[b for b in t["backends"] if b in available_backends()],
 )
 summary = summarize_timing(single, batch)
 failed = single[single["status"] != "ok"]

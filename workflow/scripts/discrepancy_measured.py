@@ -2,7 +2,7 @@
 
 import json
 
-from _helpers import configure_logging, load_config, mock_snakemake
+from _helpers import configure_logging, mock_snakemake_from_argv
 
 from accelcal.atomic import atomic_output
 from accelcal.discrepancy.detect import Rules
@@ -10,25 +10,24 @@ from accelcal.discrepancy.report import StochasticSettings, analyse
 from accelcal_repro.measured.sources import source
 from accelcal.recording import read_recording
 from accelcal.results import _finite_json
+from accelcal_repro.discrepancy.sessions import with_disjoint_rests
 
-if "snakemake" not in globals():
-    _cfg = load_config()
-    snakemake = mock_snakemake(
-        "discrepancy_measured_report", input={"csv": "results/measured/xsens_mti.csv"},
-        output=["results/discrepancy/measured/xsens_mti.json"],
-        params={"g": _cfg["measured"]["recordings"]["xsens_mti"]["g"], "rules": _cfg["discrepancy"]["rules"],
-                "stochastic": _cfg["discrepancy"]["stochastic"]},
-        wildcards={"recording": "xsens_mti"})
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("discrepancy_measured_report", recording="xsens_mti")
 
 log = configure_logging(snakemake)
 name = snakemake.wildcards.recording
 p = snakemake.params
-rec = read_recording(snakemake.input.csv)
+rec, note = with_disjoint_rests(read_recording(snakemake.input.csv))
+if note:
+    log.warning("%s: %s", name, note)
 unit = source(name).unit
 analysis = analyse(rec, p.g, rules=Rules.from_config(p.rules), stochastic=StochasticSettings.from_config(p.stochastic),
                    unit=unit)
 out = analysis.to_dict()
-out.update({"recording": name, "g": p.g, "unit": unit})
+out.update({"recording": name, "g": p.g, "unit": unit, "rate": rec.rate})
+if note:
+    out["notes"] = [*out.get("notes", []), note]
 with atomic_output(snakemake.output[0]) as tmp, open(tmp, "w") as fh:
     json.dump(_finite_json(out), fh, indent=1, sort_keys=False)
     fh.write("\n")

@@ -1,33 +1,26 @@
-"""Benchmark scoring: join detections and key; rates per effect and size; the summary with verdicts."""
+"""Benchmark scoring: join detections and key; rates per null, profile, row and size; summary; headline."""
 
 import pandas as pd
-from _helpers import configure_logging, load_config, mock_snakemake, write_csv
+from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 
-from accelcal_repro.discrepancy.benchmark import rates, score_cases, summary
+from accelcal_repro.discrepancy.scoring import headline, rates, score_cases, summary
 
-if "snakemake" not in globals():
-    _cfg = load_config()["discrepancy"]
-    _n = _cfg["benchmark"]["chunks"]
-    snakemake = mock_snakemake(
-        "discrepancy_score",
-        input={"key": [f"results/discrepancy/benchmark/key/chunk_{k}.csv" for k in range(_n)],
-               "detections": [f"results/discrepancy/benchmark/detections/chunk_{k}.csv" for k in range(_n)]},
-        output={"scores": "results/discrepancy/benchmark/scores.csv", "rates": "results/discrepancy/benchmark/rates.csv",
-                "summary": "results/discrepancy/benchmark/summary.csv"},
-        params={"rules": _cfg["rules"], "confusion_size": _cfg["benchmark"]["confusion_size_mde"]})
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("discrepancy_score")
 
 log = configure_logging(snakemake)
 key = pd.concat([pd.read_csv(f) for f in snakemake.input.key], ignore_index=True)
 det = pd.concat([pd.read_csv(f, keep_default_na=False, na_values=[""]) for f in snakemake.input.detections],
                 ignore_index=True)
-# Plan order (the key's chunks interleave the plan): sort by recording for a stable table.
-scores = score_cases(key, det).sort_values("recording", kind="stable").reset_index(drop=True)
+# Plan order (the key's chunks interleave the plan): sort by recording and null for a stable table.
+scores = score_cases(key, det).sort_values(["recording", "null"], kind="stable").reset_index(drop=True)
 rules = snakemake.params.rules
 rate_table = rates(scores)
-summ = summary(scores, rate_table, alpha=rules["alpha"], power=rules["power"],
-               confusion_size=snakemake.params.confusion_size)
+summ = summary(scores, rate_table, alpha=rules["alpha"], power=rules["power"])
 write_csv(scores, snakemake.output.scores)
 write_csv(rate_table, snakemake.output.rates)
 write_csv(summ, snakemake.output.summary)
-for _, r in summ.iterrows():
-    log.info("%s %s = %.4g [%.4g, %.4g] %s", r.effect, r.metric, r.value, r.ci_low, r.ci_high, r.verdict)
+write_csv(headline(summ, snakemake.params.profiles), snakemake.output.headline)
+for r in summ[summ.metric == "false_positive_rate"].itertuples():
+    log.info("%s null, %s: false-positive rate %.3f [%.3f, %.3f] (n %d, independent %d) %s", r.null, r.profile,
+             r.value, r.ci_low, r.ci_high, r.n, r.n_independent, r.verdict)

@@ -5,22 +5,16 @@ import json
 
 import numpy as np
 import pandas as pd
-from _helpers import configure_logging, load_config, mock_snakemake, write_csv
+from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 
-if "snakemake" not in globals():
-    _cfg = load_config()["discrepancy"]
-    snakemake = mock_snakemake(
-        "discrepancy_summary",
-        input={"benchmark": "results/discrepancy/benchmark/summary.csv",
-               "reports": [f"results/discrepancy/measured/{r}.json" for r in _cfg["recordings"]],
-               "measured_summary": "results/measured/summary.csv"},
-        output={"summary": "results/discrepancy/summary.csv", "candidates": "results/discrepancy/measured.csv"},
-        params={"recordings": _cfg["recordings"]})
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("discrepancy_summary")
 
 log = configure_logging(snakemake)
-COLUMNS = ["section", "recording", "effect", "metric", "value", "ci_low", "ci_high", "n", "target", "verdict", "rule"]
+COLUMNS = ["section", "null", "profile", "recording", "effect", "metric", "value", "ci_low", "ci_high", "n",
+           "n_independent", "target", "verdict", "rule"]
 bench = pd.read_csv(snakemake.input.benchmark, keep_default_na=False, na_values=[""])
-bench.insert(1, "recording", "")
+bench.insert(3, "recording", "")
 measured_stage = pd.read_csv(snakemake.input.measured_summary)
 
 rows, cand_rows = [], []
@@ -29,9 +23,10 @@ for name, path in zip(snakemake.params.recordings, snakemake.input.reports):
         rep = json.load(f)
 
     def row(metric, value, effect=rep["effect"], verdict="", rule="", target=np.nan):
-        rows.append({"section": "measured", "recording": name, "effect": effect, "metric": metric,
-                     "value": np.nan if value is None else value, "ci_low": np.nan, "ci_high": np.nan,
-                     "n": rep["n_poses"], "target": target, "verdict": verdict, "rule": rule})
+        rows.append({"section": "measured", "null": "", "profile": "", "recording": name, "effect": effect,
+                     "metric": metric, "value": np.nan if value is None else value, "ci_low": np.nan,
+                     "ci_high": np.nan, "n": rep["n_poses"], "n_independent": np.nan, "target": target,
+                     "verdict": verdict, "rule": rule})
 
     named = "+".join(rep["effects"]) or "none"
     row("outcome", np.nan, verdict=rep["outcome"],

@@ -1,28 +1,20 @@
 """Calibrate one measured recording with every configured estimator and evaluate it."""
 
-from _helpers import configure_logging, mock_snakemake, write_csv
+from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 
 from accelcal_repro.measured.calibrate import TABLES, calibrate_recording
-from accelcal_repro.measured.sources import read_manifest, section_list
-from accelcal.recording import read_recording
+from accelcal_repro.measured.sources import read_manifest, read_source, section_list
 
-if "snakemake" not in globals():
-    from measured_common import measured_config
-
-    _m = measured_config()
-    snakemake = mock_snakemake(
-        "measured_calibrate",
-        input={"csv": "results/measured/xsens_mti.csv", "manifest": "results/measured/data/xsens_mti.json"},
-        output={t: f"results/measured/xsens_mti/{t}.csv" for t in TABLES},
-        params={"settings": _m["recordings"]["xsens_mti"], "bootstrap": _m["bootstrap"], "static": _m["static"]},
-        wildcards={"recording": "xsens_mti"})
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("measured_calibrate", recording="xsens_mti")
 
 log = configure_logging(snakemake)
 name = snakemake.wildcards.recording
 s, b = snakemake.params.settings, snakemake.params.bootstrap
-mc = calibrate_recording(
-    name, read_recording(snakemake.input.csv), g=float(s["g"]), estimators=list(s["estimators"]),
-    sections=section_list(name, read_manifest(snakemake.input.manifest)),
+paths = read_manifest(snakemake.input.manifest)
+mc = calibrate_recording(  # the original file, read as `accelcal calibrate` reads it
+    name, read_source(name, paths), g=float(s["g"]), estimators=list(s["estimators"]),
+    sections=section_list(name, paths),
     pose_selection=s.get("pose_selection", "section_list"), n_boot=int(b["replicates"]), seed=int(b["seed"]),
     level=float(b["level"]), min_valid_fraction=float(b["min_valid_fraction"]), static_kw=dict(snakemake.params.static))
 log.info("%s: %d rests detected, %d used", name, len(mc.poses), int(mc.poses.used.sum()))

@@ -1,17 +1,13 @@
 """Claims-ledger rows of the measured stage: the papers' real-data results."""
 
 import pandas as pd
-from _helpers import configure_logging, mock_snakemake, write_csv
+from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 
 from accelcal_repro.claims import verdict_counts
 from accelcal_repro.measured.claims import measured_claims
 
-if "snakemake" not in globals():
-    snakemake = mock_snakemake(
-        "measured_claims",
-        input={"summary": "results/measured/summary.csv", "params": "results/measured/params.csv",
-               "nominal": "results/measured/nominal.csv", "peer": ["results/measured/peer_imucal.csv"]},
-        output=["results/claims/measured.csv"])
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("measured_claims")
 
 log = configure_logging(snakemake)
 peer = list(snakemake.input.peer)

@@ -1,12 +1,11 @@
 """One measured recording as canonical CSV (t,ax,ay,az), in the unit of its file."""
 
-from _helpers import configure_logging, mock_snakemake
+from _helpers import configure_logging, mock_snakemake_from_argv
 
 from accelcal_repro.measured.sources import convert, read_manifest
 
-if "snakemake" not in globals():
-    snakemake = mock_snakemake("measured_convert", input={"manifest": "results/measured/data/xsens_mti.json"},
-                               output=["results/measured/xsens_mti.csv"], wildcards={"recording": "xsens_mti"})
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("measured_convert", recording="xsens_mti")
 
 log = configure_logging(snakemake)
 name = snakemake.wildcards.recording

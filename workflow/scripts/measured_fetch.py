@@ -5,19 +5,14 @@ exit status 1, not a traceback: the message says which file and what to do."""
 
 import sys
 
-from _helpers import configure_logging, mock_snakemake
+from _helpers import configure_logging, mock_snakemake_from_argv
 
 from accelcal_repro.measured.data import DatasetError
 from accelcal.atomic import write_json_atomic
 from accelcal_repro.measured.sources import fetch_source, manifest
 
-if "snakemake" not in globals():
-    from measured_common import measured_config
-
-    _m = measured_config()
-    snakemake = mock_snakemake("measured_fetch", output=["results/measured/data/xsens_mti.json"],
-                               params={"data_dir": _m["data_dir"], "resources_dir": _m["resources_dir"]},
-                               wildcards={"recording": "xsens_mti"})
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("measured_fetch", recording="xsens_mti")
 
 log = configure_logging(snakemake)
 name = snakemake.wildcards.recording

@@ -1,26 +1,14 @@
 """Figures of the measured stage (one script; the figure id is a parameter)."""
 
 import pandas as pd
-from _helpers import configure_logging, mock_snakemake
+from _helpers import configure_logging, mock_snakemake_from_argv
 
 from accelcal_repro.measured.figures import plot_calibration, plot_residuals, plot_static_detection
 from accelcal.plotting import save_figure
 from accelcal.recording import read_recording
 
-if "snakemake" not in globals():
-    import sys
-
-    from measured_common import measured_config
-
-    _fig = sys.argv[1] if len(sys.argv) > 1 else "measured_calibration"
-    _recs = list(measured_config()["recordings"])
-    snakemake = mock_snakemake(
-        f"{_fig}_figure",
-        input={"csv": [f"results/measured/{r}.csv" for r in _recs], "poses": "results/measured/poses.csv",
-               "params": "results/measured/params.csv", "peer": ["results/measured/peer_imucal.csv"],
-               "pose_errors": "results/measured/pose_errors.csv"},
-        output={"png": f"results/figures/{_fig}.png", "pdf": f"results/figures/{_fig}.pdf"},
-        params={"figure": _fig, "recordings": _recs})
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("measured_calibration_figure")
 
 log = configure_logging(snakemake)
 fid = snakemake.params.figure

@@ -1,21 +1,13 @@
 """imucal's Ferraris calibration on its example session, against accelcal on the same poses."""
 
 import pandas as pd
-from _helpers import configure_logging, mock_snakemake, write_csv
+from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 
 from accelcal_repro.measured.peer import ferraris_comparison
 from accelcal_repro.measured.sources import FERRARIS_STATIC, read_manifest
 
-if "snakemake" not in globals():
-    from measured_common import measured_config
-
-    _m = measured_config()
-    snakemake = mock_snakemake(
-        "measured_peer",
-        input={"manifest": "results/measured/data/imucal_ferraris.json",
-               "poses": "results/measured/imucal_ferraris/poses.csv"},
-        output=["results/measured/peer_imucal.csv"],
-        params={"grav": _m["recordings"]["imucal_ferraris"]["g"], "rate_hz": _m["peer"]["rate_hz"]})
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("measured_peer")
 
 log = configure_logging(snakemake)
 paths = read_manifest(snakemake.input.manifest)

@@ -1,17 +1,12 @@
 """Gather the per-recording tables of the measured stage into results/measured/<table>.csv."""
 
 import pandas as pd
-from _helpers import configure_logging, mock_snakemake, write_csv
+from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 
 from accelcal_repro.measured.calibrate import TABLES
 
-if "snakemake" not in globals():
-    from measured_common import measured_config
-
-    _recs = list(measured_config()["recordings"])
-    snakemake = mock_snakemake("measured_tables",
-                               input={t: [f"results/measured/{r}/{t}.csv" for r in _recs] for t in TABLES},
-                               output={t: f"results/measured/{t}.csv" for t in TABLES})
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("measured_tables")
 
 log = configure_logging(snakemake)
 for t in TABLES:

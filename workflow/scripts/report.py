@@ -8,24 +8,12 @@ finished (and written its benchmark) by then.
 import sys
 from pathlib import Path
 
-from _helpers import REPO, configure_logging, mock_snakemake
+from _helpers import configure_logging, mock_snakemake_from_argv
 
 from accelcal_repro.report import ReportError, build_report, load_conclusions, write_report
 
-if "snakemake" not in globals():
-    # Standalone: every figure in results/figures/ with the caption of the same name.
-    figures = sorted(Path("results/figures").glob("*.png"))
-    snakemake = mock_snakemake(
-        "report",
-        input={"claims": "results/claims.csv", "figures": [str(p) for p in figures],
-               "conclusions": str(REPO / "workflow/report/conclusions.yaml"),
-               "lock": str(REPO / "environment.lock")},
-        output=["results/report.html"],
-        params={"figure_ids": [p.stem for p in figures],
-                "captions": {p.stem: str(REPO / f"workflow/report/{p.stem}.rst") for p in figures
-                             if (REPO / f"workflow/report/{p.stem}.rst").exists()},
-                "tables": [], "benchmarks_dir": "results/benchmarks", "config_files": []},
-    )
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("report")
 
 log = configure_logging(snakemake)
 try:

@@ -1,21 +1,13 @@
 """Claims of the Tereshkov stage, computed from its summary tables."""
 
 import pandas as pd
-from _helpers import configure_logging, mock_snakemake
-from tereshkov_common import stage_config, write_table
+from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 
 from accelcal_repro.claims import verdict_counts
 from accelcal_repro.tereshkov.claims import tereshkov_claims
 
-if "snakemake" not in globals():
-    _d = "results/tereshkov"
-    snakemake = mock_snakemake(
-        "tereshkov_claims",
-        input={"summary": f"{_d}/summary.csv", "observability": f"{_d}/observability.csv",
-               "artificial": f"{_d}/artificial_summary.csv", "sweep": f"{_d}/sweep_summary.csv"},
-        output=["results/claims/tereshkov.csv"],
-        params={"rules": stage_config()["claims"]},
-    )
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("tereshkov_claims")
 
 log = configure_logging(snakemake)
 i = snakemake.input
@@ -25,4 +17,4 @@ rows = tereshkov_claims(pd.read_csv(i.summary), pd.read_csv(i.observability), pd
 for _, r in rows.iterrows():
     log.info("%s/%s: %s (%s)", r["paper"], r["claim_id"], r["verdict"], r["reproduced_value"])
 log.info("verdicts: %s", verdict_counts(rows))
-write_table(rows, snakemake.output[0])
+write_csv(rows, snakemake.output[0])

@@ -3,30 +3,13 @@ installation (sweep), comparison (bias_convergence_comparison); which one is
 ``snakemake.params.figure``."""
 
 import pandas as pd
-from _helpers import configure_logging, mock_snakemake
-from tereshkov_common import stage_config
+from _helpers import configure_logging, mock_snakemake_from_argv
 
 from accelcal.plotting import save_figure
 from accelcal_repro.tereshkov import figures
 
-if "snakemake" not in globals():
-    import sys
-
-    _fig = sys.argv[1] if len(sys.argv) > 1 else "fig3"
-    _d = "results/tereshkov"
-    _inputs = {
-        "fig2": {"headings": f"{_d}/headings.csv"},
-        "fig3": {"field": f"{_d}/field.csv.gz", "straight": f"{_d}/straight.csv.gz", "summary": f"{_d}/summary.csv"},
-        "fig4": {"field": f"{_d}/field.csv.gz", "straight": f"{_d}/straight.csv.gz",
-                 "artificial": f"{_d}/artificial.csv.gz", "summary": f"{_d}/summary.csv"},
-        "installation": {"sweep": f"{_d}/sweep_summary.csv"},
-        "comparison": {"table": f"{_d}/comparison.csv.gz", "summary": f"{_d}/comparison_summary.csv"},
-    }[_fig]
-    _id = {"installation": "tereshkov_installation", "comparison": "bias_convergence_comparison"}.get(
-        _fig, f"tereshkov_{_fig}")
-    snakemake = mock_snakemake(f"tereshkov_{_fig}_figure", input=_inputs,
-                               output={"png": f"results/figures/{_id}.png", "pdf": f"results/figures/{_id}.pdf"},
-                               params={"figure": _fig, "cfg": stage_config()})
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("tereshkov_fig3_figure")
 
 log = configure_logging(snakemake)
 cfg = snakemake.params.cfg

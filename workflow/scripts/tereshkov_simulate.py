@@ -3,19 +3,12 @@ scenario (one estimator loop for all scenarios of equal duration) and the wall t
 Run r of a scenario belongs to job ``r mod jobs``; tereshkov_merge.py joins the jobs."""
 
 import pandas as pd
-from _helpers import configure_logging, mock_snakemake
-from tereshkov_common import stage_config, write_table
+from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 
 from accelcal_repro.tereshkov.montecarlo import run_scenarios
 
-if "snakemake" not in globals():  # standalone: the main scenarios as one job
-    _sc = ["field", "straight", "artificial"]
-    _d = "results/tereshkov/chunks"
-    snakemake = mock_snakemake(
-        "tereshkov_simulate",
-        output={**{s: f"{_d}/{s}_0.csv.gz" for s in _sc}, "timing": f"{_d}/timing_main_0.csv"},
-        params={"cfg": stage_config(), "scenarios": _sc, "job": 0, "jobs": 1},
-    )
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("tereshkov_simulate", job="0")
 
 log = configure_logging(snakemake)
 job, jobs = int(snakemake.params.job), int(snakemake.params.jobs)
@@ -25,6 +18,6 @@ for name, (df, timing) in out.items():
     log.info("%s (job %d of %d): %d runs x %d steps in %.1f s (estimator %.1f s, loop shared by %s); "
              "table %d rows in %.1f s", name, job + 1, jobs, timing["runs"], timing["steps"], timing["wall_s"],
              timing["estimator_s"], timing["merged_with"], len(df), timing["tidy_s"])
-    write_table(df, getattr(snakemake.output, name))
+    write_csv(df, getattr(snakemake.output, name))
     rows.append(timing)
-write_table(pd.DataFrame(rows), snakemake.output.timing)
+write_csv(pd.DataFrame(rows), snakemake.output.timing)

@@ -2,21 +2,12 @@
 the artificial-bias test, the installation sweep, and the wall times of the jobs."""
 
 import pandas as pd
-from _helpers import configure_logging, mock_snakemake
-from tereshkov_common import stage_config, write_table
+from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 
 from accelcal_repro.tereshkov.montecarlo import artificial_summary, convergence_summary, sweep_summary
 
-if "snakemake" not in globals():
-    _d = "results/tereshkov"
-    snakemake = mock_snakemake(
-        "tereshkov_summary",
-        input={**{s: f"{_d}/{s}.csv.gz" for s in ("field", "straight", "artificial", "sweep")},
-               "timings": [f"{_d}/timing_{p}.csv" for p in ("main", "sweep", "observability")]},
-        output={"summary": f"{_d}/summary.csv", "artificial": f"{_d}/artificial_summary.csv",
-                "sweep": f"{_d}/sweep_summary.csv", "timing": f"{_d}/timing.csv"},
-        params={"cfg": stage_config()},
-    )
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("tereshkov_summary")
 
 log = configure_logging(snakemake)
 cfg = snakemake.params.cfg
@@ -32,7 +23,7 @@ log.info("installation sweep:\n%s", sw[["reference", "kind", "angle_deg", "senso
 timing = pd.concat([pd.read_csv(p) for p in snakemake.input.timings], ignore_index=True)
 timing["us_per_step"] = 1e6 * timing["estimator_s"] / timing["steps"]
 timing["us_per_run_step"] = timing["us_per_step"] / timing["runs"]
-write_table(summary, snakemake.output.summary)
-write_table(art, snakemake.output.artificial)
-write_table(sw, snakemake.output.sweep)
-write_table(timing, snakemake.output.timing)
+write_csv(summary, snakemake.output.summary)
+write_csv(art, snakemake.output.artificial)
+write_csv(sw, snakemake.output.sweep)
+write_csv(timing, snakemake.output.timing)

@@ -30,6 +30,10 @@ Discretisation (samples every ``dt``; the filter propagates from ``t_k`` to
 
 :func:`discretize_van_loan` computes ``Φ``, the input matrices and ``Q`` by matrix
 exponentials (Van Loan 1978) for any ``Ξ``; the tests check the closed forms against it.
+
+The step loops of :func:`kalman_filter` and :func:`covariance_sequence` run as compiled
+kernels (:mod:`accelcal.batista._filter_kernels`, the same discretisation per step) when
+numba is available (:mod:`accelcal.kernels`); the numpy loops here are the reference.
 """
 
 from __future__ import annotations
@@ -37,10 +41,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import expm
 
 from ..errors import InputShapeError, NonFiniteError
+from ..kernels import compiled
 from .model import skew
+
+_KERNELS = "batista._filter_kernels"
 
 #: State names in the order of the filter's state vector.
 STATES = ("v_x", "v_y", "v_z", "g_x", "g_y", "g_z", "b_x", "b_y", "b_z")
@@ -156,6 +162,8 @@ def discretize_van_loan(omega, dt: float, xi) -> tuple[np.ndarray, np.ndarray, n
 
     Returns ``Φ``, ``G0``, ``G1`` (first-order hold of ``a_m``) and ``Q``.
     """
+    from scipy.linalg import expm  # here: scipy.linalg costs 0.5 s to import
+
     A = system_matrix(omega)
     Xi = np.diag(np.repeat(xi, 3)) if np.ndim(xi) == 1 else np.asarray(xi, float)
     B = np.zeros((9, 3))
@@ -179,6 +187,8 @@ def discretize_van_loan(omega, dt: float, xi) -> tuple[np.ndarray, np.ndarray, n
 def measurement_covariance(theta, dt: float) -> np.ndarray:
     """Covariance ``Θ/dt`` of the sampled velocity noise (``Θ`` scalar or 3x3 intensity)."""
     th = np.asarray(theta, float)
+    if th.ndim != 0 and th.shape != (3, 3):
+        raise InputShapeError(f"theta must be a scalar or 3x3, got shape {th.shape}")
     return (th * np.eye(3) if th.ndim == 0 else th) / dt
 
 
@@ -227,6 +237,19 @@ def _check_series(t, *arrays):
     return t, dt, out
 
 
+def _check_shape(name: str, a: np.ndarray, shape: tuple) -> np.ndarray:
+    if a.shape != shape:
+        raise InputShapeError(f"{name} must have shape {shape}, got {a.shape}")
+    return a
+
+
+def _initial_covariance(P0) -> np.ndarray:
+    """``P0`` (9, 9), or its diagonal (9,), as a new (9, 9) array."""
+    P0 = np.asarray(P0, float)
+    P = np.diag(P0) if P0.ndim == 1 else np.array(P0)
+    return _check_shape("P0", P, (9, 9))
+
+
 def kalman_filter(t, a_m, omega_m, y, x0, P0, xi=PAPER_XI, theta=PAPER_THETA, record_every: int = 1) -> FilterResult:
     """The time-varying Kalman filter of Sec. IV for one run (its own covariance).
 
@@ -256,13 +279,22 @@ def kalman_filter(t, a_m, omega_m, y, x0, P0, xi=PAPER_XI, theta=PAPER_THETA, re
     FilterResult
     """
     t, dt, (a_m, omega_m, y) = _check_series(t, a_m, omega_m, y)
-    x = np.asarray(x0, float).copy()
-    P = np.diag(P0) if np.ndim(P0) == 1 else np.asarray(P0, float).copy()
+    x = _check_shape("x0", np.array(x0, float), (9,))
+    P = _initial_covariance(P0)
+    xi = _check_shape("xi", np.array(xi, float), (3,))
     Rd = measurement_covariance(theta, dt)
     n = len(t)
     keep = np.arange(0, n, record_every)
     xs, ss = np.empty((len(keep), 9)), np.empty((len(keep), 9))
     xs[0], ss[0] = x, np.sqrt(np.diag(P))
+    K = compiled(_KERNELS)
+    if K is not None:
+        qv, qg, qb = (float(q) for q in xi)
+        mask = np.zeros(n, bool)
+        mask[keep] = True
+        c = np.ascontiguousarray
+        K.kalman_filter(dt, c(a_m), c(omega_m), c(y), x, c(P), c(Rd, dtype=float), qv, qg, qb, mask, xs, ss)
+        return FilterResult(t=t[keep], x=xs, sigma=ss)
     wbar = 0.5 * (omega_m[1:] + omega_m[:-1])
     Phi_all, G0_all, G1_all = transition(wbar, dt)
     Q_all = process_noise(wbar, dt, xi)
@@ -300,12 +332,20 @@ def covariance_sequence(t, omega, P0, xi=PAPER_XI, theta=PAPER_THETA, return_cov
         The posterior covariances, only if ``return_covariance``.
     """
     t, dt, (omega,) = _check_series(t, omega)
-    P = np.diag(P0) if np.ndim(P0) == 1 else np.asarray(P0, float).copy()
+    P = _initial_covariance(P0)
+    xi = _check_shape("xi", np.array(xi, float), (3,))
     Rd = measurement_covariance(theta, dt)
     n = len(t)
     Ks = np.zeros((n, 9, 3))
     Ps = np.empty((n, 9, 9))
     Ps[0] = P
+    K = compiled(_KERNELS)
+    if K is not None:
+        qv, qg, qb = (float(q) for q in xi)
+        K.covariance_sequence(dt, np.ascontiguousarray(omega), np.ascontiguousarray(P),
+                              np.ascontiguousarray(Rd, dtype=float), qv, qg, qb, Ks, Ps)
+        sigma = np.sqrt(np.einsum("kii->ki", Ps))
+        return (Ks, sigma, Ps) if return_covariance else (Ks, sigma)
     wbar = 0.5 * (omega[1:] + omega[:-1])
     Phi_all, _, _ = transition(wbar, dt)
     Q_all = process_noise(wbar, dt, xi)

@@ -2,9 +2,11 @@
 
 Deterministic layer (pose residuals): :func:`discrepancy` fits the base model of Burkhard
 et al. (2024) and tests a library of candidate effects (:mod:`.effects`) as nested
-extensions (:mod:`.fit`, :mod:`.detect`); :mod:`.benchmark` scores it on simulated
-recordings with hidden effects; :func:`analyse` runs both layers on a recording
-(:mod:`.report`, the ``accelcal discrepancy`` command).
+extensions (:mod:`.fit`, :mod:`.detect`), by default under the colored null: white
+per-pose noise plus a bias wander estimated jointly with the calibration, tests
+calibrated by a parametric bootstrap, outlier poses (:mod:`.colored`,
+:mod:`.wander_loop`); :func:`analyse` runs both layers on a recording (:mod:`.report`,
+the ``accelcal discrepancy`` command).  The benchmark is ``accelcal_repro.discrepancy``.
 
 Stochastic layer (rest data): :func:`stochastic_layer` compares the Allan deviation of
 the measured rests with the simulator's noise model, names the missing noise term and
@@ -12,7 +14,8 @@ re-simulates (:mod:`.allan`, :mod:`.stochastic`).
 """
 
 from .allan import AllanError, AllanVariance, allan_variance
-from .detect import DiscrepancyResult, Rules, discrepancy, identifiability
+from .colored import WanderError, WanderFit
+from .detect import NULLS, DiscrepancyResult, Rules, discrepancy, identifiability
 from .effects import EFFECT_IDS, EFFECTS
 from .fit import PoseData, fit, pose_data, pose_data_from_static
 from .report import Analysis, analyse
@@ -31,6 +34,9 @@ from .stochastic import (
 __all__ = [
     "EFFECTS",
     "EFFECT_IDS",
+    "NULLS",
+    "WanderError",
+    "WanderFit",
     "Analysis",
     "DiscrepancyResult",
     "PoseData",

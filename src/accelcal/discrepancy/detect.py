@@ -1,5 +1,14 @@
 """The deterministic layer: which candidate effect do the pose residuals ask for?
 
+Two noise models for the null hypothesis (``Rules.null``).  ``colored`` (the default):
+white per-pose noise times a common scale plus a bias wander estimated jointly with the
+calibration, likelihood-ratio tests calibrated by a parametric bootstrap, outlier poses,
+ambiguity between candidates and with the wander (:mod:`.colored`, :mod:`.wander_loop`).
+``white``: the loop described below, white per-pose noise times a common scale and
+F-tests (issue 7's loop, kept unchanged as the benchmark's negative control: on sessions
+whose bias wanders it names ``bias_drift`` far more often than α).  Both share the
+identifiability checks, the result class and its JSON.
+
 Given :class:`~accelcal.discrepancy.fit.PoseData`, the loop fits the base model (bias,
 scale, non-orthogonality: 9 parameters), treats it as the simulation of the experiment,
 and tests every candidate effect of the library as a nested extension of it:
@@ -66,12 +75,23 @@ from .effects import EFFECT_IDS, EFFECTS, TEMPERATURE, effect
 from .fit import Fit, PoseData, effect_columns, fit, lopo, parameter_names
 
 CORRECTIONS = ("holm", "bonferroni", "none")
+#: The noise models of the null hypothesis: ``colored`` (white per-pose noise + a bias wander
+#: estimated jointly, :mod:`.wander_loop`), ``white`` (white per-pose noise times a common scale:
+#: the F-test loop of this module).
+NULLS = ("colored", "white")
 
 
 @dataclass(frozen=True)
 class Rules:
-    """Decision rules of the loop (config ``discrepancy.rules``; defaults = config/config.yaml)."""
+    """Decision rules of the loop (config ``discrepancy.rules``; defaults = config/config.yaml).
 
+    ``null`` selects the noise model of the tests (:data:`NULLS`); ``n_boot`` and ``seed``
+    the parametric bootstrap of the colored null; ``outlier_pose`` / ``max_outliers`` the
+    outlier family (colored null only); ``max_wander_inflation`` when a candidate that did
+    not pass counts as not identifiable against the wander (:mod:`.wander_loop`).
+    """
+
+    null: str = "colored"
     alpha: float = 0.05
     correction: str = "holm"
     bic_threshold: float = 2.0
@@ -82,8 +102,23 @@ class Rules:
     max_mde_g: float = 0.01
     min_temp_range: float = 0.5
     candidates: tuple[str, ...] = EFFECT_IDS
+    n_boot: int = 199
+    seed: int = 20240709
+    outlier_pose: bool = True
+    max_outliers: int = 3
+    max_wander_inflation: float = 3.0
 
     def __post_init__(self):
+        if self.null not in NULLS:
+            raise AccelcalError(f"null must be one of {', '.join(NULLS)}, got {self.null!r}")
+        if int(self.n_boot) != self.n_boot or self.n_boot < 19:
+            raise AccelcalError(f"n_boot must be an integer >= 19 (p-values down to 0.05), got {self.n_boot}")
+        if self.max_outliers < 0 or not self.max_wander_inflation >= 1:
+            raise AccelcalError("need max_outliers >= 0 and max_wander_inflation >= 1")
+        family = len(self.candidates) + bool(self.outlier_pose)
+        if self.null == "colored" and (self.n_boot + 1) * self.alpha < family * (1 - 1e-9):
+            raise AccelcalError(f"n_boot = {self.n_boot} cannot reach Holm's first level alpha/{family} (the smallest "
+                                f"bootstrap p-value is 1/(n_boot + 1)): use n_boot >= {int(np.ceil(family / self.alpha)) - 1}")
         if not 0 < self.alpha < 1 or not 0 < self.power < 1:
             raise AccelcalError(f"need 0 < alpha < 1 and 0 < power < 1, got {self.alpha}, {self.power}")
         if self.correction not in CORRECTIONS:
@@ -98,6 +133,8 @@ class Rules:
 
     @classmethod
     def from_config(cls, cfg: dict) -> Rules:
+        # YAML reads an unquoted ``null:`` key as None: take it for the ``null`` field
+        cfg = {("null" if k is None else k): v for k, v in cfg.items()}
         return cls(**{k: (tuple(v) if k == "candidates" else v) for k, v in cfg.items()})
 
 
@@ -287,6 +324,14 @@ class Candidate:
     passed_bic: bool = False
     passed_lopo: bool = False
     named: bool = False
+    test: str = "F-test, common scale (white null)"
+    mde_white: list = field(default_factory=lambda: [float("nan")] * 3)
+    wander_inflation: float = float("nan")
+    confounded_with_wander: bool = False
+    wander_alt: dict = field(default_factory=dict)
+    ambiguous_with: tuple = ()
+    dominated: bool = False
+    bartlett: float = float("nan")
 
     @property
     def passed(self) -> bool:
@@ -296,6 +341,7 @@ class Candidate:
         d = asdict(self)
         d["reasons"] = list(self.reasons)
         d["dof"] = list(self.dof)
+        d["ambiguous_with"] = list(self.ambiguous_with)
         d["passed"] = self.passed
         d["parameters"] = list(EFFECTS[self.effect].parameters)
         d["unit"] = EFFECTS[self.effect].unit
@@ -320,6 +366,12 @@ class DiscrepancyResult:
     lopo_final: np.ndarray
     data: PoseData
     rules: Rules
+    noise_model: dict = field(default_factory=dict)
+    outliers: tuple = ()
+    outlier_tests: tuple = ()
+    errors: tuple = ()
+    final_data: PoseData | None = None
+    colored: dict = field(default_factory=dict)
 
     @property
     def effect(self) -> str:
@@ -327,12 +379,35 @@ class DiscrepancyResult:
 
     @property
     def not_identifiable(self) -> tuple[str, ...]:
-        return tuple(c.effect for c in self.candidates if c.round == 1 and not c.identifiable)
+        """Candidates refused in round 1 and, under the colored null, those the last round
+        could not rule out against the wander (never one that was named)."""
+        return tuple(self.not_identifiable_reasons)
+
+    @property
+    def not_identifiable_reasons(self) -> dict:
+        out = {c.effect: list(c.reasons) for c in self.candidates if c.round == 1 and not c.identifiable}
+        if self.candidates and self.rules.null == "colored":
+            for c in self.candidates:
+                if c.ambiguous_with and c.effect not in self.effects:
+                    out.setdefault(c.effect, list(c.reasons))
+            last = max(c.round for c in self.candidates)
+            for c in self.candidates:
+                if c.round == last and c.effect not in self.effects and c.effect not in out:
+                    if not c.identifiable:
+                        out[c.effect] = list(c.reasons)
+                    elif c.confounded_with_wander:
+                        w = self.noise_model
+                        out[c.effect] = [f"cannot be told apart from the bias wander (tau {w.get('tau_s', float('nan')):.3g} s): "
+                                         f"it makes the minimum detectable effect {c.wander_inflation:.3g} x larger than "
+                                         "white noise of the same size would, and the test did not pass"]
+        return out
 
     @property
     def outcome(self) -> str:
         if self.effects:
             return self.effects[0]
+        if self.errors:
+            return "error"
         return "not_identifiable" if self.not_identifiable else "none"
 
     @property
@@ -342,6 +417,15 @@ class DiscrepancyResult:
     @property
     def gap_after(self) -> float:
         return gap(self.final.weighted)
+
+    def residual_after_all(self) -> np.ndarray:
+        """Residuals of the final model on every pose (outlier poses predicted, not fitted)."""
+        if self.final_data is None or len(self.final_data) == len(self.data):
+            return self.final.residuals
+        from .fit import evaluate
+
+        r, _, _ = evaluate(self.final.p, self.data, self.final.effects, jacobian=False)
+        return np.full(len(self.data), np.nan) if r is None else r
 
     def summary(self) -> dict:
         """The gaps and what noise alone predicts, before (base) and after (named effects)."""
@@ -381,7 +465,14 @@ class DiscrepancyResult:
             "effect": self.effect,
             "effects": list(self.effects),
             "outcome": self.outcome,
+            "null": self.rules.null,
             "not_identifiable": list(self.not_identifiable),
+            "not_identifiable_reasons": self.not_identifiable_reasons,
+            "errors": list(self.errors),
+            "noise_model": self.noise_model or _white_noise_model(self),
+            "outliers": [dict(o) for o in self.outliers],
+            "outlier_tests": [dict(o) for o in self.outlier_tests],
+            **self.colored,
             "not_applicable": dict(self.not_applicable),
             "candidates": [c.to_dict() for c in self.candidates],
             **self.summary(),
@@ -393,12 +484,20 @@ class DiscrepancyResult:
                 "temp": None if self.data.temp is None else self.data.temp.tolist(),
                 "sigma": self.data.sigma.tolist(),
                 "residual_before": self.base.residuals.tolist(),
-                "residual_after": self.final.residuals.tolist(),
+                "residual_after": self.residual_after_all().tolist(),
+                "excluded": [o["pose"] for o in self.outliers],
                 "lopo_before": self.lopo_base.tolist(),
                 "lopo_after": self.lopo_final.tolist(),
             },
         }
         return d
+
+
+def _white_noise_model(res: DiscrepancyResult) -> dict:
+    f = res.final
+    return {"term": "none", "estimated": False, "process": "white per-pose noise times a common scale",
+            "scale": float(np.sqrt(f.chi2 / f.dof)) if f.dof > 0 else float("nan"),
+            "reason": "null 'white': the tests estimate a common scale of the per-pose noise; no bias wander"}
 
 
 def _excess_status(p_before: float, p_after: float, alpha: float) -> str:
@@ -465,6 +564,10 @@ def discrepancy(data: PoseData, rules: Rules | None = None) -> DiscrepancyResult
         needs at least 10).
     """
     rules = rules or Rules()
+    if rules.null == "colored":
+        from .wander_loop import discrepancy_colored
+
+        return discrepancy_colored(data, rules)
     cands, skipped = applicable(data, rules.candidates)
     base = fit(data)
     lopo_base = lopo(base, data)
@@ -497,5 +600,5 @@ def discrepancy(data: PoseData, rules: Rules | None = None) -> DiscrepancyResult
     return DiscrepancyResult(tuple(named), tuple(rows), skipped, base, current, lopo_base, lopo_cur, data, rules)
 
 
-__all__ = ["CORRECTIONS", "Candidate", "DiscrepancyResult", "Identifiability", "Rules", "applicable",
+__all__ = ["CORRECTIONS", "NULLS", "Candidate", "DiscrepancyResult", "Identifiability", "Rules", "applicable",
            "critical_noncentrality", "discrepancy", "gap", "holm", "identifiability"]

@@ -26,10 +26,11 @@ def _residual_panel(ax, det: dict, implication: dict | None, title: str):
     ax.axhspan(-1, 1, color="0.85", lw=0)
     top = max(4.0, 1.3 * float(np.nanmax(np.abs(np.concatenate([rb, ra])))))
     if implication and implication.get("extra_residual_std"):
-        infl = np.sqrt(1 + (np.asarray(implication["extra_residual_std"], float) / s) ** 2)
+        ws = float(implication.get("white_scale") or 1.0)
+        infl = np.sqrt(ws + (np.asarray(implication["extra_residual_std"], float) / s) ** 2)
         if np.any(infl > 1 + 1e-9):
             ax.plot(np.repeat(t, 2), np.ravel(np.column_stack([2 * infl, -2 * infl])), ls="none", marker="_",
-                    ms=7, color="C2", label="±2σ incl. the named noise terms (per pose)")
+                    ms=7, color="C2", label="±2σ of the named noise model (per pose)")
             if 2 * infl.max() > 3 * top:  # the band dwarfs the residuals: symlog keeps both readable
                 ax.set_yscale("symlog", linthresh=4.0, linscale=1.5)
             top = max(top, 1.1 * 2 * float(infl.max()))
@@ -43,6 +44,11 @@ def _residual_panel(ax, det: dict, implication: dict | None, title: str):
             label=f"base model: gap {det['gap_before']:.2f} (noise alone {det['gap_expected_before']:.2f})")
     ax.plot(t, ra, "x", color="C3", ms=4,
             label=f"base + {named}: gap {det['gap_after']:.2f} (noise alone {det['gap_expected_after']:.2f})")
+    for o in det.get("outliers") or []:  # named outlier poses: left out of the final fit
+        i = int(np.argmin(np.abs(t - o["t"])))
+        ax.plot(t[i], ra[i], "s", ms=9, mfc="none", color="C3", zorder=5)
+        ax.annotate(f"outlier pose {o['pose']}", (t[i], ra[i]), textcoords="offset points", xytext=(6, 6),
+                    fontsize=7, color="C3")
     ax.axhline(0, color="k", lw=0.6)
     ax.set_ylim(-top, top)
     ax.set_xlabel("pose mid time [s]")
@@ -87,10 +93,12 @@ def stochastic_from_report(d: dict):
     return SimpleNamespace(axes=tuple(axes), unit=d.get("unit", "u"))
 
 
-def allan_figure(results: dict):
+def allan_figure(results: dict, wander_checks: dict | None = None):
     """Measured vs simulated Allan deviation, before and after the named noise terms: one
     row per recording (``{name: StochasticResult or its to_dict()}``), one panel per axis,
-    drawn by :func:`accelcal.discrepancy.stochastic.plot_allan`."""
+    drawn by :func:`accelcal.discrepancy.stochastic.plot_allan`; ``wander_checks``
+    (``{name: noise_implication["allan_check"]}``) adds what the bias wander of the pose
+    residuals predicts."""
     from .stochastic import plot_allan
 
     n = len(results)
@@ -98,7 +106,7 @@ def allan_figure(results: dict):
         fig, axes = plt.subplots(n, 3, figsize=(10.5, 3.4 * n + 0.3), layout="constrained", squeeze=False)
         for row, (name, res) in zip(axes, results.items()):
             res = stochastic_from_report(res) if isinstance(res, dict) else res
-            plot_allan(list(row), res)
+            plot_allan(list(row), res, wander_check=(wander_checks or {}).get(name))
             row[0].set_ylabel(f"{name}\nAllan deviation [{res.unit}]")
             for ax in row:  # the named terms can be long: keep the three titles apart
                 ax.title.set_fontsize(7)
@@ -115,7 +123,8 @@ def recording_figures(analysis, title: str) -> list[tuple[str, object]]:
         _residual_panel(ax, rep, rep.get("noise_implication"), f"{title}: named {rep['effect']}")
     out = [("discrepancy_residuals", fig)]
     if analysis.stochastic is not None:
-        out.append(("discrepancy_allan", allan_figure({title: analysis.stochastic})))
+        check = (rep.get("noise_implication") or {}).get("allan_check")
+        out.append(("discrepancy_allan", allan_figure({title: analysis.stochastic}, {title: check} if check else None)))
     return out
 
 

@@ -71,6 +71,11 @@ class PoseData:
         Per-pose standard errors of the means (data unit), from the static detection.
     t_ref, temp_ref : float
         Centres of the covariates (the means over the full pose set; a subset keeps them).
+    t_start, t_end : ndarray, shape (n,), or None
+        First and last sample time of each pose [s] (the interval its mean averages over:
+        the colored null needs them for the covariance of interval means).  None: unknown.
+    index : ndarray of int, shape (n,), or None
+        Index of each pose in the recording's full pose set (a subset keeps it); None = ``0..n-1``.
     """
 
     z: np.ndarray
@@ -81,6 +86,9 @@ class PoseData:
     mean_std: np.ndarray
     t_ref: float
     temp_ref: float
+    t_start: np.ndarray | None = None
+    t_end: np.ndarray | None = None
+    index: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.z)
@@ -93,15 +101,29 @@ class PoseData:
             return None if self.temp is None else self.temp - self.temp_ref
         return None
 
+    @property
+    def pose_index(self) -> np.ndarray:
+        """Index of each pose in the full pose set."""
+        return np.arange(len(self.z)) if self.index is None else self.index
+
+    @property
+    def has_intervals(self) -> bool:
+        return self.t_start is not None and self.t_end is not None
+
     def subset(self, keep) -> PoseData:
         """The poses ``keep`` (boolean mask or indices), covariates centred as in the full set."""
-        return PoseData(self.z[keep], self.g, self.sigma[keep], self.t[keep],
-                        None if self.temp is None else self.temp[keep], self.mean_std[keep],
-                        self.t_ref, self.temp_ref)
+        def sel(a):
+            return None if a is None else a[keep]
+
+        return PoseData(self.z[keep], self.g, self.sigma[keep], self.t[keep], sel(self.temp), self.mean_std[keep],
+                        self.t_ref, self.temp_ref, sel(self.t_start), sel(self.t_end), self.pose_index[keep])
 
 
-def pose_data(z, g: float, mean_std, t, temp=None, sigma=None) -> PoseData:
+def pose_data(z, g: float, mean_std, t, temp=None, sigma=None, t_start=None, t_end=None) -> PoseData:
     """Build :class:`PoseData`; ``sigma`` defaults to the noise prediction at the full LLS fit.
+
+    ``t_start``, ``t_end`` (optional, both or neither): the interval each pose mean
+    averages over [s], ``t_start <= t <= t_end``, intervals in time order and disjoint.
 
     Raises
     ------
@@ -127,13 +149,23 @@ def pose_data(z, g: float, mean_std, t, temp=None, sigma=None) -> PoseData:
     sigma = np.asarray(sigma, float)
     if not np.all(np.isfinite(sigma)) or np.any(sigma <= 0):
         raise AccelcalError("a pose has zero or non-finite noise: its standard error cannot weight it")
+    if (t_start is None) != (t_end is None):
+        raise AccelcalError("give both t_start and t_end of the poses, or neither")
+    if t_start is not None:
+        t_start, t_end = np.asarray(t_start, float), np.asarray(t_end, float)
+        if t_start.shape != t.shape or t_end.shape != t.shape:
+            raise AccelcalError(f"pose intervals of shapes {t_start.shape}, {t_end.shape}, expected {t.shape}")
+        if not (np.all(np.isfinite(t_start)) and np.all(np.isfinite(t_end))) or np.any(t_end < t_start) \
+                or np.any(t_start[1:] < t_end[:-1]):
+            raise AccelcalError("pose intervals must be finite, in time order and disjoint (t_start <= t_end)")
     return PoseData(z, float(g), sigma, t, temp, mean_std, float(t.mean()),
-                    float(temp.mean()) if temp is not None else float("nan"))
+                    float(temp.mean()) if temp is not None else float("nan"), t_start, t_end, None)
 
 
 def pose_data_from_static(poses, g: float) -> PoseData:
     """:class:`PoseData` of the poses found by :func:`accelcal.static.detect_static`."""
-    return pose_data(poses.means, g, poses.mean_std, poses.t_mid, poses.temp)
+    return pose_data(poses.means, g, poses.mean_std, poses.t_mid, poses.temp, t_start=poses.t_start,
+                     t_end=poses.t_end)
 
 
 # --------------------------------------------------------------------------- the model

@@ -84,8 +84,9 @@ def _pose_mean_variance(model: dict, starts, durations) -> np.ndarray:
     return sum(centred_pose_variance(pose_difference_variance(k, v, starts, durations)) for k, v in model.items())
 
 
-def noise_implication(det: DiscrepancyResult, stoch, starts, durations, alpha: float) -> dict:
-    """What the named noise terms mean for the pose residuals of the final deterministic model.
+def rests_implication(det: DiscrepancyResult, stoch, starts, durations, alpha: float) -> dict:
+    """What the noise terms named from the rests mean for the pose residuals of the final model
+    (the terms extrapolated from the rests' τ range to the whole session).
 
     The simulator's noise model before is the white-only fit of each axis, after it is the
     fit with the named terms; ``extra_i = Σ_k w_ik² (v_after,ik - v_before,ik)`` is the
@@ -120,6 +121,9 @@ def noise_implication(det: DiscrepancyResult, stoch, starts, durations, alpha: f
     if stoch is None:
         return {}
     f = det.final
+    if det.final_data is not None and len(det.final_data) != len(starts):  # outlier poses left the fit
+        keep = det.final_data.pose_index
+        starts, durations = np.asarray(starts)[keep], np.asarray(durations)[keep]
     w = -(f.J[:, :3] * f.sigma[:, None])  # ∂r/∂z = -∂r/∂b (unweighted)
     if len(starts) != w.shape[0] or len(stoch.axes) != 3:
         raise AccelcalError(f"stochastic layer and deterministic layer disagree on the poses ({len(starts)} "
@@ -159,6 +163,141 @@ def noise_implication(det: DiscrepancyResult, stoch, starts, durations, alpha: f
     }
 
 
+def noise_implication(det: DiscrepancyResult, stoch, starts, durations, alpha: float) -> dict:
+    """Does the named noise model predict the pose residuals' excess over white noise?
+
+    Under the colored null the named noise model is the rests' white per-pose noise plus the
+    bias wander estimated jointly with the calibration (``det.noise_model``): the weighted
+    χ² of the final least-squares residuals is then distributed as ``Σ μ_k χ²₁``
+    (:func:`accelcal.discrepancy.colored.excess_distribution`); the verdict is
+    ``consistent`` when the observed χ² lies in its central ``1 − α`` interval (two-sided
+    p ≥ α, gamma approximation with the exact mean and variance).  That check uses the
+    same residuals the wander was fitted to, so it says that a wander of this family *can*
+    account for the excess; ``allan_check`` is the independent one: what the wander implies
+    for the Allan deviation of the rests, compared with the measured one where the wander
+    should be visible.  ``rests_only`` keeps the reading of the terms named from the rests
+    alone (:func:`rests_implication`).  Under the white null, the rests-only reading is
+    the implication (as before the colored null existed).
+
+    Returns
+    -------
+    dict
+        ``named_terms``, ``expected_excess``, ``expected_excess_interval``,
+        ``expected_excess_short_term``, ``observed_excess``, ``chi2``, ``dof``, ``p_value``,
+        ``gap_with_noise_terms``, ``verdict``, ``explains_excess``, ``extra_residual_std``,
+        ``model``, ``allan_check``, ``rests_only``.
+    """
+    rests = rests_implication(det, stoch, starts, durations, alpha) if stoch is not None else {}
+    nm = det.noise_model or {}
+    if det.rules.null != "colored" or not nm.get("estimated") or not det.colored:
+        return rests
+    c = det.colored
+    f = det.final
+    dof = int(c["dof"])
+    chi2 = float(np.sum(f.weighted ** 2))
+    mean, var = c["chi2_mean"], c["chi2_var"]
+    if dof > 0 and var > 0:
+        k, th = mean ** 2 / var, var / mean
+        upper = float(stats.gamma.sf(chi2, k, scale=th))
+        p = min(1.0, 2 * min(upper, 1 - upper))
+        verdict = "consistent" if p >= alpha else ("residuals exceed it" if upper < 0.5 else "it over-predicts")
+    else:
+        p, verdict = float("nan"), "no degrees of freedom"
+    term = nm.get("term", "none")
+    named = {a: [term] if term != "none" else ["none"] for a in "xyz"}
+    out = {
+        "model": "white per-pose noise (rests) + bias wander (REML, jointly with the calibration)",
+        "named_terms": named,
+        "expected_excess": c["excess_predicted"],
+        "expected_excess_interval": c["excess_predicted_interval"],
+        "expected_excess_short_term": rests.get("expected_excess_short_term", float("nan")),
+        "observed_excess": c["excess_observed"],
+        "chi2": chi2, "dof": dof, "p_value": p,
+        "gap_with_noise_terms": c["gap_colored_after"],
+        "verdict": verdict,
+        "explains_excess": bool(np.isfinite(p) and p >= alpha),
+        "extra_residual_std": c["wander_residual_std"],
+        "white_scale": nm.get("white_scale"),
+        "allan_check": allan_check(nm, stoch) if stoch is not None else {"verdict": "no rests analysed"},
+        "rests_only": rests,
+    }
+    return out
+
+
+def allan_check(noise_model: dict, stoch, level: float = 0.95, min_share: float = 0.1) -> dict:
+    """What the jointly estimated wander implies for the Allan deviation of the rests.
+
+    At averaging times ``τ_A`` much shorter than its correlation time the wander adds
+    ``K² τ_A / 3`` to the Allan variance (its short-lag random-walk part, ``K² = 2 s²/τ``;
+    the exact Gauss–Markov Allan variance is used).  Per axis, the prediction white (the
+    rests' white-only fit) + wander, with the band of the wander's 95 % interval of ``K``,
+    is compared with the measured Allan deviation and its ``level`` interval (χ² with the
+    Satterthwaite mix of the white- and random-walk-FM edf), at the ``τ_A`` where the
+    wander is at least ``min_share`` of the predicted Allan variance (where both layers see
+    the same time scales), Bonferroni over those ``τ_A``.  The check is one-sided: the
+    wander is *contradicted* on an axis when the rests show less Allan variance than white +
+    the lower end of the band at some compared ``τ_A`` (``rests show less``); the rests
+    showing more is not a contradiction (short-term noise such as a vibration the rests
+    carry in their own standard errors), it is reported as ``more_at``.  ``consistent``
+    otherwise; ``not visible in the rests`` when the wander is below ``min_share`` at every
+    ``τ_A`` the rests reach.
+    """
+    from .allan import avar_interval, pooled_edf
+    from .stochastic import TERMS
+
+    tau_c = noise_model.get("tau_s")
+    K, K_ci = noise_model.get("random_walk_K"), noise_model.get("random_walk_K_ci") or [np.nan, np.nan]
+    if noise_model.get("term") != "bias_wander" or K is None or not np.isfinite(K):
+        return {"verdict": "no wander named"}
+    fs = stoch.fs
+    out = {"axes": {}, "min_share": min_share, "level": level}
+
+    def wander_avar(taus, k):
+        if tau_c is None or not np.isfinite(tau_c):
+            return k ** 2 * taus / 3.0
+        s2 = k ** 2 * tau_c / 2.0
+        return s2 * TERMS["gauss_markov"].basis(taus, fs, tau_c)
+
+    verdicts = []
+    for a in stoch.axes:
+        taus = np.asarray(a.taus, float)
+        n2 = a.fit_before["white"]["value"] ** 2
+        white = n2 / taus
+        wv = wander_avar(taus, K)
+        lo_w, hi_w = (wander_avar(taus, k) for k in (K_ci[0] if np.isfinite(K_ci[0]) else 0.0,
+                                                      K_ci[1] if np.isfinite(K_ci[1]) else np.inf))
+        share = wv / (white + wv)
+        seen = share >= min_share
+        m = np.round(taus * fs).astype(int)
+        nu_w, nu_r = pooled_edf(stoch.segment_lengths, m, 0), pooled_edf(stoch.segment_lengths, m, -2)
+        nu = (white + wv) ** 2 / (white ** 2 / np.maximum(nu_w, 1e-9) + wv ** 2 / np.maximum(nu_r, 1e-9))
+        k = max(int(seen.sum()), 1)
+        meas = np.asarray(a.adev_measured, float) ** 2
+        lo, hi = avar_interval(meas[:, None], nu[:, None], 1 - (1 - level) / k)
+        lo, hi = lo[:, 0], hi[:, 0]
+        pred_lo, pred_hi = white + lo_w, white + hi_w
+        less = seen & (pred_lo > hi)
+        more = seen & (pred_hi < lo)
+        if not seen.any():
+            v = "not visible in the rests"
+        elif less.any():
+            v = "rests show less"
+        else:
+            v = "consistent"
+        verdicts.append(v)
+        out["axes"][a.axis] = {
+            "verdict": v, "taus": taus.tolist(), "adev_measured": np.sqrt(meas).tolist(),
+            "adev_interval": np.sqrt(np.column_stack([lo, hi])).tolist(),
+            "adev_white": np.sqrt(white).tolist(), "adev_predicted": np.sqrt(white + wv).tolist(),
+            "adev_predicted_band": np.sqrt(np.column_stack([pred_lo, pred_hi])).tolist(),
+            "wander_share": share.tolist(), "compared": seen.tolist(),
+            "less_at": taus[less].tolist(), "more_at": taus[more].tolist(),
+        }
+    out["verdict"] = verdicts[0] if len(set(verdicts)) == 1 else "; ".join(
+        f"{a.axis}: {v}" for a, v in zip(stoch.axes, verdicts))
+    return out
+
+
 def analyse(rec: Recording, g: float, *, rules: Rules | None = None,
             stochastic: StochasticSettings | None = DEFAULT_STOCHASTIC, unit: str = "u",
             static_kw: dict | None = None) -> Analysis:
@@ -193,4 +332,5 @@ def analyse(rec: Recording, g: float, *, rules: Rules | None = None,
     return Analysis(poses, det, stoch, err, impl, rec.rate)
 
 
-__all__ = ["DEFAULT_STOCHASTIC", "Analysis", "StochasticSettings", "analyse", "noise_implication"]
+__all__ = ["DEFAULT_STOCHASTIC", "Analysis", "StochasticSettings", "allan_check", "analyse", "noise_implication",
+           "rests_implication"]

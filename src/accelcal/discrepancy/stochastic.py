@@ -98,7 +98,10 @@ smallest ``ΔBIC`` is named when its adjusted p-value is below ``alpha`` *and*
 ``max_terms`` terms.  Step 1 is a level-``alpha`` test of "white is enough", so
 white-only data get a term named with probability ≤ ``alpha`` per axis.  Standard
 errors: standard deviation of the refitted coefficients over the ``n_boot`` bootstrap
-sets of the final model.
+sets of the final model.  Step 1's null (white only) is the same on every axis up to its scale ``N``, and the
+statistics (deviances, LR, ΔBIC) are scale-free, so one bootstrap at ``N = 1`` serves all
+axes (its coefficients times each axis's ``N`` give the standard errors): exact, and a
+third of the cost of a bootstrap per axis.
 
 Gap (one definition, before and after).  The rests are re-simulated ``n_resim`` times
 with the fitted model (same segment lengths; white-only fit "before", final model
@@ -347,10 +350,14 @@ def _simulate_term(k: str, v: float, shape, rng: np.random.Generator, n: int, fs
 
 def _kasdin_flicker(rng: np.random.Generator, n: int, cols: int) -> np.ndarray:
     """Flicker (1/f) noise: the Kasdin–Walter filter ``h_k = h_{k-1} (k − 1/2)/k`` on unit white noise."""
+    from scipy.fft import next_fast_len
+
     k = np.arange(1, n)
     h = np.concatenate([[1.0], np.cumprod((k - 0.5) / k)])
     w = rng.standard_normal((n, cols))
-    nfft = 2 * n  # zero padding: linear, not circular, convolution
+    # zero padding to at least 2n - 1: linear, not circular, convolution; a length with
+    # small prime factors (2n itself can have a large one, e.g. 2 x 1741, and FFT slowly)
+    nfft = next_fast_len(2 * n, real=True)
     spec = np.fft.rfft(w, nfft, axis=0) * np.fft.rfft(h, nfft)[:, None]
     return np.fft.irfft(spec, nfft, axis=0)[:n]
 
@@ -400,14 +407,17 @@ def _nnls_batch(A: np.ndarray, b: np.ndarray) -> np.ndarray:
     """
     G, _, p = A.shape
     best_x = np.zeros((G, p))
-    best = np.einsum("gk,gk->g", b, b)
+    bb = np.einsum("gk,gk->g", b, b)
+    best = bb.copy()
+    # the Gram matrix and Aᵀb once; a support's objective is bᵀb − 2 xᵀAᵀb + xᵀ(AᵀA)x
+    gram_all = np.einsum("gki,gkj->gij", A, A)
+    rhs_all = np.einsum("gki,gk->gi", A, b)
     for s in range(1, p + 1):
         for idx in combinations(range(p), s):
-            As = A[:, :, idx]
-            gram = np.einsum("gki,gkj->gij", As, As) + 1e-12 * np.eye(s)
-            x = np.linalg.solve(gram, np.einsum("gki,gk->gi", As, b)[..., None])[..., 0]
-            res = np.einsum("gki,gi->gk", As, x) - b
-            obj = np.einsum("gk,gk->g", res, res)
+            gram = gram_all[:, idx][:, :, idx] + 1e-12 * np.eye(s)
+            rhs = rhs_all[:, idx]
+            x = np.linalg.solve(gram, rhs[..., None])[..., 0]
+            obj = bb - 2 * np.einsum("gi,gi->g", x, rhs) + np.einsum("gi,gij,gj->g", x, gram_all[:, idx][:, :, idx], x)
             ok = np.all(x >= 0, axis=1) & (obj < best)
             best = np.where(ok, obj, best)
             best_x[ok] = 0.0
@@ -423,6 +433,10 @@ def _irls(H: np.ndarray, y: np.ndarray, edf: np.ndarray, max_iter: int = 200, to
     in ``c``, and plain scoring can cycle); each problem stops when its deviance changes
     by less than ``tol`` relative.
     """
+    from . import _fast
+
+    if _fast.AVAILABLE:  # the same algorithm, compiled (accelcal[fast])
+        return _fast.irls_gamma(H, y, edf, max_iter, tol)
     G = y.shape[0]
     floor = 1e-12 * y.max(axis=1, keepdims=True)
     sw = np.sqrt(edf)
@@ -842,6 +856,11 @@ def stochastic_layer(segments, fs: float, *, seed: int, alpha: float = 0.05, max
     m_oth = allan.m[allan.m <= max((s.shape[0] for s in others), default=0) // 2]
     allan_oth = allan_variance(others, fs, m=m_oth) if others and m_oth.size else None
 
+    # Step 1's null (white only) is the same for every axis up to the scale N, and its
+    # statistics are scale-free: one bootstrap at N = 1 serves all axes (exact).
+    unit_white = NoiseFit(("white",), np.array([1.0]), float("nan"), 0.0)
+    shared = _bootstrap(np.random.default_rng(np.random.SeedSequence([int(seed), 1 << 20])), unit_white, lengths,
+                        float(fs), allan.m, allan.edf, allan.taus, list(cand) if max_terms > 0 else [], n_boot)
     axes = []
     for j in range(d):
         boot_seq, resim_seq = np.random.SeedSequence([int(seed), j]).spawn(2)
@@ -851,7 +870,8 @@ def stochastic_layer(segments, fs: float, *, seed: int, alpha: float = 0.05, max
         homog = {"taus": homog["taus"], "adev_ratio": np.asarray(homog["adev_ratio"])[:, j] if len(homog["taus"])
                  else [], "p_value": np.asarray(homog["p_value"])[:, j] if len(homog["taus"]) else []}
         axes.append(_one_axis(names[j], allan, j, lengths, float(fs), cand, alpha, max_terms, n_boot, n_resim,
-                              np.random.default_rng(boot_seq), resim_seq, starts, durations, adev_long, homog))
+                              np.random.default_rng(boot_seq), resim_seq, starts, durations, adev_long, homog,
+                              shared))
     notes = ("intervals not given: pose times assume the rests back to back",) if intervals is None else ()
     return StochasticResult(fs=float(fs), seed=int(seed), alpha=float(alpha), candidates=cand, n_boot=int(n_boot),
                             n_resim=int(n_resim), segment_lengths=lengths, axes=tuple(axes), unit=unit, notes=notes)
@@ -893,7 +913,7 @@ def _fit_table(fit: NoiseFit, coefs: np.ndarray, shapes: np.ndarray, fs: float, 
 
 
 def _one_axis(name, allan: AllanVariance, j, lengths, fs, cand, alpha, max_terms, n_boot, n_resim, rng,
-              resim_seq, starts, durations, adev_long, homog) -> AxisStochastic:
+              resim_seq, starts, durations, adev_long, homog, shared=None) -> AxisStochastic:
     taus, edf, m = allan.taus, allan.edf, allan.m
     avar = allan.avar[:, j]
     log_n = math.log(taus.size)
@@ -911,7 +931,11 @@ def _one_axis(name, allan: AllanVariance, j, lengths, fs, cand, alpha, max_terms
             break
         alts = {k: fit_avar(taus, avar, edf, current.term_ids + (k,), fs) for k in remaining}
         lr_obs = np.array([max(current.deviance - alts[k].deviance, 0.0) for k in remaining])
-        coefs, shapes, lr_boot = _bootstrap(rng, current, lengths, fs, m, edf, taus, remaining, n_boot)
+        if current.term_ids == ("white",) and shared is not None and list(remaining) == list(cand):
+            n_white = current.coefficients["white"]
+            coefs, shapes, lr_boot = shared[0] * n_white, shared[1], shared[2]
+        else:
+            coefs, shapes, lr_boot = _bootstrap(rng, current, lengths, fs, m, edf, taus, remaining, n_boot)
         boot_current = (coefs, shapes)
         if table_before is None:
             table_before = _fit_table(before, coefs, shapes, fs, taus.max())
@@ -938,6 +962,10 @@ def _one_axis(name, allan: AllanVariance, j, lengths, fs, cand, alpha, max_terms
         named.append(remaining[best])
         current = alts[remaining[best]]
         boot_current = None
+    if boot_current is None and current.term_ids == ("white",) and shared is not None:
+        boot_current = (shared[0] * current.coefficients["white"], shared[1])
+        if table_before is None:
+            table_before = _fit_table(before, *boot_current, fs, taus.max())
     if boot_current is None:  # the final model was never the null of a test: bootstrap its standard errors
         coefs, shapes, _ = _bootstrap(rng, current, lengths, fs, m, edf, taus, [], n_boot)
         boot_current = (coefs, shapes)
@@ -959,6 +987,9 @@ def _one_axis(name, allan: AllanVariance, j, lengths, fs, cand, alpha, max_terms
 
     resim = {}
     for label, fit in (("before", before), ("after", after)):
+        if label == "after" and fit is before:  # nothing named: the same simulation (common random numbers)
+            resim[label] = resim["before"]
+            continue
         rng_r = np.random.default_rng(resim_seq)  # same state for both: common random numbers
         sims = simulate_segments(rng_r, lengths, fs, fit.model, size=n_resim)
         resim[label] = np.sqrt(allan_variance(sims, fs, m=m).avar.mean(axis=1))
@@ -1012,7 +1043,7 @@ TERM_LABELS = {"white": "white", "quantization": "quantization", "bias_instabili
                "random_walk": "random walk", "drift_ramp": "drift ramp", "gauss_markov": "Gauss-Markov", "sinusoid": "sinusoid"}
 
 
-def plot_allan(fig_or_axes, result: StochasticResult, title: str = ""):
+def plot_allan(fig_or_axes, result: StochasticResult, title: str = "", wander_check: dict | None = None):
     """Measured vs simulated Allan deviation, before and after the named terms, one panel per axis.
 
     Draws, per axis: the measured ADEV (all rests pooled) with its 68 % interval, the
@@ -1027,6 +1058,10 @@ def plot_allan(fig_or_axes, result: StochasticResult, title: str = ""):
     result : StochasticResult
     title : str
         Figure title (only when a figure is given).
+    wander_check : dict, optional
+        ``noise_implication["allan_check"]`` of the report: also draws what the bias wander
+        estimated from the pose residuals predicts (white + wander, with the band of its
+        95 % interval, green), where the check compared it (markers).
 
     Returns
     -------
@@ -1064,6 +1099,16 @@ def plot_allan(fig_or_axes, result: StochasticResult, title: str = ""):
                         label="white + named, re-simulated")
             ax.set(xscale="log", yscale="log", xlabel="averaging time τ [s]")
             ax.set_title(f"{a.axis}: + {named}\ngap {a.gap_before:.1f} → {a.gap_after:.1f}", fontsize=8.5)
+            wc = (wander_check or {}).get("axes", {}).get(a.axis)
+            if wc:
+                tw = np.asarray(wc["taus"], float)
+                band = np.asarray(wc["adev_predicted_band"], float)
+                ax.fill_between(tw, band[:, 0], np.minimum(band[:, 1], 10 * np.nanmax(a.adev_measured)), color="C2",
+                                alpha=0.18, lw=0, label="white + bias wander from the poses (95 %)")
+                ax.plot(tw, wc["adev_predicted"], color="C2", lw=1.2)
+                cmp = np.asarray(wc["compared"], bool)
+                ax.plot(tw[cmp], np.asarray(wc["adev_predicted"], float)[cmp], "D", color="C2", ms=3.5,
+                        mfc="none", label=f"compared: {wc['verdict']}")
         axs[0].set_ylabel(f"Allan deviation [{result.unit}]")
         axs[0].legend(loc="lower left", fontsize=6.5)
         if isinstance(fig_or_axes, Figure) and title:

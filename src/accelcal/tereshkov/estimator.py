@@ -42,8 +42,10 @@ the attitude loop, whose time constant is τ).
 Discretisation: ``C ← (I - ω̃_p dt) C exp(ω̃_b dt)`` per IMU sample, the body rotation
 to fourth order in the angle, the (tiny) platform rotation to first order, the matrix
 re-orthonormalised every :data:`RENORMALISE_EVERY` steps.  :func:`run_estimator` runs
-many runs at once (numpy over runs); :func:`run_estimator_scalar` is the same algorithm
-for one run in plain Python floats (a cross-check, and the single-run cost).
+many runs at once (numpy over runs, or, with numba, the compiled kernel
+:mod:`accelcal.tereshkov._estimator_kernels`: the same step, run after run);
+:func:`run_estimator_scalar` is the same algorithm for one run in plain Python floats
+(an independent cross-check).
 
 ``accel_formula='eq13'`` replaces (14) by the least-squares solution of the general
 steady-state relation (13) ``ω̃_b(ω̃_b + kgI)⁻¹ k̃_b b_a = u`` for ``(b_ax, b_ay)``
@@ -58,8 +60,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..kernels import compiled
 from .errors import InputShapeError, InvalidParameterError, NonFiniteError
 from .rotations import euler_to_dcm, skew
+
+_KERNELS = "tereshkov._estimator_kernels"
 
 #: Standard gravity [m/s²] and one degree [rad].
 G = 9.80665
@@ -260,6 +265,9 @@ def run_estimator(gyro, accel, f_ext, course, speed, dt: float, params: Tereshko
     ng = 3 if p.estimate_gyro_z else 2
     fb = p.accel_feedback
     eq13 = p.accel_formula == "eq13"
+    K = compiled(_KERNELS)
+    if K is not None:
+        return _run_compiled(K, gyro, accel, f_ext, course, speed > vmin, dt, p, state, record_every)
 
     # Structure of arrays, runs last: every per-step operation is one numpy call on
     # (3, R) or (3, 3, R) blocks (the loop cost is the number of calls, not the runs).
@@ -338,6 +346,34 @@ def run_estimator(gyro, accel, f_ext, course, speed, dt: float, params: Tereshko
                           u=out_u.transpose(2, 0, 1), mode=out_mode.T, mode_time=out_mt.T, gyro_time=out_gt.T, accel_time=out_at.T,
                           C=out_C.transpose(3, 0, 1, 2), params=params)
     return res, new_state
+
+
+def _run_compiled(K, gyro, accel, f_ext, course, moving, dt, p: TereshkovParams, state: EstimatorState,
+                  record_every: int):
+    """:func:`run_estimator` by the compiled kernel (one run after the other, the same step)."""
+    R, n, _ = gyro.shape
+    rec_idx = np.flatnonzero((state.k + np.arange(n)) % record_every == 0)
+    m = len(rec_idx)
+    out = {"bg": np.empty((R, m, 3)), "ba": np.empty((R, m, 3)), "u": np.empty((R, m, 3)),
+           "mode": np.empty((R, m), np.int8), "C": np.empty((R, m, 3, 3)), "mt": np.empty((R, m)),
+           "gt": np.empty((R, m)), "at": np.empty((R, m))}
+    st = state.copy()
+    c = np.ascontiguousarray
+    st.C, st.gyro_bias, st.accel_bias = c(st.C, dtype=float), c(st.gyro_bias, dtype=float), c(st.accel_bias, dtype=float)
+    st.rate_z, st.mode_time = c(st.rate_z, dtype=float), c(st.mode_time, dtype=float)
+    st.gyro_time, st.accel_time, st.mode = c(st.gyro_time, dtype=float), c(st.accel_time, dtype=float), c(st.mode)
+    K.run(c(gyro), c(accel), c(f_ext), c(course), c(moving), float(dt), p.k, p.g, p.tau, 1.0 / p.heading_tau,
+          dt / p.gyro_filter_s, dt / p.accel_filter_s, dt / p.rate_filter_s, p.straight_rate_dps * DEG,
+          p.turn_rate_dps * DEG, p.straight_settle_s, p.turn_settle_s, 3 if p.estimate_gyro_z else 2,
+          bool(p.accel_feedback), p.accel_formula == "eq13", bool(p.update_gyro), bool(p.update_accel),
+          int(state.k), RENORMALISE_EVERY, st.C, st.gyro_bias, st.accel_bias, st.rate_z, st.mode, st.mode_time,
+          st.gyro_time, st.accel_time, rec_idx, out["bg"], out["ba"], out["u"], out["mode"], out["C"], out["mt"],
+          out["gt"], out["at"])
+    st.k = state.k + n
+    t_rec = (state.k + rec_idx.astype(float)) * dt
+    res = TereshkovResult(t=t_rec, gyro_bias=out["bg"], accel_bias=out["ba"], u=out["u"], mode=out["mode"],
+                          mode_time=out["mt"], gyro_time=out["gt"], accel_time=out["at"], C=out["C"], params=p)
+    return res, st
 
 
 def _eq14(u, rate_z, g: float, tau: float) -> np.ndarray:

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from accelcal.kernels import compiled
 from accelcal.lls import full_lls_batch
 from accelcal.model import dM_dparams, params_from_m
 from accelcal.uncertainty import crlb as lls_crlb
@@ -427,25 +428,44 @@ def _blocks_bkt(w: np.ndarray, dt: float):
 
 
 class _FilterState:
-    """Running state of :func:`shared_gain_filter` fed block by block (memory stays bounded)."""
+    """Running state of :func:`shared_gain_filter` fed block by block (memory stays bounded).
+
+    With numba the block runs as the compiled kernel
+    :func:`accelcal.batista._filter_kernels.shared_gain_block` (state ``x`` kept as (T, 9));
+    the numpy loop below is the reference (state as (9, T))."""
 
     def __init__(self, x0, a0, w0, record, dt):
-        self.x = np.ascontiguousarray(np.asarray(x0, float).T)  # (9, T)
-        self.a_prev = np.asarray(a0, float)
-        self.w_prev = np.asarray(w0, float)
+        self.kernels = compiled("batista._filter_kernels")
+        x0 = np.asarray(x0, float)
+        self.x = np.array(x0) if self.kernels is not None else np.ascontiguousarray(x0.T)
+        self.a_prev = np.array(a0, float)
+        self.w_prev = np.array(w0, float)
         self.record = np.asarray(record, int)
+        self.recorded = np.zeros(int(self.record.max(initial=-1)) + 1, bool)  # sample index -> recorded?
+        self.recorded[self.record] = True
         self.dt = dt
-        self.out = np.empty((self.x.shape[1], len(self.record), 9))
+        self.out = np.empty((len(x0), len(self.record), 9))
         self.j = 0
         self._store(0)
 
     def _store(self, k):
         while self.j < len(self.record) and self.record[self.j] == k:
-            self.out[:, self.j] = self.x.T
+            self.out[:, self.j] = self.x if self.kernels is not None else self.x.T
             self.j += 1
 
     def run_block(self, a, w, y, gains, k0):
         """Samples ``k0 .. k0 + B - 1``: ``a``, ``w``, ``y`` of shape (T, B, 3)."""
+        if self.kernels is not None:
+            B = a.shape[1]
+            store = np.zeros(B, bool)
+            part = self.recorded[k0:k0 + B]
+            store[:len(part)] = part
+            c = np.ascontiguousarray
+            self.kernels.shared_gain_block(self.dt, self.x, self.a_prev, self.w_prev, c(a, dtype=float),
+                                           c(w, dtype=float), c(y, dtype=float), c(gains[k0:k0 + B]), store,
+                                           self.out, self.j)
+            self.j += int(store.sum())
+            return
         dt = self.dt
         wT = np.moveaxis(w, 0, -1)  # (B, 3, T)
         wbar = 0.5 * (np.concatenate([self.w_prev.T[None], wT[:-1]], axis=0) + wT)

@@ -22,6 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from accelcal.registry import model_of
+
 from ..montecarlo import min_poses
 from .grid import Experiment, select
 
@@ -188,7 +190,7 @@ def decreases_with_poses(summary: pd.DataFrame, exp: Experiment, factor: float, 
     for m in exp.methods:
         d = s[s["method"] == m].sort_values("n_poses")
         expected = [n for n in sorted(exp.n_poses) if n >= min_poses(m)]
-        for q in (("bias",) if m.startswith("bias") else ("bias", "scale", "nonorth")):
+        for q in (("bias",) if model_of(m) == "bias" else ("bias", "scale", "nonorth")):
             rms, se = d[f"{q}_rms"].to_numpy(float), d[f"{q}_rms_se"].to_numpy(float)
             if d["n_poses"].tolist() != expected or len(rms) < 2 or not np.isfinite(rms).all():
                 drops.append(np.nan)
@@ -277,16 +279,25 @@ def nonorth_error_in_range(summary: pd.DataFrame, exp: Experiment, range_pct: Se
 
 
 # --------------------------------------------------------------------------- compute time
-def speedup(timing_summary: pd.DataFrame, method: str, n_poses: int, interleave: str, min_ratio: float) -> Check:
+def speedup(timing_summary: pd.DataFrame, method: str, n_poses: int, interleave: str, min_ratio: float,
+            backend: str | None = None) -> Check:
     """Speed-up of an LLS over its NLLS baseline: the median of the paired per-problem
-    ratios t_NLLS / t_LLS at ``n_poses`` (``interleave`` timings).  Rule: ≥ ``min_ratio``."""
+    ratios t_NLLS / t_LLS at ``n_poses`` (``interleave`` timings), of the ``backend``
+    (default: the library's default, the compiled kernels if they were timed).  Rule:
+    ≥ ``min_ratio``."""
+    from ..timing import preferred_backend
+
     t = timing_summary
+    if "backend" in t:
+        backend = backend if backend is not None else preferred_backend(t, method)
+        t = t[t["backend"] == backend]
     sel = t[(t["mode"] == "single") & (t["method"] == method) & (t["interleave"] == interleave)
             & (t["n_poses"] == n_poses)]
     if len(sel) != 1:
         return Check(np.nan, False, f"timing summary has {len(sel)} rows for {method} ({interleave}, {n_poses} poses)")
     r = sel.iloc[0]
-    detail = (f"median paired ratio {r['baseline']}/{method} = {r['speedup_median']:.1f}x "
+    which = f" [{backend}]" if backend else ""
+    detail = (f"median paired ratio {r['baseline']}/{method}{which} = {r['speedup_median']:.1f}x "
               f"(IQR {r['speedup_q25']:.1f}-{r['speedup_q75']:.1f}x, n={int(r['n_timings'])}; "
               f"median {1e6 * r['median_s']:.0f} us vs {1e6 * r['median_s'] * r['speedup_of_medians']:.0f} us)")
     return Check(float(r["speedup_median"]), bool(r["speedup_median"] >= min_ratio), detail)

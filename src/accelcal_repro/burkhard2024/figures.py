@@ -14,6 +14,7 @@ import numpy as np
 import pandas as pd
 
 from accelcal.plotting import RC as _RC, style
+from accelcal.registry import model_of
 from .claims import PAPER_NONORTH_RANGE_PCT, PAPER_SPEEDUP
 from .grid import Experiment, select
 
@@ -58,13 +59,13 @@ def plot_fig1a(summary: pd.DataFrame, exp: Experiment, efficiency: Experiment, p
         _crlb_line(ax, a[a["model"] == "full"], "noise_std", "bias_crlb_rms", "CRLB, full model")
         for m in exp.methods:
             d = a[a["method"] == m].sort_values("noise_std")
-            ax.plot(d["noise_std"], d["bias_rms"], **_kw(m, ls="-" if m.startswith("full") else "--"))
+            ax.plot(d["noise_std"], d["bias_rms"], **_kw(m, ls="-" if model_of(m) == "full" else "--"))
         ax.set(xscale="log", yscale="log", xlabel="noise std per axis [m/s²]", ylabel="RMS bias error [m/s²]",
                title=f"(a) bias error, {exp.n_poses[0]} poses, data M ≠ I")
         ax.legend(loc="upper left", fontsize=7)
         ax.text(0.98, 0.03, "bias-only methods are misspecified here:\nno bound applies to them",
                 transform=ax.transAxes, ha="right", va="bottom", fontsize=6.5)
-        rows = [(a, m, "M ≠ I, full bound") for m in exp.methods if m.startswith("full")]
+        rows = [(a, m, "M ≠ I, full bound") for m in exp.methods if model_of(m) == "full"]
         rows += [(eff, m, "M = I, bias-only bound") for m in efficiency.methods]
         lo_hi = []
         for k, (t, m, what) in enumerate(rows):
@@ -96,11 +97,11 @@ def plot_fig1b(summary: pd.DataFrame, exp: Experiment):
         for m in exp.methods:
             d = b[b["method"] == m].sort_values("n_poses")
             ax.errorbar(d["n_poses"], d["bias_rms"], yerr=d["bias_rms_se"], capsize=2, elinewidth=0.7,
-                        **_kw(m, ls="-" if m.startswith("full") else "--"))
+                        **_kw(m, ls="-" if model_of(m) == "full" else "--"))
         ax.set(xscale="log", yscale="log", xlabel="number of poses", ylabel="RMS bias error [m/s²]",
                title=f"(a) bias error, σ = {exp.noise_std[0]:g} m/s², M ≠ I")
         ax.legend(loc="upper right", fontsize=7)
-        for m in (m for m in exp.methods if m.startswith("full")):
+        for m in (m for m in exp.methods if model_of(m) == "full"):
             d = b[b["method"] == m].sort_values("n_poses")
             ax2.plot(d["n_poses"], 100 * d["scale_rel_rms"], **_kw(m, label=f"{style(m)['label']}: scale factor"))
             ax2.plot(d["n_poses"], 100 * d["nonorth_rel_rms"],
@@ -115,8 +116,8 @@ def _plot_vs_g(ax, s: pd.DataFrame, exp: Experiment, methods, col: str, scale: f
     for m in methods:
         d = s[s["method"] == m].sort_values("g_error")
         if len(d):
-            ls = "-" if m.startswith("bias") else ":"
-            ax.plot(d["g_error"], scale * d[col], **_kw(m, ls=ls, lw=1.4 if m.startswith("bias") else 0.9))
+            ls = "-" if model_of(m) == "bias" else ":"
+            ax.plot(d["g_error"], scale * d[col], **_kw(m, ls=ls, lw=1.4 if model_of(m) == "bias" else 0.9))
 
 
 def plot_fig1c(summary: pd.DataFrame, exp: Experiment, title: str = "(c)", data_label: str = "M ≠ I"):
@@ -174,49 +175,57 @@ def plot_fig1d(summary: pd.DataFrame, exp: Experiment, g: float):
 def plot_timing(timing_summary: pd.DataFrame, mc_timing: pd.DataFrame | None = None, interleave: str = "block",
                 headline_n: int = 24):
     """Compute time: (a) median wall time per problem vs pose count for every method
-    (bars: IQR; dashed: batched closed forms per problem), (b) the speed-ups NLLS/LLS
-    (median of paired per-problem ratios, bars: IQR) with the paper's values, and the
-    ratio per Monte Carlo trial (batched closed form, loops for NLLS) where available."""
-    t = timing_summary
+    (bars: IQR; the compiled kernels solid, the numpy reference implementations dotted;
+    dashed: batched closed forms per problem), (b) the speed-ups NLLS/LLS (median of paired
+    per-problem ratios, bars: IQR) with the paper's values, and the ratio per Monte Carlo
+    trial (batched closed form, loops for NLLS) where available."""
+    t = timing_summary if "backend" in timing_summary else timing_summary.assign(backend="")
     single = t[(t["mode"] == "single") & (t["interleave"] == interleave)]
     batch = t[t["mode"] == "batch"]
+
+    def backends(d, m):
+        """(backend, line style, label suffix) of the rows of method ``m``: compiled first."""
+        bes = sorted(set(d.loc[d["method"] == m, "backend"]), key=lambda b: (b != "numba", b))
+        return [(b, "-" if b in ("numba", "", "casadi") or len(bes) == 1 else ":",
+                 " (numpy)" if b == "numpy" and len(bes) > 1 else "") for b in bes]
+
     with plt.rc_context(RC):
-        fig, (ax, axs) = plt.subplots(1, 2, figsize=(7.6, 4.4), layout="constrained")
+        fig, (ax, axs) = plt.subplots(1, 2, figsize=(7.6, 4.6), layout="constrained")
         for m in ("full_lls", "full_als", "full_nlls", "bias_lls", "bias_nlls"):
-            d = single[single["method"] == m].sort_values("n_poses")
-            if len(d):
+            for be, ls, suffix in backends(single, m):
+                d = single[(single["method"] == m) & (single["backend"] == be)].sort_values("n_poses")
                 ax.errorbar(d["n_poses"], 1e6 * d["median_s"],
                             yerr=[1e6 * (d["median_s"] - d["q25_s"]), 1e6 * (d["q75_s"] - d["median_s"])],
-                            capsize=2, elinewidth=0.7, **_kw(m))
+                            capsize=2, elinewidth=0.7, **_kw(m, ls=ls, label=style(m)["label"] + suffix))
         for m in ("full_lls_batch", "bias_lls_batch"):
-            d = batch[batch["method"] == m].sort_values("n_poses")
-            if len(d):
-                ax.plot(d["n_poses"], 1e6 * d["median_s"], **_kw(m, ls="--", marker="D", ms=3))
+            for be, ls, suffix in backends(batch, m):
+                d = batch[(batch["method"] == m) & (batch["backend"] == be)].sort_values("n_poses")
+                ax.plot(d["n_poses"], 1e6 * d["median_s"], **_kw(m, ls="--" if ls == "-" else ":", marker="D", ms=3,
+                                                                  label=style(m)["label"] + suffix))
         ax.set(xscale="log", yscale="log", xlabel="number of poses", ylabel="wall time per problem [µs]",
                title=f"(a) time per problem ({interleave}-interleaved)")
-        ax.legend(fontsize=6, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2)
+        ax.legend(fontsize=5.5, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2)
         for m, base in (("full_lls", "full_nlls"), ("bias_lls", "bias_nlls"), ("full_als", "full_nlls")):
-            d = single[single["method"] == m].sort_values("n_poses")
-            if not len(d):
-                continue
-            lab = f"{style(base)['label']} / {style(m)['label']}"
-            axs.errorbar(d["n_poses"], d["speedup_median"],
-                         yerr=[d["speedup_median"] - d["speedup_q25"], d["speedup_q75"] - d["speedup_median"]],
-                         capsize=2, elinewidth=0.7, **_kw(m, label=lab))
+            for be, ls, suffix in backends(single, m):
+                d = single[(single["method"] == m) & (single["backend"] == be)].sort_values("n_poses")
+                lab = f"{style(base)['label']} / {style(m)['label']}{suffix}"
+                axs.errorbar(d["n_poses"], d["speedup_median"],
+                             yerr=[d["speedup_median"] - d["speedup_q25"], d["speedup_q75"] - d["speedup_median"]],
+                             capsize=2, elinewidth=0.7, **_kw(m, ls=ls, label=lab))
             if m in PAPER_SPEEDUP:
                 axs.axhline(PAPER_SPEEDUP[m], color=style(m)["color"], ls=":", lw=1.2,
-                            label=f"paper ≈{PAPER_SPEEDUP[m]:g}× ({'full' if m.startswith('full') else 'bias-only'})")
+                            label=f"paper ≈{PAPER_SPEEDUP[m]:g}× ({'full' if model_of(m) == 'full' else 'bias-only'})")
         if mc_timing is not None and len(mc_timing):
             mt = mc_timing.pivot_table(index="n_poses", columns="method", values="per_trial_s")
             for m, base in (("full_lls", "full_nlls"), ("bias_lls", "bias_nlls")):
                 if m in mt and base in mt:
                     r = (mt[base] / mt[m]).dropna()
                     axs.plot(r.index, r.values, ls="none", marker="*", ms=7, color=style(m)["color"], mfc="none",
-                             label=f"per Monte Carlo trial ({'full' if m.startswith('full') else 'bias-only'}, batched)")
+                             label=f"per Monte Carlo trial ({'full' if model_of(m) == 'full' else 'bias-only'}, batched)")
         axs.axvline(headline_n, color="0.6", lw=0.8)
         axs.set(xscale="log", yscale="log", xlabel="number of poses", ylabel="speed-up NLLS / closed form",
                 title="(b) speed-up NLLS / closed form")
-        axs.legend(fontsize=6, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2)
+        axs.legend(fontsize=5.5, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2)
     return fig
 
 

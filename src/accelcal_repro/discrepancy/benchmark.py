@@ -1,52 +1,72 @@
-"""Benchmark of the deterministic layer: recordings with one hidden effect each, a key, a score.
+"""Benchmark of the discrepancy loop: simulated sessions with hidden effects under realistic noise.
 
 Generator (:func:`simulate_case`).  A raw multi-position session like the Xsens example
-(16-bit counts, ≈ 415 counts per m/s², white noise of ≈ 3.3 counts per sample, rounded
-to integer counts), ``n_poses`` gravity directions uniform on the sphere, rests joined by
-hand-like motions (:func:`accelcal.simulation.simulate_recording`), a temperature column
-that cycles ``temp_cycles`` times over the session (so that temperature is not collinear
-with time: with two cycles their correlation over the poses is ≈ 0.4).  One effect of the
-library is injected with a random direction ``d`` (unit vector in its parameter space)
-and the size ``m × a*(d)``, where ``a*(d)`` is its minimum detectable size along ``d``
-(:meth:`~accelcal.discrepancy.detect.Identifiability.mde_along`) computed on the *true*
-pose design with the noise the generator uses: size 1 is where the nested test alone
-would detect it with the configured power.  Rows:
+(16-bit counts, ≈ 415 counts per m/s², rounded to integer counts), ``n_poses`` gravity
+directions uniform on the sphere, rests joined by hand-like motions
+(:func:`accelcal.simulation.simulate_recording`), a temperature column that cycles
+``temp_cycles`` times over the session (so that temperature is not collinear with time:
+with two cycles their correlation over the poses is ≈ 0.4).  The sensor noise is one of
+the benchmark's noise profiles (:mod:`accelcal_repro.discrepancy.profiles`: white only,
+Gauss–Markov and flicker bias wander, rate random walk, sub-count noise with rounding,
+the models fitted to the Xsens session and to the 2.78 h ADIS16405 recording, and windows
+of that recording itself), added to the whole time series.
+
+Hidden effects are sized in units of their *oracle* minimum detectable effect: the size
+at which the loop's nested F-test (level ``α/m`` over the ``m`` candidates of a round, the
+configured power) would detect the effect along its random direction ``d`` if it knew
+the true covariance of the pose residuals under the profile (generalised least squares
+with :func:`accelcal_repro.discrepancy.profiles.pose_mean_covariance`), computed on the
+true pose design (:func:`oracle_mde`).  For the white profile it is the loop's own MDE
+(:meth:`accelcal.discrepancy.detect.Identifiability.mde_along`); under wander it is
+larger, because a wandering bias hides part of any slow effect.  Rows (``truth``):
 
 * ``none``: no effect (false-positive rate);
 * one row per effect and size (power curve, confusion matrix);
+* ``a+b``: two effects at once, each at the size times its own MDE (the loop should name
+  both, in any order);
+* ``outlier_pose``: one pose (not the initial rest) shifted, along its gravity direction,
+  by the size times the MDE of a single-pose shift (tested at ``α/n`` over the ``n``
+  poses) — a bump or a transient offset during one rest;
 * ``temperature_const``: the temperature effect of the largest size, but the
   temperature column never changes, so it acts as a constant offset the bias absorbs:
   expected outcome ``not_identifiable``.
 
-Every recording draws from its own stream, derived from the config seed, its row and its
-replicate number (:func:`accelcal_repro.montecarlo.grid_seed`), so it does not depend on the
-chunking.  The generator writes the recording (canonical CSV) and a row of the key;
-detection (:func:`detect_case`) reads only the recording.  :func:`score` joins the two.
+Every recording draws from its own stream, derived from the config seed, its profile, row
+and replicate (:func:`accelcal_repro.montecarlo.grid_seed`), so it does not depend on the
+chunking.  Detection (:func:`detect_case`) gets the recording only (time, integer counts,
+temperature: what a user's CSV holds), never the key, and runs the loop under each
+requested null hypothesis on the same pose means (``colored``, and ``white``: the loop of
+issue 7, the negative control).  Scoring: :mod:`accelcal_repro.discrepancy.scoring`.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
-from scipy import stats
 
-from accelcal.atomic import atomic_output
+from accelcal.discrepancy.detect import Rules, applicable, critical_noncentrality, discrepancy, identifiability
+from accelcal.discrepancy.effects import EFFECT_IDS
+from accelcal.discrepancy.fit import evaluate, fit_at, forward, pose_data, pose_data_from_static
 from accelcal.errors import AccelcalError
 from accelcal.evaluation import residual_sigma
 from accelcal.model import m_from_params
-from ..montecarlo import grid_seed
 from accelcal.recording import Recording
 from accelcal.simulation import random_directions, simulate_recording
 from accelcal.static import detect_static_recording
-from accelcal.discrepancy.detect import Rules, applicable, discrepancy, identifiability
-from accelcal.discrepancy.effects import EFFECT_IDS
-from accelcal.discrepancy.fit import fit_at, forward, pose_data
+
+from ..montecarlo import grid_seed
+from .profiles import NoiseProfile, pose_mean_covariance, record_windows, residual_covariance, simulate_profile
 
 NONE = "none"
 NOT_IDENTIFIABLE = "not_identifiable"
+OUTLIER = "outlier_pose"
 CONSTANT_TEMPERATURE = "temperature_const"
+ERROR = "error"
+#: The null hypotheses of the loop the benchmark can compare (issue 13).
+NULLS = ("colored", "white")
 #: Largest number of pose designs drawn until every candidate is identifiable on the truth.
 MAX_REDRAWS = 20
 
@@ -77,23 +97,80 @@ class Session:
     def from_config(cls, cfg: dict) -> Session:
         return cls(**{k: (tuple(v) if isinstance(v, list) else v) for k, v in cfg.items()})
 
+    @property
+    def n_samples(self) -> int:
+        """Samples of the whole session."""
+        r = self.rate
+        return int(round(self.init_rest_s * r)) + (self.n_poses - 1) * (int(round(self.move_s * r))
+                                                                        + int(round(self.rest_s * r)))
+
+
+# --------------------------------------------------------------------------- rows
+
+
+def effects_of(truth: str) -> tuple[str, ...]:
+    """The effects hidden in a row (``'quadratic+temperature'`` → both; none for the others)."""
+    if truth in (NONE, OUTLIER):
+        return ()
+    if truth == CONSTANT_TEMPERATURE:
+        return ("temperature",)
+    return tuple(truth.split("+"))
+
 
 def expected_outcome(truth: str) -> str:
-    """What a correct detector reports for a recording with hidden effect ``truth``."""
-    if truth == CONSTANT_TEMPERATURE:
-        return NOT_IDENTIFIABLE
-    return truth
+    """What a correct detector reports for a recording of row ``truth`` (two effects: both, '+'-joined)."""
+    return NOT_IDENTIFIABLE if truth == CONSTANT_TEMPERATURE else truth
 
 
-def plan(effects, sizes, seeds: int, seeds_none: int, seeds_constant: int) -> pd.DataFrame:
-    """Every benchmark recording: ``recording, truth, size_mde, replicate`` (fixed order)."""
-    rows = [(NONE, 0.0, r) for r in range(seeds_none)]
-    for e in effects:
-        rows += [(e, float(s), r) for s in sizes for r in range(seeds)]
-    if seeds_constant:
-        rows += [(CONSTANT_TEMPERATURE, float(max(sizes)), r) for r in range(seeds_constant)]
-    df = pd.DataFrame(rows, columns=["truth", "size_mde", "replicate"])
-    df.insert(0, "recording", [f"{t}_{s:g}_{r:04d}" for t, s, r in zip(df.truth, df.size_mde, df.replicate)])
+def check_truth(truth: str) -> None:
+    if truth in (NONE, OUTLIER, CONSTANT_TEMPERATURE):
+        return
+    effs = truth.split("+")
+    if not 1 <= len(effs) <= 2 or len(set(effs)) != len(effs) or any(e not in EFFECT_IDS for e in effs):
+        raise AccelcalError(f"unknown benchmark row {truth!r}: none, {OUTLIER}, {CONSTANT_TEMPERATURE}, an effect "
+                            f"id or two joined by '+' ({', '.join(EFFECT_IDS)})")
+
+
+def plan(profiles, effects, sizes, seeds: int, seeds_none: int, seeds_constant: int, *, pairs=(),
+         outlier: bool = True, extra_sizes: dict | None = None, constant_profiles=None) -> pd.DataFrame:
+    """Every benchmark recording: ``recording, profile, truth, size_mde, replicate`` (fixed order).
+
+    Parameters
+    ----------
+    profiles : sequence of str
+        Noise profiles; each gets every row.
+    effects : sequence of str
+        Single-effect rows.
+    sizes : sequence of float
+        Sizes [× oracle MDE] of the effect, pair and outlier rows.
+    seeds, seeds_none, seeds_constant : int
+        Recordings per (row, size), effect-free recordings, constant-temperature recordings.
+    pairs : sequence of (str, str)
+        Two-effect rows.
+    outlier : bool
+        Include the ``outlier_pose`` rows.
+    extra_sizes : dict, optional
+        ``{profile: sizes}``: further sizes of the single-effect rows (power curves).
+    constant_profiles : sequence of str, optional
+        Profiles with the constant-temperature row (default: all).
+    """
+    rows = []
+    for prof in profiles:
+        rows += [(prof, NONE, 0.0, r) for r in range(seeds_none)]
+        sz = sorted(set(map(float, sizes)) | set(map(float, (extra_sizes or {}).get(prof, ()))))
+        for e in effects:
+            rows += [(prof, e, s, r) for s in sz for r in range(seeds)]
+        for a, b in pairs:
+            rows += [(prof, f"{a}+{b}", float(s), r) for s in sizes for r in range(seeds)]
+        if outlier:
+            rows += [(prof, OUTLIER, float(s), r) for s in sizes for r in range(seeds)]
+        if seeds_constant and (constant_profiles is None or prof in constant_profiles):
+            rows += [(prof, CONSTANT_TEMPERATURE, float(max(sizes)), r) for r in range(seeds_constant)]
+    df = pd.DataFrame(rows, columns=["profile", "truth", "size_mde", "replicate"])
+    for t in df.truth.unique():
+        check_truth(t)
+    df.insert(0, "recording", [f"{p}__{t}_{s:g}_{r:04d}" for p, t, s, r in
+                               zip(df.profile, df.truth, df.size_mde, df.replicate)])
     return df
 
 
@@ -102,6 +179,9 @@ def chunk(df: pd.DataFrame, n_chunks: int, k: int) -> pd.DataFrame:
     if not 0 <= k < n_chunks:
         raise AccelcalError(f"chunk {k} outside 0..{n_chunks - 1}")
     return df.iloc[k::n_chunks]
+
+
+# --------------------------------------------------------------------------- design and oracle
 
 
 def _rest_windows(session: Session, n_samples_total: int) -> np.ndarray:
@@ -115,38 +195,101 @@ def _rest_windows(session: Session, n_samples_total: int) -> np.ndarray:
     return out
 
 
-def simulate_case(truth: str, size_mde: float, replicate: int, *, seed: int, session: Session,
-                  rules: Rules) -> tuple[Recording, dict]:
+def _trimmed_windows(session: Session, n: int) -> np.ndarray:
+    """The rests the static detection will see: trimmed by ``trim_s`` next to every motion."""
+    m = int(round(session.trim_s * session.rate))
+    win = _rest_windows(session, n) + np.array([[m, -m]])
+    win[0, 0] = 0  # the session's start borders no motion
+    return win
+
+
+@dataclass(frozen=True)
+class Oracle:
+    """GLS information of the hidden discrepancies on the true design under the profile's noise.
+
+    ``whiten``: inverse of the lower Cholesky factor of the covariance of the pose
+    residuals [1/unit of g]; ``Q0`` an orthonormal basis of the whitened Jacobian of the
+    base model (n, 9) at the truth.
+    """
+
+    whiten: np.ndarray
+    Q0: np.ndarray
+    n: int
+
+    @classmethod
+    def build(cls, data, p_true, cov_r) -> Oracle:
+        W = np.linalg.inv(np.linalg.cholesky(cov_r))
+        _, J, _ = evaluate(p_true, data, ())
+        Q0, _ = np.linalg.qr(W @ J)
+        return cls(W, Q0, len(data))
+
+    def _info(self, J1: np.ndarray) -> np.ndarray:
+        Jw = self.whiten @ J1
+        Jp = Jw - self.Q0 @ (self.Q0.T @ Jw)
+        return Jp.T @ Jp
+
+    def effect_mde(self, data, p_true, eid: str, direction, rules: Rules, n_tests: int) -> float:
+        """Size ``a`` along unit ``direction`` at which the nested F-test at ``α/n_tests`` has the configured power."""
+        _, J, _ = evaluate(np.concatenate([p_true, np.zeros(3)]), data, (eid,))
+        info = self._info(J[:, -3:])
+        lam = critical_noncentrality(3, self.n - 12, rules.alpha / max(n_tests, 1), rules.power)
+        d = np.asarray(direction, float)
+        v = float(d @ info @ d)
+        return float(np.sqrt(lam / v)) if v > 0 else float("inf")
+
+    def shift_mde(self, pose: int, rules: Rules) -> float:
+        """Residual shift of one pose [unit of g] that a test at ``α/n`` over the poses detects with the power."""
+        e = np.zeros((self.n, 1))
+        e[pose, 0] = 1.0
+        v = float(self._info(e)[0, 0])
+        lam = critical_noncentrality(1, self.n - 10, rules.alpha / self.n, rules.power)
+        return float(np.sqrt(lam / v)) if v > 0 else float("inf")
+
+
+# --------------------------------------------------------------------------- generator
+
+
+def _draw_sensor(rng, ss: Session):
+    sens = ss.sensitivity * (1 + rng.uniform(-ss.sensitivity_rel_range, ss.sensitivity_rel_range, 3))
+    lo, hi = ss.nonorth_range_deg
+    th = np.deg2rad(rng.uniform(lo, hi, 3) * rng.choice((-1.0, 1.0), 3))
+    bias = ss.offset_counts + rng.uniform(-ss.bias_range_counts, ss.bias_range_counts, 3)
+    return sens, th, m_from_params(sens - 1.0, th), bias
+
+
+def simulate_case(truth: str, size_mde: float, replicate: int, *, seed: int, session: Session, rules: Rules,
+                  profile: NoiseProfile | None = None, records: dict | None = None) -> tuple[Recording, dict]:
     """One benchmark recording and its key row.
 
     Parameters
     ----------
     truth : str
-        ``'none'``, an effect id, or ``'temperature_const'``.
+        A row of :func:`plan` (``none``, an effect id, ``a+b``, ``outlier_pose``, ``temperature_const``).
     size_mde : float
-        Size of the hidden effect in units of its minimum detectable size along its direction.
+        Size of the hidden discrepancy in units of its oracle MDE along its direction.
     replicate : int
     seed : int
         Config seed.
     session : Session
     rules : Rules
         The detection rules (α, power, candidates) that define the MDE.
+    profile : NoiseProfile, optional
+        The sensor noise; default white noise of ``session.noise_counts`` per sample.
+    records : dict, optional
+        Real noise records of the ``real`` profiles (:func:`accelcal_repro.discrepancy.profiles.simulate_profile`).
     """
-    if truth not in (NONE, CONSTANT_TEMPERATURE, *EFFECT_IDS):
-        raise AccelcalError(f"unknown benchmark row {truth!r}")
-    rng = np.random.default_rng(grid_seed(seed, f"discrepancy/{truth}", float(size_mde), int(replicate)))
+    check_truth(truth)
+    profile = profile or NoiseProfile("white", (session.noise_counts,) * 3)
+    rng = np.random.default_rng(grid_seed(seed, f"discrepancy/{profile.name}/{truth}", float(size_mde),
+                                          int(replicate)))
     ss = session
     g = ss.g
-    sens = ss.sensitivity * (1 + rng.uniform(-ss.sensitivity_rel_range, ss.sensitivity_rel_range, 3))
-    lo, hi = ss.nonorth_range_deg
-    th = np.deg2rad(rng.uniform(lo, hi, 3) * rng.choice((-1.0, 1.0), 3))
-    M = m_from_params(sens - 1.0, th)
-    bias = ss.offset_counts + rng.uniform(-ss.bias_range_counts, ss.bias_range_counts, 3)
+    sens, th, M, bias = _draw_sensor(rng, ss)
     phase = rng.uniform(0, 2 * np.pi)
-    var_mean = ss.noise_counts ** 2 + 1.0 / 12.0  # white noise + rounding to integer counts
-    eff_id = "temperature" if truth == CONSTANT_TEMPERATURE else truth
-    d = rng.standard_normal(3)
-    d /= np.linalg.norm(d)
+    effs = effects_of(truth)
+    dirs = {e: rng.standard_normal(3) for e in effs}
+    dirs = {e: d / np.linalg.norm(d) for e, d in dirs.items()}
+    noise_rng = np.random.default_rng(rng.integers(2 ** 63))
 
     for redraws in range(MAX_REDRAWS):
         u = random_directions(rng, ss.n_poses)
@@ -156,14 +299,12 @@ def simulate_case(truth: str, size_mde: float, replicate: int, *, seed: int, ses
         span = t[-1] - t[0] + 1.0 / ss.rate
         temp = ss.temp_mean + ss.temp_amplitude * np.sin(2 * np.pi * ss.temp_cycles * t / span + phase)
         # The design the detection will see: trimmed rests, their mid times and temperatures.
-        win = _rest_windows(ss, len(t))
-        m = int(round(ss.trim_s * ss.rate))
-        win = win + np.array([[m, -m]])
-        win[0, 0] = 0  # the session's start borders no motion
+        win = _trimmed_windows(ss, len(t))
         t_mid = np.array([0.5 * (t[a] + t[b - 1]) for a, b in win])
         temp_pose = np.array([temp[a:b].mean() for a, b in win])
         n_eff = (win[:, 1] - win[:, 0]).astype(float)
-        mean_std = np.repeat(np.sqrt(var_mean / n_eff)[:, None], 3, axis=1)
+        white_var = np.asarray(profile.white) ** 2 + 1.0 / 12.0  # white noise + rounding to integer counts
+        mean_std = np.sqrt(white_var[None, :] / n_eff[:, None])
         z_pose = forward(g * u, M, bias, {})
         data = pose_data(z_pose, g, mean_std, t_mid, temp_pose, sigma=residual_sigma(z_pose, mean_std, M, bias))
         p_true = np.concatenate([bias, sens - 1.0, th])
@@ -175,11 +316,24 @@ def simulate_case(truth: str, size_mde: float, replicate: int, *, seed: int, ses
     else:
         raise AccelcalError(f"{truth}: no pose design with every candidate identifiable in {MAX_REDRAWS} draws")
 
-    params, a_mde, lam = {}, float("nan"), float("nan")
-    if truth != NONE:
-        ident = idents[eff_id]
-        a_mde, lam = ident.mde_along(d), ident.lambda_crit
-        params = {eff_id: size_mde * a_mde * d}
+    # Oracle: the covariance of the pose residuals the profile implies (unit of g²).
+    C = pose_mean_covariance(profile, t[win[:, 0]], n_eff / ss.rate, n_eff, ss.rate)
+    w = -base.J[:, :3] * base.sigma[:, None]  # ∂r/∂z = -∂r/∂b (unweighted)
+    oracle = Oracle.build(data, p_true, residual_covariance(C, w))
+
+    params, key_eff = {}, {}
+    for e in effs:
+        a = oracle.effect_mde(data, p_true, e, dirs[e], rules, len(cands))
+        a_white = idents[e].mde_along(dirs[e])
+        params[e] = size_mde * a * dirs[e]
+        key_eff.update({f"mde_along_{e}": a, f"mde_along_white_{e}": a_white,
+                        **{f"param_{e}_{ax}": float(v) for ax, v in zip("xyz", params[e])},
+                        **{f"direction_{e}_{ax}": float(v) for ax, v in zip("xyz", dirs[e])}})
+    if effs:  # the first (or only) effect also under generic names
+        e = effs[0]
+        key_eff.update({"mde_along": key_eff[f"mde_along_{e}"],
+                        **{f"param_{ax}": key_eff[f"param_{e}_{ax}"] for ax in "xyz"},
+                        **{f"direction_{ax}": key_eff[f"direction_{e}_{ax}"] for ax in "xyz"}})
     if truth == CONSTANT_TEMPERATURE:
         temp = np.full_like(t, ss.temp_mean + ss.temp_amplitude * np.sin(phase))
     temp = np.round(temp / ss.temp_resolution) * ss.temp_resolution
@@ -188,16 +342,28 @@ def simulate_case(truth: str, size_mde: float, replicate: int, *, seed: int, ses
     dt = t - t_mid.mean()
     dtemp = temp - (temp_pose.mean() if truth != CONSTANT_TEMPERATURE else ss.temp_mean)
     z = forward(x, M, bias, params, dt=dt, dtemp=dtemp)
-    z = np.round(z + ss.noise_counts * rng.standard_normal(z.shape))
-    rec = Recording(t, z, temp, f"{truth}_{size_mde:g}_{replicate:04d}")
+    z = z + simulate_profile(profile, noise_rng, len(t), ss.rate, replicate=int(replicate), records=records)
 
-    phi = params.get(eff_id, np.zeros(3))
+    outlier = {"outlier_pose": -1, "outlier_t": np.nan, "outlier_shift_mde": np.nan, "outlier_shift": np.nan}
+    if truth == OUTLIER:
+        k = int(rng.integers(1, ss.n_poses))  # never the initial rest: it sets the motion threshold
+        s_mde = oracle.shift_mde(k, rules)
+        shift = size_mde * s_mde * rng.choice((-1.0, 1.0))
+        delta = shift * w[k] / float(w[k] @ w[k])  # moves the residual of pose k by `shift`
+        a_, b_ = _rest_windows(ss, len(t))[k]
+        z[a_:b_] += delta[None, :]
+        outlier = {"outlier_pose": k, "outlier_t": float(t_mid[k]), "outlier_shift_mde": s_mde,
+                   "outlier_shift": float(shift)}
+    rec = Recording(t, np.round(z), temp, f"{profile.name}__{truth}_{size_mde:g}_{replicate:04d}")
+    # Real-noise profiles reuse the windows of one record: the scoring counts independent ones.
+    window = int(replicate) % record_windows(len(records[profile.real]), len(t)) if profile.real else -1
+
     key = {
-        "truth": truth, "expected": expected_outcome(truth), "effect_injected": eff_id if truth != NONE else NONE,
-        "size_mde": float(size_mde), "replicate": int(replicate), "n_poses": ss.n_poses, "redraws": redraws,
-        "mde_along": a_mde, "lambda_crit": lam,
-        **{f"direction_{a}": float(v) for a, v in zip("xyz", d if truth != NONE else np.full(3, np.nan))},
-        **{f"param_{a}": float(v) for a, v in zip("xyz", phi)},
+        "profile": profile.name, "profile_kind": profile.kind, "truth": truth, "expected": expected_outcome(truth),
+        "effects_injected": "+".join(effs) if truth != CONSTANT_TEMPERATURE else "temperature",
+        "size_mde": float(size_mde), "replicate": int(replicate), "noise_window": window, "n_poses": ss.n_poses,
+        "redraws": redraws,
+        **outlier, **key_eff,
         **{f"absorbed_{e}": idents[e].absorbed for e in EFFECT_IDS if e in idents},
         **{f"bias_{a}": float(v) for a, v in zip("xyz", bias)},
         **{f"sensitivity_{a}": float(v) for a, v in zip("xyz", sens)},
@@ -207,46 +373,47 @@ def simulate_case(truth: str, size_mde: float, replicate: int, *, seed: int, ses
     return rec, key
 
 
-def write_counts_csv(path, rec: Recording) -> None:
-    """Write a simulated recording as canonical CSV with integer counts (what a 16-bit
-    sensor logs; ~25 % smaller and faster to write than float text), atomically.
-
-    ``read_recording`` returns the same numbers: counts are integers, ``t`` and ``temp``
-    are written with 10 significant digits (they are multiples of 0.01)."""
-    acc = np.asarray(rec.acc)
-    if not np.array_equal(acc, np.round(acc)):
-        raise AccelcalError("write_counts_csv needs integer counts")
-    df = pd.DataFrame({"t": rec.t, "ax": acc[:, 0].astype(np.int64), "ay": acc[:, 1].astype(np.int64),
-                       "az": acc[:, 2].astype(np.int64)})
-    if rec.temp is not None:
-        df["temp"] = rec.temp
-    with atomic_output(path) as tmp:
-        df.to_csv(tmp, index=False, float_format="%.10g")
-
-
 # --------------------------------------------------------------------------- detection
 
 
-def detect_case(rec: Recording, g: float, rules: Rules) -> dict:
-    """Run the deterministic layer on one recording (what ``accelcal discrepancy`` does
-    before its stochastic layer); one row of the detection table.  A recording the
-    pipeline cannot handle is a row with ``outcome='error'`` and the message.  No timings:
-    the table must be byte-identical on a rerun (wall times are in the job's benchmark file)."""
-    row = {"outcome": "error", "effect": "", "effects": "", "error": ""}
-    try:
-        from accelcal.discrepancy.fit import pose_data_from_static
+def null_available(null: str) -> bool:
+    """Can this library's loop test under ``null``?  ``white`` always (the loop of issue 7); ``colored``
+    once :class:`~accelcal.discrepancy.detect.Rules` has the ``null`` setting."""
+    if null not in NULLS:
+        raise AccelcalError(f"unknown null hypothesis {null!r}; known: {', '.join(NULLS)}")
+    return null == "white" or "null" in {f.name for f in dataclasses.fields(Rules)}
 
-        poses = detect_static_recording(rec)
-        res = discrepancy(pose_data_from_static(poses, g), rules)
-    except AccelcalError as err:
-        row["error"] = str(err).splitlines()[0]
-        return row
+
+def nulls_for(truth: str, nulls: dict) -> list[str]:
+    """The null hypotheses to run on a recording of row ``truth``: config ``benchmark.nulls``
+    maps each null to ``all``, ``effect_free`` (only the ``none`` rows) or ``none``; the
+    nulls this library lacks are left out (:func:`null_available`)."""
+    out = []
+    for null, rows in nulls.items():
+        if rows not in ("all", "effect_free", "none"):
+            raise AccelcalError(f"benchmark.nulls.{null}: {rows!r} is not all, effect_free or none")
+        if null_available(null) and (rows == "all" or (rows == "effect_free" and truth == NONE)):
+            out.append(null)
+    return out
+
+
+def rules_with_null(rules: Rules, null: str) -> Rules:
+    """``rules`` testing under ``null`` (:func:`null_available` must hold)."""
+    if not null_available(null):
+        raise AccelcalError(f"the discrepancy loop of this library has no {null!r} null hypothesis")
+    if "null" in {f.name for f in dataclasses.fields(Rules)}:
+        return dataclasses.replace(rules, null=null)
+    return rules
+
+
+def _result_row(res) -> dict:
     s = res.summary()
-    row.update(outcome=res.outcome, effect=res.effect, effects="+".join(res.effects),
-               not_identifiable="+".join(res.not_identifiable), n_poses_detected=s["n_poses"],
-               gap_before=s["gap_before"], gap_after=s["gap_after"], gap_expected_before=s["gap_expected_before"],
-               gap_expected_after=s["gap_expected_after"], gap_lopo_before=s["gap_lopo_before"],
-               gap_lopo_after=s["gap_lopo_after"], excess_before=s["excess_before"], excess_after=s["excess_after"])
+    row = {"outcome": res.outcome, "effect": res.effect, "effects": "+".join(res.effects),
+           "not_identifiable": "+".join(res.not_identifiable), "n_poses_detected": s["n_poses"],
+           **{k: s[k] for k in ("gap_before", "gap_after", "gap_expected_before", "gap_expected_after",
+                                "gap_lopo_before", "gap_lopo_after", "excess_before", "excess_after")}}
+    outliers = getattr(res, "outliers", None) or ()
+    row["outlier_t_detected"] = ";".join(f"{o['t']:.3f}" for o in outliers if isinstance(o, dict) and "t" in o)
     for c in res.candidates:
         if c.round == 1:
             row[f"p_{c.effect}"] = c.p_value
@@ -255,153 +422,52 @@ def detect_case(rec: Recording, g: float, rules: Rules) -> dict:
             row[f"passed_{c.effect}"] = c.passed
     first = [c for c in res.candidates if c.named and c.round == 1]
     if first:
-        c = first[0]
-        row.update({f"estimate_{a}": v for a, v in zip("xyz", c.estimate)})
-        row.update({f"se_{a}": v for a, v in zip("xyz", c.se)})
+        row.update({f"estimate_{a}": v for a, v in zip("xyz", first[0].estimate)})
+        row.update({f"se_{a}": v for a, v in zip("xyz", first[0].se)})
     return row
 
 
-# --------------------------------------------------------------------------- scoring
+def _null_of(rules: Rules) -> str:
+    return getattr(rules, "null", "white")
 
 
-def clopper_pearson(k, n, level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
-    """Exact binomial interval of ``k`` successes in ``n`` (NaN for ``n = 0``)."""
-    k = np.asarray(k, float)
-    n = np.asarray(n, float)
-    a = (1 - level) / 2
-    with np.errstate(invalid="ignore", divide="ignore"):
-        lo = np.where(k > 0, stats.beta.ppf(a, k, n - k + 1), 0.0)
-        hi = np.where(k < n, stats.beta.ppf(1 - a, k + 1, n - k), 1.0)
-    bad = n <= 0
-    return np.where(bad, np.nan, lo), np.where(bad, np.nan, hi)
+def _detect(data, rules: Rules) -> dict:
+    row = {"null": _null_of(rules), "outcome": ERROR, "effect": "", "effects": "", "error": ""}
+    try:
+        res = discrepancy(data, rules)
+    except AccelcalError as err:  # includes a model that does not converge: an error, never 'none'
+        row["error"] = str(err).splitlines()[0]
+    else:
+        row.update(_result_row(res))
+    return row
 
 
-def score_cases(key: pd.DataFrame, detections: pd.DataFrame) -> pd.DataFrame:
-    """One row per recording: key, detection and ``correct`` (outcome == expected),
-    ``detected`` (the injected effect named first; False on effect-free recordings),
-    ``false_positive`` (an effect named on a recording without one)."""
-    df = key.merge(detections, on="recording", how="left", validate="one_to_one")
-    if df["outcome"].isna().any():
-        missing = df.loc[df["outcome"].isna(), "recording"].head(3).tolist()
-        raise AccelcalError(f"recordings without a detection row: {missing}")
-    named = ~df["outcome"].isin([NONE, NOT_IDENTIFIABLE, "error"])
-    df["correct"] = df["outcome"] == df["expected"]
-    df["detected"] = (df["effect"] == df["effect_injected"]) & (df["truth"] != NONE)
-    df["false_positive"] = (df["truth"] == NONE) & named
-    return df
+def detect_nulls(rec: Recording, g: float, rules: Rules, nulls=("white",)) -> list[dict]:
+    """The loop on one recording under each null hypothesis (same static poses): one row per null.
 
-
-def rates(scores: pd.DataFrame, level: float = 0.95) -> pd.DataFrame:
-    """Per row (truth, size): counts of each outcome, detection rate and accuracy with
-    Clopper–Pearson intervals."""
-    out = []
-    for (truth, size), d in scores.groupby(["truth", "size_mde"], sort=False):
-        n = len(d)
-        k_det = int(d["detected"].sum())
-        k_ok = int(d["correct"].sum())
-        lo_d, hi_d = clopper_pearson(k_det, n, level)
-        if truth == NONE:  # nothing to detect: the row's rate is its false-positive rate (summary)
-            k_det, lo_d, hi_d = np.nan, np.nan, np.nan
-        lo_a, hi_a = clopper_pearson(k_ok, n, level)
-        row = {"truth": truth, "size_mde": size, "n": n, "expected": d["expected"].iloc[0],
-               "detected": k_det, "detection_rate": k_det / n, "detection_ci_low": float(lo_d),
-               "detection_ci_high": float(hi_d), "correct": k_ok, "accuracy": k_ok / n,
-               "accuracy_ci_low": float(lo_a), "accuracy_ci_high": float(hi_a),
-               "errors": int((d["outcome"] == "error").sum())}
-        for o, c in d["outcome"].value_counts().items():
-            row[f"n_{o}"] = int(c)
-        out.append(row)
-    order = {t: i for i, t in enumerate((NONE, *EFFECT_IDS, CONSTANT_TEMPERATURE))}
-    df = pd.DataFrame(out)
-    if len(df):
-        df = df.sort_values(["truth", "size_mde"], key=lambda c: c.map(order) if c.name == "truth" else c,
-                            kind="stable").reset_index(drop=True)
-    return df
-
-
-def crossing(sizes, rate, target: float) -> tuple[float, str]:
-    """Size (MDE units) where the detection rate first reaches ``target``, linear in
-    log(size) between grid points; NaN with a note if the grid does not bracket it."""
-    s = np.asarray(sizes, float)
-    r = np.asarray(rate, float)
-    o = np.argsort(s)
-    s, r = s[o], r[o]
-    if not len(s):
-        return float("nan"), "no data"
-    if r[0] >= target:
-        return float("nan"), f"reached at the smallest size {s[0]:g}"
-    for i in range(1, len(s)):
-        if r[i] >= target:
-            f = (target - r[i - 1]) / (r[i] - r[i - 1])
-            return float(np.exp(np.log(s[i - 1]) + f * (np.log(s[i]) - np.log(s[i - 1])))), ""
-    return float("nan"), f"not reached up to size {s[-1]:g}"
-
-
-def summary(scores: pd.DataFrame, rate_table: pd.DataFrame, *, alpha: float, power: float,
-            confusion_size: float) -> pd.DataFrame:
-    """The benchmark's findings, one tidy row per (effect, metric), with verdicts.
-
-    Rules (stated in ``rule``): the false-positive rate is consistent with its goal ≤ α
-    when the exact 95 % interval's lower end is ≤ α; the naming accuracy at sizes ≥ 1 MDE
-    (pooled over those sizes) is consistent with the configured power when its
-    interval's upper end is ≥ power (at 1 MDE the nested test alone detects with that
-    power, larger sizes more often).
+    What ``accelcal discrepancy`` does before its stochastic layer.  A recording the
+    pipeline cannot handle gives rows with ``outcome='error'`` and the message.  No
+    timings: the table must be byte-identical on a rerun (wall times are in the job's
+    benchmark file).
     """
-    rows = []
-    none = scores[scores.truth == NONE]
-    if len(none):
-        k, n = int(none["false_positive"].sum()), len(none)
-        lo, hi = clopper_pearson(k, n)
-        rows.append({"section": "benchmark", "effect": NONE, "metric": "false_positive_rate", "value": k / n,
-                     "ci_low": float(lo), "ci_high": float(hi), "n": n, "target": alpha,
-                     "verdict": "pass" if lo <= alpha else "fail",
-                     "rule": "exact 95% interval of the rate of naming any effect reaches down to alpha"})
-        k = int(none["correct"].sum())
-        lo, hi = clopper_pearson(k, n)
-        rows.append({"section": "benchmark", "effect": NONE, "metric": "accuracy", "value": k / n,
-                     "ci_low": float(lo), "ci_high": float(hi), "n": n, "target": np.nan, "verdict": "",
-                     "rule": "outcome 'none' (not_identifiable counts as wrong)"})
-    for truth, d in scores[scores.truth != NONE].groupby("truth", sort=False):
-        if truth == CONSTANT_TEMPERATURE:
-            k, n = int(d["correct"].sum()), len(d)
-            lo, hi = clopper_pearson(k, n)
-            rows.append({"section": "benchmark", "effect": truth, "metric": "accuracy", "value": k / n,
-                         "ci_low": float(lo), "ci_high": float(hi), "n": n, "target": power,
-                         "verdict": "pass" if hi >= power else "fail",
-                         "rule": "outcome not_identifiable; upper end of the exact 95% interval >= power"})
-            continue
-        big = d[d.size_mde >= 1.0]
-        k, n = int(big["correct"].sum()), len(big)
-        lo, hi = clopper_pearson(k, n)
-        rows.append({"section": "benchmark", "effect": truth, "metric": "accuracy_ge_1mde", "value": k / n if n else np.nan,
-                     "ci_low": float(lo), "ci_high": float(hi), "n": n, "target": power,
-                     "verdict": ("pass" if hi >= power else "fail") if n else "",
-                     "rule": "named correctly at sizes >= 1 MDE (pooled); upper end of the exact 95% interval >= power"})
-        at = d[np.isclose(d.size_mde, confusion_size)]
-        if len(at):
-            k, n = int(at["correct"].sum()), len(at)
-            lo, hi = clopper_pearson(k, n)
-            rows.append({"section": "benchmark", "effect": truth, "metric": f"accuracy_at_{confusion_size:g}mde",
-                         "value": k / n, "ci_low": float(lo), "ci_high": float(hi), "n": n, "target": np.nan,
-                         "verdict": "", "rule": "named correctly at the confusion-matrix size"})
-        r = rate_table[rate_table.truth == truth].sort_values("size_mde")
-        at1 = r[np.isclose(r.size_mde, 1.0)]
-        if len(at1):
-            a = at1.iloc[0]
-            rows.append({"section": "benchmark", "effect": truth, "metric": "detection_rate_at_1mde",
-                         "value": a.detection_rate, "ci_low": a.detection_ci_low, "ci_high": a.detection_ci_high,
-                         "n": int(a.n), "target": power, "verdict": "",
-                         "rule": "the MDE is defined as the size detected with this power by the nested test alone"})
-        for target in (0.5, 0.95):
-            v, note = crossing(r.size_mde, r.detection_rate, target)
-            rows.append({"section": "benchmark", "effect": truth, "metric": f"size_at_{int(target * 100)}pct_mde",
-                         "value": v, "ci_low": np.nan, "ci_high": np.nan, "n": int(r.n.sum()), "target": np.nan,
-                         "verdict": "", "rule": note or "linear interpolation in log(size) of the detection rate"})
-    return pd.DataFrame(rows, columns=["section", "effect", "metric", "value", "ci_low", "ci_high", "n", "target",
-                                       "verdict", "rule"])
+    try:
+        data = pose_data_from_static(detect_static_recording(rec), g)
+    except AccelcalError as err:
+        return [{"null": n, "outcome": ERROR, "effect": "", "effects": "", "error": str(err).splitlines()[0]}
+                for n in nulls]
+    return [_detect(data, rules_with_null(rules, n)) for n in nulls]
 
 
-__all__ = ["CONSTANT_TEMPERATURE", "NONE", "NOT_IDENTIFIABLE", "Session", "chunk", "clopper_pearson", "crossing",
-           "detect_case", "expected_outcome", "plan", "rates", "score_cases", "simulate_case", "summary",
-           "write_counts_csv"]
+def detect_case(rec: Recording, g: float, rules: Rules) -> dict:
+    """:func:`detect_nulls` under the null of ``rules`` itself: one row."""
+    try:
+        data = pose_data_from_static(detect_static_recording(rec), g)
+    except AccelcalError as err:
+        return {"null": _null_of(rules), "outcome": ERROR, "effect": "", "effects": "",
+                "error": str(err).splitlines()[0]}
+    return _detect(data, rules)
 
+
+__all__ = ["CONSTANT_TEMPERATURE", "ERROR", "NONE", "NOT_IDENTIFIABLE", "NULLS", "OUTLIER", "Oracle", "Session",
+           "check_truth", "chunk", "detect_case", "detect_nulls", "effects_of", "nulls_for", "expected_outcome", "null_available",
+           "plan", "rules_with_null", "simulate_case"]

@@ -1,8 +1,13 @@
-"""Figures of the discrepancy benchmark (matplotlib; return Figures,
-:func:`accelcal.plotting.save_figure` writes them).
+"""Figures of the discrepancy benchmark and of the ADIS16405 reference (matplotlib; return
+Figures, :func:`accelcal.plotting.save_figure` writes them).  Each is drawn from the
+stage's tidy tables only.
 
-* :func:`plot_confusion`: benchmark confusion matrix (true effect × outcome).
-* :func:`plot_power`: detection rate vs effect size in MDE units, per effect.
+* :func:`plot_fpr`: false-positive rate per noise profile, colored vs white null, exact 95 % CIs.
+* :func:`plot_confusion`: one confusion matrix (row of the benchmark × outcome) per profile.
+* :func:`plot_power`: detection rate vs size (power curves) and naming accuracy per profile.
+* :func:`plot_rows`: the outlier-pose and two-effect rows per profile, both nulls.
+* :func:`plot_adis_allan`: the ADIS16405 Allan deviation to ~1000 s, its fitted model, and the
+  pose-mean wander predicted vs observed on session-shaped pieces.
 
 The figures of one recording's analysis (before/after residuals, Allan deviation) are in
 :mod:`accelcal.discrepancy.figures`.
@@ -10,97 +15,327 @@ The figures of one recording's analysis (before/after residuals, Allan deviation
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pandas as pd
 
 from accelcal.discrepancy.effects import EFFECT_IDS
 from accelcal.plotting import RC, plt
 
-from .benchmark import CONSTANT_TEMPERATURE, NONE, NOT_IDENTIFIABLE, crossing
+from .benchmark import CONSTANT_TEMPERATURE, ERROR, NONE, NOT_IDENTIFIABLE, OUTLIER
 
 #: Display names.
-LABELS = {NONE: "none", NOT_IDENTIFIABLE: "not identifiable", CONSTANT_TEMPERATURE: "temperature\n(T constant)",
-          "error": "error", "quadratic": "quadratic", "cubic": "cubic", "bias_drift": "bias drift",
-          "temperature": "temperature", "temperature_scale": "temperature\nscale"}
+LABELS = {NONE: "none", NOT_IDENTIFIABLE: "not identif.", CONSTANT_TEMPERATURE: "temp. (T const)",
+          ERROR: "error", OUTLIER: "outlier pose", "quadratic": "quadratic", "cubic": "cubic",
+          "bias_drift": "bias drift", "temperature": "temperature", "temperature_scale": "temp. scale"}
 COLORS = {e: f"C{i}" for i, e in enumerate(EFFECT_IDS)}
+NULL_STYLE = {"colored": {"color": "C0", "marker": "o", "label": "colored null (issue 13)"},
+              "white": {"color": "C3", "marker": "s", "label": "white null (issue 7 loop, negative control)"}}
 
 
-def plot_confusion(scores: pd.DataFrame, size_mde: float, alpha: float):
-    """Rows: true effect (``none``, each effect at ``size_mde``, constant temperature);
-    columns: outcome.  Cells: fraction of the row's recordings (count in brackets)."""
-    d = scores[(scores.truth == NONE) | np.isclose(scores.size_mde, size_mde) | (scores.truth == CONSTANT_TEMPERATURE)]
-    rows = [r for r in (NONE, *EFFECT_IDS, CONSTANT_TEMPERATURE) if r in set(d.truth)]
-    cols = [c for c in (*EFFECT_IDS, NONE, NOT_IDENTIFIABLE) if True]
-    if (d.outcome == "error").any():
-        cols.append("error")
-    C = np.zeros((len(rows), len(cols)))
-    N = np.zeros(len(rows), int)
-    for i, r in enumerate(rows):
-        dr = d[d.truth == r]
-        N[i] = len(dr)
-        for j, c in enumerate(cols):
-            C[i, j] = (dr.outcome == c).sum()
-    F = C / np.maximum(N, 1)[:, None]
+def _label(x: str) -> str:
+    return "+".join(LABELS.get(p, p) for p in x.split("+"))
+
+
+def _main_null(nulls) -> str:
+    return "colored" if "colored" in set(nulls) else sorted(set(nulls))[0]
+
+
+def plot_fpr(summary: pd.DataFrame, profiles_table: pd.DataFrame, alpha: float, profiles):
+    """False-positive rate (anything named on an effect-free recording) per profile and null,
+    exact 95 % intervals on the effective number of independent recordings; shaded: the
+    goal ≤ α, dashed: 2α.  One row per profile (config order, top to bottom)."""
+    fp = summary[summary.metric == "false_positive_rate"]
+    ww = profiles_table.groupby("profile", sort=False)["wander_over_white"].mean()
+    nulls = [n for n in NULL_STYLE if n in set(fp.null)]
+    main = _main_null(nulls) if nulls else ""
     with plt.rc_context(RC):
-        fig, ax = plt.subplots(figsize=(7.2, 4.6), layout="constrained")
-        im = ax.imshow(F, cmap="Blues", vmin=0, vmax=1, aspect="auto")
-        for i in range(len(rows)):
-            for j in range(len(cols)):
-                if C[i, j] > 0:
-                    ax.text(j, i, f"{F[i, j]:.2f}\n({int(C[i, j])})", ha="center", va="center", fontsize=7,
-                            color="w" if F[i, j] > 0.6 else "k")
-            exp = {NONE: NONE, CONSTANT_TEMPERATURE: NOT_IDENTIFIABLE}.get(rows[i], rows[i])
-            if exp in cols:
-                j = cols.index(exp)
-                ax.add_patch(plt.Rectangle((j - 0.5, i - 0.5), 1, 1, fill=False, ec="C3", lw=1.5))
-        ax.set_xticks(range(len(cols)), [LABELS.get(c, c) for c in cols], fontsize=7.5)
-        ax.set_yticks(range(len(rows)), [f"{LABELS.get(r, r)}  (n={n})" for r, n in zip(rows, N)], fontsize=7.5)
-        ax.set_xlabel("outcome of the discrepancy loop (effect named first, none, or not identifiable)")
-        ax.set_ylabel(f"hidden effect (size {size_mde:g} × its MDE)")
-        ax.grid(False)
-        fpr = float(F[rows.index(NONE), [cols.index(e) for e in EFFECT_IDS if e in cols]].sum()) if NONE in rows else np.nan
-        ax.set_title(f"Benchmark confusion matrix (red: expected outcome); false-positive rate {fpr:.3f} "
-                     f"(α = {alpha:g})", fontsize=8.5)
-        fig.colorbar(im, ax=ax, shrink=0.8, label="fraction of the row")
+        fig, ax = plt.subplots(figsize=(8.0, 1.0 + 0.34 * len(profiles)), layout="constrained")
+        y = np.arange(len(profiles))[::-1]
+        for k, null in enumerate(nulls):
+            d = fp[fp.null == null].set_index("profile").reindex(profiles)
+            dy = (k - (len(nulls) - 1) / 2) * 0.22
+            xerr = np.vstack([d.value - d.ci_low, d.ci_high - d.value])
+            st = NULL_STYLE[null]
+            ax.errorbar(d.value, y - dy, xerr=xerr, ls="none", capsize=2.5, ms=5, lw=1.1, color=st["color"],
+                        marker=st["marker"], label=st["label"])
+            for yi, v, hi, verdict in zip(y - dy, d.value, d.ci_high, d.verdict):
+                if np.isfinite(v):
+                    ax.annotate(f"{v:.3f}" + (" ✗" if null == main and verdict == "fail" else ""), (hi, yi),
+                                xytext=(4, 0), textcoords="offset points", fontsize=6, va="center",
+                                color=st["color"])
+        ax.axvspan(0, alpha, color="C2", alpha=0.12, lw=0, label=f"goal: ≤ α = {alpha:g}")
+        ax.axvline(2 * alpha, color="C2", ls="--", lw=1, label=f"upper 95% bound must be ≤ 2α = {2 * alpha:g}")
+        first = fp[fp.null == main].set_index("profile").reindex(profiles)
+        ticks = [f"{p}  (wander {ww.get(p, np.nan):.2f}, n {int(a) if np.isfinite(a) else 0}"
+                 + (f", eff. {b:.0f}" if np.isfinite(b) and abs(b - a) > 0.5 else "") + ")"
+                 for p, a, b in zip(profiles, first.n, first.n_independent)]
+        ax.set_yticks(y, ticks, fontsize=7)
+        ax.set_xlabel("false-positive rate: share of effect-free sessions with an effect or outlier named "
+                      "(exact 95% CI)", fontsize=8)
+        ax.set_xlim(0, max(0.25, float(np.nanmax(fp.ci_high)) * 1.12) if len(fp) else 1)
+        ax.set_ylim(-0.6, len(profiles) - 0.4)
+        ax.set_title(f"Effect-free sessions per noise profile (✗ = {main}-null verdict fails)\nwander = pose-mean "
+                     "std of the profile's non-white noise / white pose-mean std", fontsize=8)
+        ax.legend(loc="lower right", fontsize=6.5)
     return fig
 
 
-def plot_power(rate_table: pd.DataFrame, power: float, alpha: float, fpr: float | None = None):
-    """Detection rate (injected effect named first) vs size in MDE units, exact 95 % intervals;
-    dotted: 50 % and 95 %, with the interpolated sizes marked; the configured power at 1 MDE."""
+def plot_confusion(scores: pd.DataFrame, size_mde: float, profiles, null: str | None = None):
+    """Per profile: rows = benchmark rows at ``size_mde`` (plus none and constant T), columns = outcome."""
+    null = null or _main_null(scores.null)
+    d0 = scores[(scores.null == null) & ((scores.truth == NONE) | np.isclose(scores.size_mde, size_mde)
+                                         | (scores.truth == CONSTANT_TEMPERATURE))]
+    truths = [t for t in (NONE, *EFFECT_IDS) if t in set(d0.truth)]
+    truths += sorted(t for t in set(d0.truth) if "+" in t) + [t for t in (OUTLIER, CONSTANT_TEMPERATURE)
+                                                              if t in set(d0.truth)]
+    cols = [*EFFECT_IDS, OUTLIER, NONE, NOT_IDENTIFIABLE, ERROR]
+    ncol = 4
+    nrow = math.ceil(len(profiles) / ncol)
     with plt.rc_context(RC):
-        fig, ax = plt.subplots(figsize=(7.2, 4.0), layout="constrained")
-        effects = [e for e in EFFECT_IDS if e in set(rate_table.truth)]
-        for k, e in enumerate(effects):
-            r = rate_table[rate_table.truth == e].sort_values("size_mde")
-            dodge = 1 + 0.015 * (k - (len(effects) - 1) / 2)
-            yerr = np.vstack([r.detection_rate - r.detection_ci_low, r.detection_ci_high - r.detection_rate])
-            ax.errorbar(r.size_mde * dodge, r.detection_rate, yerr=yerr, color=COLORS[e], marker="o", ms=4, lw=1,
-                        capsize=2, label=f"{LABELS[e].replace(chr(10), ' ')} (n={int(r.n.min())}/size)")
-            for target, mk in ((0.5, "v"), (0.95, "^")):
-                s, _ = crossing(r.size_mde, r.detection_rate, target)
-                if np.isfinite(s):
-                    ax.plot(s, target, marker=mk, color=COLORS[e], ms=7, mfc="none")
-        x0 = float(rate_table.size_mde[rate_table.size_mde > 0].min()) / 1.6
-        if fpr is not None and np.isfinite(fpr):
-            ax.plot([x0], [fpr], marker="s", color="k", ls="none",
-                    label=f"effect-free recordings (size 0): any effect named ({fpr:.3f})")
-        for y in (0.5, 0.95):
-            ax.axhline(y, color="0.4", ls=":", lw=0.9)
-        ax.axhline(alpha, color="C3", ls="--", lw=0.8, label=f"α = {alpha:g}")
-        ax.plot([1.0], [power], marker="*", color="k", ms=10, ls="none",
-                label=f"design power at 1 MDE ({power:g})")
-        ax.set_xscale("log")
-        ticks = sorted(set(rate_table.size_mde[rate_table.size_mde > 0]))
-        ax.set_xticks([x0, *ticks], ["0", *(f"{t:g}" for t in ticks)])
-        ax.set_xlim(x0 / 1.25, max(ticks) * 1.25)
-        ax.minorticks_off()
-        ax.set_ylim(-0.02, 1.02)
-        ax.set_xlabel("size of the hidden effect [× its minimum detectable effect along its direction]")
-        ax.set_ylabel("detection rate (named first), exact 95% CI")
-        ax.set_title("Detection power of the discrepancy loop (▽ 50 %, △ 95 % detection, interpolated)", fontsize=9)
-        ax.legend(loc="lower right", fontsize=7)
+        fig, axs = plt.subplots(nrow, ncol, figsize=(11.0, 2.55 * nrow + 0.6), layout="constrained", squeeze=False)
+        for ax, prof in zip(axs.flat, profiles):
+            d = d0[d0.profile == prof]
+            F = np.zeros((len(truths), len(cols)))
+            for i, t in enumerate(truths):
+                dt = d[d.truth == t]
+                for j, c in enumerate(cols):
+                    F[i, j] = (dt.outcome == c).mean() if len(dt) else np.nan
+            ax.imshow(F, cmap="Blues", vmin=0, vmax=1, aspect="auto")
+            for i, t in enumerate(truths):
+                exp = d[d.truth == t].expected.iloc[0] if (d.truth == t).any() else ""
+                for e in exp.split("+"):  # a pair: either effect may come first
+                    if e in cols:
+                        j = cols.index(e)
+                        ax.add_patch(plt.Rectangle((j - 0.5, i - 0.5), 1, 1, fill=False, ec="C3", lw=1.0))
+                for j in range(len(cols)):
+                    if F[i, j] >= 0.05:
+                        ax.text(j, i, f"{F[i, j]:.2f}".lstrip("0"), ha="center", va="center", fontsize=5,
+                                color="w" if F[i, j] > 0.6 else "k")
+            ax.set_xticks(range(len(cols)), [LABELS.get(c, c) for c in cols], rotation=90, fontsize=5.5)
+            ax.set_yticks(range(len(truths)), [_label(t) for t in truths], fontsize=5.5)
+            ax.grid(False)
+            ok = d[d.truth != NONE]
+            ax.set_title(f"{prof}: correct {ok.correct.mean():.2f}" if len(ok) else prof, fontsize=7.5)
+        for ax in axs.flat[len(profiles):]:
+            ax.set_visible(False)
+        fig.suptitle(f"Outcome of the loop ({null} null) per hidden row at {size_mde:g} × its oracle MDE "
+                     f"(red box: a correct first outcome; two effects: either of the pair; "
+                     f"rows: hidden, columns: named first)", fontsize=8.5)
     return fig
 
 
-__all__ = ["COLORS", "LABELS", "plot_confusion", "plot_power"]
+def plot_power(rates: pd.DataFrame, power: float, profiles, curve_profiles, sizes):
+    """Top: detection rate vs size for the power-curve profiles (colored null solid, white
+    dashed); bottom: naming accuracy (effect named first) per profile at the main ``sizes``
+    (every profile has them), colored null."""
+    effects = [e for e in EFFECT_IDS if e in set(rates.truth)]
+    main = _main_null(rates.null)
+    cmap = plt.get_cmap("tab10")
+    with plt.rc_context(RC):
+        fig, axs = plt.subplots(2, len(effects), figsize=(11.5, 6.4), layout="constrained", squeeze=False)
+        for j, e in enumerate(effects):
+            ax = axs[0, j]
+            for k, prof in enumerate(curve_profiles):
+                for null, ls in (("colored", "-"), ("white", "--")):
+                    r = rates[(rates.truth == e) & (rates.profile == prof) & (rates.null == null)].sort_values(
+                        "size_mde")
+                    if not len(r):
+                        continue
+                    yerr = np.vstack([r.detection_rate - r.detection_ci_low, r.detection_ci_high - r.detection_rate])
+                    ax.errorbar(r.size_mde * (1 + 0.02 * k), r.detection_rate, yerr=yerr, color=cmap(k), ls=ls,
+                                marker="o", ms=3, lw=1, capsize=1.5,
+                                label=f"profile {prof}, {null} null" if j == 0 else None)
+            ax.plot([1.0], [power], marker="*", color="k", ms=9, ls="none",
+                    label=f"oracle test's power at 1 MDE ({power:g})" if j == 0 else None)
+            ax.set_xscale("log")
+            ticks = sorted(set(rates.size_mde[rates.truth == e]))
+            ax.set_xticks(ticks, [f"{t:g}" for t in ticks])
+            ax.minorticks_off()
+            ax.set_ylim(-0.02, 1.02)
+            ax.set_title(LABELS[e], fontsize=9)
+            ax.set_xlabel("size [× oracle MDE]")
+            ax = axs[1, j]
+            r = rates[(rates.truth == e) & (rates.null == main)]
+            x = np.arange(len(profiles))
+            main_sizes = sorted(sizes)
+            for k, s in enumerate(main_sizes):
+                rs = r[np.isclose(r.size_mde, s)].set_index("profile").reindex(profiles)
+                if rs.accuracy.isna().all():
+                    continue
+                yerr = np.vstack([rs.accuracy - rs.accuracy_ci_low, rs.accuracy_ci_high - rs.accuracy])
+                ax.errorbar(x + 0.2 * (k - (len(main_sizes) - 1) / 2), rs.accuracy, yerr=yerr, ls="none", marker="o",
+                            ms=3, capsize=1.5, lw=0.8, color=plt.get_cmap("viridis")(k / max(1, len(main_sizes) - 1)),
+                            label=f"{s:g} MDE" if j == 0 else None)
+            ax.set_xticks(x, profiles, rotation=90, fontsize=6)
+            ax.set_ylim(-0.02, 1.02)
+            ax.axhline(power, color="k", lw=0.7, ls=":")
+        axs[0, 0].set_ylabel("detection rate (named), 95% CI")
+        axs[1, 0].set_ylabel(f"named first ({main} null), 95% CI")
+        axs[0, 0].legend(fontsize=6, loc="upper left")
+        axs[1, 0].legend(fontsize=6, loc="lower left", title="size", title_fontsize=6)
+        fig.suptitle("Power of the loop per effect: top, detection rate vs size for the power-curve profiles; "
+                     "bottom, naming accuracy per noise profile (dotted: the design power)", fontsize=9)
+    return fig
+
+
+def plot_rows(rates: pd.DataFrame, profiles):
+    """Accuracy of the outlier-pose rows (named and located) and of the two-effect rows (both
+    named, nothing else) per profile, each size, both nulls."""
+    kinds = [(OUTLIER, "outlier pose: named, at the right pose")]
+    kinds += [(t, f"{_label(t)}: both named, nothing else") for t in sorted(set(rates.truth)) if "+" in t]
+    with plt.rc_context(RC):
+        fig, axs = plt.subplots(len(kinds), 1, figsize=(9.0, 2.6 * len(kinds) + 0.8), layout="constrained",
+                                squeeze=False)
+        x = np.arange(len(profiles))
+        for ax, (truth, title) in zip(axs[:, 0], kinds):
+            r = rates[rates.truth == truth]
+            combos = [(n, s) for n in NULL_STYLE for s in sorted(set(r.size_mde)) if ((r.null == n)
+                                                                                      & np.isclose(r.size_mde, s)).any()]
+            for k, (null, s) in enumerate(combos):
+                rs = r[(r.null == null) & np.isclose(r.size_mde, s)].set_index("profile").reindex(profiles)
+                yerr = np.vstack([rs.accuracy - rs.accuracy_ci_low, rs.accuracy_ci_high - rs.accuracy])
+                st = NULL_STYLE[null]
+                ax.errorbar(x + 0.1 * (k - (len(combos) - 1) / 2), rs.accuracy, yerr=yerr, ls="none", capsize=1.5,
+                            lw=0.8, ms=4, color=st["color"], marker=st["marker"],
+                            mfc="none" if s < max(r.size_mde) else st["color"], label=f"{null} null, {s:g} MDE")
+            ax.set_xticks(x, profiles, rotation=30, ha="right", fontsize=7)
+            ax.set_ylim(-0.02, 1.02)
+            ax.set_ylabel("correct (95% CI)")
+            ax.set_title(title, fontsize=8.5)
+            ax.legend(fontsize=6.5, loc="upper right", ncol=2)
+        fig.suptitle("Outlier-pose and two-effect rows of the benchmark per noise profile", fontsize=9)
+    return fig
+
+
+def plot_adis_allan(curves: pd.DataFrame, allan: pd.DataFrame, check: pd.DataFrame):
+    """ADIS16405: measured Allan deviation (68 % CI) to ~1000 s per axis with the BIC-chosen
+    library model and its terms (fitted range shaded); last panel: pose-mean wander on
+    session-shaped pieces, observed vs predicted by the reference model and by the
+    stochastic layer on the pieces' own ≤ 10 s rests."""
+    axes = list(dict.fromkeys(curves.axis))
+    with plt.rc_context(RC):
+        fig, axs = plt.subplots(1, len(axes) + 1, figsize=(12.0, 3.9), layout="constrained")
+        for ax, a in zip(axs, axes):
+            c = curves[curves.axis == a]
+            m = allan[allan.axis == a]
+            ax.errorbar(m.tau_s, 1e3 * m.adev, yerr=1e3 * np.vstack([m.adev - m.adev_ci_low, m.adev_ci_high - m.adev]),
+                        fmt="o", color="k", ms=3, lw=0.8, capsize=1.5, label="measured (68% CI)", zorder=4)
+            ax.plot(c.tau_s, 1e3 * c.adev_model, color="C3", lw=1.4, label="chosen model")
+            for k, col in enumerate(x for x in c.columns if x.startswith("adev_") and x not in
+                                    ("adev_measured", "adev_model")):
+                ax.plot(c.tau_s, 1e3 * c[col], ls="--", lw=0.8, color=f"C{k}", label=col[5:])
+            fitted = c[c.fitted]
+            ax.axvspan(fitted.tau_s.min(), fitted.tau_s.max(), color="0.9", zorder=0, label="fitted range")
+            ax.set(xscale="log", yscale="log", xlabel="τ [s]")
+            ax.set_ylim(0.3 * 1e3 * c.adev_measured.min(), 2 * 1e3 * c.adev_measured.max())
+            ax.set_title(f"axis {a}", fontsize=9)
+        axs[0].set_ylabel("Allan deviation [mm/s²]")
+        axs[0].legend(fontsize=6, loc="lower left")
+        ax = axs[-1]
+        d = check.set_index("axis")
+        rows = [a for a in [*axes, "all"] if a in d.index]
+        x = np.arange(len(rows))
+        obs = np.sqrt(d.loc[rows, "observed_var"])
+        lo = np.sqrt(d.loc[rows, "observed_ci_low"].clip(lower=0))
+        hi = np.sqrt(d.loc[rows, "observed_ci_high"])
+        ax.bar(x - 0.27, 1e3 * np.sqrt(d.loc[rows, "se_var"]), 0.18, color="0.7", label="calibration's pose SE")
+        ax.bar(x - 0.09, 1e3 * obs, 0.18, color="k", yerr=1e3 * np.vstack([obs - lo, hi - obs]), capsize=2,
+               label="observed (95% CI over pieces)")
+        ax.bar(x + 0.09, 1e3 * np.sqrt(d.loc[rows, "reference_var"]), 0.18, color="C3", label="reference model")
+        if "layer_var" in d:
+            ax.bar(x + 0.27, 1e3 * np.sqrt(d.loc[rows, "layer_var"]), 0.18, color="C0",
+                   label=f"layer on ≤10 s rests ({int(d['layer_pieces'].max())} pieces)")
+        ax.set_xticks(x, rows)
+        ax.set_ylabel("pose-mean scatter about the session mean [mm/s²]")
+        ax.set_title(f"pose-mean scatter, {int(d['pieces'].max())} pieces", fontsize=9)
+        ax.legend(fontsize=6, loc="upper left")
+        fig.suptitle("ADIS16405, 2.78 h at rest: Allan deviation and what it means for the pose means of a "
+                     "calibration session", fontsize=9)
+    return fig
+
+
+def wander_named(report: dict) -> bool:
+    nm = report.get("noise_model") or {}
+    return bool(nm.get("estimated")) and nm.get("term") not in (None, "none")
+
+
+def plot_sessions(reports: dict, sims: dict, gaps: pd.DataFrame):
+    """Per real session: the distribution (ECDF) of the measured normalised pose residuals
+    |r/σ| of the base model against those of the session re-simulated with the model before
+    (base calibration, white noise of the rests) and after (what the loop named added)."""
+    names = list(reports)
+    ncol = min(3, len(names))
+    nrow = math.ceil(len(names) / ncol)
+    with plt.rc_context(RC):
+        fig, axs = plt.subplots(nrow, ncol, figsize=(3.8 * ncol, 3.0 * nrow + 0.5), layout="constrained",
+                                squeeze=False)
+        for ax, name in zip(axs.flat, names):
+            rep = reports[name]
+            meas = np.abs(np.array(rep["poses"]["residual_before"]) / np.array(rep["poses"]["sigma"]))
+            x = np.sort(meas)
+            ax.step(x, np.arange(1, x.size + 1) / x.size, where="post", color="k", lw=1.6, label="measured")
+            g = gaps[gaps.recording == name].set_index("model")
+            nothing = not rep.get("effects") and not wander_named(rep)
+            for model, col in (("before", "C0"), ("after", "C3")):
+                if model == "after" and nothing:  # nothing named: the model after is the one before
+                    continue
+                z = sims[name]
+                z = np.sort(np.abs(z[(z.model == model) & (z.pose >= 0)].z.to_numpy()))
+                if not z.size or model not in g.index:
+                    continue
+                r = g.loc[model]
+                ax.plot(z, np.arange(1, z.size + 1) / z.size, color=col, lw=1.1,
+                        label=f"re-simulated, {model}: excess {r.excess_sim_median:.2f}, KS {r.ks_distance:.2f}")
+            named = "+".join(rep.get("effects", [])) or "no effect"
+            nm = rep.get("noise_model") or {}
+            wander = nm.get("process", "") if wander_named(rep) else "no wander"
+            ax.set_title(f"{name}: {rep['n_poses']} poses, excess {g.excess_measured.iloc[0]:.2f}\n"
+                         f"named: {named}; {wander}" if len(g) else f"{name}: {rep['n_poses']} poses (no dof)",
+                         fontsize=7.5)
+            ax.set_xlabel("|pose residual| / its white noise σ_i", fontsize=7.5)
+            ax.legend(fontsize=5.5, loc="lower right")
+        for ax in axs.flat[len(names):]:
+            ax.set_visible(False)
+        axs[0, 0].set_ylabel("cumulative share of poses")
+        fig.suptitle("Real sessions re-simulated before / after what the loop names: gap to the measured residuals",
+                     fontsize=8.5)
+    return fig
+
+
+def plot_stability(stability: pd.DataFrame, estimates: pd.DataFrame):
+    """Sessions of one IMU: every parameter per session with its standard error, relative to
+    the weighted mean over the sessions, with Cochran's test (Holm-adjusted p) in the title."""
+    alt = stability[stability.yardstick == "se_scaled"].set_index("parameter")
+    stability = stability[stability.yardstick == "se"]
+    pars = list(dict.fromkeys(stability.parameter))
+    ncol = min(5, len(pars))
+    nrow = math.ceil(len(pars) / ncol)
+    with plt.rc_context(RC):
+        fig, axs = plt.subplots(nrow, ncol, figsize=(2.4 * ncol, 2.3 * nrow + 0.6), layout="constrained",
+                                squeeze=False)
+        for ax, par in zip(axs.flat, pars):
+            st = stability[stability.parameter == par].iloc[0]
+            e = estimates[(estimates.parameter == par) & estimates.recording.isin(
+                [c[6:] for c in stability.columns if c.startswith("value_") and np.isfinite(st[c])])]
+            x = np.arange(len(e))
+            ax.errorbar(x, e.value - st.weighted_mean, yerr=1.96 * e.se, fmt="o", ms=4, capsize=2,
+                        color="C2" if st.stable else "C3")
+            ax.axhline(0, color="0.5", lw=0.8)
+            ax.set_xticks(x, [r.split("_")[-1] for r in e.recording], fontsize=7)
+            p_alt = alt.loc[par, "p_adjusted"] if par in alt.index else float("nan")
+            ax.set_title(f"{par}: {'stable' if st.stable else 'NOT stable'}\np_adj {st.p_adjusted:.2g} "
+                         f"(scatter only: {p_alt:.2g})", fontsize=7)
+            ax.tick_params(axis="y", labelsize=6)
+            ax.set_ylabel({"b": "bias [data unit]", "s": "scale factor [-]", "t": "angle [rad]"}[par[0]], fontsize=6.5)
+        for ax in axs.flat[len(pars):]:
+            ax.set_visible(False)
+        fig.suptitle("One IMU, several sessions: each parameter minus its weighted mean over the sessions (95% "
+                     "intervals, the rests' noise inflated by any excess)\ngreen: consistent (Cochran's Q, Holm); in "
+                     "brackets the adjusted p with the residual scatter alone as yardstick", fontsize=8)
+    return fig
+
+
+__all__ = ["COLORS", "LABELS", "NULL_STYLE", "plot_adis_allan", "plot_confusion", "plot_fpr", "plot_power",
+           "plot_rows", "plot_sessions", "plot_stability"]

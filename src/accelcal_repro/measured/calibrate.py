@@ -29,18 +29,14 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from accelcal import bias_lls, bias_nlls, full_als, full_lls, full_nlls
+from accelcal import evaluation as ev
+from accelcal.calibration import calibrate_poses, pose_noise_std
 from accelcal.errors import AccelcalError, RecordingError
 from accelcal.recording import Recording
+from accelcal.registry import ESTIMATORS, estimator
 from accelcal.static import StaticPoses, detect_static_recording
-from accelcal import evaluation as ev
 from .sources import FERRARIS_STATIC, source
 
-#: Model of each estimator (the workflow's names: the functions of :mod:`accelcal`).
-MODEL = {"full_lls": "full", "full_als": "full", "full_nlls": "full", "bias_lls": "bias", "bias_nlls": "bias"}
-_FUNCTIONS = {"full_lls": full_lls, "full_nlls": full_nlls, "bias_lls": bias_lls, "bias_nlls": bias_nlls}
-#: Fewest poses each model's estimators accept (q + 1).
-MIN_POSES = {"full": 10, "bias": 4}
 AXES = ("x", "y", "z")
 #: The per-recording tables, by file stem (``results/measured/<recording>/<stem>.csv``).
 TABLES = ("poses", "params", "pose_errors", "summary", "agreement", "nominal")
@@ -65,6 +61,7 @@ class PoseSet:
     n_samples: np.ndarray
     labels: tuple[str, ...]
     detected: np.ndarray
+    temp: np.ndarray | None = None
 
     def __len__(self) -> int:
         return len(self.means)
@@ -160,11 +157,17 @@ def pose_set(name: str, detected: StaticPoses, used, labels) -> PoseSet:
     return PoseSet(recording=name, means=detected.means[used], mean_std=detected.mean_std[used],
                    noise_std=detected.noise_std[used], t_start=detected.t_start[used],
                    t_end=detected.t_end[used], n_samples=detected.n_samples[used],
-                   labels=tuple(labels[k] for k in used), detected=used)
+                   labels=tuple(labels[k] for k in used), detected=used,
+                   temp=None if detected.temp is None else detected.temp[used])
 
 
-def poses_table(name: str, detected: StaticPoses, used, labels) -> pd.DataFrame:
-    """One row per detected rest, with ``used`` marking the fitted ones."""
+def poses_table(name: str, detected: StaticPoses, used, labels, t) -> pd.DataFrame:
+    """One row per detected rest, with ``used`` marking the fitted ones.
+
+    ``noise_reference`` and ``reference_t_start``/``_t_end`` (the same on every row of a
+    recording) say where the detection's noise level came from
+    (:attr:`accelcal.static.StaticPoses.reference`) and which stretch it was.
+    """
     d = {"recording": name, "pose": np.arange(len(detected)), "label": labels,
          "t_start": detected.t_start, "t_end": detected.t_end, "n_samples": detected.n_samples,
          "start_index": detected.intervals[:, 0], "stop_index": detected.intervals[:, 1]}
@@ -175,37 +178,40 @@ def poses_table(name: str, detected: StaticPoses, used, labels) -> pd.DataFrame:
     for k, a in enumerate(AXES):
         d[f"noise_std_{a}"] = detected.noise_std[:, k]
     d["used"] = np.isin(np.arange(len(detected)), used)
+    a, b = detected.init_rest
+    d["noise_reference"] = detected.reference
+    d["reference_t_start"] = float(t[a])
+    d["reference_t_end"] = float(t[b - 1])
     return pd.DataFrame(d)
 
 
 # --------------------------------------------------------------------------- estimators
 
 
-def frame(ps: PoseSet, estimator: str, g: float, conversion) -> Frame:
-    """The data ``estimator`` is fitted to (module docstring: units)."""
-    if MODEL[estimator] == "full":
-        return Frame(ps.means, ps.mean_std, g, np.zeros(3), np.ones(3))
-    return Frame(conversion.to_si(ps.means), ps.mean_std / conversion.counts_per_unit, g,
-                 np.asarray(conversion.offset, float), np.asarray(conversion.counts_per_unit, float))
+def conversion_for(est: str, conversion):
+    """The nominal conversion a bias-only estimator is fitted through (module docstring:
+    units), None for the full models."""
+    return conversion if estimator(est).model == "bias" else None
 
 
-def make_fit(estimator: str, fr: Frame):
-    """``fit(z) -> result`` for ``estimator`` with g (and ALS's noise level) bound in.
-
-    ALS gets the RMS of the pose-mean standard errors (all poses and axes) as its
-    known noise level, rather than estimating it from a handful of poses.
-    """
-    if estimator not in MODEL:
-        raise AccelcalError(f"unknown estimator {estimator!r}; known: {', '.join(MODEL)}")
-    if estimator == "full_als":
-        noise = float(np.sqrt(np.mean(fr.mean_std ** 2)))
-        return lambda z: full_als(z, fr.g, noise_std=noise)
-    f = _FUNCTIONS[estimator]
-    return lambda z: f(z, fr.g)
+def frame(cal) -> Frame:
+    """What the calibration ``cal`` was fitted to, and the map of its bias back to the
+    file unit (:func:`accelcal.calibration.calibrate_poses`, ``conversion``)."""
+    return Frame(np.asarray(cal.poses["mean"]), np.asarray(cal.poses["mean_std"]), cal.g, cal.input_offset,
+                 cal.input_sensitivity)
 
 
-def parameter_names(estimator: str) -> tuple[str, ...]:
-    return FULL_PARAMETERS if MODEL[estimator] == "full" else BIAS_PARAMETERS
+def make_fit(est: str, fr: Frame):
+    """``fit(z) -> result`` for estimator ``est`` with g and the noise level bound in, as
+    :func:`accelcal.calibration.calibrate_poses` fits it (ALS: the rests' noise level,
+    :func:`accelcal.calibration.pose_noise_std`)."""
+    e = estimator(est)
+    noise = pose_noise_std(fr.mean_std) if e.needs_noise else None
+    return lambda z: e.fit(z, fr.g, noise_std=noise)
+
+
+def parameter_names(est: str) -> tuple[str, ...]:
+    return FULL_PARAMETERS if estimator(est).model == "full" else BIAS_PARAMETERS
 
 
 def parameter_vector(result, fr: Frame) -> np.ndarray:
@@ -224,10 +230,10 @@ def _se_vector(se_b, se_s, se_th_deg, fr: Frame, model: str) -> np.ndarray:
     return np.concatenate([b, np.asarray(se_s, float), np.asarray(se_th_deg, float)])
 
 
-def parameter_units(estimator: str, unit: str) -> tuple[str, ...]:
+def parameter_units(est: str, unit: str) -> tuple[str, ...]:
     sens = "counts/(m/s^2)" if unit == "counts" else "1"
     u = (unit,) * 3
-    return u if MODEL[estimator] == "bias" else (*u, *(sens,) * 3, *("deg",) * 3)
+    return u if estimator(est).model == "bias" else (*u, *(sens,) * 3, *("deg",) * 3)
 
 
 # --------------------------------------------------------------------------- one recording
@@ -248,8 +254,9 @@ def calibrate_recording(name: str, rec: Recording, *, g: float, estimators, sect
     g : float
         Local gravity [m/s²].
     estimators : sequence of str
-        Names from :data:`MODEL`.  An estimator the pose count does not allow raises
-        :class:`~accelcal.errors.TooFewPosesError` (a configuration error, not a result).
+        Names from :data:`accelcal.registry.ESTIMATORS`.  An estimator the pose count
+        does not allow raises :class:`~accelcal.errors.TooFewPosesError` (a configuration
+        error, not a result).
     sections : dict, optional
         imucal section list (selects the Ferraris poses).
     pose_selection : {'section_list', 'all'}
@@ -270,9 +277,9 @@ def calibrate_recording(name: str, rec: Recording, *, g: float, estimators, sect
     """
     src = source(name)
     conv = src.conversion
-    unknown = [e for e in estimators if e not in MODEL]
+    unknown = [e for e in estimators if e not in ESTIMATORS]
     if unknown:
-        raise AccelcalError(f"{name}: unknown estimator(s) {', '.join(unknown)}; known: {', '.join(MODEL)}")
+        raise AccelcalError(f"{name}: unknown estimator(s) {', '.join(unknown)}; known: {', '.join(ESTIMATORS)}")
     detected = detect_static_recording(rec, **(static_kw or {}))
     used, labels = select_poses(name, detected, sections, pose_selection)
     ps = pose_set(name, detected, used, labels)
@@ -282,34 +289,36 @@ def calibrate_recording(name: str, rec: Recording, *, g: float, estimators, sect
     param_rows, pose_rows, summary_rows = [], [], []
     boot, results = {}, {}
     for est in estimators:
-        model = MODEL[est]
-        fr = frame(ps, est, g, conv)
-        fit = make_fit(est, fr)
+        e = estimator(est)
+        model = e.model
         t0 = time.perf_counter()
-        try:
-            r = fit(fr.z)
-        except AccelcalError as e:  # e.g. too few poses for the full model: name the recording
-            raise type(e)(f"{name}, {est}: {e}") from None
+        try:  # the CLI's calibration of the same poses (accelcal.calibration)
+            r = calibrate_poses(ps, g, est, unit=src.unit, conversion=conversion_for(est, conv))
+        except AccelcalError as err:  # e.g. too few poses for the full model: name the recording
+            raise type(err)(f"{name}, {est}: {err}") from None
         seconds = time.perf_counter() - t0
         results[est] = r
+        fr = frame(r)
+        fit = make_fit(est, fr)
         names = parameter_names(est)
-        q = 9 if model == "full" else 3
+        q = e.n_parameters
         values = parameter_vector(r, fr)
         se = r.standard_errors
         se_v = _se_vector(se["bias"], se.get("scale_factors"), se.get("nonorthogonality_deg"), fr, model)
         nse = ev.noise_standard_errors(fr.z, fr.mean_std, r.M, r.bias, model)
         nse_v = _se_vector(nse[:3], nse[3:6], np.rad2deg(nse[6:9]), fr, model)
 
-        # residuals against the noise
+        # residuals against the noise (the calibration's quality: accelcal.quality)
         sigma = ev.residual_sigma(fr.z, fr.mean_std, r.M, r.bias)
-        chi = ev.chi2_test(r.residuals, sigma, q)
+        qa = r.quality
+        chi = ev.Chi2(qa.chi2, qa.dof, qa.p_value)
         n = len(ps)
-        lo, lo_note = ev.lopo(fit, fr.z, g, MIN_POSES[model])
+        lo, lo_note = ev.lopo(fit, fr.z, g, e.min_poses)
 
         # bootstrap over poses
         t1 = time.perf_counter()
         samples, valid = ev.bootstrap(fit, lambda res, fr=fr: parameter_vector(res, fr), fr.z, idx,
-                                      MIN_POSES[model], len(names))
+                                      e.min_poses, len(names))
         boot_seconds = time.perf_counter() - t1
         frac = float(valid.mean()) if len(valid) else 0.0
         if len(valid) and frac >= min_valid_fraction:
@@ -350,12 +359,13 @@ def calibrate_recording(name: str, rec: Recording, *, g: float, estimators, sect
             "lopo_rms": float(np.sqrt(np.mean(finite_lo ** 2))) if finite_lo.size else np.nan,
             "lopo_max_abs": float(np.max(np.abs(finite_lo))) if finite_lo.size else np.nan,
             "lopo_note": lo_note, "n_boot": int(n_boot), "boot_valid_fraction": frac, "ci_method": method,
-            "fit_seconds": seconds, "boot_seconds": boot_seconds,
+            "distinct_orientations": qa.distinct_orientations, "coverage": qa.coverage,
+            "warnings": " ".join(qa.flags), "fit_seconds": seconds, "boot_seconds": boot_seconds,
         })
 
     params = pd.DataFrame(param_rows)
     return MeasuredCalibration(
-        recording=name, poses=poses_table(name, detected, used, labels), params=params,
+        recording=name, poses=poses_table(name, detected, used, labels, rec.t), params=params,
         pose_errors=pd.DataFrame(pose_rows), summary=pd.DataFrame(summary_rows),
         agreement=agreement_table(name, params, boot, level), nominal=nominal_table(name, params, conv, src.unit),
         results=results, pose_set=ps, detected=detected)
@@ -412,7 +422,7 @@ def nominal_table(name: str, params: pd.DataFrame, conv, unit: str) -> pd.DataFr
     return pd.DataFrame(rows, columns=cols)
 
 
-__all__ = ["BIAS_PARAMETERS", "FULL_PARAMETERS", "Frame", "MIN_POSES", "MODEL", "MeasuredCalibration", "PoseSet",
-           "TABLES", "agreement_table", "calibrate_recording", "frame", "make_fit", "nominal_table", "parameter_names",
-           "parameter_vector", "pose_set", "poses_table", "select_poses"]
+__all__ = ["BIAS_PARAMETERS", "FULL_PARAMETERS", "Frame", "MeasuredCalibration", "PoseSet", "TABLES",
+           "agreement_table", "calibrate_recording", "conversion_for", "frame", "make_fit", "nominal_table",
+           "parameter_names", "parameter_vector", "pose_set", "poses_table", "select_poses"]
 

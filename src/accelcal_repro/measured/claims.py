@@ -16,6 +16,8 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from accelcal.registry import model_of
+
 from ..claims import COLUMNS, Claim, validate_rows
 
 
@@ -32,7 +34,7 @@ def _xsens_analogue(summary, nominal, params) -> str:
         return "no Xsens full-LLS result in this run"
     nom = nominal[(nominal.recording == "xsens_mti") & (nominal.estimator == "full_lls")]
     rel = ", ".join(f"{r.rel_diff_pct:+.2f}%" for r in nom.itertuples())
-    full = params[(params.recording == "xsens_mti") & params.estimator.str.startswith("full")]
+    full = params[(params.recording == "xsens_mti") & params.estimator.map(model_of).eq("full")]
     spread = full.groupby("parameter")["value"].agg(lambda v: v.max() - v.min())
     within = full.groupby("parameter")["boot_se"].min()
     ratio = float(np.nanmax(spread / within)) if len(spread) else float("nan")

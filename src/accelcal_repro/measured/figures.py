@@ -20,10 +20,13 @@ import numpy as np
 import pandas as pd
 
 from accelcal.plotting import RC, style
+from accelcal.registry import model_of
 from .sources import source
 
 #: Display names of the recordings.
-TITLES = {"xsens_mti": "Xsens MTi (IMU-TK)", "mpu6050": "MPU-6050", "imucal_ferraris": "imucal Ferraris session"}
+TITLES = {"xsens_mti": "Xsens MTi (IMU-TK)", "mpu6050": "MPU-6050", "imucal_ferraris": "imucal Ferraris session",
+          **{f"imutk_fork_{d}": f"IMU-TK fork {d}" for d in ("data2", "data3", "data4")},
+          "fxos8700_sample1": "FXOS8700 data_sample", "fxos8700_sample2": "FXOS8700 data_sample2"}
 PEER_STYLE = {"color": "k", "marker": "*", "label": "imucal Ferraris (peer)"}
 RESID_STYLE = {"color": "C5", "marker": "P", "label": "bias-only LLS residuals (implied scale)"}
 
@@ -72,17 +75,19 @@ def plot_static_detection(recordings: dict[str, tuple[np.ndarray, np.ndarray]], 
                 ax.plot(t, a[:, k], color=c, lw=0.5, label=f"a{'xyz'[k]}", rasterized=True)
             p = poses[poses.recording == name]
             for r in p.itertuples():
-                kw = {"color": "C2" if r.used else "0.6", "alpha": 0.25 if r.used else 0.35, "lw": 0}
-                if r.pose == 0:
-                    kw.update(hatch="///", edgecolor="C2" if r.used else "0.4", facecolor="none", alpha=0.6)
-                    kw.pop("color")
-                ax.axvspan(r.t_start, r.t_end, **kw)
+                ax.axvspan(r.t_start, r.t_end, color="C2" if r.used else "0.6", alpha=0.25 if r.used else 0.35, lw=0)
                 if not str(r.label).startswith("rest"):
                     ax.text(0.5 * (r.t_start + r.t_end), 1.0, r.label, transform=ax.get_xaxis_transform(),
                             ha="center", va="bottom", fontsize=6.5)
+            ref = p.iloc[0]
+            if ref.noise_reference != "known_intervals":
+                ax.axvspan(ref.reference_t_start, ref.reference_t_end, hatch="///", edgecolor="C3", facecolor="none",
+                           lw=0.6)
             n, u = len(p), int(p.used.sum())
-            ax.set_title(f"{_title(name)}: {n} rests detected, {u} used as poses", fontsize=8.5, loc="left",
-                         pad=10 if (~p.label.str.startswith("rest")).any() else 4)
+            found = {"known_intervals": "known static intervals (logged blocks)",
+                     "quietest_stretch": "rests detected (no initial rest: noise from the quietest 2 s)"}
+            ax.set_title(f"{_title(name)}: {n} {found.get(ref.noise_reference, 'rests detected')}, {u} used as poses",
+                         fontsize=8.5, loc="left", pad=10 if (~p.label.str.startswith("rest")).any() else 4)
             ax.set_ylabel("nominal m/s²")
             ax.set_xlim(t[0], t[-1])
             ax.set_ylim(-14, 14)
@@ -92,7 +97,7 @@ def plot_static_detection(recordings: dict[str, tuple[np.ndarray, np.ndarray]], 
         _figure_legend(fig, axes[:1, 0], ncol=6, extra=(
             Patch(color="C2", alpha=0.25, label="rest used as pose"),
             Patch(color="0.6", alpha=0.35, label="rest not used"),
-            Patch(facecolor="none", edgecolor="C2", hatch="///", label="initial rest (noise reference)")))
+            Patch(facecolor="none", edgecolor="C3", hatch="///", label="noise reference of the detection")))
     return fig
 
 
@@ -155,8 +160,10 @@ def plot_calibration(params: pd.DataFrame, peer: pd.DataFrame | None = None, nom
                 ax.plot(np.arange(3) + dodge(len(ests)), dev, ls="none", ms=7, **PEER_STYLE)
             ax.axhline(0, color="k", lw=0.6)
             ax.set_xticks(range(3), [f"b{a}\n{refv.get(f'bias_{a}', np.nan):.6g}" for a in "xyz"], fontsize=7)
-            ax.set_ylabel(f"bias − {style(ref)['label']} [mm/s²]", fontsize=7.5)
-            ax.set_title(f"{_title(rec)}: bias [{unit}]", fontsize=8, loc="left")
+            via = "\n(counts via nominal sensitivity)" if unit == "counts" else ""
+            ax.set_ylabel(f"bias − {style(ref)['label']} [mm/s²]{via}", fontsize=7)
+            ax.set_xlabel(f"{style(ref)['label']} value [{unit.replace('^2', '²')}]", fontsize=6.5, labelpad=1)
+            ax.set_title(f"{_title(rec)}: bias", fontsize=8, loc="left")
 
             # --- sensitivity relative to nominal
             ax = axes[row, 1]
@@ -222,7 +229,7 @@ def plot_residuals(pose_errors: pd.DataFrame):
             ests = list(dict.fromkeys(d.estimator))
             for col, prefix in ((0, "full"), (1, "bias")):
                 ax = axes[row, col]
-                es = [e for e in ests if e.startswith(prefix)]
+                es = [e for e in ests if model_of(e) == prefix]
                 if not es:
                     ax.text(0.5, 0.5, "full model not identifiable\n(6 orientations < 10 poses)"
                             if prefix == "full" else "no bias-only fit", transform=ax.transAxes,

@@ -1,15 +1,26 @@
 """The measured recordings: which files, which reader, which unit and nominal conversion.
 
-Three public recordings (``shared/data/README.md``), named by what they are:
+The public recordings (``shared/data/README.md``), named by what they are:
 
-========================  ====================  ======  ==========================================
-name                      dataset               unit    content
-========================  ====================  ======  ==========================================
-``xsens_mti``             ``imu_tk_xsens``      counts  Xsens MTi, ~38 hand-placed poses (IMU-TK)
-``mpu6050``               ``mpu6050_suarez``    counts  MPU-6050, ~10 hand-placed poses
-``imucal_ferraris``       ``imucal_ferraris``   m/s²    Ferraris session: 6 static positions
-                                                        (x_p ... z_a) and 3 rotations
-========================  ====================  ======  ==========================================
+====================  =======================  ======  ====================================================
+name                  dataset                  unit    content
+====================  =======================  ======  ====================================================
+``xsens_mti``         ``imu_tk_xsens``         counts  Xsens MTi, ~38 hand-placed poses (IMU-TK)
+``mpu6050``           ``mpu6050_suarez``       counts  MPU-6050, ~10 hand-placed poses
+``imucal_ferraris``   ``imucal_ferraris``      m/s²    Ferraris session: 6 static positions and 3 rotations
+``imutk_fork_data2``  ``imutk_fork_sessions``  m/s²    one IMU (ROS topic), 40 hand-placed poses
+``imutk_fork_data3``  ``imutk_fork_sessions``  m/s²    the same IMU, 27 poses
+``imutk_fork_data4``  ``imutk_fork_sessions``  m/s²    the same IMU, 22 poses
+``fxos8700_sample1``  ``fastahrs_fxos8700``    m/s²    FXOS8700 block log, 18 blocks = known rests
+``fxos8700_sample2``  ``fastahrs_fxos8700``    m/s²    FXOS8700 block log, 20 blocks = known rests
+====================  =======================  ======  ====================================================
+
+The fork sessions do not start at rest (the first seconds are 6-9x noisier than the
+later rests), so the static detection takes its noise level from their quietest stretch
+(:func:`accelcal.static.detect_static`, ``noise_reference='auto'``).  The FXOS8700 logs
+have no time stamps and no motion between poses; each block is a known static interval
+(:func:`accelcal.recording.read_block_log`), carried into the canonical CSV as its
+``pose`` column, so no detection runs on them.
 
 :func:`read_source` reads the original file with the readers of
 :mod:`accelcal.recording`; :func:`convert` writes the canonical CSV of the CLI
@@ -24,8 +35,8 @@ from pathlib import Path
 
 from accelcal.atomic import atomic_output, sha256_file, write_json_atomic
 from accelcal.errors import RecordingError
-from accelcal.recording import (NominalConversion, Recording, nominal_conversion, read_imucal_section_list,
-                         read_imucal_session, read_imutk_ascii, read_mpu6050_csv, write_recording)
+from accelcal.readers import read
+from accelcal.recording import NominalConversion, Recording, nominal_conversion, read_imucal_section_list, write_recording
 from .data import DatasetError, check_available, fetch_file
 
 
@@ -44,7 +55,7 @@ class Source:
     extra_files : tuple of str
         Other files the analysis needs (the imucal section list).
     fmt : str
-        Reader: ``'imutk_ascii'``, ``'mpu6050'`` or ``'imucal_session'``.
+        Reader: ``'imutk_ascii'``, ``'mpu6050'``, ``'imucal_session'`` or ``'block_log'``.
     nominal : str
         Key of :func:`accelcal.recording.nominal_conversion`.
     unit : str
@@ -78,6 +89,13 @@ SOURCES: dict[str, Source] = {
     "imucal_ferraris": Source("imucal_ferraris", "imucal_ferraris", "example_ferraris_session.csv",
                               ("example_ferraris_session_list.json",), "imucal_session", "imucal_session", "m/s^2",
                               "imucal example Ferraris session (six static positions, three rotations)"),
+    **{f"imutk_fork_{d}": Source(f"imutk_fork_{d}", "imutk_fork_sessions", f"{d}/acc_data.txt", (), "imutk_ascii",
+                                 "imutk_fork", "m/s^2",
+                                 f"IMU-TK fork (GetOverMassif) session {d}: one ROS IMU, hand-placed static poses")
+       for d in ("data2", "data3", "data4")},
+    **{f"fxos8700_sample{k}": Source(f"fxos8700_sample{k}", "fastahrs_fxos8700", f, (), "block_log", "fxos8700",
+                                     "m/s^2", f"NXP FXOS8700 (FastAhrs {f}): poses logged as blocks, known rests")
+       for k, f in ((1, "data_sample.csv"), (2, "data_sample2.csv"))},
 }
 
 #: The static sections of a Ferraris session list, in imucal's order.
@@ -127,17 +145,20 @@ def read_manifest(path) -> dict[str, Path]:
         raise RecordingError(f"{path}: not a measured-data manifest ({type(e).__name__})") from None
 
 
+#: Each source format as :func:`accelcal.readers.read` names it.
+READER_FORMAT = {"imutk_ascii": "csv", "mpu6050": "mpu6050", "imucal_session": "imucal", "block_log": "block-log"}
+
+
 def read_source(name: str, paths: dict[str, Path]) -> Recording:
-    """Read the original accelerometer file of recording ``name`` (units as stored)."""
+    """Read the original accelerometer file of recording ``name`` (units as stored) with the
+    readers of ``accelcal calibrate`` (:func:`accelcal.readers.read`), so that the workflow
+    and the CLI see the same numbers.  IMU-TK ASCII is read as a plain table (headerless
+    t, x, y, z), which is what the CLI detects it as."""
     s = source(name)
-    p = paths[s.data_file]
-    if s.fmt == "imutk_ascii":
-        return read_imutk_ascii(p)
-    if s.fmt == "mpu6050":
-        return read_mpu6050_csv(p)
-    if s.fmt == "imucal_session":
-        return read_imucal_session(p)
-    raise RecordingError(f"unknown format {s.fmt!r}")  # pragma: no cover (table is fixed)
+    return read(paths[s.data_file], format=READER_FORMAT[s.fmt], unit=_UNIT[s.unit])
+
+
+_UNIT = {"counts": "counts", "m/s^2": "m/s2"}
 
 
 def section_list(name: str, paths: dict[str, Path]) -> dict[str, tuple[int, int]] | None:

@@ -1,0 +1,800 @@
+"""Calibrations that know their quality, save and load themselves, and apply themselves.
+
+One class per method (as imucal's ``CalibrationInfo`` subclasses), all holding the model
+``z = M P(x) + b + β Δt + γ ΔT`` of :mod:`accelcal.discrepancy.effects` (the plain
+``z = M x + b`` when no effect was fitted):
+
+==========================  ================  =============================================
+class                       ``cal_type``      made by
+==========================  ================  =============================================
+:class:`FullLLSCalibration`   ``full_lls``    :func:`calibrate_recording` / ``calibrate``
+:class:`FullALSCalibration`   ``full_als``    (the registry's estimators,
+:class:`FullNLLSCalibration`  ``full_nlls``   :mod:`accelcal.registry`)
+:class:`BiasLLSCalibration`   ``bias_lls``
+:class:`BiasNLLSCalibration`  ``bias_nlls``
+:class:`ExtendedCalibration`  ``extended``    the discrepancy loop: base model + the named
+                                              effects (``accelcal discrepancy``'s report)
+==========================  ================  =============================================
+
+Apply.  :meth:`Calibration.apply` turns raw samples into calibrated specific force in
+m/s²: ``y = M⁻¹(z - b - β Δt - γ ΔT)``, then per axis ``P_j(x_j) = y_j`` solved for
+``x_j`` (Newton; exact at once without polynomial effects), with ``Δt = t - t_ref`` and
+``ΔT = T - T_ref`` against the references of the calibration session.  Raw data must be
+in the unit the calibration was fitted in (``unit``: m/s² or counts; g and mg are
+converted, counts against an m/s² calibration only through the calibration's own
+nominal conversion, ``input_offset``/``input_sensitivity``).
+
+File format (JSON, ``format: accelcal-calibration``, ``format_version`` below).  The keys
+the CLI always wrote keep their meaning (``method``, ``g``, ``n_poses``, ``bias``, ``M``,
+``scale_factors``, ``nonorthogonality_deg``, ``residual_rms``, ``residuals``,
+``standard_errors``, ``poses``, ...); new ones: ``cal_type``, ``unit`` and ``units``
+(every quantity's unit spelled out: ``M`` and ``gain`` are counts per m/s² for raw
+counts, dimensionless for m/s²), ``gain``, ``quality`` (:mod:`accelcal.quality`),
+``standard_errors_noise``, ``effects``, ``input``, ``static``.  :func:`load_calibration`
+reads it (and older files without a version: format 0), and also the report of
+``accelcal discrepancy`` (its ``model_after``: base model + named effects).  A newer
+format version than this code knows is refused with the version it needs.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+from typing import ClassVar
+
+import numpy as np
+
+from .errors import (AccelcalError, DegeneratePosesError, NotConvergedError, NotPositiveDefiniteError,
+                     TooFewPosesError)
+from .registry import ESTIMATORS, estimator
+from .units import G0, acceleration_unit
+
+FORMAT = "accelcal-calibration"
+#: Version of the JSON layout written by :meth:`Calibration.to_dict` (0: the CLI's output
+#: before versions, read as such).
+FORMAT_VERSION = 1
+#: Effects :meth:`Calibration.apply` can invert (those of :mod:`accelcal.discrepancy.effects`).
+APPLICABLE_EFFECTS = ("quadratic", "cubic", "bias_drift", "temperature", "temperature_scale")
+_NEWTON_ITER = 60
+_NEWTON_RTOL = 1e-14
+
+
+class CalibrationFileError(AccelcalError):
+    """A calibration file that cannot be read or does not fit the data it is applied to."""
+
+
+@dataclass(frozen=True)
+class EffectTerm:
+    """One fitted effect: a block of three parameters (x, y, z) of a discrepancy effect.
+
+    Attributes
+    ----------
+    id : str
+        ``quadratic``, ``cubic``, ``bias_drift``, ``temperature``, ``temperature_scale``.
+    values : ndarray, shape (3,)
+        The parameters (``k``, ``c``, ``β``, ``γ``, ``κ`` per axis), units of
+        :mod:`accelcal.discrepancy.effects` (data unit Z, unit of g G).
+    reference : float or None
+        Centre of the covariate (session mean time [s] or temperature [°C]).
+    standard_errors : ndarray, shape (3,), or None
+    """
+
+    id: str
+    values: np.ndarray
+    reference: float | None = None
+    standard_errors: np.ndarray | None = None
+
+    def to_dict(self) -> dict:
+        from .discrepancy.effects import effect
+
+        e = effect(self.id)
+        return {"id": self.id, "kind": e.kind, "covariate": e.covariate, "reference": self.reference,
+                "unit": e.unit, "parameters": dict(zip(e.parameters, map(float, self.values))),
+                "standard_errors": None if self.standard_errors is None else
+                dict(zip(e.parameters, map(_json_float, self.standard_errors)))}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> EffectTerm:
+        from .discrepancy.effects import effect
+
+        e = effect(d["id"])
+        vals = np.array([float(d["parameters"][p]) for p in e.parameters])
+        se = d.get("standard_errors")
+        se = None if not se else np.array([np.nan if se[p] is None else float(se[p]) for p in e.parameters])
+        ref = d.get("reference")
+        return cls(d["id"], vals, None if ref is None else float(ref), se)
+
+
+@dataclass(frozen=True, eq=False)
+class Calibration:
+    """A calibrated model ``z = M P(x) + b + ...`` with its units, quality and provenance.
+
+    Attributes
+    ----------
+    bias : ndarray, shape (3,)
+        ``b`` in :attr:`unit`.
+    M : ndarray, shape (3, 3)
+        Lower triangular; counts per m/s² for raw counts, dimensionless for m/s².
+    g : float
+        Gravity magnitude the calibration was fitted with [m/s²].
+    unit : {'m/s^2', 'counts'} or None
+        Unit of ``z`` and ``b`` (None: a format-0 file that did not say).
+    input_offset, input_sensitivity : ndarray, shape (3,)
+        Raw input → fit unit: ``z = (raw - input_offset) / input_sensitivity`` (zeros and
+        ones unless a nominal conversion of raw counts, in counts per m/s², was applied
+        for a bias-only model).
+    input_unit : str or None
+        Unit of the raw data ``apply`` expects by default.
+    effects : tuple of EffectTerm
+    standard_errors : dict of ndarray
+        Residual-scaled linearised standard errors (the key the CLI always wrote).
+    standard_errors_noise : dict of ndarray
+        From the independent pose noise, scaled by ``max(1, excess)`` (:mod:`accelcal.quality`).
+    quality : FitQuality or None
+    residuals : ndarray, shape (n,)
+    poses : dict
+        ``mean``, ``mean_std``, ``t_start``, ``t_end``, ``n_samples``, ``temp``, ``labels``.
+    provenance : dict
+        ``recording``, ``recording_sha256``, ``accelcal_version``, ``notes``, ``static``,
+        ``elapsed_s`` ... (copied to the JSON as they are).
+    """
+
+    CAL_TYPE: ClassVar[str] = ""
+
+    bias: np.ndarray
+    M: np.ndarray
+    g: float
+    unit: str | None
+    input_offset: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    input_sensitivity: np.ndarray = field(default_factory=lambda: np.ones(3))
+    input_unit: str | None = None
+    effects: tuple[EffectTerm, ...] = ()
+    standard_errors: dict = field(default_factory=dict)
+    standard_errors_noise: dict = field(default_factory=dict)
+    quality: object | None = None
+    residuals: np.ndarray | None = None
+    poses: dict = field(default_factory=dict)
+    provenance: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        for name in ("bias", "input_offset", "input_sensitivity"):
+            object.__setattr__(self, name, np.asarray(getattr(self, name), dtype=float).reshape(3))
+        M = np.asarray(self.M, dtype=float)
+        if M.shape != (3, 3) or not np.all(np.isfinite(M)) or not np.all(np.isfinite(self.bias)):
+            raise CalibrationFileError(f"a calibration needs a finite bias (3,) and M (3, 3); got M {M.shape}")
+        object.__setattr__(self, "M", M)
+        for e in self.effects:
+            if e.id not in APPLICABLE_EFFECTS:
+                raise CalibrationFileError(f"effect {e.id!r} cannot be applied; known: {', '.join(APPLICABLE_EFFECTS)}")
+
+    # ----------------------------------------------------------------- derived quantities
+
+    @property
+    def method(self) -> str:
+        return self.CAL_TYPE
+
+    @property
+    def model(self) -> str:
+        return ESTIMATORS[self.CAL_TYPE].model if self.CAL_TYPE in ESTIMATORS else "full"
+
+    @property
+    def gain(self) -> np.ndarray:
+        """Row norms of ``M`` (``1 + s``): counts per m/s² for counts, dimensionless for m/s²."""
+        return np.linalg.norm(self.M, axis=1)
+
+    @property
+    def scale_factors(self) -> np.ndarray:
+        from .model import params_from_m
+
+        return params_from_m(self.M)[0]
+
+    @property
+    def nonorthogonality_deg(self) -> np.ndarray:
+        from .model import params_from_m
+
+        return np.rad2deg(params_from_m(self.M)[1])
+
+    @property
+    def n_poses(self) -> int:
+        return 0 if "mean" not in self.poses else len(self.poses["mean"])
+
+    @property
+    def residual_rms(self) -> float:
+        return float("nan") if self.residuals is None else float(np.sqrt(np.mean(np.square(self.residuals))))
+
+    @property
+    def units(self) -> dict:
+        """The unit of every quantity of the JSON, spelled out."""
+        z = self.unit or "data unit"
+        gain = "counts/(m/s^2)" if self.unit == "counts" else ("1" if self.unit == "m/s^2" else f"{z}/(m/s^2)")
+        return {"data": z, "g": "m/s^2", "bias": z, "M": gain, "gain": gain,
+                "scale_factors": "1 (gain - 1; a scale-factor error only for data in m/s^2)",
+                "nonorthogonality_deg": "deg", "residuals": "m/s^2", "residual_rms": "m/s^2",
+                "poses.mean": z, "poses.mean_std": z, "poses.t_start": "s", "calibrated output": "m/s^2"}
+
+    # ----------------------------------------------------------------- apply
+
+    def apply(self, raw, *, t=None, temp=None, unit: str | None = None, effects: bool = True) -> np.ndarray:
+        """Calibrated specific force [m/s²] of raw samples.
+
+        Parameters
+        ----------
+        raw : array_like, shape (n, 3)
+            Raw accelerometer samples.
+        t : array_like, shape (n,), optional
+            Time [s] on the calibration session's clock (needed by ``bias_drift``).
+        temp : array_like, shape (n,), optional
+            Temperature [°C] (needed by ``temperature`` and ``temperature_scale``).
+        unit : str, optional
+            Unit of ``raw`` (``m/s2``, ``g``, ``mg``, ``counts``); default
+            :attr:`input_unit` (the unit the calibration was made from).
+        effects : bool
+            Apply the fitted effects (default); False gives the base model only.
+
+        Returns
+        -------
+        ndarray, shape (n, 3)
+        """
+        z = np.array(raw, dtype=float)
+        if z.ndim != 2 or z.shape[1] != 3:
+            raise CalibrationFileError(f"apply needs raw samples of shape (n, 3), got {z.shape}")
+        if not np.all(np.isfinite(z)):
+            raise CalibrationFileError("apply: raw samples hold NaN or infinite values")
+        z = self._to_fit_unit(z, unit)
+        terms = self.effects if effects else ()
+        n = len(z)
+        cov = {"time": _covariate(t, n, "t", terms, "time"), "temperature": _covariate(temp, n, "temp", terms,
+                                                                                         "temperature")}
+        from .discrepancy.effects import EFFECTS
+
+        add = np.zeros_like(z)
+        c1 = np.ones_like(z)
+        c2 = np.zeros(3)
+        c3 = np.zeros(3)
+        for term in terms:
+            e = EFFECTS[term.id]
+            if e.kind == "additive":
+                add += (cov[e.covariate] - term.reference)[:, None] * term.values
+            elif e.power == 1:
+                c1 = c1 + (cov[e.covariate] - term.reference)[:, None] * term.values
+            elif e.power == 2:
+                c2 = c2 + term.values
+            else:
+                c3 = c3 + term.values
+        y = np.linalg.solve(self.M, (z - self.bias - add).T).T
+        if not any(EFFECTS[tm.id].kind == "polynomial" for tm in terms):
+            return y
+        x = y.copy()
+        scale = max(float(np.max(np.abs(y))), self.g)
+        for _ in range(_NEWTON_ITER):
+            slope = c1 + 2 * c2 * x + 3 * c3 * x * x
+            if np.any(slope <= 0):
+                raise CalibrationFileError("the calibration's polynomial effects are not monotonic over these "
+                                           "samples (they lie outside the calibrated range): cannot invert them")
+            step = (c1 * x + c2 * x * x + c3 * x ** 3 - y) / slope
+            x -= step
+            if np.max(np.abs(step)) <= _NEWTON_RTOL * scale:
+                return x
+        raise CalibrationFileError("the polynomial effects did not invert (Newton did not converge)")
+
+    def _to_fit_unit(self, z: np.ndarray, unit: str | None) -> np.ndarray:
+        given = self.input_unit if unit is None else acceleration_unit(unit)
+        if unit is not None and given is None:
+            raise CalibrationFileError(f"unknown unit {unit!r}; use m/s2, g, mg or counts")
+        if given is None or self.unit is None:
+            return (z - self.input_offset) / self.input_sensitivity
+        if given in ("g", "mg"):
+            z = z * (G0 if given == "g" else G0 * 1e-3)
+            given = "m/s^2"
+        nominal = np.any(self.input_offset != 0) or np.any(self.input_sensitivity != 1)
+        if nominal:
+            if given != (self.input_unit or "counts"):
+                raise CalibrationFileError(f"this calibration converts raw {self.input_unit} nominally; the data are "
+                                           f"in {given}")
+            return (z - self.input_offset) / self.input_sensitivity
+        if given != self.unit:
+            raise CalibrationFileError(f"the data are in {given} but the calibration was fitted to {self.unit}: "
+                                       "apply it to data in the unit it was made from (--unit)")
+        return z
+
+    # ----------------------------------------------------------------- JSON
+
+    def _method_fields(self) -> dict:
+        """Method-specific JSON keys (solver status, conditioning...)."""
+        return {k: _jsonable(getattr(self, k)) for k in self._method_field_names()}
+
+    @classmethod
+    def _method_field_names(cls) -> tuple[str, ...]:
+        return tuple(f.name for f in fields(cls) if f.name not in _BASE_FIELDS)
+
+    def to_dict(self) -> dict:
+        """The JSON object (see the module docstring)."""
+        est = ESTIMATORS.get(self.CAL_TYPE)
+        q = self.quality
+        d = {
+            "format": FORMAT, "format_version": FORMAT_VERSION, "cal_type": self.CAL_TYPE,
+            "method": est.cli_name if est else self.CAL_TYPE, "model": self.model,
+            "g": float(self.g), "n_poses": self.n_poses,
+            "bias": self.bias.tolist(), "M": self.M.tolist(),
+            "scale_factors": self.scale_factors.tolist(), "nonorthogonality_deg": self.nonorthogonality_deg.tolist(),
+            "gain": self.gain.tolist(),
+            "residual_rms": self.residual_rms,
+            "residuals": None if self.residuals is None else np.asarray(self.residuals).tolist(),
+            "standard_errors": {k: np.asarray(v).tolist() for k, v in self.standard_errors.items()},
+            "standard_errors_noise": {k: np.asarray(v).tolist() for k, v in self.standard_errors_noise.items()},
+            "unit": self.unit, "units": self.units,
+            "input": {"unit": self.input_unit, "offset": self.input_offset.tolist(),
+                      "sensitivity": self.input_sensitivity.tolist(),
+                      "meaning": "z = (raw - offset) / sensitivity is what the model was fitted to"},
+            "effects": [e.to_dict() for e in self.effects],
+            "quality": None if q is None else q.to_dict(),
+            **self._method_fields(),
+            "poses": {k: _jsonable(v) for k, v in self.poses.items()},
+            **self.provenance,
+        }
+        return _finite_json(d)
+
+    def to_json(self) -> str:
+        return json.dumps(self.to_dict(), indent=2)
+
+    def save(self, path) -> None:
+        """Write the JSON atomically (whole or not at all)."""
+        from .atomic import write_json_atomic
+
+        write_json_atomic(path, self.to_dict())
+
+    @classmethod
+    def from_dict(cls, d: dict) -> Calibration:
+        """Rebuild a calibration from :meth:`to_dict`'s object (any subclass, by ``cal_type``)."""
+        return _from_dict(d, source="calibration")
+
+    @classmethod
+    def from_json(cls, text: str) -> Calibration:
+        try:
+            d = json.loads(text)
+        except json.JSONDecodeError as e:
+            raise CalibrationFileError(f"not a calibration: invalid JSON ({' '.join(str(e).split())})") from None
+        return _from_dict(d, source="calibration")
+
+    def __eq__(self, other) -> bool:
+        if type(self) is not type(other):
+            return NotImplemented
+        return json.dumps(self.to_dict(), sort_keys=True) == json.dumps(other.to_dict(), sort_keys=True)
+
+    __hash__ = None
+
+
+_BASE_FIELDS = frozenset(f.name for f in fields(Calibration))
+
+
+@dataclass(frozen=True, eq=False)
+class FullLLSCalibration(Calibration):
+    """Burkhard et al.'s closed-form full model (``full_lls``): λ of eq. 5, the singular values of the design."""
+
+    CAL_TYPE: ClassVar[str] = "full_lls"
+    lam: float = float("nan")
+    singular_values: np.ndarray | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class FullALSCalibration(Calibration):
+    """Adjusted least squares (``full_als``): the noise variance it corrected for, and where it came from."""
+
+    CAL_TYPE: ClassVar[str] = "full_als"
+    lam: float = float("nan")
+    noise_var: float = float("nan")
+    noise_source: str = ""
+    singular_values: np.ndarray | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class FullNLLSCalibration(Calibration):
+    """Iterative full model (``full_nlls``, CasADi/IPOPT): solver status, iterations, cost."""
+
+    CAL_TYPE: ClassVar[str] = "full_nlls"
+    status: str = ""
+    iterations: int = 0
+    cost: float = float("nan")
+
+
+@dataclass(frozen=True, eq=False)
+class BiasLLSCalibration(Calibration):
+    """Bias-only closed form (``bias_lls``, ``M = I``): the fitted ``g² - bᵀb`` (``c``) and the singular values."""
+
+    CAL_TYPE: ClassVar[str] = "bias_lls"
+    c: float = float("nan")
+    singular_values: np.ndarray | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class BiasNLLSCalibration(Calibration):
+    """Bias-only iterative (``bias_nlls``): solver status, iterations, cost."""
+
+    CAL_TYPE: ClassVar[str] = "bias_nlls"
+    status: str = ""
+    iterations: int = 0
+    cost: float = float("nan")
+
+
+@dataclass(frozen=True, eq=False)
+class ExtendedCalibration(Calibration):
+    """The base model plus the effects the discrepancy loop named (``accelcal discrepancy``)."""
+
+    CAL_TYPE: ClassVar[str] = "extended"
+    base_effects_named: tuple[str, ...] = ()
+
+
+#: ``cal_type`` → class.
+CALIBRATION_CLASSES: dict[str, type[Calibration]] = {c.CAL_TYPE: c for c in (
+    FullLLSCalibration, FullALSCalibration, FullNLLSCalibration, BiasLLSCalibration, BiasNLLSCalibration,
+    ExtendedCalibration)}
+
+
+# --------------------------------------------------------------------------- loading
+
+
+def load_calibration(path) -> Calibration:
+    """Read a calibration file: ``accelcal calibrate``'s JSON (any version this code knows)
+    or ``accelcal discrepancy``'s report (its base model plus the named effects).
+
+    Raises
+    ------
+    CalibrationFileError
+        Missing file, invalid JSON, unknown ``cal_type``, a newer format version, or
+        missing or malformed keys (one line naming the key).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise CalibrationFileError(f"{path}: no such calibration file")
+    try:
+        d = json.loads(path.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as e:
+        raise CalibrationFileError(f"{path}: not a calibration (invalid JSON: {' '.join(str(e).split())[:80]})") \
+            from None
+    return _from_dict(d, source=str(path))
+
+
+def _from_dict(d, source: str) -> Calibration:
+    if not isinstance(d, dict):
+        raise CalibrationFileError(f"{source}: not a calibration (expected a JSON object)")
+    try:
+        if "model_after" in d and "cal_type" not in d:
+            return _from_discrepancy(d)
+        version = int(d.get("format_version", 0))
+        if version > FORMAT_VERSION:
+            raise CalibrationFileError(f"{source}: calibration format {version} is newer than this accelcal reads "
+                                       f"({FORMAT_VERSION}); upgrade accelcal")
+        cal_type = d.get("cal_type") or str(d.get("method", "")).replace("-", "_")
+        cls = CALIBRATION_CLASSES.get(cal_type)
+        if cls is None:
+            raise CalibrationFileError(f"{source}: unknown calibration type {cal_type!r}; known: "
+                                       f"{', '.join(CALIBRATION_CLASSES)}")
+        return cls(**_common(d, version), **_method_values(cls, d))
+    except CalibrationFileError as e:
+        if str(e).startswith(source):
+            raise
+        raise CalibrationFileError(f"{source}: {e}") from None
+    except (KeyError, TypeError, ValueError, IndexError) as e:
+        what = f"key {e.args[0]!r} missing" if isinstance(e, KeyError) else f"malformed value ({e})"
+        raise CalibrationFileError(f"{source}: not a valid calibration ({what})") from None
+
+
+def _arr(v):
+    return None if v is None else np.array([np.nan if x is None else x for x in np.ravel(v)], dtype=float).reshape(
+        np.shape(v))
+
+
+def _common(d: dict, version: int) -> dict:
+    from .quality import FitQuality
+
+    inp = d.get("input") or {}
+    unit = d.get("unit")
+    poses = {k: (v if k == "labels" else _arr(v)) for k, v in (d.get("poses") or {}).items()}
+    if poses.get("n_samples") is not None:
+        poses["n_samples"] = poses["n_samples"].astype(int)
+    known = {"format", "format_version", "cal_type", "method", "model", "g", "n_poses", "bias", "M", "scale_factors",
+             "nonorthogonality_deg", "gain", "residual_rms", "residuals", "standard_errors", "standard_errors_noise",
+             "unit", "units", "input", "effects", "quality", "poses", "singular_values", "lam", "c", "noise_var",
+             "noise_source", "status", "iterations", "cost", "base_effects_named"}
+    return {
+        "bias": _arr(d["bias"]), "M": _arr(d["M"]), "g": float(d["g"]), "unit": unit,
+        "input_offset": _arr(inp.get("offset", [0.0] * 3)),
+        "input_sensitivity": _arr(inp.get("sensitivity", [1.0] * 3)),
+        "input_unit": inp.get("unit", unit),
+        "effects": tuple(EffectTerm.from_dict(e) for e in d.get("effects") or ()),
+        "standard_errors": {k: _arr(v) for k, v in (d.get("standard_errors") or {}).items()},
+        "standard_errors_noise": {k: _arr(v) for k, v in (d.get("standard_errors_noise") or {}).items()},
+        "quality": None if not d.get("quality") else FitQuality.from_dict(d["quality"]),
+        "residuals": _arr(d.get("residuals")),
+        "poses": poses,
+        "provenance": {k: v for k, v in d.items() if k not in known},
+    }
+
+
+def _method_values(cls, d: dict) -> dict:
+    out = {}
+    for name in cls._method_field_names():
+        if name not in d or d[name] is None:
+            continue
+        v = d[name]
+        out[name] = _arr(v) if isinstance(v, list) and name != "base_effects_named" else v
+        if name == "base_effects_named":
+            out[name] = tuple(v)
+    return out
+
+
+def _from_discrepancy(d: dict) -> ExtendedCalibration:
+    """The base model + named effects of an ``accelcal discrepancy`` report."""
+    from .discrepancy.effects import effect
+    from .model import m_from_params
+
+    after = d["model_after"]
+    p = after["parameters"]
+    val = {k: float(v["value"]) for k, v in p.items()}
+    se = {k: (np.nan if v.get("se") is None else float(v["se"])) for k, v in p.items()}
+    bias = np.array([val[f"b_{a}"] for a in "xyz"])
+    s = np.array([val[f"s_{a}"] for a in "xyz"])
+    th = np.array([val[k] for k in ("theta_xy", "theta_zx", "theta_zy")])
+    poses = d.get("poses") or {}
+    refs = {"time": after.get("t_ref"), "temperature": after.get("temp_ref")}
+    if refs["time"] is None and poses.get("t"):
+        refs["time"] = float(np.mean(poses["t"]))
+    if refs["temperature"] is None and poses.get("temp"):
+        refs["temperature"] = float(np.mean(poses["temp"]))
+    terms = []
+    for eid in after.get("effects", []):
+        e = effect(eid)
+        ref = refs[e.covariate] if e.covariate else None
+        if e.covariate and ref is None:
+            raise CalibrationFileError(f"effect {eid} needs the session's mean {e.covariate}, which the report lacks")
+        terms.append(EffectTerm(eid, np.array([val[q] for q in e.parameters]), ref,
+                                np.array([se[q] for q in e.parameters])))
+    units = d.get("units") or {}
+    unit = d.get("unit") or units.get("data")
+    unit = unit if unit in ("m/s^2", "counts") else None
+    inp = d.get("input") or {}
+    keep = {k: d[k] for k in ("recording", "recording_sha256", "accelcal_version") if k in d}
+    keep["source"] = "accelcal discrepancy report (model_after)"
+    return ExtendedCalibration(
+        bias=bias, M=m_from_params(s, th), g=float(d["g"]), unit=unit, input_unit=inp.get("unit", unit),
+        effects=tuple(terms),
+        standard_errors={"bias": np.array([se[f"b_{a}"] for a in "xyz"]),
+                         "scale_factors": np.array([se[f"s_{a}"] for a in "xyz"]),
+                         "nonorthogonality_deg": np.rad2deg([se[k] for k in ("theta_xy", "theta_zx", "theta_zy")])},
+        residuals=_arr((poses.get("residual_after"))),
+        poses={"t_mid": _arr(poses.get("t")), "temp": _arr(poses.get("temp"))} if poses.get("t") else {},
+        provenance=keep, base_effects_named=tuple(after.get("effects", [])))
+
+
+def _covariate(values, n: int, name: str, terms, kind: str):
+    from .discrepancy.effects import EFFECTS
+
+    needed = [t.id for t in terms if EFFECTS[t.id].covariate == kind]
+    if not needed:
+        return None
+    if values is None:
+        raise CalibrationFileError(f"the calibration's {', '.join(needed)} term needs the {name} of every sample; "
+                                   f"the data have none" + (" (a temp column)" if name == "temp" else ""))
+    v = np.asarray(values, dtype=float)
+    if v.shape != (n,) or not np.all(np.isfinite(v)):
+        raise CalibrationFileError(f"{name} must be {n} finite values, one per sample")
+    return v
+
+
+# --------------------------------------------------------------------------- calibrating
+
+
+#: The estimator result's extra attributes each calibration class keeps.
+_RESULT_FIELDS = {"full_lls": ("lam", "singular_values"), "full_als": ("lam", "noise_var", "singular_values"),
+                  "full_nlls": ("status", "iterations", "cost"), "bias_lls": ("c", "singular_values"),
+                  "bias_nlls": ("status", "iterations", "cost")}
+
+
+def pose_noise_std(mean_std) -> float:
+    """One noise level for the pose means: the RMS of their per-axis standard errors.
+
+    What ALS is given: its correction removes ``Σ_i σ_i²`` from the moment matrix, which
+    this RMS reproduces exactly for the terms linear in ``σ²`` (the mean of the variances).
+    """
+    return float(np.sqrt(np.mean(np.square(mean_std))))
+
+
+def calibrate_poses(poses, g: float, method: str = "full_lls", *, unit: str | None, conversion=None,
+                    provenance: dict | None = None) -> Calibration:
+    """Fit ``method`` to static poses and assess the fit.
+
+    Parameters
+    ----------
+    poses : StaticPoses
+        From :func:`accelcal.static.detect_static` or known intervals.
+    g : float
+        Local gravity [m/s²].
+    method : str
+        Registry name (``full_lls`` or ``full-lls``, ...).
+    unit : {'m/s^2', 'counts'} or None
+        Unit of the pose means.
+    conversion : NominalConversion, optional
+        Nominal counts → m/s² conversion applied before the fit (how a bias-only model,
+        which fixes ``M = I``, can be fitted to raw counts).
+    provenance : dict, optional
+        Extra keys for the JSON.
+
+    Noise.  ALS is given the noise level of the pose means measured at the rests
+    (:func:`pose_noise_std`), not the one it could estimate from the poses: the rests
+    measure it independently, from thousands of samples, whereas the poses would mix
+    the noise with any misfit of the model (the Xsens residuals are 2.5x the noise) and
+    give a noisy value from a few dozen points.
+    """
+    from .quality import assess
+
+    est = estimator(method)
+    z = np.asarray(poses.means, float)
+    se = np.asarray(poses.mean_std, float)
+    offset, sens, fit_unit, input_unit = np.zeros(3), np.ones(3), unit, unit
+    if conversion is not None:
+        offset = np.asarray(conversion.offset, float)
+        sens = np.asarray(conversion.counts_per_unit, float)
+        z, se, fit_unit = (z - offset) / sens, se / sens, "m/s^2"
+    if est.model == "bias" and fit_unit == "counts":
+        raise AccelcalError(f"{est.cli_name} fixes M = I, so the data must be in m/s^2 (or g); these are raw counts: "
+                            "use a full model (full-lls), or pass the unit (--unit) if they are not counts")
+    if len(z) < est.min_poses:
+        raise TooFewPosesError(f"{len(z)} static poses found, {est.cli_name} needs at least {est.min_poses}")
+    noise = pose_noise_std(se) if est.needs_noise else None
+    try:
+        r = est.fit(z, g, noise_std=noise)
+    except (DegeneratePosesError, NotPositiveDefiniteError, NotConvergedError) as e:
+        raise _orientation_cause(e, z, est) from None
+    quality, se_noise = assess(z, se, r.M, r.bias, r.residuals, est.n_parameters, est.model, est.min_poses)
+    extra = {k: getattr(r, k) for k in _RESULT_FIELDS[est.name]}
+    if "noise_source" in CALIBRATION_CLASSES[est.name]._method_field_names():
+        extra["noise_source"] = "rests: RMS of the pose-mean standard errors"
+    labels = getattr(poses, "labels", None)
+    pose_table = {"t_start": poses.t_start, "t_end": poses.t_end, "mean": z, "mean_std": se,
+                  "n_samples": poses.n_samples, "temp": poses.temp}
+    if labels is not None:
+        pose_table["labels"] = list(labels)
+    return CALIBRATION_CLASSES[est.name](
+        bias=r.bias, M=r.M, g=float(g), unit=fit_unit, input_offset=offset, input_sensitivity=sens,
+        input_unit=input_unit,
+        standard_errors=dict(r.standard_errors), standard_errors_noise=se_noise, quality=quality,
+        residuals=np.asarray(r.residuals), poses=pose_table, provenance=dict(provenance or {}), **extra)
+
+
+def _raw_directions(z) -> np.ndarray:
+    """Pose directions before any fit: about the centre of the best sphere through the poses
+    (the bias-only LLS, which needs no g), so that raw counts with a large offset work too."""
+    z = np.asarray(z, float)
+    try:
+        centre = estimator("bias_lls").fit(z, 1.0).bias
+    except AccelcalError:
+        centre = z.mean(axis=0)
+    d = z - centre
+    return d / np.linalg.norm(d, axis=1, keepdims=True)
+
+
+def _orientation_cause(err: AccelcalError, z, est) -> AccelcalError:
+    """A failed fit on poses that repeat too few orientations says so (the likely cause)."""
+    from .quality import distinct_orientations
+
+    k = distinct_orientations(_raw_directions(z))
+    if k >= est.min_poses:
+        return err
+    return DegeneratePosesError(f"{len(z)} poses but only {k} distinct orientations (10 deg apart): {est.cli_name} "
+                                f"needs at least {est.min_poses}; turn the sensor to new orientations between rests "
+                                f"(or use a bias-only method, >= 4) [{err}]")
+
+
+def calibrate_recording(rec, g: float, method: str = "full_lls", *, static: dict | None = None,
+                        conversion=None, provenance: dict | None = None) -> tuple[Calibration, object]:
+    """Static poses of ``rec`` (its known intervals, or detected), then :func:`calibrate_poses`.
+
+    Parameters
+    ----------
+    rec : Recording
+    g : float
+        Local gravity [m/s²].
+    method : str
+    static : dict, optional
+        Keyword arguments of :func:`accelcal.static.detect_static` (``window``,
+        ``threshold_factor``, ``min_duration``, ``trim``, ``init_duration``,
+        ``noise_reference``).
+    conversion, provenance
+        As for :func:`calibrate_poses`.
+
+    Returns
+    -------
+    calibration : Calibration
+    poses : StaticPoses
+        The poses it was fitted to.
+
+    Raises
+    ------
+    RecordingError
+        No static poses (the message says what was tried).
+    TooFewPosesError, DegeneratePosesError
+        Not enough poses or orientations for the method (the message names the count and
+        what to do).
+    """
+    from .static import detect_static_recording
+
+    if not (np.isfinite(g) and 9.7 <= g <= 9.9):
+        raise AccelcalError(f"g = {g:g}: the local gravity magnitude in m/s^2 (9.78-9.83 on the Earth's surface; "
+                            "data in g are converted, pass --unit g)")
+    poses = detect_static_recording(rec, **(static or {}))
+    prov = dict(provenance or {})
+    prov.setdefault("static", {})
+    prov["static"].update({"reference": poses.reference, "note": poses.reference_note,
+                           "known_intervals": rec.intervals is not None, **(static or {})})
+    prov.setdefault("notes", list(rec.notes))
+    labels = rec.labels if rec.intervals is not None else None
+    est = estimator(method)
+    try:
+        cal = calibrate_poses(_Poses(poses, labels), g, method, unit=rec.unit, conversion=conversion, provenance=prov)
+    except TooFewPosesError as e:
+        raise TooFewPosesError(f"{e}; {_too_few_hint(rec, poses, est)}") from None
+    return cal, poses
+
+
+@dataclass(frozen=True)
+class _Poses:
+    """StaticPoses with the labels of known intervals (for the pose table)."""
+
+    base: object
+    labels: tuple | None
+
+    def __getattr__(self, name):
+        return getattr(self.base, name)
+
+
+def _too_few_hint(rec, poses, est) -> str:
+    from .quality import distinct_orientations
+
+    k = distinct_orientations(_raw_directions(poses.means)) if len(poses) >= 4 else len(poses)
+    rate = rec.rate
+    if not 1.0 <= rate <= 20000.0:
+        return (f"the sampling rate is {rate:.4g} Hz from the time column: if its unit is not seconds, pass "
+                "--time-unit (ms, us, ns)")
+    if rec.intervals is not None:
+        return f"the file gives {len(rec.intervals)} known static intervals; record more poses"
+    return (f"{k} distinct orientations; record more rests in new orientations (at least {est.min_poses}), "
+            "loosen the detection (--threshold, --window, --min-duration) or use a bias-only method (>= 4 poses)")
+
+
+# --------------------------------------------------------------------------- JSON helpers
+
+
+def _json_float(x):
+    x = float(x)
+    return x if np.isfinite(x) else None
+
+
+def _jsonable(v):
+    if isinstance(v, np.ndarray):
+        return v.tolist()
+    if isinstance(v, (np.floating, np.integer)):
+        return v.item()
+    if isinstance(v, tuple):
+        return list(v)
+    return v
+
+
+def _finite_json(obj):
+    if isinstance(obj, float):
+        return obj if np.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: _finite_json(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_finite_json(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _finite_json(obj.tolist())
+    if isinstance(obj, (np.floating, np.integer)):
+        return _finite_json(obj.item())
+    return obj
+
+
+__all__ = ["APPLICABLE_EFFECTS", "BiasLLSCalibration", "BiasNLLSCalibration", "CALIBRATION_CLASSES", "Calibration",
+           "CalibrationFileError", "EffectTerm", "ExtendedCalibration", "FORMAT", "FORMAT_VERSION",
+           "FullALSCalibration", "FullLLSCalibration", "FullNLLSCalibration", "calibrate_poses",
+           "calibrate_recording", "load_calibration", "pose_noise_std"]

@@ -1,0 +1,230 @@
+"""Compiled kernels of the stochastic layer's bootstrap (numba, the optional ``fast`` extra).
+
+The stochastic layer refits thousands of small Allan-variance models per test step (one
+per bootstrap replicate and, for the sinusoid, per frequency of its grid) and computes
+the Allan variance of every replicate.  In numpy each small problem pays the overhead of
+dozens of array calls; these kernels run the same algorithms in one compiled loop:
+
+* :func:`irls_gamma` — :func:`accelcal.discrepancy.stochastic._irls` (Fisher scoring of
+  the Gamma likelihood, non-negative least squares by enumerating the supports, step
+  halving), problem by problem;
+* :func:`allan_sums` — the sums of squared second differences of the running sums that
+  :func:`accelcal.discrepancy.allan.allan_variance` accumulates.
+
+Same algorithms, same arithmetic up to the order of floating-point sums (results agree
+to ~1e-12 relative; the tests compare them).  Without numba (``pip install
+accelcal[fast]`` adds it) the callers use their numpy versions: :data:`AVAILABLE` says
+which runs.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+try:  # optional dependency
+    import numba
+except ImportError:  # pragma: no cover - exercised where numba is absent
+    numba = None
+
+AVAILABLE = numba is not None
+
+
+def _nnls_small(A, b, subsets, sizes):
+    """Best non-negative least-squares solution over the given supports (rows of ``subsets``,
+    the first ``sizes[j]`` entries used): ``A`` (k, p), ``b`` (k,).
+
+    The Gram matrix and ``Aᵀb`` are formed once; each support solves its sub-system by
+    Cholesky and scores ``|b − A x|² = bᵀb − 2 xᵀAᵀb + xᵀ(AᵀA)x``."""
+    k, p = A.shape
+    gram = np.empty((p, p))
+    rhs = np.empty(p)
+    bb = 0.0
+    for i in range(k):
+        bb += b[i] * b[i]
+    for a in range(p):
+        acc = 0.0
+        for i in range(k):
+            acc += A[i, a] * b[i]
+        rhs[a] = acc
+        for c in range(a, p):
+            acc = 0.0
+            for i in range(k):
+                acc += A[i, a] * A[i, c]
+            gram[a, c] = acc
+            gram[c, a] = acc
+    best_x = np.zeros(p)
+    best = bb
+    L = np.empty((p, p))
+    z = np.empty(p)
+    xs = np.empty(p)
+    for j in range(subsets.shape[0]):
+        s = sizes[j]
+        idx = subsets[j]
+        ok = True
+        for a in range(s):  # Cholesky of gram[idx, idx] + 1e-12 I
+            for c in range(a + 1):
+                acc = gram[idx[a], idx[c]] + (1e-12 if a == c else 0.0)
+                for e in range(c):
+                    acc -= L[a, e] * L[c, e]
+                if a == c:
+                    if not acc > 0:
+                        ok = False
+                        break
+                    L[a, a] = np.sqrt(acc)
+                else:
+                    L[a, c] = acc / L[c, c]
+            if not ok:
+                break
+        if not ok:
+            continue
+        for a in range(s):
+            acc = rhs[idx[a]]
+            for e in range(a):
+                acc -= L[a, e] * z[e]
+            z[a] = acc / L[a, a]
+        for a in range(s - 1, -1, -1):
+            acc = z[a]
+            for e in range(a + 1, s):
+                acc -= L[e, a] * xs[e]
+            xs[a] = acc / L[a, a]
+            if not xs[a] >= 0:
+                ok = False
+        if not ok:
+            continue
+        obj = bb
+        for a in range(s):
+            obj -= 2.0 * xs[a] * rhs[idx[a]]
+            for c in range(s):
+                obj += xs[a] * gram[idx[a], idx[c]] * xs[c]
+        if obj < best:
+            best = obj
+            for a in range(p):
+                best_x[a] = 0.0
+            for a in range(s):
+                best_x[idx[a]] = xs[a]
+    return best_x
+
+
+def _deviance(y, m, edf):
+    d = 0.0
+    for i in range(y.shape[0]):
+        r = y[i] / m[i]
+        d += edf[i] * (r - 1.0 - np.log(r))
+    return d
+
+
+def _irls_one(H, y, edf, subsets, sizes, max_iter, tol):
+    k, p = H.shape
+    ymax = y[0]
+    for i in range(k):
+        if y[i] > ymax:
+            ymax = y[i]
+    floor = 1e-12 * ymax
+    c = np.zeros(p)
+    model = y.copy()
+    dev = np.inf
+    A = np.empty((k, p))
+    bw = np.empty(k)
+    m_new = np.empty(k)
+    for _ in range(max_iter):
+        for i in range(k):
+            w = np.sqrt(edf[i]) / model[i]
+            bw[i] = y[i] * w
+            for a in range(p):
+                A[i, a] = H[i, a] * w
+        scale = np.empty(p)
+        for a in range(p):
+            acc = 0.0
+            for i in range(k):
+                acc += A[i, a] * A[i, a]
+            scale[a] = np.sqrt(acc) if acc > 0 else 1.0
+            for i in range(k):
+                A[i, a] /= scale[a]
+        c_new = _nnls_small(A, bw, subsets, sizes) / scale
+        for i in range(k):
+            acc = 0.0
+            for a in range(p):
+                acc += H[i, a] * c_new[a]
+            m_new[i] = max(acc, floor)
+        d_new = _deviance(y, m_new, edf)
+        d_old = dev
+        for _h in range(30):  # step halving towards the previous (feasible) c
+            if not d_new > d_old:
+                break
+            for a in range(p):
+                c_new[a] = 0.5 * (c_new[a] + c[a])
+            for i in range(k):
+                acc = 0.0
+                for a in range(p):
+                    acc += H[i, a] * c_new[a]
+                m_new[i] = max(acc, floor)
+            d_new = _deviance(y, m_new, edf)
+        if d_new <= d_old:
+            c[:] = c_new
+            model[:] = m_new
+            dev = d_new
+        else:
+            d_new = d_old
+        if abs(d_old - d_new) <= tol * (1.0 + abs(d_new)):
+            break
+    return c, dev
+
+
+def _irls_batch(H, y, edf, subsets, sizes, max_iter, tol):
+    G, k, p = H.shape
+    c = np.zeros((G, p))
+    dev = np.empty(G)
+    for g in range(G):
+        cg, dg = _irls_one(H[g], y[g], edf, subsets, sizes, max_iter, tol)
+        c[g] = cg
+        dev[g] = dg
+    return c, dev
+
+
+def _allan_sums(c, m):
+    """``Σ_i (c[i+2m] − 2 c[i+m] + c[i])²`` per averaging factor and column: ``c`` (n+1, d)."""
+    n1, d = c.shape
+    out = np.zeros((m.shape[0], d))
+    for j in range(m.shape[0]):
+        mk = m[j]
+        for i in range(n1 - 2 * mk):
+            for col in range(d):
+                v = c[i + 2 * mk, col] - 2.0 * c[i + mk, col] + c[i, col]
+                out[j, col] += v * v
+    return out
+
+
+if AVAILABLE:
+    _jit = numba.njit(cache=True, nogil=True)
+    _nnls_small = _jit(_nnls_small)
+    _deviance = _jit(_deviance)
+    _irls_one = _jit(_irls_one)
+    _irls_batch = _jit(_irls_batch)
+    _allan_sums = _jit(_allan_sums)
+
+
+def supports(p: int) -> tuple[np.ndarray, np.ndarray]:
+    """Every non-empty support of ``p`` columns, in the order the numpy solver tries them
+    (by size, then lexicographic): rows padded with -1, and their sizes."""
+    from itertools import combinations
+
+    rows = [idx for s in range(1, p + 1) for idx in combinations(range(p), s)]
+    out = np.full((len(rows), p), -1, dtype=np.int64)
+    for j, idx in enumerate(rows):
+        out[j, : len(idx)] = idx
+    return out, np.array([len(r) for r in rows], dtype=np.int64)
+
+
+def irls_gamma(H: np.ndarray, y: np.ndarray, edf: np.ndarray, max_iter: int = 200, tol: float = 1e-10):
+    """Compiled :func:`accelcal.discrepancy.stochastic._irls`: ``H`` (G, k, p), ``y`` (G, k)."""
+    subsets, sizes = supports(H.shape[2])
+    return _irls_batch(np.ascontiguousarray(H, dtype=np.float64), np.ascontiguousarray(y, dtype=np.float64),
+                       np.ascontiguousarray(edf, dtype=np.float64), subsets, sizes, int(max_iter), float(tol))
+
+
+def allan_sums(c: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """Compiled sums of squared second differences (:func:`_allan_sums`)."""
+    return _allan_sums(np.ascontiguousarray(c, dtype=np.float64), np.ascontiguousarray(m, dtype=np.int64))
+
+
+__all__ = ["AVAILABLE", "allan_sums", "irls_gamma", "supports"]

@@ -1,0 +1,475 @@
+"""The deterministic layer under the colored null: the naming loop with the bias wander in the noise.
+
+Each round (module :mod:`accelcal.discrepancy.colored` for the statistics):
+
+1. The current model (base + what has been named, without the poses named as outliers)
+   is fitted by weighted least squares (:func:`accelcal.discrepancy.fit.fit`) and
+   linearised; the bias wander ``(s, τ)`` is estimated by REML jointly with it.
+2. Every applicable candidate effect gets the identifiability checks of the white loop
+   (covariate, degrees of freedom, absorbed fraction, the design's MDE below ``max_mde_g``
+   × g under the rests' noise) and its minimum detectable effect (MDE) under the fitted
+   noise, reported.  ``wander_inflation`` is how much larger the wander makes the MDE
+   than white noise of the same mean variance would (largest over the directions of the
+   effect's parameters): large for effects whose signature is slow in time
+   (``bias_drift``; ``temperature`` when the temperature changes slowly), about 1 for
+   those that vary from pose to pose with the orientation.
+3. Tests: the bootstrap likelihood-ratio test of every identifiable candidate and the
+   outlier family (the largest mean-shift likelihood ratio over the poses), calibrated
+   together on the same replicates of the
+   fitted null; Holm's step-down over the round's family (the candidates and, if
+   enabled, the outlier family).  An effect passes when its adjusted p-value is ≤ α,
+   ``ΔBIC = −LR + 3 ln n < −bic_threshold`` and the colored leave-one-pose-out PRESS
+   (GLS prediction of each pose from the others, both models under the alternative's
+   REML wander) falls; the outlier family when its adjusted p-value is ≤ α.
+4. Passing candidates the data cannot tell apart (neither adds to the other: the
+   likelihood ratio of each given the other, χ²₃ approximation at level α) are not named
+   but reported ``not_identifiable`` (``ambiguous_with``); one that adds nothing to
+   another that adds to it waits for the next round (``dominated``).
+5. Of the rest, the one with the strongest evidence, the smallest ΔBIC, is named (the
+   bootstrap p-values saturate at ``1/(n_boot + 1)`` and cannot rank strong results; an
+   outlier's ΔBIC is ``−LR + 2 ln n``: one shift, one of ``n`` poses).  An effect joins
+   the model; an outlier pose leaves the pose set (its residual is then predicted, not
+   fitted).  The loop repeats until nothing passes, or ``max_rounds`` effects and
+   ``max_outliers`` outliers are named.
+
+A candidate that was tested, did not pass, and whose ``wander_inflation`` exceeds
+``max_wander_inflation`` cannot be ruled out: it is reported ``not_identifiable`` with
+the reason (the wander can produce what the effect would), never as absent.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict
+
+import numpy as np
+from scipy import stats
+
+from ..errors import AccelcalError
+from . import colored as C
+from .detect import (
+    Candidate,
+    DiscrepancyResult,
+    Rules,
+    applicable,
+    critical_noncentrality,
+    gap,
+    holm,
+    identifiability,
+)
+from .fit import Fit, PoseData, effect_columns, fit, lopo
+
+OUTLIER = "outlier_pose"
+
+
+def intervals(data: PoseData) -> tuple[np.ndarray, np.ndarray, tuple]:
+    """Start and duration [s] of each pose (instantaneous poses if the data have no intervals)."""
+    if data.has_intervals:
+        return data.t_start, np.maximum(data.t_end - data.t_start, C.POINT_DURATION), ()
+    return data.t, np.full(len(data), C.POINT_DURATION), (
+        "pose intervals not given: the pose means are treated as instantaneous samples of the wander",)
+
+
+def linearise(data: PoseData, f: Fit, taus=None) -> C.Problem:
+    """The colored problem of the fit ``f`` on ``data`` (raises :class:`~.colored.WanderError`)."""
+    J = f.J * f.sigma[:, None]  # unweighted
+    grad = -J[:, :3]            # ∂r/∂z = −∂r/∂b
+    starts, durations, notes = intervals(data)
+    return C.problem(f.residuals, J, f.sigma, grad, starts, durations, taus=taus, notes=notes)
+
+
+def _mde(info: np.ndarray, lam: float) -> np.ndarray:
+    d = np.diag(info)
+    return np.where(d > 0, np.sqrt(lam / np.where(d > 0, d, 1.0)), np.inf)
+
+
+def _inflation(info_c: np.ndarray, info_sw: np.ndarray) -> float:
+    """Largest ratio of the MDE under the wander to that under white noise of the same mean
+    variance, over the directions of the parameter space: sqrt of the largest generalised
+    eigenvalue of ``(I_sw, I_c)``."""
+    try:
+        ev = np.linalg.eigvals(np.linalg.solve(info_c, info_sw)).real
+    except np.linalg.LinAlgError:
+        return float("inf")
+    ev = ev[np.isfinite(ev)]
+    return float(np.sqrt(max(ev.max(), 0.0))) if ev.size else float("inf")
+
+
+def _wander_dict(w: C.WanderFit) -> dict:
+    return {"q_rel": w.q_rel, "tau_s": w.tau, "size": w.size, "K": w.K}
+
+
+def noise_model_dict(w: C.WanderFit | None, prob: C.Problem | None, reason: str = "") -> dict:
+    """The ``noise_model`` key: the named stochastic term of the joint fit."""
+    base = {"method": "REML of the pose residuals' noise s (white + Gauss-Markov bias wander, tau -> inf: random "
+                      "walk; the same wander on every axis), jointly with the calibration; 95 % profile-likelihood "
+                      "intervals",
+            "white": "per-pose standard errors of the rests (static detection) times the white scale"}
+    if w is None:
+        return {**base, "term": "not_estimated", "estimated": False, "reason": reason}
+    shortest = float(np.min(prob.durations)) if prob is not None else float("nan")
+    white_like = bool(w.present and np.isfinite(w.tau) and w.tau < 0.5 * shortest)
+    if not w.present:
+        process = "none"
+    elif np.isinf(w.tau):
+        process = "random_walk"
+    else:
+        process = "gauss_markov"
+    # the wander is time-correlated beyond doubt when its τ interval stays above the poses
+    lo = w.tau_ci[0] if w.tau_ci else float("nan")
+    correlated = bool(w.present and np.isfinite(lo) and lo >= 0.5 * shortest)
+    return {**base, "term": "bias_wander" if w.present else "none", "process": process, "estimated": True,
+            "white_like": white_like, "time_correlation_established": correlated,
+            "white_excess_N": math.sqrt(2 * w.q_abs * w.tau) if white_like else float("nan"),
+            "size": w.size, "size_ci": list(w.size_ci), "tau_s": w.tau if w.present else float("nan"),
+            "tau_ci": list(w.tau_ci),
+            "white_scale": w.white_scale, "white_scale_ci": list(w.white_scale_ci),
+            "random_walk_K": w.K, "random_walk_K_ci": list(w.K_ci), "q_rel": w.q_rel,
+            "excess_ci": list(w.excess_ci), "at_bound": list(w.at_bound),
+            "notes": list(prob.notes) if prob is not None else [],
+            "unit": "size: data unit (std of the wander); tau_s: s; random_walk_K: data unit / sqrt(s); "
+                    "white_scale: variance of the white part over the rests' prediction; "
+                    "white_excess_N: data unit * sqrt(s) (when tau is below the poses, white_like: the wander "
+                    "acts as white noise the rests' standard errors miss)"}
+
+
+def _gls_estimate(prob: C.Problem, X1: np.ndarray, w1: C.WanderFit, aug: Fit, sl: slice) -> tuple[list, list]:
+    """GLS estimate and standard error of the candidate's block (the last three columns of
+    ``X1``) at the alternative's REML wander: the weighted nonlinear estimate of ``aug``
+    plus the GLS − least-squares difference of the model linearised at the current fit."""
+    try:
+        beta_g, cov = C.gls_step(prob, X1, w1.t, w1.q_rel, w1.white_scale)
+        beta_w, _ = C.gls_step(prob, X1, w1.t, 0.0)
+    except np.linalg.LinAlgError:
+        return [float("nan")] * 3, [float("nan")] * 3
+    est = aug.p[sl] + beta_g[-3:] - beta_w[-3:]
+    return est.tolist(), np.sqrt(np.clip(np.diag(cov)[-3:], 0.0, None)).tolist()
+
+
+def discrepancy_colored(data: PoseData, rules: Rules) -> DiscrepancyResult:
+    """The loop of the module docstring on one pose set (``rules.null == 'colored'``)."""
+    cands, _ = applicable(data, rules.candidates)
+    base = fit(data)
+    lopo_base = lopo(base, data)
+    rng_seq = np.random.SeedSequence([int(rules.seed), 13])
+    st = _State(data, base)
+    rnd = 0
+    while True:
+        rnd += 1
+        remaining = ([e for e in cands if e not in st.named and e not in st.ambiguous]
+                     if st.n_effects < rules.max_rounds else [])
+        test_outliers = rules.outlier_pose and len(st.outliers) < rules.max_outliers
+        if not remaining and not test_outliers:
+            break
+        try:
+            prob = linearise(st.data, st.current)
+        except C.WanderError as err:
+            st.wander_error = str(err)
+            for eid in remaining:
+                ident = identifiability(st.data, st.current, eid, rules, len(remaining))
+                st.rows.append(_untested(ident, rnd, (*ident.reasons, f"bias wander cannot be estimated: {err}")))
+            break
+        rng = np.random.default_rng(rng_seq.spawn(1)[0])
+        cand_rows, out_row, rt = _round(st, prob, remaining, test_outliers, rules, rnd, rng)
+        best = _choose(cand_rows, out_row)
+        st.rows += [Candidate(**{**asdict(c), "reasons": c.reasons, "named": best is not None and best[3] is c})
+                    for c, _, _ in cand_rows]
+        if out_row is not None:
+            out_row["named"] = best is not None and best[2] == OUTLIER
+            st.outlier_tests.append(out_row)
+        if best is None:
+            break
+        if best[2] == OUTLIER:
+            if not _drop_outlier(st, rt.outlier_pose, out_row):
+                break
+        else:
+            st.named.append(best[3].effect)
+            st.n_effects += 1
+            st.current = best[4]
+    return _result(data, rules, base, lopo_base, st)
+
+
+class _State:
+    """What the loop has named so far, and the pose set and model it stands at."""
+
+    def __init__(self, data: PoseData, base: Fit):
+        self.data, self.current = data, base
+        self.named, self.outliers, self.rows, self.errors, self.outlier_tests = [], [], [], [], []
+        self.ambiguous: set[str] = set()
+        self.n_effects = 0
+        self.wander_error = ""
+
+
+def _round(st: _State, prob: C.Problem, remaining, test_outliers: bool, rules: Rules, rnd: int, rng):
+    """One round: identifiability, the bootstrap tests, Holm, ΔBIC, LOPO, ambiguity.
+
+    Returns the candidate rows ``(Candidate, augmented fit, columns)``, the outlier row
+    (or None) and the round's :class:`~.colored.RoundTests`.
+    """
+    null = C.fit_wander(prob, prob.X0, fine=False)
+    prepared = [_prepare(st.data, st.current, prob, null, eid, rules, len(remaining), rnd) for eid in remaining]
+    tested = [r for r in prepared if r["identifiable"]]
+    rt = C.round_tests(prob, [r["Xe"] for r in tested], rng, rules.n_boot, outliers=test_outliers)
+    padj = holm([float(v) for v in rt.p_values] + ([rt.outlier_p] if test_outliers else []), rules.correction)
+    lo0 = C.studentised(prob, prob.X0, null.t, null.q_rel)[1][0]
+    cand_rows = [_tested_candidate(st, prob, r, rt, k, padj[k], lo0, rules) for k, r in enumerate(tested)]
+    cand_rows = _resolve_ambiguous(prob, cand_rows, rules.alpha)
+    st.ambiguous |= {c.effect for c, _, _ in cand_rows if c.ambiguous_with}
+    cand_rows += [(_untested_from(r), None, None) for r in prepared if not r["identifiable"]]
+    out_row = None
+    if test_outliers:
+        i, n = rt.outlier_pose, len(st.data)
+        out_row = {"round": rnd, "pose": int(st.data.pose_index[i]), "t": float(st.data.t[i]),
+                   "statistic": rt.outlier_lr, "studentised": float(rt.outlier_t[i]),
+                   "p_value": rt.outlier_p, "p_adjusted": float(padj[-1]),
+                   "delta_bic": -rt.outlier_lr + 2.0 * math.log(n),
+                   "passed_test": bool(padj[-1] <= rules.alpha), "named": False}
+    return cand_rows, out_row, rt
+
+
+def _tested_candidate(st: _State, prob: C.Problem, r: dict, rt: C.RoundTests, k: int, p_adj: float,
+                      lo0: np.ndarray, rules: Rules):
+    """The :class:`Candidate` row of a tested effect, with its augmented weighted fit."""
+    X1 = np.hstack([prob.X0, r["Xe"]])
+    w1 = C.fit_wander(prob, X1, fine=False)
+    # leave-one-pose-out under one covariance for both models (the alternative's REML noise):
+    # the comparison then measures what the effect adds out of sample, not a change of the
+    # wander's kriging
+    lo1 = C.studentised(prob, X1, w1.t, w1.q_rel)[1][0]
+    lo0c = C.studentised(prob, prob.X0, w1.t, w1.q_rel)[1][0]
+    n = len(st.data)
+    lr = float(rt.lr[k])
+    dbic = -lr + 3.0 * math.log(n)
+    est, se, se_noise, aug, err = [float("nan")] * 3, [float("nan")] * 3, [float("nan")] * 3, None, ""
+    try:
+        aug = fit(st.data, (*st.current.effects, r["effect"]), p0=st.current.p)
+    except AccelcalError as e:
+        err = f"{r['effect']}: fit failed: {e}"
+        st.errors.append(err)
+    if aug is not None:
+        sl = slice(9 + 3 * len(st.current.effects), 12 + 3 * len(st.current.effects))
+        est, se = _gls_estimate(prob, X1, w1, aug, sl)
+        se_noise = aug.standard_errors(False)[sl].tolist()
+    c = Candidate(**r["common"], statistic=lr, dof=(3, n - st.current.q - 3), p_value=float(rt.p_values[k]),
+                  bartlett=float(rt.bartlett[k]), p_adjusted=float(p_adj), delta_bic=dbic,
+                  lopo_gap_current=gap(lo0), lopo_gap=gap(lo1), estimate=est, se=se, se_noise=se_noise,
+                  passed_test=bool(np.isfinite(p_adj) and p_adj <= rules.alpha and aug is not None),
+                  passed_bic=bool(dbic < -rules.bic_threshold),
+                  passed_lopo=bool(np.sum(lo1 ** 2) < (1 - rules.lopo_min_improvement) * np.sum(lo0c ** 2)),
+                  test="likelihood ratio, parametric bootstrap under the fitted noise",
+                  mde_white=r["mde_white"], wander_inflation=r["inflation"], wander_alt=_wander_dict(w1))
+    confounded = not c.passed and r["inflation"] > rules.max_wander_inflation
+    c = Candidate(**{**asdict(c), "reasons": (*c.reasons, *([err] if err else [])),
+                     "confounded_with_wander": confounded})
+    return c, aug, r["Xe"]
+
+
+def _choose(cand_rows: list, out_row: dict | None):
+    """The result to name: among what passed (and is neither ambiguous nor dominated), the
+    strongest evidence, the smallest ΔBIC (the bootstrap p-values saturate at
+    ``1/(n_boot + 1)`` and cannot rank strong results).  ``(p, ΔBIC, kind, Candidate, fit)``
+    or None."""
+    passing = [(c.p_value, c.delta_bic, "effect", c, a) for c, a, _ in cand_rows
+               if c.passed and not c.ambiguous_with and not c.dominated]
+    if out_row is not None and out_row["passed_test"]:
+        passing.append((out_row["p_value"], out_row["delta_bic"], OUTLIER, None, None))
+    return min(passing, key=lambda x: (x[1], x[0])) if passing else None
+
+
+def _drop_outlier(st: _State, i: int, out_row: dict) -> bool:
+    """Name pose ``i`` (of the current pose set) an outlier and refit without it."""
+    keep = np.arange(len(st.data)) != i
+    new_data = st.data.subset(keep)
+    try:
+        new = fit(new_data, st.current.effects, p0=st.current.p)
+    except AccelcalError as e:
+        st.errors.append(f"refit without pose {int(st.data.pose_index[i])} failed: {e}")
+        return False
+    r_pred = _predict(st.data.subset(np.array([i])), new)
+    st.outliers.append({"pose": int(st.data.pose_index[i]), "t": float(st.data.t[i]), "shift": r_pred,
+                        "shift_sigma": r_pred / float(st.data.sigma[i]), "statistic": out_row["statistic"],
+                        "studentised": out_row["studentised"], "p": out_row["p_value"],
+                        "p_adjusted": out_row["p_adjusted"], "round": out_row["round"],
+                        "gap_before": gap(st.current.weighted), "gap_after": gap(new.weighted)})
+    st.named.append(OUTLIER)
+    st.data, st.current = new_data, new
+    return True
+
+
+def _resolve_ambiguous(prob: C.Problem, cand_rows: list, alpha: float) -> list:
+    """Pairs of passing candidates the data cannot tell apart (e.g. ``temperature`` and
+    ``bias_drift`` when the temperature follows time).
+
+    For passing candidates ``b`` and ``c``: ``b | c`` is the likelihood ratio of
+    current + c + b against current + c (wander re-estimated, χ²₃ approximation at level
+    α).  Neither significant given the other: the pair is ambiguous, neither is named,
+    both are reported ``not_identifiable`` (``ambiguous_with``).  Only one significant
+    given the other: the other is explained by it and cannot be named this round (it is
+    tested again after the refit)."""
+    passing = [(i, c, Xe) for i, (c, _, Xe) in enumerate(cand_rows) if c.passed]
+    if len(passing) < 2:
+        return cand_rows
+    X0 = prob.X0
+
+    def ml(X):
+        try:
+            return float(C.profile(prob, X, prob.y[None], C.Q_REL_GRID).ml_min()[0])
+        except np.linalg.LinAlgError:  # the pair's columns are collinear: neither adds to the other
+            return float("nan")
+
+    single = {i: ml(np.hstack([X0, Xe])) for i, _, Xe in passing}
+    amb = {i: [] for i, _, _ in passing}
+    drop = set()
+    for a in range(len(passing)):
+        for b in range(a + 1, len(passing)):
+            (i, ci, Xi), (j, cj, Xj) = passing[a], passing[b]
+            both = ml(np.hstack([X0, Xi, Xj]))
+            if np.isnan(both):
+                i_given_j = j_given_i = False
+            else:
+                i_given_j = stats.chi2.sf(max(single[j] - both, 0.0), Xi.shape[1]) <= alpha
+                j_given_i = stats.chi2.sf(max(single[i] - both, 0.0), Xj.shape[1]) <= alpha
+            if not i_given_j and not j_given_i:
+                amb[i].append(cj.effect)
+                amb[j].append(ci.effect)
+            elif not i_given_j:
+                drop.add(i)
+            elif not j_given_i:
+                drop.add(j)
+    out = []
+    for k, (c, a, Xe) in enumerate(cand_rows):
+        if k in amb and amb[k]:
+            c = Candidate(**{**asdict(c), "reasons": (*c.reasons, "cannot be told apart from "
+                                                      + ", ".join(amb[k]) + " on these poses"),
+                             "ambiguous_with": tuple(amb[k])})
+        elif k in drop:
+            c = Candidate(**{**asdict(c), "reasons": (*c.reasons, "explained by another passing candidate this "
+                                                      "round (tested again after the refit)"), "dominated": True})
+        out.append((c, a, Xe))
+    return out
+
+
+def _predict(one: PoseData, f: Fit) -> float:
+    """Residual of a left-out pose under the fit ``f`` (unit of g)."""
+    from .fit import evaluate
+
+    r, _, _ = evaluate(f.p, one, f.effects, jacobian=False)
+    return float("nan") if r is None else float(r[0])
+
+
+def _prepare(data, current, prob, null, eid, rules, n_tests, rnd) -> dict:
+    ident = identifiability(data, current, eid, rules, n_tests)
+    common = dict(round=rnd, effect=eid, identifiable=ident.identifiable, reasons=ident.reasons,
+                  absorbed=ident.absorbed, absorbed_axis=ident.absorbed_axis.tolist(), mde=ident.mde.tolist(),
+                  mde_data=ident.mde_data.tolist())
+    row = {"effect": eid, "common": common, "identifiable": ident.identifiable, "mde_white": ident.mde.tolist(),
+           "inflation": float("nan"), "Xe": None}
+    if not ident.identifiable:
+        return row
+    Xe = prob.columns(effect_columns(current.p, data, current.effects, eid))
+    info = C.effect_information(prob, prob.X0, Xe, null.t, null.q_rel)
+    lam = critical_noncentrality(3, ident.dof, rules.alpha / max(n_tests, 1), rules.power)
+    mde = _mde(info["colored"], lam) * math.sqrt(null.white_scale)
+    with np.errstate(invalid="ignore"):
+        ratio = np.where(np.asarray(ident.mde) > 0, mde / np.asarray(ident.mde), np.inf)
+    mde_data = np.asarray(ident.mde_data) * ratio
+    infl = _inflation(info["colored"], info["scaled_white"])
+    # the gate stays the design's (the rests' noise, as in the white loop): the noise fitted
+    # under the current model also carries the effects not yet named, which would make a
+    # strong effect refuse itself
+    common.update(mde=mde.tolist(), mde_data=mde_data.tolist())
+    row.update(inflation=infl, Xe=Xe)
+    return row
+
+
+def _untested(ident, rnd, reasons) -> Candidate:
+    return Candidate(round=rnd, effect=ident.effect, identifiable=False, reasons=tuple(reasons),
+                     absorbed=ident.absorbed, absorbed_axis=ident.absorbed_axis.tolist(), mde=ident.mde.tolist(),
+                     mde_data=ident.mde_data.tolist(), test="not tested")
+
+
+def _untested_from(row) -> Candidate:
+    return Candidate(**row["common"], test="not tested", mde_white=row["mde_white"])
+
+
+def _result(data: PoseData, rules: Rules, base: Fit, lopo_base: np.ndarray, st: _State) -> DiscrepancyResult:
+    cur_data, current = st.data, st.current
+    lopo_final = lopo(current, cur_data) if not st.outliers else _lopo_full(current, cur_data, data)
+    wander, prob, colored = None, None, {}
+    wander_error = st.wander_error
+    try:
+        prob = linearise(cur_data, current)
+        wander = C.fit_wander(prob, prob.X0, fine=True)
+    except C.WanderError as err:
+        wander_error = wander_error or str(err)
+    except (AccelcalError, np.linalg.LinAlgError, ValueError) as err:
+        st.errors.append(f"noise model fit failed: {err}")
+    if wander is not None:
+        colored = _colored_summary(data, base, prob, wander, cur_data, current)
+    _, skipped = applicable(data, rules.candidates)
+    return DiscrepancyResult(tuple(st.named), tuple(st.rows), skipped, base, current, lopo_base, lopo_final, data,
+                             rules, noise_model=noise_model_dict(wander, prob, wander_error),
+                             outliers=tuple(st.outliers), outlier_tests=tuple(st.outlier_tests),
+                             errors=tuple(st.errors), final_data=cur_data, colored=colored)
+
+
+def _lopo_full(current: Fit, cur_data: PoseData, data: PoseData) -> np.ndarray:
+    """Leave-one-pose-out errors on the full pose set: the kept poses' LOPO errors, the
+    outliers' prediction errors (they are not in the fit), NaN-free, in noise units."""
+    out = np.full(len(data), np.nan)
+    kept = np.isin(data.pose_index, cur_data.pose_index)
+    out[kept] = lopo(current, cur_data)
+    for i in np.flatnonzero(~kept):
+        out[i] = _predict(data.subset(np.array([i])), current) / data.sigma[i]
+    return out
+
+
+def _colored_summary(data, base, prob, wander, cur_data, current) -> dict:
+    """Gaps and excess under the named noise model (white + bias wander of the final model)."""
+    Xf = prob.X0
+    # before: the base model on all poses under the final noise model
+    s_w = wander.white_scale
+    try:
+        pb = linearise(data, base, taus=[wander.tau])
+        quad_b = _quad(*C.at(pb, wander), pb.X0) / s_w
+        before = {"gap": math.sqrt(quad_b / len(data))}
+    except AccelcalError:
+        before = {"gap": float("nan")}
+    p1, q1 = C.at(prob, wander)
+    quad_a = _quad(p1, q1, Xf) / s_w
+    mu_rel = C.excess_distribution(p1, Xf, 0, q1, s_w)
+    dof = prob.m - Xf.shape[1]
+    chi2_obs = float(np.sum(current.weighted ** 2))
+    mean, var = float(mu_rel.sum()), float(2 * np.sum(mu_rel ** 2))
+    lo, hi = (stats.gamma.ppf([0.025, 0.975], mean ** 2 / var, scale=var / mean) if var > 0 else (mean, mean))
+    # per pose (every pose, outliers too): std of the wander's share of the residual about the
+    # session's common mean, through the final model's gradient
+    from .fit import evaluate
+    from .stochastic import centred_pose_variance
+
+    starts, durations, _ = intervals(data)
+    _, J_all, _ = evaluate(current.p, data, current.effects)
+    if wander.present and J_all is not None:
+        tau = wander.tau
+        D = (C.pose_difference_variance("random_walk", math.sqrt(wander.q_abs), starts, durations) if np.isinf(tau)
+             else C.pose_difference_variance("gauss_markov", (math.sqrt(wander.q_abs), tau), starts, durations))
+        v = centred_pose_variance(D)
+        extra = np.sqrt(np.clip(v, 0, None) * np.sum(J_all[:, :3] ** 2, axis=1))
+    else:
+        extra = np.zeros(len(data))
+    return {
+        "gap_colored_before": before["gap"],
+        "gap_colored_after": math.sqrt(quad_a / len(cur_data)),
+        "excess_predicted": math.sqrt(mean / dof) if dof > 0 else float("nan"),
+        "excess_predicted_interval": [math.sqrt(lo / dof), math.sqrt(hi / dof)] if dof > 0 else [float("nan")] * 2,
+        "excess_observed": math.sqrt(chi2_obs / dof) if dof > 0 else float("nan"),
+        "excess_explained": bool(dof > 0 and lo <= chi2_obs <= hi),
+        "chi2_mean": mean, "chi2_var": var,
+        "wander_residual_std": extra.tolist(),
+        "dof": int(dof),
+    }
+
+
+def _quad(prob: C.Problem, q: float, X) -> float:
+    """``yᵀ P y`` of a one-τ problem at relative variance ``q`` (unit white scale)."""
+    return float(C.profile(prob, X, prob.y[None], np.array([q])).quad[0, 0, 0])

@@ -1,0 +1,166 @@
+"""Compiled kernels for the hot loops, and the switch between them and the numpy reference.
+
+The closed forms are a few thousand floating-point operations, the sequential filters a
+few hundred per step; in numpy, the per-call overhead (about a microsecond per call,
+tens of calls per problem or step) costs far more than the arithmetic.  The kernels
+(:mod:`accelcal._lls_kernels`, :mod:`accelcal.batista._filter_kernels`,
+:mod:`accelcal.tereshkov._estimator_kernels`) are the same algorithms written as
+scalar loops and compiled with numba.
+
+Why numba: it compiles the plain Python/numpy of the reference implementations (the
+same language, read and tested side by side), needs no C toolchain at install time
+(wheels for every platform numpy supports), caches the machine code on disk, is
+maintained by Anaconda/NVIDIA with a release every few months, and is an optional
+dependency: without it (``pip install accelcal`` without the ``fast`` extra) the numpy
+implementations run, with identical results.
+
+Selection, per process (environment variable ``ACCELCAL_KERNELS``, or :func:`set_backend`):
+
+* ``auto`` (default): with numba installed, the batched estimators and the filters run
+  compiled (numba is imported at their first call); the single-problem estimators
+  (:func:`~accelcal.full_lls`, :func:`~accelcal.bias_lls`, :func:`~accelcal.full_als`)
+  run compiled once the kernels are loaded in the process, and in numpy before: numba's
+  start-up (importing it and initialising its compiler, about 0.5 s of CPU) costs more
+  than ten thousand numpy solves, so a one-off calibration (the command line, a
+  bootstrap of a recording) never pays it;
+* ``numba``: every estimator and filter compiled (an :class:`ImportError` if numba is
+  missing);
+* ``numpy``: the numpy reference implementations only.
+
+Without numba, ``auto`` is ``numpy``.  The two paths give the same numbers to rounding
+(``tests/test_kernels.py``).
+
+Nothing here imports numba until a kernel is first needed, so ``import accelcal``
+stays cheap.  The first call of each kernel compiles it (seconds); ``cache=True``
+stores the machine code on disk, beside the kernel's source (``__pycache__``) or, if
+that folder is not writable, in numba's user-wide cache folder (``NUMBA_CACHE_DIR``
+if set); later processes load it in milliseconds.  If no cache folder is writable the
+kernels still run, compiled in memory by every process (a warning says so once).
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.util
+import os
+import warnings
+
+#: Values of ``ACCELCAL_KERNELS``.
+BACKENDS = ("auto", "numpy", "numba")
+
+_choice: str | None = None  # auto, numpy or numba: what was asked for
+_backend: str | None = None  # numba or numpy: what runs
+_loaded: dict[str, object] = {}
+_cache_warned = False
+
+
+def choice() -> str:
+    """The backend asked for: ``'auto'``, ``'numpy'`` or ``'numba'`` ($ACCELCAL_KERNELS)."""
+    if _choice is None:
+        set_backend(os.environ.get("ACCELCAL_KERNELS", "auto").strip().lower() or "auto")
+    return _choice
+
+
+def backend() -> str:
+    """The backend in use: ``'numba'`` or ``'numpy'``."""
+    if _backend is None:
+        choice()
+    return _backend
+
+
+def _resolve(choice: str) -> str:
+    if choice not in BACKENDS:
+        raise ValueError(f"ACCELCAL_KERNELS must be one of {', '.join(BACKENDS)}, not {choice!r}")
+    if choice == "numpy":
+        return "numpy"
+    try:
+        found = importlib.util.find_spec("numba") is not None
+    except (ImportError, ValueError):  # a broken or blocked installation counts as absent
+        found = False
+    if found:
+        return "numba"
+    if choice == "numba":
+        raise ImportError("ACCELCAL_KERNELS=numba but numba is not installed (pip install 'accelcal[fast]')")
+    return "numpy"
+
+
+def set_backend(choice: str) -> str | None:
+    """Ask for ``choice`` (one of :data:`BACKENDS`); returns the previous choice (None if
+    none had been made), which restores it."""
+    global _choice, _backend
+    previous = _choice
+    if choice is None:
+        _choice = _backend = None
+        return previous
+    _backend = _resolve(choice)
+    _choice = choice
+    return previous
+
+
+def compiled(module: str, single: bool = False):
+    """The kernel module ``accelcal.<module>`` if it is to run compiled, else None.
+
+    ``single``: the caller solves one problem; under ``auto`` it gets the kernels only
+    once some kernel module is loaded in this process (see the module docstring).  The
+    module (and numba with it) is imported on the first call; a dictionary lookup after.
+    """
+    global _backend
+    if _backend != "numba" and backend() != "numba":
+        return None
+    try:
+        return _loaded[module]
+    except KeyError:
+        pass
+    if single and _choice == "auto" and not _loaded:
+        return None
+    try:
+        mod = _loaded[module] = importlib.import_module(f"accelcal.{module}")
+    except ImportError as exc:  # numba found but not importable (broken install, wrong llvmlite)
+        if _choice == "numba":
+            raise
+        warnings.warn(f"accelcal: numba cannot be imported ({exc}); using the numpy implementations",
+                      RuntimeWarning, stacklevel=2)
+        _backend = "numpy"
+        return None
+    return mod
+
+
+def load() -> None:
+    """Load every kernel module now (numba's start-up paid here), so that the
+    single-problem estimators run compiled under ``auto`` too; nothing without numba."""
+    for module in KERNEL_MODULES:
+        compiled(module)
+
+
+#: Every kernel module (relative to the accelcal package).
+KERNEL_MODULES = ("_lls_kernels", "batista._filter_kernels", "tereshkov._estimator_kernels")
+
+
+def jit(*args, **options):
+    """``numba.njit`` with the project's options: disk cache, no Python error model (a
+    division by zero gives inf/NaN as in numpy, the kernels test for it), no GIL.
+
+    Falls back to an in-memory compilation when numba finds no writable cache folder.
+    """
+    import numba
+
+    options = {"cache": True, "nogil": True, "error_model": "numpy", **options}
+
+    def decorate(fn):
+        global _cache_warned
+        try:
+            return numba.njit(**options)(fn)
+        except RuntimeError as exc:  # "cannot cache function ...: no locator available"
+            if not options.get("cache") or "cache" not in str(exc):
+                raise
+            if not _cache_warned:
+                warnings.warn(f"accelcal: no writable numba cache folder ({exc}); kernels are compiled in "
+                              "memory by every process (set NUMBA_CACHE_DIR to a writable folder)",
+                              RuntimeWarning, stacklevel=2)
+                _cache_warned = True
+            return numba.njit(**{**options, "cache": False})(fn)
+
+    return decorate(args[0]) if args and callable(args[0]) else decorate
+
+
+__all__ = ["BACKENDS", "KERNEL_MODULES", "backend", "choice", "compiled", "jit", "load", "set_backend"]

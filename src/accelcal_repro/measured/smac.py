@@ -1,0 +1,77 @@
+"""Reader of the SMAC-Group ``imudata`` R data files (the 2.78 h static ADIS16405 recording).
+
+``adis_16405_imu1.rda`` (``shared/data/README.md``) is an xz-compressed R data file
+holding one object, a 1,000,000 × 6 numeric matrix of R class ``imu`` with columns
+``Gyro. X/Y/Z`` (deg/s) and ``Accel. X/Y/Z`` (g), sampled at 100 Hz, the sensor at one
+orientation (``Accel. Z`` ≈ −1.016 g).  The accelerometer columns are multiples of the
+ADIS16405's output step of 3.33 mg.  The file carries no time column: ``t = i / fs``.
+
+Read with the ``rdata`` package (the ``workflow`` extra; the core library does not
+depend on it).  It is a recording of one orientation, so it is not a calibration source
+of the measured stage (:mod:`accelcal_repro.measured.sources`, which calibrates poses):
+the discrepancy stage uses it as the reference for slow bias wander
+(:mod:`accelcal_repro.discrepancy.adis`).
+"""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from accelcal.errors import RecordingError
+from accelcal.recording import Recording
+
+#: The recording's sampling rate [Hz] (SMAC-Group imudata documentation of ``adis_16405_imu1``).
+ADIS16405_RATE = 100.0
+ACCEL_COLUMNS = ("Accel. X", "Accel. Y", "Accel. Z")
+
+
+def read_smac_rda(path, fs: float = ADIS16405_RATE) -> Recording:
+    """The accelerometer of a SMAC ``imudata`` ``.rda`` file as a :class:`Recording` (unit g).
+
+    Parameters
+    ----------
+    path : path-like
+        The ``.rda`` file.
+    fs : float
+        Sampling rate [Hz] (the file has no time column).
+
+    Raises
+    ------
+    RecordingError
+        One line naming the file: not readable as R data, no matrix, no accelerometer
+        columns, non-finite values.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise RecordingError(f"{path}: no such file")
+    try:
+        import rdata
+    except ImportError:  # pragma: no cover (rdata is in the workflow extra)
+        raise RecordingError(f"{path}: reading R data needs the 'rdata' package (pip install 'accelcal[workflow]')")
+    try:
+        with warnings.catch_warnings():  # "missing constructor for R class imu": the matrix is what we want
+            warnings.simplefilter("ignore")
+            objs = rdata.conversion.convert(rdata.parser.parse_file(path))
+    except Exception as e:  # rdata raises many types on a damaged file
+        raise RecordingError(f"{path}: not a readable R data file ({type(e).__name__}: {str(e)[:80]})") from None
+    if len(objs) != 1:
+        raise RecordingError(f"{path}: expected one object, found {len(objs)} ({', '.join(map(str, objs))})")
+    (name, obj), = objs.items()
+    values = np.asarray(obj, dtype=float)
+    try:
+        cols = [str(c) for c in obj.coords[obj.dims[1]].values]
+    except (AttributeError, IndexError, KeyError):
+        raise RecordingError(f"{path}: object {name!r} is not a matrix with column names") from None
+    missing = [c for c in ACCEL_COLUMNS if c not in cols]
+    if values.ndim != 2 or missing:
+        raise RecordingError(f"{path}: object {name!r} lacks accelerometer columns {missing} (has {cols})")
+    acc = values[:, [cols.index(c) for c in ACCEL_COLUMNS]]
+    if not np.all(np.isfinite(acc)):
+        raise RecordingError(f"{path}: non-finite accelerometer values")
+    return Recording(np.arange(len(acc)) / float(fs), acc, None, f"{path}:{name}")
+
+
+__all__ = ["ACCEL_COLUMNS", "ADIS16405_RATE", "read_smac_rda"]

@@ -1,0 +1,154 @@
+"""Property-based fuzzing of the readers: any file gives a valid Recording or one
+RecordingError line, never another exception; through the CLI, exit 0 or 2 with one line
+and no output on failure, never an internal error (exit 3).
+
+Inputs are generated malformed files: valid tables damaged by deletion, insertion and
+replacement of characters and lines, odd delimiters and decimal marks, comments and
+blank lines, binary garbage, gzip of any of these, and random headers.  The number of
+examples is ``ACCELCAL_FUZZ_EXAMPLES`` (default 250 for the reader, 60 through the CLI,
+so the suite stays fast); the closing note's count comes from a larger run of the same
+tests.  Every example run is counted and the total printed (``pytest -s``).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import gzip
+import io
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from accelcal import cli
+from accelcal.errors import RecordingError
+from accelcal.readers import read
+from accelcal.recording import MIN_ROWS
+
+N = int(os.environ.get("ACCELCAL_FUZZ_EXAMPLES", "250"))
+COUNT = {"reader": 0, "cli": 0, "read": 0, "refused": 0}
+
+HEADERS = ["t,ax,ay,az", "time,acc_x,acc_y,acc_z", "timestamp;accX;accY;accZ", "TIME\tAX\tAY\tAZ", "t ax ay az",
+           "time [ms],ax [g],ay [g],az [g]", "%time,field.linear_acceleration.x,field.linear_acceleration.y,"
+           "field.linear_acceleration.z", "x, y, z", "datetime,ax,ay,az", "", "a,b", "t,ax,ax,az", "pose,t,ax,ay,az"]
+JUNK = ["nan", "inf", "-inf", "", "1e400", "abc", "1,5", "--", "0x10", "1.2.3", "  ", "\x00", "é", "#", ">>>", ";",
+        "\t", "1e-400", "9999999999999999999999", "-0", "+.5", "NaN"]
+
+
+def _valid_table(draw) -> str:
+    n = draw(st.integers(min_value=0, max_value=60))
+    sep = draw(st.sampled_from([",", ";", "\t", " ", "|"]))
+    header = draw(st.sampled_from(HEADERS))
+    rate = draw(st.sampled_from([1.0, 100.0, 400.0, 1000.0]))
+    scale = draw(st.sampled_from([1.0, 1 / 9.80665, 1000.0, 16384 / 9.80665]))
+    rng = np.random.default_rng(draw(st.integers(0, 2 ** 16)))
+    acc = (np.array([0.1, -0.2, 9.8]) + 0.01 * rng.standard_normal((n, 3))) * scale
+    t = np.arange(n) / rate
+    tfmt = draw(st.sampled_from(["{:.4f}", "{:.0f}", "{:d}"]))
+    lines = [header.replace(",", sep) if sep != "," and header.count(",") else header] if header else []
+    for i in range(n):
+        tv = tfmt.format(int(t[i] * 1000)) if tfmt == "{:d}" else tfmt.format(t[i])
+        lines.append(sep.join([tv, *(f"{v:.6g}" for v in acc[i])]))
+    return "\n".join(lines) + draw(st.sampled_from(["\n", "", "\r\n", "\n\n\n"]))
+
+
+@st.composite
+def damaged_files(draw) -> bytes:
+    kind = draw(st.sampled_from(["table", "table", "table", "bytes", "lines"]))
+    if kind == "bytes":
+        data = draw(st.binary(max_size=400))
+    elif kind == "lines":
+        data = "\n".join(draw(st.lists(st.text(max_size=40), max_size=30))).encode("utf-8", "surrogatepass")
+    else:
+        text = _valid_table(draw)
+        for _ in range(draw(st.integers(0, 6))):
+            op = draw(st.sampled_from(["delete", "insert", "replace", "cut", "dupline", "comment", "blank"]))
+            lines = text.split("\n")
+            i = draw(st.integers(0, max(len(lines) - 1, 0)))
+            if op == "delete" and text:
+                j = draw(st.integers(0, len(text) - 1))
+                text = text[:j] + text[j + draw(st.integers(1, 5)):]
+            elif op == "insert":
+                j = draw(st.integers(0, len(text)))
+                text = text[:j] + draw(st.sampled_from(JUNK)) + text[j:]
+            elif op == "replace" and lines:
+                fields = lines[i].split(",")
+                fields[draw(st.integers(0, len(fields) - 1))] = draw(st.sampled_from(JUNK))
+                lines[i] = ",".join(fields)
+                text = "\n".join(lines)
+            elif op == "cut":
+                text = text[: draw(st.integers(0, len(text)))]
+            elif op == "dupline" and lines:
+                lines.insert(i, lines[i])
+                text = "\n".join(lines)
+            elif op == "comment":
+                lines.insert(i, draw(st.sampled_from(["# note", "% x", "// y", "--- monitor"])))
+                text = "\n".join(lines)
+            elif op == "blank":
+                lines.insert(i, "")
+                text = "\n".join(lines)
+        data = text.encode("utf-8", "surrogatepass")
+    if draw(st.booleans()) and draw(st.integers(0, 5)) == 0:
+        data = gzip.compress(data, mtime=0)
+        if draw(st.booleans()):
+            data = data[: len(data) // 2]  # a damaged gzip
+    return data
+
+
+def _check_recording(rec) -> None:
+    assert rec.acc.ndim == 2 and rec.acc.shape == (rec.n, 3) and rec.n >= MIN_ROWS
+    assert np.all(np.isfinite(rec.acc)) and np.all(np.isfinite(rec.t)) and np.all(np.diff(rec.t) > 0)
+    assert rec.unit in ("m/s^2", "counts")
+    assert rec.temp is None or (rec.temp.shape == (rec.n,) and np.all(np.isfinite(rec.temp)))
+
+
+@settings(max_examples=N, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@given(damaged_files(), st.sampled_from(["auto", "auto", "csv", "imutk", "block-log", "mpu6050", "imucal"]))
+def test_reader_returns_a_recording_or_one_line(data, fmt):
+    COUNT["reader"] += 1
+    with tempfile.TemporaryDirectory() as tmp:
+        p = Path(tmp) / "rec.csv"
+        p.write_bytes(data)
+        try:
+            rec = read(p, format=fmt)
+        except RecordingError as e:
+            msg = str(e)
+            assert msg and "\n" not in msg and "Traceback" not in msg
+            COUNT["refused"] += 1
+        else:
+            _check_recording(rec)
+            COUNT["read"] += 1
+
+
+@settings(max_examples=max(N // 4, 20), deadline=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@given(damaged_files())
+def test_cli_exits_0_or_2_in_one_line(data):
+    COUNT["cli"] += 1
+    with tempfile.TemporaryDirectory() as tmp:
+        p, out = Path(tmp) / "rec.csv", Path(tmp) / "out.json"
+        p.write_bytes(data)
+        err = io.StringIO()
+        with contextlib.redirect_stderr(err):
+            code = cli.main(["calibrate", str(p), "--out", str(out)])
+        text = err.getvalue()
+        assert code in (0, 2), text
+        if code == 2:
+            lines = text.strip().splitlines()
+            assert len(lines) == 1 and lines[0].startswith("accelcal: error: "), text
+            assert not out.exists()
+
+
+def test_report_count():
+    """Print how many inputs were tried (run after the two properties, `pytest -s`)."""
+    print(f"\nfuzz: {COUNT['reader']} files through the readers ({COUNT['read']} read, {COUNT['refused']} refused), "
+          f"{COUNT['cli']} through `accelcal calibrate`")
+    if COUNT["reader"]:
+        assert COUNT["read"] + COUNT["refused"] == COUNT["reader"]
+
+
+pytestmark = pytest.mark.filterwarnings("ignore::UserWarning")

@@ -1,0 +1,110 @@
+"""How the workflow is put together: the order of the stage includes does not matter, every
+script is the script of a rule and runs standalone with that rule's own paths (pypsa-eur's
+mock_snakemake: the Snakefile is the one place for paths)."""
+
+import os
+import re
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from tests.configs import CI_CONFIG, REPO
+
+from .conftest import copy_of_ci_workflow, run_snakemake
+
+SCRIPTS = REPO / "workflow" / "scripts"
+sys.path.insert(0, str(SCRIPTS))
+import _helpers  # noqa: E402
+
+
+def _job_counts(stderr_and_stdout: str) -> dict[str, int]:
+    """``{rule: jobs}`` from the 'Job stats' table of a dry run."""
+    table = stderr_and_stdout.split("Job stats:", 1)[1]
+    return {m.group(1): int(m.group(2)) for m in re.finditer(r"^(\w+)\s+(\d+)\s*$", table, re.M)
+            if m.group(1) != "total"}
+
+
+def test_stage_include_order_does_not_matter(tmp_path):
+    text = (REPO / "Snakefile").read_text()
+    includes = re.findall(r'^include: "workflow/rules/(?!common)\w+\.smk"\n', text, re.M)
+    assert len(includes) >= 6
+    reordered = text
+    for line in includes:
+        reordered = reordered.replace(line, "")
+    # gatherers first, stages in reverse: every list is read only when the DAG is built
+    at = reordered.index("\n", reordered.index('include: "workflow/rules/common.smk"')) + 1
+    reordered = reordered[:at] + "".join(sorted(includes, reverse=True)) + reordered[at:]
+    snakefile = REPO / f".Snakefile.reordered.{os.getpid()}"  # beside the real one: same basedir
+    snakefile.write_text(reordered)
+    try:
+        counts = []
+        for sf in (REPO / "Snakefile", snakefile):
+            proc = subprocess.run([str(Path(sys.executable).with_name("snakemake")), "--snakefile", str(sf),
+                                   "--directory", str(tmp_path), "-n", "all", "--configfile", str(CI_CONFIG),
+                                   "--cores", "2"], cwd=REPO, capture_output=True, text=True, timeout=300)
+            assert proc.returncode == 0, proc.stderr[-3000:]
+            counts.append(_job_counts(proc.stdout + proc.stderr))
+    finally:
+        snakefile.unlink()
+    assert counts[0] == counts[1]
+    assert {"claims", "report", "all"} <= set(counts[0])
+
+
+@pytest.fixture(scope="module")
+def workflow():
+    cwd = Path.cwd()
+    from snakemake.api import SnakemakeApi
+    from snakemake.settings.types import (ConfigSettings, DeploymentSettings, OutputSettings, ResourceSettings,
+                                          StorageSettings, WorkflowSettings)
+    try:
+        with SnakemakeApi(OutputSettings()) as api:
+            yield api.workflow(resource_settings=ResourceSettings(cores=1), storage_settings=StorageSettings(),
+                               config_settings=ConfigSettings(), workflow_settings=WorkflowSettings(),
+                               deployment_settings=DeploymentSettings(), snakefile=REPO / "Snakefile",
+                               workdir=cwd)._workflow
+    finally:
+        os.chdir(cwd)
+
+
+def _scripts():
+    return sorted(p for p in SCRIPTS.glob("*.py") if not p.name.startswith("_"))
+
+
+@pytest.mark.parametrize("script", _scripts(), ids=lambda p: p.name)
+def test_every_script_mocks_a_rule_that_runs_it(workflow, script):
+    m = re.search(r'mock_snakemake_from_argv\("(\w+)"', script.read_text())
+    assert m, f"{script.name} has no standalone block (mock_snakemake_from_argv)"
+    rule = workflow.get_rule(m.group(1))
+    assert rule.script and Path(rule.script).name == script.name, (
+        f"rule {rule.name} runs {rule.script}, not {script.name}")
+
+
+def test_mock_snakemake_gives_the_rules_paths():
+    smk = _helpers.mock_snakemake("discrepancy_chunk", chunk="3")
+    assert smk.output.detections == "results/discrepancy/benchmark/detections/chunk_3.csv"
+    assert smk.input.profiles == "results/discrepancy/benchmark/profiles.json"
+    assert smk.log == ["results/logs/discrepancy/chunk_3.log"]
+    assert smk.config["discrepancy"]["benchmark"]["chunks"] == 16  # the default config
+    ci = _helpers.mock_snakemake("discrepancy_chunk", configfile=CI_CONFIG, chunk="0")
+    assert ci.config["discrepancy"]["benchmark"]["chunks"] == 2
+
+
+def test_a_script_run_standalone_rebuilds_the_workflows_output(ci_workflow, tmp_path):
+    """claims_ledger.py outside Snakemake, on a copy of the CI run, rewrites results/claims.csv
+    byte for byte."""
+    work = copy_of_ci_workflow(ci_workflow, tmp_path)
+    target = work / "results" / "claims.csv"
+    want = target.read_bytes()
+    target.unlink()
+    env = {**os.environ, "ACCELCAL_CONFIG": str(CI_CONFIG)}
+    proc = subprocess.run([sys.executable, str(SCRIPTS / "claims_ledger.py")], cwd=work, env=env,
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert target.read_bytes() == want
+    # and Snakemake sees nothing to redo beyond that file's own rule
+    proc = run_snakemake(work, "-n", "results/claims.csv", "--configfile", CI_CONFIG)
+    assert proc.returncode == 0, proc.stderr
+    shutil.rmtree(work / "results")

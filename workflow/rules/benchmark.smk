@@ -1,0 +1,122 @@
+"""Target 'benchmark' (issue 15): where the compute time goes.  Time per problem vs pose
+count of every estimator, one problem at a time and batched, compiled kernels and numpy
+reference (the burkhard2024 timing job, which the speed claims also read), the cost per
+step of the Batista and Tereshkov filters, the first-call (compilation) time of the
+kernels, and the job-seconds of every stage of the last run; one table and one figure.
+Config: the `benchmark` mapping (workflow/schemas/benchmark.schema.yaml).
+
+Outputs live under results/timing/ and the figure id contains "timing": wall times are
+not reproducible, and the byte-identical rerun check leaves such paths out.
+
+Needs from common.smk: FIGURES, REPORT_TABLES, log_path, bench_path, figure_outputs, SMALL.
+"""
+
+BENCHMARK = config["benchmark"]
+TIMING_DIR = "results/timing"
+BENCHMARK_FIGURE = "timing_benchmark"
+
+FIGURES.append(BENCHMARK_FIGURE)
+REPORT_TABLES.append(("benchmark", "Where the compute time goes: estimators at 24 poses, filters per step, "
+                      "first-call compilation and job-seconds per stage, with the goals of issue 15",
+                      f"{TIMING_DIR}/summary.csv"))
+
+
+rule timing_filters:
+    """Cost per step of the Batista filter and of Tereshkov's estimator, compiled and numpy.
+
+    threads = all cores: Snakemake then runs it alone, so no other job perturbs the clock.
+    """
+    output:
+        f"{TIMING_DIR}/filters.csv",
+    params:
+        batista=config["batista2011"],
+        tereshkov=config["tereshkov"],
+        bench=BENCHMARK["tereshkov"],
+    log:
+        log_path("benchmark/filters"),
+    benchmark:
+        bench_path("benchmark/filters"),
+    threads: workflow.cores
+    resources:
+        mem_mb=2000,
+        runtime=20,
+    script:
+        "../scripts/timing_filters.py"
+
+
+rule timing_compile:
+    """First-call time of the compiled kernels in fresh processes, empty and filled disk cache."""
+    output:
+        f"{TIMING_DIR}/compile.csv",
+    params:
+        calls=BENCHMARK["compile_calls"],
+    log:
+        log_path("benchmark/compile"),
+    benchmark:
+        bench_path("benchmark/compile"),
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=20,
+    script:
+        "../scripts/timing_compile.py"
+
+
+def _other_figures(wildcards):
+    """Every figure but this target's: the stage table is read once every other job is done."""
+    return expand("results/figures/{figure}.png", figure=[f for f in FIGURES if f != BENCHMARK_FIGURE])
+
+
+rule timing_stages:
+    """Job-seconds per stage from results/benchmarks/ (every rule writes its file there),
+    after every other figure and the ledger: the last run of each job."""
+    input:
+        figures=_other_figures,
+        claims="results/claims.csv",
+    output:
+        f"{TIMING_DIR}/stages.csv",
+    params:
+        benchmarks_dir="results/benchmarks",
+    log:
+        log_path("benchmark/stages"),
+    benchmark:
+        bench_path("benchmark/stages"),
+    threads: 1
+    resources:
+        **SMALL,
+    script:
+        "../scripts/timing_stages.py"
+
+
+rule timing_benchmark_figure:
+    """The summary table (with the goals) and the figure."""
+    input:
+        estimators="results/burkhard2024/timing_summary.csv",
+        filters=f"{TIMING_DIR}/filters.csv",
+        compile=f"{TIMING_DIR}/compile.csv",
+        stages=f"{TIMING_DIR}/stages.csv",
+    output:
+        summary=f"{TIMING_DIR}/summary.csv",
+        **figure_outputs(BENCHMARK_FIGURE, f"../report/{BENCHMARK_FIGURE}.rst", "Benchmark"),
+    params:
+        goals=BENCHMARK["goals"],
+        n_poses=config["burkhard2024"]["timing"]["headline_n_poses"],
+        interleave=config["burkhard2024"]["timing"]["headline_interleave"],
+    log:
+        log_path("benchmark/figure"),
+    benchmark:
+        bench_path("benchmark/figure"),
+    threads: 1
+    resources:
+        **SMALL,
+    script:
+        "../scripts/timing_benchmark.py"
+
+
+rule benchmark:
+    """Every output of the benchmark (target only)."""
+    localrule: True
+    input:
+        f"{TIMING_DIR}/summary.csv",
+        f"results/figures/{BENCHMARK_FIGURE}.png",
+        f"results/figures/{BENCHMARK_FIGURE}.pdf",

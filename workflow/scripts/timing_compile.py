@@ -1,0 +1,16 @@
+"""Benchmark: first-call time of the compiled kernels in fresh processes, with an empty
+numba cache (compilation) and with the cache the first process wrote (loading)."""
+
+from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
+
+from accelcal_repro.timing import compile_timing
+
+if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
+    snakemake = mock_snakemake_from_argv("timing_compile")
+
+log = configure_logging(snakemake)
+table = compile_timing(snakemake.params.calls)
+if table.empty:
+    log.warning("numba is not installed: nothing is compiled, the numpy implementations run")
+log.info("first-call times [s]:\n%s", table.to_string())
+write_csv(table, snakemake.output[0])
