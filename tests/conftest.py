@@ -36,8 +36,10 @@ CI_CONFIG = REPO / "config" / "ci.yaml"
 CI_RUN_TIMEOUT_S = 3600
 
 
-def run_snakemake(workdir, *args, timeout=600):
-    """The repository's workflow with ``workdir`` as working directory (results go there)."""
+def run_snakemake(workdir, *args, timeout=1800):
+    """The repository's workflow with ``workdir`` as working directory (results go there).
+    The timeout is a safety net against a hung run, not a measurement: the CI run took
+    more than 10 min on a shared machine at load 12."""
     cmd = [str(Path(sys.executable).with_name("snakemake")), "--snakefile", str(REPO / "Snakefile"),
            "--directory", str(workdir), "--cores", "2", "--scheduler", "greedy", *map(str, args)]
     return subprocess.run(cmd, cwd=REPO, capture_output=True, text=True, timeout=timeout)

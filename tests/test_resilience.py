@@ -2,11 +2,16 @@
 fetch job fails in one line, and an interrupted run (hard kill or Ctrl-C) leaves only
 whole files behind and resumes without redoing finished jobs.
 
+No test here depends on timing: the interrupted run is interrupted while a job is held
+mid-way by tests/hold_hook, and the subprocess timeouts are safety nets against a hung
+run (10 min), not measurements.
+
 Offline is simulated with proxy variables pointing at a closed local port
 (http://127.0.0.1:9): urllib honours them, so every download and reachability check is
 refused at once, on any machine, without a test-only switch in the code.
 """
 
+import errno
 import gzip
 import hashlib
 import json
@@ -66,7 +71,7 @@ def test_missing_dataset_fails_before_any_job(tmp_path, dry_run):
     overlay = measured_overlay(tmp_path / "offline.yaml", data_dir, cache)
     workdir = tmp_path / "work"
     proc = snakemake(workdir, "all", "--configfile", CI, overlay, "--cores", "1", *["-n"] * dry_run,
-                     env=OFFLINE, timeout=120)
+                     env=OFFLINE, timeout=600)
     out = proc.stdout + proc.stderr
     assert proc.returncode != 0, out
     lines = [ln for ln in out.splitlines() if ln.startswith("missing measured data:")]
@@ -93,7 +98,7 @@ def test_data_in_the_download_cache_needs_no_network(tmp_path):
     for dataset in DATASETS:
         (cache / dataset).symlink_to(SHARED / dataset)  # no copy of the data
     overlay = measured_overlay(tmp_path / "cache.yaml", tmp_path / "no_data", "cache")
-    proc = snakemake(workdir, "-n", "all", "--configfile", CI, overlay, "--cores", "1", env=OFFLINE, timeout=120)
+    proc = snakemake(workdir, "-n", "all", "--configfile", CI, overlay, "--cores", "1", env=OFFLINE, timeout=600)
     assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
     assert "measured_fetch" in proc.stdout + proc.stderr
 
@@ -135,7 +140,7 @@ def test_fetch_job_fails_in_one_line_on_a_damaged_copy(tmp_path):
     overlay = measured_overlay(tmp_path / "damaged.yaml", data_dir, tmp_path / "cache")
     workdir = tmp_path / "work"
     proc = snakemake(workdir, "results/measured/data/mpu6050.json", "--configfile", CI, overlay, "--cores", "1",
-                     env=OFFLINE, timeout=120)
+                     env=OFFLINE, timeout=600)
     out = proc.stdout + proc.stderr
     assert proc.returncode != 0, out
     assert "Traceback" not in out, out
@@ -278,7 +283,7 @@ def test_a_killed_atomic_writer_leaves_no_output_and_the_next_write_cleans_up(tm
 
     def run(kill):
         code = _KILLED_WRITER.format(scripts=str(REPO / "workflow" / "scripts"), setup=setup, call=call, kill=kill)
-        return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+        return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=600)
 
     proc = run(kill=True)
     assert proc.returncode == -signal.SIGKILL, proc.stderr
@@ -408,36 +413,65 @@ def uninterrupted(tmp_path_factory):
     return workdir, jobs_in(proc.stdout + proc.stderr)
 
 
-def interrupt(workdir, sig, min_finished=3, timeout=300):
-    """Start the run in its own process group; once `min_finished` Monte Carlo jobs have
-    finished and the next job has started, send `sig` to the whole group (a hard crash or
-    a Ctrl-C).  Returns the Snakemake output, the finished and the running job ids."""
+#: The job held at the interruption: the gather job of the Monte Carlo, held by
+#: tests/hold_hook between writing its outputs (after two of them, before the third), so
+#: that all 8 Monte Carlo jobs have finished and one job is certainly running when the
+#: signal comes, however loaded the machine is.
+HELD_RULE = "burkhard2024_summary"
+HELD_OUTPUT = "results/burkhard2024/comparisons.csv"
+HOLD_HOOK = Path(__file__).with_name("hold_hook")
+
+
+def hold_env(fifo, output):
+    """Environment that makes tests/hold_hook/sitecustomize.py hold every process renaming
+    a file onto ``output`` (a glob of absolute paths) until ``fifo`` is opened and closed."""
+    return {"PYTHONPATH": os.pathsep.join(filter(None, [str(HOLD_HOOK), os.environ.get("PYTHONPATH")])),
+            "ACCELCAL_TEST_HOLD_FIFO": str(fifo), "ACCELCAL_TEST_HOLD_OUTPUT": output}
+
+
+def open_when_held(fifo, alive, describe, safety_timeout=1800):
+    """Wait until a process blocks reading ``fifo`` (held by the hook) and return the write
+    end, opened: the held process stays blocked until it is closed.  ``alive()`` false
+    means the run ended without reaching the hold (the test fails, saying so).  No
+    timing decides anything: the timeout is a safety net against a hung run only."""
+    t0 = time.monotonic()
+    while True:
+        try:
+            # a FIFO's write end opens without blocking only while a reader has it open
+            return os.open(fifo, os.O_WRONLY | os.O_NONBLOCK)
+        except OSError as e:
+            if e.errno != errno.ENXIO:
+                raise
+        assert alive(), "the run ended without reaching the held job:\n" + describe()
+        assert time.monotonic() - t0 < safety_timeout, "the held job was not reached (run hung?):\n" + describe()
+        time.sleep(0.05)
+
+
+def interrupt(workdir, sig):
+    """Start the run in its own process group with the gather job held mid-way (all Monte
+    Carlo jobs finished by then), send `sig` to the whole group (a hard crash or a Ctrl-C)
+    while it is held, and return the Snakemake output, the finished and the running job ids."""
     console = workdir.with_name(workdir.name + ".console")
+    fifo = workdir.with_name(workdir.name + ".hold")
+    os.mkfifo(fifo)
+    env = dict(os.environ, **hold_env(fifo, f"*/{HELD_OUTPUT}"))
     with open(console, "w") as sink:
         proc = subprocess.Popen(snakemake_cmd(workdir, TARGET, "--configfile", CI, "--cores", "1"), cwd=REPO,
-                                stdout=sink, stderr=subprocess.STDOUT, start_new_session=True)
-    t0 = time.monotonic()
+                                stdout=sink, stderr=subprocess.STDOUT, start_new_session=True, env=env)
+    held = None
     try:
-        while True:
-            assert proc.poll() is None, "the run ended before it could be interrupted:\n" + console.read_text()
-            assert time.monotonic() - t0 < timeout, "no interruption point reached:\n" + console.read_text()
-            text = console.read_text()
-            jobs, done = jobs_in(text), finished_jobs(text)
-            mc_done = [j for j in done if jobs.get(j, ("",))[0] == "burkhard2024_mc"]
-            running = set(jobs) - done
-            if len(mc_done) >= min_finished and running:
-                time.sleep(1.0)  # inside the running job's script, not at its start
-                break
-            time.sleep(0.05)
-        text = console.read_text()
+        held = open_when_held(fifo, lambda: proc.poll() is None, console.read_text)
         os.killpg(proc.pid, sig)
-        proc.wait(timeout=120)
+        proc.wait(timeout=600)
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
             proc.wait()
-    # nothing of the group may survive (a job still writing would spoil the checks)
-    deadline = time.monotonic() + 30
+        if held is not None:
+            os.close(held)
+    # nothing of the group may survive (a job still writing would spoil the checks); the
+    # 2 min are a safety net: a killed or interrupted process ends at once
+    deadline = time.monotonic() + 120
     while time.monotonic() < deadline:
         try:
             os.killpg(proc.pid, 0)
@@ -459,7 +493,9 @@ def test_interrupted_run_resumes_without_redoing_finished_jobs(tmp_path, uninter
     t0 = time.perf_counter()
     text, done, running, jobs = interrupt(workdir, sig)
     results = workdir / "results"
-    assert running, text
+    # the held job was running; every Monte Carlo job had finished before it could start
+    assert [jobs[j][0] for j in running] == [HELD_RULE], text
+    assert sum(jobs[j][0] == "burkhard2024_mc" for j in done) == 8, text
 
     # (a) only whole files; list what the interruption left
     files, temporaries = survey(results)
@@ -470,7 +506,7 @@ def test_interrupted_run_resumes_without_redoing_finished_jobs(tmp_path, uninter
           f"{len(files)} whole files, temporaries left: {[str(p.relative_to(results)) for p in temporaries]}")
 
     # (b) the dry run of the resumed run plans exactly the unfinished jobs
-    proc = snakemake(workdir, "--dry-run", TARGET, "--configfile", CI, "--cores", "1", timeout=120)
+    proc = snakemake(workdir, "--dry-run", TARGET, "--configfile", CI, "--cores", "1", timeout=600)
     assert proc.returncode == 0, proc.stderr[-3000:]
     planned = {o for _, outputs in jobs_in(proc.stdout + proc.stderr).values() for o in outputs}
     every = {o for _, outputs in ref_jobs.values() for o in outputs}
@@ -483,7 +519,7 @@ def test_interrupted_run_resumes_without_redoing_finished_jobs(tmp_path, uninter
     # kill cannot, and Snakemake refuses to start until `--unlock` (its error says so).
     locks = list((workdir / ".snakemake" / "locks").glob("*"))
     if sig == signal.SIGKILL:
-        proc = snakemake(workdir, "--unlock", TARGET, "--configfile", CI, timeout=120)
+        proc = snakemake(workdir, "--unlock", TARGET, "--configfile", CI, timeout=600)
         assert proc.returncode == 0, proc.stderr[-3000:]
     else:
         assert not locks, locks

@@ -70,6 +70,7 @@ def _other_figures(wildcards):
 rule timing_stages:
     """Job-seconds per stage from results/benchmarks/ (every rule writes its file there),
     after every other figure and the ledger: the last run of each job."""
+    localrule: True  # on a cluster: the login node (reads the benchmark files)
     input:
         figures=_other_figures,
         claims="results/claims.csv",
@@ -90,6 +91,7 @@ rule timing_stages:
 
 rule timing_benchmark_figure:
     """The summary table (with the goals) and the figure."""
+    localrule: True  # on a cluster: the login node (a table and a figure, last)
     input:
         estimators="results/burkhard2024/timing_summary.csv",
         filters=f"{TIMING_DIR}/filters.csv",

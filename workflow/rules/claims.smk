@@ -6,6 +6,7 @@ this file may be included before or after the stages that register their claims.
 
 rule claims:
     """results/claims.csv from results/claims/<stage>.csv of every stage."""
+    localrule: True  # on a cluster: the login node (a concatenation)
     input:
         lambda w: expand("results/claims/{stage}.csv", stage=CLAIM_STAGES),
     output:

@@ -152,6 +152,7 @@ rule discrepancy_adis_sessions:
 rule discrepancy_profiles:
     """The benchmark's noise profiles resolved to counts (profiles.json) and what each does to
     the pose means of the session (profiles.csv)."""
+    localrule: True  # on a cluster: the login node (a gather between two groups of SLURM jobs)
     input:
         models="results/discrepancy/adis/models.csv",
         xsens=["results/discrepancy/measured/xsens_mti.json"] if DISCREPANCY_NEEDS_XSENS else [],

@@ -61,6 +61,7 @@ rule measured_fetch:
     High priority: when a download is needed it runs first, before the long Monte Carlo
     jobs, so that a failing download stops the run early."""
     priority: 100
+    localrule: True  # on a cluster: the login node (internet access; a checksum when the data is local)
     output:
         "results/measured/data/{recording}.json",
     params:

@@ -52,6 +52,7 @@ def report_config_files():
 
 rule report:
     """results/report.html from every figure, the claims ledger and the stages' summary tables."""
+    localrule: True  # on a cluster: the login node (the HTML of finished outputs)
     input:
         claims="results/claims.csv",
         figures=lambda w: expand("results/figures/{figure}.png", figure=sorted(FIGURES)),
