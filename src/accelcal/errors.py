@@ -4,6 +4,13 @@
 class AccelcalError(ValueError):
     """Base class: a problem with the user's input that the CLI reports in one line."""
 
+    def __init__(self, message="", *args):
+        # Messages quote the user's file (column names, cells); a line break in it would
+        # break the one-line contract, so it is shown escaped.
+        if isinstance(message, str):
+            message = message.replace("\r", "\\r").replace("\n", "\\n")
+        super().__init__(message, *args)
+
 
 class InputShapeError(AccelcalError):
     """Arrays of the wrong shape or dimensionality."""

@@ -115,6 +115,14 @@ rule timing_benchmark_figure:
         "../scripts/timing_benchmark.py"
 
 
+# The figure id as a target: `snakemake timing_benchmark`.
+rule timing_benchmark:
+    localrule: True
+    input:
+        f"results/figures/{BENCHMARK_FIGURE}.png",
+        f"results/figures/{BENCHMARK_FIGURE}.pdf",
+
+
 rule benchmark:
     """Every output of the benchmark (target only)."""
     localrule: True

@@ -12,21 +12,16 @@ dozens of array calls; these kernels run the same algorithms in one compiled loo
   :func:`accelcal.discrepancy.allan.allan_variance` accumulates.
 
 Same algorithms, same arithmetic up to the order of floating-point sums (results agree
-to ~1e-12 relative; the tests compare them).  Without numba (``pip install
-accelcal[fast]`` adds it) the callers use their numpy versions: :data:`AVAILABLE` says
-which runs.
+to ~1e-12 relative; the tests compare them).  Imported only through
+:func:`accelcal.kernels.compiled` (it imports numba), so ``ACCELCAL_KERNELS`` selects it
+as it does every other kernel; without numba the callers use their numpy versions.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-try:  # optional dependency
-    import numba
-except ImportError:  # pragma: no cover - exercised where numba is absent
-    numba = None
-
-AVAILABLE = numba is not None
+from ..kernels import jit
 
 
 def _nnls_small(A, b, subsets, sizes):
@@ -194,13 +189,14 @@ def _allan_sums(c, m):
     return out
 
 
-if AVAILABLE:
-    _jit = numba.njit(cache=True, nogil=True)
-    _nnls_small = _jit(_nnls_small)
-    _deviance = _jit(_deviance)
-    _irls_one = _jit(_irls_one)
-    _irls_batch = _jit(_irls_batch)
-    _allan_sums = _jit(_allan_sums)
+# The Python error model: these kernels never divide by zero on valid input, and the
+# numpy versions raise where they would.
+_jit = jit(error_model="python")
+_nnls_small = _jit(_nnls_small)
+_deviance = _jit(_deviance)
+_irls_one = _jit(_irls_one)
+_irls_batch = _jit(_irls_batch)
+_allan_sums = _jit(_allan_sums)
 
 
 def supports(p: int) -> tuple[np.ndarray, np.ndarray]:
@@ -227,4 +223,4 @@ def allan_sums(c: np.ndarray, m: np.ndarray) -> np.ndarray:
     return _allan_sums(np.ascontiguousarray(c, dtype=np.float64), np.ascontiguousarray(m, dtype=np.int64))
 
 
-__all__ = ["AVAILABLE", "allan_sums", "irls_gamma", "supports"]
+__all__ = ["allan_sums", "irls_gamma", "supports"]

@@ -223,7 +223,9 @@ def allan_variance(segments, fs: float, *, m=None, min_edf: float = DEFAULT_MIN_
     if m.size == 0 or np.any(m < 1):
         raise AllanError(f"no averaging time has pooled edf >= {min_edf:g}: the rests are too short "
                          f"(longest {max(lengths)} samples)")
-    from . import _fast
+    from .. import kernels
+
+    fast = kernels.compiled("discrepancy._fast")
 
     d = segs[0].shape[1]
     sums = np.zeros((m.size, d))
@@ -233,8 +235,8 @@ def allan_variance(segments, fs: float, *, m=None, min_edf: float = DEFAULT_MIN_
         # the digits of raw counts around 32768.
         c = np.concatenate([np.zeros((1,) + s.shape[1:]), np.cumsum(s - s.mean(axis=0), axis=0)])
         reach = c.shape[0] - 2 * m >= 1
-        if _fast.AVAILABLE:  # the same sums, compiled (accelcal[fast])
-            sums[reach] += _fast.allan_sums(c, m[reach]) / (2.0 * m[reach, None] ** 2)
+        if fast is not None:  # the same sums, compiled (accelcal[fast])
+            sums[reach] += fast.allan_sums(c, m[reach]) / (2.0 * m[reach, None] ** 2)
         else:
             for k in np.flatnonzero(reach):
                 mk = m[k]

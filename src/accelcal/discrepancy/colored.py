@@ -553,10 +553,15 @@ class RoundTests:
 
 
 def round_tests(prob: Problem, X_alts: list, rng: np.random.Generator, n_boot: int,
-                outliers: bool = True) -> RoundTests:
+                outliers: bool = True, extend=None, n_boot_max: int | None = None) -> RoundTests:
     """Likelihood-ratio tests current (``prob.X0``) vs current + each ``X_alts[k]``
     (contrast columns, appended to X0) and the outlier family, all calibrated on the same
-    ``n_boot`` data sets simulated under the current model with its REML noise."""
+    ``n_boot`` data sets simulated under the current model with its REML noise.
+
+    ``extend(counts, n)`` (optional): given the exceedance counts of the candidates (and,
+    last, of the outlier family) after ``n`` replicates, True when more replicates could
+    change a decision; the bootstrap then grows to ``n_boot_max`` replicates (the first
+    ``n_boot`` are the same draws either way)."""
     X0 = prob.X0
     sf0 = profile(prob, X0, prob.y[None], Q_REL_GRID, shifts=outliers)
     m0 = float(sf0.ml_min()[0])
@@ -567,33 +572,43 @@ def round_tests(prob: Problem, X_alts: list, rng: np.random.Generator, n_boot: i
     null = fit_wander(prob, X0, fine=False)
     Xs = [np.hstack([X0, Xa]) for Xa in X_alts]
     lr = np.array([max(m0 - float(profile(prob, X1, prob.y[None], Q_REL_GRID).ml_min()[0]), 0.0) for X1 in Xs])
-    # bootstrap under the null: y* = V diag(sqrt(s (1 + q λ))) z
+    lr_pose = np.maximum(m0 - sf0.shift_ml_min()[0], 0.0) if outliers else np.zeros(0)
+    o_i = int(np.argmax(lr_pose)) if outliers else -1
+    o_lr = float(lr_pose[o_i]) if outliers else float("nan")
+    counts, lr_sum, n, batch = np.zeros(len(Xs) + 1, dtype=np.int64), np.zeros(len(Xs)), 0, n_boot
+    while batch > 0:
+        c, s = _bootstrap_batch(prob, X0, Xs, null, lr, o_lr, rng.standard_normal((batch, prob.m)), outliers)
+        counts, lr_sum, n = counts + c, lr_sum + s, n + batch
+        more = extend is not None and n_boot_max is not None and n < n_boot_max
+        batch = n_boot_max - n if more and extend(counts[: len(Xs) + outliers], n) else 0
+    p = (1 + counts[: len(Xs)]) / (n + 1)
+    scale = lr_sum / n / np.array([Xa.shape[1] for Xa in X_alts]) if X_alts else np.zeros(0)
+    o_p = float((1 + counts[-1]) / (n + 1)) if outliers else float("nan")
+    t_obs, _ = studentised(prob, X0, null.t, null.q_rel, scale=null.white_scale)
+    return RoundTests(lr=lr, p_values=p, bartlett=scale, outlier_t=t_obs[0], outlier_p=o_p, outlier_pose=o_i,
+                      outlier_lr=o_lr, null_wander=null, n_boot=int(n))
+
+
+def _bootstrap_batch(prob: Problem, X0, Xs, null: WanderFit, lr, o_lr: float, Z: np.ndarray, outliers: bool):
+    """Replicates ``y* = V diag(sqrt(s (1 + q λ))) z`` under the null, refitted as the data:
+    per candidate (and, last, the outlier family) the count of replicate statistics at or
+    above the observed one, and per candidate the sum of the replicate LRs."""
     V, lam = prob.V[null.t], prob.lam[null.t]
-    Z = rng.standard_normal((n_boot, prob.m))
     Ystar = (Z * np.sqrt(null.white_scale * (1.0 + null.q_rel * lam))[None, :]) @ V.T
     sfs = profile(prob, X0, Ystar, Q_REL_GRID, shifts=outliers)
     m0s = sfs.ml_min()
     tol = 1e-9 * max(1.0, float(np.max(lr, initial=0.0)))
-    p = np.empty(len(X_alts))
-    scale = np.empty(len(X_alts))
+    counts, sums = np.zeros(len(Xs) + 1, dtype=np.int64), np.zeros(len(Xs))
     for k, X1 in enumerate(Xs):
         lrs = np.maximum(m0s - profile(prob, X1, Ystar, Q_REL_GRID).ml_min(), 0.0)
-        p[k] = (1 + np.sum(lrs >= lr[k] - tol)) / (n_boot + 1)
-        scale[k] = float(np.mean(lrs)) / X_alts[k].shape[1]
-    t_obs, _ = studentised(prob, X0, null.t, null.q_rel, scale=null.white_scale)
-    t_obs = t_obs[0]
-    o_p, o_i, o_lr = float("nan"), -1, float("nan")
+        counts[k], sums[k] = np.sum(lrs >= lr[k] - tol), float(np.sum(lrs))
     if outliers:
         # the mean-shift likelihood ratio of each pose, the noise re-estimated with the
         # shift (so an outlier cannot hide by inflating it): its maximum over the poses
         # against the same statistic on the replicates
-        lr_pose = np.maximum(m0 - sf0.shift_ml_min()[0], 0.0)
-        o_i = int(np.argmax(lr_pose))
-        o_lr = float(lr_pose[o_i])
         lrs_max = np.maximum(m0s[:, None] - sfs.shift_ml_min(), 0.0).max(axis=1)
-        o_p = float((1 + np.sum(lrs_max >= o_lr - 1e-9 * max(1.0, o_lr))) / (n_boot + 1))
-    return RoundTests(lr=lr, p_values=p, bartlett=scale, outlier_t=t_obs, outlier_p=o_p, outlier_pose=o_i,
-                      outlier_lr=o_lr, null_wander=null, n_boot=int(n_boot))
+        counts[-1] = np.sum(lrs_max >= o_lr - 1e-9 * max(1.0, o_lr))
+    return counts, sums
 
 
 # --------------------------------------------------------------------------- information, MDE, GLS

@@ -433,10 +433,11 @@ def _irls(H: np.ndarray, y: np.ndarray, edf: np.ndarray, max_iter: int = 200, to
     in ``c``, and plain scoring can cycle); each problem stops when its deviance changes
     by less than ``tol`` relative.
     """
-    from . import _fast
+    from .. import kernels
 
-    if _fast.AVAILABLE:  # the same algorithm, compiled (accelcal[fast])
-        return _fast.irls_gamma(H, y, edf, max_iter, tol)
+    fast = kernels.compiled("discrepancy._fast")
+    if fast is not None:  # the same algorithm, compiled (accelcal[fast])
+        return fast.irls_gamma(H, y, edf, max_iter, tol)
     G = y.shape[0]
     floor = 1e-12 * y.max(axis=1, keepdims=True)
     sw = np.sqrt(edf)

@@ -17,7 +17,13 @@ Each round (module :mod:`accelcal.discrepancy.colored` for the statistics):
    outlier family (the largest mean-shift likelihood ratio over the poses), calibrated
    together on the same replicates of the
    fitted null; Holm's step-down over the round's family (the candidates and, if
-   enabled, the outlier family).  An effect passes when its adjusted p-value is ≤ α,
+   enabled, the outlier family).  The bootstrap has ``n_boot`` replicates, grown to
+   ``5 (n_boot + 1) − 1`` when a test that does not pass could pass with more of them
+   (the lower end of the 99 % Clopper–Pearson interval of its p-value would pass Holm):
+   199 replicates put the smallest p-value at 0.005, which Holm over six tests makes
+   0.03, so a strong effect with one replicate above it (p = 0.01, adjusted 0.06) was
+   missed.  Only the power changes: a test that passes at ``n_boot`` is never re-drawn,
+   and the first ``n_boot`` replicates are the same either way.  An effect passes when its adjusted p-value is ≤ α,
    ``ΔBIC = −LR + 3 ln n < −bic_threshold`` and the colored leave-one-pose-out PRESS
    (GLS prediction of each pose from the others, both models under the alternative's
    REML wander) falls; the outlier family when its adjusted p-value is ≤ α.
@@ -209,7 +215,8 @@ def _round(st: _State, prob: C.Problem, remaining, test_outliers: bool, rules: R
     null = C.fit_wander(prob, prob.X0, fine=False)
     prepared = [_prepare(st.data, st.current, prob, null, eid, rules, len(remaining), rnd) for eid in remaining]
     tested = [r for r in prepared if r["identifiable"]]
-    rt = C.round_tests(prob, [r["Xe"] for r in tested], rng, rules.n_boot, outliers=test_outliers)
+    rt = C.round_tests(prob, [r["Xe"] for r in tested], rng, rules.n_boot, outliers=test_outliers,
+                       extend=_more_replicates_could_pass(rules), n_boot_max=5 * (rules.n_boot + 1) - 1)
     padj = holm([float(v) for v in rt.p_values] + ([rt.outlier_p] if test_outliers else []), rules.correction)
     lo0 = C.studentised(prob, prob.X0, null.t, null.q_rel)[1][0]
     cand_rows = [_tested_candidate(st, prob, r, rt, k, padj[k], lo0, rules) for k, r in enumerate(tested)]
@@ -225,6 +232,22 @@ def _round(st: _State, prob: C.Problem, remaining, test_outliers: bool, rules: R
                    "delta_bic": -rt.outlier_lr + 2.0 * math.log(n),
                    "passed_test": bool(padj[-1] <= rules.alpha), "named": False}
     return cand_rows, out_row, rt
+
+
+def _more_replicates_could_pass(rules: Rules):
+    """``extend(counts, n)`` for :func:`~.colored.round_tests`: True when a test that does
+    not pass Holm at its p-value ``(1 + counts)/(n + 1)`` would pass at the lower end of
+    the 99 % Clopper–Pearson interval of its exceedance probability (floored at the
+    smallest p-value of the grown bootstrap)."""
+    floor = 1.0 / (5 * (rules.n_boot + 1))
+
+    def extend(counts: np.ndarray, n: int) -> bool:
+        low = np.where(counts > 0, stats.beta.ppf(0.005, np.maximum(counts, 1), n - counts + 1), 0.0)
+        passes_now = holm((1 + counts) / (n + 1), rules.correction) <= rules.alpha
+        could_pass = holm(np.maximum(low, floor), rules.correction) <= rules.alpha
+        return bool(np.any(could_pass & ~passes_now))
+
+    return extend
 
 
 def _tested_candidate(st: _State, prob: C.Problem, r: dict, rt: C.RoundTests, k: int, p_adj: float,
