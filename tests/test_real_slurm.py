@@ -74,6 +74,30 @@ class Cluster:
         return {line.split("|")[0]: dict(zip(fields, line.split("|")[1:])) for line in out.splitlines()}
 
 
+def kill_job_leftovers(root: Path) -> list[int]:
+    """Kill the processes of this module's SLURM jobs that outlived them: with
+    ``proctrack/linuxproc`` SLURM finds a job's processes through their parents, so a
+    process re-parented to init escapes ``scancel`` (seen: the group job's Snakemake of the
+    cancelled job, waiting forever).  Found by a SLURM job id in their environment and a
+    working directory under this session's temporary folder."""
+    killed = []
+    for proc in Path("/proc").iterdir():
+        if not proc.name.isdigit() or int(proc.name) == os.getpid():
+            continue
+        try:
+            cwd = Path(os.readlink(proc / "cwd"))
+            environ = (proc / "environ").read_bytes()
+        except OSError:
+            continue
+        if b"SLURM_JOB_ID=" in environ and str(cwd).startswith(str(root)):
+            try:
+                os.kill(int(proc.name), 9)
+                killed.append(int(proc.name))
+            except ProcessLookupError:
+                pass
+    return killed
+
+
 @pytest.fixture(scope="module")
 def slurm(tmp_path_factory):
     """Install (if missing) and start the single-node SLURM; stop it and remove what was
@@ -95,6 +119,9 @@ def slurm(tmp_path_factory):
     finally:
         t3 = time.perf_counter()
         subprocess.run([TOOLS / "stop_single_node.sh", "--keep", state], timeout=300)  # logs kept for a failure
+        left = kill_job_leftovers(tmp_path_factory.getbasetemp())
+        if left:
+            print(f"\nreal SLURM: killed {len(left)} process(es) of cancelled jobs that SLURM left: {left}")
         if installed:
             subprocess.run(["apt-get", "purge", "-y", "-q", *installed], capture_output=True, timeout=600,
                            env=dict(os.environ, DEBIAN_FRONTEND="noninteractive"))

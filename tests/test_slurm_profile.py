@@ -147,7 +147,7 @@ def test_partition_and_account_set_in_the_profile_reach_every_job(tmp_path, fake
 
 
 def test_default_config_submits_a_few_dozen_slurm_jobs(tmp_path, fake_slurm):
-    """At the default (paper-scale) config the profile groups 158 rule jobs into 24 SLURM
+    """At the default (paper-scale) config the profile groups 159 rule jobs into 25 SLURM
     jobs (a few dozen, the issue's aim); every job is in a group, a local rule or a timing benchmark (a new rule
     left ungrouped would add SLURM jobs of seconds), and every rule the profile names exists."""
     out = dry_run(tmp_path, fake_slurm, "all")
@@ -159,7 +159,8 @@ def test_default_config_submits_a_few_dozen_slurm_jobs(tmp_path, fake_slurm):
     assert set(ungrouped) == TIMING_RULES and set(ungrouped.values()) == {1}, ungrouped
     groups = re.findall(r"Group job (\w+) \(jobs in lexicogr", out)
     slurm_jobs = len(groups) + sum(ungrouped.values())
-    print(f"default config: {len(jobs)} rule jobs -> {slurm_jobs} SLURM jobs {Counter(groups)}")
+    remote = sum(1 for rule, *_ in jobs if rule not in local)
+    print(f"default config: {len(jobs)} rule jobs, {remote} not local -> {slurm_jobs} SLURM jobs {Counter(groups)}")
     assert len(jobs) > 100 and 10 <= slurm_jobs <= 30, (len(jobs), slurm_jobs, Counter(groups))
     settings = profile_settings()
     named = {g.split("=")[0] for g in settings["groups"]}
