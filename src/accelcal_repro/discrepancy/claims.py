@@ -100,7 +100,7 @@ def _xsens_row(excess: pd.DataFrame | None, gaps: pd.DataFrame | None) -> dict:
     q_after, q_before = float(g.loc["after", "excess_measured_quantile"]), float(g.loc["before", "excess_measured_quantile"])
     ok = inside and 0.025 <= q_after <= 0.975 and not 0.025 <= q_before <= 0.975
     return XSENS_GAP.judge(float(e.excess_predicted), passed=ok, fmt="predicted excess {:.2f}",
-                           evidence=f"{GAPS} (and excess.csv beside it): observed {e.excess_observed:.2f}, joint model "
+                           evidence=f"{GAPS}: observed excess (excess.csv beside it) {e.excess_observed:.2f}, joint model "
                                     f"{e.excess_predicted:.2f} [{e.excess_predicted_ci_low:.2f}, "
                                     f"{e.excess_predicted_ci_high:.2f}]; re-simulated before: measured at quantile "
                                     f"{q_before:.2f}, RMS ratio {g.loc['before', 'rms_ratio']:.2f}, KS "
