@@ -78,7 +78,8 @@ def plot_fpr(summary: pd.DataFrame, profiles_table: pd.DataFrame, alpha: float, 
         ax.set_ylim(-0.6, len(profiles) - 0.4)
         ax.set_title(f"Effect-free sessions per noise profile (✗ = {main}-null verdict fails)\nwander = pose-mean "
                      "std of the profile's non-white noise / white pose-mean std", fontsize=8)
-        ax.legend(loc="lower right", fontsize=6.5)
+        # below the axes: inside, it covered the labels of the bottom rows
+        fig.legend(*ax.get_legend_handles_labels(), loc="outside lower center", ncol=2, fontsize=6.5)
     return fig
 
 
