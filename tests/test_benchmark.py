@@ -40,7 +40,7 @@ def test_interleaved_timing_per_backend_and_paired_speedups():
     methods = {("full_lls", "numba"): method(5e-6, 5e-6), ("full_lls", "numpy"): method(4e-5, 4e-5),
                ("full_nlls", "casadi"): method(1e-3, 1e-3)}
     if "numba" not in BACKENDS:
-        pytest.skip("numba not installed")
+        pytest.skip("numba (the optional fast extra) is not installed: only the numpy path runs")
     single = timing.time_interleaved({k: z for k in methods}, 9.8, methods, repeats=2, clock=clock)
     assert kernels.choice() == previous  # the backend is restored
     assert set(map(tuple, single[["method", "backend"]].drop_duplicates().to_numpy())) == set(methods)

@@ -357,7 +357,7 @@ def test_compiled_kernels_match_numpy():
     from accelcal.discrepancy import allan as A
     from accelcal.discrepancy import stochastic as S
 
-    pytest.importorskip("numba")
+    pytest.importorskip("numba", reason="numba (the optional fast extra) is not installed: only the numpy path runs")
     previous = kernels.set_backend("numba")
     rng = np.random.default_rng(0)
     segs = [rng.standard_normal((n, 20)) for n in (1200, 300, 301, 257)]

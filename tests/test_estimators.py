@@ -166,7 +166,7 @@ def backend(request, monkeypatch):
     from accelcal import kernels
 
     if request.param == "numba" and kernels._resolve("auto") != "numba":
-        pytest.skip("numba not installed")
+        pytest.skip("numba (the optional fast extra) is not installed: only the numpy path runs")
     monkeypatch.setattr(kernels, "_choice", request.param)
     monkeypatch.setattr(kernels, "_backend", request.param)
     return request.param

@@ -21,7 +21,8 @@ from accelcal.errors import AccelcalError
 from accelcal.lls import bias_lls, bias_lls_batch, full_lls, full_lls_batch
 from accelcal.simulation import random_directions, sample_truth, simulate_poses
 
-pytestmark = pytest.mark.skipif(kernels._resolve("auto") != "numba", reason="numba not installed")
+pytestmark = pytest.mark.skipif(kernels._resolve("auto") != "numba",
+                                reason="numba (the optional fast extra) is not installed: only the numpy path runs")
 
 G = 9.8055
 

@@ -108,6 +108,16 @@ def _deviance(y, m, edf):
     return d
 
 
+def _floored_model(H, c, floor, out):
+    """``out = max(H c, floor)`` row by row: the model Allan variances of coefficients ``c``."""
+    k, p = H.shape
+    for i in range(k):
+        acc = 0.0
+        for a in range(p):
+            acc += H[i, a] * c[a]
+        out[i] = max(acc, floor)
+
+
 def _irls_one(H, y, edf, subsets, sizes, max_iter, tol):
     k, p = H.shape
     ymax = y[0]
@@ -136,11 +146,7 @@ def _irls_one(H, y, edf, subsets, sizes, max_iter, tol):
             for i in range(k):
                 A[i, a] /= scale[a]
         c_new = _nnls_small(A, bw, subsets, sizes) / scale
-        for i in range(k):
-            acc = 0.0
-            for a in range(p):
-                acc += H[i, a] * c_new[a]
-            m_new[i] = max(acc, floor)
+        _floored_model(H, c_new, floor, m_new)
         d_new = _deviance(y, m_new, edf)
         d_old = dev
         for _h in range(30):  # step halving towards the previous (feasible) c
@@ -148,11 +154,7 @@ def _irls_one(H, y, edf, subsets, sizes, max_iter, tol):
                 break
             for a in range(p):
                 c_new[a] = 0.5 * (c_new[a] + c[a])
-            for i in range(k):
-                acc = 0.0
-                for a in range(p):
-                    acc += H[i, a] * c_new[a]
-                m_new[i] = max(acc, floor)
+            _floored_model(H, c_new, floor, m_new)
             d_new = _deviance(y, m_new, edf)
         if d_new <= d_old:
             c[:] = c_new
@@ -194,6 +196,7 @@ def _allan_sums(c, m):
 _jit = jit(error_model="python")
 _nnls_small = _jit(_nnls_small)
 _deviance = _jit(_deviance)
+_floored_model = _jit(_floored_model)
 _irls_one = _jit(_irls_one)
 _irls_batch = _jit(_irls_batch)
 _allan_sums = _jit(_allan_sums)
