@@ -48,7 +48,9 @@ misalignment parameters, the named effects, the candidate) and ``q`` the wander
 variance relative to the white one, the whole times the white scale ``s``.  ``K_τ`` is
 diagonalised once per ``τ`` of a grid
 (five per decade from a tenth of the shortest pose to ten session lengths, then the
-random walk), so every likelihood on the grid costs ``O(n p)``.
+random walk); each model's columns are projected out once per ``τ`` (:class:`Basis`: the
+contrasts the model leaves free, in which its GLS residual projector is diagonal), so
+every likelihood on the grid costs ``O(n)``.
 
 Estimation (REML).  The noise ``(s, q, τ)`` is estimated jointly with the calibration by
 restricted maximum likelihood: ``−2ℓ_R = log|Σ| + log|XᵀΣ⁻¹X| + yᵀ P y``, ``s``
@@ -69,7 +71,10 @@ trades off against slow effects, so ``LR`` is stretched (by 1.2–1.6 for most e
 up to 3 for ``bias_drift`` under a random-walk-like wander: ``bartlett`` in the output).
 The p-value comes from ``n_boot`` data sets simulated under the fitted null (the current
 model with its REML noise) and refitted with both models exactly as the data:
-``p = (1 + #{LR* ≥ LR})/(n_boot + 1)``.  Because ``LR`` is invariant to the fixed effects
+``p = (1 + #{LR* ≥ LR})/(n_boot + 1)``, or, for a test that reaches ``h`` exceedances
+first, Besag & Clifford's (1991) sequential ``p = h/ℓ`` after ``ℓ`` replicates (``h`` is
+chosen so that such a test could not pass at level α with every replicate: it only saves
+the replicates of clearly insignificant tests).  Because ``LR`` is invariant to the fixed effects
 of the null and to the scale ``s``, the bootstrap needs only ``(q, τ)``; and since ``LR``
 is asymptotically pivotal (χ²₃ whatever the noise parameters), the bootstrap p-value is
 second-order accurate (a scale-only, Bartlett-type correction was tried and rejected: on
@@ -154,11 +159,31 @@ def wander_kernel(tau: float, starts, durations, grad) -> np.ndarray:
     ``tau`` finite: Gauss–Markov of unit variance; ``inf``: random walk with ``K = 1``.
     Returns ``(∇_i · ∇_j) (−D_ij / 2)`` (n, n).
     """
-    if np.isinf(tau):
-        D = pose_difference_variance("random_walk", 1.0, starts, durations)
-    else:
-        D = pose_difference_variance("gauss_markov", (1.0, float(tau)), starts, durations)
-    return -0.5 * (grad @ grad.T) * D
+    return wander_kernels(np.array([tau], float), starts, durations, grad)[0]
+
+
+def wander_kernels(taus, starts, durations, grad) -> np.ndarray:
+    """:func:`wander_kernel` of every correlation time of ``taus`` (T, n, n), in one pass.
+
+    ``D`` is :func:`accelcal.discrepancy.stochastic.pose_difference_variance`'s
+    (``gauss_markov`` of unit size, ``random_walk`` with ``K = 1``), its formulas evaluated
+    for all ``τ`` at once.
+    """
+    taus = np.asarray(taus, float)
+    a, T = np.asarray(starts, float), np.asarray(durations, float)
+    first_end = np.where(a[:, None] <= a[None, :], (a + T)[:, None], (a + T)[None, :])
+    gap = np.maximum(np.maximum(a[:, None], a[None, :]) - first_end, 0.0)      # (n, n)
+    D = np.empty((taus.size,) + gap.shape)
+    rw = np.isinf(taus)
+    D[rw] = gap + (T[:, None] + T[None, :]) / 3
+    tc = taus[~rw][:, None]                                                      # (T', 1)
+    W = 2 * (tc * T + tc**2 * np.expm1(-T / tc)) / T**2                          # (T', n)
+    E = -np.expm1(-T / tc) / T                                                   # (T', n)
+    cov = tc[:, :, None] ** 2 * E[:, :, None] * E[:, None, :] * np.exp(-gap / tc[:, :, None])
+    D[~rw] = W[:, :, None] + W[:, None, :] - 2 * cov
+    idx = np.arange(gap.shape[0])
+    D[:, idx, idx] = 0.0
+    return -0.5 * (grad @ grad.T)[None] * D
 
 
 def gm_variance(q_abs: float, tau: float) -> tuple[float, float]:
@@ -240,19 +265,14 @@ class Problem:
 
 
 def _eigen(prob, taus):
-    m = prob.L.shape[1]
-    lam = np.empty((len(taus), m))
-    V = np.empty((len(taus), m, m))
-    scale = np.empty(len(taus))
-    for i, tau in enumerate(taus):
-        Kc = prob.kernel(tau)
-        Kc = 0.5 * (Kc + Kc.T)
-        ev, vec = np.linalg.eigh(Kc)
-        ev = np.clip(ev, 0.0, None)  # round-off: the projected kernel is positive semi-definite
-        s = float(ev.mean())
-        scale[i] = s if s > 0 else 1.0
-        lam[i], V[i] = ev / scale[i], vec
-    return lam, V, scale
+    # the kernels of all τ in the contrasts, diagonalised as one stack
+    K = wander_kernels(taus, prob.starts, prob.durations, prob.grad) / np.outer(prob.sigma, prob.sigma)[None]
+    Kc = prob.L.T[None] @ K @ prob.L
+    ev, V = np.linalg.eigh(0.5 * (Kc + np.swapaxes(Kc, 1, 2)))
+    ev = np.clip(ev, 0.0, None)  # round-off: the projected kernel is positive semi-definite
+    s = ev.mean(axis=1)
+    scale = np.where(s > 0, s, 1.0)
+    return ev / scale[:, None], V, scale
 
 
 def problem(r, J, sigma, grad, starts, durations, taus=None, notes=()) -> Problem:
@@ -304,6 +324,25 @@ def _neg2ll(quad, nu, logdet):
     return nu * np.log(s) + quad / s + logdet
 
 
+def _neg2ll_min(quad, nu, logdet):
+    """Minimum over the grid of :func:`_neg2ll` per data set: ``quad`` (B, T, Q), ``logdet`` (T, Q).
+
+    The same number with one logarithm per data set instead of one per grid point: where
+    the white scale is above its floor, ``−2ℓ = ν (log(x e^{logdet/ν}) + 1)`` (``x = quad/ν``)
+    is smallest where the product is; below it, ``−2ℓ`` is linear in ``quad``.
+    """
+    quad = np.clip(quad.reshape(quad.shape[0], -1), 1e-300, None)
+    ld = logdet.reshape(-1)
+    floored = quad < MIN_WHITE_SCALE * nu
+    prod = np.where(floored, np.inf, quad * np.exp(ld / nu)[None]).min(axis=1)
+    with np.errstate(divide="ignore"):
+        free = nu * (np.log(prod / nu) + 1.0)
+    if not floored.any():
+        return free
+    lin = np.where(floored, quad / MIN_WHITE_SCALE + ld[None], np.inf).min(axis=1) + nu * math.log(MIN_WHITE_SCALE)
+    return np.minimum(free, lin)
+
+
 @dataclass(frozen=True)
 class Surface:
     """Likelihood of data sets over the grid of ``(τ, q)``, the white scale ``s`` profiled out.
@@ -311,7 +350,8 @@ class Surface:
     ``quad`` (B, T, Q): ``yᵀ P y`` with ``P`` the GLS residual projector of ``I + q K_τ``;
     ``logdet`` (T, Q): ``log|I + q K_τ|``; ``logdet_a`` (T, Q): ``log|Xᵀ(I + q K_τ)⁻¹X|``;
     ``m`` contrasts, ``p`` columns; ``shift_quad`` (B, T, Q, n) or None: ``quad`` of the
-    model with a free shift of each pose.  With ``Σ = s (I + q K_τ)``, ``s`` at its optimum
+    model with a free shift of each pose; ``best_shift_quad`` (B, T, Q) or None: the
+    smallest of those over the poses.  With ``Σ = s (I + q K_τ)``, ``s`` at its optimum
     ``ŝ = max(quad/ν, MIN_WHITE_SCALE)``, ``ν = m`` (ML) or ``m − p`` (REML)::
 
         −2ℓ   = m log ŝ + quad/ŝ + logdet                  (+ constants)
@@ -324,6 +364,7 @@ class Surface:
     m: int
     p: int
     shift_quad: np.ndarray | None = None
+    best_shift_quad: np.ndarray | None = None
 
     @property
     def ml(self) -> np.ndarray:
@@ -339,64 +380,98 @@ class Surface:
 
     def ml_min(self) -> np.ndarray:
         """Grid minimum of ``−2ℓ`` per data set (B,)."""
-        return self.ml.reshape(self.ml.shape[0], -1).min(axis=1)
+        return _neg2ll_min(self.quad, self.m, self.logdet)
 
     def shift_ml_min(self) -> np.ndarray:
         """Grid minimum of ``−2ℓ`` of the model with pose ``i`` shifted, per data set (B, n)."""
         ml = _neg2ll(self.shift_quad, self.m, self.logdet[None, :, :, None])
         return ml.reshape(ml.shape[0], -1, ml.shape[-1]).min(axis=1)
 
+    def best_shift_ml_min(self) -> np.ndarray:
+        """Grid minimum of ``−2ℓ`` of the best single-pose shift, per data set (B,): the
+        minimum over the poses of :meth:`shift_ml_min` (at each grid point ``−2ℓ`` grows
+        with ``quad``, so the best pose there is the one with the smallest ``quad``)."""
+        return _neg2ll_min(self.best_shift_quad, self.m, self.logdet)
 
-def profile(prob: Problem, X: np.ndarray, Y: np.ndarray, qrel, shifts: bool = False) -> Surface:
+
+@dataclass(frozen=True)
+class Basis:
+    """The contrasts left free by a model's columns ``X`` (m, p), per correlation time.
+
+    ``K`` (m, r): orthonormal basis of the complement of ``X`` (``r = m − p``); ``U``, ``mu``
+    (T, r, r), (T, r): eigenvectors and eigenvalues of ``Kᵀ K_τ K`` (the kernel as
+    ``prob.lam`` scales it); ``logdet_xx``: ``log|XᵀX|``.  The GLS residual projector of
+    ``I + q K_τ`` is ``K U diag(1/(1 + q μ)) Uᵀ Kᵀ`` (the REML identity), so the likelihood
+    of a data set costs ``O(r)`` per grid point once ``Kᵀ y`` is rotated.
+    """
+
+    K: np.ndarray
+    U: np.ndarray
+    mu: np.ndarray
+    logdet_xx: float
+
+
+def basis(prob: Problem, X: np.ndarray) -> Basis:
+    """The :class:`Basis` of columns ``X`` on ``prob``'s grid of ``τ``.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        The columns are collinear (no GLS fit exists).
+    """
+    m, p = X.shape
+    if p:
+        Uf, s, _ = np.linalg.svd(X, full_matrices=True)
+        if s[-1] <= 1e-12 * s[0]:
+            raise np.linalg.LinAlgError("collinear columns: the model has no unique GLS fit")
+        K, logdet_xx = Uf[:, p:], 2.0 * float(np.log(s).sum())
+    else:
+        K, logdet_xx = np.eye(m), 0.0
+    A = np.swapaxes(prob.V, 1, 2) @ K                            # (T, m, r): Vᵀ K
+    R = np.swapaxes(A, 1, 2) @ (prob.lam[:, :, None] * A)        # (T, r, r): Kᵀ K_τ K
+    mu, U = np.linalg.eigh(0.5 * (R + np.swapaxes(R, 1, 2)))
+    return Basis(K, U, np.clip(mu, 0.0, None), logdet_xx)
+
+
+def profile(prob: Problem, X: np.ndarray, Y: np.ndarray, qrel, shifts: bool = False,
+            best_shift: bool = False, bas: Basis | None = None) -> Surface:
     """The likelihood :class:`Surface` of data sets ``Y`` (B, m) under the model with columns
     ``X`` (m, p), over the grid ``prob.taus`` × ``qrel`` ((Q,), or (T, Q): one row per τ).
 
+    The quadratic forms are taken in the model's own contrasts (:class:`Basis`, computed
+    here unless given as ``bas``): ``yᵀ P y = Σ_j ỹ_j² / (1 + q μ_j)`` with ``ỹ = Uᵀ Kᵀ y``,
+    and ``log|XᵀΣ⁻¹X| = log|KᵀΣK| + log|XᵀX| − log|Σ|``.
+
     ``shifts``: also the model with a free shift of pose ``i``'s residual, for every pose
     (the outlier model): ``quad − (P r)_i²/P_ii`` (a rank-one update of the GLS fit, ``P``
-    the residual projector in the pose space).
+    the residual projector in the pose space); ``best_shift``: only the smallest of those
+    over the poses (what the outlier family's statistic needs).
     """
+    bas = basis(prob, X) if bas is None else bas
     qrel = np.asarray(qrel, float)
     Y = np.atleast_2d(Y)
     T = prob.taus.size
-    q = np.broadcast_to(qrel, (T, qrel.shape[-1]))            # (T, Q)
+    q = np.broadcast_to(qrel, (T, qrel.shape[-1]))              # (T, Q)
     p = X.shape[1]
-    Yr = Y[None] @ prob.V                                      # (T, B, m): rotated data
-    one = 1.0 + q[:, :, None] * prob.lam[:, None, :]           # (T, Q, m)
+    Yt = (Y @ bas.K)[None] @ bas.U                              # (T, B, r): rotated free contrasts
+    one = 1.0 + q[:, :, None] * bas.mu[:, None, :]              # (T, Q, r)
     w = 1.0 / one
-    quad = (Yr * Yr) @ w.transpose(0, 2, 1)                    # (T, B, Q)
-    logdet = np.log(one).sum(axis=2)                           # (T, Q)
-    logdet_a = np.zeros(q.shape)
-    resid = Yr.transpose(0, 2, 1)[:, None]                     # (T, 1, m, B) before the fixed effects
-    if p:
-        Xr = prob.V.transpose(0, 2, 1) @ X                     # (T, m, p)
-        B = Y.shape[0]
-        # A = Xrᵀ diag(w) Xr and b = Xrᵀ diag(w) Yrᵀ for every q, each as one product
-        # over m (one matrix product per τ: BLAS, not a batch of small ones)
-        XX = (Xr[:, :, :, None] * Xr[:, :, None, :]).reshape(T, -1, p * p)
-        A = (w @ XX).reshape(T, -1, p, p)                      # (T, Q, p, p)
-        XY = (Xr[:, :, :, None] * Yr.transpose(0, 2, 1)[:, :, None, :]).reshape(T, -1, p * B)
-        b = (w @ XY).reshape(T, -1, p, B)                      # (T, Q, p, B)
-        ci = np.linalg.inv(np.linalg.cholesky(A))
-        u = ci @ b                                             # c⁻¹ b
-        quad = quad - np.einsum("tqpb,tqpb->tbq", u, u)
-        logdet_a = -2.0 * np.log(np.diagonal(ci, axis1=2, axis2=3)).sum(axis=2)
-    quad = quad.transpose(1, 0, 2)                             # (B, T, Q)
-    shift_quad = None
-    if shifts:
-        LV = prob.L @ prob.V                                   # (T, n, m): poses from rotated contrasts
-        if p:
-            beta = np.swapaxes(ci, 2, 3) @ u                   # (T, Q, p, B)
-            resid = resid - Xr[:, None] @ beta                 # (T, Q, m, B)
-            H = np.swapaxes(Xr[:, None] * w[:, :, :, None], 2, 3) @ np.swapaxes(LV, 1, 2)[:, None]
-            CH = ci @ H                                        # (T, Q, p, n)
-            d = np.swapaxes((LV * LV) @ np.swapaxes(w, 1, 2), 1, 2) - np.einsum("tqpn,tqpn->tqn", CH, CH)
-        else:
-            d = np.swapaxes((LV * LV) @ np.swapaxes(w, 1, 2), 1, 2)
-        z = LV[:, None] @ (w[:, :, :, None] * resid)           # (T, Q, n, B): (P r)_i
-        gain = z * z / np.clip(d, 1e-300, None)[..., None]
-        shift_quad = np.clip(quad.transpose(1, 2, 0)[:, :, None, :] - gain, 1e-300, None)  # (T, Q, n, B)
-        shift_quad = shift_quad.transpose(3, 0, 1, 2)          # (B, T, Q, n)
-    return Surface(quad, logdet, logdet_a, prob.m, p, shift_quad)
+    quad = ((Yt * Yt) @ w.transpose(0, 2, 1)).transpose(1, 0, 2)   # (B, T, Q)
+    logdet = np.log(1.0 + q[:, :, None] * prob.lam[:, None, :]).sum(axis=2)
+    logdet_a = np.log(one).sum(axis=2) + bas.logdet_xx - logdet if p else np.zeros(q.shape)
+    shift_quad = best = None
+    if shifts or best_shift:
+        M = (prob.L @ bas.K)[None] @ bas.U                      # (T, n, r): poses from rotated contrasts
+        d = np.clip((M * M) @ w.transpose(0, 2, 1), 1e-300, None)   # (T, n, Q): P_ii
+        # (P r)_i / sqrt(P_ii) for all (q, i) as one matrix product per τ (Q n × r times r × B)
+        A = M[:, None] * w[:, :, None, :] / np.sqrt(d.transpose(0, 2, 1))[..., None]   # (T, Q, n, r)
+        z = A.reshape(T, -1, A.shape[-1]) @ Yt.transpose(0, 2, 1)                     # (T, Q n, B)
+        gain = np.square(z, out=z).reshape(T, q.shape[1], -1, Y.shape[0])             # (T, Q, n, B)
+        if shifts:
+            shift_quad = np.clip(quad.transpose(1, 2, 0)[:, :, None, :] - gain, 1e-300, None).transpose(3, 0, 1, 2)
+        if best_shift:
+            best = np.clip(quad - gain.max(axis=2).transpose(2, 0, 1), 1e-300, None)   # (B, T, Q)
+    return Surface(quad, logdet, logdet_a, prob.m, p, shift_quad, best)
 
 
 def gls_projector(prob: Problem, X: np.ndarray, t: int, q: float) -> np.ndarray:
@@ -485,28 +560,31 @@ def fit_wander(prob: Problem, X: np.ndarray, fine: bool = True) -> WanderFit:
     tf, kf = np.unravel_index(int(np.argmin(dev)), dev.shape)
     best = float(dev[tf, kf])
     s_hat = sf.white_scale()[0]
-    # the full deviance over (τ, q, s), s = f ŝ(τ, q) on a scan around the optimum (above the floor)
-    s_full = s_hat[:, :, None] * S_FACTORS[None, None, :]
-    dev_full = (nu * np.log(s_full) + quad[:, :, None] / s_full + sf.logdet[:, :, None]
-                + sf.logdet_a[:, :, None])
-    inside = (dev_full <= best + CHI2_95) & (s_full >= MIN_WHITE_SCALE * (1 - 1e-12))   # (T, Q, S)
-    taus = fp.taus
-    q_abs = s_full * Q_REL_FINE[None, :, None] / fp.scale[:, None, None]
-    rw = np.isinf(taus)[:, None, None]
+    # the full deviance over (τ, q, s), s = f ŝ(τ, q) on a scan around the optimum (above the
+    # floor), at the grid points whose profiled deviance is inside the region (the others have
+    # no s inside it: the deviance at ŝ is its minimum over the allowed s)
+    ct, cq = np.nonzero(dev <= best + CHI2_95 + 1e-9)
+    s_full = s_hat[ct, cq][:, None] * S_FACTORS[None, :]                     # (N, S)
+    dev_full = nu * np.log(s_full) + quad[ct, cq][:, None] / s_full + (sf.logdet + sf.logdet_a)[ct, cq][:, None]
+    inside = (dev_full <= best + CHI2_95) & (s_full >= MIN_WHITE_SCALE * (1 - 1e-12))
+    taus, T = fp.taus, fp.taus.size
+    tv, qv = taus[ct][:, None], Q_REL_FINE[cq][:, None]
+    q_abs = s_full * qv / fp.scale[ct][:, None]
+    rw = np.isinf(tv)
     with np.errstate(divide="ignore", invalid="ignore"):
         size = np.where(rw, np.inf, np.sqrt(q_abs))
-        K = np.where(rw, np.sqrt(q_abs), np.sqrt(2 * q_abs / np.where(rw, 1.0, taus[:, None, None])))
+        K = np.where(rw, np.sqrt(q_abs), np.sqrt(2 * q_abs / np.where(rw, 1.0, tv)))
     # the residual excess the model predicts on average: sqrt(s (1 + q)) (mean eigenvalue 1)
-    excess = np.sqrt(s_full * (1.0 + Q_REL_FINE[None, :, None]))
-    wander = inside & (Q_REL_FINE[None, :, None] > 0)
+    excess = np.sqrt(s_full * (1.0 + qv))
+    wander = inside & (qv > 0)
     bound = []
-    if inside[:, -1].any():
+    if inside[cq == Q_REL_FINE.size - 1].any():
         bound.append("size: upper end of the grid (q_rel 1e4)")
-    if wander[-1].any() or wander[-2].any():
+    if wander[ct >= T - 2].any():
         bound.append("tau: the interval reaches the random walk (no upper bound)")
-    if wander[0].any():
+    if wander[ct == 0].any():
         bound.append("tau: lower end of the grid")
-    if inside[:, :, 0].any() or inside[:, :, -1].any():
+    if inside[:, 0].any() or inside[:, -1].any():
         bound.append("white scale: end of the scanned range (x0.1 - x10 of its estimate)")
     if np.isclose(s_hat[tf, kf], MIN_WHITE_SCALE):
         bound.append(f"white scale: at its floor {MIN_WHITE_SCALE:g}")
@@ -515,9 +593,9 @@ def fit_wander(prob: Problem, X: np.ndarray, fine: bool = True) -> WanderFit:
         v = a[mask]
         return (float(np.min(v)), float(np.max(v))) if v.size else (float("nan"), float("nan"))
 
-    tau_ci = rng(np.broadcast_to(taus[:, None, None], inside.shape), wander)
+    tau_ci = rng(np.broadcast_to(tv, inside.shape), wander)
     size_ci, K_ci = rng(size, inside), rng(K, inside)
-    if inside[:, 0, :].any():  # q = 0 inside the region: the lower ends are 0
+    if inside[cq == 0].any():  # q = 0 inside the region: the lower ends are 0
         size_ci, K_ci = (0.0, size_ci[1]), (0.0, K_ci[1])
     out = _wander_at(fp, int(tf), float(Q_REL_FINE[kf]), float(s_hat[tf, kf]), best)
     return WanderFit(**{**out.__dict__, "size_ci": size_ci, "tau_ci": tau_ci, "K_ci": K_ci,
@@ -552,63 +630,143 @@ class RoundTests:
     n_boot: int
 
 
+#: Bootstrap replicates are drawn in batches of these sizes (then repeating the last), so
+#: that a test can stop early (:func:`round_tests`); the draws do not depend on them.
+BATCHES = (25, 25, 50, 100)
+
+
+def stop_count(alpha: float, n: int) -> int:
+    """Exceedances after which a test stops (Besag & Clifford 1991): the smallest ``h`` with
+    ``h/n > α``.  A test stopped at its ``h``-th exceedance after ``ℓ ≤ n`` replicates has the
+    p-value ``h/ℓ > α``, and with all ``n`` it would have had ``(k + 1)/(n + 1) > α`` too
+    (``k ≥ h``): stopping never changes whether it can pass at level ``α``."""
+    return int(math.floor(alpha * n)) + 1
+
+
 def round_tests(prob: Problem, X_alts: list, rng: np.random.Generator, n_boot: int,
-                outliers: bool = True, extend=None, n_boot_max: int | None = None) -> RoundTests:
+                outliers: bool = True, extend=None, n_boot_max: int | None = None,
+                alpha: float = 0.05, null: WanderFit | None = None) -> RoundTests:
     """Likelihood-ratio tests current (``prob.X0``) vs current + each ``X_alts[k]``
     (contrast columns, appended to X0) and the outlier family, all calibrated on the same
-    ``n_boot`` data sets simulated under the current model with its REML noise.
+    replicates simulated under the current model with its REML noise.
 
-    ``extend(counts, n)`` (optional): given the exceedance counts of the candidates (and,
-    last, of the outlier family) after ``n`` replicates, True when more replicates could
-    change a decision; the bootstrap then grows to ``n_boot_max`` replicates (the first
-    ``n_boot`` are the same draws either way)."""
+    Sequential Monte Carlo p-values (Besag & Clifford 1991): a test stops at its
+    :func:`stop_count`-th exceedance, with ``p = h/ℓ`` (``ℓ`` replicates used); one that
+    runs to the end has ``p = (1 + k)/(n + 1)``.  Both are valid p-values, and a stopped
+    test could not have passed at level ``alpha`` with every replicate either; what stopping
+    saves is the replicates of tests that are clearly not significant.
+
+    ``extend(counts, n, final)`` (optional): given the exceedance counts of the tests (the
+    outlier family last) and the p-values of those that stopped (``final``, NaN while
+    running) after ``n`` replicates, the mask of the tests for which more replicates could
+    change a decision.  If any, those tests grow to ``n_boot_max`` replicates (their first
+    ``n_boot`` are the same draws either way) and every other test keeps its p-value.
+    ``null``: the current model's REML noise (``fit_wander(prob, prob.X0, fine=False)``) if
+    the caller has it."""
     X0 = prob.X0
-    sf0 = profile(prob, X0, prob.y[None], Q_REL_GRID, shifts=outliers)
+    bases = [basis(prob, X0)] + [basis(prob, np.hstack([X0, Xa])) for Xa in X_alts]
+    sf0 = profile(prob, X0, prob.y[None], Q_REL_GRID, shifts=outliers, bas=bases[0])
     m0 = float(sf0.ml_min()[0])
     # the bootstrap simulates the REML noise of the current model.  (Estimating it with the
     # most outlying pose free, against masking, was tried: under a random-walk wander it
     # lowered the simulated noise and raised the outlier family's false positives from
     # 7.5 % to 11 % and the candidates' from 5.3 % to 7.2 %, 120 sessions each.)
-    null = fit_wander(prob, X0, fine=False)
-    Xs = [np.hstack([X0, Xa]) for Xa in X_alts]
-    lr = np.array([max(m0 - float(profile(prob, X1, prob.y[None], Q_REL_GRID).ml_min()[0]), 0.0) for X1 in Xs])
+    null = fit_wander(prob, X0, fine=False) if null is None else null
+    lr = np.array([max(m0 - float(profile(prob, np.hstack([X0, Xa]), prob.y[None], Q_REL_GRID, bas=b).ml_min()[0]),
+                       0.0) for Xa, b in zip(X_alts, bases[1:])])
     lr_pose = np.maximum(m0 - sf0.shift_ml_min()[0], 0.0) if outliers else np.zeros(0)
     o_i = int(np.argmax(lr_pose)) if outliers else -1
     o_lr = float(lr_pose[o_i]) if outliers else float("nan")
-    counts, lr_sum, n, batch = np.zeros(len(Xs) + 1, dtype=np.int64), np.zeros(len(Xs)), 0, n_boot
-    while batch > 0:
-        c, s = _bootstrap_batch(prob, X0, Xs, null, lr, o_lr, rng.standard_normal((batch, prob.m)), outliers)
-        counts, lr_sum, n = counts + c, lr_sum + s, n + batch
-        more = extend is not None and n_boot_max is not None and n < n_boot_max
-        batch = n_boot_max - n if more and extend(counts[: len(Xs) + outliers], n) else 0
-    p = (1 + counts[: len(Xs)]) / (n + 1)
-    scale = lr_sum / n / np.array([Xa.shape[1] for Xa in X_alts]) if X_alts else np.zeros(0)
-    o_p = float((1 + counts[-1]) / (n + 1)) if outliers else float("nan")
+    seq = _Sequential(len(X_alts) + outliers, stop_count(alpha, n_boot))
+    cap, k = n_boot, 0
+    while True:
+        batch = min(BATCHES[min(k, len(BATCHES) - 1)], cap - seq.n)
+        Z = rng.standard_normal((batch, prob.m))
+        stats_ = _bootstrap_batch(prob, bases, X_alts, null, Z, seq.running, outliers)
+        seq.add(stats_, np.concatenate([lr, [o_lr] if outliers else []]))
+        k += 1
+        if not seq.running.any():
+            break
+        if seq.n == cap:
+            grow = (extend(seq.counts, seq.n, seq.final) if cap == n_boot and extend is not None
+                    and n_boot_max is not None and n_boot_max > n_boot else None)
+            if grow is None or not np.any(grow):
+                break
+            seq.freeze(~np.asarray(grow, bool))   # the others keep their p-value at n_boot
+            cap = n_boot_max
+            seq.h = stop_count(alpha, n_boot_max)   # the running tests have fewer exceedances than that
+    p_all = seq.p_values()
     t_obs, _ = studentised(prob, X0, null.t, null.q_rel, scale=null.white_scale)
-    return RoundTests(lr=lr, p_values=p, bartlett=scale, outlier_t=t_obs[0], outlier_p=o_p, outlier_pose=o_i,
-                      outlier_lr=o_lr, null_wander=null, n_boot=int(n))
+    return RoundTests(lr=lr, p_values=p_all[: len(X_alts)], bartlett=seq.mean_lr(X_alts),
+                      outlier_t=t_obs[0], outlier_p=float(p_all[-1]) if outliers else float("nan"),
+                      outlier_pose=o_i, outlier_lr=o_lr, null_wander=null, n_boot=int(seq.n))
 
 
-def _bootstrap_batch(prob: Problem, X0, Xs, null: WanderFit, lr, o_lr: float, Z: np.ndarray, outliers: bool):
-    """Replicates ``y* = V diag(sqrt(s (1 + q λ))) z`` under the null, refitted as the data:
-    per candidate (and, last, the outlier family) the count of replicate statistics at or
-    above the observed one, and per candidate the sum of the replicate LRs."""
-    V, lam = prob.V[null.t], prob.lam[null.t]
-    Ystar = (Z * np.sqrt(null.white_scale * (1.0 + null.q_rel * lam))[None, :]) @ V.T
-    sfs = profile(prob, X0, Ystar, Q_REL_GRID, shifts=outliers)
+class _Sequential:
+    """Exceedance counts of tests that stop at their ``h``-th exceedance (:func:`round_tests`)."""
+
+    def __init__(self, k: int, h: int):
+        self.counts = np.zeros(k, dtype=np.int64)
+        self.used = np.zeros(k, dtype=np.int64)     # replicates each test has used
+        self.sums = np.zeros(k)                     # sum of its replicate statistics
+        self.final = np.full(k, np.nan)             # p-value of a stopped test
+        self.n, self.h = 0, h
+
+    @property
+    def running(self) -> np.ndarray:
+        return np.isnan(self.final)
+
+    def add(self, stats_: np.ndarray, observed: np.ndarray) -> None:
+        """Replicate statistics ``stats_`` (b, k) (NaN for the stopped tests) against the
+        observed ones: count, and stop the tests that reach ``h`` exceedances."""
+        tol = 1e-9 * np.maximum(1.0, np.nan_to_num(observed, nan=0.0))
+        for j in np.flatnonzero(self.running):
+            x = stats_[:, j]
+            cum = self.counts[j] + np.cumsum(x >= observed[j] - tol[j])
+            hit = np.flatnonzero(cum >= self.h)
+            last = int(hit[0]) + 1 if hit.size else x.size
+            self.counts[j], self.used[j] = cum[last - 1], self.used[j] + last
+            self.sums[j] += float(np.sum(x[:last]))
+            if hit.size:
+                self.final[j] = self.h / self.used[j]
+        self.n += stats_.shape[0]
+
+    def freeze(self, mask: np.ndarray) -> None:
+        """Stop the running tests of ``mask`` at their current p-value."""
+        keep = mask & self.running
+        self.final[keep] = ((1 + self.counts) / (self.used + 1))[keep]
+
+    def p_values(self) -> np.ndarray:
+        return np.where(self.running, (1 + self.counts) / (self.used + 1), self.final)
+
+    def mean_lr(self, X_alts) -> np.ndarray:
+        if not X_alts:
+            return np.zeros(0)
+        k = len(X_alts)
+        return self.sums[:k] / np.maximum(self.used[:k], 1) / np.array([Xa.shape[1] for Xa in X_alts])
+
+
+def _bootstrap_batch(prob: Problem, bases: list, X_alts: list, null: WanderFit, Z: np.ndarray,
+                     running: np.ndarray, outliers: bool) -> np.ndarray:
+    """Replicates ``y* ~ N(0, s (I + q K_τ))`` under the null, refitted as the data:
+    per replicate the LR of each candidate and, last, the largest mean-shift LR over the
+    poses (the noise re-estimated with the shift, so an outlier cannot hide by inflating
+    it), NaN for the tests no longer ``running``."""
+    # drawn through the Cholesky factor of the null covariance: unique, unlike the
+    # eigenvectors (whose signs depend on the LAPACK routine), so the replicates are too
+    root = np.linalg.cholesky(null.white_scale * prob.sigma_c(null.t, null.q_rel))
+    Ystar = Z @ root.T
+    out = np.full((Z.shape[0], len(running)), np.nan)
+    best = outliers and bool(running[-1])
+    X0 = prob.X0
+    sfs = profile(prob, X0, Ystar, Q_REL_GRID, best_shift=best, bas=bases[0])
     m0s = sfs.ml_min()
-    tol = 1e-9 * max(1.0, float(np.max(lr, initial=0.0)))
-    counts, sums = np.zeros(len(Xs) + 1, dtype=np.int64), np.zeros(len(Xs))
-    for k, X1 in enumerate(Xs):
-        lrs = np.maximum(m0s - profile(prob, X1, Ystar, Q_REL_GRID).ml_min(), 0.0)
-        counts[k], sums[k] = np.sum(lrs >= lr[k] - tol), float(np.sum(lrs))
-    if outliers:
-        # the mean-shift likelihood ratio of each pose, the noise re-estimated with the
-        # shift (so an outlier cannot hide by inflating it): its maximum over the poses
-        # against the same statistic on the replicates
-        lrs_max = np.maximum(m0s[:, None] - sfs.shift_ml_min(), 0.0).max(axis=1)
-        counts[-1] = np.sum(lrs_max >= o_lr - 1e-9 * max(1.0, o_lr))
-    return counts, sums
+    for k, (Xa, b) in enumerate(zip(X_alts, bases[1:])):
+        if running[k]:
+            out[:, k] = np.maximum(m0s - profile(prob, np.hstack([X0, Xa]), Ystar, Q_REL_GRID, bas=b).ml_min(), 0.0)
+    if best:
+        out[:, -1] = np.maximum(m0s - sfs.best_shift_ml_min(), 0.0)
+    return out
 
 
 # --------------------------------------------------------------------------- information, MDE, GLS

@@ -17,13 +17,16 @@ Each round (module :mod:`accelcal.discrepancy.colored` for the statistics):
    outlier family (the largest mean-shift likelihood ratio over the poses), calibrated
    together on the same replicates of the
    fitted null; Holm's step-down over the round's family (the candidates and, if
-   enabled, the outlier family).  The bootstrap has ``n_boot`` replicates, grown to
-   ``5 (n_boot + 1) − 1`` when a test that does not pass could pass with more of them
-   (the lower end of the 99 % Clopper–Pearson interval of its p-value would pass Holm):
-   199 replicates put the smallest p-value at 0.005, which Holm over six tests makes
-   0.03, so a strong effect with one replicate above it (p = 0.01, adjusted 0.06) was
-   missed.  Only the power changes: a test that passes at ``n_boot`` is never re-drawn,
-   and the first ``n_boot`` replicates are the same either way.  An effect passes when its adjusted p-value is ≤ α,
+   enabled, the outlier family).  The bootstrap has ``n_boot`` replicates; a test stops
+   at its ``h``-th exceedance (Besag & Clifford's sequential p-value ``h/ℓ``, ``h`` the
+   smallest count with ``h/n_boot > α``: such a test cannot pass with all replicates
+   either: stopping changes no decision at ``n_boot``, and a stopped test is not grown).  Tests that do not pass but
+   could with more replicates (the lower end of the 99 % Clopper–Pearson interval of
+   their p-value would pass Holm) grow to ``5 (n_boot + 1) − 1`` replicates: 199
+   replicates put the smallest p-value at 0.005, which Holm over six tests makes 0.03, so
+   a strong effect with one replicate above it (p = 0.01, adjusted 0.06) was missed.  Only
+   the power changes: a test that passes at ``n_boot`` keeps its p-value, and the first
+   ``n_boot`` replicates are the same either way.  An effect passes when its adjusted p-value is ≤ α,
    ``ΔBIC = −LR + 3 ln n < −bic_threshold`` and the colored leave-one-pose-out PRESS
    (GLS prediction of each pose from the others, both models under the alternative's
    REML wander) falls; the outlier family when its adjusted p-value is ≤ α.
@@ -216,7 +219,8 @@ def _round(st: _State, prob: C.Problem, remaining, test_outliers: bool, rules: R
     prepared = [_prepare(st.data, st.current, prob, null, eid, rules, len(remaining), rnd) for eid in remaining]
     tested = [r for r in prepared if r["identifiable"]]
     rt = C.round_tests(prob, [r["Xe"] for r in tested], rng, rules.n_boot, outliers=test_outliers,
-                       extend=_more_replicates_could_pass(rules), n_boot_max=5 * (rules.n_boot + 1) - 1)
+                       extend=_more_replicates_could_pass(rules), n_boot_max=5 * (rules.n_boot + 1) - 1,
+                       alpha=rules.alpha, null=null)
     padj = holm([float(v) for v in rt.p_values] + ([rt.outlier_p] if test_outliers else []), rules.correction)
     lo0 = C.studentised(prob, prob.X0, null.t, null.q_rel)[1][0]
     cand_rows = [_tested_candidate(st, prob, r, rt, k, padj[k], lo0, rules) for k, r in enumerate(tested)]
@@ -235,17 +239,21 @@ def _round(st: _State, prob: C.Problem, remaining, test_outliers: bool, rules: R
 
 
 def _more_replicates_could_pass(rules: Rules):
-    """``extend(counts, n)`` for :func:`~.colored.round_tests`: True when a test that does
-    not pass Holm at its p-value ``(1 + counts)/(n + 1)`` would pass at the lower end of
-    the 99 % Clopper–Pearson interval of its exceedance probability (floored at the
-    smallest p-value of the grown bootstrap)."""
+    """``extend(counts, n, final)`` for :func:`~.colored.round_tests`: the running tests
+    that do not pass Holm at their p-value ``(1 + counts)/(n + 1)`` but would at the lower
+    end of the 99 % Clopper–Pearson interval of their exceedance probability (floored at the
+    smallest p-value of the grown bootstrap).  The stopped tests keep their p-value
+    ``final`` (they cannot pass); a test that passes is not re-drawn."""
     floor = 1.0 / (5 * (rules.n_boot + 1))
 
-    def extend(counts: np.ndarray, n: int) -> bool:
+    def extend(counts: np.ndarray, n: int, final: np.ndarray) -> np.ndarray:
+        running = np.isnan(final)
         low = np.where(counts > 0, stats.beta.ppf(0.005, np.maximum(counts, 1), n - counts + 1), 0.0)
-        passes_now = holm((1 + counts) / (n + 1), rules.correction) <= rules.alpha
-        could_pass = holm(np.maximum(low, floor), rules.correction) <= rules.alpha
-        return bool(np.any(could_pass & ~passes_now))
+        p_now = np.where(running, (1 + counts) / (n + 1), final)
+        p_low = np.where(running, np.maximum(low, floor), final)
+        passes_now = holm(p_now, rules.correction) <= rules.alpha
+        could_pass = holm(p_low, rules.correction) <= rules.alpha
+        return running & could_pass & ~passes_now
 
     return extend
 
