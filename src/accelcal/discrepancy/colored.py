@@ -541,14 +541,15 @@ Q_REL_FINE = np.concatenate([[0.0], np.logspace(-3.0, 4.0, 71)])
 S_FACTORS = np.logspace(-1.0, 1.0, 81)
 
 
-def fit_wander(prob: Problem, X: np.ndarray, fine: bool = True) -> WanderFit:
+def fit_wander(prob: Problem, X: np.ndarray, fine: bool = True, bas: Basis | None = None) -> WanderFit:
     """REML estimate of ``(s, q, τ)`` for fixed-effect columns ``X``, with 95 % profile intervals.
 
     ``fine``: estimate and intervals on a grid of ten ``τ`` and ten ``q`` per decade (what
-    the report uses); otherwise the test grid, without intervals.
+    the report uses); otherwise the test grid, without intervals (``bas``: the
+    :class:`Basis` of ``X`` on it, if known).
     """
     if not fine:
-        sf = profile(prob, X, prob.y[None], Q_REL_GRID)
+        sf = profile(prob, X, prob.y[None], Q_REL_GRID, bas=bas)
         reml = sf.reml[0]
         t, k = np.unravel_index(int(np.argmin(reml)), reml.shape)
         return _wander_at(prob, int(t), float(Q_REL_GRID[k]), float(sf.white_scale()[0, t, k]), float(reml[t, k]))
@@ -628,6 +629,7 @@ class RoundTests:
     outlier_lr: float           # that likelihood ratio
     null_wander: WanderFit      # the noise the bootstrap simulates (current model, REML)
     n_boot: int
+    bases: tuple = ()           # Basis of the current model, then of each alternative
 
 
 #: Bootstrap replicates are drawn in batches of these sizes (then repeating the last), so
@@ -645,7 +647,7 @@ def stop_count(alpha: float, n: int) -> int:
 
 def round_tests(prob: Problem, X_alts: list, rng: np.random.Generator, n_boot: int,
                 outliers: bool = True, extend=None, n_boot_max: int | None = None,
-                alpha: float = 0.05, null: WanderFit | None = None) -> RoundTests:
+                alpha: float = 0.05, null: WanderFit | None = None, bas0: Basis | None = None) -> RoundTests:
     """Likelihood-ratio tests current (``prob.X0``) vs current + each ``X_alts[k]``
     (contrast columns, appended to X0) and the outlier family, all calibrated on the same
     replicates simulated under the current model with its REML noise.
@@ -661,10 +663,10 @@ def round_tests(prob: Problem, X_alts: list, rng: np.random.Generator, n_boot: i
     running) after ``n`` replicates, the mask of the tests for which more replicates could
     change a decision.  If any, those tests grow to ``n_boot_max`` replicates (their first
     ``n_boot`` are the same draws either way) and every other test keeps its p-value.
-    ``null``: the current model's REML noise (``fit_wander(prob, prob.X0, fine=False)``) if
-    the caller has it."""
+    ``null``, ``bas0``: the current model's REML noise (``fit_wander(prob, prob.X0,
+    fine=False)``) and :class:`Basis`, if the caller has them."""
     X0 = prob.X0
-    bases = [basis(prob, X0)] + [basis(prob, np.hstack([X0, Xa])) for Xa in X_alts]
+    bases = [basis(prob, X0) if bas0 is None else bas0] + [basis(prob, np.hstack([X0, Xa])) for Xa in X_alts]
     sf0 = profile(prob, X0, prob.y[None], Q_REL_GRID, shifts=outliers, bas=bases[0])
     m0 = float(sf0.ml_min()[0])
     # the bootstrap simulates the REML noise of the current model.  (Estimating it with the
@@ -699,7 +701,7 @@ def round_tests(prob: Problem, X_alts: list, rng: np.random.Generator, n_boot: i
     t_obs, _ = studentised(prob, X0, null.t, null.q_rel, scale=null.white_scale)
     return RoundTests(lr=lr, p_values=p_all[: len(X_alts)], bartlett=seq.mean_lr(X_alts),
                       outlier_t=t_obs[0], outlier_p=float(p_all[-1]) if outliers else float("nan"),
-                      outlier_pose=o_i, outlier_lr=o_lr, null_wander=null, n_boot=int(seq.n))
+                      outlier_pose=o_i, outlier_lr=o_lr, null_wander=null, n_boot=int(seq.n), bases=tuple(bases))
 
 
 class _Sequential:

@@ -215,12 +215,13 @@ def _round(st: _State, prob: C.Problem, remaining, test_outliers: bool, rules: R
     Returns the candidate rows ``(Candidate, augmented fit, columns)``, the outlier row
     (or None) and the round's :class:`~.colored.RoundTests`.
     """
-    null = C.fit_wander(prob, prob.X0, fine=False)
+    bas0 = C.basis(prob, prob.X0)
+    null = C.fit_wander(prob, prob.X0, fine=False, bas=bas0)
     prepared = [_prepare(st.data, st.current, prob, null, eid, rules, len(remaining), rnd) for eid in remaining]
     tested = [r for r in prepared if r["identifiable"]]
     rt = C.round_tests(prob, [r["Xe"] for r in tested], rng, rules.n_boot, outliers=test_outliers,
                        extend=_more_replicates_could_pass(rules), n_boot_max=5 * (rules.n_boot + 1) - 1,
-                       alpha=rules.alpha, null=null)
+                       alpha=rules.alpha, null=null, bas0=bas0)
     padj = holm([float(v) for v in rt.p_values] + ([rt.outlier_p] if test_outliers else []), rules.correction)
     lo0 = C.studentised(prob, prob.X0, null.t, null.q_rel)[1][0]
     cand_rows = [_tested_candidate(st, prob, r, rt, k, padj[k], lo0, rules) for k, r in enumerate(tested)]
@@ -262,7 +263,7 @@ def _tested_candidate(st: _State, prob: C.Problem, r: dict, rt: C.RoundTests, k:
                       lo0: np.ndarray, rules: Rules):
     """The :class:`Candidate` row of a tested effect, with its augmented weighted fit."""
     X1 = np.hstack([prob.X0, r["Xe"]])
-    w1 = C.fit_wander(prob, X1, fine=False)
+    w1 = C.fit_wander(prob, X1, fine=False, bas=rt.bases[k + 1])
     # leave-one-pose-out under one covariance for both models (the alternative's REML noise):
     # the comparison then measures what the effect adds out of sample, not a change of the
     # wander's kriging
