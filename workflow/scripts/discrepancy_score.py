@@ -10,8 +10,10 @@ if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_
 
 log = configure_logging(snakemake)
 key = pd.concat([pd.read_csv(f) for f in snakemake.input.key], ignore_index=True)
-det = pd.concat([pd.read_csv(f, keep_default_na=False, na_values=[""]) for f in snakemake.input.detections],
-                ignore_index=True)
+# the named outliers' times as written ('a;b'; read as numbers, a chunk with one per recording
+# would come back as floats and another as strings)
+det = pd.concat([pd.read_csv(f, keep_default_na=False, na_values=[""], dtype={"outlier_t_detected": str})
+                 for f in snakemake.input.detections], ignore_index=True)
 # Plan order (the key's chunks interleave the plan): sort by recording and null for a stable table.
 scores = score_cases(key, det).sort_values(["recording", "null"], kind="stable").reset_index(drop=True)
 rules = snakemake.params.rules

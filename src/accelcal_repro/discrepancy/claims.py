@@ -5,6 +5,16 @@ Each row's rule is in its claim text; values come from the stage's tables
 (results/discrepancy/benchmark/summary.csv, profiles.csv, results/discrepancy/adis/...),
 never typed in.  A null hypothesis the library does not have yet makes its rows
 ``not_reproducible`` with that reason.
+
+The benchmark's rules judge exact (Clopper–Pearson) 95 % intervals, and at a small number
+of recordings a rule may be unable to give one of its verdicts whatever the data: the upper
+end with no success of 1 is 0.975, which reaches a power of 0.8 (a power rule that cannot
+fail), and with no false positive of 6 it is 0.459, above 2α = 0.1 (a false-positive rule
+that cannot pass).  Each rule therefore first asks, from a row's sample size alone (its
+``n_independent``, the size its interval was computed on), whether the extreme outcome
+could still give the other verdict (:func:`testable`); rows where it could not are left out
+of the judgement and counted in the evidence, and a claim with no row left is
+``not_reproducible`` with the sample size and the interval in its reason.
 """
 
 from __future__ import annotations
@@ -14,6 +24,7 @@ import pandas as pd
 
 from ..claims import COLUMNS, Claim, validate_rows
 from .benchmark import NONE, OUTLIER
+from .scoring import clopper_pearson
 
 SUMMARY = "results/discrepancy/benchmark/summary.csv"
 ADIS_CHECK = "results/discrepancy/adis/session_check_summary.csv"
@@ -23,36 +34,47 @@ FPR_COLORED = Claim(
     "Issue 13, goal of point 5: under every noise profile of the benchmark (white, rounding, Gauss-Markov, flicker, "
     "random walk, the Xsens and ADIS16405 fits and the ADIS16405 record itself), the loop with the colored null "
     "names an effect or outlier on at most alpha of effect-free sessions: reproduced iff for every profile the "
-    "exact 95% interval reaches down to alpha and its upper end is at most 2 alpha",
+    "exact 95% interval reaches down to alpha and its upper end is at most 2 alpha (profiles with too few "
+    "recordings for that, where the upper end exceeds 2 alpha even with no false positive, are left out; with none "
+    "left the claim is not reproducible at this scale)",
     "FPR <= alpha, upper bound <= 2 alpha")
 FPR_WHITE = Claim(
     "discrepancy", "fpr_white_null_inflated_by_wander",
     "Issue 13 (negative control): the loop with the white-noise null (issue 7) names an effect on more than alpha "
     "of effect-free sessions whose noise has slow wander: reproduced iff on at least one wander profile the lower "
-    "end of the exact 95% interval of its false-positive rate exceeds alpha",
+    "end of the exact 95% interval of its false-positive rate exceeds alpha (profiles with too few recordings for "
+    "that, where the lower end stays at or below alpha even if every recording is a false positive, are left out; "
+    "with none left the claim is not reproducible at this scale)",
     "2 of 5 effect-free recordings named bias_drift")
 FPR_WHITE_WHITE = Claim(
     "discrepancy", "fpr_white_null_white_noise",
     "Issue 7: on white noise the loop with the white null keeps its false-positive rate at alpha: reproduced iff "
-    "the exact 95% interval on the white profile reaches down to alpha and its upper end is at most 2 alpha",
+    "the exact 95% interval on the white profile reaches down to alpha and its upper end is at most 2 alpha (not "
+    "reproducible at this scale when the upper end exceeds 2 alpha even with no false positive)",
     "FPR <= alpha")
 NAMING = Claim(
     "discrepancy", "naming_at_3mde_every_profile",
     "Issue 13, point 5: each effect hidden at 3 times its oracle minimum detectable effect is named first by the "
     "colored-null loop with the design power under every noise profile: reproduced iff for every (profile, "
-    "effect) the upper end of the exact 95% interval of the naming accuracy at 3 MDE is at least the power",
+    "effect) the upper end of the exact 95% interval of the naming accuracy at 3 MDE is at least the power (rows "
+    "with too few recordings for the rule to fail, where the upper end reaches the power even with no success, "
+    "are left out; with none left the claim is not reproducible at this scale)",
     "power at >= 1 MDE")
 OUTLIERS = Claim(
     "discrepancy", "outlier_pose_named",
     "Issue 13, point 4: one pose shifted by 3 times the minimum detectable shift is named outlier_pose at its "
     "pose under every noise profile (colored null): reproduced iff the upper end of the exact 95% interval of that "
-    "accuracy is at least the power for every profile",
+    "accuracy is at least the power for every profile (profiles with too few recordings for the rule to fail, "
+    "where the upper end reaches the power even with no success, are left out; with none left the claim is not "
+    "reproducible at this scale)",
     "named with the pose index")
 PAIRS = Claim(
     "discrepancy", "two_effects_named",
     "Issue 13, point 4: two effects hidden at once, each at 3 times its oracle MDE, are both named (in any order, "
     "nothing else) under every noise profile (colored null): reproduced iff the upper end of the exact 95% "
-    "interval of that accuracy is at least the power for every profile and pair",
+    "interval of that accuracy is at least the power for every profile and pair (rows with too few recordings "
+    "for the rule to fail, where the upper end reaches the power even with no success, are left out; with none "
+    "left the claim is not reproducible at this scale)",
     "both named")
 ADIS_REFERENCE = Claim(
     "discrepancy", "adis_long_tau_terms_predict_wander",
@@ -136,37 +158,129 @@ def _unavailable(claim: Claim, null: str) -> dict:
                                   f"yet (benchmark.nulls)")
 
 
+def sample_sizes(d: pd.DataFrame) -> np.ndarray:
+    """The sample size each summary row's interval was computed on: ``n_independent`` (Kish's
+    effective size, :func:`accelcal_repro.discrepancy.scoring.effective_n`) where given, else ``n``."""
+    n = pd.to_numeric(d["n"], errors="coerce").to_numpy(float)
+    if "n_independent" in d:
+        ni = pd.to_numeric(d["n_independent"], errors="coerce").to_numpy(float)
+        n = np.where(np.isfinite(ni) & (ni > 0), ni, n)
+    return n
+
+
+#: The rules of the benchmark's claims, by what they compare (module docstring).
+RULES = ("power", "fpr_upper", "fpr_lower")
+
+
+def testable(rule: str, n, *, alpha: float = 0.05, power: float = 0.8) -> tuple[np.ndarray, np.ndarray]:
+    """Can a row of sample size ``n`` give both verdicts of ``rule``?  ``(mask, bound)``.
+
+    ``power`` (pass iff the upper end of the exact 95 % interval ≥ ``power``): only if no
+    success of ``n`` puts the upper end below the power (``bound``: that upper end);
+    ``fpr_upper`` (pass needs the upper end ≤ 2α): only if no false positive of ``n`` puts
+    it at or below 2α (``bound``: that upper end); ``fpr_lower`` (pass iff the lower end
+    > α): only if ``n`` false positives of ``n`` put it above α (``bound``: that lower end).
+    The other verdict is reachable at any ``n ≥ 1`` (``n`` successes reach any power, ``n``
+    false positives push the upper end to 1, none keep the lower end at 0).
+    """
+    n = np.asarray(n, float)
+    if rule == "power":
+        bound = clopper_pearson(np.zeros_like(n), n)[1]
+        ok = bound < power
+    elif rule == "fpr_upper":
+        bound = clopper_pearson(np.zeros_like(n), n)[1]
+        ok = bound <= 2 * alpha
+    elif rule == "fpr_lower":
+        bound = clopper_pearson(n, n)[0]
+        ok = bound > alpha
+    else:
+        raise ValueError(f"unknown rule {rule!r} (known: {', '.join(RULES)})")
+    return np.asarray(ok & (n >= 1), bool), bound
+
+
+def _n_text(n: np.ndarray) -> str:
+    lo, hi = float(np.min(n)), float(np.max(n))
+    return f"{hi:g}" if lo == hi else f"{lo:g}-{hi:g}"
+
+
+def _not_testable(claim: Claim, rule: str, n: np.ndarray, bound: np.ndarray, *, alpha: float, power: float,
+                  per: str) -> dict:
+    """The ``not_reproducible`` row of a claim none of whose rows is :func:`testable` (the bound
+    shown is the most favourable one, at the largest ``n``)."""
+    b = float(bound[int(np.argmax(n))])
+    head = f"not testable at this scale: n {_n_text(n)} per {per}, the exact 95 % interval's"
+    if rule == "power":
+        why = f"upper end is {b:.3f} >= power {power:g} even with no success"
+    elif rule == "fpr_upper":
+        why = f"upper end is {b:.3f} > 2 alpha {2 * alpha:g} even with no false positive"
+    else:
+        why = f"lower end is {b:.3f} <= alpha {alpha:g} even if every recording is a false positive"
+    return claim.not_reproducible(f"{head} {why}")
+
+
+def _left_out(d: pd.DataFrame, keep: np.ndarray, n: np.ndarray, what: str) -> str:
+    if keep.all():
+        return ""
+    gone = [f"{r.profile}{'' if r.effect == NONE else '/' + r.effect} (n {k:g})"
+            for r, k, ok in zip(d.itertuples(), n, keep) if not ok]
+    return f"; left out, not testable at their n ({what}): {len(gone)}: {', '.join(gone)}"
+
+
 def _fpr_rows(summary, profiles_table, alpha, nulls) -> list[dict]:
     rows = []
     fc = _fpr(summary, "colored")
     if "colored" not in nulls or not len(fc):
         rows.append(_unavailable(FPR_COLORED, "colored"))
     else:
-        bad = fc[fc.verdict != "pass"]
-        worst = fc.loc[fc.ci_high.idxmax()]
-        rows.append(FPR_COLORED.judge(
-            float(fc.value.max()), passed=len(bad) == 0, fmt="max {:.3f}",
-            evidence=f"{SUMMARY}: {len(fc) - len(bad)}/{len(fc)} profiles pass; highest rate {fc.value.max():.3f} "
-                     f"({fc.loc[fc.value.idxmax(), 'profile']}); highest upper bound {worst.ci_high:.3f} "
-                     f"({worst.profile}); failing: {', '.join(f'{r.profile} {r.value:.3f} [{r.ci_low:.3f}, {r.ci_high:.3f}]' for r in bad.itertuples()) or 'none'}"))
+        n_all = sample_sizes(fc)
+        keep, bound = testable("fpr_upper", n_all, alpha=alpha)
+        if not keep.any():
+            rows.append(_not_testable(FPR_COLORED, "fpr_upper", n_all, bound, alpha=alpha, power=np.nan,
+                                      per="profile"))
+        else:
+            out = _left_out(fc, keep, n_all, "upper end above 2 alpha with no false positive")
+            fc = fc[keep]
+            bad = fc[fc.verdict != "pass"]
+            worst = fc.loc[fc.ci_high.idxmax()]
+            rows.append(FPR_COLORED.judge(
+                float(fc.value.max()), passed=len(bad) == 0, fmt="max {:.3f}",
+                evidence=f"{SUMMARY}: {len(fc) - len(bad)}/{len(fc)} profiles pass; highest rate {fc.value.max():.3f} "
+                         f"({fc.loc[fc.value.idxmax(), 'profile']}); highest upper bound {worst.ci_high:.3f} "
+                         f"({worst.profile}); failing: {', '.join(f'{r.profile} {r.value:.3f} [{r.ci_low:.3f}, {r.ci_high:.3f}]' for r in bad.itertuples()) or 'none'}"
+                         + out))
     fw = _fpr(summary, "white")
     if "white" not in nulls or not len(fw):
         rows += [_unavailable(FPR_WHITE, "white"), _unavailable(FPR_WHITE_WHITE, "white")]
         return rows
     kinds = profiles_table.groupby("profile")["wander_over_white"].mean()
     wander = fw[fw.profile.map(lambda p: kinds.get(p, 0.0) > 0.05)]
-    inflated = wander[wander.ci_low > alpha]
-    top = wander.loc[wander.value.idxmax()] if len(wander) else None
-    rows.append(FPR_WHITE.judge(
-        float(top.value) if top is not None else float("nan"), passed=len(inflated) > 0, fmt="max {:.3f}",
-        evidence=f"{SUMMARY}: white null, {len(inflated)}/{len(wander)} wander profiles with the interval above "
-                 f"alpha: {', '.join(f'{r.profile} {r.value:.3f} [{r.ci_low:.3f}, {r.ci_high:.3f}]' for r in inflated.itertuples()) or 'none'}"))
+    n_w = sample_sizes(wander)
+    keep, bound = testable("fpr_lower", n_w, alpha=alpha)
+    if len(wander) and not keep.any():
+        rows.append(_not_testable(FPR_WHITE, "fpr_lower", n_w, bound, alpha=alpha, power=np.nan,
+                                  per="wander profile"))
+    else:
+        out = _left_out(wander, keep, n_w, "lower end at or below alpha with every recording a false positive")
+        wander = wander[keep]
+        inflated = wander[wander.ci_low > alpha]
+        top = wander.loc[wander.value.idxmax()] if len(wander) else None
+        rows.append(FPR_WHITE.judge(
+            float(top.value) if top is not None else float("nan"), passed=len(inflated) > 0, fmt="max {:.3f}",
+            evidence=f"{SUMMARY}: white null, {len(inflated)}/{len(wander)} wander profiles with the interval above "
+                     f"alpha: {', '.join(f'{r.profile} {r.value:.3f} [{r.ci_low:.3f}, {r.ci_high:.3f}]' for r in inflated.itertuples()) or 'none'}"
+                     + out))
     ww = fw[fw.profile == "white"]
     if len(ww):
         r = ww.iloc[0]
-        rows.append(FPR_WHITE_WHITE.judge(r.value, passed=r.verdict == "pass", fmt="{:.3f}",
-                                          evidence=f"{SUMMARY}: white profile, white null: {r.value:.3f} "
-                                                   f"[{r.ci_low:.3f}, {r.ci_high:.3f}], n {int(r.n)}"))
+        n_ww = sample_sizes(ww.iloc[:1])
+        keep, bound = testable("fpr_upper", n_ww, alpha=alpha)
+        if not keep[0]:
+            rows.append(_not_testable(FPR_WHITE_WHITE, "fpr_upper", n_ww, bound, alpha=alpha, power=np.nan,
+                                      per="profile"))
+        else:
+            rows.append(FPR_WHITE_WHITE.judge(r.value, passed=r.verdict == "pass", fmt="{:.3f}",
+                                              evidence=f"{SUMMARY}: white profile, white null: {r.value:.3f} "
+                                                       f"[{r.ci_low:.3f}, {r.ci_high:.3f}], n {int(r.n)}"))
     else:
         rows.append(FPR_WHITE_WHITE.not_reproducible("no white profile in the benchmark"))
     return rows
@@ -184,12 +298,20 @@ def _accuracy_rows(summary, power, nulls) -> list[dict]:
         if not len(d):
             out.append(claim.not_reproducible("no such rows at 3 MDE in the benchmark config"))
             continue
+        n_all = sample_sizes(d)
+        keep, bound = testable("power", n_all, power=power)
+        if not keep.any():
+            out.append(_not_testable(claim, "power", n_all, bound, alpha=np.nan, power=power, per="row"))
+            continue
+        gone = _left_out(d, keep, n_all, "upper end at or above the power with no success")
+        d = d[keep]
         bad = d[d.ci_high < power]
         worst = d.loc[d.value.idxmin()]
         out.append(claim.judge(float(d.value.min()), passed=len(bad) == 0, fmt="min {:.2f}",
                                evidence=f"{SUMMARY}: accuracy_at_3mde, {len(d) - len(bad)}/{len(d)} (profile, row) "
                                         f"reach the power; lowest {worst.value:.2f} ({worst.profile}, {worst.effect}, "
-                                        f"n {int(worst.n)}); below: {', '.join(f'{r.profile}/{r.effect} {r.value:.2f}' for r in bad.itertuples()) or 'none'}"))
+                                        f"n {int(worst.n)}); below: {', '.join(f'{r.profile}/{r.effect} {r.value:.2f}' for r in bad.itertuples()) or 'none'}"
+                                        + gone))
     return out
 
 
@@ -224,4 +346,4 @@ def discrepancy_claims(summary: pd.DataFrame, profiles_table: pd.DataFrame, adis
     return validate_rows(pd.DataFrame(rows, columns=list(COLUMNS)), source="discrepancy claims")
 
 
-__all__ = ["discrepancy_claims"]
+__all__ = ["RULES", "discrepancy_claims", "sample_sizes", "testable"]

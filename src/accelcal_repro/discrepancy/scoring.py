@@ -87,10 +87,21 @@ def interval(x, clusters=None) -> tuple[float, float, float]:
     return float(lo), float(hi), ne
 
 
-def _outlier_located(det_t: str, true_t: float, tol: float) -> bool:
-    if not isinstance(det_t, str) or not det_t or not np.isfinite(true_t):
+def _outlier_times(det_t) -> list[float]:
+    """The mid times of the poses the loop named outliers: the detection's ``outlier_t_detected``,
+    ``';'``-joined times as written, or a single number (``pandas.read_csv`` parses a column
+    whose cells each hold one time as floats); empty, NaN or None: none."""
+    if isinstance(det_t, str):
+        return [float(v) for v in det_t.split(";") if v.strip()]
+    if isinstance(det_t, (int, float, np.integer, np.floating)) and not isinstance(det_t, bool):
+        return [float(det_t)] if np.isfinite(det_t) else []
+    return []
+
+
+def _outlier_located(det_t, true_t: float, tol: float) -> bool:
+    if not np.isfinite(true_t):
         return False
-    return any(abs(float(v) - true_t) <= tol for v in det_t.split(";"))
+    return any(abs(v - true_t) <= tol for v in _outlier_times(det_t))
 
 
 def score_cases(key: pd.DataFrame, detections: pd.DataFrame, *, outlier_tol_s: float = 3.0) -> pd.DataFrame:
@@ -108,7 +119,7 @@ def score_cases(key: pd.DataFrame, detections: pd.DataFrame, *, outlier_tol_s: f
     injected = df["effects_injected"].fillna("").map(lambda s: frozenset(x for x in s.split("+") if x and x != NONE))
     df["named"] = ~df["outcome"].isin(NOTHING_NAMED)
     located = [_outlier_located(d, t, outlier_tol_s) for d, t in
-               zip(df.get("outlier_t_detected", pd.Series([""] * len(df))).fillna(""), df["outlier_t"])]
+               zip(df.get("outlier_t_detected", pd.Series([""] * len(df), index=df.index)), df["outlier_t"])]
     df["outlier_located"] = located
     single = df.truth.isin(EFFECT_IDS)
     pair = df.truth.str.contains("+", regex=False)
