@@ -12,8 +12,8 @@ the models fitted to the Xsens session and to the 2.78 h ADIS16405 recording, an
 of that recording itself), added to the whole time series.
 
 Hidden effects are sized in units of their *oracle* minimum detectable effect: the size
-at which the loop's nested F-test (level ``α/m`` over the ``m`` candidates of a round, the
-configured power) would detect the effect along its random direction ``d`` if it knew
+at which the loop's nested F-test (level ``α/m`` over the ``m`` tests of its first round:
+the candidates and, if enabled, the outlier family of the colored null; the configured power) would detect the effect along its random direction ``d`` if it knew
 the true covariance of the pose residuals under the profile (generalised least squares
 with :func:`accelcal_repro.discrepancy.profiles.pose_mean_covariance`), computed on the
 true pose design (:func:`oracle_mde`).  For the white profile it is the loop's own MDE
@@ -25,8 +25,8 @@ larger, because a wandering bias hides part of any slow effect.  Rows (``truth``
 * ``a+b``: two effects at once, each at the size times its own MDE (the loop should name
   both, in any order);
 * ``outlier_pose``: one pose (not the initial rest) shifted, along its gravity direction,
-  by the size times the MDE of a single-pose shift (tested at ``α/n`` over the ``n``
-  poses) — a bump or a transient offset during one rest;
+  by the size times the MDE of a single-pose shift (tested at ``α/(n m)``: the ``n``
+  poses, the ``m`` tests of the round) — a bump or a transient offset during one rest;
 * ``temperature_const``: the temperature effect of the largest size, but the
   temperature column never changes, so it acts as a constant offset the bias absorbs:
   expected outcome ``not_identifiable``.
@@ -237,12 +237,13 @@ class Oracle:
         v = float(d @ info @ d)
         return float(np.sqrt(lam / v)) if v > 0 else float("inf")
 
-    def shift_mde(self, pose: int, rules: Rules) -> float:
-        """Residual shift of one pose [unit of g] that a test at ``α/n`` over the poses detects with the power."""
+    def shift_mde(self, pose: int, rules: Rules, n_tests: int = 1) -> float:
+        """Residual shift of one pose [unit of g] that a test at ``α/(n n_tests)`` (the ``n``
+        poses, the ``n_tests`` members of the round's Holm family) detects with the power."""
         e = np.zeros((self.n, 1))
         e[pose, 0] = 1.0
         v = float(self._info(e)[0, 0])
-        lam = critical_noncentrality(1, self.n - 10, rules.alpha / self.n, rules.power)
+        lam = critical_noncentrality(1, self.n - 10, rules.alpha / (self.n * max(n_tests, 1)), rules.power)
         return float(np.sqrt(lam / v)) if v > 0 else float("inf")
 
 
@@ -321,10 +322,13 @@ def simulate_case(truth: str, size_mde: float, replicate: int, *, seed: int, ses
     w = -base.J[:, :3] * base.sigma[:, None]  # ∂r/∂z = -∂r/∂b (unweighted)
     oracle = Oracle.build(data, p_true, residual_covariance(C, w))
 
+    # the loop's first round tests the candidates and the outlier family together (Holm)
+    family = len(cands) + bool(rules.outlier_pose)
     params, key_eff = {}, {}
     for e in effs:
-        a = oracle.effect_mde(data, p_true, e, dirs[e], rules, len(cands))
-        a_white = idents[e].mde_along(dirs[e])
+        a = oracle.effect_mde(data, p_true, e, dirs[e], rules, family)
+        # the white loop's MDE at the same level (its own check above is at α/len(cands))
+        a_white = identifiability(data, base, e, rules, family).mde_along(dirs[e])
         params[e] = size_mde * a * dirs[e]
         key_eff.update({f"mde_along_{e}": a, f"mde_along_white_{e}": a_white,
                         **{f"param_{e}_{ax}": float(v) for ax, v in zip("xyz", params[e])},
@@ -347,7 +351,7 @@ def simulate_case(truth: str, size_mde: float, replicate: int, *, seed: int, ses
     outlier = {"outlier_pose": -1, "outlier_t": np.nan, "outlier_shift_mde": np.nan, "outlier_shift": np.nan}
     if truth == OUTLIER:
         k = int(rng.integers(1, ss.n_poses))  # never the initial rest: it sets the motion threshold
-        s_mde = oracle.shift_mde(k, rules)
+        s_mde = oracle.shift_mde(k, rules, family)
         shift = size_mde * s_mde * rng.choice((-1.0, 1.0))
         delta = shift * w[k] / float(w[k] @ w[k])  # moves the residual of pose k by `shift`
         a_, b_ = _rest_windows(ss, len(t))[k]
