@@ -37,6 +37,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import kernels
 from ..errors import AccelcalError, NotConvergedError
 from ..model import m_from_params, params_from_m
 from .effects import EFFECTS, TEMPERATURE, TIME, effect
@@ -49,6 +50,8 @@ MAX_ITER_LOPO = 50
 #: Relative tolerance of the per-axis Newton solve of ``P(x) = y``.
 NEWTON_RTOL = 1e-14
 N_BASE = 9
+#: The compiled kernel of :func:`evaluate_batch` (:mod:`accelcal.kernels`).
+_KERNELS = "discrepancy._fit_kernels"
 
 
 @dataclass(frozen=True)
@@ -221,9 +224,31 @@ def evaluate_batch(P, data: PoseData, effects, jacobian: bool = True):
         The true specific force each pose implies (unit of g).
     """
     P = np.atleast_2d(np.asarray(P, float))
+    cov = {TIME: data.covariate(TIME), TEMPERATURE: data.covariate(TEMPERATURE)}
+    K = kernels.compiled(_KERNELS)
+    if K is not None and all(EFFECTS[e].covariate is None or cov[EFFECTS[e].covariate] is not None for e in effects):
+        cols, codes = _effect_codes(data, effects, cov)
+        return K.evaluate_batch(P, data.z, cols, codes, data.g, jacobian, NEWTON_RTOL)
+    return _evaluate_batch_numpy(P, data, effects, jacobian, cov)
+
+
+def _effect_codes(data: PoseData, effects, cov: dict) -> tuple[np.ndarray, np.ndarray]:
+    """The effects as the compiled kernel takes them: centred covariate per pose (k, n), zeros
+    for the polynomial terms, and kind codes (0 additive, 1 scale, 2 or 3 the power)."""
+    cols = np.zeros((len(effects), len(data)))
+    codes = np.empty(len(effects), np.int64)
+    for i, eid in enumerate(effects):
+        e = EFFECTS[eid]
+        codes[i] = 0 if e.kind == "additive" else e.power
+        if e.kind == "additive" or e.power == 1:
+            cols[i] = cov[e.covariate]
+    return cols, codes
+
+
+def _evaluate_batch_numpy(P, data: PoseData, effects, jacobian: bool, cov: dict):
+    """:func:`evaluate_batch` in numpy (the reference of the compiled kernel)."""
     Bn = P.shape[0]
     n = len(data)
-    cov = {TIME: data.covariate(TIME), TEMPERATURE: data.covariate(TEMPERATURE)}
     M, dM, ok = _m_and_derivatives(P[:, 3:6], P[:, 6:9])
     A = np.linalg.inv(np.where(ok[:, None, None], M, np.eye(3)))
     add = np.zeros((Bn, n, 3))
