@@ -161,7 +161,10 @@ def _newton(x, y, c1, c2, c3, dP, ok, g, rtol):
 
 
 def _jacobian(J, x, y, norm, dP, As, dMs, cov, code):
-    """Analytic Jacobian of the residuals (module docstring of :mod:`accelcal.discrepancy.fit`)."""
+    """Analytic Jacobian of the residuals (module docstring of :mod:`accelcal.discrepancy.fit`).
+
+    ``∂r/∂p_k = -w (∂M/∂p_k) y``: each ``∂M/∂(s, θ)_k`` has one non-zero row with one to
+    three non-zero entries (:func:`_model`), and only those are summed."""
     B, n, _ = x.shape
     v = np.empty(3)
     w = np.empty(3)
@@ -169,17 +172,18 @@ def _jacobian(J, x, y, norm, dP, As, dMs, cov, code):
         A = As[b]
         dM = dMs[b]
         for i in range(n):
+            y0, y1, y2 = y[b, i, 0], y[b, i, 1], y[b, i, 2]
             for j in range(3):
                 v[j] = (x[b, i, j] / norm[b, i]) / dP[b, i, j]
             for j in range(3):
                 w[j] = v[0] * A[0, j] + v[1] * A[1, j] + v[2] * A[2, j]
                 J[b, i, j] = -w[j]
-            for m in range(6):
-                acc = 0.0
-                for row in range(3):
-                    acc += w[row] * (dM[m, row, 0] * y[b, i, 0] + dM[m, row, 1] * y[b, i, 1]
-                                     + dM[m, row, 2] * y[b, i, 2])
-                J[b, i, 3 + m] = -acc
+            J[b, i, 3] = -(w[0] * (dM[0, 0, 0] * y0))
+            J[b, i, 4] = -(w[1] * (dM[1, 1, 0] * y0 + dM[1, 1, 1] * y1))
+            J[b, i, 5] = -(w[2] * (dM[2, 2, 0] * y0 + dM[2, 2, 1] * y1 + dM[2, 2, 2] * y2))
+            J[b, i, 6] = -(w[1] * (dM[3, 1, 0] * y0 + dM[3, 1, 1] * y1))
+            J[b, i, 7] = -(w[2] * (dM[4, 2, 0] * y0 + dM[4, 2, 2] * y2))
+            J[b, i, 8] = -(w[2] * (dM[5, 2, 1] * y1 + dM[5, 2, 2] * y2))
             for e in range(code.shape[0]):
                 o = 9 + 3 * e
                 for j in range(3):
@@ -191,10 +195,189 @@ def _jacobian(J, x, y, norm, dP, As, dMs, cov, code):
                         J[b, i, o + j] = -v[j] * x[b, i, j] ** code[e]
 
 
+def _lopo_system(P, z, cov, code, g, rtol, sig, normal):
+    """One Gauss–Newton system per leave-one-pose-out refit (row ``b`` of ``P`` leaves out
+    pose ``b``): residuals ``r`` (B, n), the reduced χ² ``cost`` (B,), and if ``normal``
+    the column scales ``d`` (B, q) and the scaled normal equations ``H`` (B, q, q),
+    ``grad`` (B, q), as :func:`accelcal.discrepancy.fit.lopo` forms them (else empty)."""
+    r, J, _ = _evaluate_batch(P, z, cov, code, g, normal, rtol)
+    B, n = r.shape
+    q = J.shape[2]
+    cost = np.empty(B)
+    d = np.empty((B, q))
+    H = np.empty((B, q, q))
+    grad = np.empty((B, q))
+    if not normal:
+        for b in range(B):
+            c = 0.0
+            for i in range(n):
+                rw = r[b, i] / sig[i] * (0.0 if i == b else 1.0)
+                c += rw * rw
+            cost[b] = c
+        return r, cost, d, H, grad
+    rw = np.empty(n)
+    Js = np.empty((q, n))  # transposed: the sums below run along contiguous rows
+    for b in range(B):
+        c = 0.0
+        for i in range(n):
+            keep = 0.0 if i == b else 1.0  # times zero, not skipped: a NaN residual stays NaN
+            rw[i] = r[b, i] / sig[i] * keep
+            c += rw[i] * rw[i]
+            for j in range(q):
+                Js[j, i] = J[b, i, j] / sig[i] * keep
+        cost[b] = c
+        for j in range(q):
+            acc = 0.0
+            for i in range(n):
+                acc += Js[j, i] * Js[j, i]
+            d[b, j] = np.sqrt(acc) if acc != 0 else 1.0
+            for i in range(n):
+                Js[j, i] /= d[b, j]
+        for j in range(q):
+            acc = 0.0
+            for i in range(n):
+                acc += Js[j, i] * rw[i]
+            grad[b, j] = acc
+            for m in range(j, q):
+                acc = 0.0
+                for i in range(n):
+                    acc += Js[j, i] * Js[m, i]
+                H[b, j, m] = acc
+                H[b, m, j] = acc
+    return r, cost, d, H, grad
+
+
+def _weighted(p, z, cov, code, g, rtol, sig):
+    """Residuals, weighted Jacobian ``J / σ`` and ``x`` at one parameter vector; ``ok`` false
+    where the model cannot be inverted (the numpy fit's ``fun`` returning None)."""
+    r, J, x = _evaluate_batch(p.reshape(1, -1), z, cov, code, g, True, rtol)
+    n, q = J.shape[1], J.shape[2]
+    ok = True
+    for i in range(n):
+        ok = ok and np.isfinite(r[0, i])
+    Jw = np.empty((n, q))
+    for i in range(n):
+        for j in range(q):
+            Jw[i, j] = J[0, i, j] / sig[i]
+    return r[0], Jw, x[0], ok
+
+
+def _chi2(r, sig):
+    c = 0.0
+    for i in range(r.shape[0]):
+        c += (r[i] / sig[i]) ** 2
+    return c
+
+
+def _lm_step(r, Jw, sig, cost, lam):
+    """Levenberg–Marquardt step with Marquardt's column scaling (least squares on the
+    augmented system, as :func:`accelcal.discrepancy.fit.fit`) and the χ² decrease it predicts."""
+    n, q = Jw.shape
+    d = np.empty(q)
+    for j in range(q):
+        acc = 0.0
+        for i in range(n):
+            acc += Jw[i, j] * Jw[i, j]
+        d[j] = np.sqrt(acc) if acc != 0 else 1.0
+    A = np.zeros((n + q, q))
+    rhs = np.zeros(n + q)
+    for i in range(n):
+        rhs[i] = -(r[i] / sig[i])
+        for j in range(q):
+            A[i, j] = Jw[i, j] / d[j]
+    for j in range(q):
+        A[n + j, j] = np.sqrt(lam)
+    step = _least_squares(A, rhs) / d
+    pred = 0.0
+    for i in range(n):
+        acc = r[i] / sig[i]
+        for j in range(q):
+            acc += Jw[i, j] * step[j]
+        pred += acc * acc
+    return step, cost - pred
+
+
+def _least_squares(A, b):
+    """``argmin |A x - b|`` of a full-column-rank ``A`` (m, q), by Householder QR (overwrites
+    ``A`` and ``b``).  The LM system has full rank (its damping rows ``sqrt(λ) I``, λ ≥ 1e-12,
+    keep every singular value of the unit-norm columns far above the rank cut-off of the
+    SVD that numpy's ``lstsq`` uses), so both give its one solution to rounding; QR costs a
+    fraction of the SVD's LAPACK set-up for these small problems."""
+    m, q = A.shape
+    for k in range(q):
+        norm = 0.0
+        for i in range(k, m):
+            norm += A[i, k] * A[i, k]
+        norm = np.sqrt(norm)
+        if norm == 0.0:
+            continue
+        alpha = -norm if A[k, k] >= 0 else norm
+        A[k, k] -= alpha  # v = a_k - alpha e_k, stored in place of the column
+        vv = 0.0
+        for i in range(k, m):
+            vv += A[i, k] * A[i, k]
+        for j in range(k + 1, q):
+            dot = 0.0
+            for i in range(k, m):
+                dot += A[i, k] * A[i, j]
+            f = 2.0 * dot / vv
+            for i in range(k, m):
+                A[i, j] -= f * A[i, k]
+        dot = 0.0
+        for i in range(k, m):
+            dot += A[i, k] * b[i]
+        f = 2.0 * dot / vv
+        for i in range(k, m):
+            b[i] -= f * A[i, k]
+        A[k, k] = alpha  # the diagonal of R
+    x = np.empty(q)
+    for k in range(q - 1, -1, -1):  # back substitution R x = (Qᵀ b)[:q]
+        acc = b[k]
+        for j in range(k + 1, q):
+            acc -= A[k, j] * x[j]
+        x[k] = acc / A[k, k]
+    return x
+
+
+def _lm_fit(p, z, cov, code, g, rtol, sig, max_iter, chi2_tol):
+    """:func:`accelcal.discrepancy.fit.fit` from the start ``p``: returns ``(p, r, J / σ, x,
+    iterations, status)``, status 0 converged, 1 start not invertible, 2 not converged."""
+    r, J, x, ok = _weighted(p, z, cov, code, g, rtol, sig)
+    if not ok:
+        return p, r, J, x, 0, 1
+    cost = _chi2(r, sig)
+    lam = 1e-6
+    for it in range(1, max_iter + 1):
+        step, pred = _lm_step(r, J, sig, cost, lam)
+        p_new = p + step
+        r_new, J_new, x_new, ok = _weighted(p_new, z, cov, code, g, rtol, sig)
+        cost_new = _chi2(r_new, sig) if ok else np.inf
+        if ok and cost_new <= cost:
+            p, r, J, x = p_new, r_new, J_new, x_new
+            decrease = cost - cost_new
+            cost = cost_new
+            lam = max(lam / 10, 1e-12)
+            if pred <= chi2_tol and decrease <= chi2_tol:
+                return p, r, J, x, it, 0
+        else:
+            if pred <= chi2_tol:  # at the optimum: no step can lower χ² measurably
+                return p, r, J, x, it, 0
+            lam *= 10
+            if lam > 1e12:
+                break
+    return p, r, J, x, max_iter, 2
+
+
 _model = jit(_model)
 _newton = jit(_newton)
 _jacobian = jit(_jacobian)
 _evaluate_batch = jit(_evaluate_batch)
+_lopo_system = jit(_lopo_system)
+_weighted = jit(_weighted)
+_chi2 = jit(_chi2)
+_least_squares = jit(_least_squares)
+_lm_step = jit(_lm_step)
+_lm_fit = jit(_lm_fit)
 
 
 def evaluate_batch(P, z, cov, code, g: float, jacobian: bool, rtol: float):
@@ -207,4 +390,18 @@ def evaluate_batch(P, z, cov, code, g: float, jacobian: bool, rtol: float):
     return r, (J if jacobian else None), x
 
 
-__all__ = ["ADDITIVE", "SCALE", "evaluate_batch"]
+def lopo_system(P, z, cov, code, g: float, rtol: float, sig, normal: bool = True):
+    """:func:`_lopo_system` on contiguous float arrays."""
+    return _lopo_system(np.ascontiguousarray(P, dtype=np.float64), np.ascontiguousarray(z, dtype=np.float64),
+                        np.ascontiguousarray(cov, dtype=np.float64), np.asarray(code, dtype=np.int64), float(g),
+                        float(rtol), np.ascontiguousarray(sig, dtype=np.float64), bool(normal))
+
+
+def lm_fit(p, z, cov, code, g: float, rtol: float, sig, max_iter: int, chi2_tol: float):
+    """:func:`_lm_fit` on contiguous float arrays."""
+    return _lm_fit(np.array(p, dtype=np.float64), np.ascontiguousarray(z, dtype=np.float64),
+                   np.ascontiguousarray(cov, dtype=np.float64), np.asarray(code, dtype=np.int64), float(g), float(rtol),
+                   np.ascontiguousarray(sig, dtype=np.float64), int(max_iter), float(chi2_tol))
+
+
+__all__ = ["ADDITIVE", "SCALE", "evaluate_batch", "lm_fit", "lopo_system"]
