@@ -195,6 +195,23 @@ def _jacobian(J, x, y, norm, dP, As, dMs, cov, code):
                         J[b, i, o + j] = -v[j] * x[b, i, j] ** code[e]
 
 
+def _dot(a, b):
+    """``a · b`` with four running sums (one sum would wait on the latency of each addition)."""
+    n = a.shape[0]
+    s0 = s1 = s2 = s3 = 0.0
+    i = 0
+    while i + 4 <= n:
+        s0 += a[i] * b[i]
+        s1 += a[i + 1] * b[i + 1]
+        s2 += a[i + 2] * b[i + 2]
+        s3 += a[i + 3] * b[i + 3]
+        i += 4
+    while i < n:
+        s0 += a[i] * b[i]
+        i += 1
+    return (s0 + s1) + (s2 + s3)
+
+
 def _lopo_system(P, z, cov, code, g, rtol, sig, normal):
     """One Gauss–Newton system per leave-one-pose-out refit (row ``b`` of ``P`` leaves out
     pose ``b``): residuals ``r`` (B, n), the reduced χ² ``cost`` (B,), and if ``normal``
@@ -234,17 +251,60 @@ def _lopo_system(P, z, cov, code, g, rtol, sig, normal):
             for i in range(n):
                 Js[j, i] /= d[b, j]
         for j in range(q):
-            acc = 0.0
-            for i in range(n):
-                acc += Js[j, i] * rw[i]
-            grad[b, j] = acc
+            grad[b, j] = _dot(Js[j], rw)
             for m in range(j, q):
-                acc = 0.0
-                for i in range(n):
-                    acc += Js[j, i] * Js[m, i]
-                H[b, j, m] = acc
-                H[b, m, j] = acc
+                H[b, j, m] = H[b, m, j] = _dot(Js[j], Js[m])
     return r, cost, d, H, grad
+
+
+def _lu_solve(H, g, x):
+    """Solve ``H x = g`` (q, q) into ``x`` by LU with partial pivoting (as LAPACK's gesv);
+    False if a pivot is exactly zero (numpy's solve raises LinAlgError then).  NaN in, NaN out."""
+    q = H.shape[0]
+    A = H.copy()
+    y = g.copy()
+    for k in range(q):
+        p = k
+        for i in range(k + 1, q):
+            if abs(A[i, k]) > abs(A[p, k]):
+                p = i
+        if A[p, k] == 0.0:
+            return False
+        if p != k:
+            for j in range(q):
+                A[k, j], A[p, j] = A[p, j], A[k, j]
+            y[k], y[p] = y[p], y[k]
+        for i in range(k + 1, q):
+            f = A[i, k] / A[k, k]
+            for j in range(k + 1, q):
+                A[i, j] -= f * A[k, j]
+            y[i] -= f * y[k]
+    for k in range(q - 1, -1, -1):
+        acc = y[k]
+        for j in range(k + 1, q):
+            acc -= A[k, j] * x[j]
+        x[k] = acc / A[k, k]
+    return True
+
+
+def _lopo_step(P, z, cov, code, g, rtol, sig, normal):
+    """:func:`_lopo_system` and its Gauss–Newton step: ``(r, cost, step / d, pred, d, H, grad,
+    solved)`` with ``step = -H⁻¹ grad`` and ``pred = -grad · step`` per row; ``solved`` false if
+    some ``H`` is singular (then the caller takes the pseudo-inverse of every row, as numpy)."""
+    r, cost, d, H, grad = _lopo_system(P, z, cov, code, g, rtol, sig, normal)
+    B, q = d.shape
+    step = np.empty((B, q))
+    pred = np.empty(B)
+    solved = True
+    if normal:
+        x = np.empty(q)
+        for b in range(B):
+            solved = solved and _lu_solve(H[b], grad[b], x)
+            pred[b] = 0.0
+            for j in range(q):
+                pred[b] += grad[b, j] * x[j]  # -grad · step, step = -x
+                step[b, j] = -x[j] / d[b, j]
+    return r, cost, step, pred, d, H, grad, solved
 
 
 def _weighted(p, z, cov, code, g, rtol, sig):
@@ -372,7 +432,10 @@ _model = jit(_model)
 _newton = jit(_newton)
 _jacobian = jit(_jacobian)
 _evaluate_batch = jit(_evaluate_batch)
+_dot = jit(_dot)
 _lopo_system = jit(_lopo_system)
+_lu_solve = jit(_lu_solve)
+_lopo_step = jit(_lopo_step)
 _weighted = jit(_weighted)
 _chi2 = jit(_chi2)
 _least_squares = jit(_least_squares)
@@ -390,9 +453,9 @@ def evaluate_batch(P, z, cov, code, g: float, jacobian: bool, rtol: float):
     return r, (J if jacobian else None), x
 
 
-def lopo_system(P, z, cov, code, g: float, rtol: float, sig, normal: bool = True):
-    """:func:`_lopo_system` on contiguous float arrays."""
-    return _lopo_system(np.ascontiguousarray(P, dtype=np.float64), np.ascontiguousarray(z, dtype=np.float64),
+def lopo_step(P, z, cov, code, g: float, rtol: float, sig, normal: bool = True):
+    """:func:`_lopo_step` on contiguous float arrays."""
+    return _lopo_step(np.ascontiguousarray(P, dtype=np.float64), np.ascontiguousarray(z, dtype=np.float64),
                         np.ascontiguousarray(cov, dtype=np.float64), np.asarray(code, dtype=np.int64), float(g),
                         float(rtol), np.ascontiguousarray(sig, dtype=np.float64), bool(normal))
 
@@ -404,4 +467,4 @@ def lm_fit(p, z, cov, code, g: float, rtol: float, sig, max_iter: int, chi2_tol:
                    np.ascontiguousarray(sig, dtype=np.float64), int(max_iter), float(chi2_tol))
 
 
-__all__ = ["ADDITIVE", "SCALE", "evaluate_batch", "lm_fit", "lopo_system"]
+__all__ = ["ADDITIVE", "SCALE", "evaluate_batch", "lm_fit", "lopo_step"]

@@ -567,28 +567,45 @@ def _fit_numpy(data: PoseData, effects, p, max_iter: int):
 
 
 def _lopo_system(data: PoseData, effects):
-    """``(P, normal) ↦ (r, cost, d, H, grad)``: the residuals of the stack ``P`` (row ``i``
-    leaves out pose ``i``), the reduced χ², and if ``normal`` the column scales and the
-    scaled normal equations of each row (compiled, or in numpy)."""
+    """``(P, normal) ↦ (r, cost, step, pred)``: the residuals of the stack ``P`` (row ``i``
+    leaves out pose ``i``), the reduced χ², and if ``normal`` each row's Gauss–Newton step
+    (in parameter units) and the χ² decrease it predicts (compiled, or in numpy)."""
     sig = data.sigma
     K, cov, codes = _kernel_inputs(data, effects)
     if K is not None:
-        return lambda P, normal: K.lopo_system(P, data.z, *codes, data.g, NEWTON_RTOL, sig, normal)
+        def system(P, normal):
+            r, cost, step, pred, d, H, grad, solved = K.lopo_step(P, data.z, *codes, data.g, NEWTON_RTOL, sig, normal)
+            if normal and not solved:
+                step, pred = _pinv_step(H, grad, d)
+            return r, cost, step, pred
+
+        return system
     keep = 1.0 - np.eye(len(data))
 
     def system(P, normal):
         r, J, _ = _evaluate_batch_numpy(P, data, effects, normal, cov)
         rw = r / sig * keep
         if not normal:
-            return r, np.sum(rw * rw, axis=1), None, None, None
+            return r, np.sum(rw * rw, axis=1), None, None
         Jw = J / sig[None, :, None] * keep[:, :, None]
         d = np.sqrt(np.sum(Jw * Jw, axis=1))
         d[d == 0] = 1.0
         Js = Jw / d[:, None, :]
         JsT = Js.transpose(0, 2, 1)
-        return r, np.sum(rw * rw, axis=1), d, JsT @ Js, (JsT @ rw[:, :, None])[:, :, 0]
+        H, grad = JsT @ Js, (JsT @ rw[:, :, None])[:, :, 0]
+        try:
+            step = -np.linalg.solve(H, grad[..., None])[..., 0]
+        except np.linalg.LinAlgError:
+            return (r, np.sum(rw * rw, axis=1), *_pinv_step(H, grad, d))
+        return r, np.sum(rw * rw, axis=1), step / d, -np.sum(grad * step, axis=1)
 
     return system
+
+
+def _pinv_step(H, grad, d):
+    """Gauss–Newton steps by the pseudo-inverse of every row (some ``H`` is singular)."""
+    step = -(np.linalg.pinv(H) @ grad[:, :, None])[:, :, 0]
+    return step / d, -np.sum(grad * step, axis=1)
 
 
 def lopo(f: Fit, data: PoseData, max_iter: int = MAX_ITER_LOPO) -> np.ndarray:
@@ -613,7 +630,7 @@ def lopo(f: Fit, data: PoseData, max_iter: int = MAX_ITER_LOPO) -> np.ndarray:
     redo = np.zeros(n, bool)
     for it in range(max_iter + 1):
         last = it == max_iter or (it and not np.nanmax(pred) > CHI2_TOL)
-        r, cost, d, H, grad = system(P, not last)  # the last one only needs r and cost
+        r, cost, step, pred_new = system(P, not last)  # the last one only needs r and cost
         if start is None:
             start = cost
         if it and not np.nanmax(pred) > CHI2_TOL:
@@ -621,13 +638,8 @@ def lopo(f: Fit, data: PoseData, max_iter: int = MAX_ITER_LOPO) -> np.ndarray:
         if it == max_iter:
             redo |= ~(pred <= CHI2_TOL)
             break
-        try:
-            step = -np.linalg.solve(H, grad[..., None])[..., 0]
-        except np.linalg.LinAlgError:
-            step = -(np.linalg.pinv(H) @ grad[:, :, None])[:, :, 0]
-        pred = -np.sum(grad * step, axis=1)
-        pred = np.where(np.isfinite(pred), pred, np.inf)
-        P = P + step / d
+        pred = np.where(np.isfinite(pred_new), pred_new, np.inf)
+        P = P + step
     redo |= ~np.isfinite(cost) | (cost > start * (1 + 1e-12) + CHI2_TOL)
     out[:] = r[np.arange(n), np.arange(n)] / sig
     for i in np.flatnonzero(redo):
