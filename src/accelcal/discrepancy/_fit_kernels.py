@@ -195,23 +195,6 @@ def _jacobian(J, x, y, norm, dP, As, dMs, cov, code):
                         J[b, i, o + j] = -v[j] * x[b, i, j] ** code[e]
 
 
-def _dot(a, b):
-    """``a · b`` with four running sums (one sum would wait on the latency of each addition)."""
-    n = a.shape[0]
-    s0 = s1 = s2 = s3 = 0.0
-    i = 0
-    while i + 4 <= n:
-        s0 += a[i] * b[i]
-        s1 += a[i + 1] * b[i + 1]
-        s2 += a[i + 2] * b[i + 2]
-        s3 += a[i + 3] * b[i + 3]
-        i += 4
-    while i < n:
-        s0 += a[i] * b[i]
-        i += 1
-    return (s0 + s1) + (s2 + s3)
-
-
 def _lopo_system(P, z, cov, code, g, rtol, sig, normal):
     """One Gauss–Newton system per leave-one-pose-out refit (row ``b`` of ``P`` leaves out
     pose ``b``): residuals ``r`` (B, n), the reduced χ² ``cost`` (B,), and if ``normal``
@@ -250,10 +233,8 @@ def _lopo_system(P, z, cov, code, g, rtol, sig, normal):
             d[b, j] = np.sqrt(acc) if acc != 0 else 1.0
             for i in range(n):
                 Js[j, i] /= d[b, j]
-        for j in range(q):
-            grad[b, j] = _dot(Js[j], rw)
-            for m in range(j, q):
-                H[b, j, m] = H[b, m, j] = _dot(Js[j], Js[m])
+        H[b] = np.dot(Js, Js.T)  # BLAS, as numpy's matmul of the reference
+        grad[b] = np.dot(Js, rw)
     return r, cost, d, H, grad
 
 
@@ -432,7 +413,6 @@ _model = jit(_model)
 _newton = jit(_newton)
 _jacobian = jit(_jacobian)
 _evaluate_batch = jit(_evaluate_batch)
-_dot = jit(_dot)
 _lopo_system = jit(_lopo_system)
 _lu_solve = jit(_lu_solve)
 _lopo_step = jit(_lopo_step)
