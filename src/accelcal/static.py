@@ -458,7 +458,7 @@ def _geyer(acov: np.ndarray, n: int) -> np.ndarray:
     """Geyer's τ (c,) from the leading autocovariances (c, K) of columns of ``n`` samples
     (:func:`_leading_autocovariances`), as :func:`_integrated_autocorr_time` sums them; NaN
     where all ``K/2`` pairs are positive and the full sequence is longer."""
-    c, K = acov.shape
+    K = acov.shape[1]
     with np.errstate(invalid="ignore", divide="ignore"):
         rho = acov / acov[:, :1]
     pairs = rho[:, 0::2] + rho[:, 1::2]

@@ -144,7 +144,7 @@ def _newton(x, y, c1, c2, c3, dP, ok, g, rtol):
                     s = f / d if d > 0 else np.nan
                     step[b, i, j] = s
                     x[b, i, j] = xx - s
-                    if abs(s) > big:  # NaN never compares greater: nanmax
+                    if abs(s) > big:  # noqa: PLR1730 (NaN never compares greater: nanmax)
                         big = abs(s)
         if not big > tol:
             converged = True

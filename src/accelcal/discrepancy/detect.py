@@ -166,10 +166,6 @@ def critical_noncentrality(k: int, dof: int, level: float, power: float) -> floa
     return float(optimize.brentq(f, 0.0, hi, xtol=1e-10, rtol=1e-12))
 
 
-#: Orthonormal basis of a column space and its rank (kept under its old name).
-_orth = orthonormal_basis
-
-
 def _f_sf(stat: float, dfn: int, dfd: int) -> float:
     """``stats.f.sf(stat, dfn, dfd)`` for ``stat >= 0`` without scipy.stats' argument handling
     (its ``_sf`` is this special function; the loop calls it for every candidate)."""
@@ -269,7 +265,7 @@ def identifiability(data: PoseData, base: Fit, eid: str, rules: Rules, n_tests: 
         reasons.append(f"{n} poses leave {dof} residual degrees of freedom for {q} + 3 parameters")
     J1 = effect_columns(base.p, data, base.effects, eid) / data.sigma[:, None]
     U0, _ = base.column_basis
-    U1, rank1 = _orth(J1)
+    U1, rank1 = orthonormal_basis(J1)
     rho = np.linalg.svd(U0.T @ U1, compute_uv=False) if rank1 else np.zeros(0)
     absorbed = 1.0 if rank1 < 3 else float(min(1.0, rho.max() ** 2))
     proj = U0 @ (U0.T @ J1)

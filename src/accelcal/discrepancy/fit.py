@@ -29,6 +29,12 @@ leave-one-pose-out refits (one per pose, per model, per round) are warm-started 
 full-data optimum and take 1–3 iterations.  Convergence is tested in χ² units (the
 residuals are in units of their noise), hence independent of the data unit: stop when
 the Gauss–Newton step predicts a χ² decrease below ``CHI2_TOL``.
+
+With numba (:mod:`accelcal.kernels`) the model, the Levenberg–Marquardt loop and the
+leave-one-pose-out systems run compiled (:mod:`accelcal.discrepancy._fit_kernels`, loaded
+at the first fit: a recording's loop fits hundreds of models); the numpy code here is
+their reference.  Both give the same fits to rounding, which the stopping rule can turn
+into an iteration more or less: residuals then differ by up to ~1e-5 noise units.
 """
 
 from __future__ import annotations
@@ -51,7 +57,7 @@ MAX_ITER_LOPO = 50
 #: Relative tolerance of the per-axis Newton solve of ``P(x) = y``.
 NEWTON_RTOL = 1e-14
 N_BASE = 9
-#: The compiled kernel of :func:`evaluate_batch` (:mod:`accelcal.kernels`).
+#: The compiled kernels of :func:`evaluate_batch`, :func:`fit` and :func:`lopo` (:mod:`accelcal.kernels`).
 _KERNELS = "discrepancy._fit_kernels"
 
 
@@ -506,7 +512,6 @@ def fit(data: PoseData, effects=(), p0=None, max_iter: int = MAX_ITER) -> Fit:
     for e in effects:
         effect(e)
     p = _start(data, effects, p0)
-    sig = data.sigma
     K, _, codes = _kernel_inputs(data, effects)
     if K is None:
         p, r, J, x, it, status = _fit_numpy(data, effects, p, max_iter)
@@ -628,12 +633,13 @@ def lopo(f: Fit, data: PoseData, max_iter: int = MAX_ITER_LOPO) -> np.ndarray:
     P = np.tile(f.p, (n, 1))
     start = None
     redo = np.zeros(n, bool)
+    pred = np.full(n, np.inf)  # no step yet
     for it in range(max_iter + 1):
-        last = it == max_iter or (it and not np.nanmax(pred) > CHI2_TOL)
-        r, cost, step, pred_new = system(P, not last)  # the last one only needs r and cost
+        done = it > 0 and not np.nanmax(pred) > CHI2_TOL
+        r, cost, step, pred_new = system(P, not (done or it == max_iter))  # the last only needs r, cost
         if start is None:
             start = cost
-        if it and not np.nanmax(pred) > CHI2_TOL:
+        if done:
             break
         if it == max_iter:
             redo |= ~(pred <= CHI2_TOL)
