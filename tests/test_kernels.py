@@ -397,3 +397,61 @@ def test_auto_loads_numba_for_batches_and_filters_not_for_one_problem():
     env = {k: v for k, v in os.environ.items() if k != "ACCELCAL_KERNELS"}
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
     assert out.stdout.split() == ["auto", "False", "True", "True"]
+
+
+# ----------------------------------------------------------------------------- discrepancy fits
+def _pose_set(seed, n=30):
+    """Raw-count pose means (415 counts per m/s², offset 32768) with a quadratic term, time and
+    temperature: the benchmark's kind of problem."""
+    from accelcal.discrepancy.fit import forward, pose_data
+
+    rng = np.random.default_rng(seed)
+    tr = sample_truth(rng, 1)
+    M, bias = 415.0 * tr["M"][0], 32768.0 + 300 * rng.standard_normal(3)
+    t = np.sort(rng.uniform(0, 250, n))
+    temp = 25 + 5 * np.sin(t / 40)
+    z = forward(G * random_directions(rng, n), M, bias, {"quadratic": 2e-4 * rng.standard_normal(3)})
+    se = np.full((n, 3), 0.14)
+    return pose_data(z + se * rng.standard_normal((n, 3)), G, se, t, temp)
+
+
+@pytest.mark.parametrize("effects", [(), ("quadratic",), ("cubic",), ("bias_drift",), ("temperature",),
+                                     ("temperature_scale",), ("quadratic", "temperature", "bias_drift")])
+def test_discrepancy_fits_agree(effects):
+    """The extended model, its Levenberg–Marquardt fit and the leave-one-pose-out refits: the
+    compiled kernels against the numpy reference (NaN rows where the model cannot be inverted)."""
+    from accelcal.discrepancy.fit import evaluate_batch, fit, lopo, n_parameters
+
+    rng = np.random.default_rng(len(effects))
+    for seed in range(4):
+        data = _pose_set(seed)
+        base = fit(data)
+        P = np.tile(np.concatenate([base.p, np.zeros(n_parameters(effects) - 9)]), (6, 1))
+        P[:, 3:] += 1e-3 * rng.standard_normal((6, P.shape[1] - 3)) * (P[:, 3:] != 0)
+        P[:, 9:] += 1e-5 * rng.standard_normal((6, P.shape[1] - 9))
+        P[2, 7:9] = [1.2, 1.0]  # angles that make M invalid
+        (ra, Ja, xa), (rb, Jb, xb) = both(evaluate_batch, P, data, effects)
+        np.testing.assert_array_equal(np.isnan(ra), np.isnan(rb))
+        ok = ~np.isnan(rb[:, 0])
+        np.testing.assert_allclose(ra[ok], rb[ok], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(Ja[ok], Jb[ok], rtol=1e-10, atol=1e-12 * np.abs(Jb[ok]).max())
+        np.testing.assert_allclose(xa[ok], xb[ok], rtol=1e-12)
+        # the fits stop once a step predicts a χ² decrease below 1e-10: rounding can move that
+        # stop by an iteration, i.e. the residuals by up to ~1e-5 noise units
+        fa, fb = both(fit, data, effects, p0=base.p)
+        np.testing.assert_allclose(fa.chi2, fb.chi2, rtol=1e-9)
+        np.testing.assert_allclose(fa.residuals / fa.sigma, fb.residuals / fb.sigma, rtol=0, atol=1e-4)
+        la, lb = both(lopo, fb, data)
+        np.testing.assert_allclose(la, lb, rtol=0, atol=1e-4)
+
+
+def test_discrepancy_white_loop_agrees():
+    from accelcal.discrepancy.detect import Rules, discrepancy
+
+    rules = Rules(null="white")
+    for seed in range(3):
+        a, b = both(discrepancy, _pose_set(seed), rules)
+        assert a.outcome == b.outcome and a.effects == b.effects
+        for ca, cb in zip(a.candidates, b.candidates):
+            assert (ca.effect, ca.identifiable, ca.passed, ca.named) == (cb.effect, cb.identifiable, cb.passed, cb.named)
+            np.testing.assert_allclose(ca.p_value, cb.p_value, rtol=1e-7)

@@ -133,7 +133,8 @@ def load() -> None:
 
 
 #: Every kernel module (relative to the accelcal package).
-KERNEL_MODULES = ("_lls_kernels", "batista._filter_kernels", "tereshkov._estimator_kernels", "discrepancy._fast")
+KERNEL_MODULES = ("_lls_kernels", "batista._filter_kernels", "tereshkov._estimator_kernels", "discrepancy._fast",
+                  "discrepancy._fit_kernels")
 
 
 def jit(*args, **options):

@@ -100,16 +100,18 @@ def simulate_recording(rng: np.random.Generator, directions, g: float, M, bias, 
     given as ``(start, end)`` °C, a linearly drifting ``temp`` column.
     """
     u = np.asarray(directions, dtype=float)
+    n_move = int(round(move_s * rate))
+    w = np.linspace(0, 1, n_move, endpoint=False)[:, None]
+    # all motions at once: one draw of every shake (the same numbers, in the same order, as
+    # one draw per motion) and the great circles of every pair of consecutive poses
+    shake = 0.5 * g * np.sin(np.pi * w) * rng.standard_normal((max(len(u) - 1, 0), n_move, 3))
+    moves = g * _slerp(u[:-1], u[1:], w) + shake
     chunks = []
     for i, ui in enumerate(u):
         n_rest = int(round((init_rest_s if i == 0 else rest_s) * rate))
         chunks.append(np.repeat(g * ui[None, :], n_rest, axis=0))
         if i + 1 < len(u):
-            n_move = int(round(move_s * rate))
-            w = np.linspace(0, 1, n_move, endpoint=False)[:, None]
-            path = _slerp(ui, u[i + 1], w)
-            shake = 0.5 * g * np.sin(np.pi * w) * rng.standard_normal((n_move, 3))
-            chunks.append(g * path + shake)
+            chunks.append(moves[i])
     x = np.concatenate(chunks)
     acc = apply_model(x, M, bias) + noise_std * rng.standard_normal(x.shape)
     t = np.arange(len(x)) / rate
@@ -120,21 +122,22 @@ def simulate_recording(rng: np.random.Generator, directions, g: float, M, bias, 
 
 
 def _slerp(a: np.ndarray, b: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """Great-circle path from unit vector ``a`` to ``b`` at fractions ``w`` (m, 1).
+    """Great-circle paths from unit vectors ``a`` to ``b`` (k, 3) at fractions ``w`` (m, 1):
+    shape (k, m, 3).
 
     Antipodal ends have no unique great circle: the path then passes through a
     direction perpendicular to ``a``.
     """
-    a = a / np.linalg.norm(a)
-    b = b / np.linalg.norm(b)
-    angle = np.arccos(np.clip(a @ b, -1.0, 1.0))
-    if angle < 1e-9:
-        return np.repeat(a[None, :], len(w), axis=0)
-    if np.pi - angle < 1e-6:
-        perp = np.cross(a, [1.0, 0, 0] if abs(a[0]) < 0.9 else [0, 1.0, 0])
-        perp /= np.linalg.norm(perp)
-    else:
-        perp = b - (a @ b) * a
-        perp /= np.linalg.norm(perp)
-    phi = angle * w
-    return np.cos(phi) * a + np.sin(phi) * perp
+    a = a / np.linalg.norm(a, axis=1, keepdims=True)
+    b = b / np.linalg.norm(b, axis=1, keepdims=True)
+    ab = np.sum(a * b, axis=1)
+    angle = np.arccos(np.clip(ab, -1.0, 1.0))
+    ref = np.where((np.abs(a[:, 0]) < 0.9)[:, None], [1.0, 0, 0], [0, 1.0, 0])
+    perp = np.where((np.pi - angle < 1e-6)[:, None], np.cross(a, ref), b - ab[:, None] * a)
+    with np.errstate(invalid="ignore", divide="ignore"):  # equal ends: perp = 0, path replaced below
+        perp /= np.linalg.norm(perp, axis=1, keepdims=True)
+    phi = angle[:, None, None] * w[None]
+    path = np.cos(phi) * a[:, None, :] + np.sin(phi) * perp[:, None, :]
+    same = angle < 1e-9
+    path[same] = a[same][:, None, :]
+    return path

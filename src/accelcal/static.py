@@ -406,14 +406,74 @@ def _integrated_autocorr_time(x: np.ndarray) -> np.ndarray:
     return np.minimum(tau, n)
 
 
+#: Lags whose autocovariances :func:`_segment_statistics` sums directly (Geyer's sequence of a
+#: rest of white noise ends within the first few pairs; longer ones take the FFT route).
+DIRECT_LAGS = 16
+
+
+def _segment_statistics(segs) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Mean, standard deviation (ddof 1) and :func:`_integrated_autocorr_time` of each segment
+    (each (k, 3)), all segments of one length at once.
+
+    The autocovariances of the first :data:`DIRECT_LAGS` lags are summed directly, pair of
+    lags by pair and only as long as Geyer's sequence of a column goes on (it ends within
+    two or three pairs on most rests), instead of two FFTs per pose; a column whose
+    sequence runs past them is done by the FFT route.  Same estimator; the
+    autocovariances agree to rounding.
+    """
+    means, std, tau = (np.empty((len(segs), 3)) for _ in range(3))
+    groups: dict[int, list[int]] = {}
+    for i, s in enumerate(segs):
+        groups.setdefault(len(s), []).append(i)
+    for n, idx in groups.items():
+        X = np.stack([segs[i] for i in idx])
+        means[idx] = X.mean(axis=1)
+        std[idx] = X.std(axis=1, ddof=1)
+        C = (X - X.mean(axis=1, keepdims=True)).transpose(0, 2, 1).reshape(-1, n)  # one row per column
+        tau[idx] = _geyer(_leading_autocovariances(C, min(DIRECT_LAGS, 2 * (n // 2))), n).reshape(-1, 3)
+        for i in np.asarray(idx)[np.isnan(tau[idx]).any(axis=1)]:  # sequence longer than the direct lags
+            tau[i] = _integrated_autocorr_time(segs[i])
+    return means, std, tau
+
+
+def _leading_autocovariances(C: np.ndarray, K: int) -> np.ndarray:
+    """``Σ_t C[c, t] C[c, t + k]`` for lags ``k < K`` (``K`` even), (c, K); a row is left NaN
+    from the pair of lags after its first non-positive autocorrelation pair (Geyer stops there)."""
+    c, n = C.shape
+    acov = np.full((c, K), np.nan)
+    rows, Ca = np.arange(c), C
+    for k in range(0, K, 2):
+        for lag in (k, k + 1):
+            acov[rows, lag] = np.einsum("ct,ct->c", Ca[:, :n - lag], Ca[:, lag:])
+        a0 = acov[rows, 0]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            go = (a0 > 0) & (acov[rows, k] / a0 + acov[rows, k + 1] / a0 > 0)
+        rows, Ca = rows[go], Ca[go]
+        if not rows.size:
+            break
+    return acov
+
+
+def _geyer(acov: np.ndarray, n: int) -> np.ndarray:
+    """Geyer's τ (c,) from the leading autocovariances (c, K) of columns of ``n`` samples
+    (:func:`_leading_autocovariances`), as :func:`_integrated_autocorr_time` sums them; NaN
+    where all ``K/2`` pairs are positive and the full sequence is longer."""
+    K = acov.shape[1]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        rho = acov / acov[:, :1]
+    pairs = rho[:, 0::2] + rho[:, 1::2]
+    nonpos = pairs <= 0  # NaN (not computed: after the end) is not
+    end = np.where(nonpos.any(axis=1), np.argmax(nonpos, axis=1), K // 2)  # pairs summed: [0, end)
+    total = np.sum(np.where(np.arange(K // 2)[None, :] < end[:, None], pairs, 0.0), axis=1)
+    tau = np.maximum(1.0, 2.0 * total - 1.0)
+    tau[(end == K // 2) & (K < 2 * (n // 2))] = np.nan
+    tau[~(acov[:, 0] > 0)] = 1.0
+    return np.minimum(tau, n)
+
+
 def _pose_statistics(t, acc, temp, spans, init, reference="initial_rest", note="") -> StaticPoses:
-    k = len(spans)
-    means, noise_std, mean_std = np.empty((k, 3)), np.empty((k, 3)), np.empty((k, 3))
-    for i, (a, b) in enumerate(spans):
-        seg = acc[a:b]
-        means[i] = seg.mean(axis=0)
-        noise_std[i] = seg.std(axis=0, ddof=1)
-        mean_std[i] = noise_std[i] * np.sqrt(_integrated_autocorr_time(seg) / (b - a))
+    means, noise_std, tau = _segment_statistics([acc[a:b] for a, b in spans])
+    mean_std = noise_std * np.sqrt(tau / (spans[:, 1] - spans[:, 0])[:, None])
     t_start, t_end = t[spans[:, 0]], t[spans[:, 1] - 1]
     ptemp = None if temp is None else np.array([temp[a:b].mean() for a, b in spans])
     return StaticPoses(means=means, t_start=t_start, t_end=t_end, t_mid=0.5 * (t_start + t_end),

@@ -64,15 +64,15 @@ leave-one-pose-out gap ``sqrt(PRESS/n)`` is reported next to it.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from functools import lru_cache
 
 import numpy as np
-from scipy import optimize, stats
+from scipy import optimize, special, stats
 
 from ..errors import AccelcalError
 from .effects import EFFECT_IDS, EFFECTS, TEMPERATURE, effect
-from .fit import Fit, PoseData, effect_columns, fit, lopo, parameter_names
+from .fit import Fit, PoseData, effect_columns, fit, lopo, orthonormal_basis, parameter_names
 
 CORRECTIONS = ("holm", "bonferroni", "none")
 #: The noise models of the null hypothesis: ``colored`` (white per-pose noise + a bias wander
@@ -166,13 +166,10 @@ def critical_noncentrality(k: int, dof: int, level: float, power: float) -> floa
     return float(optimize.brentq(f, 0.0, hi, xtol=1e-10, rtol=1e-12))
 
 
-def _orth(J: np.ndarray) -> tuple[np.ndarray, int]:
-    """Orthonormal basis of the column space of ``J`` and its numerical rank."""
-    U, s, _ = np.linalg.svd(J, full_matrices=False)
-    if s.size == 0 or s[0] == 0:
-        return U[:, :0], 0
-    rank = int(np.sum(s > max(J.shape) * np.finfo(float).eps * s[0]))
-    return U[:, :rank], rank
+def _f_sf(stat: float, dfn: int, dfd: int) -> float:
+    """``stats.f.sf(stat, dfn, dfd)`` for ``stat >= 0`` without scipy.stats' argument handling
+    (its ``_sf`` is this special function; the loop calls it for every candidate)."""
+    return float(special.fdtrc(dfn, dfd, stat)) if dfd > 0 else float("nan")
 
 
 def holm(p_values, correction: str = "holm") -> np.ndarray:
@@ -266,10 +263,9 @@ def identifiability(data: PoseData, base: Fit, eid: str, rules: Rules, n_tests: 
             reasons.append(f"temperature varies by {rng:.3g} degC over the poses (< {rules.min_temp_range:g})")
     if dof < 1:
         reasons.append(f"{n} poses leave {dof} residual degrees of freedom for {q} + 3 parameters")
-    J0 = base.J
     J1 = effect_columns(base.p, data, base.effects, eid) / data.sigma[:, None]
-    U0, _ = _orth(J0)
-    U1, rank1 = _orth(J1)
+    U0, _ = base.column_basis
+    U1, rank1 = orthonormal_basis(J1)
     rho = np.linalg.svd(U0.T @ U1, compute_uv=False) if rank1 else np.zeros(0)
     absorbed = 1.0 if rank1 < 3 else float(min(1.0, rho.max() ** 2))
     proj = U0 @ (U0.T @ J1)
@@ -526,7 +522,7 @@ def _test_candidate(data: PoseData, current: Fit, lopo_cur: np.ndarray, ident: I
     chi0, chi1 = current.chi2, aug.chi2
     stat = ((chi0 - chi1) / 3) / (chi1 / dof1) if chi1 > 0 else float("inf")
     stat = max(stat, 0.0)
-    p = float(stats.f.sf(stat, 3, dof1))
+    p = _f_sf(stat, 3, dof1)
     dbic = float(n * np.log(chi1 / chi0) + 3 * np.log(n)) if chi0 > 0 and chi1 > 0 else float("nan")
     lo = lopo(aug, data)
     both = np.isfinite(lo) & np.isfinite(lopo_cur)
@@ -585,13 +581,11 @@ def discrepancy(data: PoseData, rules: Rules | None = None) -> DiscrepancyResult
         round_rows = []
         for (c, aug, lo), pa in zip(tested, padj):
             ok = bool(np.isfinite(pa) and pa <= rules.alpha)
-            round_rows.append((Candidate(**{**asdict(c), "reasons": c.reasons, "p_adjusted": float(pa),
-                                            "passed_test": ok}), aug, lo))
+            round_rows.append((replace(c, p_adjusted=float(pa), passed_test=ok), aug, lo))
         passing = [t for t in round_rows if t[0].passed]
         if passing:
             best = min(passing, key=lambda t: (t[0].p_value, t[0].delta_bic))
-            round_rows = [(Candidate(**{**asdict(c), "reasons": c.reasons, "named": c is best[0]}), a, lo)
-                          for c, a, lo in round_rows]
+            round_rows = [(replace(c, named=c is best[0]), a, lo) for c, a, lo in round_rows]
         rows += [c for c, _, _ in round_rows]
         if not passing:
             break

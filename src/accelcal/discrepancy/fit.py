@@ -29,14 +29,22 @@ leave-one-pose-out refits (one per pose, per model, per round) are warm-started 
 full-data optimum and take 1–3 iterations.  Convergence is tested in χ² units (the
 residuals are in units of their noise), hence independent of the data unit: stop when
 the Gauss–Newton step predicts a χ² decrease below ``CHI2_TOL``.
+
+With numba (:mod:`accelcal.kernels`) the model, the Levenberg–Marquardt loop and the
+leave-one-pose-out systems run compiled (:mod:`accelcal.discrepancy._fit_kernels`, loaded
+at the first fit: a recording's loop fits hundreds of models); the numpy code here is
+their reference.  Both give the same fits to rounding, which the stopping rule can turn
+into an iteration more or less: residuals then differ by up to ~1e-5 noise units.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
+from .. import kernels
 from ..errors import AccelcalError, NotConvergedError
 from ..model import m_from_params, params_from_m
 from .effects import EFFECTS, TEMPERATURE, TIME, effect
@@ -49,6 +57,8 @@ MAX_ITER_LOPO = 50
 #: Relative tolerance of the per-axis Newton solve of ``P(x) = y``.
 NEWTON_RTOL = 1e-14
 N_BASE = 9
+#: The compiled kernels of :func:`evaluate_batch`, :func:`fit` and :func:`lopo` (:mod:`accelcal.kernels`).
+_KERNELS = "discrepancy._fit_kernels"
 
 
 @dataclass(frozen=True)
@@ -221,9 +231,40 @@ def evaluate_batch(P, data: PoseData, effects, jacobian: bool = True):
         The true specific force each pose implies (unit of g).
     """
     P = np.atleast_2d(np.asarray(P, float))
+    K, cov, codes = _kernel_inputs(data, effects)
+    if K is not None:
+        return K.evaluate_batch(P, data.z, *codes, data.g, jacobian, NEWTON_RTOL)
+    return _evaluate_batch_numpy(P, data, effects, jacobian, cov)
+
+
+def _kernel_inputs(data: PoseData, effects):
+    """``(K, cov, codes)``: the compiled kernel module (None: numpy runs; also when an effect's
+    covariate is missing, so that both paths fail alike), the covariates, and the effects as
+    the kernel takes them (:func:`_effect_codes`)."""
+    cov = {TIME: data.covariate(TIME), TEMPERATURE: data.covariate(TEMPERATURE)}
+    K = kernels.compiled(_KERNELS)
+    if K is None or any(EFFECTS[e].covariate is not None and cov[EFFECTS[e].covariate] is None for e in effects):
+        return None, cov, None
+    return K, cov, _effect_codes(data, effects, cov)
+
+
+def _effect_codes(data: PoseData, effects, cov: dict) -> tuple[np.ndarray, np.ndarray]:
+    """The effects as the compiled kernel takes them: centred covariate per pose (k, n), zeros
+    for the polynomial terms, and kind codes (0 additive, 1 scale, 2 or 3 the power)."""
+    cols = np.zeros((len(effects), len(data)))
+    codes = np.empty(len(effects), np.int64)
+    for i, eid in enumerate(effects):
+        e = EFFECTS[eid]
+        codes[i] = 0 if e.kind == "additive" else e.power
+        if e.kind == "additive" or e.power == 1:
+            cols[i] = cov[e.covariate]
+    return cols, codes
+
+
+def _evaluate_batch_numpy(P, data: PoseData, effects, jacobian: bool, cov: dict):
+    """:func:`evaluate_batch` in numpy (the reference of the compiled kernel)."""
     Bn = P.shape[0]
     n = len(data)
-    cov = {TIME: data.covariate(TIME), TEMPERATURE: data.covariate(TEMPERATURE)}
     M, dM, ok = _m_and_derivatives(P[:, 3:6], P[:, 6:9])
     A = np.linalg.inv(np.where(ok[:, None, None], M, np.eye(3)))
     add = np.zeros((Bn, n, 3))
@@ -354,6 +395,15 @@ def effect_columns(p, data: PoseData, base_effects, new_effect: str) -> np.ndarr
     return J[:, -3:]
 
 
+def orthonormal_basis(J: np.ndarray) -> tuple[np.ndarray, int]:
+    """Orthonormal basis of the column space of ``J`` and its numerical rank."""
+    U, s, _ = np.linalg.svd(J, full_matrices=False)
+    if s.size == 0 or s[0] == 0:
+        return U[:, :0], 0
+    rank = int(np.sum(s > max(J.shape) * np.finfo(float).eps * s[0]))
+    return U[:, :rank], rank
+
+
 # --------------------------------------------------------------------------- fits
 
 
@@ -404,9 +454,20 @@ class Fit:
         i = self.effects.index(effect_id)
         return self.p[N_BASE + 3 * i: N_BASE + 3 * i + 3]
 
+    @cached_property
+    def _information_inverse(self) -> np.ndarray:
+        # computed once: the reports ask for the scaled and the unscaled standard errors
+        return np.linalg.pinv(self.J.T @ self.J)
+
+    @cached_property
+    def column_basis(self) -> tuple[np.ndarray, int]:
+        """Orthonormal basis of the column space of ``J`` and its numerical rank
+        (:func:`orthonormal_basis`; computed once, every candidate of a round projects on it)."""
+        return orthonormal_basis(self.J)
+
     def covariance(self, scaled: bool = True) -> np.ndarray:
         """``(JᵀJ)⁻¹``, times ``χ²/dof`` if ``scaled`` (the residual scatter, as the F-test uses)."""
-        cov = np.linalg.pinv(self.J.T @ self.J)
+        cov = self._information_inverse
         if scaled:
             cov = cov * (self.chi2 / self.dof if self.dof > 0 else np.nan)
         return cov
@@ -451,6 +512,22 @@ def fit(data: PoseData, effects=(), p0=None, max_iter: int = MAX_ITER) -> Fit:
     for e in effects:
         effect(e)
     p = _start(data, effects, p0)
+    K, _, codes = _kernel_inputs(data, effects)
+    if K is None:
+        p, r, J, x, it, status = _fit_numpy(data, effects, p, max_iter)
+    else:
+        p, r, J, x, it, status = K.lm_fit(p, data.z, *codes, data.g, NEWTON_RTOL, data.sigma, max_iter, CHI2_TOL)
+    if status == 0:
+        return Fit(effects, p, r, data.sigma, J, it, x)
+    if status == 1:
+        raise NotConvergedError(f"model {'+'.join(('base',) + effects)}: start point not invertible")
+    raise NotConvergedError(f"model {'+'.join(('base',) + effects)} did not converge in {max_iter} iterations")
+
+
+def _fit_numpy(data: PoseData, effects, p, max_iter: int):
+    """Levenberg–Marquardt of :func:`fit` in numpy (the reference of the compiled kernel):
+    ``(p, r, J / σ, x, iterations, status)``, status 0 converged, 1 start not invertible,
+    2 not converged."""
     sig = data.sigma
 
     def fun(pp):
@@ -461,7 +538,7 @@ def fit(data: PoseData, effects=(), p0=None, max_iter: int = MAX_ITER) -> Fit:
 
     out = fun(p)
     if out is None:
-        raise NotConvergedError(f"model {'+'.join(('base',) + effects)}: start point not invertible")
+        return p, None, None, None, 0, 1
     r, J, x = out
     cost = float(np.sum((r / sig) ** 2))
     lam = 1e-6
@@ -484,14 +561,56 @@ def fit(data: PoseData, effects=(), p0=None, max_iter: int = MAX_ITER) -> Fit:
             cost = cost_new
             lam = max(lam / 10, 1e-12)
             if pred <= CHI2_TOL and decrease <= CHI2_TOL:
-                return Fit(effects, p, r, sig, J, it, x)
+                return p, r, J, x, it, 0
         else:
             if pred <= CHI2_TOL:  # at the optimum: no step can lower χ² measurably
-                return Fit(effects, p, r, sig, J, it, x)
+                return p, r, J, x, it, 0
             lam *= 10
             if lam > 1e12:
                 break
-    raise NotConvergedError(f"model {'+'.join(('base',) + effects)} did not converge in {max_iter} iterations")
+    return p, r, J, x, max_iter, 2
+
+
+def _lopo_system(data: PoseData, effects):
+    """``(P, normal) ↦ (r, cost, step, pred)``: the residuals of the stack ``P`` (row ``i``
+    leaves out pose ``i``), the reduced χ², and if ``normal`` each row's Gauss–Newton step
+    (in parameter units) and the χ² decrease it predicts (compiled, or in numpy)."""
+    sig = data.sigma
+    K, cov, codes = _kernel_inputs(data, effects)
+    if K is not None:
+        def system(P, normal):
+            r, cost, step, pred, d, H, grad, solved = K.lopo_step(P, data.z, *codes, data.g, NEWTON_RTOL, sig, normal)
+            if normal and not solved:
+                step, pred = _pinv_step(H, grad, d)
+            return r, cost, step, pred
+
+        return system
+    keep = 1.0 - np.eye(len(data))
+
+    def system(P, normal):
+        r, J, _ = _evaluate_batch_numpy(P, data, effects, normal, cov)
+        rw = r / sig * keep
+        if not normal:
+            return r, np.sum(rw * rw, axis=1), None, None
+        Jw = J / sig[None, :, None] * keep[:, :, None]
+        d = np.sqrt(np.sum(Jw * Jw, axis=1))
+        d[d == 0] = 1.0
+        Js = Jw / d[:, None, :]
+        JsT = Js.transpose(0, 2, 1)
+        H, grad = JsT @ Js, (JsT @ rw[:, :, None])[:, :, 0]
+        try:
+            step = -np.linalg.solve(H, grad[..., None])[..., 0]
+        except np.linalg.LinAlgError:
+            return (r, np.sum(rw * rw, axis=1), *_pinv_step(H, grad, d))
+        return r, np.sum(rw * rw, axis=1), step / d, -np.sum(grad * step, axis=1)
+
+    return system
+
+
+def _pinv_step(H, grad, d):
+    """Gauss–Newton steps by the pseudo-inverse of every row (some ``H`` is singular)."""
+    step = -(np.linalg.pinv(H) @ grad[:, :, None])[:, :, 0]
+    return step / d, -np.sum(grad * step, axis=1)
 
 
 def lopo(f: Fit, data: PoseData, max_iter: int = MAX_ITER_LOPO) -> np.ndarray:
@@ -510,35 +629,23 @@ def lopo(f: Fit, data: PoseData, max_iter: int = MAX_ITER_LOPO) -> np.ndarray:
     if n - 1 <= q:
         return out
     sig = data.sigma
-    keep = 1.0 - np.eye(n)
+    system = _lopo_system(data, f.effects)
     P = np.tile(f.p, (n, 1))
     start = None
     redo = np.zeros(n, bool)
+    pred = np.full(n, np.inf)  # no step yet
     for it in range(max_iter + 1):
-        r, J, _ = evaluate_batch(P, data, f.effects)
-        rw = r / sig * keep
-        cost = np.sum(rw * rw, axis=1)
+        done = it > 0 and not np.nanmax(pred) > CHI2_TOL
+        r, cost, step, pred_new = system(P, not (done or it == max_iter))  # the last only needs r, cost
         if start is None:
             start = cost
-        if it and not np.nanmax(pred) > CHI2_TOL:
+        if done:
             break
         if it == max_iter:
             redo |= ~(pred <= CHI2_TOL)
             break
-        Jw = J / sig[None, :, None] * keep[:, :, None]
-        d = np.sqrt(np.sum(Jw * Jw, axis=1))
-        d[d == 0] = 1.0
-        Js = Jw / d[:, None, :]
-        JsT = Js.transpose(0, 2, 1)
-        H = JsT @ Js
-        grad = (JsT @ rw[:, :, None])[:, :, 0]
-        try:
-            step = -np.linalg.solve(H, grad[..., None])[..., 0]
-        except np.linalg.LinAlgError:
-            step = -(np.linalg.pinv(H) @ grad[:, :, None])[:, :, 0]
-        pred = -np.sum(grad * step, axis=1)
-        pred = np.where(np.isfinite(pred), pred, np.inf)
-        P = P + step / d
+        pred = np.where(np.isfinite(pred_new), pred_new, np.inf)
+        P = P + step
     redo |= ~np.isfinite(cost) | (cost > start * (1 + 1e-12) + CHI2_TOL)
     out[:] = r[np.arange(n), np.arange(n)] / sig
     for i in np.flatnonzero(redo):
@@ -553,5 +660,5 @@ def lopo(f: Fit, data: PoseData, max_iter: int = MAX_ITER_LOPO) -> np.ndarray:
     return out
 
 
-__all__ = ["CHI2_TOL", "Fit", "PoseData", "effect_columns", "evaluate", "evaluate_batch", "fit", "fit_at", "forward", "lopo", "n_parameters",
+__all__ = ["CHI2_TOL", "Fit", "PoseData", "effect_columns", "evaluate", "evaluate_batch", "fit", "fit_at", "forward", "lopo", "n_parameters", "orthonormal_basis",
            "parameter_names", "pose_data", "pose_data_from_static"]

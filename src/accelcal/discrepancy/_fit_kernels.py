@@ -1,0 +1,450 @@
+"""Compiled kernels of the discrepancy fits (numba, the optional ``fast`` extra).
+
+The white and colored loops evaluate the extended model thousands of times per
+recording: every Levenberg–Marquardt iteration of every candidate fit, and every
+Gauss–Newton iteration of the leave-one-pose-out refits (a stack of ``n`` parameter
+vectors on ``n`` poses).  Each evaluation is a few thousand floating-point operations;
+in numpy it costs dozens of array calls.  :func:`evaluate_batch` is
+:func:`accelcal.discrepancy.fit.evaluate_batch` written as one compiled loop: same
+algorithm (the same Newton iterations, stopped by the same batch-wide test), same
+arithmetic up to the order of floating-point sums.
+
+Effects are passed as codes (:data:`ADDITIVE`, :data:`SCALE`, or the power 2, 3 of a
+polynomial term) with their centred covariate per pose.  Imported only through
+:func:`accelcal.kernels.compiled` (it imports numba).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..kernels import jit
+
+#: Effect codes: an additive term ``φ c_i``, a scale term ``P(x) = (1 + φ c_i) x``; 2 and 3
+#: are the polynomial terms ``φ x²`` and ``φ x³``.
+ADDITIVE = 0
+SCALE = 1
+
+
+def _model(p, M, dM, A):
+    """``M(s, θ)``, ``∂M/∂(s, θ)`` and ``A = M⁻¹`` (identity when invalid) of one parameter
+    vector, into the given arrays; returns whether the angles and scales are valid."""
+    s0, s1, s2 = p[3], p[4], p[5]
+    sn0, sn1, sn2 = np.sin(p[6]), np.sin(p[7]), np.sin(p[8])
+    cs0, cs1, cs2 = np.cos(p[6]), np.cos(p[7]), np.cos(p[8])
+    uzz2 = 1.0 - sn1 ** 2 - sn2 ** 2
+    ok = uzz2 > 0 and 1.0 + s0 > 0 and 1.0 + s1 > 0 and 1.0 + s2 > 0
+    uzz = np.sqrt(uzz2) if ok else 1.0
+    g0, g1, g2 = 1.0 + s0, 1.0 + s1, 1.0 + s2
+    M[:] = 0.0
+    M[0, 0] = g0
+    M[1, 0], M[1, 1] = sn0 * g1, cs0 * g1
+    M[2, 0], M[2, 1], M[2, 2] = sn1 * g2, sn2 * g2, uzz * g2
+    dM[:] = 0.0
+    dM[0, 0, 0] = 1.0
+    dM[1, 1, 0], dM[1, 1, 1] = sn0, cs0
+    dM[2, 2, 0], dM[2, 2, 1], dM[2, 2, 2] = sn1, sn2, uzz
+    dM[3, 1, 0], dM[3, 1, 1] = g1 * cs0, -g1 * sn0
+    dM[4, 2, 0], dM[4, 2, 2] = g2 * cs1, -g2 * sn1 * cs1 / uzz
+    dM[5, 2, 1], dM[5, 2, 2] = g2 * cs2, -g2 * sn2 * cs2 / uzz
+    # M is lower triangular: its inverse by forward substitution
+    A[:] = 0.0
+    if ok:
+        A[0, 0], A[1, 1], A[2, 2] = 1.0 / M[0, 0], 1.0 / M[1, 1], 1.0 / M[2, 2]
+        A[1, 0] = -M[1, 0] * A[0, 0] * A[1, 1]
+        A[2, 1] = -M[2, 1] * A[1, 1] * A[2, 2]
+        A[2, 0] = -(M[2, 0] * A[0, 0] + M[2, 1] * A[1, 0]) * A[2, 2]
+    else:
+        A[0, 0] = A[1, 1] = A[2, 2] = 1.0
+    return ok
+
+
+def _evaluate_batch(P, z, cov, code, g, jacobian, rtol):
+    """Residuals ``r`` (B, n), Jacobian ``J`` (B, n, q) (empty if not ``jacobian``) and
+    implied specific force ``x`` (B, n, 3): :func:`accelcal.discrepancy.fit.evaluate_batch`."""
+    B, q = P.shape
+    n = z.shape[0]
+    k = code.shape[0]
+    Ms = np.empty((B, 3, 3))
+    dMs = np.empty((B, 6, 3, 3))
+    As = np.empty((B, 3, 3))
+    ok = np.empty(B, np.bool_)
+    y = np.empty((B, n, 3))
+    c1 = np.ones((B, n, 3))
+    c2 = np.zeros((B, 3))
+    c3 = np.zeros((B, 3))
+    poly = False
+    for e in range(k):
+        poly = poly or code[e] != ADDITIVE  # P(x) = y needs solving (the scale term too)
+    for b in range(B):
+        ok[b] = _model(P[b], Ms[b], dMs[b], As[b])
+        for i in range(n):
+            d0, d1, d2 = z[i, 0] - P[b, 0], z[i, 1] - P[b, 1], z[i, 2] - P[b, 2]
+            a0, a1, a2 = 0.0, 0.0, 0.0
+            for e in range(k):
+                o = 9 + 3 * e
+                if code[e] == ADDITIVE:
+                    a0 += cov[e, i] * P[b, o]
+                    a1 += cov[e, i] * P[b, o + 1]
+                    a2 += cov[e, i] * P[b, o + 2]
+                elif code[e] == SCALE:
+                    for j in range(3):
+                        c1[b, i, j] += cov[e, i] * P[b, o + j]
+            d0, d1, d2 = d0 - a0, d1 - a1, d2 - a2
+            for j in range(3):
+                y[b, i, j] = d0 * As[b, j, 0] + d1 * As[b, j, 1] + d2 * As[b, j, 2]
+        for e in range(k):
+            o = 9 + 3 * e
+            for j in range(3):
+                if code[e] == 2:
+                    c2[b, j] += P[b, o + j]
+                elif code[e] == 3:
+                    c3[b, j] += P[b, o + j]
+    x = y.copy()
+    dP = c1.copy()
+    if poly:
+        _newton(x, y, c1, c2, c3, dP, ok, g, rtol)
+    r = np.empty((B, n))
+    norm = np.empty((B, n))
+    for b in range(B):
+        for i in range(n):
+            nn = np.sqrt(x[b, i, 0] ** 2 + x[b, i, 1] ** 2 + x[b, i, 2] ** 2)
+            norm[b, i] = nn
+            r[b, i] = nn - g
+            if not np.isfinite(r[b, i]):
+                ok[b] = False
+        if not ok[b]:
+            r[b, :] = np.nan
+    J = np.empty((B, n, q if jacobian else 0))
+    if jacobian:
+        _jacobian(J, x, y, norm, dP, As, dMs, cov, code)
+    return r, J, x
+
+
+def _newton(x, y, c1, c2, c3, dP, ok, g, rtol):
+    """Solve ``P(x) = y`` axis by axis in place (Newton, one stopping test for the whole
+    batch, as the numpy reference), then ``dP = P'(x)``; clears ``ok`` where it fails."""
+    B, n, _ = x.shape
+    scale = g
+    for b in range(B):
+        for i in range(n):
+            for j in range(3):
+                scale = max(scale, abs(y[b, i, j]))
+    tol = rtol * scale
+    step = np.empty_like(x)
+    converged = False
+    for _ in range(60):
+        big = -np.inf
+        for b in range(B):
+            for i in range(n):
+                for j in range(3):
+                    xx = x[b, i, j]
+                    d = c1[b, i, j] + 2 * c2[b, j] * xx + 3 * c3[b, j] * xx * xx
+                    f = c1[b, i, j] * xx + c2[b, j] * xx * xx + c3[b, j] * xx ** 3 - y[b, i, j]
+                    s = f / d if d > 0 else np.nan
+                    step[b, i, j] = s
+                    x[b, i, j] = xx - s
+                    if abs(s) > big:  # noqa: PLR1730 (NaN never compares greater: nanmax)
+                        big = abs(s)
+        if not big > tol:
+            converged = True
+            break
+    for b in range(B):
+        for i in range(n):
+            for j in range(3):
+                if not converged and not abs(step[b, i, j]) <= tol:
+                    ok[b] = False
+                xx = x[b, i, j]
+                dP[b, i, j] = c1[b, i, j] + 2 * c2[b, j] * xx + 3 * c3[b, j] * xx * xx
+                if not dP[b, i, j] > 0:
+                    ok[b] = False
+
+
+def _jacobian(J, x, y, norm, dP, As, dMs, cov, code):
+    """Analytic Jacobian of the residuals (module docstring of :mod:`accelcal.discrepancy.fit`).
+
+    ``∂r/∂p_k = -w (∂M/∂p_k) y``: each ``∂M/∂(s, θ)_k`` has one non-zero row with one to
+    three non-zero entries (:func:`_model`), and only those are summed."""
+    B, n, _ = x.shape
+    v = np.empty(3)
+    w = np.empty(3)
+    for b in range(B):
+        A = As[b]
+        dM = dMs[b]
+        for i in range(n):
+            y0, y1, y2 = y[b, i, 0], y[b, i, 1], y[b, i, 2]
+            for j in range(3):
+                v[j] = (x[b, i, j] / norm[b, i]) / dP[b, i, j]
+            for j in range(3):
+                w[j] = v[0] * A[0, j] + v[1] * A[1, j] + v[2] * A[2, j]
+                J[b, i, j] = -w[j]
+            J[b, i, 3] = -(w[0] * (dM[0, 0, 0] * y0))
+            J[b, i, 4] = -(w[1] * (dM[1, 1, 0] * y0 + dM[1, 1, 1] * y1))
+            J[b, i, 5] = -(w[2] * (dM[2, 2, 0] * y0 + dM[2, 2, 1] * y1 + dM[2, 2, 2] * y2))
+            J[b, i, 6] = -(w[1] * (dM[3, 1, 0] * y0 + dM[3, 1, 1] * y1))
+            J[b, i, 7] = -(w[2] * (dM[4, 2, 0] * y0 + dM[4, 2, 2] * y2))
+            J[b, i, 8] = -(w[2] * (dM[5, 2, 1] * y1 + dM[5, 2, 2] * y2))
+            for e in range(code.shape[0]):
+                o = 9 + 3 * e
+                for j in range(3):
+                    if code[e] == ADDITIVE:
+                        J[b, i, o + j] = -w[j] * cov[e, i]
+                    elif code[e] == SCALE:
+                        J[b, i, o + j] = -v[j] * x[b, i, j] * cov[e, i]
+                    else:
+                        J[b, i, o + j] = -v[j] * x[b, i, j] ** code[e]
+
+
+def _lopo_system(P, z, cov, code, g, rtol, sig, normal):
+    """One Gauss–Newton system per leave-one-pose-out refit (row ``b`` of ``P`` leaves out
+    pose ``b``): residuals ``r`` (B, n), the reduced χ² ``cost`` (B,), and if ``normal``
+    the column scales ``d`` (B, q) and the scaled normal equations ``H`` (B, q, q),
+    ``grad`` (B, q), as :func:`accelcal.discrepancy.fit.lopo` forms them (else empty)."""
+    r, J, _ = _evaluate_batch(P, z, cov, code, g, normal, rtol)
+    B, n = r.shape
+    q = J.shape[2]
+    cost = np.empty(B)
+    d = np.empty((B, q))
+    H = np.empty((B, q, q))
+    grad = np.empty((B, q))
+    if not normal:
+        for b in range(B):
+            c = 0.0
+            for i in range(n):
+                rw = r[b, i] / sig[i] * (0.0 if i == b else 1.0)
+                c += rw * rw
+            cost[b] = c
+        return r, cost, d, H, grad
+    rw = np.empty(n)
+    Js = np.empty((q, n))  # transposed: the sums below run along contiguous rows
+    for b in range(B):
+        c = 0.0
+        for i in range(n):
+            keep = 0.0 if i == b else 1.0  # times zero, not skipped: a NaN residual stays NaN
+            rw[i] = r[b, i] / sig[i] * keep
+            c += rw[i] * rw[i]
+            for j in range(q):
+                Js[j, i] = J[b, i, j] / sig[i] * keep
+        cost[b] = c
+        for j in range(q):
+            acc = 0.0
+            for i in range(n):
+                acc += Js[j, i] * Js[j, i]
+            d[b, j] = np.sqrt(acc) if acc != 0 else 1.0
+            for i in range(n):
+                Js[j, i] /= d[b, j]
+        H[b] = np.dot(Js, Js.T)  # BLAS, as numpy's matmul of the reference
+        grad[b] = np.dot(Js, rw)
+    return r, cost, d, H, grad
+
+
+def _lu_solve(H, g, x):
+    """Solve ``H x = g`` (q, q) into ``x`` by LU with partial pivoting (as LAPACK's gesv);
+    False if a pivot is exactly zero (numpy's solve raises LinAlgError then).  NaN in, NaN out."""
+    q = H.shape[0]
+    A = H.copy()
+    y = g.copy()
+    for k in range(q):
+        p = k
+        for i in range(k + 1, q):
+            if abs(A[i, k]) > abs(A[p, k]):
+                p = i
+        if A[p, k] == 0.0:
+            return False
+        if p != k:
+            for j in range(q):
+                A[k, j], A[p, j] = A[p, j], A[k, j]
+            y[k], y[p] = y[p], y[k]
+        for i in range(k + 1, q):
+            f = A[i, k] / A[k, k]
+            for j in range(k + 1, q):
+                A[i, j] -= f * A[k, j]
+            y[i] -= f * y[k]
+    for k in range(q - 1, -1, -1):
+        acc = y[k]
+        for j in range(k + 1, q):
+            acc -= A[k, j] * x[j]
+        x[k] = acc / A[k, k]
+    return True
+
+
+def _lopo_step(P, z, cov, code, g, rtol, sig, normal):
+    """:func:`_lopo_system` and its Gauss–Newton step: ``(r, cost, step / d, pred, d, H, grad,
+    solved)`` with ``step = -H⁻¹ grad`` and ``pred = -grad · step`` per row; ``solved`` false if
+    some ``H`` is singular (then the caller takes the pseudo-inverse of every row, as numpy)."""
+    r, cost, d, H, grad = _lopo_system(P, z, cov, code, g, rtol, sig, normal)
+    B, q = d.shape
+    step = np.empty((B, q))
+    pred = np.empty(B)
+    solved = True
+    if normal:
+        x = np.empty(q)
+        for b in range(B):
+            solved = solved and _lu_solve(H[b], grad[b], x)
+            pred[b] = 0.0
+            for j in range(q):
+                pred[b] += grad[b, j] * x[j]  # -grad · step, step = -x
+                step[b, j] = -x[j] / d[b, j]
+    return r, cost, step, pred, d, H, grad, solved
+
+
+def _weighted(p, z, cov, code, g, rtol, sig):
+    """Residuals, weighted Jacobian ``J / σ`` and ``x`` at one parameter vector; ``ok`` false
+    where the model cannot be inverted (the numpy fit's ``fun`` returning None)."""
+    r, J, x = _evaluate_batch(p.reshape(1, -1), z, cov, code, g, True, rtol)
+    n, q = J.shape[1], J.shape[2]
+    ok = True
+    for i in range(n):
+        ok = ok and np.isfinite(r[0, i])
+    Jw = np.empty((n, q))
+    for i in range(n):
+        for j in range(q):
+            Jw[i, j] = J[0, i, j] / sig[i]
+    return r[0], Jw, x[0], ok
+
+
+def _chi2(r, sig):
+    c = 0.0
+    for i in range(r.shape[0]):
+        c += (r[i] / sig[i]) ** 2
+    return c
+
+
+def _lm_step(r, Jw, sig, cost, lam):
+    """Levenberg–Marquardt step with Marquardt's column scaling (least squares on the
+    augmented system, as :func:`accelcal.discrepancy.fit.fit`) and the χ² decrease it predicts."""
+    n, q = Jw.shape
+    d = np.empty(q)
+    for j in range(q):
+        acc = 0.0
+        for i in range(n):
+            acc += Jw[i, j] * Jw[i, j]
+        d[j] = np.sqrt(acc) if acc != 0 else 1.0
+    A = np.zeros((n + q, q))
+    rhs = np.zeros(n + q)
+    for i in range(n):
+        rhs[i] = -(r[i] / sig[i])
+        for j in range(q):
+            A[i, j] = Jw[i, j] / d[j]
+    for j in range(q):
+        A[n + j, j] = np.sqrt(lam)
+    step = _least_squares(A, rhs) / d
+    pred = 0.0
+    for i in range(n):
+        acc = r[i] / sig[i]
+        for j in range(q):
+            acc += Jw[i, j] * step[j]
+        pred += acc * acc
+    return step, cost - pred
+
+
+def _least_squares(A, b):
+    """``argmin |A x - b|`` of a full-column-rank ``A`` (m, q), by Householder QR (overwrites
+    ``A`` and ``b``).  The LM system has full rank (its damping rows ``sqrt(λ) I``, λ ≥ 1e-12,
+    keep every singular value of the unit-norm columns far above the rank cut-off of the
+    SVD that numpy's ``lstsq`` uses), so both give its one solution to rounding; QR costs a
+    fraction of the SVD's LAPACK set-up for these small problems."""
+    m, q = A.shape
+    for k in range(q):
+        norm = 0.0
+        for i in range(k, m):
+            norm += A[i, k] * A[i, k]
+        norm = np.sqrt(norm)
+        if norm == 0.0:
+            continue
+        alpha = -norm if A[k, k] >= 0 else norm
+        A[k, k] -= alpha  # v = a_k - alpha e_k, stored in place of the column
+        vv = 0.0
+        for i in range(k, m):
+            vv += A[i, k] * A[i, k]
+        for j in range(k + 1, q):
+            dot = 0.0
+            for i in range(k, m):
+                dot += A[i, k] * A[i, j]
+            f = 2.0 * dot / vv
+            for i in range(k, m):
+                A[i, j] -= f * A[i, k]
+        dot = 0.0
+        for i in range(k, m):
+            dot += A[i, k] * b[i]
+        f = 2.0 * dot / vv
+        for i in range(k, m):
+            b[i] -= f * A[i, k]
+        A[k, k] = alpha  # the diagonal of R
+    x = np.empty(q)
+    for k in range(q - 1, -1, -1):  # back substitution R x = (Qᵀ b)[:q]
+        acc = b[k]
+        for j in range(k + 1, q):
+            acc -= A[k, j] * x[j]
+        x[k] = acc / A[k, k]
+    return x
+
+
+def _lm_fit(p, z, cov, code, g, rtol, sig, max_iter, chi2_tol):
+    """:func:`accelcal.discrepancy.fit.fit` from the start ``p``: returns ``(p, r, J / σ, x,
+    iterations, status)``, status 0 converged, 1 start not invertible, 2 not converged."""
+    r, J, x, ok = _weighted(p, z, cov, code, g, rtol, sig)
+    if not ok:
+        return p, r, J, x, 0, 1
+    cost = _chi2(r, sig)
+    lam = 1e-6
+    for it in range(1, max_iter + 1):
+        step, pred = _lm_step(r, J, sig, cost, lam)
+        p_new = p + step
+        r_new, J_new, x_new, ok = _weighted(p_new, z, cov, code, g, rtol, sig)
+        cost_new = _chi2(r_new, sig) if ok else np.inf
+        if ok and cost_new <= cost:
+            p, r, J, x = p_new, r_new, J_new, x_new
+            decrease = cost - cost_new
+            cost = cost_new
+            lam = max(lam / 10, 1e-12)
+            if pred <= chi2_tol and decrease <= chi2_tol:
+                return p, r, J, x, it, 0
+        else:
+            if pred <= chi2_tol:  # at the optimum: no step can lower χ² measurably
+                return p, r, J, x, it, 0
+            lam *= 10
+            if lam > 1e12:
+                break
+    return p, r, J, x, max_iter, 2
+
+
+_model = jit(_model)
+_newton = jit(_newton)
+_jacobian = jit(_jacobian)
+_evaluate_batch = jit(_evaluate_batch)
+_lopo_system = jit(_lopo_system)
+_lu_solve = jit(_lu_solve)
+_lopo_step = jit(_lopo_step)
+_weighted = jit(_weighted)
+_chi2 = jit(_chi2)
+_least_squares = jit(_least_squares)
+_lm_step = jit(_lm_step)
+_lm_fit = jit(_lm_fit)
+
+
+def evaluate_batch(P, z, cov, code, g: float, jacobian: bool, rtol: float):
+    """Residuals, Jacobian (None if not ``jacobian``) and implied specific force of the
+    parameter stack ``P`` (B, q) on the pose means ``z`` (n, 3); ``cov`` (k, n) the centred
+    covariate of each effect (zeros for the polynomial ones), ``code`` (k,) its kind."""
+    r, J, x = _evaluate_batch(np.ascontiguousarray(P, dtype=np.float64), np.ascontiguousarray(z, dtype=np.float64),
+                              np.ascontiguousarray(cov, dtype=np.float64), np.asarray(code, dtype=np.int64),
+                              float(g), bool(jacobian), float(rtol))
+    return r, (J if jacobian else None), x
+
+
+def lopo_step(P, z, cov, code, g: float, rtol: float, sig, normal: bool = True):
+    """:func:`_lopo_step` on contiguous float arrays."""
+    return _lopo_step(np.ascontiguousarray(P, dtype=np.float64), np.ascontiguousarray(z, dtype=np.float64),
+                        np.ascontiguousarray(cov, dtype=np.float64), np.asarray(code, dtype=np.int64), float(g),
+                        float(rtol), np.ascontiguousarray(sig, dtype=np.float64), bool(normal))
+
+
+def lm_fit(p, z, cov, code, g: float, rtol: float, sig, max_iter: int, chi2_tol: float):
+    """:func:`_lm_fit` on contiguous float arrays."""
+    return _lm_fit(np.array(p, dtype=np.float64), np.ascontiguousarray(z, dtype=np.float64),
+                   np.ascontiguousarray(cov, dtype=np.float64), np.asarray(code, dtype=np.int64), float(g), float(rtol),
+                   np.ascontiguousarray(sig, dtype=np.float64), int(max_iter), float(chi2_tol))
+
+
+__all__ = ["ADDITIVE", "SCALE", "evaluate_batch", "lm_fit", "lopo_step"]
