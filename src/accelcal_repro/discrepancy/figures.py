@@ -174,7 +174,8 @@ def plot_power(rates: pd.DataFrame, power: float, profiles, curve_profiles, size
             ax.axhline(power, color="k", lw=0.7, ls=":")
         axs[0, 0].set_ylabel("detection rate (named), 95% CI")
         axs[1, 0].set_ylabel(f"named first ({main} null), 95% CI")
-        axs[0, 0].legend(fontsize=6, loc="upper left")
+        # below the panels: inside the first one it covered points at either end of the curve
+        fig.legend(*axs[0, 0].get_legend_handles_labels(), loc="outside lower center", ncol=5, fontsize=6.5)
         axs[1, 0].legend(fontsize=6, loc="lower left", title="size", title_fontsize=6)
         fig.suptitle("Power of the loop per effect: top, detection rate vs size for the power-curve profiles; "
                      "bottom, naming accuracy per noise profile (dotted: the design power)", fontsize=9)
