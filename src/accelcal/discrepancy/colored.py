@@ -58,9 +58,9 @@ profiled analytically (``ŝ = yᵀPy/(m − p)`` at ``Σ = s (I + q K_τ)``).  C
 intervals are profile-likelihood intervals: the range of a quantity over the set where
 ``−2ℓ_R`` is within ``χ²₁(0.95) = 3.84`` of its minimum; the estimate and the intervals
 are taken on a fine grid (ten values per decade of ``τ`` and of ``q``: a resolution of
-±12 %, well inside any interval the poses give).  Intervals that reach the ends of the grid are reported open (the data cannot
-bound them); a wander the contrasts cannot see is reported as not estimated with the
-reason, never replaced by white noise silently.
+±12 %, well inside any interval the poses give).  Intervals that reach the ends of the
+grid are reported open (the data cannot bound them); a wander the contrasts cannot see
+is reported as not estimated with the reason, never replaced by white noise silently.
 
 Tests (likelihood ratio, parametric bootstrap).  Current model vs current + effect: the
 likelihood ratio ``LR = −2 (ℓ₀ − ℓ₁)`` of the maximum likelihoods over the parameters

@@ -13,7 +13,8 @@ of that recording itself), added to the whole time series.
 
 Hidden effects are sized in units of their *oracle* minimum detectable effect: the size
 at which the loop's nested F-test (level ``α/m`` over the ``m`` tests of its first round:
-the candidates and, if enabled, the outlier family of the colored null; the configured power) would detect the effect along its random direction ``d`` if it knew
+the candidates and, if enabled, the outlier family of the colored null; the configured
+power) would detect the effect along its random direction ``d`` if it knew
 the true covariance of the pose residuals under the profile (generalised least squares
 with :func:`accelcal_repro.discrepancy.profiles.pose_mean_covariance`), computed on the
 true pose design (:func:`oracle_mde`).  For the white profile it is the loop's own MDE
