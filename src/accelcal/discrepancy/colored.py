@@ -666,7 +666,8 @@ def round_tests(prob: Problem, X_alts: list, rng: np.random.Generator, n_boot: i
     ``null``, ``bas0``: the current model's REML noise (``fit_wander(prob, prob.X0,
     fine=False)``) and :class:`Basis`, if the caller has them."""
     X0 = prob.X0
-    bases = [basis(prob, X0) if bas0 is None else bas0] + [basis(prob, np.hstack([X0, Xa])) for Xa in X_alts]
+    Xs = [np.hstack([X0, Xa]) for Xa in X_alts]
+    bases = [basis(prob, X0) if bas0 is None else bas0] + [basis(prob, X1) for X1 in Xs]
     sf0 = profile(prob, X0, prob.y[None], Q_REL_GRID, shifts=outliers, bas=bases[0])
     m0 = float(sf0.ml_min()[0])
     # the bootstrap simulates the REML noise of the current model.  (Estimating it with the
@@ -674,18 +675,21 @@ def round_tests(prob: Problem, X_alts: list, rng: np.random.Generator, n_boot: i
     # lowered the simulated noise and raised the outlier family's false positives from
     # 7.5 % to 11 % and the candidates' from 5.3 % to 7.2 %, 120 sessions each.)
     null = fit_wander(prob, X0, fine=False) if null is None else null
-    lr = np.array([max(m0 - float(profile(prob, np.hstack([X0, Xa]), prob.y[None], Q_REL_GRID, bas=b).ml_min()[0]),
-                       0.0) for Xa, b in zip(X_alts, bases[1:])])
+    lr = np.array([max(m0 - float(profile(prob, X1, prob.y[None], Q_REL_GRID, bas=b).ml_min()[0]), 0.0)
+                   for X1, b in zip(Xs, bases[1:])])
     lr_pose = np.maximum(m0 - sf0.shift_ml_min()[0], 0.0) if outliers else np.zeros(0)
     o_i = int(np.argmax(lr_pose)) if outliers else -1
     o_lr = float(lr_pose[o_i]) if outliers else float("nan")
+    observed = np.concatenate([lr, [o_lr] if outliers else []])
+    # replicates drawn through the Cholesky factor of the null covariance: unique, unlike the
+    # eigenvectors (whose signs depend on the LAPACK routine), so the replicates are too
+    root = np.linalg.cholesky(null.white_scale * prob.sigma_c(null.t, null.q_rel))
     seq = _Sequential(len(X_alts) + outliers, stop_count(alpha, n_boot))
     cap, k = n_boot, 0
     while True:
         batch = min(BATCHES[min(k, len(BATCHES) - 1)], cap - seq.n)
-        Z = rng.standard_normal((batch, prob.m))
-        stats_ = _bootstrap_batch(prob, bases, X_alts, null, Z, seq.running, outliers)
-        seq.add(stats_, np.concatenate([lr, [o_lr] if outliers else []]))
+        Ystar = rng.standard_normal((batch, prob.m)) @ root.T
+        seq.add(_bootstrap_batch(prob, bases, Xs, Ystar, seq.running, outliers), observed)
         k += 1
         if not seq.running.any():
             break
@@ -748,24 +752,18 @@ class _Sequential:
         return self.sums[:k] / np.maximum(self.used[:k], 1) / np.array([Xa.shape[1] for Xa in X_alts])
 
 
-def _bootstrap_batch(prob: Problem, bases: list, X_alts: list, null: WanderFit, Z: np.ndarray,
+def _bootstrap_batch(prob: Problem, bases: list, Xs: list, Ystar: np.ndarray,
                      running: np.ndarray, outliers: bool) -> np.ndarray:
-    """Replicates ``y* ~ N(0, s (I + q K_τ))`` under the null, refitted as the data:
-    per replicate the LR of each candidate and, last, the largest mean-shift LR over the
+    """Replicates ``Ystar`` (B, m) drawn under the null, refitted as the data: per replicate the LR of each candidate and, last, the largest mean-shift LR over the
     poses (the noise re-estimated with the shift, so an outlier cannot hide by inflating
     it), NaN for the tests no longer ``running``."""
-    # drawn through the Cholesky factor of the null covariance: unique, unlike the
-    # eigenvectors (whose signs depend on the LAPACK routine), so the replicates are too
-    root = np.linalg.cholesky(null.white_scale * prob.sigma_c(null.t, null.q_rel))
-    Ystar = Z @ root.T
-    out = np.full((Z.shape[0], len(running)), np.nan)
+    out = np.full((Ystar.shape[0], len(running)), np.nan)
     best = outliers and bool(running[-1])
-    X0 = prob.X0
-    sfs = profile(prob, X0, Ystar, Q_REL_GRID, best_shift=best, bas=bases[0])
+    sfs = profile(prob, prob.X0, Ystar, Q_REL_GRID, best_shift=best, bas=bases[0])
     m0s = sfs.ml_min()
-    for k, (Xa, b) in enumerate(zip(X_alts, bases[1:])):
+    for k, (X1, b) in enumerate(zip(Xs, bases[1:])):
         if running[k]:
-            out[:, k] = np.maximum(m0s - profile(prob, np.hstack([X0, Xa]), Ystar, Q_REL_GRID, bas=b).ml_min(), 0.0)
+            out[:, k] = np.maximum(m0s - profile(prob, X1, Ystar, Q_REL_GRID, bas=b).ml_min(), 0.0)
     if best:
         out[:, -1] = np.maximum(m0s - sfs.best_shift_ml_min(), 0.0)
     return out
