@@ -266,3 +266,81 @@ def test_crossing_and_intervals():
     assert lo == pytest.approx(0.01643, abs=1e-4) and hi == pytest.approx(0.11284, abs=1e-4)
     lo, hi = S.clopper_pearson(0, 10)
     assert lo == 0 and hi == pytest.approx(0.30850, abs=1e-4)
+
+
+# --------------------------------------------------------------------------- screening a real record
+
+FS = 100.0
+N_WIN = 10_000  # 100 s windows
+
+
+def _record(seed=3, n_windows=20):
+    """White noise with a slow random-walk wander on each axis: a clean 'real' record."""
+    rng = np.random.default_rng(seed)
+    n = n_windows * N_WIN
+    return rng.standard_normal((n, 3)) + np.cumsum(rng.standard_normal((n, 3)), axis=0) * 2e-3
+
+
+def test_screen_leaves_a_clean_record_alone():
+    rec = _record()
+    assert P.transient_scan(rec, FS, P.RecordScreen()) == []
+    assert P.clean_windows(len(rec), N_WIN, []) == tuple(range(20))
+
+
+@pytest.mark.parametrize("kind", ["bump", "step", "spike"])
+def test_screen_finds_a_planted_transient_and_removes_its_window(kind):
+    """A 5 s bump of 0.5 sd (11 sd of a 5 s mean), a step of 1 sd and a one-sample spike that moves a
+    5 s mean by 10 of its sd, each planted in window 7 on one axis, are found there and nowhere else."""
+    rec = _record()
+    at = 7 * N_WIN + 4_000
+    if kind == "bump":
+        rec[at:at + 500, 1] += 0.5
+    elif kind == "step":
+        rec[at:, 2] += 1.0
+    else:
+        rec[at, 0] += 10 * 500 / np.sqrt(500)
+    events = P.transient_scan(rec, FS, P.RecordScreen())
+    assert events and {ev["start"] // N_WIN for ev in events} == {7}
+    assert {ev["axis"] for ev in events} == {{"bump": 1, "step": 2, "spike": 0}[kind]}
+    assert all(ev["start"] <= at + 500 and ev["stop"] >= at for ev in events)
+    assert P.clean_windows(len(rec), N_WIN, events) == tuple(k for k in range(20) if k != 7)
+
+
+def test_screened_real_profile_draws_only_clean_windows():
+    rec = _record()
+    rec[7 * N_WIN + 4_000:7 * N_WIN + 4_500, :] += 0.5  # a bump on every axis in window 7
+    fitted = {"adis16405": {"models": [{"white": 1.0 / np.sqrt(FS)}] * 3, "fs": FS, "white_match": False}}
+    session = dataclasses.replace(SESSION, n_poses=12)  # 20 + 11 * 8 = 108 s: nine windows
+    n = session.n_samples
+    records = {"adis16405": rec}
+    prof = P.build_profiles([{"name": "r", "real": "adis16405"}], session, fitted=fitted, records=records,
+                            screen=P.RecordScreen())["r"]
+    bad = {(7 * N_WIN + 4_000) // n, (7 * N_WIN + 4_499) // n}
+    assert prof.real_windows == tuple(k for k in range(len(rec) // n) if k not in bad)
+    assert P.NoiseProfile.from_dict(prof.to_dict()) == prof
+    assert P.independent_recordings(prof, 200, len(rec), n) == len(prof.real_windows)
+    w = len(prof.real_windows)
+    for r in (0, 5, w + 2):  # every replicate lands on a clean window (the last one: axes permuted)
+        k, perm = P.window_of(prof, r, len(rec), n)
+        assert k == prof.real_windows[r % w] and perm == P.AXIS_PERMUTATIONS[r // w]
+        x = P.simulate_profile(prof, np.random.default_rng(0), n, FS, replicate=r, records=records)
+        np.testing.assert_array_equal(x, rec[k * n:(k + 1) * n][:, list(perm)])
+    unscreened = P.build_profiles([{"name": "r", "real": "adis16405"}], session, fitted=fitted)["r"]
+    assert unscreened.real_windows == () and P.window_of(unscreened, 7, len(rec), n)[0] == 7
+
+
+def test_record_screen_errors_are_one_line():
+    with pytest.raises(P.ProfileError, match="block_s > 0"):
+        P.RecordScreen(block_s=(0.0,))
+    with pytest.raises(P.ProfileError, match="fewer than two blocks"):
+        P.transient_scan(np.zeros((300, 3)), FS, P.RecordScreen())
+    with pytest.raises(P.ProfileError, match="shape"):
+        P.transient_scan(np.zeros((3000, 2)), FS, P.RecordScreen())
+    with pytest.raises(P.ProfileError, match="no scatter"):
+        P.transient_scan(np.zeros((30_000, 3)), FS, P.RecordScreen())
+    fitted = {"adis16405": {"models": [{"white": 0.1}] * 3, "fs": FS}}
+    with pytest.raises(P.ProfileError, match="needs the adis16405 noise record"):
+        P.build_profiles([{"name": "r", "real": "adis16405"}], SESSION, fitted=fitted, screen=P.RecordScreen())
+    prof = P.NoiseProfile("r", (1.0,) * 3, real="adis16405", real_windows=(0, 9), kind="real")
+    with pytest.raises(P.ProfileError, match="beyond the 2 windows"):
+        P.window_of(prof, 0, 2 * N_WIN, N_WIN)

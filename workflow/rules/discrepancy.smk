@@ -150,15 +150,18 @@ rule discrepancy_adis_sessions:
 
 
 rule discrepancy_profiles:
-    """The benchmark's noise profiles resolved to counts (profiles.json) and what each does to
-    the pose means of the session (profiles.csv)."""
+    """The benchmark's noise profiles resolved to counts (profiles.json), what each does to
+    the pose means of the session (profiles.csv), and the transients the pre-registered
+    screen finds in the real record (record_screen.csv: the windows it leaves out)."""
     localrule: True  # on a cluster: the login node (a gather between two groups of SLURM jobs)
     input:
         models="results/discrepancy/adis/models.csv",
         xsens=["results/discrepancy/measured/xsens_mti.json"] if DISCREPANCY_NEEDS_XSENS else [],
+        record=["results/discrepancy/adis/noise.npy"] if DISCREPANCY_NEEDS_RECORD else [],
     output:
         profiles="results/discrepancy/benchmark/profiles.json",
         table="results/discrepancy/benchmark/profiles.csv",
+        screen="results/discrepancy/benchmark/record_screen.csv",
     params:
         benchmark=DISCREPANCY_BENCH,
     log:

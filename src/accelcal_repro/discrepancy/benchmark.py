@@ -59,7 +59,7 @@ from accelcal.simulation import random_directions, simulate_recording
 from accelcal.static import detect_static_recording
 
 from ..montecarlo import grid_seed
-from .profiles import NoiseProfile, pose_mean_covariance, record_windows, residual_covariance, simulate_profile
+from .profiles import NoiseProfile, pose_mean_covariance, residual_covariance, simulate_profile, window_of
 
 NONE = "none"
 NOT_IDENTIFIABLE = "not_identifiable"
@@ -361,7 +361,7 @@ def simulate_case(truth: str, size_mde: float, replicate: int, *, seed: int, ses
                    "outlier_shift": float(shift)}
     rec = Recording(t, np.round(z), temp, f"{profile.name}__{truth}_{size_mde:g}_{replicate:04d}")
     # Real-noise profiles reuse the windows of one record: the scoring counts independent ones.
-    window = int(replicate) % record_windows(len(records[profile.real]), len(t)) if profile.real else -1
+    window = window_of(profile, replicate, len(records[profile.real]), len(t))[0] if profile.real else -1
 
     key = {
         "profile": profile.name, "profile_kind": profile.kind, "truth": truth, "expected": expected_outcome(truth),

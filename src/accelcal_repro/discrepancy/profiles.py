@@ -34,10 +34,27 @@ moved) before the samples are rounded to integer counts.  Three kinds:
   rescaled so that its white term equals the session's (the ratio of wander to white
   noise is the ADIS's own).
 * **real** (``real: adis16405``): windows of the ADIS16405 recording itself (demeaned,
-  same rescaling), no model at all.  Replicate ``r`` takes the disjoint window
-  ``r mod W`` (``W`` = windows of session length in the record) with the axis
-  permutation ``⌊r / W⌋ mod 6``; only ``W`` recordings are independent, which the
-  scoring's confidence interval accounts for (:func:`independent_recordings`).
+  same rescaling), no model at all.  The record is cut into disjoint windows of session
+  length; those holding a transient are left out (below), and replicate ``r`` takes the
+  ``r mod W``-th clean window (``W`` clean windows) with the axis permutation
+  ``⌊r / W⌋ mod 6``; only ``W`` recordings are independent, which the scoring's
+  confidence interval accounts for (:func:`independent_recordings`).
+
+  **Screen of the record (pre-registered).**  A real record can hold transients (a
+  bump of the table, a disturbance of a few seconds on every axis), and a window that
+  holds one is not effect-free: it is a disturbed pose.  Before any window is used,
+  :func:`transient_scan` compares the means of 1 s and 5 s blocks of each axis with
+  the running median of the 1 s means within ±60 s (a bump, a spike) and with the
+  block before (a step, which a running median follows), and flags a block beyond 5
+  robust standard deviations (1.4826 MAD of all such values of that length on that
+  axis; config ``discrepancy.benchmark.record_screen``); every window that overlaps a
+  flagged block is left out (:func:`clean_windows`).  The criterion sees the record
+  only, never the loop or its detections.  On the ADIS16405 record it finds seven
+  bumps (near 1408, 2152–2177, 2578, 6818–6825, 7027–7047, 8795–8803 and 9560 s of
+  the record), mostly simultaneous on two or three axes, 1.4–4 mg for 5–25 s, and one
+  step of 2 mg on two axes (7840–7850 s), and leaves out 7 of the 39 windows
+  (5, 8, 10, 27, 31, 34, 37): 32 remain.  The table of events is written beside the
+  profiles (``record_screen.csv``).
 
 Every profile also gives the covariance of the pose means it implies
 (:func:`pose_mean_covariance`), from which the benchmark sizes its hidden effects in
@@ -52,7 +69,7 @@ offset per axis that the bias absorbs.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from itertools import permutations
 
 import numpy as np
@@ -92,6 +109,9 @@ class NoiseProfile:
         fitted model, used only for the covariance.
     real_scale : tuple of 3 float
         Record unit → counts, per axis.
+    real_windows : tuple of int
+        Indices of the record's windows of session length that the simulation may use
+        (the clean ones, :func:`clean_windows`); empty: every window.
     kind : {'parametric', 'fitted', 'real'}
     description : str
     """
@@ -103,6 +123,7 @@ class NoiseProfile:
     real_scale: tuple = (1.0, 1.0, 1.0)
     kind: str = "parametric"
     description: str = ""
+    real_windows: tuple = ()
 
     def model(self, axis: int, fs: float) -> dict:
         """The axis's noise model as :func:`accelcal.discrepancy.stochastic.model_avar` takes it
@@ -125,7 +146,7 @@ class NoiseProfile:
                       for t, vals in d.get("components", ()))
         return cls(d["name"], tuple(float(v) for v in d["white"]), comps, d.get("real", ""),
                    tuple(float(v) for v in d.get("real_scale", (1.0, 1.0, 1.0))), d.get("kind", "parametric"),
-                   d.get("description", ""))
+                   d.get("description", ""), tuple(int(k) for k in d.get("real_windows", ())))
 
 
 # --------------------------------------------------------------------------- building profiles
@@ -175,7 +196,8 @@ def _from_model(name: str, models: list[dict], fs: float, scale, kind: str, real
                         real=real, real_scale=tuple(float(s) for s in scale), kind=kind, description=description)
 
 
-def build_profiles(specs, session, *, fitted: dict | None = None) -> dict[str, NoiseProfile]:
+def build_profiles(specs, session, *, fitted: dict | None = None, records: dict | None = None,
+                   screen: RecordScreen | None = None) -> dict[str, NoiseProfile]:
     """Every configured profile, resolved to counts, in config order.
 
     Parameters
@@ -186,6 +208,12 @@ def build_profiles(specs, session, *, fitted: dict | None = None) -> dict[str, N
     fitted : dict, optional
         ``{source: {"models": [3 per-axis models {term: value}], "fs": Hz, "unit_to_counts":
         float or 3 floats, "white_match": bool}}`` for the fitted and real profiles.
+    records : dict, optional
+        ``{name: record (n, 3)}``: the real records, screened with ``screen``.
+    screen : RecordScreen, optional
+        The transient screen of the real records (module docstring); with it, a real
+        profile needs its record and keeps only the clean windows
+        (:attr:`NoiseProfile.real_windows`); without it, every window.
     """
     fitted = fitted or {}
     out = {}
@@ -211,9 +239,23 @@ def build_profiles(specs, session, *, fitted: dict | None = None) -> dict[str, N
         if f.get("white_match", False):  # rescale so that the white term is the session's
             scale = np.array([session.noise_counts / (m["white"] * math.sqrt(fs)) for m in f["models"]])
         kind = "real" if spec.get("real") else "fitted"
-        out[name] = _from_model(name, f["models"], fs, scale, kind, src if kind == "real" else "",
-                                spec.get("description", f.get("description", "")))
+        prof = _from_model(name, f["models"], fs, scale, kind, src if kind == "real" else "",
+                           spec.get("description", f.get("description", "")))
+        if kind == "real" and screen is not None:
+            prof = replace(prof, real_windows=screened_windows(src, records, fs, session.n_samples, screen))
+        out[name] = prof
     return out
+
+
+def screened_windows(name: str, records: dict | None, fs: float, n: int, screen: RecordScreen) -> tuple[int, ...]:
+    """The clean windows of ``n`` samples of record ``name`` (:func:`transient_scan`, :func:`clean_windows`)."""
+    if not records or name not in records:
+        raise ProfileError(f"the record screen needs the {name} noise record")
+    rec = records[name]
+    kept = clean_windows(len(rec), n, transient_scan(rec, fs, screen))
+    if not kept:
+        raise ProfileError(f"the record screen leaves no clean window of {n} samples in the {name} record")
+    return kept
 
 
 # --------------------------------------------------------------------------- simulation
@@ -224,11 +266,31 @@ def record_windows(n_record: int, n: int) -> int:
     return n_record // n
 
 
+def usable_windows(profile: NoiseProfile, n_record: int, n: int) -> tuple[int, ...]:
+    """The windows of ``n`` samples of the record a real profile draws from: its clean ones, else every one."""
+    w = record_windows(n_record, n)
+    if w < 1:
+        raise ProfileError(f"the {profile.real} record ({n_record} samples) is shorter than a session ({n})")
+    if not profile.real_windows:
+        return tuple(range(w))
+    if max(profile.real_windows) >= w:  # screened for another session length or record
+        raise ProfileError(f"profile {profile.name}: window {max(profile.real_windows)} is beyond the {w} windows "
+                           f"of {n} samples in the {profile.real} record")
+    return tuple(profile.real_windows)
+
+
+def window_of(profile: NoiseProfile, replicate: int, n_record: int, n: int) -> tuple[int, tuple]:
+    """Record window and axis permutation of replicate ``replicate`` of a real profile (module docstring)."""
+    wins = usable_windows(profile, n_record, n)
+    r = int(replicate)
+    return wins[r % len(wins)], AXIS_PERMUTATIONS[(r // len(wins)) % len(AXIS_PERMUTATIONS)]
+
+
 def independent_recordings(profile: NoiseProfile, n_recordings: int, n_record: int | None, n: int) -> int:
     """How many of ``n_recordings`` replicates carry independent noise (real profiles reuse windows)."""
     if not profile.real or n_record is None:
         return n_recordings
-    return min(n_recordings, record_windows(n_record, n))
+    return min(n_recordings, len(usable_windows(profile, n_record, n)))
 
 
 def simulate_profile(profile: NoiseProfile, rng: np.random.Generator, n: int, fs: float, *, replicate: int = 0,
@@ -236,18 +298,15 @@ def simulate_profile(profile: NoiseProfile, rng: np.random.Generator, n: int, fs
     """Noise of ``profile`` for a session of ``n`` samples, shape (n, 3) [counts], not rounded.
 
     Parametric and fitted profiles: white noise plus every component, each component and
-    axis on its own stream spawned from ``rng``.  Real profiles: window ``replicate mod W``
-    of the record, axes permuted by ``⌊replicate / W⌋`` (module docstring), demeaned over
-    the record, times :attr:`NoiseProfile.real_scale`.
+    axis on its own stream spawned from ``rng``.  Real profiles: the ``replicate mod W``-th
+    usable window of the record, axes permuted by ``⌊replicate / W⌋`` (:func:`window_of`),
+    demeaned over the record, times :attr:`NoiseProfile.real_scale`.
     """
     if profile.real:
         if not records or profile.real not in records:
             raise ProfileError(f"profile {profile.name} needs the {profile.real} noise record")
         rec = records[profile.real]
-        w = record_windows(len(rec), n)
-        if w < 1:
-            raise ProfileError(f"the {profile.real} record ({len(rec)} samples) is shorter than a session ({n})")
-        k, perm = replicate % w, AXIS_PERMUTATIONS[(replicate // w) % len(AXIS_PERMUTATIONS)]
+        k, perm = window_of(profile, replicate, len(rec), n)
         return rec[k * n:(k + 1) * n][:, list(perm)] * np.asarray(profile.real_scale)[None, :]
     seeds = np.random.SeedSequence(int(rng.integers(2 ** 63))).spawn(1 + len(profile.components))
     out = np.random.default_rng(seeds[0]).standard_normal((n, 3)) * np.asarray(profile.white)[None, :]
@@ -284,7 +343,8 @@ class RecordScreen:
         the record's slow wander.
     z : float
         Flag a block whose deviation from its reference exceeds ``z`` robust standard
-        deviations (1.4826 MAD of all the blocks of its length on that axis).
+        deviations (1.4826 MAD of all the blocks of its length on that axis), or
+        differs from the block before it by as much (a step).
     """
 
     block_s: tuple = (1.0, 5.0)
@@ -301,7 +361,7 @@ class RecordScreen:
 
 
 def _block_means(c: np.ndarray, b: int, offset: int) -> tuple[np.ndarray, np.ndarray]:
-    """Starts and means of the disjoint blocks of ``b`` samples from ``offset``, from the cumulative sum ``c`` (n+1,)."""
+    """Starts and means of the disjoint blocks of ``b`` samples from ``offset`` (``c``: cumulative sum, (n+1,))."""
     starts = np.arange(offset, len(c) - b, b)
     return starts, (c[starts + b] - c[starts]) / b
 
@@ -321,8 +381,10 @@ def transient_scan(record: np.ndarray, fs: float, screen: RecordScreen) -> list[
 
     Every axis is compared with its own local level (:func:`_local_reference`) in blocks of
     each length of ``screen.block_s``, on two grids offset by half a block (so that a bump
-    straddling a block edge is seen whole); a block is flagged when its deviation exceeds
-    ``screen.z`` robust standard deviations of all the blocks of its length on that axis.
+    straddling a block edge is seen whole); a block is flagged when its deviation from the
+    local level (``level``), or the difference between it and the block before it
+    (``step``), exceeds ``screen.z`` robust standard deviations of all such values of its
+    length on that axis.
     The criterion knows nothing of the loop or of the sessions cut from the record: it is
     fixed before the windows are used, so it cannot be tuned to the loop's detections.
 
@@ -336,37 +398,59 @@ def transient_scan(record: np.ndarray, fs: float, screen: RecordScreen) -> list[
     Returns
     -------
     list of dict
-        One per run of overlapping flagged blocks of one axis and block length: ``axis``,
-        ``block_s``, ``start``, ``stop`` (samples, ``[start, stop)``), ``z`` (the largest
-        signed deviation in robust standard deviations) and ``deviation`` (record unit).
+        One per run of overlapping flagged blocks of one axis, block length and test:
+        ``axis``, ``block_s``, ``kind`` (``level`` or ``step``), ``start``, ``stop``
+        (samples, ``[start, stop)``), ``z`` (the largest signed deviation in robust standard
+        deviations) and ``deviation`` (record unit).
     """
     x = np.asarray(record, float)
     if x.ndim != 2 or x.shape[1] != 3 or not np.all(np.isfinite(x)):
         raise ProfileError(f"a noise record must be finite with shape (n, 3); got shape {x.shape}")
+    longest = max(max(int(round(b * fs)) for b in screen.block_s), int(round(fs)))
+    if len(x) < 2 * longest:  # fewer than two blocks: no scatter to compare a block with
+        raise ProfileError(f"record screen: {len(x)} samples are fewer than two blocks of {longest}")
     events = []
     for a in range(3):
         ref = _local_reference(x[:, a], fs, screen.reference_s)
-        cx = np.concatenate([[0.0], np.cumsum(x[:, a] - ref)])
+        c_level = np.concatenate([[0.0], np.cumsum(x[:, a] - ref)])
+        c_raw = np.concatenate([[0.0], np.cumsum(x[:, a])])
         for block_s in screen.block_s:
             b = max(int(round(block_s * fs)), 1)
-            grids = [_block_means(cx, b, off) for off in sorted({0, b // 2})]
-            d_all = np.concatenate([d for _, d in grids])
-            s = 1.4826 * float(np.median(np.abs(d_all - np.median(d_all))))
-            if not s > 0:
-                raise ProfileError(f"record screen: axis {a} has no scatter in blocks of {block_s} s")
-            hits = sorted((int(st), float(d / s)) for starts, d in grids for st, d in zip(starts, d)
-                          if abs(d) > screen.z * s)
-            for st, z in hits:  # merge overlapping flagged blocks into one event
-                if events and events[-1]["axis"] == a and events[-1]["block_s"] == block_s \
-                        and st <= events[-1]["stop"]:
-                    ev = events[-1]
-                    ev["stop"] = max(ev["stop"], st + b)
-                    if abs(z) > abs(ev["z"]):
-                        ev["z"], ev["deviation"] = z, z * s
-                else:
-                    events.append({"axis": a, "block_s": block_s, "start": st, "stop": st + b, "z": z,
-                                   "deviation": z * s})
+            starts, m = _half_grid(c_level, b)
+            _, r = _half_grid(c_raw, b)
+            # level: the block against its local reference; step: the next block against the
+            # previous one, in the record itself (a running median follows a step, so the
+            # reference would hide it)
+            for kind, st, span, d in (("level", starts, b, m), ("step", starts[:-2], 2 * b, r[2:] - r[:-2])):
+                events += _flag(d, st, span, screen.z, {"axis": a, "block_s": block_s, "kind": kind},
+                                f"axis {a} has no scatter in blocks of {block_s} s")
     return events
+
+
+def _half_grid(c: np.ndarray, b: int) -> tuple[np.ndarray, np.ndarray]:
+    """Starts and means of the blocks of ``b`` samples every ``b/2`` (two disjoint grids interleaved), in order."""
+    grids = [_block_means(c, b, off) for off in sorted({0, b // 2})]
+    starts = np.concatenate([s for s, _ in grids])
+    order = np.argsort(starts, kind="stable")
+    return starts[order], np.concatenate([m for _, m in grids])[order]
+
+
+def _flag(d: np.ndarray, starts: np.ndarray, span: int, z: float, labels: dict, what: str) -> list[dict]:
+    """Runs of overlapping spans ``[start, start + span)`` whose ``d`` exceeds ``z`` robust standard deviations."""
+    s = 1.4826 * float(np.median(np.abs(d - np.median(d))))
+    if not s > 0:
+        raise ProfileError(f"record screen: {what}")
+    out = []
+    for i in np.flatnonzero(np.abs(d) > z * s):
+        st, zi = int(starts[i]), float(d[i] / s)
+        if out and st <= out[-1]["stop"]:  # overlaps the last flagged span: one event
+            ev = out[-1]
+            ev["stop"] = max(ev["stop"], st + span)
+            if abs(zi) > abs(ev["z"]):
+                ev["z"], ev["deviation"] = zi, zi * s
+        else:
+            out.append({**labels, "start": st, "stop": st + span, "z": zi, "deviation": zi * s})
+    return out
 
 
 def clean_windows(n_record: int, n: int, events) -> tuple[int, ...]:
@@ -498,6 +582,7 @@ def profile_table(profiles: dict, session) -> list[dict]:
 
 
 __all__ = ["AXIS_PERMUTATIONS", "FITTED_SOURCES", "FLICKER_FLOOR", "NoiseProfile", "ProfileError", "REAL_RECORDS",
-           "build_profiles", "centred", "independent_recordings", "pose_mean_covariance", "pose_mean_white",
-           "profile_table", "record_windows", "residual_covariance", "rounding_bias_variance", "session_length",
-           "joint_source", "simulate_profile", "xsens_source"]
+           "RecordScreen", "build_profiles", "centred", "clean_windows", "independent_recordings",
+           "pose_mean_covariance", "pose_mean_white", "profile_table", "record_windows", "residual_covariance",
+           "rounding_bias_variance", "screened_windows", "session_length", "joint_source", "simulate_profile",
+           "transient_scan", "usable_windows", "window_of", "xsens_source"]
