@@ -82,3 +82,32 @@ def copy_of_ci_workflow(ci_workflow, dest: Path) -> Path:
     shutil.copytree(src / "results", dest / "results")
     shutil.copytree(src / ".snakemake", dest / ".snakemake", ignore=shutil.ignore_patterns("log", "locks"))
     return dest
+
+
+def config_error(cfg: dict, path: Path) -> str | None:
+    """The Snakefile parsed in this process with ``cfg`` as the whole config (what
+    ``snakemake --configfile PATH --replace-workflow-config`` reads; ``cfg`` is written to
+    ``path``): the message of the config error it raises, or None when it parses.
+
+    The config is checked while the Snakefile is parsed (check_config, common.smk), before
+    any DAG: what a broken config gets is decided here, without a Snakemake process per
+    case (~1.5 s each).  The command line's behaviour on a broken config (one line, no
+    traceback, no job) is tested through a subprocess once per stage."""
+    import yaml
+    from snakemake.api import SnakemakeApi
+    from snakemake.exceptions import WorkflowError
+    from snakemake.settings.types import (ConfigSettings, DeploymentSettings, OutputSettings, ResourceSettings,
+                                          StorageSettings, WorkflowSettings)
+
+    path.write_text(yaml.safe_dump(cfg))
+    workdir = path.parent / "parse"
+    workdir.mkdir(exist_ok=True)
+    with SnakemakeApi(OutputSettings(quiet={"all"})) as api:
+        try:
+            api.workflow(resource_settings=ResourceSettings(cores=1), storage_settings=StorageSettings(),
+                         config_settings=ConfigSettings(configfiles=[path], replace_workflow_config=True),
+                         workflow_settings=WorkflowSettings(), deployment_settings=DeploymentSettings(),
+                         snakefile=REPO / "Snakefile", workdir=workdir)._workflow
+        except WorkflowError as e:
+            return str(e.args[0]) if e.args else str(e)
+    return None

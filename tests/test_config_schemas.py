@@ -1,9 +1,10 @@
 """Schemas and cross-field rules of the config sections batista2011, tereshkov and measured
 (workflow/schemas/<stage>.schema.yaml and the stage rules in check_config, common.smk).
 
-Each broken config is the CI config with one change, given to `snakemake -n` as the whole
-config (--replace-workflow-config, so that a deleted key stays deleted): it must fail
-before the DAG is built, with one line naming the config file, the key and what is wrong.
+Each broken config is the CI config with one change, given as the whole config
+(--replace-workflow-config, so that a deleted key stays deleted): it must fail while the
+Snakefile is parsed, before the DAG is built, with one line naming the config file, the key
+and what is wrong (every case parsed in-process; one per stage through `snakemake -n`).
 Valid configs at the edges of every rule pass, so the checks do not reject good values.
 """
 
@@ -14,6 +15,7 @@ import pytest
 import yaml
 
 from tests.configs import ci_config, load_config
+from tests.conftest import config_error
 from tests.test_workflow import CI, REPO, snakemake
 
 DEFAULT = REPO / "config" / "config.yaml"
@@ -131,6 +133,23 @@ BROKEN = {
 
 
 @pytest.mark.parametrize("case", sorted(BROKEN))
+def test_broken_stage_config_is_rejected_with_its_key_and_what_is_wrong(tmp_path, case):
+    """Every broken config is rejected while the Snakefile is parsed (in this process: the
+    same check_config as the command line), with one line naming the file, the key and
+    what is wrong."""
+    cfg, message = BROKEN[case]
+    path = tmp_path / "config.yaml"
+    error = config_error(cfg, path)
+    assert error is not None, "the broken config was accepted"
+    assert "\n" not in error and error.startswith("invalid config"), error
+    assert str(path) in error and message in error, error
+
+
+#: One broken config per stage through the command line (the rest differ only in the message).
+CLI_CASES = ("batista_window_in_transition", "tereshkov_inverted_range", "measured_full_model_on_six_poses")
+
+
+@pytest.mark.parametrize("case", CLI_CASES)
 def test_broken_stage_config_fails_the_dry_run_before_any_job(tmp_path, case):
     cfg, message = BROKEN[case]
     path, workdir, proc = dry_run(tmp_path, cfg)

@@ -3,6 +3,7 @@ and deterministic figures.  Generic across stages: each stage's own tables are t
 tests/test_<stage>_*.py."""
 
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -17,7 +18,7 @@ from accelcal.plotting import RC, save_figure
 
 from tests.configs import ci_config
 
-from .conftest import copy_of_ci_workflow, run_snakemake
+from .conftest import config_error, copy_of_ci_workflow, run_snakemake
 
 REPO = Path(__file__).resolve().parents[1]
 CI = REPO / "config" / "ci.yaml"
@@ -84,20 +85,25 @@ def test_ci_verdicts_match_the_expected_verdicts(ci_run):
 
 
 def test_ci_reruns_are_byte_identical(ci_run, tmp_path):
-    """Determinism: forcing a representative subset of jobs to rerun with the same config
-    (Monte Carlo grid points, a calibration Monte Carlo, real-data tables, a benchmark's
-    detection, figures and the ledger) rewrites identical bytes.  Wall-time measurements
-    are the exception: files with "timing" in their path, the speed claims computed from them, and the
-    report that shows them (its byte-identity from identical inputs is tests/test_report.py's)."""
+    """Determinism: forcing a representative set of jobs to rerun with the same config
+    (a Monte Carlo grid point and its gather, a calibration and a filter Monte Carlo chunk,
+    real-data tables, a discrepancy benchmark chunk, its scoring and summary, a measured
+    discrepancy report, the ADIS analysis, figures, the stage claims and the ledger)
+    rewrites identical bytes.  Only those jobs run (``--force`` on them as targets, not
+    ``--forcerun``, which would redo everything downstream too: the same determinism,
+    minutes more).  Wall-time measurements are the exception: files with "timing" in their
+    path, the speed claims computed from them, and the report that shows them (its
+    byte-identity from identical inputs is tests/test_report.py's)."""
     import hashlib
 
     workdir = copy_of_ci_workflow(ci_run, tmp_path / "copy")
-    # one job of each chunked Monte Carlo (the jobs after it rerun too), and single jobs
     point = sorted((workdir / "results" / "burkhard2024" / "mc").glob("*.csv.gz"))[0].relative_to(workdir)
-    rules = [point, "burkhard2024_summary", "results/batista2011/chunks/calibration_errors_0.csv.gz",
-             "results/tereshkov/chunks/field_0.csv.gz", "measured_tables", "tereshkov_summary",
-             "results/discrepancy/benchmark/detections/chunk_0.csv", "burkhard2024_figures", "batista2011_fig4_plot",
-             "claims"]
+    targets = [point, "burkhard2024_summary", "results/batista2011/chunks/calibration_errors_0.csv.gz",
+               "results/tereshkov/chunks/field_0.csv.gz", "measured_tables", "tereshkov_summary",
+               "results/discrepancy/benchmark/detections/chunk_0.csv", "results/discrepancy/benchmark/scores.csv.gz",
+               "results/discrepancy/summary.csv", "results/discrepancy/measured/mpu6050.json",
+               "results/discrepancy/adis/models.csv", "results/claims/discrepancy.csv",
+               "results/figures/discrepancy_confusion.png", "burkhard2024_figures", "batista2011_fig4_plot", "claims"]
     results = workdir / "results"
 
     def digests():
@@ -115,15 +121,18 @@ def test_ci_reruns_are_byte_identical(ci_run, tmp_path):
         return out
 
     before = digests()
-    proc = snakemake(workdir, "all", "--configfile", CI, "--forcerun", *rules)
+    proc = snakemake(workdir, *targets, "--configfile", CI, "--force")
     assert proc.returncode == 0, proc.stderr[-3000:]
     after = digests()
     assert before.keys() == after.keys()
     changed = sorted(str(k) for k in before if before[k] != after[k])
     assert not changed, f"rerun changed {changed}"
     out = proc.stdout + proc.stderr
-    for rule in ("burkhard2024_mc", "batista2011_calibration_mc", "tereshkov_simulate", "discrepancy_chunk"):
-        assert rule in out, rule  # the jobs did rerun
+    ran = set(re.findall(r"^(?:local)?rule (\w+):$", out, re.M))
+    for rule in ("burkhard2024_mc", "burkhard2024_summary", "batista2011_calibration_mc", "tereshkov_simulate",
+                 "discrepancy_chunk", "discrepancy_score", "discrepancy_summary", "discrepancy_measured_report",
+                 "discrepancy_adis", "discrepancy_claims", "discrepancy_confusion_figure", "claims"):
+        assert rule in ran, rule  # the job did rerun
 
 
 def test_ledger_script_runs_standalone_and_is_reproducible(ci_run, tmp_path):
@@ -169,6 +178,17 @@ def broken_configs():
 
 
 @pytest.mark.parametrize("case", sorted(broken_configs()))
+def test_broken_config_is_rejected_with_its_key_and_what_is_wrong(tmp_path, case):
+    """Rejected while the Snakefile is parsed (in this process, tests/conftest.config_error),
+    in one line naming the file, the key and what is wrong."""
+    cfg, message = broken_configs()[case]
+    path = tmp_path / "broken.yaml"
+    error = config_error(cfg, path)
+    assert error is not None and "\n" not in error and error.startswith("invalid config"), error
+    assert str(path) in error and message in error, error
+
+
+@pytest.mark.parametrize("case", ["missing_stage", "cross_field_rule"])
 def test_broken_config_fails_before_any_job(tmp_path, case):
     cfg, message = broken_configs()[case]
     path = tmp_path / "broken.yaml"
