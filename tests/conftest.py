@@ -1,4 +1,5 @@
 import fcntl
+import os
 import json
 import shutil
 import subprocess
@@ -111,3 +112,30 @@ def config_error(cfg: dict, path: Path) -> str | None:
         except WorkflowError as e:
             return str(e.args[0]) if e.args else str(e)
     return None
+
+
+#: Dispatch order (``--dist loadfile`` hands whole modules to the workers in collection
+#: order).  First the modules that spend most of their time waiting, each on a worker of its
+#: own: the real SLURM (daemons, status polls, a time limit of a minute) and the module whose
+#: first test starts the CI run (which uses both cores itself).  Last, the other modules that
+#: need the CI run: dispatched early they would hold a worker idle while it runs.
+FIRST_MODULES = ("test_real_slurm.py", "test_workflow.py")
+LAST_MODULES = ("test_burkhard2024_workflow.py", "test_discrepancy_workflow.py", "test_workflow_structure.py",
+                "test_resilience.py", "test_benchmark.py")
+
+
+def pytest_collection_modifyitems(config, items):
+    """The waiting modules first, the modules that need the CI run last (FIRST_MODULES)."""
+    def rank(item):
+        name = Path(str(item.fspath)).name
+        if name in FIRST_MODULES:
+            return FIRST_MODULES.index(name)
+        return len(FIRST_MODULES) + 1 + LAST_MODULES.index(name) if name in LAST_MODULES else len(FIRST_MODULES)
+
+    items.sort(key=rank)  # stable: the order within a module is kept
+
+
+def pytest_xdist_auto_num_workers(config):
+    """``-n auto``: one worker per core, and at least three: two of them wait most of their
+    time (for SLURM, for the CI run), so two workers on two cores would leave the cores idle."""
+    return max(3, os.cpu_count() or 1)
