@@ -187,8 +187,8 @@ def sha256(path):
 def outputs_equal_local_run(results: Path, request):
     """Every result of this run (logs, benchmarks and timings excepted) is byte-identical
     to the same file of the local CI run.  That run (tests/conftest.ci_workflow, shared by
-    the session) is asked for only here, after the SLURM run: another worker may be making
-    it meanwhile, and this test does not wait for it before its own run."""
+    the session) is asked for only in the module's last test, after every SLURM run:
+    another worker is making it meanwhile, and the SLURM runs do not wait for it."""
     ci_workflow = request.getfixturevalue("ci_workflow")
     mine, local = comparable(results), comparable(ci_workflow[0] / "results")
     assert mine and set(mine) <= set(local), sorted(set(mine) - set(local))
@@ -209,10 +209,10 @@ def profile_run(slurm, tmp_path_factory):
     return workdir, text
 
 
-def test_real_slurm_each_job_runs_as_a_slurm_job_in_the_chosen_partition(slurm, profile_run, request):
+def test_real_slurm_each_job_runs_as_a_slurm_job_in_the_chosen_partition(slurm, profile_run):
     """Every job not marked local runs in a SLURM job of the run (grouped as the profile
-    says), in the chosen partition, with the chosen account, and the results equal the
-    local run's."""
+    says), in the chosen partition, with the chosen account, and writes every file it
+    planned, whole."""
     workdir, text = profile_run
     jobs = slurm.jobs(run_id(text))
     logs = submitted(text)
@@ -241,7 +241,7 @@ def test_real_slurm_each_job_runs_as_a_slurm_job_in_the_chosen_partition(slurm, 
     files, temporaries = survey(workdir / "results")
     assert not temporaries, temporaries
     assert all((workdir / o).is_file() for o in ran_in)
-    outputs_equal_local_run(workdir / "results", request)
+    # equal to the local run's: test_real_slurm_results_equal_the_local_run, at the end
 
 
 def slurm_id_of_held_job(text):
@@ -317,7 +317,7 @@ def faulted_runs(slurm, profile_run, tmp_path_factory):
 
 
 @pytest.mark.parametrize("fault", list(FAULTS))
-def test_real_slurm_cancelled_or_timed_out_job_fails_and_the_rerun_resumes(slurm, faulted_runs, request, fault):
+def test_real_slurm_cancelled_or_timed_out_job_fails_and_the_rerun_resumes(slurm, faulted_runs, fault):
     """A SLURM job that dies under Snakemake (cancelled by scancel, or killed by SLURM at its
     time limit) is reported as failed with its rule's name; the run stops (no hang); the
     same command again submits only the failed job and leaves the finished ones alone."""
@@ -342,7 +342,6 @@ def test_real_slurm_cancelled_or_timed_out_job_fails_and_the_rerun_resumes(slurm
     assert again == [HELD_RULE], again
     for p, (digest, mtime) in run["finished"].items():
         assert (sha256(p), p.stat().st_mtime_ns) == (digest, mtime), f"{p} was redone"
-    outputs_equal_local_run(run["workdir"] / "results", request)
 
 
 @pytest.fixture(scope="module")
@@ -385,3 +384,12 @@ def test_real_slurm_with_accounting_the_account_is_checked_and_used(slurm_with_a
             assert "Unable to guess SLURM account. Trying to proceed without." in text
             assert "sacct: invalid option -- '1'" in text  # the plugin's guess (2.8.0)
     assert charged == {"accelcal_test": "accelcal_test", None: "root"}, charged  # root: the default account
+
+
+def test_real_slurm_results_equal_the_local_run(profile_run, faulted_runs, request):
+    """The results of the profile run and of both faulted runs after their reruns equal the
+    local CI run's, byte for byte (last in the module: it waits for the local run, which
+    another worker makes while the SLURM runs go on)."""
+    outputs_equal_local_run(profile_run[0] / "results", request)
+    for fault, run in faulted_runs.items():
+        outputs_equal_local_run(run["workdir"] / "results", request)
