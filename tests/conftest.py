@@ -139,3 +139,14 @@ def pytest_xdist_auto_num_workers(config):
     """``-n auto``: one worker per core, and at least three: two of them wait most of their
     time (for SLURM, for the CI run), so two workers on two cores would leave the cores idle."""
     return max(3, os.cpu_count() or 1)
+
+
+def pytest_runtest_logreport(report):
+    """With $ACCELCAL_TEST_TIMELINE set to a folder: one line per test phase (end time,
+    worker, phase, seconds, test) in a file per worker, to see where a run's wall time goes
+    (which module waits for what); nothing otherwise."""
+    folder = os.environ.get("ACCELCAL_TEST_TIMELINE")
+    if folder:
+        worker = os.environ.get("PYTEST_XDIST_WORKER", "master")
+        with open(Path(folder) / f"{worker}.tsv", "a") as f:
+            f.write(f"{time.time():.1f}\t{worker}\t{report.when}\t{report.duration:.2f}\t{report.nodeid}\n")
