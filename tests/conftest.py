@@ -114,11 +114,13 @@ def config_error(cfg: dict, path: Path) -> str | None:
     return None
 
 
-#: Dispatch order (``--dist loadfile`` hands whole modules to the workers in collection
-#: order).  First the modules that spend most of their time waiting, each on a worker of its
-#: own: the real SLURM (daemons, status polls, a time limit of a minute) and the module whose
-#: first test starts the CI run (which uses both cores itself).  Last, the other modules that
-#: need the CI run: dispatched early they would hold a worker idle while it runs.
+#: Dispatch order (``--dist loadfile --no-loadscope-reorder`` hands whole modules to the
+#: workers in collection order; xdist's default hands out the modules with the most tests
+#: first, which started the real-SLURM module, 5 tests, last).  First the modules that spend
+#: most of their time waiting, each on a worker of its own: the real SLURM (daemons, status
+#: polls, a time limit of a minute) and the module whose first test starts the CI run (which
+#: uses both cores itself).  Last, the other modules that need the CI run: dispatched early
+#: they would hold a worker idle while it runs.
 FIRST_MODULES = ("test_real_slurm.py", "test_workflow.py")
 LAST_MODULES = ("test_burkhard2024_workflow.py", "test_discrepancy_workflow.py", "test_workflow_structure.py",
                 "test_resilience.py", "test_benchmark.py")
