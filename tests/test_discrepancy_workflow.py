@@ -60,7 +60,7 @@ FIGURES = ["discrepancy_fpr", "discrepancy_confusion", "discrepancy_power", "dis
 def test_stage_outputs_of_the_ci_run(ci_workflow):
     """The stage end to end, in the session's CI run (tests/conftest.py): every table and
     figure, one benchmark row per recording and null, the MPU-6050 (10 poses) not
-    identifiable.  Its byte-identical rerun is tests/test_workflow.py's forced-rerun test
+    identifiable.  Its byte-identical rerun is tests/test_workflow_reruns.py's
     (a chunk, the scoring, the summary, a measured report, the ADIS analysis, the claims,
     a figure)."""
     w = ci_workflow[0]

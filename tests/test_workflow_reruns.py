@@ -1,0 +1,63 @@
+"""Determinism of the whole workflow: a forced rerun of chosen jobs of the CI run rewrites
+identical bytes.  A module of its own so that, dispatched after the CI run is made (see
+tests/conftest.py), it runs on whichever worker is free while the rest of test_workflow.py
+goes on."""
+
+import re
+from pathlib import Path
+
+import pandas as pd
+
+from .conftest import CI_CONFIG as CI
+from .conftest import copy_of_ci_workflow, run_snakemake as snakemake
+
+
+def test_ci_reruns_are_byte_identical(ci_workflow, tmp_path):
+    """Determinism: forcing a representative set of jobs to rerun with the same config
+    (a Monte Carlo grid point and its gather, a calibration and a filter Monte Carlo chunk,
+    real-data tables, a discrepancy benchmark chunk, its scoring and summary, a measured
+    discrepancy report, the ADIS analysis, figures, the stage claims and the ledger)
+    rewrites identical bytes.  Only those jobs run (``--force`` on them as targets, not
+    ``--forcerun``, which would redo everything downstream too: the same determinism,
+    minutes more).  Wall-time measurements are the exception: files with "timing" in their
+    path, the speed claims computed from them, and the report that shows them (its
+    byte-identity from identical inputs is tests/test_report.py's)."""
+    import hashlib
+
+    workdir = copy_of_ci_workflow(ci_workflow, tmp_path / "copy")
+    point = sorted((workdir / "results" / "burkhard2024" / "mc").glob("*.csv.gz"))[0].relative_to(workdir)
+    targets = [point, "burkhard2024_summary", "results/batista2011/chunks/calibration_errors_0.csv.gz",
+               "results/tereshkov/chunks/field_0.csv.gz", "measured_tables", "tereshkov_summary",
+               "results/discrepancy/benchmark/detections/chunk_0.csv", "results/discrepancy/benchmark/scores.csv.gz",
+               "results/discrepancy/summary.csv", "results/discrepancy/measured/mpu6050.json",
+               "results/discrepancy/adis/models.csv", "results/claims/discrepancy.csv",
+               "results/figures/discrepancy_confusion.png", "burkhard2024_figures", "batista2011_fig4_plot", "claims"]
+    results = workdir / "results"
+
+    def digests():
+        out = {}
+        for p in sorted(results.rglob("*")):
+            rel = p.relative_to(results)
+            if not p.is_file() or {"logs", "benchmarks"} & set(rel.parts) or "timing" in str(rel) \
+                    or rel == Path("report.html"):
+                continue
+            if p.suffix == ".csv" and "claims" in (rel.parts[0], p.stem):
+                ledger = pd.read_csv(p, dtype=str, keep_default_na=False)
+                out[rel] = ledger[~ledger["claim_id"].str.startswith("speed_")].to_csv(index=False)
+            else:
+                out[rel] = hashlib.sha256(p.read_bytes()).hexdigest()
+        return out
+
+    before = digests()
+    proc = snakemake(workdir, *targets, "--configfile", CI, "--force")
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    after = digests()
+    assert before.keys() == after.keys()
+    changed = sorted(str(k) for k in before if before[k] != after[k])
+    assert not changed, f"rerun changed {changed}"
+    out = proc.stdout + proc.stderr
+    ran = set(re.findall(r"^(?:local)?rule (\w+):$", out, re.M))
+    for rule in ("burkhard2024_mc", "burkhard2024_summary", "batista2011_calibration_mc", "tereshkov_simulate",
+                 "discrepancy_chunk", "discrepancy_score", "discrepancy_summary", "discrepancy_measured_report",
+                 "discrepancy_adis", "discrepancy_claims", "discrepancy_confusion_figure", "claims"):
+        assert rule in ran, rule  # the job did rerun
