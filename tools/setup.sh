@@ -10,10 +10,7 @@ fi
 stamp=.venv/.accelcal-lock.sha256
 want=$(.venv/bin/python -c "import hashlib,sys;print(hashlib.sha256(open('environment.lock','rb').read()).hexdigest())")
 if [ ! -f "$stamp" ] || [ "$(cat "$stamp")" != "$want" ]; then
-    # --no-compile: no bytecode for every module of every package now (half of the install's
-    # 40 s); Python writes it for the modules that are imported, when they first are
-    .venv/bin/python -m pip install -q --disable-pip-version-check --require-hashes --no-deps --no-compile \
-        -r environment.lock
+    .venv/bin/python -m pip install -q --disable-pip-version-check --require-hashes --no-deps -r environment.lock
     .venv/bin/python -m pip install -q --disable-pip-version-check --no-deps --no-build-isolation -e .
     echo "$want" > "$stamp"
 fi
