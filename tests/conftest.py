@@ -1,6 +1,6 @@
 import fcntl
-import os
 import json
+import os
 import shutil
 import subprocess
 import sys
