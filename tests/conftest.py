@@ -138,6 +138,7 @@ def pytest_collection_modifyitems(config, items):
     items.sort(key=rank)  # stable: the order within a module is kept
 
 
+@pytest.hookimpl(optionalhook=True)  # xdist's hook: the suite also runs with -p no:xdist
 def pytest_xdist_auto_num_workers(config):
     """``-n auto``: one worker per core, and at least three: two of them wait most of their
     time (for SLURM, for the CI run), so two workers on two cores would leave the cores idle."""

@@ -29,8 +29,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import special  # scipy.stats costs ~0.4 s to import; these are the functions it calls
 
+from . import distributions as dist
 from .errors import AccelcalError
 from .uncertainty import pose_residuals, residual_jacobian
 
@@ -80,7 +80,7 @@ def chi2_test(residuals, sigma, n_params: int) -> Chi2:
     s = np.asarray(sigma, float)
     c = float(np.sum((r / s) ** 2))
     dof = r.size - n_params
-    p = float(special.chdtrc(dof, c)) if dof > 0 else float("nan")  # the chi2 distribution's sf
+    p = dist.chi2_sf(c, dof)
     return Chi2(c, dof, p)
 
 
@@ -179,7 +179,7 @@ def t_interval(value, se, dof: int, level: float) -> tuple[np.ndarray, np.ndarra
     if dof <= 0:
         nan = np.full(value.shape, np.nan)
         return nan, nan
-    k = special.stdtrit(dof, 0.5 + level / 2)  # Student t quantile
+    k = dist.t_ppf(0.5 + level / 2, dof)
     return value - k * se, value + k * se
 
 
@@ -194,7 +194,7 @@ def noise_interval(value, se_noise, chi: Chi2, level: float) -> tuple[np.ndarray
     standard error is not used: with 1-3 degrees of freedom its σ̂ is itself a guess
     (the MPU-6050 full model has one, and its residuals happen to be ~50x below the noise).
     """
-    k = special.ndtri(0.5 + level / 2) * max(1.0, chi.excess if np.isfinite(chi.excess) else 1.0)  # normal quantile
+    k = dist.norm_ppf(0.5 + level / 2) * max(1.0, chi.excess if np.isfinite(chi.excess) else 1.0)  # normal quantile
     value = np.asarray(value, float)
     se = np.asarray(se_noise, float)
     return value - k * se, value + k * se

@@ -33,8 +33,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import stats
 
+from .. import distributions as dist
 from ..errors import AccelcalError
 
 #: Power-law exponents α of S_y(f) ∝ f^α that :func:`edf_overlapping` knows.
@@ -154,8 +154,8 @@ def avar_interval(avar, edf, level: float = 0.683) -> tuple[np.ndarray, np.ndarr
         raise AllanError(f"confidence level must be in (0, 1), got {level}")
     avar = np.asarray(avar, dtype=float)
     edf = np.broadcast_to(np.asarray(edf, dtype=float), avar.shape)
-    lo = avar * edf / stats.chi2.ppf(0.5 + level / 2, edf)
-    hi = avar * edf / stats.chi2.ppf(0.5 - level / 2, edf)
+    lo = avar * edf / dist.chi2_ppf(0.5 + level / 2, edf)
+    hi = avar * edf / dist.chi2_ppf(0.5 - level / 2, edf)
     return lo, hi
 
 

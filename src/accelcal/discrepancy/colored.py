@@ -116,8 +116,8 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import stats
 
+from .. import distributions as dist
 from ..errors import AccelcalError
 from .stochastic import pose_difference_variance  # noqa: F401 (re-exported for the loop)
 
@@ -129,7 +129,7 @@ Q_REL_GRID = np.concatenate([[0.0], np.logspace(-2.0, 3.0, 16)])
 TAU_PER_DECADE = 5
 TAU_PER_DECADE_FINE = 10
 #: ``χ²₁`` quantile of the 95 % profile-likelihood intervals.
-CHI2_95 = float(stats.chi2.isf(0.05, 1))
+CHI2_95 = float(dist.chi2_isf(0.05, 1))
 #: Residual degrees of freedom (poses − parameters) the wander's two parameters need at
 #: least (a variance from 6 degrees of freedom has a relative standard error of 58 %).
 MIN_WANDER_DOF = 6

@@ -68,8 +68,9 @@ from dataclasses import asdict, dataclass, field, replace
 from functools import lru_cache
 
 import numpy as np
-from scipy import optimize, special, stats
+from scipy import special
 
+from .. import distributions as dist
 from ..errors import AccelcalError
 from .effects import EFFECT_IDS, EFFECTS, TEMPERATURE, effect
 from .fit import Fit, PoseData, effect_columns, fit, lopo, orthonormal_basis, parameter_names
@@ -153,22 +154,24 @@ def critical_noncentrality(k: int, dof: int, level: float, power: float) -> floa
     """``λ*`` with ``P(F(k, dof; λ*) > F_{1-level}(k, dof)) = power`` (inf if ``dof < 1``)."""
     if dof < 1:
         return float("inf")
-    fcrit = stats.f.isf(level, k, dof)
+    fcrit = dist.f_isf(level, k, dof)
 
     def f(lam):
-        return stats.ncf.sf(fcrit, k, dof, lam) - power
+        return dist.ncf_sf(fcrit, k, dof, lam) - power
 
     hi = 1.0
     while f(hi) < 0:
         hi *= 2
         if hi > 1e8:
             return float("inf")
-    return float(optimize.brentq(f, 0.0, hi, xtol=1e-10, rtol=1e-12))
+    from scipy.optimize import brentq  # here: scipy.optimize costs 0.2-0.6 s to import
+
+    return float(brentq(f, 0.0, hi, xtol=1e-10, rtol=1e-12))
 
 
 def _f_sf(stat: float, dfn: int, dfd: int) -> float:
-    """``stats.f.sf(stat, dfn, dfd)`` for ``stat >= 0`` without scipy.stats' argument handling
-    (its ``_sf`` is this special function; the loop calls it for every candidate)."""
+    """:func:`accelcal.distributions.f_sf` for ``stat >= 0`` without its argument handling
+    (the loop calls it for every candidate)."""
     return float(special.fdtrc(dfn, dfd, stat)) if dfd > 0 else float("nan")
 
 
@@ -426,8 +429,8 @@ class DiscrepancyResult:
     def summary(self) -> dict:
         """The gaps and what noise alone predicts, before (base) and after (named effects)."""
         b, f = self.base, self.final
-        chi0 = stats.chi2.sf(b.chi2, b.dof) if b.dof > 0 else float("nan")
-        chi1 = stats.chi2.sf(f.chi2, f.dof) if f.dof > 0 else float("nan")
+        chi0 = dist.chi2_sf(b.chi2, b.dof) if b.dof > 0 else float("nan")
+        chi1 = dist.chi2_sf(f.chi2, f.dof) if f.dof > 0 else float("nan")
         excess_var = b.chi2 - b.dof
         return {
             "n_poses": b.n,

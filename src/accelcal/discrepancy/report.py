@@ -22,8 +22,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import stats
 
+from .. import distributions as dist
 from ..errors import AccelcalError
 from ..recording import Recording
 from ..static import StaticPoses, detect_static_recording
@@ -145,7 +145,7 @@ def rests_implication(det: DiscrepancyResult, stoch, starts, durations, alpha: f
     s2 = f.sigma ** 2 + extra
     chi2 = float(np.sum(f.residuals ** 2 / s2))
     if f.dof > 0:
-        upper = float(stats.chi2.sf(chi2, f.dof))
+        upper = float(dist.chi2_sf(chi2, f.dof))
         p = min(1.0, 2 * min(upper, 1 - upper))
         verdict = "consistent" if p >= alpha else ("residuals exceed it" if upper < 0.5 else "it over-predicts")
     else:
@@ -198,7 +198,7 @@ def noise_implication(det: DiscrepancyResult, stoch, starts, durations, alpha: f
     mean, var = c["chi2_mean"], c["chi2_var"]
     if dof > 0 and var > 0:
         k, th = mean ** 2 / var, var / mean
-        upper = float(stats.gamma.sf(chi2, k, scale=th))
+        upper = float(dist.gamma_sf(chi2, k, scale=th))
         p = min(1.0, 2 * min(upper, 1 - upper))
         verdict = "consistent" if p >= alpha else ("residuals exceed it" if upper < 0.5 else "it over-predicts")
     else:

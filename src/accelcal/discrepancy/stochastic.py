@@ -154,9 +154,8 @@ from dataclasses import dataclass, field
 from itertools import combinations
 
 import numpy as np
-from scipy import stats
-from scipy.signal import lfilter
 
+from .. import distributions as dist
 from ..errors import AccelcalError
 from .allan import AllanVariance, allan_variance, check_segments, pooled_edf
 
@@ -345,6 +344,8 @@ def _simulate_term(k: str, v: float, shape, rng: np.random.Generator, n: int, fs
     rho = math.exp(-1.0 / (fs * shape))  # gauss_markov: stationary AR(1)
     e = rng.standard_normal((n, cols)) * v * math.sqrt(1.0 - rho * rho)
     e[0] = rng.standard_normal(cols) * v  # start in the stationary distribution
+    from scipy.signal import lfilter  # here: scipy.signal costs ~1 s to import
+
     return lfilter([1.0], [1.0, -rho], e, axis=0)
 
 
@@ -670,7 +671,7 @@ def segment_homogeneity(allan_longest: AllanVariance, allan_others: AllanVarianc
     k = min(allan_longest.taus.size, allan_others.taus.size)
     ratio = allan_others.avar[:k] / allan_longest.avar[:k]
     nu_o, nu_l = allan_others.edf[:k, None], allan_longest.edf[:k, None]
-    cdf = stats.f.cdf(ratio, nu_o, nu_l)
+    cdf = dist.f_cdf(ratio, nu_o, nu_l)
     p = np.minimum(1.0, 2 * np.minimum(cdf, 1 - cdf))
     return {"taus": allan_longest.taus[:k], "adev_ratio": np.sqrt(ratio), "p_value": p}
 

@@ -52,8 +52,8 @@ import math
 from dataclasses import asdict
 
 import numpy as np
-from scipy import stats
 
+from .. import distributions as dist
 from ..errors import AccelcalError
 from . import colored as C
 from .detect import (
@@ -249,7 +249,7 @@ def _more_replicates_could_pass(rules: Rules):
 
     def extend(counts: np.ndarray, n: int, final: np.ndarray) -> np.ndarray:
         running = np.isnan(final)
-        low = np.where(counts > 0, stats.beta.ppf(0.005, np.maximum(counts, 1), n - counts + 1), 0.0)
+        low = np.where(counts > 0, dist.beta_ppf(0.005, np.maximum(counts, 1), n - counts + 1), 0.0)
         p_now = np.where(running, (1 + counts) / (n + 1), final)
         p_low = np.where(running, np.maximum(low, floor), final)
         passes_now = holm(p_now, rules.correction) <= rules.alpha
@@ -359,8 +359,8 @@ def _resolve_ambiguous(prob: C.Problem, cand_rows: list, alpha: float) -> list:
             if np.isnan(both):
                 i_given_j = j_given_i = False
             else:
-                i_given_j = stats.chi2.sf(max(single[j] - both, 0.0), Xi.shape[1]) <= alpha
-                j_given_i = stats.chi2.sf(max(single[i] - both, 0.0), Xj.shape[1]) <= alpha
+                i_given_j = dist.chi2_sf(max(single[j] - both, 0.0), Xi.shape[1]) <= alpha
+                j_given_i = dist.chi2_sf(max(single[i] - both, 0.0), Xj.shape[1]) <= alpha
             if not i_given_j and not j_given_i:
                 amb[i].append(cj.effect)
                 amb[j].append(ci.effect)
@@ -473,7 +473,7 @@ def _colored_summary(data, base, prob, wander, cur_data, current) -> dict:
     dof = prob.m - Xf.shape[1]
     chi2_obs = float(np.sum(current.weighted ** 2))
     mean, var = float(mu_rel.sum()), float(2 * np.sum(mu_rel ** 2))
-    lo, hi = (stats.gamma.ppf([0.025, 0.975], mean ** 2 / var, scale=var / mean) if var > 0 else (mean, mean))
+    lo, hi = (dist.gamma_ppf([0.025, 0.975], mean ** 2 / var, scale=var / mean) if var > 0 else (mean, mean))
     # per pose (every pose, outliers too): std of the wander's share of the residual about the
     # session's common mean, through the final model's gradient
     from .fit import evaluate

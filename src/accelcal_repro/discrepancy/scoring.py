@@ -26,8 +26,8 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
-from scipy import stats
 
+from accelcal import distributions as dist
 from accelcal.discrepancy.effects import EFFECT_IDS
 from accelcal.errors import AccelcalError
 
@@ -45,8 +45,8 @@ def clopper_pearson(k, n, level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
     n = np.asarray(n, float)
     a = (1 - level) / 2
     with np.errstate(invalid="ignore", divide="ignore"):
-        lo = np.where(k > 0, stats.beta.ppf(a, k, n - k + 1), 0.0)
-        hi = np.where(k < n, stats.beta.ppf(1 - a, k + 1, n - k), 1.0)
+        lo = np.where(k > 0, dist.beta_ppf(a, k, n - k + 1), 0.0)
+        hi = np.where(k < n, dist.beta_ppf(1 - a, k + 1, n - k), 1.0)
     bad = n <= 0
     return np.where(bad, np.nan, lo), np.where(bad, np.nan, hi)
 

@@ -43,8 +43,8 @@ import math
 
 import numpy as np
 import pandas as pd
-from scipy import stats
 
+from accelcal import distributions as dist
 from accelcal.discrepancy.detect import holm
 from accelcal.discrepancy.fit import evaluate, fit, forward, pose_data, pose_data_from_static
 from accelcal.errors import AccelcalError
@@ -283,6 +283,8 @@ def diagnostics_row(name: str, rec: Recording, report: dict) -> dict:
         h = (a + b) // 2
         drift.append((acc[h:b].mean(axis=0) - acc[a:h].mean(axis=0)) / (2 * se[i]))
     r = np.array(p["residual_before"], float) / np.array(p["sigma"], float)
+    from scipy import stats  # here: scipy.stats costs ~1 s to import, and few jobs need it
+
     rho, pval = stats.spearmanr(np.array(p["t"], float), r)
     return {"recording": name, "n_poses": len(ranges), "within_pose_drift": float(np.sqrt(np.mean(np.square(drift)))),
             "half_consistency": half_consistency(rec, ranges, pose_data_of(report)),
@@ -435,6 +437,8 @@ def gap_rows(name: str, report: dict, sims: pd.DataFrame, rec: Recording | None 
         return []
     exc_meas = math.sqrt(float(meas @ meas) / dof)
     hc_meas = half_consistency(rec, _rest_ranges(rec, report), pose_data_of(report)) if rec is not None else np.nan
+    from scipy import stats  # here: scipy.stats costs ~1 s to import, and few jobs need it
+
     rows = []
     for which, d in sims[sims.pose >= 0].groupby("model", sort=False):
         z = d.z.to_numpy()
@@ -479,7 +483,7 @@ def stability_rows(estimates: pd.DataFrame, alpha: float, se_column: str = "se")
         q = float(np.sum(w * (v - mean) ** 2))
         rows.append({"parameter": par, "sessions": k, "weighted_mean": mean, "pooled_se": float(1 / np.sqrt(w.sum())),
                      "spread": float(v.max() - v.min()), "spread_over_se": float((v.max() - v.min()) / np.sqrt(np.mean(d.se ** 2))),
-                     "Q": q, "dof": k - 1, "p_value": float(stats.chi2.sf(q, k - 1)),
+                     "Q": q, "dof": k - 1, "p_value": float(dist.chi2_sf(q, k - 1)),
                      **{f"value_{r}": float(x) for r, x in zip(d.recording, v)},
                      **{f"se_{r}": float(s) for r, s in zip(d.recording, d.se)}})
     out = pd.DataFrame(rows)

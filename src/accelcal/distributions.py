@@ -1,0 +1,103 @@
+"""The distribution functions the library uses, taken from ``scipy.special``.
+
+``scipy.stats`` implements each of these as the special function named here, after
+checking its arguments (see the ``_sf``/``_ppf``/``_isf`` methods in
+``scipy/stats/_continuous_distns.py``).  Importing ``scipy.stats`` costs about 1 s of CPU,
+and every process pays it: each workflow job and each ``accelcal`` call.  Importing
+``scipy.special`` costs about 0.4 s.  The functions return what ``scipy.stats`` returns,
+including outside the support (``sf = 1`` below it) and for invalid degrees of freedom
+(NaN).  ``tests/test_distributions.py`` checks them against ``scipy.stats``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import special
+
+
+def _out(value):
+    """A float for scalar input, an array otherwise (as scipy.stats returns)."""
+    value = np.asarray(value, float)
+    return float(value) if value.ndim == 0 else value
+
+
+def _valid(*dofs):
+    ok = np.ones((), bool)
+    for d in dofs:
+        ok = ok & (np.asarray(d, float) > 0)
+    return ok
+
+
+def chi2_sf(x, df):
+    """Upper tail ``P(χ²_df > x)`` (``stats.chi2.sf``)."""
+    x, df = np.asarray(x, float), np.asarray(df, float)
+    p = np.where(x < 0, 1.0, special.chdtrc(df, np.maximum(x, 0.0)))
+    return _out(np.where(_valid(df), p, np.nan))
+
+
+def chi2_isf(q, df):
+    """``x`` with ``P(χ²_df > x) = q`` (``stats.chi2.isf``)."""
+    return _out(np.where(_valid(df), special.chdtri(df, q), np.nan))
+
+
+def chi2_ppf(q, df):
+    """``x`` with ``P(χ²_df ≤ x) = q`` (``stats.chi2.ppf``)."""
+    df = np.asarray(df, float)
+    return _out(np.where(_valid(df), 2 * special.gammaincinv(df / 2, q), np.nan))
+
+
+def f_sf(x, dfn, dfd):
+    """Upper tail of the F distribution (``stats.f.sf``)."""
+    x = np.asarray(x, float)
+    p = np.where(x < 0, 1.0, special.fdtrc(dfn, dfd, np.maximum(x, 0.0)))
+    return _out(np.where(_valid(dfn, dfd), p, np.nan))
+
+
+def f_cdf(x, dfn, dfd):
+    """``P(F ≤ x)`` (``stats.f.cdf``)."""
+    x = np.asarray(x, float)
+    p = np.where(x < 0, 0.0, special.fdtr(dfn, dfd, np.maximum(x, 0.0)))
+    return _out(np.where(_valid(dfn, dfd), p, np.nan))
+
+
+def f_isf(q, dfn, dfd):
+    """``x`` with ``P(F > x) = q`` (``stats.f.isf``: ``fdtri`` at ``1 - q``)."""
+    q = np.asarray(q, float)
+    return _out(np.where(_valid(dfn, dfd), special.fdtri(dfn, dfd, 1.0 - q), np.nan))
+
+
+def ncf_sf(x, dfn, dfd, nc):
+    """Upper tail of the noncentral F distribution, ``1 - ncfdtr`` (``stats.ncf.sf``
+    within 1e-13: both are Boost's noncentral beta; at ``nc = 0`` scipy 1.17's
+    ``stats.ncf.sf`` returns ``-cdf``, this returns the central F's tail)."""
+    x = np.asarray(x, float)
+    p = np.where(x < 0, 1.0, 1.0 - special.ncfdtr(dfn, dfd, nc, np.maximum(x, 0.0)))
+    return _out(np.where(_valid(dfn, dfd) & (np.asarray(nc, float) >= 0), p, np.nan))
+
+
+def gamma_sf(x, a, scale=1.0):
+    """Upper tail of the gamma distribution of shape ``a`` (``stats.gamma.sf``)."""
+    y = np.asarray(x, float) / scale
+    p = np.where(y < 0, 1.0, special.gammaincc(a, np.maximum(y, 0.0)))
+    return _out(np.where(_valid(a) & (scale > 0), p, np.nan))
+
+
+def gamma_ppf(q, a, scale=1.0):
+    """Quantile of the gamma distribution of shape ``a`` (``stats.gamma.ppf``)."""
+    return _out(np.where(_valid(a) & (scale > 0), special.gammaincinv(a, q) * scale, np.nan))
+
+
+def beta_ppf(q, a, b):
+    """Quantile of the beta distribution (``stats.beta.ppf``)."""
+    return _out(np.where(_valid(a, b), special.betaincinv(a, b, q), np.nan))
+
+
+def t_ppf(q, df):
+    """Quantile of Student's t (``stats.t.ppf``; ``stdtrit`` gives +inf at ``q = 0``)."""
+    q = np.asarray(q, float)
+    return _out(np.where(_valid(df), np.where(q == 0, -np.inf, special.stdtrit(df, q)), np.nan))
+
+
+def norm_ppf(q):
+    """Quantile of the standard normal (``stats.norm.ppf``)."""
+    return _out(special.ndtri(q))
