@@ -455,3 +455,19 @@ def test_discrepancy_white_loop_agrees():
         for ca, cb in zip(a.candidates, b.candidates):
             assert (ca.effect, ca.identifiable, ca.passed, ca.named) == (cb.effect, cb.identifiable, cb.passed, cb.named)
             np.testing.assert_allclose(ca.p_value, cb.p_value, rtol=1e-7)
+
+
+@pytest.mark.parametrize("rho", [0.0, 0.3, 0.999, 0.99999])
+def test_gauss_markov_simulation_is_bit_for_bit_lfilter(rho):
+    """The compiled AR(1) recursion gives exactly scipy.signal.lfilter's numbers, so the
+    simulated noise (and every benchmark table built on it) does not depend on the path."""
+    from scipy.signal import lfilter
+
+    from accelcal.discrepancy import _fast
+    from accelcal.discrepancy.stochastic import simulate_noise
+
+    e = np.random.default_rng(7).standard_normal((5000, 3))
+    assert np.array_equal(_fast.ar1(e, rho), lfilter([1.0], [1.0, -rho], e, axis=0))
+    terms = {"white": 1e-3, "gauss_markov": (2e-3, 30.0)}
+    a, b = both(lambda: simulate_noise(np.random.default_rng(3), 20000, 100.0, terms, size=3))
+    assert np.array_equal(a, b)

@@ -9,7 +9,8 @@ dozens of array calls; these kernels run the same algorithms in one compiled loo
   the Gamma likelihood, non-negative least squares by enumerating the supports, step
   halving), problem by problem;
 * :func:`allan_sums` — the sums of squared second differences of the running sums that
-  :func:`accelcal.discrepancy.allan.allan_variance` accumulates.
+  :func:`accelcal.discrepancy.allan.allan_variance` accumulates;
+* :func:`ar1` — the Gauss–Markov recursion of the noise simulator (``lfilter``, bit for bit).
 
 Same algorithms, same arithmetic up to the order of floating-point sums (results agree
 to ~1e-12 relative; the tests compare them).  Imported only through
@@ -191,6 +192,18 @@ def _allan_sums(c, m):
     return out
 
 
+def _ar1(e, rho):
+    """``y[t] = e[t] + rho·y[t−1]`` down each column of ``e`` (n, d), from ``y[−1] = 0``."""
+    n, d = e.shape
+    y = np.empty((n, d))
+    prev = np.zeros(d)
+    for t in range(n):
+        for col in range(d):
+            prev[col] = e[t, col] + rho * prev[col]
+            y[t, col] = prev[col]
+    return y
+
+
 # The Python error model: these kernels never divide by zero on valid input, and the
 # numpy versions raise where they would.
 _jit = jit(error_model="python")
@@ -200,6 +213,7 @@ _floored_model = _jit(_floored_model)
 _irls_one = _jit(_irls_one)
 _irls_batch = _jit(_irls_batch)
 _allan_sums = _jit(_allan_sums)
+_ar1 = _jit(_ar1)
 
 
 def supports(p: int) -> tuple[np.ndarray, np.ndarray]:
@@ -226,4 +240,11 @@ def allan_sums(c: np.ndarray, m: np.ndarray) -> np.ndarray:
     return _allan_sums(np.ascontiguousarray(c, dtype=np.float64), np.ascontiguousarray(m, dtype=np.int64))
 
 
-__all__ = ["allan_sums", "irls_gamma", "supports"]
+def ar1(e: np.ndarray, rho: float) -> np.ndarray:
+    """Compiled ``scipy.signal.lfilter([1], [1, -rho], e, axis=0)`` of a 2-D ``e``: the same
+    operations in the same order (``y = 1·e + (0·e' + rho·y')``, which is ``e + rho·y'``
+    exactly), so the same bits; scipy.signal costs ~1 s of CPU to import."""
+    return _ar1(np.ascontiguousarray(e, dtype=np.float64), float(rho))
+
+
+__all__ = ["allan_sums", "ar1", "irls_gamma", "supports"]
