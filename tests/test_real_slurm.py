@@ -195,10 +195,44 @@ def outputs_equal_local_run(results: Path, request):
     assert [k for k in mine if mine[k] != local[k]] == []
 
 
+def start_held_run(slurm, workdir: Path) -> dict:
+    """TARGETS through the profile in ``workdir`` with the gather job held (tests/hold_hook):
+    the run's working directory, hold FIFO, console file and process."""
+    fifo, console = workdir.with_name("hold"), workdir.with_name("console.log")
+    os.mkfifo(fifo)
+    with open(console, "w") as sink:
+        proc = subprocess.Popen(snakemake_cmd(workdir, PROFILE, *TARGETS), cwd=REPO, stdout=sink,
+                                stderr=subprocess.STDOUT, start_new_session=True,
+                                env=dict(slurm.env, **hold_env(fifo, f"*/{HELD_OUTPUT}")))
+    return {"workdir": workdir, "fifo": fifo, "console": console, "proc": proc}
+
+
+def monte_carlo_outputs(workdir: Path) -> dict:
+    """{path: (sha256, mtime)} of the run's Monte Carlo outputs (the gather job's inputs)."""
+    finished = {p: (sha256(p), p.stat().st_mtime_ns) for p in (workdir / "results").rglob("mc/*.csv.gz")}
+    assert len(finished) == 8, sorted(finished)
+    return finished
+
+
 @pytest.fixture(scope="module")
-def profile_run(slurm, tmp_path_factory):
+def time_limit_run(slurm, tmp_path_factory):
+    """The time-limit fault's run, started before the profile run and beside it: TARGETS
+    from an empty working directory, the gather job held.  It is the module's longest
+    run (SLURM's shortest time limit is 1 min from the job's start, and the plugin's
+    status checks back off while nothing finishes), so it does not wait for the profile
+    run as the scancel run does."""
+    run = start_held_run(slurm, tmp_path_factory.mktemp("time_limit") / "work")
+    yield run
+    if run["proc"].poll() is None:  # a test failed before the fault: no run outlives the module
+        os.killpg(run["proc"].pid, 9)
+        run["proc"].wait()
+
+
+@pytest.fixture(scope="module")
+def profile_run(slurm, time_limit_run, tmp_path_factory):
     """TARGETS through the profile as the README says to use it, with the partition and
-    account set by uncommenting its two lines: (working directory, Snakemake's output)."""
+    account set by uncommenting its two lines: (working directory, Snakemake's output).
+    (The time-limit fault's run is started first, and runs beside it.)"""
     tmp = tmp_path_factory.mktemp("profile_run")
     profile = profile_copy(tmp / "profile", partition="other", account="accelcal_test")
     workdir = tmp / "work"
@@ -261,34 +295,28 @@ FAULTS = {  # fault: (what the test does to the held job's SLURM job, SLURM's st
 
 
 @pytest.fixture(scope="module")
-def faulted_runs(slurm, profile_run, tmp_path_factory):
-    """For every fault, side by side (one SLURM CPU each): a copy of the profile run
-    without the gather job's outputs, run again with the gather job held; the fault hits
-    its SLURM job; then the same command again, without the hold.  Returns per fault the
-    working directory, the Monte Carlo outputs (sha256, mtime) before the faulted run,
-    the faulted run's output and return code, the SLURM job id, the seconds from the
-    fault to the run's end, and the rerun's output and return code."""
-    runs = {}
+def faulted_runs(slurm, profile_run, time_limit_run, tmp_path_factory):
+    """For every fault, side by side (one SLURM CPU each), a run with the gather job held:
+    for ``scancel`` a copy of the profile run without the gather job's outputs, for
+    ``time_limit`` the run started from scratch beside the profile run
+    (:func:`time_limit_run`).  The fault hits the held job's SLURM job; then the same
+    command runs again, without the hold.  Returns per fault the working directory, the
+    Monte Carlo outputs (sha256, mtime) before the fault, the faulted run's output and
+    return code, the SLURM job id, the seconds from the fault to the run's end, and the
+    rerun's output and return code."""
+    tmp = tmp_path_factory.mktemp("scancel")
+    workdir = tmp / "work"
+    shutil.copytree(profile_run[0], workdir, symlinks=True, ignore=shutil.ignore_patterns("locks"))
+    for path in (workdir / "results" / "burkhard2024").iterdir():
+        if path.is_file():  # the gather job's outputs (not the Monte Carlo's, in mc/)
+            path.unlink()
+    finished = monte_carlo_outputs(workdir)
+    runs = {"scancel": dict(start_held_run(slurm, workdir), finished=finished), "time_limit": time_limit_run}
     try:
-        for fault in FAULTS:
-            tmp = tmp_path_factory.mktemp(fault)
-            workdir = tmp / "work"
-            shutil.copytree(profile_run[0], workdir, symlinks=True, ignore=shutil.ignore_patterns("locks"))
-            for path in (workdir / "results" / "burkhard2024").iterdir():
-                if path.is_file():  # the gather job's outputs (not the Monte Carlo's, in mc/)
-                    path.unlink()
-            finished = {p: (sha256(p), p.stat().st_mtime_ns) for p in (workdir / "results").rglob("mc/*.csv.gz")}
-            assert len(finished) == 8
-            fifo = tmp / "hold"
-            os.mkfifo(fifo)
-            console = tmp / "console.log"
-            with open(console, "w") as sink:
-                proc = subprocess.Popen(snakemake_cmd(workdir, PROFILE, *TARGETS), cwd=REPO, stdout=sink,
-                                        stderr=subprocess.STDOUT, start_new_session=True,
-                                        env=dict(slurm.env, **hold_env(fifo, f"*/{HELD_OUTPUT}")))
-            runs[fault] = {"workdir": workdir, "finished": finished, "fifo": fifo, "console": console, "proc": proc}
         for fault, run in runs.items():
             run["held"] = open_when_held(run["fifo"], lambda: run["proc"].poll() is None, run["console"].read_text)
+            if "finished" not in run:  # the held gather job runs only once every Monte Carlo job has finished
+                run["finished"] = monte_carlo_outputs(run["workdir"])
             run["slurm_id"] = slurm_id_of_held_job(run["console"].read_text())
             FAULTS[fault][0](slurm, run["slurm_id"])
             run["t0"] = time.perf_counter()

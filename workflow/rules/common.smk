@@ -7,7 +7,6 @@ import re
 import jsonschema
 import yaml
 from snakemake.exceptions import WorkflowError
-from snakemake.utils import validate
 
 #: Figure ids; every id is a target rule and results/figures/<id>.png|pdf.  Each stage
 #: file appends its own (``FIGURES.append(...)``).
@@ -30,13 +29,26 @@ def _config_error(where, what):
     return ConfigError(f"invalid config ({', '.join(files) or 'no config file'}): {where}: {what}")
 
 
-def _validate(cfg, schema, prefix=""):
+_SCHEMAS = {}
+
+
+def _schema(path):
+    """A schema file, parsed once per process, by libyaml where PyYAML has it.  Every
+    snakemake call (dry runs, each SLURM job) parses the Snakefile and with it the
+    schemas: snakemake.utils.validate's pure-Python YAML took ~0.3 s of CPU of that."""
+    path = os.path.join(workflow.basedir, path) if not os.path.isabs(path) else path
+    if path not in _SCHEMAS:
+        with open(path, encoding="utf-8") as f:
+            _SCHEMAS[path] = yaml.load(f, Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
+    return _SCHEMAS[path]
+
+
+def _validate(cfg, schema_path, prefix=""):
+    """``cfg`` against a JSON schema (draft 2020-12, as snakemake.utils.validate; the
+    schemas refer only within themselves): the first error as one line."""
     try:
-        validate(cfg, schema, set_default=False)
-    except WorkflowError as e:
-        err = e.__context__  # validate() raises from inside `except ValidationError`
-        if not isinstance(err, jsonschema.ValidationError):
-            raise
+        jsonschema.Draft202012Validator(_schema(schema_path)).validate(cfg)
+    except jsonschema.ValidationError as err:
         where = ".".join([prefix] * bool(prefix) + [str(p) for p in err.absolute_path]) or "(top level)"
         raise _config_error(where, err.message) from None
 
@@ -70,8 +82,7 @@ def _ranges(schema, defs, path=()):
 
 def _check_ranges(section, schema_path, prefix):
     """Every [low, high] range of a stage section (found in its schema) has low <= high."""
-    with open(schema_path) as f:
-        schema = yaml.safe_load(f)
+    schema = _schema(schema_path)
     for path in _ranges(schema, schema.get("$defs", {})):
         value = section
         for k in path:
