@@ -195,13 +195,13 @@ def outputs_equal_local_run(results: Path, request):
     assert [k for k in mine if mine[k] != local[k]] == []
 
 
-def start_held_run(slurm, workdir: Path) -> dict:
-    """TARGETS through the profile in ``workdir`` with the gather job held (tests/hold_hook):
-    the run's working directory, hold FIFO, console file and process."""
+def start_held_run(slurm, workdir: Path, *args) -> dict:
+    """TARGETS through the profile in ``workdir`` (with ``args``) with the gather job held
+    (tests/hold_hook): the run's working directory, hold FIFO, console file and process."""
     fifo, console = workdir.with_name("hold"), workdir.with_name("console.log")
     os.mkfifo(fifo)
     with open(console, "w") as sink:
-        proc = subprocess.Popen(snakemake_cmd(workdir, PROFILE, *TARGETS), cwd=REPO, stdout=sink,
+        proc = subprocess.Popen(snakemake_cmd(workdir, PROFILE, *TARGETS, *args), cwd=REPO, stdout=sink,
                                 stderr=subprocess.STDOUT, start_new_session=True,
                                 env=dict(slurm.env, **hold_env(fifo, f"*/{HELD_OUTPUT}")))
     return {"workdir": workdir, "fifo": fifo, "console": console, "proc": proc}
@@ -217,11 +217,11 @@ def monte_carlo_outputs(workdir: Path) -> dict:
 @pytest.fixture(scope="module")
 def time_limit_run(slurm, tmp_path_factory):
     """The time-limit fault's run, started before the profile run and beside it: TARGETS
-    from an empty working directory, the gather job held.  It is the module's longest
-    run (SLURM's shortest time limit is 1 min from the job's start, and the plugin's
-    status checks back off while nothing finishes), so it does not wait for the profile
-    run as the scancel run does."""
-    run = start_held_run(slurm, tmp_path_factory.mktemp("time_limit") / "work")
+    from an empty working directory, the gather job held, with 1 min for it
+    (TIME_LIMIT_ARGS).  It is the module's longest run (SLURM's shortest time limit is
+    1 min from the job's start, and the plugin's status checks back off while nothing
+    finishes), so it does not wait for the profile run as the scancel run does."""
+    run = start_held_run(slurm, tmp_path_factory.mktemp("time_limit") / "work", *TIME_LIMIT_ARGS)
     yield run
     if run["proc"].poll() is None:  # a test failed before the fault: no run outlives the module
         os.killpg(run["proc"].pid, 9)
@@ -288,10 +288,14 @@ def slurm_id_of_held_job(text):
 
 FAULTS = {  # fault: (what the test does to the held job's SLURM job, SLURM's state afterwards)
     "scancel": (lambda slurm, job: slurm.run("scancel", job), "CANCELLED"),
-    # the job outgrows its time limit, lowered by the administrator to the shortest there
-    # is (SLURM's limits are whole minutes: 0:05 becomes 1 min from the job's start)
-    "time_limit": (lambda slurm, job: slurm.run("scontrol", "update", f"JobId={job}", "TimeLimit=0:05"), "TIMEOUT"),
+    # the job outgrows its time limit: the run asks for the shortest there is (SLURM's
+    # limits are whole minutes) for the held job (TIME_LIMIT_ARGS), and SLURM ends it
+    "time_limit": (None, "TIMEOUT"),
 }
+#: The time-limit fault's run asks for 1 min for the held job, as a user who asked for too
+#: little would (the profile's own runtime is 30 min; the rerun goes without these).  Last on the
+#: command line: --set-resources takes every word after it.
+TIME_LIMIT_ARGS = ("--set-resources", f"{HELD_RULE}:runtime=1")
 
 
 @pytest.fixture(scope="module")
@@ -299,11 +303,13 @@ def faulted_runs(slurm, profile_run, time_limit_run, tmp_path_factory):
     """For every fault, side by side (one SLURM CPU each), a run with the gather job held:
     for ``scancel`` a copy of the profile run without the gather job's outputs, for
     ``time_limit`` the run started from scratch beside the profile run
-    (:func:`time_limit_run`).  The fault hits the held job's SLURM job; then the same
-    command runs again, without the hold.  Returns per fault the working directory, the
-    Monte Carlo outputs (sha256, mtime) before the fault, the faulted run's output and
-    return code, the SLURM job id, the seconds from the fault to the run's end, and the
-    rerun's output and return code."""
+    (:func:`time_limit_run`).  The fault hits the held job's SLURM job; when the run has
+    ended, the same command runs again, without the hold (and with the profile's time
+    limit).  Returns per fault the working directory, the Monte Carlo outputs (sha256,
+    mtime) before the rerun, the faulted run's output and return code, the SLURM job id,
+    and the rerun's output and return code.  The
+    time-limit run's held job is never released: SLURM ends it, whenever the test gets
+    there (no timing decides the outcome)."""
     tmp = tmp_path_factory.mktemp("scancel")
     workdir = tmp / "work"
     shutil.copytree(profile_run[0], workdir, symlinks=True, ignore=shutil.ignore_patterns("locks"))
@@ -311,20 +317,29 @@ def faulted_runs(slurm, profile_run, time_limit_run, tmp_path_factory):
         if path.is_file():  # the gather job's outputs (not the Monte Carlo's, in mc/)
             path.unlink()
     finished = monte_carlo_outputs(workdir)
-    runs = {"scancel": dict(start_held_run(slurm, workdir), finished=finished), "time_limit": time_limit_run}
+    runs = {"time_limit": time_limit_run, "scancel": dict(start_held_run(slurm, workdir), finished=finished)}
     try:
         for fault, run in runs.items():
+            if FAULTS[fault][0] is None:  # the time limit: SLURM ends the held job by itself
+                continue
             run["held"] = open_when_held(run["fifo"], lambda: run["proc"].poll() is None, run["console"].read_text)
-            if "finished" not in run:  # the held gather job runs only once every Monte Carlo job has finished
-                run["finished"] = monte_carlo_outputs(run["workdir"])
             run["slurm_id"] = slurm_id_of_held_job(run["console"].read_text())
             FAULTS[fault][0](slurm, run["slurm_id"])
             run["t0"] = time.perf_counter()
-        for fault, run in runs.items():
+        for fault in sorted(runs, key=lambda f: FAULTS[f][0] is None):  # the time-limit run ends last
+            run = runs[fault]
             run["returncode"] = run["proc"].wait(timeout=900)  # no hang: the run ends on its own
-            run["stopped"] = time.perf_counter() - run["t0"]
             run["text"] = run["console"].read_text()
-            print(f"\nreal SLURM {fault}: the run ended {run['stopped']:.1f} s after the fault")
+            if "t0" in run:
+                print(f"\nreal SLURM {fault}: the run ended {time.perf_counter() - run['t0']:.1f} s after the fault")
+            run.setdefault("slurm_id", slurm_id_of_held_job(run["text"]))
+            # the gather job runs only once every Monte Carlo job has finished: these are
+            # what the rerun must leave alone
+            run.setdefault("finished", monte_carlo_outputs(run["workdir"]))
+            # the same command again, without the hold (and the time-limit arguments)
+            run["rerun_proc"] = subprocess.Popen(snakemake_cmd(run["workdir"], PROFILE, *TARGETS), cwd=REPO,
+                                                 env=slurm.env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                                 text=True)
     finally:
         for run in runs.values():
             if run["proc"].poll() is None:
@@ -332,15 +347,11 @@ def faulted_runs(slurm, profile_run, time_limit_run, tmp_path_factory):
                 run["proc"].wait()
             if run.get("held") is not None:
                 os.close(run["held"])
-    # the same command again, without the hold, both side by side
     t0 = time.perf_counter()
-    reruns = {fault: subprocess.Popen(snakemake_cmd(run["workdir"], PROFILE, *TARGETS), cwd=REPO, env=slurm.env,
-                                      stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-              for fault, run in runs.items()}
-    for fault, proc in reruns.items():
-        runs[fault]["rerun"] = proc.communicate(timeout=900)[0]
-        runs[fault]["rerun_returncode"] = proc.returncode
-    print(f"\nreal SLURM: reruns {time.perf_counter() - t0:.1f} s")
+    for run in runs.values():
+        run["rerun"] = run["rerun_proc"].communicate(timeout=900)[0]
+        run["rerun_returncode"] = run.pop("rerun_proc").returncode
+    print(f"\nreal SLURM: reruns ended {time.perf_counter() - t0:.1f} s after the time-limit run")
     return runs
 
 
