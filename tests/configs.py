@@ -1,5 +1,7 @@
 """The workflow's configs as Snakemake builds them, for tests that read them directly."""
 
+import copy
+import functools
 from pathlib import Path
 
 import yaml
@@ -19,12 +21,19 @@ def _extend(base: dict, overlay: dict) -> dict:
     return base
 
 
+@functools.lru_cache(maxsize=None)
+def _parsed(path: Path):
+    # Parsed once per process, by libyaml where PyYAML has it: the config tests build a
+    # few dozen configs at collection, in every test worker.
+    return yaml.load(path.read_text(), Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader))
+
+
 def load_config(overlay: str | Path | None = None) -> dict:
     """config/config.yaml extended by ``overlay`` (a file of config/, e.g. ``"ci.yaml"``),
-    as ``snakemake --configfile`` does."""
-    config = yaml.safe_load(DEFAULT_CONFIG.read_text())
+    as ``snakemake --configfile`` does (a new copy at every call)."""
+    config = copy.deepcopy(_parsed(DEFAULT_CONFIG))
     if overlay is not None and Path(overlay).name != DEFAULT_CONFIG.name:
-        _extend(config, yaml.safe_load((REPO / "config" / overlay).read_text()) or {})
+        _extend(config, copy.deepcopy(_parsed(REPO / "config" / overlay)) or {})
     return config
 
 

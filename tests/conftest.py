@@ -1,6 +1,7 @@
 import fcntl
 import json
 import os
+import resource
 import shutil
 import subprocess
 import sys
@@ -147,10 +148,13 @@ def pytest_xdist_auto_num_workers(config):
 
 def pytest_runtest_logreport(report):
     """With $ACCELCAL_TEST_TIMELINE set to a folder: one line per test phase (end time,
-    worker, phase, seconds, test) in a file per worker, to see where a run's wall time goes
-    (which module waits for what); nothing otherwise."""
+    worker, phase, seconds, test, and the worker's CPU seconds so far: its own and its
+    finished subprocesses') in a file per worker, to see where a run's wall time and CPU
+    go (which module waits for what); nothing otherwise."""
     folder = os.environ.get("ACCELCAL_TEST_TIMELINE")
     if folder:
         worker = os.environ.get("PYTEST_XDIST_WORKER", "master")
+        own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpu = own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
         with open(Path(folder) / f"{worker}.tsv", "a") as f:
-            f.write(f"{time.time():.1f}\t{worker}\t{report.when}\t{report.duration:.2f}\t{report.nodeid}\n")
+            f.write(f"{time.time():.1f}\t{worker}\t{report.when}\t{report.duration:.2f}\t{report.nodeid}\t{cpu:.2f}\n")

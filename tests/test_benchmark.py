@@ -62,6 +62,16 @@ def test_benchmark_times_every_backend_and_the_nlls_once():
     assert (single["status"] == "ok").all()
 
 
+def test_batched_calls_per_backend():
+    """With calls per backend, each backend's methods are timed that many times (the
+    compiled batched calls are quick, and their median needs more of them)."""
+    single, batch = timing.run_benchmark(0, 9.8055, 1e-3, n_poses=[12], n_problems=2, repeats=1, batch_problems=4,
+                                         batch_repeats={"numpy": 1, "numba": 4}, interleavings=["block"])
+    counts = batch.groupby(["method", "backend"]).size()
+    assert {b: set(counts.xs(b, level="backend")) for b in BACKENDS} == \
+        {b: {4 if b == "numba" else 1} for b in BACKENDS}
+
+
 def _tereshkov_data(runs=2, n=300):
     from accelcal.tereshkov.estimator import TereshkovParams
 

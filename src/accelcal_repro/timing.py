@@ -163,26 +163,30 @@ def _call(f: Callable, z: np.ndarray, g: float) -> str:
     return "ok"
 
 
-def time_batched(problems: Mapping, g: float, methods: Mapping, repeats: int,
+def time_batched(problems: Mapping, g: float, methods: Mapping, repeats: int | Mapping[str, int],
                  clock: Callable[[], float] = time.perf_counter) -> pd.DataFrame:
     """Wall time of batched estimators, each on its stack ``problems[key]`` (T, n, 3),
     interleaved per repeat (rotating order), after an untimed warm-up; keys as in
-    :func:`time_interleaved`.
+    :func:`time_interleaved`.  ``repeats``: calls per method, or per backend (a mapping
+    backend -> calls): a method whose calls are done drops out of the later rounds.
 
     Returns ``method, backend, repeat, n_problems, seconds, problems_per_s`` and the
     CPU time of the call (``cpu_seconds``, ``time.thread_time``: on a loaded machine a
     call of a few milliseconds may wait for a core, which its wall time counts).
     """
     keys = list(methods)
+    calls = {m: repeats if isinstance(repeats, int) else repeats[_label(m)[1]] for m in keys}
     previous = kernels.choice()
     rows = []
     try:
         for m in keys:
             _switch(_label(m)[1])
             methods[m](problems[m][:2], g)
-        for r in range(repeats):
+        for r in range(max(calls.values(), default=0)):
             shift = r % len(keys)
             for m in keys[shift:] + keys[:shift]:
+                if r >= calls[m]:
+                    continue
                 name, backend = _label(m)
                 _switch(backend)
                 z = problems[m]
@@ -265,7 +269,7 @@ def summarize_timing(single: pd.DataFrame, batched: pd.DataFrame | None = None,
 
 
 def run_benchmark(seed: int, g: float, noise_std: float, n_poses: Sequence[int], n_problems: int, repeats: int,
-                  batch_problems: int, batch_repeats: int,
+                  batch_problems: int, batch_repeats: int | Mapping[str, int],
                   single_methods: Sequence[str] = tuple(SINGLE_METHODS),
                   batch_methods: Sequence[str] = tuple(BATCH_METHODS),
                   interleavings: Sequence[str] = ("block", "problem"), als_known_noise: bool = True,

@@ -16,7 +16,8 @@ t = p.timing
 single, batch = run_benchmark(
     seed=int(p.seed), g=float(p.g), noise_std=float(t["noise_std"]), n_poses=[int(n) for n in t["n_poses"]],
     n_problems=int(t["problems"]), repeats=int(t["repeats"]), batch_problems=int(t["batch_problems"]),
-    batch_repeats=int(t["batch_repeats"]), interleavings=list(t["interleavings"]),
+    batch_repeats={"numpy": int(t["batch_repeats"]), "numba": int(t["batch_repeats_compiled"])},
+    interleavings=list(t["interleavings"]),
     als_known_noise=bool(p.als_known_noise), nlls_known_noise=bool(p.nlls_known_noise),
     backends=[b for b in t["backends"] if b in available_backends()],
 )
