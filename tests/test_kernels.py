@@ -375,6 +375,27 @@ def test_no_writable_cache_compiles_in_memory_with_one_warning(tmp_path):
     assert out.stdout.split() == ["True", "1"]
 
 
+def test_processes_starting_together_compile_each_kernel_once(tmp_path):
+    """Two processes that call the same kernel at once on an empty disk cache: one compiles
+    it, the other waits and loads what the first saved (kernels._one_compiler_at_a_time);
+    both get the same numbers."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"), ACCELCAL_KERNELS="numba")
+    code = ("import numpy as np\n"
+            "from accelcal import bias_lls_batch\n"
+            "from accelcal._lls_kernels import bias_lls_batch as kernel\n"
+            "z = np.array([[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1.0]])\n"
+            "r = bias_lls_batch(z[None] + 0.1, 1.0)\n"
+            "s = kernel.stats\n"
+            "print(sum(s.cache_misses.values()), sum(s.cache_hits.values()), repr(r.bias[0, 0]))\n")
+    procs = [subprocess.Popen([sys.executable, "-c", code], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                              text=True) for _ in range(2)]
+    outs = [p.communicate(timeout=600) for p in procs]
+    assert all(p.returncode == 0 for p in procs), [err for _, err in outs]
+    misses, hits, values = zip(*(out.split() for out, _ in outs))
+    assert sorted(misses) == ["0", "1"] and sorted(hits) == ["0", "1"], outs  # one compiled, one loaded
+    assert values[0] == values[1]
+
+
 def test_backend_choice_from_the_environment():
     assert kernels._resolve("numpy") == "numpy"
     assert kernels._resolve("auto") == "numba"

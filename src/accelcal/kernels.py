@@ -150,7 +150,7 @@ def jit(*args, **options):
     def decorate(fn):
         global _cache_warned
         try:
-            return numba.njit(**options)(fn)
+            return _one_compiler_at_a_time(numba.njit(**options)(fn))
         except RuntimeError as exc:  # "cannot cache function ...: no locator available"
             if not options.get("cache") or "cache" not in str(exc):
                 raise
@@ -162,6 +162,49 @@ def jit(*args, **options):
             return numba.njit(**{**options, "cache": False})(fn)
 
     return decorate(args[0]) if args and callable(args[0]) else decorate
+
+
+_locks_held: set[str] = set()
+
+
+def _one_compiler_at_a_time(dispatcher):
+    """``dispatcher`` with its compilation serialised across processes by a lock file
+    beside its disk cache: the first process compiles and saves each signature, the
+    others wait for it (without CPU) and then load it from the cache.
+
+    Processes that start together on an empty cache (a fresh clone: the parallel jobs of
+    the workflow, SLURM jobs, test workers) would otherwise each compile the same
+    kernels, ~10-20 s of CPU each.  Without a disk cache, or where locks are not
+    available, it compiles as numba does."""
+    try:
+        import fcntl
+    except ImportError:  # not POSIX
+        return dispatcher
+    folder = getattr(getattr(dispatcher, "_cache", None), "cache_path", None)
+    if not folder:
+        return dispatcher
+    fn = dispatcher.py_func
+    lock_path = os.path.join(folder, f"{fn.__module__}.{fn.__qualname__}.compile-lock")
+    compile_ = dispatcher.compile
+
+    def compile(sig):
+        if lock_path in _locks_held:  # this process holds it already (a recursive compilation)
+            return compile_(sig)
+        try:
+            os.makedirs(folder, exist_ok=True)
+            fd = os.open(lock_path, os.O_CREAT | os.O_RDWR, 0o644)
+        except OSError:
+            return compile_(sig)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX)  # released when the file is closed, or the process ends
+            _locks_held.add(lock_path)
+            return compile_(sig)  # loads from the disk cache what another process saved meanwhile
+        finally:
+            _locks_held.discard(lock_path)
+            os.close(fd)
+
+    dispatcher.compile = compile
+    return dispatcher
 
 
 __all__ = ["BACKENDS", "KERNEL_MODULES", "backend", "choice", "compiled", "jit", "load", "set_backend"]
