@@ -1,0 +1,134 @@
+"""An interrupted run (hard kill or Ctrl-C) leaves only whole files behind and resumes
+without redoing finished jobs (issue 8; the helpers are tests/test_resilience.py's).
+
+A module of its own, dispatched after the CI run is made (tests/conftest.py): its
+reference is the session's CI run, and the other resilience tests need none.
+
+No test here depends on timing: the run is interrupted while a job is held mid-way by
+tests/hold_hook, and the subprocess timeouts are safety nets against a hung run (10 min),
+not measurements.
+"""
+
+import os
+import signal
+import subprocess
+import time
+
+import pytest
+
+from tests.test_resilience import (
+    CI,
+    HELD_OUTPUT,
+    HELD_RULE,
+    REPO,
+    TARGET,
+    comparable,
+    finished_jobs,
+    hold_env,
+    jobs_in,
+    open_when_held,
+    sha256,
+    snakemake,
+    snakemake_cmd,
+    survey,
+)
+
+
+@pytest.fixture(scope="module")
+def uninterrupted(ci_workflow, tmp_path_factory):
+    """The reference: the session's CI run (tests/conftest.py; the same config, so the same
+    outputs of TARGET) and the jobs TARGET takes from scratch (a dry run in an empty folder)."""
+    workdir = tmp_path_factory.mktemp("plan")
+    proc = snakemake(workdir, "--dry-run", TARGET, "--configfile", CI, "--cores", "1")
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    return ci_workflow[0], jobs_in(proc.stdout + proc.stderr)
+
+
+
+def interrupt(workdir, sig):
+    """Start the run in its own process group with the gather job held mid-way (all Monte
+    Carlo jobs finished by then), send `sig` to the whole group (a hard crash or a Ctrl-C)
+    while it is held, and return the Snakemake output, the finished and the running job ids."""
+    console = workdir.with_name(workdir.name + ".console")
+    fifo = workdir.with_name(workdir.name + ".hold")
+    os.mkfifo(fifo)
+    env = dict(os.environ, **hold_env(fifo, f"*/{HELD_OUTPUT}"))
+    with open(console, "w") as sink:
+        proc = subprocess.Popen(snakemake_cmd(workdir, TARGET, "--configfile", CI, "--cores", "1"), cwd=REPO,
+                                stdout=sink, stderr=subprocess.STDOUT, start_new_session=True, env=env)
+    held = None
+    try:
+        held = open_when_held(fifo, lambda: proc.poll() is None, console.read_text)
+        os.killpg(proc.pid, sig)
+        proc.wait(timeout=600)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+        if held is not None:
+            os.close(held)
+    # nothing of the group may survive (a job still writing would spoil the checks); the
+    # 2 min are a safety net: a killed or interrupted process ends at once
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline:
+        try:
+            os.killpg(proc.pid, 0)
+        except ProcessLookupError:
+            break
+        time.sleep(0.1)
+    else:
+        raise AssertionError("processes of the interrupted run survive")
+    text = console.read_text()  # Ctrl-C: Snakemake reports what it cancelled
+    jobs, done = jobs_in(text), finished_jobs(text)
+    return text, done, set(jobs) - done, jobs
+
+
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGINT], ids=["SIGKILL", "SIGINT"])
+def test_interrupted_run_resumes_without_redoing_finished_jobs(tmp_path, uninterrupted, sig):
+    ref_dir, ref_jobs = uninterrupted
+    workdir = tmp_path / "work"
+    workdir.mkdir()
+    t0 = time.perf_counter()
+    text, done, running, jobs = interrupt(workdir, sig)
+    results = workdir / "results"
+    # the held job was running; every Monte Carlo job had finished before it could start
+    assert [jobs[j][0] for j in running] == [HELD_RULE], text
+    assert sum(jobs[j][0] == "burkhard2024_mc" for j in done) == 8, text
+
+    # (a) only whole files; list what the interruption left
+    files, temporaries = survey(results)
+    finished = {o: (sha256(results.parent / o), (results.parent / o).stat().st_mtime_ns)
+                for j in done for o in jobs[j][1]}
+    assert all((results.parent / o).is_file() for o in finished)
+    print(f"{sig.name}: {len(done)} jobs finished, running {[jobs[j][0] for j in running]}; "
+          f"{len(files)} whole files, temporaries left: {[str(p.relative_to(results)) for p in temporaries]}")
+
+    # (b) the dry run of the resumed run plans exactly the unfinished jobs
+    proc = snakemake(workdir, "--dry-run", TARGET, "--configfile", CI, "--cores", "1", timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    planned = {o for _, outputs in jobs_in(proc.stdout + proc.stderr).values() for o in outputs}
+    every = {o for _, outputs in ref_jobs.values() for o in outputs}
+    assert not planned & set(finished), f"finished jobs planned again: {sorted(planned & set(finished))}"
+    assert planned == every - set(finished), sorted(planned ^ (every - set(finished)))
+    assert {o for j in running for o in jobs[j][1]} <= planned  # the interrupted job is redone
+
+    # (c) the resumed run completes, leaves the finished outputs alone and equals an
+    # uninterrupted run.  Ctrl-C releases Snakemake's lock on the working directory; a hard
+    # kill cannot, and Snakemake refuses to start until `--unlock` (its error says so).
+    locks = list((workdir / ".snakemake" / "locks").glob("*"))
+    if sig == signal.SIGKILL:
+        proc = snakemake(workdir, "--unlock", TARGET, "--configfile", CI, timeout=600)
+        assert proc.returncode == 0, proc.stderr[-3000:]
+    else:
+        assert not locks, locks
+    proc = snakemake(workdir, TARGET, "--configfile", CI, "--cores", "1")
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    for o, (digest, mtime) in finished.items():
+        p = results.parent / o
+        assert (sha256(p), p.stat().st_mtime_ns) == (digest, mtime), f"{o} was rewritten"
+    _, temporaries = survey(results)
+    assert not temporaries, f"temporary files left after the resumed run: {temporaries}"
+    mine, ref = comparable(results), comparable(ref_dir / "results")
+    assert mine and set(mine) <= set(ref), sorted(set(mine) - set(ref))  # the CI run made more
+    assert [k for k in mine if mine[k] != ref[k]] == []
+    print(f"{sig.name}: interrupt + dry run + resume {time.perf_counter() - t0:.1f} s")
