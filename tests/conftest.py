@@ -121,9 +121,11 @@ def config_error(cfg: dict, path: Path) -> str | None:
 #: most of their time waiting, each on a worker of its own: the real SLURM (daemons, status
 #: polls, a time limit of a minute) and the module whose first test starts the CI run (which
 #: uses both cores itself).  Last, the other modules that need the CI run: dispatched early
-#: they would hold a worker idle while it runs.
+#: they would hold a worker idle while it runs.  A module of one test takes the next module
+#: with it (a worker runs a test once it knows the one after it), so the one-test reruns
+#: module comes before a light one, not before another long one.
 FIRST_MODULES = ("test_real_slurm.py", "test_workflow.py")
-LAST_MODULES = ("test_workflow_reruns.py", "test_workflow_interrupts.py", "test_burkhard2024_workflow.py",
+LAST_MODULES = ("test_workflow_interrupts.py", "test_burkhard2024_workflow.py", "test_workflow_reruns.py",
                 "test_discrepancy_workflow.py", "test_workflow_structure.py", "test_benchmark.py")
 
 
