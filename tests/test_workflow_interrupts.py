@@ -54,7 +54,9 @@ def interrupt(workdir, sig):
     os.mkfifo(fifo)
     env = dict(os.environ, **hold_env(fifo, f"*/{HELD_OUTPUT}"))
     with open(console, "w") as sink:
-        proc = subprocess.Popen(snakemake_cmd(workdir, TARGET, "--configfile", CI, "--cores", "1"), cwd=REPO,
+        # two cores: the Monte Carlo jobs two at a time; the held gather job needs them all,
+        # so it alone runs when the signal comes
+        proc = subprocess.Popen(snakemake_cmd(workdir, TARGET, "--configfile", CI, "--cores", "2"), cwd=REPO,
                                 stdout=sink, stderr=subprocess.STDOUT, start_new_session=True, env=env)
     held = None
     try:
@@ -121,7 +123,7 @@ def test_interrupted_run_resumes_without_redoing_finished_jobs(tmp_path, uninter
         assert proc.returncode == 0, proc.stderr[-3000:]
     else:
         assert not locks, locks
-    proc = snakemake(workdir, TARGET, "--configfile", CI, "--cores", "1")
+    proc = snakemake(workdir, TARGET, "--configfile", CI, "--cores", "2")
     assert proc.returncode == 0, proc.stderr[-3000:]
     for o, (digest, mtime) in finished.items():
         p = results.parent / o
