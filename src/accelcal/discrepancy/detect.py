@@ -68,7 +68,6 @@ from dataclasses import asdict, dataclass, field, replace
 from functools import lru_cache
 
 import numpy as np
-from scipy import special
 
 from .. import distributions as dist
 from ..errors import AccelcalError
@@ -172,7 +171,7 @@ def critical_noncentrality(k: int, dof: int, level: float, power: float) -> floa
 def _f_sf(stat: float, dfn: int, dfd: int) -> float:
     """:func:`accelcal.distributions.f_sf` for ``stat >= 0`` without its argument handling
     (the loop calls it for every candidate)."""
-    return float(special.fdtrc(dfn, dfd, stat)) if dfd > 0 else float("nan")
+    return float(dist.special.fdtrc(dfn, dfd, stat)) if dfd > 0 else float("nan")
 
 
 def holm(p_values, correction: str = "holm") -> np.ndarray:
@@ -429,8 +428,8 @@ class DiscrepancyResult:
     def summary(self) -> dict:
         """The gaps and what noise alone predicts, before (base) and after (named effects)."""
         b, f = self.base, self.final
-        chi0 = dist.chi2_sf(b.chi2, b.dof) if b.dof > 0 else float("nan")
-        chi1 = dist.chi2_sf(f.chi2, f.dof) if f.dof > 0 else float("nan")
+        chi0 = dist.chi2_sf(b.chi2, b.dof)  # NaN without degrees of freedom
+        chi1 = dist.chi2_sf(f.chi2, f.dof)
         excess_var = b.chi2 - b.dof
         return {
             "n_poses": b.n,
