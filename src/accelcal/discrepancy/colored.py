@@ -125,9 +125,9 @@ neighbouring poses (kriging); its RMS in units of ``σ`` is the colored LOPO gap
 Assumptions.  Gaussian errors; the per-pose standard errors of the rests are right for
 the short-term noise up to the common factor ``s ≥ 0.5``; one wander process, of the
 same size on the three axes (data unit), equicorrelated between the axes by ``φ ≥ 0`` (a
-common-mode share), of the Gauss–Markov / random-walk family (a sum of components or a flicker floor is approximated by its nearest
-member: the tests measure what that costs); the poses' gradients at the linearisation
-point.  The per-pose standard errors are computed from the pose's own samples, so noise
+common-mode share), of the Gauss–Markov / random-walk family (a sum of components or a
+flicker floor is approximated by its nearest member: the tests measure what that
+costs); the poses' gradients at the linearisation point.  The per-pose standard errors are computed from the pose's own samples, so noise
 with a correlation time near the pose durations is partly counted in both (it then
 shows as a smaller ``σ_w`` or ``s``); the interval-mean covariance is exact for the
 wander as modelled.
@@ -1014,6 +1014,7 @@ def simulate_interval_means(rng: np.random.Generator, terms: dict, starts, durat
     return root @ z
 
 
-__all__ = ["CHI2_95", "COMMON_GRID", "Problem", "axis_gram", "axis_weight", "fit_common", "contrast_covariance", "Q_REL_GRID", "at", "RoundTests", "Surface", "WanderError", "WanderFit", "effect_information",
+__all__ = ["CHI2_95", "COMMON_GRID", "Problem", "axis_gram", "axis_weight", "fit_common", "contrast_covariance",
+           "Q_REL_GRID", "at", "RoundTests", "Surface", "WanderError", "WanderFit", "effect_information",
            "excess_distribution", "fit_wander", "gls_projector", "gls_step", "gm_variance", "problem", "profile",
            "round_tests", "simulate_interval_means", "studentised", "tau_grid", "wander_kernel"]
