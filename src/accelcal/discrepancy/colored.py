@@ -127,10 +127,10 @@ the short-term noise up to the common factor ``s ≥ 0.5``; one wander process, 
 same size on the three axes (data unit), equicorrelated between the axes by ``φ ≥ 0`` (a
 common-mode share), of the Gauss–Markov / random-walk family (a sum of components or a
 flicker floor is approximated by its nearest member: the tests measure what that
-costs); the poses' gradients at the linearisation point.  The per-pose standard errors are computed from the pose's own samples, so noise
-with a correlation time near the pose durations is partly counted in both (it then
-shows as a smaller ``σ_w`` or ``s``); the interval-mean covariance is exact for the
-wander as modelled.
+costs); the poses' gradients at the linearisation point.  The per-pose standard errors
+are computed from the pose's own samples, so noise with a correlation time near the pose
+durations is partly counted in both (it then shows as a smaller ``σ_w`` or ``s``); the
+interval-mean covariance is exact for the wander as modelled.
 """
 
 from __future__ import annotations
