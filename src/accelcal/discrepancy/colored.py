@@ -16,10 +16,11 @@ its mean error on axis ``k`` is ``ē_ik = w̄_ik + β̄_ik`` with
   from the pose's own samples (Geyer's autocorrelation time, :mod:`accelcal.static`),
   ``s`` a common white scale (≥ :data:`MIN_WHITE_SCALE`), estimated;
 * ``β̄_ik`` the interval mean of a slow bias process ``β_k(t)``, the same process
-  (``bias_wander``) on every axis, independent between axes, of size ``σ_w`` (data
-  unit): a first-order Gauss–Markov process (variance ``σ_w²``, correlation time ``τ``,
-  covariance ``σ_w² exp(-|t - t'|/τ)``) or, as ``τ → ∞`` at fixed ``K² = 2 σ_w²/τ``, a
-  random walk ``K² min(t, t')`` (the grid of ``τ`` ends with it).
+  (``bias_wander``) on every axis, of size ``σ_w`` (data unit) per axis, correlated
+  between the axes by ``φ`` (below): a first-order Gauss–Markov process (variance
+  ``σ_w²``, correlation time ``τ``, covariance ``σ_w² exp(-|t - t'|/τ)``) or, as ``τ → ∞``
+  at fixed ``K² = 2 σ_w²/τ``, a random walk ``K² min(t, t')`` (the grid of ``τ`` ends
+  with it).
 
 The covariance of two interval means is exact (:func:`accelcal.discrepancy.stochastic.
 pose_difference_variance` gives the variogram ``D_ij = Var(β̄_i − β̄_j)`` in closed form;
@@ -27,9 +28,26 @@ pose_difference_variance` gives the variogram ``D_ij = Var(β̄_i − β̄_j)`` 
 that the per-axis bias of the model absorbs, which is why the random walk and the flicker
 floor need no stationary variance).  A pose residual ``r_i = ‖x_i‖ − g`` moves by
 ``∇_i · ē_i`` with ``∇_i = ∂r_i/∂z_i`` (≈ the unit gravity direction in the sensor frame,
-through ``M⁻ᵀ``), so, with ``σ_i² = Σ_k ∇_ik² se_ik²``::
+through ``M⁻ᵀ``), so, with ``σ_i² = Σ_k ∇_ik² se_ik²`` and ``C`` the correlation of the
+wander between the axes (``Cov(β_a(t), β_b(t')) = σ_w² C_ab k_τ(t, t')``)::
 
-    Cov(r_i, r_j) = s σ_i² δ_ij + σ_w² (∇_i · ∇_j) k_τ(i, j),   k_τ = −D_τ/2 (unit size).
+    Cov(r_i, r_j) = s σ_i² δ_ij + σ_w² (∇_iᵀ C ∇_j) k_τ(i, j),   k_τ = −D_τ/2 (unit size).
+
+Axes that wander together.  A real sensor's axes often drift together (one supply,
+reference or temperature drives all channels: on the ADIS16405 record, 5 s deviations of
+the three axes from their local level correlate by 0.35-0.69).  Such a wander moves the
+residual of a pose whose gravity points along the shared direction more than that of a
+pose across it, which the independent-axes kernel ``∇_i · ∇_j`` cannot express.  Of a
+general ``C`` (six parameters) the ~25 contrasts of a session support one: the wander is
+modelled as an independent part plus a common-mode part shared by the three axes,
+``C_φ = (1 − φ) I + φ 11ᵀ`` (correlation ``φ`` between any two axes, ``0 ≤ φ ≤ 1``, the
+same sign on the three sensor axes), so the pair factor is ``(1 − φ) ∇_i · ∇_j + φ (Σ_a
+∇_ia)(Σ_b ∇_jb)`` (:func:`axis_gram`).  ``φ = 0`` is the independent-axes model.
+``φ`` is estimated by REML with ``(s, q, τ)`` on the grid :data:`COMMON_GRID` (each
+``(φ, τ)`` kernel diagonalised once, as one stack: :func:`fit_common`), once per round under
+the current model; the round's tests, MDEs and LOPO then stand at ``φ̂``.  Per-axis
+sizes that differ, or correlations of other signs or strengths between different pairs
+of axes, are approximated by the nearest member.
 
 ``s`` absorbs a white excess (pose-to-pose disturbances, noise faster than the poses that
 the standard errors miss); small ``τ`` (below the pose durations) makes the wander extra
@@ -79,9 +97,14 @@ of the null and to the scale ``s``, the bootstrap needs only ``(q, τ)``; and si
 is asymptotically pivotal (χ²₃ whatever the noise parameters), the bootstrap p-value is
 second-order accurate (a scale-only, Bartlett-type correction was tried and rejected: on
 sessions with three Gauss–Markov components it gave 8 % false positives at α = 5 %).
-Its guarantee: effect-free recordings whose noise is of this family get an effect named
-with probability ≤ α (up to the Monte Carlo error of a finite ``n_boot``), however
-large the wander.  A wander outside the family (several Gauss–Markov components,
+The bootstrap draws under ``φ̂`` and refits ``(s, q, τ)`` in each
+replicate, not ``φ``: the statistic is the likelihood ratio at the round's ``φ̂`` (a plug-in:
+the estimation error of ``φ̂`` is not propagated; re-estimating it per replicate would need
+every candidate's :class:`Basis` for every ``φ``, five times the cost; the benchmark
+measures what holding it costs).  Its
+guarantee: effect-free recordings whose noise is of this family get an effect named
+with probability ≤ α (up to the Monte Carlo error of a finite ``n_boot`` and of ``φ̂``),
+however large the wander.  A wander outside the family (several Gauss–Markov components,
 flicker) is approximated by the nearest member; the tests check the false-positive rate
 on such sessions.
 
@@ -101,13 +124,13 @@ neighbouring poses (kriging); its RMS in units of ``σ`` is the colored LOPO gap
 
 Assumptions.  Gaussian errors; the per-pose standard errors of the rests are right for
 the short-term noise up to the common factor ``s ≥ 0.5``; one wander process, of the
-same size on the three axes (data unit), independent between axes, of the Gauss–Markov /
-random-walk family (a sum of components or a flicker floor is approximated by its nearest
-member: the tests measure what that costs); the poses' gradients at the linearisation
-point.  The per-pose standard errors are computed from the pose's own samples, so noise
-with a correlation time near the pose durations is partly counted in both (it then
-shows as a smaller ``σ_w`` or ``s``); the interval-mean covariance is exact for the
-wander as modelled.
+same size on the three axes (data unit), equicorrelated between the axes by ``φ ≥ 0`` (a
+common-mode share), of the Gauss–Markov / random-walk family (a sum of components or a
+flicker floor is approximated by its nearest member: the tests measure what that
+costs); the poses' gradients at the linearisation point.  The per-pose standard errors
+are computed from the pose's own samples, so noise with a correlation time near the pose
+durations is partly counted in both (it then shows as a smaller ``σ_w`` or ``s``); the
+interval-mean covariance is exact for the wander as modelled.
 """
 
 from __future__ import annotations
@@ -153,22 +176,50 @@ def tau_grid(durations, span: float, per_decade: int = TAU_PER_DECADE) -> np.nda
     return np.concatenate([np.geomspace(lo, hi, k + 1), [np.inf]])
 
 
-def wander_kernel(tau: float, starts, durations, grad) -> np.ndarray:
+def axis_gram(grad, common: float = 0.0) -> np.ndarray:
+    """``∇_iᵀ C_φ ∇_j`` (n, n): how the wander of the three axes reaches two pose residuals.
+
+    ``C_φ = (1 − φ) I + φ 11ᵀ`` is the correlation of the wander between the sensor axes
+    (unit variance per axis, correlation ``φ`` between any two; module docstring), so the
+    result is ``(1 − φ) ∇_i · ∇_j + φ (Σ_a ∇_ia)(Σ_b ∇_jb)``.
+    """
+    grad = np.asarray(grad, float)
+    G = grad @ grad.T
+    if common:
+        s = grad.sum(axis=1)
+        G = (1.0 - common) * G + common * np.outer(s, s)
+    return G
+
+
+def axis_weight(grad, common: float = 0.0) -> np.ndarray:
+    """The diagonal of :func:`axis_gram` (n,): the wander's variance in each pose residual per unit
+    wander variance per axis."""
+    grad = np.asarray(grad, float)
+    return (1.0 - common) * np.sum(grad**2, axis=1) + common * grad.sum(axis=1) ** 2
+
+
+def wander_kernel(tau: float, starts, durations, grad, common: float = 0.0) -> np.ndarray:
     """Generalised covariance of the pose residuals from a unit-size wander (module docstring).
 
-    ``tau`` finite: Gauss–Markov of unit variance; ``inf``: random walk with ``K = 1``.
-    Returns ``(∇_i · ∇_j) (−D_ij / 2)`` (n, n).
+    ``tau`` finite: Gauss–Markov of unit variance; ``inf``: random walk with ``K = 1``;
+    ``common``: the correlation ``φ`` of the wander between the axes (:func:`axis_gram`).
+    Returns ``(∇_iᵀ C_φ ∇_j) (−D_ij / 2)`` (n, n).
     """
-    return wander_kernels(np.array([tau], float), starts, durations, grad)[0]
+    return wander_kernels(np.array([tau], float), starts, durations, grad, common)[0]
 
 
-def wander_kernels(taus, starts, durations, grad) -> np.ndarray:
+def wander_kernels(taus, starts, durations, grad, common: float = 0.0) -> np.ndarray:
     """:func:`wander_kernel` of every correlation time of ``taus`` (T, n, n), in one pass.
 
     ``D`` is :func:`accelcal.discrepancy.stochastic.pose_difference_variance`'s
     (``gauss_markov`` of unit size, ``random_walk`` with ``K = 1``), its formulas evaluated
     for all ``τ`` at once.
     """
+    return -0.5 * axis_gram(grad, common)[None] * _variograms(taus, starts, durations)
+
+
+def _variograms(taus, starts, durations) -> np.ndarray:
+    """``D_ij = Var(β̄_i − β̄_j)`` of a unit wander for every ``τ`` of ``taus`` (T, n, n)."""
     taus = np.asarray(taus, float)
     a, T = np.asarray(starts, float), np.asarray(durations, float)
     first_end = np.where(a[:, None] <= a[None, :], (a + T)[:, None], (a + T)[None, :])
@@ -183,7 +234,7 @@ def wander_kernels(taus, starts, durations, grad) -> np.ndarray:
     D[~rw] = W[:, :, None] + W[:, None, :] - 2 * cov
     idx = np.arange(gap.shape[0])
     D[:, idx, idx] = 0.0
-    return -0.5 * (grad @ grad.T)[None] * D
+    return D
 
 
 def gm_variance(q_abs: float, tau: float) -> tuple[float, float]:
@@ -219,6 +270,9 @@ class Problem:
         Their eigenvectors.
     scale : ndarray (T,)
         Mean eigenvalue of each kernel (``q_abs = q / scale``).
+    common : float
+        Correlation ``φ`` of the wander between the axes the kernels are built with
+        (:func:`axis_gram`).
     """
 
     y: np.ndarray
@@ -233,6 +287,7 @@ class Problem:
     V: np.ndarray
     scale: np.ndarray
     notes: tuple = field(default_factory=tuple)
+    common: float = 0.0
 
     @property
     def m(self) -> int:
@@ -248,15 +303,22 @@ class Problem:
 
     def kernel(self, tau: float) -> np.ndarray:
         """Contrast kernel (m, m) of a unit wander with correlation time ``tau``."""
-        K = wander_kernel(tau, self.starts, self.durations, self.grad)
+        K = wander_kernel(tau, self.starts, self.durations, self.grad, self.common)
         Kw = K / self.sigma[:, None] / self.sigma[None, :]
         return self.L.T @ Kw @ self.L
 
     def with_taus(self, taus) -> Problem:
         """The same problem on another grid of correlation times."""
-        lam, V, scale = _eigen(self, taus)
+        return self._rebuilt(np.asarray(taus, float), self.common)
+
+    def with_common(self, common: float) -> Problem:
+        """The same problem with the wander's axis correlation ``φ = common``."""
+        return self if common == self.common else self._rebuilt(self.taus, float(common))
+
+    def _rebuilt(self, taus, common):
+        lam, V, scale = _eigen(self, taus, common)
         return Problem(self.y, self.X0, self.L, self.sigma, self.grad, self.starts, self.durations,
-                       np.asarray(taus, float), lam, V, scale, self.notes)
+                       taus, lam, V, scale, self.notes, common)
 
     def sigma_c(self, t: int, q: float) -> np.ndarray:
         """Contrast covariance ``I + q K_τ`` at grid point ``(t, q)`` (relative ``q``)."""
@@ -264,10 +326,19 @@ class Problem:
         return (V * (1.0 + q * self.lam[t])) @ V.T
 
 
-def _eigen(prob, taus):
-    # the kernels of all τ in the contrasts, diagonalised as one stack
-    K = wander_kernels(taus, prob.starts, prob.durations, prob.grad) / np.outer(prob.sigma, prob.sigma)[None]
-    Kc = prob.L.T[None] @ K @ prob.L
+def _eigen(prob, taus, common):
+    """Eigenvalues (scaled by their mean), eigenvectors and mean of the contrast kernels of
+    every ``τ`` of ``taus``; ``common`` a float (T kernels) or an array of ``φ`` (len(common)
+    × T kernels, ``φ`` outermost: the kernel is linear in ``φ``, the variograms are shared)."""
+    D = _variograms(taus, prob.starts, prob.durations) / np.outer(prob.sigma, prob.sigma)[None]
+    phis = np.atleast_1d(np.asarray(common, float))
+    G = prob.grad @ prob.grad.T
+    Kc = prob.L.T[None] @ (-0.5 * G[None] * D) @ prob.L
+    if np.any(phis != 0):
+        sg = prob.grad.sum(axis=1)
+        Kcom = prob.L.T[None] @ (-0.5 * np.outer(sg, sg)[None] * D) @ prob.L
+        Kc = ((1.0 - phis)[:, None, None, None] * Kc[None] + phis[:, None, None, None] * Kcom[None])
+        Kc = Kc.reshape((-1,) + Kc.shape[2:])
     ev, V = np.linalg.eigh(0.5 * (Kc + np.swapaxes(Kc, 1, 2)))
     ev = np.clip(ev, 0.0, None)  # round-off: the projected kernel is positive semi-definite
     s = ev.mean(axis=1)
@@ -275,9 +346,11 @@ def _eigen(prob, taus):
     return ev / scale[:, None], V, scale
 
 
-def problem(r, J, sigma, grad, starts, durations, taus=None, notes=()) -> Problem:
+def problem(r, J, sigma, grad, starts, durations, taus=None, notes=(), common: float | None = 0.0) -> Problem:
     """Build the :class:`Problem` of a fit: residuals ``r`` (n,), Jacobian ``J`` (n, q) whose
-    first three columns are the bias, ``σ`` (n,), gradients ``∇`` (n, 3), pose intervals.
+    first three columns are the bias, ``σ`` (n,), gradients ``∇`` (n, 3), pose intervals,
+    the wander's axis correlation ``common`` (:func:`axis_gram`; None: the kernels are not
+    diagonalised, for :func:`fit_common`, which does it for every ``φ`` of its grid).
 
     Raises
     ------
@@ -300,8 +373,8 @@ def problem(r, J, sigma, grad, starts, durations, taus=None, notes=()) -> Proble
     y = L.T @ (r / sigma)
     taus = tau_grid(durations, float(np.max(starts + durations) - np.min(starts))) if taus is None else taus
     prob = Problem(y, X0, L, sigma, grad, starts, durations, np.asarray(taus, float),
-                   np.zeros((0, 0)), np.zeros((0, 0, 0)), np.zeros(0), tuple(notes))
-    return prob.with_taus(prob.taus)
+                   np.zeros((0, 0)), np.zeros((0, 0, 0)), np.zeros(0), tuple(notes), float("nan"))
+    return prob if common is None else prob._rebuilt(prob.taus, float(common))
 
 
 # --------------------------------------------------------------------------- likelihood on the grid
@@ -512,7 +585,11 @@ class WanderFit:
     ``white_scale`` = ``ŝ`` (variance of the white part over the rests' prediction);
     ``q_rel`` the wander's variance relative to the white one in the contrasts (the tests'
     scale), ``q_abs`` in the data unit squared (``s_w²``, the wander's variance; ``K²`` for
-    the random walk), ``size`` its std, ``K`` its short-lag random-walk coefficient.
+    the random walk), ``size`` its std, ``K`` its short-lag random-walk coefficient (per
+    axis).  ``common`` is the wander's correlation ``φ`` between the axes the fit stands at,
+    ``common_ci`` its 95 % profile interval on :data:`COMMON_GRID` and ``common_profile``
+    the profiled ``−2ℓ_R`` at each grid value (:func:`fit_common`; empty when ``φ`` was not
+    estimated).
     """
 
     t: int
@@ -529,6 +606,9 @@ class WanderFit:
     white_scale_ci: tuple
     excess_ci: tuple
     at_bound: tuple
+    common: float = 0.0
+    common_ci: tuple = ()
+    common_profile: tuple = ()
 
     @property
     def present(self) -> bool:
@@ -610,7 +690,58 @@ def _wander_at(prob: Problem, t: int, q_rel: float, s_hat: float, reml: float) -
     size, K = gm_variance(q_abs, tau)
     nan2 = (float("nan"), float("nan"))
     return WanderFit(t=t, q_rel=q_rel, tau=tau, q_abs=q_abs, size=size, K=K, white_scale=s_hat, reml=reml,
-                     size_ci=nan2, tau_ci=nan2, K_ci=nan2, white_scale_ci=nan2, excess_ci=nan2, at_bound=())
+                     size_ci=nan2, tau_ci=nan2, K_ci=nan2, white_scale_ci=nan2, excess_ci=nan2, at_bound=(),
+                     common=float(prob.common))
+
+
+#: Correlations ``φ`` of the wander between the sensor axes that :func:`fit_common` chooses
+#: from: independent axes, then a common-mode share of a third to all of the wander (four
+#: values: each costs one diagonalisation of the kernels per round; with five the loop was
+#: 1.3x slower than with independent axes on sessions with effects).
+COMMON_GRID = np.array([0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0])
+
+
+def fit_common(prob: Problem, X: np.ndarray, grid=None) -> tuple[Problem, Basis, WanderFit]:
+    """REML of the wander's axis correlation ``φ`` jointly with ``(s, q, τ)`` on the test grid.
+
+    The kernels of every ``(φ, τ)`` are diagonalised as one stack and profiled in one pass
+    (the grid of ``τ`` repeated per ``φ``), so the cost is that of one profile on a grid
+    ``len(grid)`` times longer.
+
+    Parameters
+    ----------
+    prob : Problem
+        The linearised problem (any ``common``).
+    X : ndarray (m, p)
+        Fixed-effect columns of the model whose noise is estimated.
+    grid : array_like, optional
+        Values of ``φ`` (default :data:`COMMON_GRID`; ``0`` first: a tie, e.g. no wander at
+        all, keeps independent axes).
+
+    Returns
+    -------
+    Problem, Basis, WanderFit
+        The problem rebuilt at the estimate ``φ̂``, the :class:`Basis` of ``X`` on it, and
+        the REML noise there (``fit_wander(..., fine=False)``) with ``common_ci`` (the grid
+        values within ``χ²₁(0.95)`` of the minimum) and ``common_profile``.
+    """
+    grid = np.asarray(COMMON_GRID if grid is None else grid, float)
+    T = prob.taus.size
+    lam, V, scale = _eigen(prob, prob.taus, grid)
+    stack = Problem(prob.y, prob.X0, prob.L, prob.sigma, prob.grad, prob.starts, prob.durations,
+                    np.tile(prob.taus, grid.size), lam, V, scale, prob.notes, float("nan"))
+    bas = basis(stack, X)
+    dev = profile(stack, X, prob.y[None], Q_REL_GRID, bas=bas).reml[0].reshape(grid.size, -1).min(axis=1)
+    k = int(np.argmin(dev))
+    sl = slice(k * T, (k + 1) * T)
+    p = Problem(prob.y, prob.X0, prob.L, prob.sigma, prob.grad, prob.starts, prob.durations, prob.taus,
+                lam[sl], V[sl], scale[sl], prob.notes, float(grid[k]))
+    b = Basis(bas.K, bas.U[sl], bas.mu[sl], bas.logdet_xx)
+    w = fit_wander(p, X, fine=False, bas=b)
+    inside = grid[dev <= dev[k] + CHI2_95]
+    w = WanderFit(**{**w.__dict__, "common_ci": (float(inside.min()), float(inside.max())),
+                     "common_profile": tuple(float(v) for v in dev)})
+    return p, b, w
 
 
 # --------------------------------------------------------------------------- tests
@@ -843,8 +974,9 @@ def excess_distribution(prob: Problem, X: np.ndarray, t: int, q: float, scale: f
 # --------------------------------------------------------------------------- simulation
 
 
-def simulate_interval_means(rng: np.random.Generator, terms: dict, starts, durations, size: int = 3) -> np.ndarray:
-    """Exact Gaussian draws of the interval means of a noise model, ``size`` independent axes.
+def simulate_interval_means(rng: np.random.Generator, terms: dict, starts, durations, size: int = 3,
+                            axis_corr=None) -> np.ndarray:
+    """Exact Gaussian draws of the interval means of a noise model on ``size`` axes.
 
     Parameters
     ----------
@@ -853,6 +985,11 @@ def simulate_interval_means(rng: np.random.Generator, terms: dict, starts, durat
         takes it (two-parameter terms: ``(coefficient, shape)``); for several components of
         one term pass a list of values, e.g. ``{"gauss_markov": [(s1, 3.0), (s2, 30.0)]}``.
     starts, durations : array_like (n,)
+    size : int
+        Axes.
+    axis_corr : array_like (size, size), optional
+        Correlation of the process between the axes (default: independent axes); each
+        axis keeps the variance of ``terms``.
 
     Returns
     -------
@@ -871,9 +1008,13 @@ def simulate_interval_means(rng: np.random.Generator, terms: dict, starts, durat
     Cv = -0.5 * D + c
     ev, vec = np.linalg.eigh(0.5 * (Cv + Cv.T))
     root = vec * np.sqrt(np.clip(ev, 0.0, None))
-    return root @ rng.standard_normal((n, size))
+    z = rng.standard_normal((n, size))
+    if axis_corr is not None:
+        z = z @ np.linalg.cholesky(np.asarray(axis_corr, float)).T
+    return root @ z
 
 
-__all__ = ["CHI2_95", "Problem", "contrast_covariance", "Q_REL_GRID", "at", "RoundTests", "Surface", "WanderError", "WanderFit", "effect_information",
+__all__ = ["CHI2_95", "COMMON_GRID", "Problem", "axis_gram", "axis_weight", "fit_common", "contrast_covariance",
+           "Q_REL_GRID", "at", "RoundTests", "Surface", "WanderError", "WanderFit", "effect_information",
            "excess_distribution", "fit_wander", "gls_projector", "gls_step", "gm_variance", "problem", "profile",
            "round_tests", "simulate_interval_means", "studentised", "tau_grid", "wander_kernel"]

@@ -4,7 +4,9 @@ Each round (module :mod:`accelcal.discrepancy.colored` for the statistics):
 
 1. The current model (base + what has been named, without the poses named as outliers)
    is fitted by weighted least squares (:func:`accelcal.discrepancy.fit.fit`) and
-   linearised; the bias wander ``(s, τ)`` is estimated by REML jointly with it.
+   linearised; the bias wander ``(s, τ)`` and its correlation ``φ`` between the sensor
+   axes (a common-mode share, :func:`~.colored.fit_common`) are estimated by REML jointly
+   with it; the round's tests, MDEs and LOPO stand at ``φ̂``.
 2. Every applicable candidate effect gets the identifiability checks of the white loop
    (covariate, degrees of freedom, absorbed fraction, the design's MDE below ``max_mde_g``
    × g under the rests' noise) and its minimum detectable effect (MDE) under the fitted
@@ -79,12 +81,22 @@ def intervals(data: PoseData) -> tuple[np.ndarray, np.ndarray, tuple]:
         "pose intervals not given: the pose means are treated as instantaneous samples of the wander",)
 
 
-def linearise(data: PoseData, f: Fit, taus=None) -> C.Problem:
-    """The colored problem of the fit ``f`` on ``data`` (raises :class:`~.colored.WanderError`)."""
+def linearise(data: PoseData, f: Fit, taus=None, common: float | None = 0.0) -> C.Problem:
+    """The colored problem of the fit ``f`` on ``data`` (raises :class:`~.colored.WanderError`),
+    with the wander's axis correlation ``common`` (:func:`~.colored.axis_gram`; None: not yet
+    diagonalised, see :func:`~.colored.problem`)."""
     J = f.J * f.sigma[:, None]  # unweighted
     grad = -J[:, :3]            # ∂r/∂z = −∂r/∂b
     starts, durations, notes = intervals(data)
-    return C.problem(f.residuals, J, f.sigma, grad, starts, durations, taus=taus, notes=notes)
+    return C.problem(f.residuals, J, f.sigma, grad, starts, durations, taus=taus, notes=notes, common=common)
+
+
+def linearise_noise(data: PoseData, f: Fit) -> tuple[C.Problem, C.Basis, C.WanderFit]:
+    """:func:`linearise` at the REML estimate of the wander's axis correlation under the
+    fit's own model (:func:`~.colored.fit_common`): the problem, the :class:`~.colored.Basis`
+    of its columns and the REML noise (test grid)."""
+    prob = linearise(data, f, common=None)
+    return C.fit_common(prob, prob.X0)
 
 
 def _mde(info: np.ndarray, lam: float) -> np.ndarray:
@@ -105,14 +117,14 @@ def _inflation(info_c: np.ndarray, info_sw: np.ndarray) -> float:
 
 
 def _wander_dict(w: C.WanderFit) -> dict:
-    return {"q_rel": w.q_rel, "tau_s": w.tau, "size": w.size, "K": w.K}
+    return {"q_rel": w.q_rel, "tau_s": w.tau, "size": w.size, "K": w.K, "axis_correlation": w.common}
 
 
 def noise_model_dict(w: C.WanderFit | None, prob: C.Problem | None, reason: str = "") -> dict:
     """The ``noise_model`` key: the named stochastic term of the joint fit."""
     base = {"method": "REML of the pose residuals' noise s (white + Gauss-Markov bias wander, tau -> inf: random "
-                      "walk; the same wander on every axis), jointly with the calibration; 95 % profile-likelihood "
-                      "intervals",
+                      "walk; the same wander size on every axis, correlated between the axes by axis_correlation, "
+                      "a common-mode share), jointly with the calibration; 95 % profile-likelihood intervals",
             "white": "per-pose standard errors of the rests (static detection) times the white scale"}
     if w is None:
         return {**base, "term": "not_estimated", "estimated": False, "reason": reason}
@@ -135,9 +147,13 @@ def noise_model_dict(w: C.WanderFit | None, prob: C.Problem | None, reason: str 
             "white_scale": w.white_scale, "white_scale_ci": list(w.white_scale_ci),
             "random_walk_K": w.K, "random_walk_K_ci": list(w.K_ci), "q_rel": w.q_rel,
             "excess_ci": list(w.excess_ci), "at_bound": list(w.at_bound),
+            "axis_correlation": w.common, "axis_correlation_ci": list(w.common_ci),
+            "axis_correlation_profile": {f"{phi:g}": v for phi, v in zip(C.COMMON_GRID, w.common_profile)},
             "notes": list(prob.notes) if prob is not None else [],
             "unit": "size: data unit (std of the wander); tau_s: s; random_walk_K: data unit / sqrt(s); "
                     "white_scale: variance of the white part over the rests' prediction; "
+                    "axis_correlation: correlation of the wander between any two sensor axes (its common-mode share; "
+                    "interval and -2 log REML likelihood on the grid of the tests); "
                     "white_excess_N: data unit * sqrt(s) (when tau is below the poses, white_like: the wander "
                     "acts as white noise the rests' standard errors miss)"}
 
@@ -171,15 +187,16 @@ def discrepancy_colored(data: PoseData, rules: Rules) -> DiscrepancyResult:
         if not remaining and not test_outliers:
             break
         try:
-            prob = linearise(st.data, st.current)
+            prob, bas0, null = linearise_noise(st.data, st.current)
         except C.WanderError as err:
             st.wander_error = str(err)
             for eid in remaining:
                 ident = identifiability(st.data, st.current, eid, rules, len(remaining))
                 st.rows.append(_untested(ident, rnd, (*ident.reasons, f"bias wander cannot be estimated: {err}")))
             break
+        st.noise = (st.data, st.current, prob, bas0, null)
         rng = np.random.default_rng(rng_seq.spawn(1)[0])
-        cand_rows, out_row, rt = _round(st, prob, remaining, test_outliers, rules, rnd, rng)
+        cand_rows, out_row, rt = _round(st, prob, (bas0, null), remaining, test_outliers, rules, rnd, rng)
         best = _choose(cand_rows, out_row)
         st.rows += [Candidate(**{**asdict(c), "reasons": c.reasons, "named": best is not None and best[3] is c})
                     for c, _, _ in cand_rows]
@@ -207,16 +224,18 @@ class _State:
         self.ambiguous: set[str] = set()
         self.n_effects = 0
         self.wander_error = ""
+        self.noise = None   # (data, fit, problem, basis, REML noise) of the last round's current model
 
 
-def _round(st: _State, prob: C.Problem, remaining, test_outliers: bool, rules: Rules, rnd: int, rng):
+def _round(st: _State, prob: C.Problem, noise: tuple, remaining, test_outliers: bool, rules: Rules, rnd: int, rng):
     """One round: identifiability, the bootstrap tests, Holm, ΔBIC, LOPO, ambiguity.
 
-    Returns the candidate rows ``(Candidate, augmented fit, columns)``, the outlier row
-    (or None) and the round's :class:`~.colored.RoundTests`.
+    ``noise``: the :class:`~.colored.Basis` of the current model and its REML noise on
+    ``prob`` (:func:`linearise_noise`).  Returns the candidate rows ``(Candidate,
+    augmented fit, columns)``, the outlier row (or None) and the round's
+    :class:`~.colored.RoundTests`.
     """
-    bas0 = C.basis(prob, prob.X0)
-    null = C.fit_wander(prob, prob.X0, fine=False, bas=bas0)
+    bas0, null = noise
     prepared = [_prepare(st.data, st.current, prob, null, eid, rules, len(remaining), rnd) for eid in remaining]
     tested = [r for r in prepared if r["identifiable"]]
     rt = C.round_tests(prob, [r["Xe"] for r in tested], rng, rules.n_boot, outliers=test_outliers,
@@ -430,8 +449,12 @@ def _result(data: PoseData, rules: Rules, base: Fit, lopo_base: np.ndarray, st: 
     wander, prob, colored = None, None, {}
     wander_error = st.wander_error
     try:
-        prob = linearise(cur_data, current)
+        last = st.noise
+        same = last is not None and last[0] is cur_data and last[1] is current
+        prob, _, coarse = last[2:] if same else linearise_noise(cur_data, current)
         wander = C.fit_wander(prob, prob.X0, fine=True)
+        wander = C.WanderFit(**{**wander.__dict__, "common_ci": coarse.common_ci,
+                                "common_profile": coarse.common_profile})
     except C.WanderError as err:
         wander_error = wander_error or str(err)
     except (AccelcalError, np.linalg.LinAlgError, ValueError) as err:
@@ -462,7 +485,7 @@ def _colored_summary(data, base, prob, wander, cur_data, current) -> dict:
     # before: the base model on all poses under the final noise model
     s_w = wander.white_scale
     try:
-        pb = linearise(data, base, taus=[wander.tau])
+        pb = linearise(data, base, taus=[wander.tau], common=prob.common)
         quad_b = _quad(*C.at(pb, wander), pb.X0) / s_w
         before = {"gap": math.sqrt(quad_b / len(data))}
     except AccelcalError:
@@ -486,7 +509,7 @@ def _colored_summary(data, base, prob, wander, cur_data, current) -> dict:
         D = (C.pose_difference_variance("random_walk", math.sqrt(wander.q_abs), starts, durations) if np.isinf(tau)
              else C.pose_difference_variance("gauss_markov", (math.sqrt(wander.q_abs), tau), starts, durations))
         v = centred_pose_variance(D)
-        extra = np.sqrt(np.clip(v, 0, None) * np.sum(J_all[:, :3] ** 2, axis=1))
+        extra = np.sqrt(np.clip(v, 0, None) * C.axis_weight(J_all[:, :3], prob.common))
     else:
         extra = np.zeros(len(data))
     return {
