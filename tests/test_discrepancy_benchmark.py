@@ -36,6 +36,10 @@ def test_plan_chunks_partition_the_plan():
         B.chunk(plan, 4, 4)
     with pytest.raises(Exception, match="unknown benchmark row"):
         B.plan(["white"], ["nonsense"], [1.0], 1, 1, 0)
+    # a real-record profile gets its own number of effect-free recordings
+    counts = B.plan(["white", "adis_real"], EFFECT_IDS, [3.0], 1, 5, 0, none_counts={"adis_real": 7}
+                    ).query("truth == @B.NONE").groupby("profile").size()
+    assert counts.to_dict() == {"white": 5, "adis_real": 7}
 
 
 def test_each_recording_has_its_own_stream():

@@ -29,8 +29,8 @@ def _config(**bench):
     d["recordings"] = ["mpu6050"]
     d["sessions"].update(few_poses=[], same_imu={}, replicates=3)
     d["stochastic"].update(n_boot=19, n_resim=1)
-    d["benchmark"].update(sizes_mde=[3.0], seeds=1, seeds_none=2, seeds_constant=1, confusion_size_mde=3.0,
-                          chunks=2, power_curve={"profiles": ["white"], "sizes_mde": [1.0]},
+    d["benchmark"].update(sizes_mde=[3.0], seeds=1, seeds_none=2, seeds_none_real=3, seeds_constant=1,
+                          confusion_size_mde=3.0, chunks=2, power_curve={"profiles": ["white"], "sizes_mde": [1.0]},
                           profiles=[{"name": "white"}, {"name": "gm_1x_30s", "gauss_markov": [[1.0, 30.0]]},
                                     {"name": "adis_real", "real": "adis16405"}], **bench)
     d["adis"].update(layer_pieces=1, n_boot=19, n_resim=1)
@@ -71,10 +71,11 @@ def test_stage_outputs_of_the_ci_run(ci_workflow):
     # per profile: the effect-free recordings, five effects, the pair, the outlier, the
     # constant temperature (one seed, one size at CI scale); the power-curve profile adds
     # its five effects at its extra size; one row per recording and null
-    per_profile = bench["seeds_none"] + 5 + 1 + 1 + bench["seeds_constant"]
+    per_profile = 5 + 1 + 1 + bench["seeds_constant"]
+    effect_free = sum(bench["seeds_none_real"] if "real" in pr else bench["seeds_none"] for pr in bench["profiles"])
     extra = 5 * len(bench["power_curve"]["sizes_mde"]) * len(bench["power_curve"]["profiles"])
     assert (bench["seeds"], len(bench["sizes_mde"])) == (1, 1)  # the count above assumes them
-    assert scores.recording.nunique() == len(bench["profiles"]) * per_profile + extra
+    assert scores.recording.nunique() == len(bench["profiles"]) * per_profile + effect_free + extra
     assert set(scores.groupby("recording").size()) == {scores.null.nunique()} == {len(bench["nulls"])}
     for f in FIGURES:
         for ext in ("png", "pdf"):

@@ -26,7 +26,8 @@ for n in sorted(n for n in bench["nulls"] if not null_available(n)):
     log.warning("null hypothesis %r: not in this library's discrepancy loop yet; skipped", n)
 todo = chunk(plan(list(profiles), rules.candidates, bench["sizes_mde"], bench["seeds"], bench["seeds_none"],
                   bench["seeds_constant"], pairs=bench["pairs"], outlier=bench["outlier"],
-                  extra_sizes={pr: bench["power_curve"]["sizes_mde"] for pr in bench["power_curve"]["profiles"]}),
+                  extra_sizes={pr: bench["power_curve"]["sizes_mde"] for pr in bench["power_curve"]["profiles"]},
+                  none_counts={n: bench["seeds_none_real"] for n, pr in profiles.items() if pr.real}),
               bench["chunks"], p.chunk)
 keys, dets = [], []
 for spec in todo.itertuples():

@@ -133,7 +133,8 @@ def check_truth(truth: str) -> None:
 
 
 def plan(profiles, effects, sizes, seeds: int, seeds_none: int, seeds_constant: int, *, pairs=(),
-         outlier: bool = True, extra_sizes: dict | None = None, constant_profiles=None) -> pd.DataFrame:
+         outlier: bool = True, extra_sizes: dict | None = None, constant_profiles=None,
+         none_counts: dict | None = None) -> pd.DataFrame:
     """Every benchmark recording: ``recording, profile, truth, size_mde, replicate`` (fixed order).
 
     Parameters
@@ -154,10 +155,13 @@ def plan(profiles, effects, sizes, seeds: int, seeds_none: int, seeds_constant: 
         ``{profile: sizes}``: further sizes of the single-effect rows (power curves).
     constant_profiles : sequence of str, optional
         Profiles with the constant-temperature row (default: all).
+    none_counts : dict, optional
+        ``{profile: n}``: effect-free recordings of these profiles instead of ``seeds_none``
+        (the real-record profiles, whose recordings share a few windows of noise).
     """
     rows = []
     for prof in profiles:
-        rows += [(prof, NONE, 0.0, r) for r in range(seeds_none)]
+        rows += [(prof, NONE, 0.0, r) for r in range((none_counts or {}).get(prof, seeds_none))]
         sz = sorted(set(map(float, sizes)) | set(map(float, (extra_sizes or {}).get(prof, ()))))
         for e in effects:
             rows += [(prof, e, s, r) for s in sz for r in range(seeds)]
