@@ -17,6 +17,14 @@ from snakemake.utils import min_version
 min_version("9.0")
 
 
+# One BLAS thread per job: the jobs are the parallelism (--cores, or one SLURM task each).
+# With a multi-threaded BLAS in each of two jobs on two cores, their threads spin for each
+# other's core: the discrepancy benchmark's detection ran 22x slower per job that way.
+# Inherited by every job (and re-read by each SLURM job); a value the user set is kept.
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+
 # The default config, next to this file (so --directory elsewhere still finds it).
 # --configfile FILE extends it key by key; add --replace-workflow-config to replace it.
 configfile: os.path.join(workflow.basedir, "config", "config.yaml")

@@ -8,6 +8,12 @@ import sys
 import time
 from pathlib import Path
 
+# One BLAS thread per process, set before numpy loads (the workers and the workflow runs
+# inherit it): the tests run in parallel on few cores, and a multi-threaded BLAS in two
+# processes at once spins for the other's core (as the Snakefile says).
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
 import numpy as np
 import pytest
 
