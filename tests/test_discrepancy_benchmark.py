@@ -115,6 +115,25 @@ def test_real_profile_draws_disjoint_windows():
         P.simulate_profile(prof, rng, 4, 100.0)
 
 
+def test_axis_correlation_of_a_profile_is_what_the_axes_share():
+    """A profile whose wander is correlated between the axes by phi (the joint model's common-mode
+    share) gives that correlation, keeps each axis's variance, round-trips, and refuses axes of
+    different models; phi = 0 is the independent-axes stream, unchanged."""
+    comps = (("gauss_markov", ((1.0, 0.5),) * 3),)
+    prof = P.NoiseProfile("c", (0.0, 0.0, 0.0), comps, axis_correlation=0.6)
+    x = P.simulate_profile(prof, np.random.default_rng(3), 200_000, 100.0)
+    c = np.corrcoef(x.T)
+    assert np.allclose(c[np.triu_indices(3, 1)], 0.6, atol=0.05), c
+    assert np.allclose(x.std(axis=0), 1.0, rtol=0.05)
+    assert P.NoiseProfile.from_dict(prof.to_dict()) == prof
+    indep = dataclasses.replace(prof, axis_correlation=0.0)
+    assert np.abs(np.corrcoef(P.simulate_profile(indep, np.random.default_rng(3), 200_000, 100.0).T)[0, 1]) < 0.05
+    mixed = P.NoiseProfile("m", (0.0, 0.0, 0.0), (("gauss_markov", ((1.0, 0.5), (2.0, 0.5), (1.0, 0.5))),),
+                           axis_correlation=0.5)
+    with pytest.raises(P.ProfileError, match="same gauss_markov on every axis"):
+        P.simulate_profile(mixed, np.random.default_rng(0), 10, 100.0)
+
+
 def test_profile_config_errors_are_one_line():
     with pytest.raises(P.ProfileError, match="unknown keys"):
         P.build_profiles([{"name": "x", "gauss_marko": [[1, 3]]}], SESSION)

@@ -504,7 +504,9 @@ def _discrepancy_summary(out: dict, path: Path) -> None:
 
         lines.append(f"  bias wander ({nm['process']}): size {v(nm['size'])} {ci(nm['size_ci'])}, "
                      f"tau {v(nm['tau_s'])} s {ci(nm['tau_ci'])}, random-walk K {v(nm['random_walk_K'])} "
-                     f"{ci(nm['random_walk_K_ci'])} (95 % profile likelihood)"
+                     f"{ci(nm['random_walk_K_ci'])}"
+                     + (f", correlation between the axes {v(nm['axis_correlation'])} {ci(nm['axis_correlation_ci'])}"
+                        if nm.get("axis_correlation") is not None else "") + " (95 % profile likelihood)"
                      + ("" if nm.get("time_correlation_established") else
                         "; its time correlation is not established (tau may be below the poses: extra white noise)"))
     elif nm.get("estimated") is False and det.get("null") == "colored":

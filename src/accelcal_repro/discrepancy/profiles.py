@@ -114,6 +114,10 @@ class NoiseProfile:
         (the clean ones, :func:`clean_windows`); empty: every window.
     kind : {'parametric', 'fitted', 'real'}
     description : str
+    axis_correlation : float
+        Correlation ``φ`` between the axes of every component (a common-mode share, as the
+        colored null's joint model estimates it: :func:`accelcal.discrepancy.colored.axis_gram`);
+        it needs the same component on every axis.  0: independent axes.
     """
 
     name: str
@@ -124,6 +128,7 @@ class NoiseProfile:
     kind: str = "parametric"
     description: str = ""
     real_windows: tuple = ()
+    axis_correlation: float = 0.0
 
     def model(self, axis: int, fs: float) -> dict:
         """The axis's noise model as :func:`accelcal.discrepancy.stochastic.model_avar` takes it
@@ -146,7 +151,8 @@ class NoiseProfile:
                       for t, vals in d.get("components", ()))
         return cls(d["name"], tuple(float(v) for v in d["white"]), comps, d.get("real", ""),
                    tuple(float(v) for v in d.get("real_scale", (1.0, 1.0, 1.0))), d.get("kind", "parametric"),
-                   d.get("description", ""), tuple(int(k) for k in d.get("real_windows", ())))
+                   d.get("description", ""), tuple(int(k) for k in d.get("real_windows", ())),
+                   float(d.get("axis_correlation", 0.0)))
 
 
 # --------------------------------------------------------------------------- building profiles
@@ -241,6 +247,7 @@ def build_profiles(specs, session, *, fitted: dict | None = None, records: dict 
         kind = "real" if spec.get("real") else "fitted"
         prof = _from_model(name, f["models"], fs, scale, kind, src if kind == "real" else "",
                            spec.get("description", f.get("description", "")))
+        prof = replace(prof, axis_correlation=float(f.get("axis_correlation", 0.0)))
         if kind == "real" and screen is not None:
             prof = replace(prof, real_windows=screened_windows(src, records, fs, session.n_samples, screen))
         out[name] = prof
@@ -310,9 +317,17 @@ def simulate_profile(profile: NoiseProfile, rng: np.random.Generator, n: int, fs
         return rec[k * n:(k + 1) * n][:, list(perm)] * np.asarray(profile.real_scale)[None, :]
     seeds = np.random.SeedSequence(int(rng.integers(2 ** 63))).spawn(1 + len(profile.components))
     out = np.random.default_rng(seeds[0]).standard_normal((n, 3)) * np.asarray(profile.white)[None, :]
+    phi = float(profile.axis_correlation)
     for j, (term, values) in enumerate(profile.components):
         crng = np.random.default_rng(seeds[1 + j])
-        if all(v == values[0] for v in values):  # the same model on every axis: one call, three columns
+        same = all(v == values[0] for v in values)
+        if phi:
+            if not same:
+                raise ProfileError(f"profile {profile.name}: an axis correlation needs the same {term} on every axis")
+            # three independent columns and a common one: correlation φ between any two axes
+            c = simulate_noise(crng, n, fs, {term: values[0]}, size=4)
+            out += math.sqrt(1.0 - phi) * c[:, :3] + math.sqrt(phi) * c[:, 3:]
+        elif same:  # the same model on every axis: one call, three columns
             out += simulate_noise(crng, n, fs, {term: values[0]}, size=3)
         else:
             for a in range(3):
@@ -523,7 +538,8 @@ def xsens_source(report: dict) -> dict:
 
 def joint_source(report: dict, name: str) -> dict:
     """A ``fitted`` entry of :func:`build_profiles` from a report's joint noise model (the colored
-    null's REML bias wander, the same on every axis) with the white noise of its rests: the
+    null's REML bias wander, the same on every axis, with its correlation between the axes)
+    with the white noise of its rests: the
     per-axis sample standard deviation whose mean over a rest has the rest's standard error
     (the static detection's, which counts the samples' correlation), median over the rests."""
     nm = report.get("noise_model") or {}
@@ -546,7 +562,9 @@ def joint_source(report: dict, name: str) -> dict:
             else:
                 m["gauss_markov"] = (float(nm["size"]), float(nm["tau_s"]))
         models.append(m)
+    wander = nm.get("term") not in (None, "none")
     return {"models": models, "fs": fs, "unit_to_counts": 1.0, "white_match": False,
+            "axis_correlation": float(nm.get("axis_correlation") or 0.0) if wander else 0.0,
             "description": f"{name}: the joint model's bias wander ({nm.get('process', 'none')}) and the rests' white "
                            f"noise"}
 

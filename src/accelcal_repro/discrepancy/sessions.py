@@ -108,6 +108,12 @@ def pose_data_of(report: dict):
                      None if temp is None else np.array(temp, float), sigma=np.array(p["sigma"], float))
 
 
+def wander_axis_correlation(report: dict) -> float:
+    """The joint model's correlation of the named bias wander between the axes (0 without one)."""
+    nm = report.get("noise_model") or {}
+    return float(nm.get("axis_correlation") or 0.0) if wander_components(report) else 0.0
+
+
 def wander_components(report: dict) -> tuple[tuple[str, tuple], ...]:
     """The joint model's named bias wander as profile components (same on every axis, data unit)."""
     nm = report.get("noise_model") or {}
@@ -148,6 +154,9 @@ def named_rows(name: str, report: dict) -> list[dict]:
             ci = (f"K [{', '.join(map(_g, nm.get('random_walk_K_ci') or [None, None]))}]" if proc == "random_walk"
                   else f"size [{', '.join(map(_g, nm.get('size_ci') or [None, None]))}], "
                        f"tau [{', '.join(map(_g, nm.get('tau_ci') or [None, None]))}] s")
+            if nm.get("axis_correlation") is not None:
+                value += f", axis correlation {_g(nm['axis_correlation'])}"
+                ci += f", axis correlation [{', '.join(map(_g, nm.get('axis_correlation_ci') or [None, None]))}]"
             rows.append(row("stochastic (joint)", nm.get("term", ""), proc, value, ci))
     elif nm:
         rows.append(row("stochastic (joint)", "not_estimated", "", nm.get("reason") or ""))
@@ -394,7 +403,8 @@ def resimulate(rec: Recording, report: dict, *, n_rep: int, seed: int, white_onl
     rows (``pose = -1``).
     """
     before = NoiseProfile("before", (0.0, 0.0, 0.0))  # the rests' own noise (simulate_session)
-    after = NoiseProfile("after", (0.0, 0.0, 0.0), () if white_only_after else wander_components(report))
+    after = NoiseProfile("after", (0.0, 0.0, 0.0), () if white_only_after else wander_components(report),
+                         axis_correlation=0.0 if white_only_after else wander_axis_correlation(report))
     rows = []
     for which, prof in (("before", before), ("after", after)):
         failed = 0
@@ -507,4 +517,5 @@ def estimates_of(name: str, report: dict, which: str = "before") -> list[dict]:
 
 
 __all__ = ["BASE_PARAMETERS", "FEW_POSES_LIMITS", "GAP_COLUMNS", "diagnostics_row", "few_poses_rows", "poses_of", "with_disjoint_rests", "base_residuals", "estimates_of", "evidence_rows", "excess_rows", "gap_rows",
-           "named_rows", "pose_data_of", "resimulate", "simulate_session", "stability_rows", "wander_components"]
+           "named_rows", "pose_data_of", "resimulate", "simulate_session", "stability_rows", "wander_axis_correlation",
+           "wander_components"]
