@@ -45,7 +45,11 @@ rule timing_filters:
 
 
 rule timing_compile:
-    """First-call time of the compiled kernels in fresh processes, empty and filled disk cache."""
+    """First-call time of the compiled kernels in fresh processes, empty and filled disk cache.
+
+    High priority: one thread and nothing depends on it, so left to the end it ran alone
+    (18 s with a core idle); early, it runs beside another job (on its own core).
+    """
     output:
         f"{TIMING_DIR}/compile.csv",
     params:
@@ -54,6 +58,7 @@ rule timing_compile:
         log_path("benchmark/compile"),
     benchmark:
         bench_path("benchmark/compile"),
+    priority: 50
     threads: 1
     resources:
         mem_mb=2000,
