@@ -37,8 +37,12 @@ moved) before the samples are rounded to integer counts.  Three kinds:
   same rescaling), no model at all.  The record is cut into disjoint windows of session
   length; those holding a transient are left out (below), and replicate ``r`` takes the
   ``r mod W``-th clean window (``W`` clean windows) with the axis permutation
-  ``⌊r / W⌋ mod 6``; only ``W`` recordings are independent, which the scoring's
-  confidence interval accounts for (:func:`independent_recordings`).
+  ``⌊r / W⌋ mod 6``, each recording with its own sensor and temperature.  Recordings that
+  share a window are correlated, which the scoring's confidence interval accounts for
+  (Kish's effective sample size, :mod:`.scoring`); the benchmark gives such a profile its
+  own number of effect-free recordings (``seeds_none_real``: at 576, each window and
+  permutation three times, the outcomes of one window correlate by about 0.02, so the
+  576 count as about 530).
 
   **Screen of the record (pre-registered).**  A real record can hold transients (a
   bump of the table, a disturbance of a few seconds on every axis), and a window that
