@@ -41,7 +41,7 @@ moved) before the samples are rounded to integer counts.  Three kinds:
   share a window are correlated, which the scoring's confidence interval accounts for
   (Kish's effective sample size, :mod:`.scoring`); the benchmark gives such a profile its
   own number of effect-free recordings (``seeds_none_real``: at 576, each window and
-  permutation three times, the outcomes of one window correlate by about 0.02, so the
+  permutation three times, the outcomes of one window correlate by about 0.005, so the
   576 count as about 530).
 
   **Screen of the record (pre-registered).**  A real record can hold transients (a
