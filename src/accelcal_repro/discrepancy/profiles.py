@@ -540,6 +540,13 @@ def xsens_source(report: dict) -> dict:
             "description": f"Xsens MTi session, stochastic layer on its rests (named: {named})"}
 
 
+def wander_axis_correlation(report: dict) -> float:
+    """The joint model's correlation of its named bias wander between the axes (0 without one)."""
+    nm = report.get("noise_model") or {}
+    named = nm.get("estimated") and nm.get("term") not in (None, "none")
+    return float(nm.get("axis_correlation") or 0.0) if named else 0.0
+
+
 def joint_source(report: dict, name: str) -> dict:
     """A ``fitted`` entry of :func:`build_profiles` from a report's joint noise model (the colored
     null's REML bias wander, the same on every axis, with its correlation between the axes)
@@ -566,9 +573,8 @@ def joint_source(report: dict, name: str) -> dict:
             else:
                 m["gauss_markov"] = (float(nm["size"]), float(nm["tau_s"]))
         models.append(m)
-    wander = nm.get("term") not in (None, "none")
     return {"models": models, "fs": fs, "unit_to_counts": 1.0, "white_match": False,
-            "axis_correlation": float(nm.get("axis_correlation") or 0.0) if wander else 0.0,
+            "axis_correlation": wander_axis_correlation(report),
             "description": f"{name}: the joint model's bias wander ({nm.get('process', 'none')}) and the rests' white "
                            f"noise"}
 
@@ -607,4 +613,5 @@ __all__ = ["AXIS_PERMUTATIONS", "FITTED_SOURCES", "FLICKER_FLOOR", "NoiseProfile
            "RecordScreen", "build_profiles", "centred", "clean_windows", "independent_recordings",
            "pose_mean_covariance", "pose_mean_white", "profile_table", "record_windows", "residual_covariance",
            "rounding_bias_variance", "screened_windows", "session_length", "joint_source", "simulate_profile",
+           "wander_axis_correlation",
            "transient_scan", "usable_windows", "window_of", "xsens_source"]

@@ -52,7 +52,7 @@ from accelcal.model import m_from_params
 from accelcal.recording import Recording
 from accelcal.static import detect_static_recording
 
-from .profiles import NoiseProfile, simulate_profile
+from .profiles import NoiseProfile, simulate_profile, wander_axis_correlation
 
 BASE_PARAMETERS = ("b_x", "b_y", "b_z", "s_x", "s_y", "s_z", "theta_xy", "theta_zx", "theta_zy")
 
@@ -106,12 +106,6 @@ def pose_data_of(report: dict):
     temp = p.get("temp")
     return pose_data(np.array(p["mean"], float), report["g"], np.array(p["mean_std"], float), np.array(p["t"], float),
                      None if temp is None else np.array(temp, float), sigma=np.array(p["sigma"], float))
-
-
-def wander_axis_correlation(report: dict) -> float:
-    """The joint model's correlation of the named bias wander between the axes (0 without one)."""
-    nm = report.get("noise_model") or {}
-    return float(nm.get("axis_correlation") or 0.0) if wander_components(report) else 0.0
 
 
 def wander_components(report: dict) -> tuple[tuple[str, tuple], ...]:
@@ -517,5 +511,4 @@ def estimates_of(name: str, report: dict, which: str = "before") -> list[dict]:
 
 
 __all__ = ["BASE_PARAMETERS", "FEW_POSES_LIMITS", "GAP_COLUMNS", "diagnostics_row", "few_poses_rows", "poses_of", "with_disjoint_rests", "base_residuals", "estimates_of", "evidence_rows", "excess_rows", "gap_rows",
-           "named_rows", "pose_data_of", "resimulate", "simulate_session", "stability_rows", "wander_axis_correlation",
-           "wander_components"]
+           "named_rows", "pose_data_of", "resimulate", "simulate_session", "stability_rows", "wander_components"]
