@@ -16,7 +16,7 @@ from accelcal.discrepancy import colored as C
 from accelcal.discrepancy import wander_loop as W
 from accelcal.discrepancy.detect import Rules, critical_noncentrality, discrepancy
 from accelcal.discrepancy.fit import effect_columns, evaluate, fit_at, forward, pose_data
-from accelcal.discrepancy.stochastic import simulate_noise
+from accelcal.noise import simulate_noise
 from accelcal.errors import NotConvergedError
 from accelcal.evaluation import residual_sigma
 from accelcal.model import m_from_params

@@ -484,8 +484,7 @@ def test_gauss_markov_simulation_is_bit_for_bit_lfilter(rho):
     simulated noise (and every benchmark table built on it) does not depend on the path."""
     from scipy.signal import lfilter
 
-    from accelcal.discrepancy import _fast
-    from accelcal.discrepancy.stochastic import simulate_noise
+    from accelcal.noise import _fast, simulate_noise
 
     e = np.random.default_rng(7).standard_normal((5000, 3))
     assert np.array_equal(_fast.ar1(e, rho), lfilter([1.0], [1.0, -rho], e, axis=0))

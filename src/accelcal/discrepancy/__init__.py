@@ -10,24 +10,22 @@ the ``accelcal discrepancy`` command).  The benchmark is ``accelcal_repro.discre
 
 Stochastic layer (rest data): :func:`stochastic_layer` compares the Allan deviation of
 the measured rests with the simulator's noise model, names the missing noise term and
-re-simulates (:mod:`.allan`, :mod:`.stochastic`).
+re-simulates (:mod:`.stochastic`, on the noise analysis of :mod:`accelcal.noise`).
 """
 
-from .allan import AllanError, AllanVariance, allan_variance
+from ..noise import TERMS, AllanError, AllanVariance, allan_variance, simulate_segments
 from .colored import WanderError, WanderFit
 from .detect import NULLS, DiscrepancyResult, Rules, discrepancy, identifiability
 from .effects import EFFECT_IDS, EFFECTS
+from .figures import plot_allan
 from .fit import PoseData, fit, pose_data, pose_data_from_static
 from .report import Analysis, analyse
 from .stochastic import (
     DEFAULT_CANDIDATES,
-    TERMS,
     StochasticError,
     StochasticResult,
     expected_residual_std,
-    plot_allan,
     rest_segments,
-    simulate_segments,
     stochastic_layer,
 )
 

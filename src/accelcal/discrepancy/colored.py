@@ -142,7 +142,7 @@ import numpy as np
 
 from .. import distributions as dist
 from ..errors import AccelcalError
-from .stochastic import pose_difference_variance  # noqa: F401 (re-exported for the loop)
+from .stochastic.implication import pose_difference_variance  # noqa: F401 (re-exported for the loop)
 
 #: Relative wander variance ``q`` (over the white variance of the contrasts) the tests
 #: profile over: 0, then three per decade (the likelihood is smooth in log q: the grid
@@ -981,7 +981,7 @@ def simulate_interval_means(rng: np.random.Generator, terms: dict, starts, durat
     Parameters
     ----------
     terms : dict
-        Noise model ``{term: coefficient}`` as :func:`accelcal.discrepancy.stochastic.model_avar`
+        Noise model ``{term: coefficient}`` as :func:`accelcal.noise.model_avar`
         takes it (two-parameter terms: ``(coefficient, shape)``); for several components of
         one term pass a list of values, e.g. ``{"gauss_markov": [(s1, 3.0), (s2, 30.0)]}``.
     starts, durations : array_like (n,)

@@ -29,7 +29,7 @@ from ..recording import Recording
 from ..static import StaticPoses, detect_static_recording
 from .detect import DiscrepancyResult, Rules, discrepancy
 from .fit import pose_data_from_static
-from .stochastic import DEFAULT_CANDIDATES
+from .stochastic.layer import DEFAULT_CANDIDATES
 
 
 @dataclass(frozen=True)
@@ -79,7 +79,7 @@ class Analysis:
 def _pose_mean_variance(model: dict, starts, durations) -> np.ndarray:
     """Expected variance of each pose-mean error about the session's common mean under a
     noise model ``{term: value}`` (:func:`accelcal.discrepancy.stochastic.pose_difference_variance`)."""
-    from .stochastic import centred_pose_variance, pose_difference_variance
+    from .stochastic.implication import centred_pose_variance, pose_difference_variance
 
     return sum(centred_pose_variance(pose_difference_variance(k, v, starts, durations)) for k, v in model.items())
 
@@ -136,7 +136,7 @@ def rests_implication(det: DiscrepancyResult, stoch, starts, durations, alpha: f
     # Short-term reading: each pose mean only carries the extra Allan variance at its own
     # duration (no wander between poses), i.e. the named terms without their extrapolation
     # from the rests (τ up to ~10 s) to the whole session.
-    from .stochastic import model_avar
+    from ..noise.terms import model_avar
 
     dshort = np.column_stack([
         model_avar(a.model_after, durations, stoch.fs)
@@ -242,8 +242,8 @@ def allan_check(noise_model: dict, stoch, level: float = 0.95, min_share: float 
     otherwise; ``not visible in the rests`` when the wander is below ``min_share`` at every
     ``τ_A`` the rests reach.
     """
-    from .allan import avar_interval, pooled_edf
-    from .stochastic import TERMS
+    from ..noise.allan import avar_interval, pooled_edf
+    from ..noise.terms import TERMS
 
     tau_c = noise_model.get("tau_s")
     K, K_ci = noise_model.get("random_walk_K"), noise_model.get("random_walk_K_ci") or [np.nan, np.nan]
@@ -310,7 +310,7 @@ def analyse(rec: Recording, g: float, *, rules: Rules | None = None,
         A recording whose rests are too short for the stochastic layer is not an error:
         the report says why that layer is missing.
     """
-    from .stochastic import rest_segments, stochastic_layer
+    from .stochastic.layer import rest_segments, stochastic_layer
 
     poses = detect_static_recording(rec, **(static_kw or {}))
     det = discrepancy(pose_data_from_static(poses, g), rules or Rules())

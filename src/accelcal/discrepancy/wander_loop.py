@@ -498,7 +498,7 @@ def _colored_summary(data, base, prob, wander, cur_data, current) -> dict:
     # per pose (every pose, outliers too): std of the wander's share of the residual about the
     # session's common mean, through the final model's gradient
     from .fit import evaluate
-    from .stochastic import centred_pose_variance
+    from .stochastic.implication import centred_pose_variance
 
     starts, durations, _ = intervals(data)
     _, J_all, _ = evaluate(current.p, data, current.effects)

@@ -6,7 +6,7 @@ moved) before the samples are rounded to integer counts.  Three kinds:
 
 * **parametric** (config ``discrepancy.benchmark.profiles``): white noise of
   ``noise_counts`` per sample (the session's, unless the profile sets its own) plus
-  terms of the stochastic layer's library (:data:`accelcal.discrepancy.stochastic.TERMS`)
+  terms of the stochastic layer's library (:data:`accelcal.noise.TERMS`)
   whose sizes are given in units of ``σ_pm``, the white noise of one pose mean
   (``noise_counts / sqrt(samples of a trimmed rest)``; 0.141 counts for the Xsens-like
   session):
@@ -78,8 +78,9 @@ from itertools import permutations
 
 import numpy as np
 
-from accelcal.discrepancy.stochastic import TERMS, pose_difference_variance, simulate_noise
+from accelcal.discrepancy.stochastic import pose_difference_variance
 from accelcal.errors import AccelcalError
+from accelcal.noise import TERMS, simulate_noise
 
 #: Allan floor of flicker noise per unit B: sqrt(2 ln 2 / π).
 FLICKER_FLOOR = math.sqrt(2 * math.log(2) / math.pi)
@@ -135,7 +136,7 @@ class NoiseProfile:
     axis_correlation: float = 0.0
 
     def model(self, axis: int, fs: float) -> dict:
-        """The axis's noise model as :func:`accelcal.discrepancy.stochastic.model_avar` takes it
+        """The axis's noise model as :func:`accelcal.noise.model_avar` takes it
         (one entry per term; repeated terms, e.g. several Gauss–Markov biases, keep only the
         first: use :attr:`components` for the full model)."""
         out = {"white": self.white[axis] / math.sqrt(fs)}

@@ -225,7 +225,7 @@ def allan_variance(segments, fs: float, *, m=None, min_edf: float = DEFAULT_MIN_
                          f"(longest {max(lengths)} samples)")
     from .. import kernels
 
-    fast = kernels.compiled("discrepancy._fast")
+    fast = kernels.compiled("noise._fast")
 
     d = segs[0].shape[1]
     sums = np.zeros((m.size, d))
