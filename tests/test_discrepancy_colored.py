@@ -194,6 +194,7 @@ def test_common_mode_wander_keeps_false_positives_at_alpha(monkeypatch):
     counts = {}
     for label, g in (("estimated", grid), ("independent", np.array([0.0]))):
         monkeypatch.setattr(C, "COMMON_GRID", g)
+        monkeypatch.setattr(C.reml, "COMMON_GRID", g)   # fit_common's default grid
         n = 0
         for k, wander in enumerate(COMMON_WANDERS):
             rng = np.random.default_rng(40 + k)

@@ -35,7 +35,7 @@ import numpy as np
 import pandas as pd
 
 from accelcal.discrepancy.stochastic import pose_difference_variance, rest_segments, stochastic_layer
-from accelcal.noise import TERMS, allan_variance, avar_interval, fit_avar
+from accelcal.noise import TERMS, allan_variance, fit_avar
 
 from accelcal.static import _integrated_autocorr_time
 
