@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from accelcal.discrepancy import detect as D
+from accelcal.discrepancy import vocabulary as D
 from accelcal.discrepancy.effects import EFFECT_IDS
 from accelcal.recording import read_recording, write_recording
 from accelcal_repro.discrepancy import benchmark as B

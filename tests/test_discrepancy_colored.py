@@ -14,7 +14,7 @@ from scipy import stats
 
 from accelcal.discrepancy import colored as C
 from accelcal.discrepancy import wander_loop as W
-from accelcal.discrepancy.detect import Rules, critical_noncentrality, discrepancy
+from accelcal.discrepancy.vocabulary import Rules, critical_noncentrality, discrepancy
 from accelcal.discrepancy.fit import effect_columns, evaluate, fit_at, forward, pose_data
 from accelcal.noise import simulate_noise
 from accelcal.errors import NotConvergedError

@@ -5,7 +5,7 @@ import pytest
 from scipy import stats
 
 from accelcal_repro.discrepancy import benchmark as B
-from accelcal.discrepancy.detect import Rules, critical_noncentrality, discrepancy, holm, identifiability
+from accelcal.discrepancy.vocabulary import Rules, critical_noncentrality, discrepancy, holm, identifiability
 from accelcal.discrepancy.effects import EFFECT_IDS
 from accelcal.discrepancy.fit import evaluate, fit, fit_at, forward, lopo, pose_data
 from accelcal.evaluation import residual_sigma

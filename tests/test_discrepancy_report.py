@@ -5,7 +5,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from accelcal.discrepancy.detect import Rules, discrepancy
+from accelcal.discrepancy.vocabulary import Rules, discrepancy
 from accelcal.discrepancy.fit import forward, pose_data
 from accelcal.discrepancy.report import allan_check, noise_implication, rests_implication
 from accelcal.model import m_from_params

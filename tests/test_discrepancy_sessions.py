@@ -5,7 +5,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from accelcal.discrepancy.detect import Rules
+from accelcal.discrepancy.vocabulary import Rules
 from accelcal.discrepancy.report import analyse
 from accelcal_repro.discrepancy import benchmark as B
 from accelcal_repro.discrepancy import profiles as P

@@ -59,7 +59,7 @@ import numpy as np
 from .. import distributions as dist
 from ..errors import AccelcalError
 from . import colored as C
-from .detect import (
+from .vocabulary import (
     Candidate,
     DiscrepancyResult,
     Rules,

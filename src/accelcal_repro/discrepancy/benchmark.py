@@ -18,7 +18,7 @@ power) would detect the effect along its random direction ``d`` if it knew
 the true covariance of the pose residuals under the profile (generalised least squares
 with :func:`accelcal_repro.discrepancy.profiles.pose_mean_covariance`), computed on the
 true pose design (:func:`oracle_mde`).  For the white profile it is the loop's own MDE
-(:meth:`accelcal.discrepancy.detect.Identifiability.mde_along`); under wander it is
+(:meth:`accelcal.discrepancy.vocabulary.Identifiability.mde_along`); under wander it is
 larger, because a wandering bias hides part of any slow effect.  Rows (``truth``):
 
 * ``none``: no effect (false-positive rate);
@@ -48,7 +48,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from accelcal.discrepancy.detect import Rules, applicable, critical_noncentrality, discrepancy, identifiability
+from accelcal.discrepancy.vocabulary import Rules, applicable, critical_noncentrality, discrepancy, identifiability
 from accelcal.discrepancy.effects import EFFECT_IDS
 from accelcal.discrepancy.fit import evaluate, fit_at, forward, pose_data, pose_data_from_static
 from accelcal.errors import AccelcalError
@@ -387,7 +387,7 @@ def simulate_case(truth: str, size_mde: float, replicate: int, *, seed: int, ses
 
 def null_available(null: str) -> bool:
     """Can this library's loop test under ``null``?  ``white`` always (the loop of issue 7); ``colored``
-    once :class:`~accelcal.discrepancy.detect.Rules` has the ``null`` setting."""
+    once :class:`~accelcal.discrepancy.vocabulary.Rules` has the ``null`` setting."""
     if null not in NULLS:
         raise AccelcalError(f"unknown null hypothesis {null!r}; known: {', '.join(NULLS)}")
     return null == "white" or "null" in {f.name for f in dataclasses.fields(Rules)}
