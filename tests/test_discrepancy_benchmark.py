@@ -8,6 +8,7 @@ import pandas as pd
 import pytest
 
 from accelcal.discrepancy import vocabulary as D
+from accelcal.discrepancy import white_loop
 from accelcal.discrepancy.effects import EFFECT_IDS
 from accelcal.recording import read_recording, write_recording
 from accelcal_repro.discrepancy import benchmark as B
@@ -199,7 +200,7 @@ def test_scoring_catches_a_fitter_that_ignores_the_effect(monkeypatch):
     _, good = _benchmark(rows, WHITE_RULES)
     assert all(_verdict(good, e, "accuracy_ge_1mde").verdict == "pass" for e in EFFECT_IDS)
 
-    real_fit = D.fit
+    real_fit = white_loop.fit
 
     def blind_fit(data, effects=(), p0=None, max_iter=200):
         base = real_fit(data, effects[:-1], p0=None if p0 is None else p0[: 9 + 3 * (len(effects) - 1)])
@@ -209,7 +210,7 @@ def test_scoring_catches_a_fitter_that_ignores_the_effect(monkeypatch):
 
         return fit_at(data, effects, np.concatenate([base.p, np.zeros(3)]))
 
-    monkeypatch.setattr(D, "fit", blind_fit)
+    monkeypatch.setattr(white_loop, "fit", blind_fit)
     _, bad = _benchmark(rows, WHITE_RULES)
     for e in EFFECT_IDS:
         v = _verdict(bad, e, "accuracy_ge_1mde")

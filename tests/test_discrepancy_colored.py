@@ -14,12 +14,13 @@ from scipy import stats
 
 from accelcal.discrepancy import colored as C
 from accelcal.discrepancy import wander_loop as W
-from accelcal.discrepancy.vocabulary import Rules, critical_noncentrality, discrepancy
+from accelcal.discrepancy.detect import discrepancy
 from accelcal.discrepancy.fit import effect_columns, evaluate, fit_at, forward, pose_data
-from accelcal.noise import simulate_noise
+from accelcal.discrepancy.vocabulary import Rules, critical_noncentrality
 from accelcal.errors import NotConvergedError
 from accelcal.evaluation import residual_sigma
 from accelcal.model import m_from_params
+from accelcal.noise import simulate_noise
 from accelcal.simulation import random_directions
 
 G = 9.80665

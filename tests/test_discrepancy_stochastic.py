@@ -13,8 +13,8 @@ from scipy import stats
 from accelcal import noise
 from accelcal.discrepancy import stochastic as st
 from accelcal.discrepancy.figures import plot_allan
-from accelcal.noise import allan as al
 from accelcal.errors import AccelcalError
+from accelcal.noise import allan as al
 
 FS = 100.0
 #: A calibration session's rests: one long initial rest and shorter poses.

@@ -15,7 +15,7 @@ re-simulates (:mod:`.stochastic`, on the noise analysis of :mod:`accelcal.noise`
 
 from ..noise import TERMS, AllanError, AllanVariance, allan_variance, simulate_segments
 from .colored import WanderError, WanderFit
-from .vocabulary import NULLS, DiscrepancyResult, Rules, discrepancy, identifiability
+from .detect import discrepancy
 from .effects import EFFECT_IDS, EFFECTS
 from .figures import plot_allan
 from .fit import PoseData, fit, pose_data, pose_data_from_static
@@ -28,6 +28,7 @@ from .stochastic import (
     rest_segments,
     stochastic_layer,
 )
+from .vocabulary import NULLS, DiscrepancyResult, Rules, identifiability
 
 __all__ = [
     "EFFECTS",

@@ -1,7 +1,7 @@
 """One recording through both layers: the report of ``accelcal discrepancy`` and of the workflow.
 
 :func:`analyse` detects the static poses (as ``accelcal calibrate`` does), runs the
-deterministic layer (:func:`accelcal.discrepancy.vocabulary.discrepancy`) on the pose means
+deterministic layer (:func:`accelcal.discrepancy.detect.discrepancy`) on the pose means
 and the stochastic layer (:func:`accelcal.discrepancy.stochastic.stochastic_layer`) on
 the same rests, and then joins them: what the named noise terms imply for the pose
 residuals (:func:`noise_implication`).
@@ -27,9 +27,10 @@ from .. import distributions as dist
 from ..errors import AccelcalError
 from ..recording import Recording
 from ..static import StaticPoses, detect_static_recording
-from .vocabulary import DiscrepancyResult, Rules, discrepancy
+from .detect import discrepancy
 from .fit import pose_data_from_static
 from .stochastic.layer import DEFAULT_CANDIDATES
+from .vocabulary import DiscrepancyResult, Rules
 
 
 @dataclass(frozen=True)

@@ -1,21 +1,15 @@
-"""The deterministic layer: which candidate effect do the pose residuals ask for?
+"""What the deterministic layer's two naming loops share: rules, identifiability, candidates, result.
 
-Two noise models for the null hypothesis (``Rules.null``).  ``colored`` (the default):
-white per-pose noise times a common scale plus a bias wander estimated jointly with the
-calibration, likelihood-ratio tests calibrated by a parametric bootstrap, outlier poses,
-ambiguity between candidates and with the wander (:mod:`.colored`, :mod:`.wander_loop`).
-``white``: the loop described below, white per-pose noise times a common scale and
-F-tests (issue 7's loop, kept unchanged as the benchmark's negative control: on sessions
-whose bias wanders it names ``bias_drift`` far more often than α).  Both share the
-identifiability checks, the result class and its JSON.
+The loops (:mod:`.white_loop` under the white null, :mod:`.wander_loop` under the colored
+null; :func:`accelcal.discrepancy.detect.discrepancy` chooses) test every candidate effect
+of the library as a nested extension of the current model (the base model of bias, scale
+and non-orthogonality, 9 parameters, plus the effects named so far).  Both use the
+decision :class:`Rules`, the identifiability checks below, the :class:`Candidate` rows and
+the :class:`DiscrepancyResult` with its JSON.
 
-Given :class:`~accelcal.discrepancy.fit.PoseData`, the loop fits the base model (bias,
-scale, non-orthogonality: 9 parameters), treats it as the simulation of the experiment,
-and tests every candidate effect of the library as a nested extension of it:
-
-1. **Identifiability** (:func:`identifiability`), before any test.  With ``J₀`` the
-   weighted Jacobian of the current model and ``J₁`` that of the effect's three
-   parameters at zero effect:
+Identifiability (:func:`identifiability`), before any test.  With ``J₀`` the weighted
+Jacobian of the current model and ``J₁`` that of the effect's three parameters at zero
+effect:
 
    * *absorbed* = the largest squared canonical correlation between the column spaces
      of ``J₁`` and ``J₀``: the fraction of the residual signature of the effect's worst
@@ -34,27 +28,6 @@ and tests every candidate effect of the library as a nested extension of it:
    missing or does not vary (temperature range below the configured minimum), when
    fewer than one residual degree of freedom would remain, when ``absorbed`` exceeds
    ``max_absorbed``, or when its MDE in the data unit exceeds ``max_mde_g`` × g.
-2. **Nested test** of current vs current + effect: the F-test on the weighted
-   residuals, ``F = ((χ²₀ - χ²₁)/3) / (χ²₁/(n - q - 3))`` against ``F(3, n - q - 3)``.
-   Not the likelihood-ratio χ² test with the per-pose noise as known variance: the
-   residuals of real recordings exceed that noise (Xsens: ≈ 3×, results/measured), and
-   a test that takes the noise model as exact would call every candidate significant.
-   The F-test estimates the common scale of the residuals from the extended model's own
-   residuals, so it is exact for Gaussian errors whose covariance is known up to a
-   factor.  Holm's step-down procedure controls the family-wise error across the
-   identifiable candidates of a round (``correction='bonferroni'`` is available;
-   ``'none'`` exists only as the negative control of the benchmark).
-3. **ΔBIC** = ``n ln(χ²₁/χ²₀) + 3 ln n`` (Gaussian likelihood with the scale profiled
-   out, as the F-test) must be below ``-bic_threshold``.
-4. **Leave-one-pose-out** prediction error (PRESS, in noise units, each reduced fit
-   warm-started from the full one) must fall below ``(1 - lopo_min_improvement)`` × that
-   of the current model.
-
-The best candidate among those passing 2–4 (smallest p-value, then smallest ΔBIC) is
-named, the model is refitted with it, and the loop repeats with the remaining
-candidates until none passes or ``max_rounds`` effects are named.  Each round is a
-family tested at level α; a round is only reached if the previous one named an effect,
-so on effect-free data the probability of naming anything is that of round 1: ≤ α.
 
 Gap (:func:`gap`): the RMS of the weighted pose residuals, ``sqrt(χ²/n)``, with the same
 fixed weights before (base model) and after (base + named effects); noise alone predicts
@@ -166,12 +139,6 @@ def critical_noncentrality(k: int, dof: int, level: float, power: float) -> floa
     from scipy.optimize import brentq  # here: scipy.optimize costs 0.2-0.6 s to import
 
     return float(brentq(f, 0.0, hi, xtol=1e-10, rtol=1e-12))
-
-
-def _f_sf(stat: float, dfn: int, dfd: int) -> float:
-    """:func:`accelcal.distributions.f_sf` for ``stat >= 0`` without its argument handling
-    (the loop calls it for every candidate)."""
-    return float(dist.special.fdtrc(dfn, dfd, stat)) if dfd > 0 else float("nan")
 
 
 def holm(p_values, correction: str = "holm") -> np.ndarray:
@@ -505,42 +472,6 @@ def _excess_status(p_before: float, p_after: float, alpha: float) -> str:
         return "no excess"
     return "explained" if p_after >= alpha else "not explained"
 
-
-def _test_candidate(data: PoseData, current: Fit, lopo_cur: np.ndarray, ident: Identifiability,
-                    rnd: int, rules: Rules):
-    eid = ident.effect
-    common = dict(round=rnd, effect=eid, identifiable=ident.identifiable, reasons=ident.reasons,
-                  absorbed=ident.absorbed, absorbed_axis=ident.absorbed_axis.tolist(), mde=ident.mde.tolist(),
-                  mde_data=ident.mde_data.tolist())
-    if not ident.identifiable:
-        return Candidate(**common), None, None
-    try:
-        aug = fit(data, (*current.effects, eid), p0=current.p)
-    except AccelcalError as err:
-        return Candidate(**{**common, "identifiable": False,
-                            "reasons": (*ident.reasons, f"fit failed: {err}")}), None, None
-    n = data.z.shape[0]
-    dof1 = aug.dof
-    chi0, chi1 = current.chi2, aug.chi2
-    stat = ((chi0 - chi1) / 3) / (chi1 / dof1) if chi1 > 0 else float("inf")
-    stat = max(stat, 0.0)
-    p = _f_sf(stat, 3, dof1)
-    dbic = float(n * np.log(chi1 / chi0) + 3 * np.log(n)) if chi0 > 0 and chi1 > 0 else float("nan")
-    lo = lopo(aug, data)
-    both = np.isfinite(lo) & np.isfinite(lopo_cur)
-    press0, press1 = (float(np.sum(lopo_cur[both] ** 2)), float(np.sum(lo[both] ** 2))) if both.any() else (np.nan,) * 2
-    i = len(current.effects)
-    sl = slice(9 + 3 * i, 12 + 3 * i)
-    cand = Candidate(**common, statistic=float(stat), dof=(3, dof1), p_value=p, delta_bic=dbic,
-                     lopo_gap_current=gap(lopo_cur[both]) if both.any() else float("nan"),
-                     lopo_gap=gap(lo[both]) if both.any() else float("nan"),
-                     estimate=aug.p[sl].tolist(), se=aug.standard_errors(True)[sl].tolist(),
-                     se_noise=aug.standard_errors(False)[sl].tolist(),
-                     passed_bic=bool(dbic < -rules.bic_threshold),
-                     passed_lopo=bool(np.isfinite(press1) and press1 < (1 - rules.lopo_min_improvement) * press0))
-    return cand, aug, lo
-
-
 def applicable(data: PoseData, candidates) -> tuple[list[str], dict]:
     """Candidates whose covariate exists in the recording, and why the others are not applicable."""
     ok, skipped = [], {}
@@ -552,49 +483,6 @@ def applicable(data: PoseData, candidates) -> tuple[list[str], dict]:
     return ok, skipped
 
 
-def discrepancy(data: PoseData, rules: Rules | None = None) -> DiscrepancyResult:
-    """Run the deterministic layer (module docstring) on one pose set.
-
-    Raises
-    ------
-    AccelcalError
-        The base model cannot be fitted (too few or degenerate poses: the full model
-        needs at least 10).
-    """
-    rules = rules or Rules()
-    if rules.null == "colored":
-        from .wander_loop import discrepancy_colored
-
-        return discrepancy_colored(data, rules)
-    cands, skipped = applicable(data, rules.candidates)
-    base = fit(data)
-    lopo_base = lopo(base, data)
-    current, lopo_cur = base, lopo_base
-    named, rows = [], []
-    for rnd in range(1, rules.max_rounds + 1):
-        remaining = [e for e in cands if e not in named]
-        if not remaining:
-            break
-        tested = []
-        for eid in remaining:
-            ident = identifiability(data, current, eid, rules, len(remaining))
-            tested.append(_test_candidate(data, current, lopo_cur, ident, rnd, rules))
-        padj = holm([c.p_value for c, _, _ in tested], rules.correction)
-        round_rows = []
-        for (c, aug, lo), pa in zip(tested, padj):
-            ok = bool(np.isfinite(pa) and pa <= rules.alpha)
-            round_rows.append((replace(c, p_adjusted=float(pa), passed_test=ok), aug, lo))
-        passing = [t for t in round_rows if t[0].passed]
-        if passing:
-            best = min(passing, key=lambda t: (t[0].p_value, t[0].delta_bic))
-            round_rows = [(replace(c, named=c is best[0]), a, lo) for c, a, lo in round_rows]
-        rows += [c for c, _, _ in round_rows]
-        if not passing:
-            break
-        _, current, lopo_cur = best
-        named.append(best[0].effect)
-    return DiscrepancyResult(tuple(named), tuple(rows), skipped, base, current, lopo_base, lopo_cur, data, rules)
-
 
 __all__ = ["CORRECTIONS", "NULLS", "Candidate", "DiscrepancyResult", "Identifiability", "Rules", "applicable",
-           "critical_noncentrality", "discrepancy", "gap", "holm", "identifiability"]
+           "critical_noncentrality", "gap", "holm", "identifiability"]

@@ -48,9 +48,10 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from accelcal.discrepancy.vocabulary import Rules, applicable, critical_noncentrality, discrepancy, identifiability
+from accelcal.discrepancy.detect import discrepancy
 from accelcal.discrepancy.effects import EFFECT_IDS
 from accelcal.discrepancy.fit import evaluate, fit_at, forward, pose_data, pose_data_from_static
+from accelcal.discrepancy.vocabulary import Rules, applicable, critical_noncentrality, identifiability
 from accelcal.errors import AccelcalError
 from accelcal.evaluation import residual_sigma
 from accelcal.model import m_from_params

@@ -3,7 +3,7 @@
 Pose means taken minutes apart share the sensor's slowly wandering bias, so their errors
 are correlated, and a trend in them is not by itself evidence of a deterministic drift.
 This module is the statistical core of the ``colored`` null of
-:func:`accelcal.discrepancy.vocabulary.discrepancy`: the covariance of the pose residuals
+:func:`accelcal.discrepancy.detect.discrepancy`: the covariance of the pose residuals
 implied by a noise model, generalised least squares (GLS) under it, restricted maximum
 likelihood (REML) of the wander jointly with the calibration, and nested tests whose
 null distribution is calibrated by a parametric bootstrap.

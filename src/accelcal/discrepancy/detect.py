@@ -1,0 +1,38 @@
+"""The deterministic layer: which candidate effect do the pose residuals ask for?
+
+Two noise models for the null hypothesis (``Rules.null``).  ``colored`` (the default):
+white per-pose noise times a common scale plus a bias wander estimated jointly with the
+calibration, likelihood-ratio tests calibrated by a parametric bootstrap, outlier poses,
+ambiguity between candidates and with the wander (:mod:`.colored`, :mod:`.wander_loop`).
+``white``: white per-pose noise times a common scale and F-tests (:mod:`.white_loop`,
+the benchmark's negative control: on sessions whose bias wanders it names
+``bias_drift`` far more often than α).  Both share the identifiability checks, the
+result class and its JSON (:mod:`.vocabulary`).
+
+:func:`discrepancy` runs the loop of the null ``rules.null`` chooses.
+"""
+
+from __future__ import annotations
+
+from .fit import PoseData
+from .vocabulary import DiscrepancyResult, Rules
+from .wander_loop import discrepancy_colored
+from .white_loop import discrepancy_white
+
+
+def discrepancy(data: PoseData, rules: Rules | None = None) -> DiscrepancyResult:
+    """Run the deterministic layer (module docstring) on one pose set.
+
+    Raises
+    ------
+    AccelcalError
+        The base model cannot be fitted (too few or degenerate poses: the full model
+        needs at least 10).
+    """
+    rules = rules or Rules()
+    if rules.null == "colored":
+        return discrepancy_colored(data, rules)
+    return discrepancy_white(data, rules)
+
+
+__all__ = ["discrepancy"]
