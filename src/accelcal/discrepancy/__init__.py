@@ -5,7 +5,7 @@ et al. (2024) and tests a library of candidate effects (:mod:`.effects`) as nest
 extensions (:mod:`.fit`, :mod:`.detect`), by default under the colored null: white
 per-pose noise plus a bias wander estimated jointly with the calibration, tests
 calibrated by a parametric bootstrap, outlier poses (:mod:`.colored`,
-:mod:`.wander_loop`); :func:`analyse` runs both layers on a recording (:mod:`.report`,
+:mod:`.wander_loop`); :func:`discrepancy_report` runs both layers on a recording (:mod:`.report`,
 the ``accelcal discrepancy`` command).  The benchmark is ``accelcal_repro.discrepancy``.
 
 Stochastic layer (rest data): :func:`stochastic_layer` compares the Allan deviation of
@@ -19,7 +19,7 @@ from .detect import discrepancy
 from .effects import EFFECT_IDS, EFFECTS
 from .figures import plot_allan
 from .fit import PoseData, fit, pose_data, pose_data_from_static
-from .report import Analysis, analyse
+from .report import DiscrepancyReport, discrepancy_report
 from .stochastic import (
     DEFAULT_CANDIDATES,
     StochasticError,
@@ -30,6 +30,9 @@ from .stochastic import (
 )
 from .vocabulary import NULLS, DiscrepancyResult, Rules, identifiability
 
+#: Short names of :func:`discrepancy_report` and :class:`DiscrepancyReport` (the same objects; public API).
+analyse, Analysis = discrepancy_report, DiscrepancyReport
+
 __all__ = [
     "EFFECTS",
     "EFFECT_IDS",
@@ -37,10 +40,12 @@ __all__ = [
     "WanderError",
     "WanderFit",
     "Analysis",
+    "DiscrepancyReport",
     "DiscrepancyResult",
     "PoseData",
     "Rules",
     "analyse",
+    "discrepancy_report",
     "discrepancy",
     "fit",
     "identifiability",

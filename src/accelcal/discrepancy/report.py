@@ -1,6 +1,6 @@
 """One recording through both layers: the report of ``accelcal discrepancy`` and of the workflow.
 
-:func:`analyse` detects the static poses (as ``accelcal calibrate`` does), runs the
+:func:`discrepancy_report` detects the static poses (as ``accelcal calibrate`` does), runs the
 deterministic layer (:func:`accelcal.discrepancy.detect.discrepancy`) on the pose means
 and the stochastic layer (:func:`accelcal.discrepancy.stochastic.stochastic_layer`) on
 the same rests, and then joins them: what the named noise terms imply for the pose
@@ -55,8 +55,8 @@ DEFAULT_STOCHASTIC = StochasticSettings()
 
 
 @dataclass(frozen=True)
-class Analysis:
-    """Both layers on one recording."""
+class DiscrepancyReport:
+    """Both layers on one recording: what ``accelcal discrepancy`` reports (:meth:`to_dict`)."""
 
     poses: StaticPoses
     deterministic: DiscrepancyResult
@@ -299,10 +299,14 @@ def allan_check(noise_model: dict, stoch, level: float = 0.95, min_share: float 
     return out
 
 
-def analyse(rec: Recording, g: float, *, rules: Rules | None = None,
-            stochastic: StochasticSettings | None = DEFAULT_STOCHASTIC, unit: str = "u",
-            static_kw: dict | None = None) -> Analysis:
-    """Both layers on one recording (``stochastic=None`` skips the stochastic layer).
+def discrepancy_report(rec: Recording, g: float, *, rules: Rules | None = None,
+                       stochastic: StochasticSettings | None = DEFAULT_STOCHASTIC, unit: str = "u",
+                       static_kw: dict | None = None) -> DiscrepancyReport:
+    """The discrepancy report of a recording: static poses, both layers and their join.
+
+    Detects the static poses, runs the deterministic layer on their means and the
+    stochastic layer on the same rests (``stochastic=None`` skips it), and joins them
+    (:func:`noise_implication`).
 
     Raises
     ------
@@ -330,8 +334,8 @@ def analyse(rec: Recording, g: float, *, rules: Rules | None = None,
                                      (rules or Rules()).alpha)
     else:
         err = "not run"
-    return Analysis(poses, det, stoch, err, impl, rec.rate)
+    return DiscrepancyReport(poses, det, stoch, err, impl, rec.rate)
 
 
-__all__ = ["DEFAULT_STOCHASTIC", "Analysis", "StochasticSettings", "allan_check", "analyse", "noise_implication",
-           "rests_implication"]
+__all__ = ["DEFAULT_STOCHASTIC", "DiscrepancyReport", "StochasticSettings", "allan_check", "discrepancy_report",
+           "noise_implication", "rests_implication"]
