@@ -67,7 +67,7 @@ def test_oracle_mde_is_the_loops_own_under_white_noise_and_larger_under_wander()
 
 
 def _pose_means(rec):
-    win = B._trimmed_windows(SESSION, len(rec.t))
+    win = SESSION.trimmed_windows(len(rec.t))
     return np.array([rec.acc[a:b].mean(axis=0) for a, b in win])
 
 
@@ -77,7 +77,7 @@ def test_profile_noise_matches_its_pose_mean_covariance(name):
     (Monte Carlo over 300 sessions, each pose and axis; chi-square-size tolerance)."""
     prof = PROFILES[name]
     n = SESSION.n_samples
-    win = B._trimmed_windows(SESSION, n)
+    win = SESSION.trimmed_windows(n)
     ns = (win[:, 1] - win[:, 0]).astype(float)
     C = P.pose_mean_covariance(prof, win[:, 0] / SESSION.rate, ns / SESSION.rate, ns, SESSION.rate)
     Pc = np.eye(len(ns)) - 1.0 / len(ns)

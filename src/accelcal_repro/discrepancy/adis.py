@@ -130,9 +130,7 @@ def chosen_models(models: pd.DataFrame) -> list[dict]:
 
 def session_layout(session) -> tuple[np.ndarray, int]:
     """Trimmed rest windows ``[start, stop)`` of the benchmark session and its length in samples."""
-    from .benchmark import _trimmed_windows
-
-    return _trimmed_windows(session, session.n_samples), session.n_samples
+    return session.trimmed_windows(), session.n_samples
 
 
 def _predicted_scatter(model: dict, starts, durations) -> float:

@@ -106,6 +106,27 @@ class Session:
         return int(round(self.init_rest_s * r)) + (self.n_poses - 1) * (int(round(self.move_s * r))
                                                                         + int(round(self.rest_s * r)))
 
+    def rest_windows(self, n_samples: int | None = None) -> np.ndarray:
+        """``[start, stop)`` sample range of every rest of the simulated session.
+
+        ``n_samples``: the length of the simulated time series, which must be the
+        session's (:attr:`n_samples`, the default).
+        """
+        rate = self.rate
+        n_init, n_rest, n_move = (int(round(v * rate)) for v in (self.init_rest_s, self.rest_s, self.move_s))
+        starts = [0] + [n_init + i * n_move + (i - 1) * n_rest for i in range(1, self.n_poses)]
+        stops = [n_init] + [s + n_rest for s in starts[1:]]
+        out = np.array([starts, stops]).T
+        assert out[-1, 1] == (self.n_samples if n_samples is None else n_samples)
+        return out
+
+    def trimmed_windows(self, n_samples: int | None = None) -> np.ndarray:
+        """The rests the static detection will see: trimmed by ``trim_s`` next to every motion."""
+        m = int(round(self.trim_s * self.rate))
+        win = self.rest_windows(n_samples) + np.array([[m, -m]])
+        win[0, 0] = 0  # the session's start borders no motion
+        return win
+
 
 # --------------------------------------------------------------------------- rows
 
@@ -188,25 +209,6 @@ def chunk(df: pd.DataFrame, n_chunks: int, k: int) -> pd.DataFrame:
 
 
 # --------------------------------------------------------------------------- design and oracle
-
-
-def _rest_windows(session: Session, n_samples_total: int) -> np.ndarray:
-    """``[start, stop)`` sample range of every rest of the simulated session."""
-    rate = session.rate
-    n_init, n_rest, n_move = (int(round(v * rate)) for v in (session.init_rest_s, session.rest_s, session.move_s))
-    starts = [0] + [n_init + i * n_move + (i - 1) * n_rest for i in range(1, session.n_poses)]
-    stops = [n_init] + [s + n_rest for s in starts[1:]]
-    out = np.array([starts, stops]).T
-    assert out[-1, 1] == n_samples_total
-    return out
-
-
-def _trimmed_windows(session: Session, n: int) -> np.ndarray:
-    """The rests the static detection will see: trimmed by ``trim_s`` next to every motion."""
-    m = int(round(session.trim_s * session.rate))
-    win = _rest_windows(session, n) + np.array([[m, -m]])
-    win[0, 0] = 0  # the session's start borders no motion
-    return win
 
 
 @dataclass(frozen=True)
@@ -306,7 +308,7 @@ def simulate_case(truth: str, size_mde: float, replicate: int, *, seed: int, ses
         span = t[-1] - t[0] + 1.0 / ss.rate
         temp = ss.temp_mean + ss.temp_amplitude * np.sin(2 * np.pi * ss.temp_cycles * t / span + phase)
         # The design the detection will see: trimmed rests, their mid times and temperatures.
-        win = _trimmed_windows(ss, len(t))
+        win = ss.trimmed_windows(len(t))
         t_mid = np.array([0.5 * (t[a] + t[b - 1]) for a, b in win])
         temp_pose = np.array([temp[a:b].mean() for a, b in win])
         n_eff = (win[:, 1] - win[:, 0]).astype(float)
@@ -360,7 +362,7 @@ def simulate_case(truth: str, size_mde: float, replicate: int, *, seed: int, ses
         s_mde = oracle.shift_mde(k, rules, family)
         shift = size_mde * s_mde * rng.choice((-1.0, 1.0))
         delta = shift * w[k] / float(w[k] @ w[k])  # moves the residual of pose k by `shift`
-        a_, b_ = _rest_windows(ss, len(t))[k]
+        a_, b_ = ss.rest_windows(len(t))[k]
         z[a_:b_] += delta[None, :]
         outlier = {"outlier_pose": k, "outlier_t": float(t_mid[k]), "outlier_shift_mde": s_mde,
                    "outlier_shift": float(shift)}

@@ -585,9 +585,7 @@ def profile_table(profiles: dict, session) -> list[dict]:
     the pose means of the session: RMS over poses of the pose-mean standard deviation beyond the
     samples' own white noise and rounding (the time-correlated terms, and the rounding bias of
     sub-count noise), in counts and relative to the white one (``wander_over_white``)."""
-    from .benchmark import _trimmed_windows
-
-    win = _trimmed_windows(session, session.n_samples)
+    win = session.trimmed_windows()
     n_s = (win[:, 1] - win[:, 0]).astype(float)
     starts, durations = win[:, 0] / session.rate, n_s / session.rate
     rows = []
