@@ -37,7 +37,7 @@ leave-one-pose-out gap ``sqrt(PRESS/n)`` is reported next to it.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field
 from functools import lru_cache
 
 import numpy as np
@@ -45,7 +45,7 @@ import numpy as np
 from .. import distributions as dist
 from ..errors import AccelcalError
 from .effects import EFFECT_IDS, EFFECTS, TEMPERATURE, effect
-from .fit import Fit, PoseData, effect_columns, fit, lopo, orthonormal_basis, parameter_names
+from .fit import Fit, PoseData, effect_columns, orthonormal_basis, parameter_names
 
 CORRECTIONS = ("holm", "bonferroni", "none")
 #: The noise models of the null hypothesis: ``colored`` (white per-pose noise + a bias wander

@@ -9,7 +9,8 @@ the calibration (the discrepancy workflow's stochastic layer,
   (:func:`allan_variance` → :class:`AllanVariance`);
 * :mod:`.terms` — the noise-term library (:data:`TERMS`: white, quantization, flicker
   bias instability, random walk, drift ramp, Gauss–Markov, sinusoid; IEEE Std 952
-  coefficients) and the Allan variance of a noise model (:func:`model_avar`);
+  coefficients), the Allan variance of a noise model (:func:`model_avar`) and the checks
+  of a model's entries (:func:`noise_term`, :func:`term_parameters`);
 * :mod:`.simulation` — sampled noise of a model (:func:`simulate_segments`,
   :func:`simulate_noise`);
 * :mod:`.allan_fit` — the fit of a model's coefficients to a measured Allan variance by
@@ -48,9 +49,9 @@ from .allan import (
 )
 from .allan_fit import NoiseFit, fit_avar, fit_avar_batch, gamma_deviance
 from .simulation import simulate_noise, simulate_segments
-from .terms import TERM_IDS, TERMS, NoiseModelError, NoiseTerm, model_avar
+from .terms import TERM_IDS, TERMS, NoiseModelError, NoiseTerm, model_avar, noise_term, term_parameters
 
 __all__ = ["DEFAULT_MIN_EDF", "NOISE_ALPHAS", "TERMS", "TERM_IDS", "AllanError", "AllanVariance", "NoiseFit",
            "NoiseModelError", "NoiseTerm", "allan_variance", "avar_interval", "check_segments", "edf_overlapping",
-           "fit_avar", "fit_avar_batch", "gamma_deviance", "model_avar", "octave_m", "pooled_edf", "simulate_noise",
-           "simulate_segments"]
+           "fit_avar", "fit_avar_batch", "gamma_deviance", "model_avar", "noise_term", "octave_m", "pooled_edf",
+           "simulate_noise", "simulate_segments", "term_parameters"]

@@ -17,7 +17,7 @@ from itertools import combinations
 
 import numpy as np
 
-from .terms import TERMS, NoiseModelError, _term, model_avar
+from .terms import TERMS, NoiseModelError, model_avar, noise_term
 
 
 @dataclass(frozen=True)
@@ -135,17 +135,17 @@ def fit_avar_batch(taus, avar, edf, term_ids: Sequence[str], fs: float) -> list[
         raise NoiseModelError("Allan variance must be positive and finite at every tau (constant data?)")
     term_ids = tuple(term_ids)
     for k in term_ids:
-        _term(k)
+        noise_term(k)
     G = y.shape[0]
     shaped = [k for k in term_ids if TERMS[k].shape_key]
     if len(shaped) > 1:
         raise NoiseModelError(f"at most one two-parameter term per model, got {shaped}")
     if not shaped:
-        H = np.column_stack([_term(k).basis(taus, fs) for k in term_ids])
+        H = np.column_stack([noise_term(k).basis(taus, fs) for k in term_ids])
         c, dev = _irls(np.broadcast_to(H, (G,) + H.shape), y, edf)
         return [NoiseFit(term_ids, c[g], float("nan"), float(dev[g])) for g in range(G)]
     grid = TERMS[shaped[0]].shape_grid(fs, taus.max())
-    Hs = np.stack([np.column_stack([_term(k).basis(taus, fs, sh) for k in term_ids]) for sh in grid])
+    Hs = np.stack([np.column_stack([noise_term(k).basis(taus, fs, sh) for k in term_ids]) for sh in grid])
     H = np.broadcast_to(Hs[None], (G,) + Hs.shape).reshape(G * grid.size, *Hs.shape[1:])
     c, dev = _irls(H, np.repeat(y, grid.size, axis=0), edf)
     c, dev = c.reshape(G, grid.size, -1), dev.reshape(G, grid.size)
@@ -167,11 +167,6 @@ def fit_avar(taus, avar, edf, term_ids: Sequence[str], fs: float) -> NoiseFit:
         Sampling rate [Hz] (the Gauss–Markov basis is that of the sampled process).
     """
     return fit_avar_batch(taus, np.asarray(avar, dtype=float)[None], edf, term_ids, fs)[0]
-
-
-def _n_params(term_id: str) -> int:
-    return 2 if TERMS[term_id].shape_key else 1
-
 
 
 __all__ = ["NoiseFit", "fit_avar", "fit_avar_batch", "gamma_deviance"]

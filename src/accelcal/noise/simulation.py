@@ -14,7 +14,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from .terms import TERM_IDS, _value
+from .terms import TERM_IDS, term_parameters
 
 
 def simulate_segments(rng: np.random.Generator, lengths: Sequence[int], fs: float,
@@ -27,7 +27,7 @@ def simulate_segments(rng: np.random.Generator, lengths: Sequence[int], fs: floa
 
     Returns a list of arrays of shape ``(n_i,)`` (``size=None``) or ``(n_i, size)``.
     """
-    vals = {k: _value(k, v) for k, v in terms.items()}
+    vals = {k: term_parameters(k, v) for k, v in terms.items()}
     seeds = rng.integers(0, 2**63, size=len(TERM_IDS))
     streams = {k: np.random.default_rng(int(s)) for k, s in zip(TERM_IDS, seeds)}
     cols = 1 if size is None else int(size)

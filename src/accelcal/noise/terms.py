@@ -50,7 +50,9 @@ The per-sample standard deviation of the white term is ``N √fs``.
   (``2σ²τ/(3T_c)``) below ``T_c``, falling like white noise (``2σ²T_c/τ``) above.
   ``T_c`` enters nonlinearly: it is profiled over a grid of 3 values per octave from
   ``1/(2 fs)`` to ``2 τ_max`` (the estimate has that resolution, ±12 %).  Not a default
-  candidate (see Identifiability).
+  candidate of the discrepancy workflow's stochastic layer: it imitates a random walk
+  or a flicker floor on short records (:mod:`accelcal.discrepancy.stochastic.layer`,
+  "Identifiability").
 * ``sinusoid``: a periodic disturbance ``A sin(2π f₀ t + φ)`` (IEEE 952's sinusoidal
   noise), random phase per rest; AVAR of the sampled sinusoid
   ``A² H_m² sin²(π f₀ τ)`` with ``H_m = sin(π f₀ τ)/(m sin(π f₀/fs))``: it rises like a
@@ -62,6 +64,8 @@ The per-sample standard deviation of the white term is ``N √fs``.
   ``K²/fs`` (the discrete walk adds ``K²/(6 fs² τ)``, white-like and below 1 %).
 * ``drift_ramp``: a linear drift ``R t`` within each rest (deterministic).
 
+:func:`noise_term` looks a term up and :func:`term_parameters` checks a model entry,
+each with a one-line :class:`NoiseModelError` naming what is wrong.
 """
 
 from __future__ import annotations
@@ -95,6 +99,11 @@ class NoiseTerm:
     alpha: int
     meaning: str
     shape_key: str | None = None
+
+    @property
+    def n_parameters(self) -> int:
+        """Free parameters of the term in a fit: 2 for the two-parameter terms, else 1."""
+        return 2 if self.shape_key else 1
 
     def basis(self, tau, fs: float, shape: float | None = None) -> np.ndarray:
         """AVAR(τ) per unit squared coefficient (two-parameter terms need ``shape``)."""
@@ -162,16 +171,21 @@ TERMS = {t.id: t for t in (
 TERM_IDS = tuple(TERMS)
 
 
-def _term(term_id: str) -> NoiseTerm:
+def noise_term(term_id: str) -> NoiseTerm:
+    """The library's term ``term_id`` (raises :class:`NoiseModelError` naming the known ids)."""
     try:
         return TERMS[term_id]
     except KeyError:
         raise NoiseModelError(f"unknown noise term {term_id!r}; known: {', '.join(TERM_IDS)}") from None
 
 
-def _value(term_id: str, v) -> tuple[float, float | None]:
-    """(coefficient, shape or None) of a model entry; two-parameter terms are ``(coefficient, shape)``."""
-    t = _term(term_id)
+def term_parameters(term_id: str, v) -> tuple[float, float | None]:
+    """``(coefficient, shape or None)`` of a model entry ``{term_id: v}``, checked.
+
+    One-parameter terms take a coefficient ``>= 0``; the two-parameter terms
+    ``(coefficient >= 0, shape > 0)``.  Raises :class:`NoiseModelError` otherwise.
+    """
+    t = noise_term(term_id)
     if t.shape_key is not None:
         try:
             s, shape = (float(x) for x in v)
@@ -194,10 +208,9 @@ def model_avar(terms: Mapping[str, object], taus, fs: float) -> np.ndarray:
     taus = np.asarray(taus, dtype=float)
     out = np.zeros(taus.shape)
     for k, v in terms.items():
-        s, shape = _value(k, v)
-        out = out + s**2 * _term(k).basis(taus, fs, shape)
+        s, shape = term_parameters(k, v)
+        out = out + s**2 * noise_term(k).basis(taus, fs, shape)
     return out
 
 
-
-__all__ = ["LN2", "NoiseModelError", "NoiseTerm", "TERMS", "TERM_IDS", "model_avar"]
+__all__ = ["LN2", "NoiseModelError", "NoiseTerm", "TERMS", "TERM_IDS", "model_avar", "noise_term", "term_parameters"]

@@ -182,7 +182,7 @@ class Problem:
         return self if common == self.common else self._rebuilt(self.taus, float(common))
 
     def _rebuilt(self, taus, common):
-        lam, V, scale = _eigen(self, taus, common)
+        lam, V, scale = kernel_eigensystems(self, taus, common)
         return Problem(self.y, self.X0, self.L, self.sigma, self.grad, self.starts, self.durations,
                        taus, lam, V, scale, self.notes, common)
 
@@ -192,7 +192,7 @@ class Problem:
         return (V * (1.0 + q * self.lam[t])) @ V.T
 
 
-def _eigen(prob, taus, common):
+def kernel_eigensystems(prob, taus, common):
     """Eigenvalues (scaled by their mean), eigenvectors and mean of the contrast kernels of
     every ``τ`` of ``taus``; ``common`` a float (T kernels) or an array of ``φ`` (len(common)
     × T kernels, ``φ`` outermost: the kernel is linear in ``φ``, the variograms are shared)."""
@@ -245,4 +245,5 @@ def problem(r, J, sigma, grad, starts, durations, taus=None, notes=(), common: f
 
 
 __all__ = ["MIN_WANDER_DOF", "POINT_DURATION", "TAU_PER_DECADE", "TAU_PER_DECADE_FINE", "Problem", "WanderError",
-           "axis_gram", "axis_weight", "gm_variance", "problem", "tau_grid", "wander_kernel", "wander_kernels"]
+           "axis_gram", "axis_weight", "gm_variance", "kernel_eigensystems", "problem", "tau_grid", "wander_kernel",
+           "wander_kernels"]

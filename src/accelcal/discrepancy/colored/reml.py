@@ -11,7 +11,7 @@ import numpy as np
 
 from ... import distributions as dist
 from .gls import MIN_WHITE_SCALE, Q_REL_GRID, Basis, basis, profile
-from .problem import TAU_PER_DECADE_FINE, Problem, _eigen, gm_variance, tau_grid
+from .problem import TAU_PER_DECADE_FINE, Problem, gm_variance, kernel_eigensystems, tau_grid
 
 #: ``χ²₁`` quantile of the 95 % profile-likelihood intervals.
 CHI2_95 = float(dist.chi2_isf(0.05, 1))
@@ -170,7 +170,7 @@ def fit_common(prob: Problem, X: np.ndarray, grid=None) -> tuple[Problem, Basis,
     """
     grid = np.asarray(COMMON_GRID if grid is None else grid, float)
     T = prob.taus.size
-    lam, V, scale = _eigen(prob, prob.taus, grid)
+    lam, V, scale = kernel_eigensystems(prob, prob.taus, grid)
     stack = Problem(prob.y, prob.X0, prob.L, prob.sigma, prob.grad, prob.starts, prob.durations,
                     np.tile(prob.taus, grid.size), lam, V, scale, prob.notes, float("nan"))
     bas = basis(stack, X)

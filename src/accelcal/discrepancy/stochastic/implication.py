@@ -33,7 +33,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from ...noise.terms import _value, model_avar
+from ...noise.terms import model_avar, term_parameters
 from .results import StochasticError, StochasticResult
 
 
@@ -59,7 +59,7 @@ def pose_difference_variance(term_id: str, value, starts, durations) -> np.ndarr
     -------
     ndarray, shape (n, n)
     """
-    s, shape = _value(term_id, value)
+    s, shape = term_parameters(term_id, value)
     a = np.asarray(starts, dtype=float)
     T = np.asarray(durations, dtype=float)
     if a.shape != T.shape or a.ndim != 1 or a.size == 0 or np.any(T <= 0):
@@ -145,9 +145,9 @@ def pose_residual_implication(terms: Mapping[str, object], starts, durations, fs
     per_term = {k: centred_pose_variance(pose_difference_variance(k, v, starts, durations))
                 for k, v in terms.items()}
     white_like = ["white"]
-    n2_white = _value("white", terms["white"])[0] ** 2 if "white" in terms else 0.0
+    n2_white = term_parameters("white", terms["white"])[0] ** 2 if "white" in terms else 0.0
     if "gauss_markov" in terms:
-        sigma, tc = _value("gauss_markov", terms["gauss_markov"])
+        sigma, tc = term_parameters("gauss_markov", terms["gauss_markov"])
         if tc < 0.1 * durations.min():
             white_like.append("gauss_markov")
             n2_white += 2 * sigma**2 * tc

@@ -69,7 +69,7 @@ from ... import distributions as dist
 from ...noise.allan import AllanVariance, allan_variance, check_segments
 from ...noise.allan_fit import NoiseFit, fit_avar, fit_avar_batch
 from ...noise.simulation import simulate_segments
-from ...noise.terms import TERMS, _term
+from ...noise.terms import TERMS, noise_term
 from .implication import pose_residual_implication
 from .results import AxisStochastic, StochasticError, StochasticResult
 
@@ -79,11 +79,6 @@ from .results import AxisStochastic, StochasticError, StochasticResult
 DEFAULT_CANDIDATES = ("quantization", "bias_instability", "random_walk", "drift_ramp", "sinusoid")
 DEFAULT_N_BOOT = 199
 DEFAULT_N_RESIM = 16
-
-
-def _n_params(term_id: str) -> int:
-    return 2 if TERMS[term_id].shape_key else 1
-
 
 
 # --------------------------------------------------------------------------- homogeneity
@@ -164,7 +159,7 @@ def stochastic_layer(segments, fs: float, *, seed: int, alpha: float = 0.05, max
     d = segs[0].shape[1]
     cand = tuple(dict.fromkeys(candidates))
     for k in cand:
-        _term(k)
+        noise_term(k)
     if "white" in cand:
         raise StochasticError("'white' is the base model, not a candidate")
     if not 0 < alpha < 1:
@@ -284,7 +279,7 @@ def _one_axis(name, allan: AllanVariance, j, lengths, fs, cand, alpha, max_terms
         tol = 1e-9 * max(1.0, float(lr_obs.max()))
         p_raw = (1 + (lr_boot >= lr_obs[None, :] - tol).sum(axis=0)) / (n_boot + 1)
         p_adj = (1 + (lr_boot.max(axis=1)[:, None] >= lr_obs[None, :] - tol).sum(axis=0)) / (n_boot + 1)
-        dbic = -lr_obs + np.array([_n_params(k) for k in remaining]) * log_n
+        dbic = -lr_obs + np.array([TERMS[k].n_parameters for k in remaining]) * log_n
         best = int(np.argmin(dbic))
         accept = bool(p_adj[best] < alpha and dbic[best] < 0)
         tests.append({
@@ -317,11 +312,11 @@ def _one_axis(name, allan: AllanVariance, j, lengths, fs, cand, alpha, max_terms
     # CI with the edf of the final model: Satterthwaite mix of the terms' edf at each τ.
     parts, nus = [], []
     for k, c in zip(after.term_ids, after.c):
-        parts.append(c * _term(k).basis(taus, fs, after.shape if TERMS[k].shape_key else None))
+        parts.append(c * noise_term(k).basis(taus, fs, after.shape if TERMS[k].shape_key else None))
         if k == "gauss_markov":  # random-walk-like below T_c, white-like above
             nus.append(np.where(taus < after.shape, allan.edf_for(-2), allan.edf_for(0)))
         else:
-            nus.append(allan.edf_for(_term(k).alpha))
+            nus.append(allan.edf_for(noise_term(k).alpha))
     total = np.sum(parts, axis=0)
     nu_mix = total**2 / np.sum([p**2 / np.maximum(nu, 1e-12) for p, nu in zip(parts, nus)], axis=0)
     lo, hi = allan.adev_interval(0.683, np.column_stack([nu_mix] * allan.avar.shape[1]))
