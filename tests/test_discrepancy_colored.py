@@ -80,7 +80,7 @@ def true_mde_direction(truth, eid, wander, rules, n_tests, direction):
     prob = W.linearise(d0, f0)
     Xe = prob.columns(effect_columns(truth["p"], d0, (), eid))
     S = C.contrast_covariance(prob, wander or {})
-    info = C.effect_information(prob, prob.X0, Xe, sigma_c=S)["colored"]
+    info = C.effect_information(prob, prob.X0, Xe, sigma_c=S).colored
     lam = critical_noncentrality(3, n - 12, rules.alpha / n_tests, rules.power)
     d = np.asarray(direction, float) / np.linalg.norm(direction)
     return float(np.sqrt(lam / (d @ info @ d))) * d

@@ -45,7 +45,7 @@ import numpy as np
 from .. import distributions as dist
 from ..errors import AccelcalError
 from .effects import EFFECT_IDS, EFFECTS, TEMPERATURE, effect
-from .fit import Fit, PoseData, effect_columns, orthonormal_basis, parameter_names
+from .fit import Fit, PoseData, effect_columns, evaluate, orthonormal_basis, parameter_names
 
 CORRECTIONS = ("holm", "bonferroni", "none")
 #: The noise models of the null hypothesis: ``colored`` (white per-pose noise + a bias wander
@@ -260,7 +260,7 @@ def identifiability(data: PoseData, base: Fit, eid: str, rules: Rules, n_tests: 
     return Identifiability(eid, not reasons, tuple(reasons), absorbed, absorbed_axis, mde, mde_data, info, lam, dof)
 
 
-# --------------------------------------------------------------------------- the loop
+# --------------------------------------------------------------------------- candidates, outliers, the result
 
 
 @dataclass(frozen=True)
@@ -298,6 +298,13 @@ class Candidate:
     dominated: bool = False
     bartlett: float = float("nan")
 
+    @classmethod
+    def from_identifiability(cls, ident: Identifiability, rnd: int) -> Candidate:
+        """The row of a candidate in round ``rnd`` before its test: its identifiability only."""
+        return cls(round=rnd, effect=ident.effect, identifiable=ident.identifiable, reasons=ident.reasons,
+                   absorbed=ident.absorbed, absorbed_axis=ident.absorbed_axis.tolist(), mde=ident.mde.tolist(),
+                   mde_data=ident.mde_data.tolist())
+
     @property
     def passed(self) -> bool:
         return self.identifiable and self.passed_test and self.passed_bic and self.passed_lopo
@@ -311,6 +318,56 @@ class Candidate:
         d["parameters"] = list(EFFECTS[self.effect].parameters)
         d["unit"] = EFFECTS[self.effect].unit
         return d
+
+
+@dataclass(frozen=True)
+class OutlierTest:
+    """The outlier family of one round (colored null): its most outlying pose and the test.
+
+    ``pose`` is the pose's index in the recording, ``t`` its mid time [s]; ``statistic``
+    the largest mean-shift likelihood ratio over the poses, ``studentised`` that pose's
+    GLS studentised residual; ``p_value`` the bootstrap p-value of the family,
+    ``p_adjusted`` after Holm over the round; ``delta_bic`` = ``−LR + 2 ln n``.
+    """
+
+    round: int
+    pose: int
+    t: float
+    statistic: float
+    studentised: float
+    p_value: float
+    p_adjusted: float
+    delta_bic: float
+    passed_test: bool
+    named: bool = False
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+@dataclass(frozen=True)
+class OutlierPose:
+    """A pose named an outlier: left out of the fit, its residual predicted by the others.
+
+    ``shift``: its residual under the refit without it (unit of g), ``shift_sigma`` the
+    same over the pose's noise; the test's ``statistic``, ``studentised``, ``p`` and
+    ``p_adjusted`` (:class:`OutlierTest`); the gaps of the model before and after.
+    """
+
+    pose: int
+    t: float
+    shift: float
+    shift_sigma: float
+    statistic: float
+    studentised: float
+    p: float
+    p_adjusted: float
+    round: int
+    gap_before: float
+    gap_after: float
+
+    def to_dict(self) -> dict:
+        return asdict(self)
 
 
 @dataclass(frozen=True)
@@ -332,8 +389,8 @@ class DiscrepancyResult:
     data: PoseData
     rules: Rules
     noise_model: dict = field(default_factory=dict)
-    outliers: tuple = ()
-    outlier_tests: tuple = ()
+    outliers: tuple[OutlierPose, ...] = ()
+    outlier_tests: tuple[OutlierTest, ...] = ()
     errors: tuple = ()
     final_data: PoseData | None = None
     colored: dict = field(default_factory=dict)
@@ -387,8 +444,6 @@ class DiscrepancyResult:
         """Residuals of the final model on every pose (outlier poses predicted, not fitted)."""
         if self.final_data is None or len(self.final_data) == len(self.data):
             return self.final.residuals
-        from .fit import evaluate
-
         r, _, _ = evaluate(self.final.p, self.data, self.final.effects, jacobian=False)
         return np.full(len(self.data), np.nan) if r is None else r
 
@@ -435,8 +490,8 @@ class DiscrepancyResult:
             "not_identifiable_reasons": self.not_identifiable_reasons,
             "errors": list(self.errors),
             "noise_model": self.noise_model or _white_noise_model(self),
-            "outliers": [dict(o) for o in self.outliers],
-            "outlier_tests": [dict(o) for o in self.outlier_tests],
+            "outliers": [o.to_dict() for o in self.outliers],
+            "outlier_tests": [o.to_dict() for o in self.outlier_tests],
             **self.colored,
             "not_applicable": dict(self.not_applicable),
             "candidates": [c.to_dict() for c in self.candidates],
@@ -450,7 +505,7 @@ class DiscrepancyResult:
                 "sigma": self.data.sigma.tolist(),
                 "residual_before": self.base.residuals.tolist(),
                 "residual_after": self.residual_after_all().tolist(),
-                "excluded": [o["pose"] for o in self.outliers],
+                "excluded": [o.pose for o in self.outliers],
                 "lopo_before": self.lopo_base.tolist(),
                 "lopo_after": self.lopo_final.tolist(),
             },
@@ -484,5 +539,5 @@ def applicable(data: PoseData, candidates) -> tuple[list[str], dict]:
 
 
 
-__all__ = ["CORRECTIONS", "NULLS", "Candidate", "DiscrepancyResult", "Identifiability", "Rules", "applicable",
-           "critical_noncentrality", "gap", "holm", "identifiability"]
+__all__ = ["CORRECTIONS", "NULLS", "Candidate", "DiscrepancyResult", "Identifiability", "OutlierPose", "OutlierTest",
+           "Rules", "applicable", "critical_noncentrality", "gap", "holm", "identifiability"]

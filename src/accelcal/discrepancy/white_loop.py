@@ -53,16 +53,13 @@ def _f_sf(stat: float, dfn: int, dfd: int) -> float:
 def _test_candidate(data: PoseData, current: Fit, lopo_cur: np.ndarray, ident: Identifiability,
                     rnd: int, rules: Rules):
     eid = ident.effect
-    common = dict(round=rnd, effect=eid, identifiable=ident.identifiable, reasons=ident.reasons,
-                  absorbed=ident.absorbed, absorbed_axis=ident.absorbed_axis.tolist(), mde=ident.mde.tolist(),
-                  mde_data=ident.mde_data.tolist())
+    row = Candidate.from_identifiability(ident, rnd)
     if not ident.identifiable:
-        return Candidate(**common), None, None
+        return row, None, None
     try:
         aug = fit(data, (*current.effects, eid), p0=current.p)
     except AccelcalError as err:
-        return Candidate(**{**common, "identifiable": False,
-                            "reasons": (*ident.reasons, f"fit failed: {err}")}), None, None
+        return replace(row, identifiable=False, reasons=(*ident.reasons, f"fit failed: {err}")), None, None
     n = data.z.shape[0]
     dof1 = aug.dof
     chi0, chi1 = current.chi2, aug.chi2
@@ -75,15 +72,14 @@ def _test_candidate(data: PoseData, current: Fit, lopo_cur: np.ndarray, ident: I
     press0, press1 = (float(np.sum(lopo_cur[both] ** 2)), float(np.sum(lo[both] ** 2))) if both.any() else (np.nan,) * 2
     i = len(current.effects)
     sl = slice(9 + 3 * i, 12 + 3 * i)
-    cand = Candidate(**common, statistic=float(stat), dof=(3, dof1), p_value=p, delta_bic=dbic,
-                     lopo_gap_current=gap(lopo_cur[both]) if both.any() else float("nan"),
-                     lopo_gap=gap(lo[both]) if both.any() else float("nan"),
-                     estimate=aug.p[sl].tolist(), se=aug.standard_errors(True)[sl].tolist(),
-                     se_noise=aug.standard_errors(False)[sl].tolist(),
-                     passed_bic=bool(dbic < -rules.bic_threshold),
-                     passed_lopo=bool(np.isfinite(press1) and press1 < (1 - rules.lopo_min_improvement) * press0))
+    cand = replace(row, statistic=float(stat), dof=(3, dof1), p_value=p, delta_bic=dbic,
+                   lopo_gap_current=gap(lopo_cur[both]) if both.any() else float("nan"),
+                   lopo_gap=gap(lo[both]) if both.any() else float("nan"),
+                   estimate=aug.p[sl].tolist(), se=aug.standard_errors(True)[sl].tolist(),
+                   se_noise=aug.standard_errors(False)[sl].tolist(),
+                   passed_bic=bool(dbic < -rules.bic_threshold),
+                   passed_lopo=bool(np.isfinite(press1) and press1 < (1 - rules.lopo_min_improvement) * press0))
     return cand, aug, lo
-
 
 
 def discrepancy_white(data: PoseData, rules: Rules) -> DiscrepancyResult:

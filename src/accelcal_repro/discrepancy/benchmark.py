@@ -424,8 +424,7 @@ def _result_row(res) -> dict:
            "not_identifiable": "+".join(res.not_identifiable), "n_poses_detected": s["n_poses"],
            **{k: s[k] for k in ("gap_before", "gap_after", "gap_expected_before", "gap_expected_after",
                                 "gap_lopo_before", "gap_lopo_after", "excess_before", "excess_after")}}
-    outliers = getattr(res, "outliers", None) or ()
-    row["outlier_t_detected"] = ";".join(f"{o['t']:.3f}" for o in outliers if isinstance(o, dict) and "t" in o)
+    row["outlier_t_detected"] = ";".join(f"{o.t:.3f}" for o in res.outliers)
     for c in res.candidates:
         if c.round == 1:
             row[f"p_{c.effect}"] = c.p_value

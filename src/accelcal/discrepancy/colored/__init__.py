@@ -143,6 +143,7 @@ from .gls import (
     MIN_WHITE_SCALE,
     Q_REL_GRID,
     Basis,
+    EffectInformation,
     Surface,
     basis,
     effect_information,
@@ -168,11 +169,11 @@ from .problem import (
     wander_kernels,
 )
 from .reml import CHI2_95, COMMON_GRID, Q_REL_FINE, S_FACTORS, WanderFit, at, fit_common, fit_wander
-from .simulation import contrast_covariance, pose_difference_variance, simulate_interval_means
+from .simulation import contrast_covariance, simulate_interval_means
 
 __all__ = ["BATCHES", "CHI2_95", "COMMON_GRID", "MIN_WANDER_DOF", "MIN_WHITE_SCALE", "POINT_DURATION", "Q_REL_FINE",
-           "Q_REL_GRID", "S_FACTORS", "TAU_PER_DECADE", "TAU_PER_DECADE_FINE", "Basis", "Problem", "RoundTests",
-           "Surface", "WanderError", "WanderFit", "at", "axis_gram", "axis_weight", "basis", "contrast_covariance",
-           "effect_information", "excess_distribution", "fit_common", "fit_wander", "gls_projector", "gls_step",
-           "gm_variance", "pose_difference_variance", "problem", "profile", "round_tests", "simulate_interval_means",
+           "Q_REL_GRID", "S_FACTORS", "TAU_PER_DECADE", "TAU_PER_DECADE_FINE", "Basis", "EffectInformation", "Problem",
+           "RoundTests", "Surface", "WanderError", "WanderFit", "at", "axis_gram", "axis_weight", "basis",
+           "contrast_covariance", "effect_information", "excess_distribution", "fit_common", "fit_wander",
+           "gls_projector", "gls_step", "gm_variance", "problem", "profile", "round_tests", "simulate_interval_means",
            "stop_count", "studentised", "tau_grid", "wander_kernel", "wander_kernels"]

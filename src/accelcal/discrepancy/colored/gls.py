@@ -222,12 +222,21 @@ def studentised(prob: Problem, X: np.ndarray, t: int, q: float, Y=None, scale: f
 # --------------------------------------------------------------------------- information, MDE, GLS
 
 
+@dataclass(frozen=True)
+class EffectInformation:
+    """Fisher information of an effect block profiled over the current model (k, k) under
+    three noise models: the colored one (``colored``), white noise (``white``) and white
+    noise of the same mean variance (``scaled_white``: what a common scale factor would give)."""
+
+    colored: np.ndarray
+    white: np.ndarray
+    scaled_white: np.ndarray
+
+
 def effect_information(prob: Problem, X0: np.ndarray, Xe: np.ndarray, t: int | None = None, q: float = 0.0,
-                       sigma_c: np.ndarray | None = None) -> dict:
-    """Fisher information of an effect block ``Xe`` profiled over ``X0``: under the wander
-    ``(t, q)`` or the contrast covariance ``sigma_c`` (``colored``), under white noise
-    (``white``) and under white noise of the same mean variance (``scaled_white``: what a
-    common scale factor would give)."""
+                       sigma_c: np.ndarray | None = None) -> EffectInformation:
+    """:class:`EffectInformation` of an effect block ``Xe`` profiled over ``X0``, the colored
+    noise being the wander ``(t, q)`` or the contrast covariance ``sigma_c``."""
     if sigma_c is None:
         V = prob.V[t]
         w = 1.0 / (1.0 + q * prob.lam[t])
@@ -243,7 +252,7 @@ def effect_information(prob: Problem, X0: np.ndarray, Xe: np.ndarray, t: int | N
         return Xe.T @ P @ Xe
 
     I_white = info(np.eye(prob.m))
-    return {"colored": info(Si), "white": I_white, "scaled_white": I_white / mean_var}
+    return EffectInformation(colored=info(Si), white=I_white, scaled_white=I_white / mean_var)
 
 
 
@@ -271,5 +280,5 @@ def excess_distribution(prob: Problem, X: np.ndarray, t: int, q: float, scale: f
     return np.clip(mu, 0.0, None)
 
 
-__all__ = ["MIN_WHITE_SCALE", "Q_REL_GRID", "Basis", "Surface", "basis", "effect_information", "excess_distribution",
+__all__ = ["MIN_WHITE_SCALE", "Q_REL_GRID", "Basis", "EffectInformation", "Surface", "basis", "effect_information", "excess_distribution",
            "gls_projector", "gls_step", "profile", "studentised"]

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..stochastic.implication import pose_difference_variance  # noqa: F401 (re-exported for the loop)
+from ..stochastic.implication import pose_difference_variance
 from .problem import Problem
 
 
