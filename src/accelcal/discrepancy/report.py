@@ -25,11 +25,15 @@ import numpy as np
 
 from .. import distributions as dist
 from ..errors import AccelcalError
+from ..noise.allan import avar_interval, pooled_edf
+from ..noise.terms import TERMS, model_avar
 from ..recording import Recording
 from ..static import StaticPoses, detect_static_recording
 from .detect import discrepancy
 from .fit import pose_data_from_static
-from .stochastic.layer import DEFAULT_CANDIDATES
+from .stochastic import StochasticResult
+from .stochastic.implication import centred_pose_variance, pose_difference_variance
+from .stochastic.layer import DEFAULT_CANDIDATES, rest_segments, stochastic_layer
 from .vocabulary import DiscrepancyResult, Rules
 
 
@@ -60,7 +64,7 @@ class DiscrepancyReport:
 
     poses: StaticPoses
     deterministic: DiscrepancyResult
-    stochastic: object | None
+    stochastic: StochasticResult | None
     stochastic_error: str
     implication: dict
     fs: float
@@ -80,8 +84,6 @@ class DiscrepancyReport:
 def _pose_mean_variance(model: dict, starts, durations) -> np.ndarray:
     """Expected variance of each pose-mean error about the session's common mean under a
     noise model ``{term: value}`` (:func:`accelcal.discrepancy.stochastic.pose_difference_variance`)."""
-    from .stochastic.implication import centred_pose_variance, pose_difference_variance
-
     return sum(centred_pose_variance(pose_difference_variance(k, v, starts, durations)) for k, v in model.items())
 
 
@@ -137,8 +139,6 @@ def rests_implication(det: DiscrepancyResult, stoch, starts, durations, alpha: f
     # Short-term reading: each pose mean only carries the extra Allan variance at its own
     # duration (no wander between poses), i.e. the named terms without their extrapolation
     # from the rests (τ up to ~10 s) to the whole session.
-    from ..noise.terms import model_avar
-
     dshort = np.column_stack([
         model_avar(a.model_after, durations, stoch.fs)
         - model_avar({t: v["value"] for t, v in a.fit_before.items()}, durations, stoch.fs) for a in stoch.axes])
@@ -243,9 +243,6 @@ def allan_check(noise_model: dict, stoch, level: float = 0.95, min_share: float 
     otherwise; ``not visible in the rests`` when the wander is below ``min_share`` at every
     ``τ_A`` the rests reach.
     """
-    from ..noise.allan import avar_interval, pooled_edf
-    from ..noise.terms import TERMS
-
     tau_c = noise_model.get("tau_s")
     K, K_ci = noise_model.get("random_walk_K"), noise_model.get("random_walk_K_ci") or [np.nan, np.nan]
     if noise_model.get("term") != "bias_wander" or K is None or not np.isfinite(K):
@@ -315,8 +312,6 @@ def discrepancy_report(rec: Recording, g: float, *, rules: Rules | None = None,
         A recording whose rests are too short for the stochastic layer is not an error:
         the report says why that layer is missing.
     """
-    from .stochastic.layer import rest_segments, stochastic_layer
-
     poses = detect_static_recording(rec, **(static_kw or {}))
     det = discrepancy(pose_data_from_static(poses, g), rules or Rules())
     stoch, err, impl = None, "", {}

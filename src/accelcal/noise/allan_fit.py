@@ -17,6 +17,7 @@ from itertools import combinations
 
 import numpy as np
 
+from .. import kernels
 from .terms import TERMS, NoiseModelError, model_avar, noise_term
 
 
@@ -88,8 +89,6 @@ def _irls(H: np.ndarray, y: np.ndarray, edf: np.ndarray, max_iter: int = 200, to
     in ``c``, and plain scoring can cycle); each problem stops when its deviance changes
     by less than ``tol`` relative.
     """
-    from .. import kernels
-
     fast = kernels.compiled("noise._fast")
     if fast is not None:  # the same algorithm, compiled (accelcal[fast])
         return fast.irls_gamma(H, y, edf, max_iter, tol)

@@ -14,6 +14,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+from .. import kernels
 from .terms import TERM_IDS, term_parameters
 
 
@@ -68,8 +69,6 @@ def _simulate_term(k: str, v: float, shape, rng: np.random.Generator, n: int, fs
     rho = math.exp(-1.0 / (fs * shape))  # gauss_markov: stationary AR(1)
     e = rng.standard_normal((n, cols)) * v * math.sqrt(1.0 - rho * rho)
     e[0] = rng.standard_normal(cols) * v  # start in the stationary distribution
-    from .. import kernels
-
     fast = kernels.compiled("noise._fast")
     if fast is not None:  # the same recursion, compiled (and no scipy.signal import: ~1 s of CPU)
         return fast.ar1(e, rho)

@@ -62,6 +62,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -100,7 +101,6 @@ def segment_homogeneity(allan_longest: AllanVariance, allan_others: AllanVarianc
     return {"taus": allan_longest.taus[:k], "adev_ratio": np.sqrt(ratio), "p_value": p}
 
 
-
 def rest_segments(acc, intervals) -> list[np.ndarray]:
     """Cut the rests ``[start, stop)`` (e.g. :attr:`accelcal.static.StaticPoses.intervals`) out of ``acc``."""
     acc = np.asarray(acc, dtype=float)
@@ -130,7 +130,7 @@ def stochastic_layer(segments, fs: float, *, seed: int, alpha: float = 0.05, max
     max_terms : int
         Most terms named beyond white.
     candidates : sequence of str
-        Candidate terms (ids of :data:`TERMS` other than ``white``).
+        Candidate terms (ids of :data:`~accelcal.noise.TERMS` other than ``white``).
     intervals : array_like of int, shape (n_segments, 2), optional
         Sample ranges ``[start, stop)`` of the segments in the recording, for the pose
         times of the pose-residual implication; default: the segments back to back,
@@ -150,22 +150,14 @@ def stochastic_layer(segments, fs: float, *, seed: int, alpha: float = 0.05, max
 
     Raises
     ------
-    StochasticError, AllanError (both :class:`~accelcal.errors.AccelcalError`)
+    StochasticError, NoiseModelError, AllanError (all :class:`~accelcal.errors.AccelcalError`)
         Non-finite or too short segments, too little data for four octaves of τ,
-        constant data, bad settings.
+        constant data, bad settings (an unknown candidate: NoiseModelError).
     """
     segs = check_segments(segments, fs)
     lengths = tuple(int(s.shape[0]) for s in segs)
     d = segs[0].shape[1]
-    cand = tuple(dict.fromkeys(candidates))
-    for k in cand:
-        noise_term(k)
-    if "white" in cand:
-        raise StochasticError("'white' is the base model, not a candidate")
-    if not 0 < alpha < 1:
-        raise StochasticError(f"alpha must be in (0, 1), got {alpha}")
-    if max_terms < 0 or n_boot < 19 or n_resim < 1:
-        raise StochasticError("need max_terms >= 0, n_boot >= 19 (p-values down to 0.05) and n_resim >= 1")
+    settings = _Settings.checked(candidates, alpha, max_terms, n_boot, n_resim)
     allan = allan_variance(segs, fs)
     if allan.taus.size < 4:
         raise StochasticError(f"the rests reach only {allan.taus.size} octaves of tau (longest rest "
@@ -176,14 +168,8 @@ def stochastic_layer(segments, fs: float, *, seed: int, alpha: float = 0.05, max
                                                              tuple(str(i) for i in range(d)))
     if len(names) != d:
         raise StochasticError(f"{len(names)} axis names for {d} columns")
-    if intervals is None:
-        ends = np.cumsum(lengths)
-        iv = np.column_stack([ends - np.array(lengths), ends])
-    else:
-        iv = np.asarray(intervals, dtype=int)
-        if iv.shape != (len(lengths), 2) or np.any(iv[:, 1] - iv[:, 0] != np.array(lengths)):
-            raise StochasticError("intervals must be (n_segments, 2) [start, stop) rows matching the segment lengths")
-    starts, durations = iv[:, 0] / float(fs), (iv[:, 1] - iv[:, 0]) / float(fs)
+    starts, durations = _pose_times(intervals, lengths, fs)
+    rests = _Rests(allan, lengths, float(fs), starts, durations)
 
     longest = int(np.argmax(lengths))
     m_long = allan.m[allan.m <= lengths[longest] // 2]
@@ -191,36 +177,96 @@ def stochastic_layer(segments, fs: float, *, seed: int, alpha: float = 0.05, max
     others = [s for i, s in enumerate(segs) if i != longest and s.shape[0] >= 2]
     m_oth = allan.m[allan.m <= max((s.shape[0] for s in others), default=0) // 2]
     allan_oth = allan_variance(others, fs, m=m_oth) if others and m_oth.size else None
+    homog = segment_homogeneity(allan_long, allan_oth)
 
     # Step 1's null (white only) is the same for every axis up to the scale N, and its
     # statistics are scale-free: one bootstrap at N = 1 serves all axes (exact).
     unit_white = NoiseFit(("white",), np.array([1.0]), float("nan"), 0.0)
-    shared = _bootstrap(np.random.default_rng(np.random.SeedSequence([int(seed), 1 << 20])), unit_white, lengths,
-                        float(fs), allan.m, allan.edf, allan.taus, list(cand) if max_terms > 0 else [], n_boot)
+    shared = _bootstrap(np.random.default_rng(np.random.SeedSequence([int(seed), 1 << 20])), unit_white, rests,
+                        list(settings.candidates) if max_terms > 0 else [], n_boot)
     axes = []
     for j in range(d):
         boot_seq, resim_seq = np.random.SeedSequence([int(seed), j]).spawn(2)
         adev_long = np.full(allan.taus.size, np.nan)
         adev_long[: m_long.size] = allan_long.adev[:, j]
-        homog = segment_homogeneity(allan_long, allan_oth)
-        homog = {"taus": homog["taus"], "adev_ratio": np.asarray(homog["adev_ratio"])[:, j] if len(homog["taus"])
-                 else [], "p_value": np.asarray(homog["p_value"])[:, j] if len(homog["taus"]) else []}
-        axes.append(_one_axis(names[j], allan, j, lengths, float(fs), cand, alpha, max_terms, n_boot, n_resim,
-                              np.random.default_rng(boot_seq), resim_seq, starts, durations, adev_long, homog,
-                              shared))
+        homog_j = {"taus": homog["taus"], "adev_ratio": np.asarray(homog["adev_ratio"])[:, j] if len(homog["taus"])
+                   else [], "p_value": np.asarray(homog["p_value"])[:, j] if len(homog["taus"]) else []}
+        axes.append(_one_axis(names[j], j, rests, settings, np.random.default_rng(boot_seq), resim_seq, adev_long,
+                              homog_j, shared))
     notes = ("intervals not given: pose times assume the rests back to back",) if intervals is None else ()
-    return StochasticResult(fs=float(fs), seed=int(seed), alpha=float(alpha), candidates=cand, n_boot=int(n_boot),
-                            n_resim=int(n_resim), segment_lengths=lengths, axes=tuple(axes), unit=unit, notes=notes)
+    return StochasticResult(fs=float(fs), seed=int(seed), alpha=float(alpha), candidates=settings.candidates,
+                            n_boot=int(n_boot), n_resim=int(n_resim), segment_lengths=lengths, axes=tuple(axes),
+                            unit=unit, notes=notes)
 
 
-def _bootstrap(rng, fit: NoiseFit, lengths, fs, m, edf, taus, extra: Sequence[str], n_boot: int):
-    """Refit ``n_boot`` synthetic data sets of ``fit``'s model with its own terms and with each term + extra[k].
+@dataclass(frozen=True)
+class _Settings:
+    """The layer's settings (:func:`stochastic_layer`), checked."""
 
-    Returns (refitted coefficients (n_boot, p), refitted correlation times (n_boot,),
-    LR (n_boot, len(extra))).
-    """
-    sims = simulate_segments(rng, lengths, fs, fit.model, size=n_boot)
-    av = allan_variance(sims, fs, m=m).avar.T  # (n_boot, k)
+    candidates: tuple[str, ...]
+    alpha: float
+    max_terms: int
+    n_boot: int
+    n_resim: int
+
+    @classmethod
+    def checked(cls, candidates, alpha, max_terms, n_boot, n_resim) -> _Settings:
+        cand = tuple(dict.fromkeys(candidates))
+        for k in cand:
+            noise_term(k)
+        if "white" in cand:
+            raise StochasticError("'white' is the base model, not a candidate")
+        if not 0 < alpha < 1:
+            raise StochasticError(f"alpha must be in (0, 1), got {alpha}")
+        if max_terms < 0 or n_boot < 19 or n_resim < 1:
+            raise StochasticError("need max_terms >= 0, n_boot >= 19 (p-values down to 0.05) and n_resim >= 1")
+        return cls(cand, alpha, max_terms, n_boot, n_resim)
+
+
+@dataclass(frozen=True)
+class _Rests:
+    """The rests as the layer sees them: their pooled Allan variance (every axis), the
+    segments' lengths [samples], the rate [Hz], and the poses' start times and durations [s]."""
+
+    allan: AllanVariance
+    lengths: tuple[int, ...]
+    fs: float
+    starts: np.ndarray
+    durations: np.ndarray
+
+
+def _pose_times(intervals, lengths, fs) -> tuple[np.ndarray, np.ndarray]:
+    """Start and duration [s] of each rest: from ``intervals``, else the rests back to back."""
+    if intervals is None:
+        ends = np.cumsum(lengths)
+        iv = np.column_stack([ends - np.array(lengths), ends])
+    else:
+        iv = np.asarray(intervals, dtype=int)
+        if iv.shape != (len(lengths), 2) or np.any(iv[:, 1] - iv[:, 0] != np.array(lengths)):
+            raise StochasticError("intervals must be (n_segments, 2) [start, stop) rows matching the segment lengths")
+    return iv[:, 0] / float(fs), (iv[:, 1] - iv[:, 0]) / float(fs)
+
+
+@dataclass(frozen=True)
+class _Refits:
+    """A model's bootstrap data sets refitted: its coefficients (n_boot, p) and nonlinear
+    parameter (n_boot,) under its own terms, and the LR of each added term (n_boot, k)."""
+
+    coefs: np.ndarray
+    shapes: np.ndarray
+    lr: np.ndarray
+
+    def at_white(self, n_white: float) -> _Refits:
+        """The refits of the unit white model (the shared step-1 bootstrap) for white noise ``N``:
+        the coefficients scale with ``N``, the statistics are scale-free."""
+        return _Refits(self.coefs * n_white, self.shapes, self.lr)
+
+
+def _bootstrap(rng, fit: NoiseFit, rests: _Rests, extra: Sequence[str], n_boot: int) -> _Refits:
+    """Refit ``n_boot`` synthetic data sets of ``fit``'s model with its own terms and with each term + extra[k]."""
+    fs, taus, edf = rests.fs, rests.allan.taus, rests.allan.edf
+    sims = simulate_segments(rng, rests.lengths, fs, fit.model, size=n_boot)
+    av = allan_variance(sims, fs, m=rests.allan.m).avar.T  # (n_boot, k)
     null = fit_avar_batch(taus, av, edf, fit.term_ids, fs)
     coefs = np.array([[math.sqrt(max(v, 0.0)) for v in f.c] for f in null])
     shapes = np.array([f.shape for f in null])
@@ -229,13 +275,13 @@ def _bootstrap(rng, fit: NoiseFit, lengths, fs, m, edf, taus, extra: Sequence[st
     for i, k in enumerate(extra):
         alt = fit_avar_batch(taus, av, edf, fit.term_ids + (k,), fs)
         lr[:, i] = np.maximum(dev0 - np.array([f.deviance for f in alt]), 0.0)
-    return coefs, shapes, lr
+    return _Refits(coefs, shapes, lr)
 
 
-def _fit_table(fit: NoiseFit, coefs: np.ndarray, shapes: np.ndarray, fs: float, tau_max: float) -> dict:
+def _fit_table(fit: NoiseFit, refits: _Refits, fs: float, tau_max: float) -> dict:
     """Coefficients with bootstrap standard errors; the nonlinear parameter's error also counts
     its grid step (uniform rounding, step²/12), else a grid-limited estimate would show 0."""
-    se = coefs.std(axis=0, ddof=1)
+    se = refits.coefs.std(axis=0, ddof=1)
     out = {}
     for i, (k, v) in enumerate(fit.coefficients.items()):
         out[k] = {"value": v, "se": float(se[i])}
@@ -244,91 +290,117 @@ def _fit_table(fit: NoiseFit, coefs: np.ndarray, shapes: np.ndarray, fs: float, 
             grid = TERMS[k].shape_grid(fs, tau_max)
             step = fit.shape * (grid[1] / grid[0] - 1.0)
             out[k][key] = fit.shape
-            out[k][key.rsplit("_", 1)[0] + "_se"] = float(np.sqrt(np.var(shapes, ddof=1) + step**2 / 12))
+            out[k][key.rsplit("_", 1)[0] + "_se"] = float(np.sqrt(np.var(refits.shapes, ddof=1) + step**2 / 12))
     return out
 
 
-def _one_axis(name, allan: AllanVariance, j, lengths, fs, cand, alpha, max_terms, n_boot, n_resim, rng,
-              resim_seq, starts, durations, adev_long, homog, shared=None) -> AxisStochastic:
-    taus, edf, m = allan.taus, allan.edf, allan.m
-    avar = allan.avar[:, j]
+@dataclass(frozen=True)
+class _TermSearch:
+    """The outcome of the stepwise test on one axis: the final fit, the terms it named, one
+    record per step, and the bootstrap refits of the white-only fit and of the final fit."""
+
+    after: NoiseFit
+    named: tuple[str, ...]
+    tests: tuple[dict, ...]
+    refits_before: _Refits
+    refits_after: _Refits
+
+
+def _name_terms(before: NoiseFit, avar: np.ndarray, rests: _Rests, settings: _Settings, rng,
+                shared: _Refits) -> _TermSearch:
+    """The stepwise test of the module docstring ("Test") on one axis, from the white-only fit ``before``."""
+    taus, edf, fs = rests.allan.taus, rests.allan.edf, rests.fs
     log_n = math.log(taus.size)
-    current = fit_avar(taus, avar, edf, ("white",), fs)
-    before = current
-    table_before = None
-    boot_current = None
-    tests = []
-    named: list[str] = []
-    while len(named) < max_terms:
+    current, refits_before, refits, tests, named = before, None, None, [], []
+    while len(named) < settings.max_terms:
         # at most one two-parameter term per model: once one is named the others drop out
         has_shaped = any(TERMS[k].shape_key for k in current.term_ids)
-        remaining = [k for k in cand if k not in current.term_ids and not (has_shaped and TERMS[k].shape_key)]
+        remaining = [k for k in settings.candidates
+                     if k not in current.term_ids and not (has_shaped and TERMS[k].shape_key)]
         if not remaining:
             break
         alts = {k: fit_avar(taus, avar, edf, current.term_ids + (k,), fs) for k in remaining}
         lr_obs = np.array([max(current.deviance - alts[k].deviance, 0.0) for k in remaining])
-        if current.term_ids == ("white",) and shared is not None and list(remaining) == list(cand):
-            n_white = current.coefficients["white"]
-            coefs, shapes, lr_boot = shared[0] * n_white, shared[1], shared[2]
+        if current.term_ids == ("white",) and list(remaining) == list(settings.candidates):
+            refits = shared.at_white(current.coefficients["white"])
         else:
-            coefs, shapes, lr_boot = _bootstrap(rng, current, lengths, fs, m, edf, taus, remaining, n_boot)
-        boot_current = (coefs, shapes)
-        if table_before is None:
-            table_before = _fit_table(before, coefs, shapes, fs, taus.max())
-        # a bootstrap LR equal to the observed one up to round-off counts as ≥
-        tol = 1e-9 * max(1.0, float(lr_obs.max()))
-        p_raw = (1 + (lr_boot >= lr_obs[None, :] - tol).sum(axis=0)) / (n_boot + 1)
-        p_adj = (1 + (lr_boot.max(axis=1)[:, None] >= lr_obs[None, :] - tol).sum(axis=0)) / (n_boot + 1)
-        dbic = -lr_obs + np.array([TERMS[k].n_parameters for k in remaining]) * log_n
-        best = int(np.argmin(dbic))
-        accept = bool(p_adj[best] < alpha and dbic[best] < 0)
-        tests.append({
-            "step": len(tests) + 1,
-            "current_model": list(current.term_ids),
-            "candidates": {k: {"statistic": float(lr_obs[i]), "p_value": float(p_raw[i]),
-                               "p_value_adjusted": float(p_adj[i]), "delta_bic": float(dbic[i]),
-                               "value": alts[k].coefficients[k],
-                               **({TERMS[k].shape_key: alts[k].shape} if TERMS[k].shape_key else {})}
-                           for i, k in enumerate(remaining)},
-            "best": remaining[best],
-            "named": remaining[best] if accept else None,
-        })
-        if not accept:
+            refits = _bootstrap(rng, current, rests, remaining, settings.n_boot)
+        refits_before = refits if refits_before is None else refits_before
+        step = _test_step(current, alts, remaining, lr_obs, refits.lr, settings, log_n, len(tests) + 1)
+        tests.append(step)
+        if step["named"] is None:
             break
-        named.append(remaining[best])
-        current = alts[remaining[best]]
-        boot_current = None
-    if boot_current is None and current.term_ids == ("white",) and shared is not None:
-        boot_current = (shared[0] * current.coefficients["white"], shared[1])
-        if table_before is None:
-            table_before = _fit_table(before, *boot_current, fs, taus.max())
-    if boot_current is None:  # the final model was never the null of a test: bootstrap its standard errors
-        coefs, shapes, _ = _bootstrap(rng, current, lengths, fs, m, edf, taus, [], n_boot)
-        boot_current = (coefs, shapes)
-        if table_before is None:
-            table_before = _fit_table(before, coefs, shapes, fs, taus.max())
-    after = current
+        named.append(step["named"])
+        current = alts[step["named"]]
+        refits = None
+    if refits is None and current.term_ids == ("white",):
+        refits = shared.at_white(current.coefficients["white"])
+    if refits is None:  # the final model was never the null of a test: bootstrap its standard errors
+        refits = _bootstrap(rng, current, rests, [], settings.n_boot)
+    return _TermSearch(current, tuple(named), tuple(tests), refits if refits_before is None else refits_before, refits)
 
-    # CI with the edf of the final model: Satterthwaite mix of the terms' edf at each τ.
+
+def _test_step(current: NoiseFit, alts: dict, remaining: list, lr_obs: np.ndarray, lr_boot: np.ndarray,
+               settings: _Settings, log_n: float, step: int) -> dict:
+    """One step's record: every remaining candidate's LR, p-values (raw and max-statistic
+    adjusted), ΔBIC and estimate; the best one, and whether it is named."""
+    n_boot = settings.n_boot
+    # a bootstrap LR equal to the observed one up to round-off counts as ≥
+    tol = 1e-9 * max(1.0, float(lr_obs.max()))
+    p_raw = (1 + (lr_boot >= lr_obs[None, :] - tol).sum(axis=0)) / (n_boot + 1)
+    p_adj = (1 + (lr_boot.max(axis=1)[:, None] >= lr_obs[None, :] - tol).sum(axis=0)) / (n_boot + 1)
+    dbic = -lr_obs + np.array([TERMS[k].n_parameters for k in remaining]) * log_n
+    best = int(np.argmin(dbic))
+    accept = bool(p_adj[best] < settings.alpha and dbic[best] < 0)
+    return {
+        "step": step,
+        "current_model": list(current.term_ids),
+        "candidates": {k: {"statistic": float(lr_obs[i]), "p_value": float(p_raw[i]),
+                           "p_value_adjusted": float(p_adj[i]), "delta_bic": float(dbic[i]),
+                           "value": alts[k].coefficients[k],
+                           **({TERMS[k].shape_key: alts[k].shape} if TERMS[k].shape_key else {})}
+                       for i, k in enumerate(remaining)},
+        "best": remaining[best],
+        "named": remaining[best] if accept else None,
+    }
+
+
+def _adev_interval(allan: AllanVariance, fit: NoiseFit, fs: float) -> tuple[np.ndarray, np.ndarray]:
+    """68.3 % interval of the measured Allan deviation (every axis) with the edf of the model
+    ``fit``: the Satterthwaite mix of its terms' edf at each τ."""
+    taus = allan.taus
     parts, nus = [], []
-    for k, c in zip(after.term_ids, after.c):
-        parts.append(c * noise_term(k).basis(taus, fs, after.shape if TERMS[k].shape_key else None))
+    for k, c in zip(fit.term_ids, fit.c):
+        parts.append(c * noise_term(k).basis(taus, fs, fit.shape if TERMS[k].shape_key else None))
         if k == "gauss_markov":  # random-walk-like below T_c, white-like above
-            nus.append(np.where(taus < after.shape, allan.edf_for(-2), allan.edf_for(0)))
+            nus.append(np.where(taus < fit.shape, allan.edf_for(-2), allan.edf_for(0)))
         else:
             nus.append(allan.edf_for(noise_term(k).alpha))
     total = np.sum(parts, axis=0)
     nu_mix = total**2 / np.sum([p**2 / np.maximum(nu, 1e-12) for p, nu in zip(parts, nus)], axis=0)
-    lo, hi = allan.adev_interval(0.683, np.column_stack([nu_mix] * allan.avar.shape[1]))
+    return allan.adev_interval(0.683, np.column_stack([nu_mix] * allan.avar.shape[1]))
 
-    resim = {}
-    for label, fit in (("before", before), ("after", after)):
-        if label == "after" and fit is before:  # nothing named: the same simulation (common random numbers)
-            resim[label] = resim["before"]
-            continue
-        rng_r = np.random.default_rng(resim_seq)  # same state for both: common random numbers
-        sims = simulate_segments(rng_r, lengths, fs, fit.model, size=n_resim)
-        resim[label] = np.sqrt(allan_variance(sims, fs, m=m).avar.mean(axis=1))
+
+def _resimulated_adev(fit: NoiseFit, rests: _Rests, n_resim: int, seq) -> np.ndarray:
+    """Allan deviation of the rests re-simulated ``n_resim`` times with ``fit``'s model (mean
+    Allan variance over the replicates); the same ``seq`` gives every model the same random
+    numbers (common random numbers)."""
+    sims = simulate_segments(np.random.default_rng(seq), rests.lengths, rests.fs, fit.model, size=n_resim)
+    return np.sqrt(allan_variance(sims, rests.fs, m=rests.allan.m).avar.mean(axis=1))
+
+
+def _one_axis(name: str, j: int, rests: _Rests, settings: _Settings, rng, resim_seq, adev_long: np.ndarray,
+              homog: dict, shared: _Refits) -> AxisStochastic:
+    allan, fs = rests.allan, rests.fs
+    taus, edf = allan.taus, allan.edf
+    avar = allan.avar[:, j]
+    before = fit_avar(taus, avar, edf, ("white",), fs)
+    search = _name_terms(before, avar, rests, settings, rng, shared)
+    after = search.after
+    lo, hi = _adev_interval(allan, after, fs)
+    resim_before = _resimulated_adev(before, rests, settings.n_resim, resim_seq)
+    # nothing named: the same simulation (common random numbers)
+    resim_after = resim_before if after is before else _resimulated_adev(after, rests, settings.n_resim, resim_seq)
     adev = np.sqrt(avar)
     se_log10 = 1.0 / (math.log(10.0) * np.sqrt(2.0 * edf))
 
@@ -336,18 +408,19 @@ def _one_axis(name, allan: AllanVariance, j, lengths, fs, cand, alpha, max_terms
         r = np.log10(adev / sim)
         return float(np.sqrt(np.mean(r**2))), float(np.sqrt(np.mean((r / se_log10) ** 2)))
 
-    log_gb, gb = gaps(resim["before"])
-    log_ga, ga = gaps(resim["after"])
+    log_gb, gb = gaps(resim_before)
+    log_ga, ga = gaps(resim_after)
     return AxisStochastic(
         axis=name, taus=taus, n_terms=allan.n_terms, edf=edf, adev_measured=adev,
         adev_ci=np.column_stack([lo[:, j], hi[:, j]]), adev_longest_rest=adev_long,
         adev_model_before=np.sqrt(before.avar(taus, fs)), adev_model_after=np.sqrt(after.avar(taus, fs)),
-        adev_resim_before=resim["before"], adev_resim_after=resim["after"],
-        fit_before=table_before, fit_after=_fit_table(after, *boot_current, fs, taus.max()), tests=tuple(tests),
-        named=tuple(named), gap_before=gb, gap_after=ga, log_gap_before=log_gb, log_gap_after=log_ga,
+        adev_resim_before=resim_before, adev_resim_after=resim_after,
+        fit_before=_fit_table(before, search.refits_before, fs, taus.max()),
+        fit_after=_fit_table(after, search.refits_after, fs, taus.max()), tests=search.tests,
+        named=search.named, gap_before=gb, gap_after=ga, log_gap_before=log_gb, log_gap_after=log_ga,
         homogeneity=homog,
-        pose_residual_implication=pose_residual_implication(after.model, starts, durations, fs, float(taus.max())))
-
+        pose_residual_implication=pose_residual_implication(after.model, rests.starts, rests.durations, fs,
+                                                            float(taus.max())))
 
 
 __all__ = ["DEFAULT_CANDIDATES", "DEFAULT_N_BOOT", "DEFAULT_N_RESIM", "rest_segments", "segment_homogeneity",
