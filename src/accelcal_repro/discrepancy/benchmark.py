@@ -50,8 +50,8 @@ import pandas as pd
 
 from accelcal.discrepancy.detect import discrepancy
 from accelcal.discrepancy.effects import EFFECT_IDS
-from accelcal.discrepancy.fit import evaluate, fit_at, forward, pose_data, pose_data_from_static
-from accelcal.discrepancy.vocabulary import Rules, applicable, critical_noncentrality, identifiability
+from accelcal.discrepancy.fit import Fit, PoseData, evaluate, fit_at, forward, pose_data, pose_data_from_static
+from accelcal.discrepancy.vocabulary import Identifiability, Rules, applicable, critical_noncentrality, identifiability
 from accelcal.errors import AccelcalError
 from accelcal.evaluation import residual_sigma
 from accelcal.model import m_from_params
@@ -258,12 +258,23 @@ class Oracle:
 # --------------------------------------------------------------------------- generator
 
 
-def _draw_sensor(rng, ss: Session):
+@dataclass(frozen=True)
+class _Sensor:
+    """A simulated sensor: sensitivities [counts per unit of g], non-orthogonality angles
+    [rad], the matrix ``M`` they make and the bias [counts]."""
+
+    sensitivity: np.ndarray
+    nonorth: np.ndarray
+    M: np.ndarray
+    bias: np.ndarray
+
+
+def _draw_sensor(rng, ss: Session) -> _Sensor:
     sens = ss.sensitivity * (1 + rng.uniform(-ss.sensitivity_rel_range, ss.sensitivity_rel_range, 3))
     lo, hi = ss.nonorth_range_deg
     th = np.deg2rad(rng.uniform(lo, hi, 3) * rng.choice((-1.0, 1.0), 3))
     bias = ss.offset_counts + rng.uniform(-ss.bias_range_counts, ss.bias_range_counts, 3)
-    return sens, th, m_from_params(sens - 1.0, th), bias
+    return _Sensor(sens, th, m_from_params(sens - 1.0, th), bias)
 
 
 def simulate_case(truth: str, size_mde: float, replicate: int, *, seed: int, session: Session, rules: Rules,
@@ -292,14 +303,98 @@ def simulate_case(truth: str, size_mde: float, replicate: int, *, seed: int, ses
     rng = np.random.default_rng(grid_seed(seed, f"discrepancy/{profile.name}/{truth}", float(size_mde),
                                           int(replicate)))
     ss = session
-    g = ss.g
-    sens, th, M, bias = _draw_sensor(rng, ss)
+    sensor = _draw_sensor(rng, ss)
     phase = rng.uniform(0, 2 * np.pi)
     effs = effects_of(truth)
     dirs = {e: rng.standard_normal(3) for e in effs}
     dirs = {e: d / np.linalg.norm(d) for e, d in dirs.items()}
     noise_rng = np.random.default_rng(rng.integers(2 ** 63))
+    design = _draw_design(rng, ss, profile, rules, sensor, phase, truth)
+    t, win, n_eff = design.t, design.windows, design.n_eff
 
+    # Oracle: the covariance of the pose residuals the profile implies (unit of g²).
+    C = pose_mean_covariance(profile, t[win[:, 0]], n_eff / ss.rate, n_eff, ss.rate)
+    w = -design.base.J[:, :3] * design.base.sigma[:, None]  # ∂r/∂z = -∂r/∂b (unweighted)
+    oracle = Oracle.build(design.data, design.p_true, residual_covariance(C, w))
+    # the loop's first round tests the candidates and the outlier family together (Holm)
+    family = len(design.candidates) + bool(rules.outlier_pose)
+    params, key_eff = _effect_sizes(design, oracle, dirs, size_mde, rules, family)
+
+    temp = design.temp
+    if truth == CONSTANT_TEMPERATURE:
+        temp = np.full_like(t, ss.temp_mean + ss.temp_amplitude * np.sin(phase))
+    temp = np.round(temp / ss.temp_resolution) * ss.temp_resolution
+    # Centre the covariates as the fitter does (mean over the poses), so that the injected
+    # parameters are what the extended model estimates.
+    dt = t - design.t_mid.mean()
+    dtemp = temp - (design.temp_pose.mean() if truth != CONSTANT_TEMPERATURE else ss.temp_mean)
+    z = forward(design.x, sensor.M, sensor.bias, params, dt=dt, dtemp=dtemp)
+    z = z + simulate_profile(profile, noise_rng, len(t), ss.rate, replicate=int(replicate), records=records)
+
+    outlier = {"outlier_pose": -1, "outlier_t": np.nan, "outlier_shift_mde": np.nan, "outlier_shift": np.nan}
+    if truth == OUTLIER:
+        outlier = _shift_one_pose(z, rng, ss, design, oracle, w, size_mde, rules, family)
+    rec = Recording(t, np.round(z), temp, f"{profile.name}__{truth}_{size_mde:g}_{replicate:04d}")
+    # Real-noise profiles reuse the windows of one record: the scoring counts independent ones.
+    window = window_of(profile, replicate, len(records[profile.real]), len(t))[0] if profile.real else -1
+
+    key = {
+        "profile": profile.name, "profile_kind": profile.kind, "truth": truth, "expected": expected_outcome(truth),
+        "effects_injected": "+".join(effs) if truth != CONSTANT_TEMPERATURE else "temperature",
+        "size_mde": float(size_mde), "replicate": int(replicate), "noise_window": window, "n_poses": ss.n_poses,
+        "redraws": design.redraws,
+        **outlier, **key_eff,
+        **{f"absorbed_{e}": design.identifiability[e].absorbed for e in EFFECT_IDS if e in design.identifiability},
+        **{f"bias_{a}": float(v) for a, v in zip("xyz", sensor.bias)},
+        **{f"sensitivity_{a}": float(v) for a, v in zip("xyz", sensor.sensitivity)},
+        **{f"nonorth_deg_{k}": float(v) for k, v in zip(("xy", "zx", "zy"), np.rad2deg(sensor.nonorth))},
+        "temp_range": float(np.ptp(temp)),
+    }
+    return rec, key
+
+
+def _shift_one_pose(z: np.ndarray, rng, ss: Session, design: _Design, oracle: Oracle, w: np.ndarray,
+                    size_mde: float, rules: Rules, family: int) -> dict:
+    """Shift one pose's samples in ``z`` (in place) along its residual's gradient ``w``, by
+    ``size_mde`` times the MDE of a single-pose shift; its key columns."""
+    k = int(rng.integers(1, ss.n_poses))  # never the initial rest: it sets the motion threshold
+    s_mde = oracle.shift_mde(k, rules, family)
+    shift = size_mde * s_mde * rng.choice((-1.0, 1.0))
+    delta = shift * w[k] / float(w[k] @ w[k])  # moves the residual of pose k by `shift`
+    a_, b_ = ss.rest_windows(len(design.t))[k]
+    z[a_:b_] += delta[None, :]
+    return {"outlier_pose": k, "outlier_t": float(design.t_mid[k]), "outlier_shift_mde": s_mde,
+            "outlier_shift": float(shift)}
+
+
+@dataclass(frozen=True)
+class _Design:
+    """A simulated session before its effects and noise: the true specific force ``x`` (unit
+    of g) and temperature along the time ``t``, the trimmed rest windows the detection will
+    see with their mid times, mean temperatures and sample counts, the true pose means as
+    :class:`PoseData`, the true parameters, the base model at the truth, the applicable
+    candidates and their identifiability on it, and the designs drawn before this one."""
+
+    t: np.ndarray
+    x: np.ndarray
+    temp: np.ndarray
+    windows: np.ndarray
+    t_mid: np.ndarray
+    temp_pose: np.ndarray
+    n_eff: np.ndarray
+    data: PoseData
+    p_true: np.ndarray
+    base: Fit
+    candidates: list[str]
+    identifiability: dict[str, Identifiability]
+    redraws: int
+
+
+def _draw_design(rng, ss: Session, profile: NoiseProfile, rules: Rules, sensor: _Sensor, phase: float,
+                 truth: str) -> _Design:
+    """Pose directions, redrawn (at most :data:`MAX_REDRAWS` times) until every candidate is
+    identifiable on the true design."""
+    g = ss.g
     for redraws in range(MAX_REDRAWS):
         u = random_directions(rng, ss.n_poses)
         sim = simulate_recording(rng, u, g, np.eye(3), np.zeros(3), 0.0, rate=ss.rate, rest_s=ss.rest_s,
@@ -314,75 +409,37 @@ def simulate_case(truth: str, size_mde: float, replicate: int, *, seed: int, ses
         n_eff = (win[:, 1] - win[:, 0]).astype(float)
         white_var = np.asarray(profile.white) ** 2 + 1.0 / 12.0  # white noise + rounding to integer counts
         mean_std = np.sqrt(white_var[None, :] / n_eff[:, None])
+        M, bias = sensor.M, sensor.bias
         z_pose = forward(g * u, M, bias, {})
         data = pose_data(z_pose, g, mean_std, t_mid, temp_pose, sigma=residual_sigma(z_pose, mean_std, M, bias))
-        p_true = np.concatenate([bias, sens - 1.0, th])
+        p_true = np.concatenate([bias, sensor.sensitivity - 1.0, sensor.nonorth])
         base = fit_at(data, (), p_true)
         cands, _ = applicable(data, rules.candidates)
         idents = {e: identifiability(data, base, e, rules, len(cands)) for e in cands}
         if all(i.identifiable for i in idents.values()):
-            break
-    else:
-        raise AccelcalError(f"{truth}: no pose design with every candidate identifiable in {MAX_REDRAWS} draws")
+            return _Design(t, x, temp, win, t_mid, temp_pose, n_eff, data, p_true, base, cands, idents, redraws)
+    raise AccelcalError(f"{truth}: no pose design with every candidate identifiable in {MAX_REDRAWS} draws")
 
-    # Oracle: the covariance of the pose residuals the profile implies (unit of g²).
-    C = pose_mean_covariance(profile, t[win[:, 0]], n_eff / ss.rate, n_eff, ss.rate)
-    w = -base.J[:, :3] * base.sigma[:, None]  # ∂r/∂z = -∂r/∂b (unweighted)
-    oracle = Oracle.build(data, p_true, residual_covariance(C, w))
 
-    # the loop's first round tests the candidates and the outlier family together (Holm)
-    family = len(cands) + bool(rules.outlier_pose)
+def _effect_sizes(design: _Design, oracle: Oracle, dirs: dict, size_mde: float, rules: Rules,
+                  family: int) -> tuple[dict, dict]:
+    """The hidden effects' parameters, ``size_mde`` times each one's oracle MDE along its
+    direction, and their key columns (MDEs, parameters, directions)."""
     params, key_eff = {}, {}
-    for e in effs:
-        a = oracle.effect_mde(data, p_true, e, dirs[e], rules, family)
+    for e, d in dirs.items():
+        a = oracle.effect_mde(design.data, design.p_true, e, d, rules, family)
         # the white loop's MDE at the same level (its own check above is at α/len(cands))
-        a_white = identifiability(data, base, e, rules, family).mde_along(dirs[e])
-        params[e] = size_mde * a * dirs[e]
+        a_white = identifiability(design.data, design.base, e, rules, family).mde_along(d)
+        params[e] = size_mde * a * d
         key_eff.update({f"mde_along_{e}": a, f"mde_along_white_{e}": a_white,
                         **{f"param_{e}_{ax}": float(v) for ax, v in zip("xyz", params[e])},
-                        **{f"direction_{e}_{ax}": float(v) for ax, v in zip("xyz", dirs[e])}})
-    if effs:  # the first (or only) effect also under generic names
-        e = effs[0]
+                        **{f"direction_{e}_{ax}": float(v) for ax, v in zip("xyz", d)}})
+    if dirs:  # the first (or only) effect also under generic names
+        e = next(iter(dirs))
         key_eff.update({"mde_along": key_eff[f"mde_along_{e}"],
                         **{f"param_{ax}": key_eff[f"param_{e}_{ax}"] for ax in "xyz"},
                         **{f"direction_{ax}": key_eff[f"direction_{e}_{ax}"] for ax in "xyz"}})
-    if truth == CONSTANT_TEMPERATURE:
-        temp = np.full_like(t, ss.temp_mean + ss.temp_amplitude * np.sin(phase))
-    temp = np.round(temp / ss.temp_resolution) * ss.temp_resolution
-    # Centre the covariates as the fitter does (mean over the poses), so that the injected
-    # parameters are what the extended model estimates.
-    dt = t - t_mid.mean()
-    dtemp = temp - (temp_pose.mean() if truth != CONSTANT_TEMPERATURE else ss.temp_mean)
-    z = forward(x, M, bias, params, dt=dt, dtemp=dtemp)
-    z = z + simulate_profile(profile, noise_rng, len(t), ss.rate, replicate=int(replicate), records=records)
-
-    outlier = {"outlier_pose": -1, "outlier_t": np.nan, "outlier_shift_mde": np.nan, "outlier_shift": np.nan}
-    if truth == OUTLIER:
-        k = int(rng.integers(1, ss.n_poses))  # never the initial rest: it sets the motion threshold
-        s_mde = oracle.shift_mde(k, rules, family)
-        shift = size_mde * s_mde * rng.choice((-1.0, 1.0))
-        delta = shift * w[k] / float(w[k] @ w[k])  # moves the residual of pose k by `shift`
-        a_, b_ = ss.rest_windows(len(t))[k]
-        z[a_:b_] += delta[None, :]
-        outlier = {"outlier_pose": k, "outlier_t": float(t_mid[k]), "outlier_shift_mde": s_mde,
-                   "outlier_shift": float(shift)}
-    rec = Recording(t, np.round(z), temp, f"{profile.name}__{truth}_{size_mde:g}_{replicate:04d}")
-    # Real-noise profiles reuse the windows of one record: the scoring counts independent ones.
-    window = window_of(profile, replicate, len(records[profile.real]), len(t))[0] if profile.real else -1
-
-    key = {
-        "profile": profile.name, "profile_kind": profile.kind, "truth": truth, "expected": expected_outcome(truth),
-        "effects_injected": "+".join(effs) if truth != CONSTANT_TEMPERATURE else "temperature",
-        "size_mde": float(size_mde), "replicate": int(replicate), "noise_window": window, "n_poses": ss.n_poses,
-        "redraws": redraws,
-        **outlier, **key_eff,
-        **{f"absorbed_{e}": idents[e].absorbed for e in EFFECT_IDS if e in idents},
-        **{f"bias_{a}": float(v) for a, v in zip("xyz", bias)},
-        **{f"sensitivity_{a}": float(v) for a, v in zip("xyz", sens)},
-        **{f"nonorth_deg_{k}": float(v) for k, v in zip(("xy", "zx", "zy"), np.rad2deg(th))},
-        "temp_range": float(np.ptp(temp)),
-    }
-    return rec, key
+    return params, key_eff
 
 
 # --------------------------------------------------------------------------- detection
