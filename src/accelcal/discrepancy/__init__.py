@@ -2,15 +2,21 @@
 
 Deterministic layer (pose residuals): :func:`discrepancy` fits the base model of Burkhard
 et al. (2024) and tests a library of candidate effects (:mod:`.effects`) as nested
-extensions (:mod:`.fit`, :mod:`.detect`), by default under the colored null: white
-per-pose noise plus a bias wander estimated jointly with the calibration, tests
-calibrated by a parametric bootstrap, outlier poses (:mod:`.colored`,
-:mod:`.wander_loop`); :func:`discrepancy_report` runs both layers on a recording (:mod:`.report`,
-the ``accelcal discrepancy`` command).  The benchmark is ``accelcal_repro.discrepancy``.
+extensions (:mod:`.fit`), by default under the colored null: white per-pose noise plus
+a bias wander estimated jointly with the calibration, tests calibrated by a parametric
+bootstrap, outlier poses.  :mod:`.detect` chooses the loop of the null: :mod:`.wander_loop`
+(colored, its statistics in the subpackage :mod:`.colored`) or :mod:`.white_loop`
+(white); :mod:`.vocabulary` holds what both share (rules, identifiability, candidate
+rows, the result).
 
 Stochastic layer (rest data): :func:`stochastic_layer` compares the Allan deviation of
 the measured rests with the simulator's noise model, names the missing noise term and
-re-simulates (:mod:`.stochastic`, on the noise analysis of :mod:`accelcal.noise`).
+re-simulates (the subpackage :mod:`.stochastic`, on the noise analysis of
+:mod:`accelcal.noise`).
+
+:func:`discrepancy_report` runs both layers on a recording and joins them
+(:mod:`.report`, the ``accelcal discrepancy`` command); :mod:`.figures` draws them.  The
+benchmark is ``accelcal_repro.discrepancy``.
 """
 
 from ..noise import TERMS, AllanError, AllanVariance, allan_variance, simulate_segments
