@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from accelcal.discrepancy.stochastic import simulate_noise
 from accelcal.errors import RecordingError
+from accelcal.noise import simulate_noise
 from accelcal_repro.discrepancy import adis as A
 from accelcal_repro.discrepancy.benchmark import Session
 from accelcal_repro.measured.smac import read_smac_rda

@@ -7,11 +7,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from accelcal.discrepancy import detect as D
+from accelcal.discrepancy import vocabulary as D
+from accelcal.discrepancy import white_loop
 from accelcal.discrepancy.effects import EFFECT_IDS
 from accelcal.recording import read_recording, write_recording
 from accelcal_repro.discrepancy import benchmark as B
 from accelcal_repro.discrepancy import profiles as P
+from accelcal_repro.discrepancy import record_screen as RS
 from accelcal_repro.discrepancy import scoring as S
 
 SESSION = B.Session()
@@ -66,7 +68,7 @@ def test_oracle_mde_is_the_loops_own_under_white_noise_and_larger_under_wander()
 
 
 def _pose_means(rec):
-    win = B._trimmed_windows(SESSION, len(rec.t))
+    win = SESSION.trimmed_windows(len(rec.t))
     return np.array([rec.acc[a:b].mean(axis=0) for a, b in win])
 
 
@@ -76,7 +78,7 @@ def test_profile_noise_matches_its_pose_mean_covariance(name):
     (Monte Carlo over 300 sessions, each pose and axis; chi-square-size tolerance)."""
     prof = PROFILES[name]
     n = SESSION.n_samples
-    win = B._trimmed_windows(SESSION, n)
+    win = SESSION.trimmed_windows(n)
     ns = (win[:, 1] - win[:, 0]).astype(float)
     C = P.pose_mean_covariance(prof, win[:, 0] / SESSION.rate, ns / SESSION.rate, ns, SESSION.rate)
     Pc = np.eye(len(ns)) - 1.0 / len(ns)
@@ -199,7 +201,7 @@ def test_scoring_catches_a_fitter_that_ignores_the_effect(monkeypatch):
     _, good = _benchmark(rows, WHITE_RULES)
     assert all(_verdict(good, e, "accuracy_ge_1mde").verdict == "pass" for e in EFFECT_IDS)
 
-    real_fit = D.fit
+    real_fit = white_loop.fit
 
     def blind_fit(data, effects=(), p0=None, max_iter=200):
         base = real_fit(data, effects[:-1], p0=None if p0 is None else p0[: 9 + 3 * (len(effects) - 1)])
@@ -209,7 +211,7 @@ def test_scoring_catches_a_fitter_that_ignores_the_effect(monkeypatch):
 
         return fit_at(data, effects, np.concatenate([base.p, np.zeros(3)]))
 
-    monkeypatch.setattr(D, "fit", blind_fit)
+    monkeypatch.setattr(white_loop, "fit", blind_fit)
     _, bad = _benchmark(rows, WHITE_RULES)
     for e in EFFECT_IDS:
         v = _verdict(bad, e, "accuracy_ge_1mde")
@@ -306,8 +308,8 @@ def _record(seed=3, n_windows=20):
 
 def test_screen_leaves_a_clean_record_alone():
     rec = _record()
-    assert P.transient_scan(rec, FS, P.RecordScreen()) == []
-    assert P.clean_windows(len(rec), N_WIN, []) == tuple(range(20))
+    assert RS.transient_scan(rec, FS, RS.RecordScreen()) == []
+    assert RS.clean_windows(len(rec), N_WIN, []) == tuple(range(20))
 
 
 @pytest.mark.parametrize("kind", ["bump", "step", "spike"])
@@ -322,11 +324,11 @@ def test_screen_finds_a_planted_transient_and_removes_its_window(kind):
         rec[at:, 2] += 1.0
     else:
         rec[at, 0] += 10 * 500 / np.sqrt(500)
-    events = P.transient_scan(rec, FS, P.RecordScreen())
+    events = RS.transient_scan(rec, FS, RS.RecordScreen())
     assert events and {ev["start"] // N_WIN for ev in events} == {7}
     assert {ev["axis"] for ev in events} == {{"bump": 1, "step": 2, "spike": 0}[kind]}
     assert all(ev["start"] <= at + 500 and ev["stop"] >= at for ev in events)
-    assert P.clean_windows(len(rec), N_WIN, events) == tuple(k for k in range(20) if k != 7)
+    assert RS.clean_windows(len(rec), N_WIN, events) == tuple(k for k in range(20) if k != 7)
 
 
 def test_screened_real_profile_draws_only_clean_windows():
@@ -337,7 +339,7 @@ def test_screened_real_profile_draws_only_clean_windows():
     n = session.n_samples
     records = {"adis16405": rec}
     prof = P.build_profiles([{"name": "r", "real": "adis16405"}], session, fitted=fitted, records=records,
-                            screen=P.RecordScreen())["r"]
+                            screen=RS.RecordScreen())["r"]
     bad = {(7 * N_WIN + 4_000) // n, (7 * N_WIN + 4_499) // n}
     assert prof.real_windows == tuple(k for k in range(len(rec) // n) if k not in bad)
     assert P.NoiseProfile.from_dict(prof.to_dict()) == prof
@@ -353,17 +355,17 @@ def test_screened_real_profile_draws_only_clean_windows():
 
 
 def test_record_screen_errors_are_one_line():
-    with pytest.raises(P.ProfileError, match="block_s > 0"):
-        P.RecordScreen(block_s=(0.0,))
-    with pytest.raises(P.ProfileError, match="fewer than two blocks"):
-        P.transient_scan(np.zeros((300, 3)), FS, P.RecordScreen())
-    with pytest.raises(P.ProfileError, match="shape"):
-        P.transient_scan(np.zeros((3000, 2)), FS, P.RecordScreen())
-    with pytest.raises(P.ProfileError, match="no scatter"):
-        P.transient_scan(np.zeros((30_000, 3)), FS, P.RecordScreen())
+    with pytest.raises(RS.RecordScreenError, match="block_s > 0"):
+        RS.RecordScreen(block_s=(0.0,))
+    with pytest.raises(RS.RecordScreenError, match="fewer than two blocks"):
+        RS.transient_scan(np.zeros((300, 3)), FS, RS.RecordScreen())
+    with pytest.raises(RS.RecordScreenError, match="shape"):
+        RS.transient_scan(np.zeros((3000, 2)), FS, RS.RecordScreen())
+    with pytest.raises(RS.RecordScreenError, match="no scatter"):
+        RS.transient_scan(np.zeros((30_000, 3)), FS, RS.RecordScreen())
     fitted = {"adis16405": {"models": [{"white": 0.1}] * 3, "fs": FS}}
     with pytest.raises(P.ProfileError, match="needs the adis16405 noise record"):
-        P.build_profiles([{"name": "r", "real": "adis16405"}], SESSION, fitted=fitted, screen=P.RecordScreen())
+        P.build_profiles([{"name": "r", "real": "adis16405"}], SESSION, fitted=fitted, screen=RS.RecordScreen())
     prof = P.NoiseProfile("r", (1.0,) * 3, real="adis16405", real_windows=(0, 9), kind="real")
     with pytest.raises(P.ProfileError, match="beyond the 2 windows"):
         P.window_of(prof, 0, 2 * N_WIN, N_WIN)

@@ -13,7 +13,7 @@ import yaml
 from accelcal import cli
 from accelcal_repro.discrepancy import benchmark as B
 from accelcal.discrepancy import report
-from accelcal.discrepancy.detect import Rules
+from accelcal.discrepancy.vocabulary import Rules
 from accelcal.recording import Recording, write_recording
 from accelcal.simulation import random_directions, simulate_recording
 

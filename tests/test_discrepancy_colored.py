@@ -14,12 +14,13 @@ from scipy import stats
 
 from accelcal.discrepancy import colored as C
 from accelcal.discrepancy import wander_loop as W
-from accelcal.discrepancy.detect import Rules, critical_noncentrality, discrepancy
+from accelcal.discrepancy.detect import discrepancy
 from accelcal.discrepancy.fit import effect_columns, evaluate, fit_at, forward, pose_data
-from accelcal.discrepancy.stochastic import simulate_noise
+from accelcal.discrepancy.vocabulary import Rules, critical_noncentrality
 from accelcal.errors import NotConvergedError
 from accelcal.evaluation import residual_sigma
 from accelcal.model import m_from_params
+from accelcal.noise import simulate_noise
 from accelcal.simulation import random_directions
 
 G = 9.80665
@@ -79,7 +80,7 @@ def true_mde_direction(truth, eid, wander, rules, n_tests, direction):
     prob = W.linearise(d0, f0)
     Xe = prob.columns(effect_columns(truth["p"], d0, (), eid))
     S = C.contrast_covariance(prob, wander or {})
-    info = C.effect_information(prob, prob.X0, Xe, sigma_c=S)["colored"]
+    info = C.effect_information(prob, prob.X0, Xe, sigma_c=S).colored
     lam = critical_noncentrality(3, n - 12, rules.alpha / n_tests, rules.power)
     d = np.asarray(direction, float) / np.linalg.norm(direction)
     return float(np.sqrt(lam / (d @ info @ d))) * d
@@ -194,6 +195,7 @@ def test_common_mode_wander_keeps_false_positives_at_alpha(monkeypatch):
     counts = {}
     for label, g in (("estimated", grid), ("independent", np.array([0.0]))):
         monkeypatch.setattr(C, "COMMON_GRID", g)
+        monkeypatch.setattr(C.reml, "COMMON_GRID", g)   # fit_common's default grid
         n = 0
         for k, wander in enumerate(COMMON_WANDERS):
             rng = np.random.default_rng(40 + k)

@@ -5,9 +5,10 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from accelcal.discrepancy.detect import Rules, discrepancy
+from accelcal.discrepancy.detect import discrepancy
 from accelcal.discrepancy.fit import forward, pose_data
 from accelcal.discrepancy.report import allan_check, noise_implication, rests_implication
+from accelcal.discrepancy.vocabulary import Rules
 from accelcal.model import m_from_params
 from accelcal.simulation import random_directions
 
@@ -71,7 +72,7 @@ def test_a_random_walk_adds_scatter_growing_with_distance_in_time():
 
 def _allan_stoch(n_white, extra_avar, fs=100.0, lengths=(5200,) + (800,) * 30):
     """A stochastic-layer stand-in whose rests measured white noise + ``extra_avar(τ)``."""
-    from accelcal.discrepancy.allan import octave_m
+    from accelcal.noise import octave_m
 
     m = octave_m(list(lengths))
     taus = m / fs
@@ -85,7 +86,7 @@ def test_allan_check_compares_the_wander_with_the_rests():
     """A Gauss-Markov wander (K = 0.06, τ = 120 s) whose Allan variance the rests show is
     consistent; rests with white noise only contradict a wander large enough to show at
     their longest τ; a tiny wander is not visible in the rests."""
-    from accelcal.discrepancy.stochastic import TERMS
+    from accelcal.noise import TERMS
 
     N, K, tau = 0.35, 0.06, 120.0
     nm = {"term": "bias_wander", "tau_s": tau, "random_walk_K": K, "random_walk_K_ci": [0.8 * K, 1.25 * K]}

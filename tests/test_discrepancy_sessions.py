@@ -5,8 +5,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from accelcal.discrepancy.detect import Rules
-from accelcal.discrepancy.report import analyse
+from accelcal.discrepancy.vocabulary import Rules
+from accelcal.discrepancy.report import discrepancy_report
 from accelcal_repro.discrepancy import benchmark as B
 from accelcal_repro.discrepancy import profiles as P
 from accelcal_repro.discrepancy import sessions as SS
@@ -17,7 +17,7 @@ WHITE_RULES = B.rules_with_null(Rules(), "white")
 
 def _report(profile, seed=3):
     rec, _ = B.simulate_case(B.NONE, 0.0, seed, seed=7, session=SESSION, rules=WHITE_RULES, profile=profile)
-    rep = analyse(rec, SESSION.g, rules=WHITE_RULES, stochastic=None).to_dict()
+    rep = discrepancy_report(rec, SESSION.g, rules=WHITE_RULES, stochastic=None).to_dict()
     rep["g"] = SESSION.g
     return rec, rep
 
@@ -73,7 +73,7 @@ def test_diagnostics_tell_pose_offsets_from_noise():
     for a, b in ranges:
         acc[a:b] += rng.normal(0.0, 1.0, 3)  # a per-pose offset of several pose-mean standard errors
     shifted = dataclasses.replace(rec, acc=acc)
-    rep2 = analyse(shifted, SESSION.g, rules=WHITE_RULES, stochastic=None).to_dict()
+    rep2 = discrepancy_report(shifted, SESSION.g, rules=WHITE_RULES, stochastic=None).to_dict()
     rep2["g"] = SESSION.g
     d = SS.diagnostics_row("o", shifted, rep2)
     assert d["half_consistency"] > 0.9 and d["within_pose_drift"] < 1.5

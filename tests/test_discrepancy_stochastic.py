@@ -10,9 +10,11 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from accelcal.discrepancy import allan as al
+from accelcal import noise
 from accelcal.discrepancy import stochastic as st
+from accelcal.discrepancy.figures import plot_allan
 from accelcal.errors import AccelcalError
+from accelcal.noise import allan as al
 
 FS = 100.0
 #: A calibration session's rests: one long initial rest and shorter poses.
@@ -21,7 +23,7 @@ N_WHITE = 0.1  # per-sample std 1.0 at 100 Hz
 
 
 def _segments(seed, terms, lengths=LENGTHS, d=3):
-    return st.simulate_segments(np.random.default_rng(seed), lengths, FS, terms, size=d)
+    return noise.simulate_segments(np.random.default_rng(seed), lengths, FS, terms, size=d)
 
 
 # --------------------------------------------------------------------------- Allan variance
@@ -105,7 +107,7 @@ def _estimate_check(axes, term, truth):
     est = np.array([a.fit_after[term]["value"] for a in axes])
     se = np.array([a.fit_after[term]["se"] for a in axes])
     if isinstance(truth, tuple):  # two-parameter term: amplitude, and the shape to its grid resolution
-        shape = np.array([a.fit_after[term][st.TERMS[term].shape_key] for a in axes])
+        shape = np.array([a.fit_after[term][noise.TERMS[term].shape_key] for a in axes])
         if np.any(np.abs(np.log2(shape / truth[1])) > 0.25):
             return False
         truth = truth[0]
@@ -180,12 +182,12 @@ def test_a_broken_fitter_does_not_pass(monkeypatch):
     truth = INJECTED["random_walk"]
     segs = _segments(20 + sorted(INJECTED).index("random_walk"), {"white": N_WHITE, "random_walk": truth})
 
-    class WrongBasis(st.NoiseTerm):
+    class WrongBasis(noise.NoiseTerm):
         def basis(self, tau, fs, shape=None):
             return np.asarray(tau, dtype=float) / 30.0
 
-    rw = st.TERMS["random_walk"]
-    monkeypatch.setitem(st.TERMS, "random_walk", WrongBasis(rw.id, rw.symbol, rw.unit, rw.alpha, rw.meaning))
+    rw = noise.TERMS["random_walk"]
+    monkeypatch.setitem(noise.TERMS, "random_walk", WrongBasis(rw.id, rw.symbol, rw.unit, rw.alpha, rw.meaning))
     r = st.stochastic_layer(segs, FS, seed=6, n_boot=99)
     assert all(a.named[0] == "random_walk" for a in r.axes)  # the shape is right, the scale is not
     assert not _estimate_check(r.axes, "random_walk", truth)
@@ -222,7 +224,7 @@ def test_result_is_json_ready_and_deterministic(white_result):
 ])
 def test_simulated_terms_have_their_allan_variance(terms):
     a = al.allan_variance(_segments(30, terms, lengths=[4000] + [600] * 10, d=200), FS)
-    theory = st.model_avar(terms, a.taus, FS)
+    theory = noise.model_avar(terms, a.taus, FS)
     mean, se = a.avar.mean(axis=1), a.avar.std(axis=1, ddof=1) / np.sqrt(a.avar.shape[1])
     # from m = 8 on: the Kasdin flicker (+5 % at m = 4) and the discrete walk (+3 % at m = 4)
     # have converged to the continuous forms
@@ -237,7 +239,7 @@ def test_simulated_terms_have_their_allan_variance(terms):
 def test_pose_difference_variance_reduces_to_allan_for_adjacent_poses(term, value):
     T = 1.3
     D = st.pose_difference_variance(term, value, [0.0, T], [T, T])
-    assert D[0, 1] == pytest.approx(2 * st.model_avar({term: value}, [T], 1e9)[0], rel=1e-6)
+    assert D[0, 1] == pytest.approx(2 * noise.model_avar({term: value}, [T], 1e9)[0], rel=1e-6)
 
 
 @pytest.mark.parametrize("terms", [{"white": 0.1, "random_walk": 0.05}, {"bias_instability": 0.2},
@@ -250,7 +252,7 @@ def test_pose_implication_matches_monte_carlo(terms):
     # one record (one coherent session), after a burn-in: the Kasdin flicker starts from
     # rest and is short of low frequencies near its start
     burn = 2 * n
-    x = st.simulate_noise(np.random.default_rng(7), burn + n, fs, terms, size=2000)[burn:]
+    x = noise.simulate_noise(np.random.default_rng(7), burn + n, fs, terms, size=2000)[burn:]
     means = np.stack([x[int(a * fs):int(a * fs) + int(T * fs)].mean(axis=0) for a, T in zip(starts, durations)])
     centred = means - means.mean(axis=0)
     mc = (centred**2).mean(axis=1)  # per pose
@@ -287,13 +289,13 @@ def test_plot_allan_draws_one_panel_per_axis(tmp_path, white_result):
     from accelcal.plotting import save_figure
 
     before = plt.get_fignums()
-    fig = st.plot_allan(Figure(figsize=(9, 3)), white_result, "white noise")
+    fig = plot_allan(Figure(figsize=(9, 3)), white_result, "white noise")
     assert len(fig.axes) == 3 and all(ax.get_xscale() == "log" for ax in fig.axes)
     png, pdf = save_figure(fig, tmp_path / "allan")
     assert png.stat().st_size > 0 and pdf.stat().st_size > 0
     assert plt.get_fignums() == before
     with pytest.raises(AccelcalError):
-        st.plot_allan(fig.axes[:2], white_result)
+        plot_allan(fig.axes[:2], white_result)
 
 
 # --------------------------------------------------------------------------- bad input
@@ -335,7 +337,7 @@ def test_bad_models_raise_one_line_errors():
     for terms, match in (({"white": -1.0}, ">= 0"), ({"gauss_markov": 0.3}, "correlation_time"),
                          ({"sinusoid": (1.0, 0.0)}, "frequency"), ({"pink": 1.0}, "unknown")):
         with pytest.raises(AccelcalError, match=match) as e:
-            st.simulate_segments(rng, [100], FS, terms)
+            noise.simulate_segments(rng, [100], FS, terms)
         assert _one_line_error(e)
     with pytest.raises(AccelcalError, match="overlap"):
         st.pose_difference_variance("white", 1.0, [0, 1], [2, 2])
@@ -354,8 +356,8 @@ def test_compiled_kernels_match_numpy():
     """The numba kernels (accelcal[fast]) run the numpy algorithms: the same Allan variance
     and the same Gamma fits to round-off, on every model shape the layer uses."""
     from accelcal import kernels
-    from accelcal.discrepancy import allan as A
-    from accelcal.discrepancy import stochastic as S
+    from accelcal.noise import allan as A
+    from accelcal.noise import allan_fit as S
 
     pytest.importorskip("numba", reason="numba (the optional fast extra) is not installed: only the numpy path runs")
     previous = kernels.set_backend("numba")

@@ -467,7 +467,8 @@ def test_discrepancy_fits_agree(effects):
 
 
 def test_discrepancy_white_loop_agrees():
-    from accelcal.discrepancy.detect import Rules, discrepancy
+    from accelcal.discrepancy.detect import discrepancy
+    from accelcal.discrepancy.vocabulary import Rules
 
     rules = Rules(null="white")
     for seed in range(3):
@@ -484,8 +485,7 @@ def test_gauss_markov_simulation_is_bit_for_bit_lfilter(rho):
     simulated noise (and every benchmark table built on it) does not depend on the path."""
     from scipy.signal import lfilter
 
-    from accelcal.discrepancy import _fast
-    from accelcal.discrepancy.stochastic import simulate_noise
+    from accelcal.noise import _fast, simulate_noise
 
     e = np.random.default_rng(7).standard_normal((5000, 3))
     assert np.array_equal(_fast.ar1(e, rho), lfilter([1.0], [1.0, -rho], e, axis=0))

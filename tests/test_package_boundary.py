@@ -17,7 +17,7 @@ SRC = Path(__file__).resolve().parents[1] / "src"
 CORE = SRC / "accelcal"
 #: Third-party packages the core may import anywhere, and where matplotlib is allowed.
 CORE_DEPENDENCIES = {"numpy", "scipy", "pandas", "casadi"}
-PLOTTING_MODULES = {"plotting.py", "discrepancy/figures.py", "discrepancy/stochastic.py"}
+PLOTTING_MODULES = {"plotting.py", "discrepancy/figures.py"}
 #: numba (the optional ``fast`` extra) is imported by the kernel loader only, on first use.
 KERNEL_LOADER = "kernels.py"
 

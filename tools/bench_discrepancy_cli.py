@@ -47,7 +47,7 @@ def make_recording(path: Path) -> dict:
     from accelcal.model import m_from_params
     from accelcal.recording import Recording, write_recording
     from accelcal.simulation import random_directions, simulate_recording
-    from accelcal.discrepancy.stochastic import simulate_noise
+    from accelcal.noise import simulate_noise
 
     rng = np.random.default_rng(SEED)
     u = random_directions(rng, N_POSES)

@@ -30,7 +30,7 @@ import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 import yaml  # noqa: E402
 
-from accelcal.discrepancy.detect import Rules  # noqa: E402
+from accelcal.discrepancy.vocabulary import Rules  # noqa: E402
 from accelcal_repro.discrepancy.benchmark import Session, detect_nulls, simulate_case  # noqa: E402
 from accelcal_repro.discrepancy.profiles import NoiseProfile  # noqa: E402
 from accelcal_repro.discrepancy.scoring import interval  # noqa: E402

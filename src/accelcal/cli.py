@@ -459,8 +459,8 @@ def _discrepancy(args) -> int:
     static = _static_settings(args, rec)
     with _step("static detection, deterministic and stochastic layers (the noise bootstrap takes a while)"):
         try:
-            analysis = report.analyse(rec, args.g, stochastic=report.DEFAULT_STOCHASTIC, unit=rec.unit,
-                                      static_kw=static)
+            analysis = report.discrepancy_report(rec, args.g, stochastic=report.DEFAULT_STOCHASTIC, unit=rec.unit,
+                                                static_kw=static)
         except RecordingError as e:
             raise RecordingError(f"{e}{_rate_hint(rec)}") from None
     figures = []

@@ -4,7 +4,7 @@ The closed forms are a few thousand floating-point operations, the sequential fi
 few hundred per step; in numpy, the per-call overhead (about a microsecond per call,
 tens of calls per problem or step) costs far more than the arithmetic.  The kernels
 (:mod:`accelcal._lls_kernels`, :mod:`accelcal.batista._filter_kernels`,
-:mod:`accelcal.tereshkov._estimator_kernels`, :mod:`accelcal.discrepancy._fast`) are the same algorithms written as
+:mod:`accelcal.tereshkov._estimator_kernels`, :mod:`accelcal.noise._fast`) are the same algorithms written as
 scalar loops and compiled with numba.
 
 Why numba: it compiles the plain Python/numpy of the reference implementations (the
@@ -133,7 +133,7 @@ def load() -> None:
 
 
 #: Every kernel module (relative to the accelcal package).
-KERNEL_MODULES = ("_lls_kernels", "batista._filter_kernels", "tereshkov._estimator_kernels", "discrepancy._fast",
+KERNEL_MODULES = ("_lls_kernels", "batista._filter_kernels", "tereshkov._estimator_kernels", "noise._fast",
                   "discrepancy._fit_kernels")
 
 

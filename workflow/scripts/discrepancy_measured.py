@@ -5,8 +5,8 @@ import json
 from _helpers import configure_logging, mock_snakemake_from_argv
 
 from accelcal.atomic import atomic_output
-from accelcal.discrepancy.detect import Rules
-from accelcal.discrepancy.report import StochasticSettings, analyse
+from accelcal.discrepancy.vocabulary import Rules
+from accelcal.discrepancy.report import StochasticSettings, discrepancy_report
 from accelcal_repro.measured.sources import source
 from accelcal.recording import read_recording
 from accelcal.results import _finite_json
@@ -22,8 +22,8 @@ rec, note = with_disjoint_rests(read_recording(snakemake.input.csv))
 if note:
     log.warning("%s: %s", name, note)
 unit = source(name).unit
-analysis = analyse(rec, p.g, rules=Rules.from_config(p.rules), stochastic=StochasticSettings.from_config(p.stochastic),
-                   unit=unit)
+analysis = discrepancy_report(rec, p.g, rules=Rules.from_config(p.rules),
+                              stochastic=StochasticSettings.from_config(p.stochastic), unit=unit)
 out = analysis.to_dict()
 out.update({"recording": name, "g": p.g, "unit": unit, "rate": rec.rate})
 if note:

@@ -10,6 +10,7 @@ from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 from accelcal.atomic import write_json_atomic
 from accelcal_repro.discrepancy import adis as A
 from accelcal_repro.discrepancy import profiles as P
+from accelcal_repro.discrepancy import record_screen as RS
 from accelcal_repro.discrepancy.benchmark import Session
 
 if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
@@ -21,14 +22,14 @@ def screen_table(records: dict, fitted: dict, n: int, screen) -> pd.DataFrame:
     rows = []
     for name, rec in records.items():
         fs = float(fitted[name]["fs"])
-        events = P.transient_scan(rec, fs, screen)
+        events = RS.transient_scan(rec, fs, screen)
         for ev in events:
             rows.append({"record": name, "axis": "xyz"[ev["axis"]], "block_s": ev["block_s"], "kind": ev["kind"],
                          "t_start_s": ev["start"] / fs, "t_stop_s": ev["stop"] / fs, "z": ev["z"],
                          "deviation": ev["deviation"], "window": ev["start"] // n,
                          "window_last": (ev["stop"] - 1) // n})
-        w = P.record_windows(len(rec), n)
-        kept = P.clean_windows(len(rec), n, events)
+        w = RS.record_windows(len(rec), n)
+        kept = RS.clean_windows(len(rec), n, events)
         log.info("record screen of %s: %d flagged runs of blocks, %d of %d windows of %d samples left out (%s)",
                  name, len(events), w - len(kept), w, n, ", ".join(str(k) for k in range(w) if k not in kept) or "none")
     return pd.DataFrame(rows, columns=["record", "axis", "block_s", "kind", "t_start_s", "t_stop_s", "z", "deviation",
@@ -48,7 +49,7 @@ if snakemake.input.xsens:
     if "xsens_mti_joint" in wanted:
         fitted["xsens_mti_joint"] = P.joint_source(xsens, "xsens_mti")
 records = {"adis16405": np.load(snakemake.input.record[0]).astype(float)} if snakemake.input.record else {}
-screen = P.RecordScreen.from_config(bench["record_screen"])
+screen = RS.RecordScreen.from_config(bench["record_screen"])
 profiles = P.build_profiles(bench["profiles"], session, fitted=fitted, records=records, screen=screen)
 write_json_atomic(snakemake.output.profiles, {n: p.to_dict() for n, p in profiles.items()})
 write_csv(screen_table(records, fitted, session.n_samples, screen), snakemake.output.screen)

@@ -2,34 +2,42 @@
 
 Deterministic layer (pose residuals): :func:`discrepancy` fits the base model of Burkhard
 et al. (2024) and tests a library of candidate effects (:mod:`.effects`) as nested
-extensions (:mod:`.fit`, :mod:`.detect`), by default under the colored null: white
-per-pose noise plus a bias wander estimated jointly with the calibration, tests
-calibrated by a parametric bootstrap, outlier poses (:mod:`.colored`,
-:mod:`.wander_loop`); :func:`analyse` runs both layers on a recording (:mod:`.report`,
-the ``accelcal discrepancy`` command).  The benchmark is ``accelcal_repro.discrepancy``.
+extensions (:mod:`.fit`), by default under the colored null: white per-pose noise plus
+a bias wander estimated jointly with the calibration, tests calibrated by a parametric
+bootstrap, outlier poses.  :mod:`.detect` chooses the loop of the null: :mod:`.wander_loop`
+(colored, its statistics in the subpackage :mod:`.colored`) or :mod:`.white_loop`
+(white); :mod:`.vocabulary` holds what both share (rules, identifiability, candidate
+rows, the result).
 
 Stochastic layer (rest data): :func:`stochastic_layer` compares the Allan deviation of
 the measured rests with the simulator's noise model, names the missing noise term and
-re-simulates (:mod:`.allan`, :mod:`.stochastic`).
+re-simulates (the subpackage :mod:`.stochastic`, on the noise analysis of
+:mod:`accelcal.noise`).
+
+:func:`discrepancy_report` runs both layers on a recording and joins them
+(:mod:`.report`, the ``accelcal discrepancy`` command); :mod:`.figures` draws them.  The
+benchmark is ``accelcal_repro.discrepancy``.
 """
 
-from .allan import AllanError, AllanVariance, allan_variance
+from ..noise import TERMS, AllanError, AllanVariance, allan_variance, simulate_segments
 from .colored import WanderError, WanderFit
-from .detect import NULLS, DiscrepancyResult, Rules, discrepancy, identifiability
+from .detect import discrepancy
 from .effects import EFFECT_IDS, EFFECTS
+from .figures import plot_allan
 from .fit import PoseData, fit, pose_data, pose_data_from_static
-from .report import Analysis, analyse
+from .report import DiscrepancyReport, discrepancy_report
 from .stochastic import (
     DEFAULT_CANDIDATES,
-    TERMS,
     StochasticError,
     StochasticResult,
     expected_residual_std,
-    plot_allan,
     rest_segments,
-    simulate_segments,
     stochastic_layer,
 )
+from .vocabulary import NULLS, DiscrepancyResult, Rules, identifiability
+
+#: Short names of :func:`discrepancy_report` and :class:`DiscrepancyReport` (the same objects; public API).
+analyse, Analysis = discrepancy_report, DiscrepancyReport
 
 __all__ = [
     "EFFECTS",
@@ -38,10 +46,12 @@ __all__ = [
     "WanderError",
     "WanderFit",
     "Analysis",
+    "DiscrepancyReport",
     "DiscrepancyResult",
     "PoseData",
     "Rules",
     "analyse",
+    "discrepancy_report",
     "discrepancy",
     "fit",
     "identifiability",

@@ -2,8 +2,12 @@
 Figures, :func:`accelcal.plotting.save_figure` writes them).
 
 * :func:`plot_before_after`: weighted pose residuals before/after, per recording.
-* :func:`allan_figure`: measured vs simulated Allan deviation (helper: ``plot_allan``).
+* :func:`allan_figure`: measured vs simulated Allan deviation (one row per recording);
+  :func:`plot_allan` draws one recording's row.
 * :func:`recording_figures`: the CLI's figures for one recording.
+
+matplotlib (the ``plots`` extra) is imported by the functions that draw, not with the
+module: :mod:`accelcal.discrepancy` exports :func:`plot_allan` without loading it.
 
 The benchmark's figures (confusion matrix, power) are in
 :mod:`accelcal_repro.discrepancy.figures`.
@@ -13,7 +17,84 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..plotting import RC, plt
+from .stochastic.results import StochasticError, StochasticResult
+
+#: Short labels of the terms in figures.
+TERM_LABELS = {"white": "white", "quantization": "quantization", "bias_instability": "bias instability (flicker)",
+               "random_walk": "random walk", "drift_ramp": "drift ramp", "gauss_markov": "Gauss-Markov", "sinusoid": "sinusoid"}
+
+
+def plot_allan(fig_or_axes, result: StochasticResult, title: str = "", wander_check: dict | None = None):
+    """Measured vs simulated Allan deviation, before and after the named terms, one panel per axis.
+
+    Draws, per axis: the measured ADEV (all rests pooled) with its 68 % interval, the
+    longest rest alone (thin grey), the white-only model (dashed) and the final model
+    (solid) as theory lines, and the re-simulated rests of both models (open markers),
+    with the named terms and the gap before → after in the panel title.
+
+    Parameters
+    ----------
+    fig_or_axes : matplotlib.figure.Figure or sequence of Axes
+        A figure to fill (one row of panels) or one Axes per axis of ``result``.
+    result : StochasticResult
+    title : str
+        Figure title (only when a figure is given).
+    wander_check : dict, optional
+        ``noise_implication["allan_check"]`` of the report: also draws what the bias wander
+        estimated from the pose residuals predicts (white + wander, with the band of its
+        95 % interval, green), where the check compared it (markers).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import matplotlib
+    from matplotlib.figure import Figure
+
+    from ..plotting import RC
+
+    n = len(result.axes)
+    with matplotlib.rc_context(RC):
+        if isinstance(fig_or_axes, Figure):
+            fig = fig_or_axes
+            axs = list(np.atleast_1d(fig.subplots(1, n, squeeze=False)[0]))
+        else:
+            axs = list(fig_or_axes)
+            if len(axs) != n:
+                raise StochasticError(f"{len(axs)} axes given for {n} result axes")
+            fig = axs[0].figure
+        for ax, a in zip(axs, result.axes):
+            t = a.taus
+            yerr = np.abs(np.vstack([a.adev_measured - a.adev_ci[:, 0], a.adev_ci[:, 1] - a.adev_measured]))
+            ax.errorbar(t, a.adev_measured, yerr=yerr, fmt="o", color="k", ms=3.5, capsize=2, lw=0.9,
+                        label="measured (all rests, 68 % CI)", zorder=4)
+            if np.any(np.isfinite(a.adev_longest_rest)):
+                ax.plot(t, a.adev_longest_rest, color="0.55", lw=0.9, label="measured, longest rest only", zorder=3)
+            ax.plot(t, a.adev_model_before, ls="--", color="C0", lw=1.2, label="white only (fit)")
+            ax.plot(t, a.adev_resim_before, ls="none", marker="s", mfc="none", color="C0", ms=4,
+                    label="white only, re-simulated")
+            named = " + ".join(TERM_LABELS.get(k, k) for k in a.named) or "none"
+            if a.named:
+                ax.plot(t, a.adev_model_after, ls="-", color="C3", lw=1.4, label="white + named (fit)")
+                ax.plot(t, a.adev_resim_after, ls="none", marker="^", mfc="none", color="C3", ms=4,
+                        label="white + named, re-simulated")
+            ax.set(xscale="log", yscale="log", xlabel="averaging time τ [s]")
+            ax.set_title(f"{a.axis}: + {named}\ngap {a.gap_before:.1f} → {a.gap_after:.1f}", fontsize=8.5)
+            wc = (wander_check or {}).get("axes", {}).get(a.axis)
+            if wc:
+                tw = np.asarray(wc["taus"], float)
+                band = np.asarray(wc["adev_predicted_band"], float)
+                ax.fill_between(tw, band[:, 0], np.minimum(band[:, 1], 10 * np.nanmax(a.adev_measured)), color="C2",
+                                alpha=0.18, lw=0, label="white + bias wander from the poses (95 %)")
+                ax.plot(tw, wc["adev_predicted"], color="C2", lw=1.2)
+                cmp = np.asarray(wc["compared"], bool)
+                ax.plot(tw[cmp], np.asarray(wc["adev_predicted"], float)[cmp], "D", color="C2", ms=3.5,
+                        mfc="none", label=f"compared: {wc['verdict']}")
+        axs[0].set_ylabel(f"Allan deviation [{result.unit}]")
+        axs[0].legend(loc="lower left", fontsize=6.5)
+        if isinstance(fig_or_axes, Figure) and title:
+            fig.suptitle(title, fontsize=9.5)
+    return fig
 
 
 def _residual_panel(ax, det: dict, implication: dict | None, title: str):
@@ -62,6 +143,8 @@ def plot_before_after(reports: dict[str, dict]):
     the model with the named effects (after); grey bands ±1σ, ±2σ of the white-noise
     prediction, green ticks ±2σ including the named noise terms (symmetric-log axis when
     that band dwarfs the residuals)."""
+    from ..plotting import RC, plt
+
     n = len(reports)
     with plt.rc_context(RC):
         fig, axes = plt.subplots(1, n, figsize=(3.8 * n + 0.4, 4.4), layout="constrained", squeeze=False)
@@ -79,7 +162,7 @@ def _as_array(v) -> np.ndarray:
 
 def stochastic_from_report(d: dict):
     """The parts of a :class:`~accelcal.discrepancy.stochastic.StochasticResult` that
-    :func:`~accelcal.discrepancy.stochastic.plot_allan` draws, rebuilt from its ``to_dict()``
+    :func:`plot_allan` draws, rebuilt from its ``to_dict()``
     (JSON: null for NaN)."""
     from types import SimpleNamespace
 
@@ -96,10 +179,10 @@ def stochastic_from_report(d: dict):
 def allan_figure(results: dict, wander_checks: dict | None = None):
     """Measured vs simulated Allan deviation, before and after the named noise terms: one
     row per recording (``{name: StochasticResult or its to_dict()}``), one panel per axis,
-    drawn by :func:`accelcal.discrepancy.stochastic.plot_allan`; ``wander_checks``
+    drawn by :func:`plot_allan`; ``wander_checks``
     (``{name: noise_implication["allan_check"]}``) adds what the bias wander of the pose
     residuals predicts."""
-    from .stochastic import plot_allan
+    from ..plotting import RC, plt
 
     n = len(results)
     with plt.rc_context(RC):
@@ -117,6 +200,8 @@ def allan_figure(results: dict, wander_checks: dict | None = None):
 def recording_figures(analysis, title: str) -> list[tuple[str, object]]:
     """The CLI's figures for one recording: ``discrepancy_residuals`` and, if the stochastic
     layer ran, ``discrepancy_allan``."""
+    from ..plotting import RC, plt
+
     rep = analysis.to_dict()
     with plt.rc_context(RC):
         fig, ax = plt.subplots(figsize=(6.4, 4.6), layout="constrained")
@@ -128,5 +213,6 @@ def recording_figures(analysis, title: str) -> list[tuple[str, object]]:
     return out
 
 
-__all__ = ["allan_figure", "plot_before_after", "recording_figures", "stochastic_from_report"]
+__all__ = ["TERM_LABELS", "allan_figure", "plot_allan", "plot_before_after", "recording_figures",
+           "stochastic_from_report"]
 

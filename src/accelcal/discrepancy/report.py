@@ -1,6 +1,6 @@
 """One recording through both layers: the report of ``accelcal discrepancy`` and of the workflow.
 
-:func:`analyse` detects the static poses (as ``accelcal calibrate`` does), runs the
+:func:`discrepancy_report` detects the static poses (as ``accelcal calibrate`` does), runs the
 deterministic layer (:func:`accelcal.discrepancy.detect.discrepancy`) on the pose means
 and the stochastic layer (:func:`accelcal.discrepancy.stochastic.stochastic_layer`) on
 the same rests, and then joins them: what the named noise terms imply for the pose
@@ -25,11 +25,16 @@ import numpy as np
 
 from .. import distributions as dist
 from ..errors import AccelcalError
+from ..noise.allan import avar_interval, pooled_edf
+from ..noise.terms import TERMS, model_avar
 from ..recording import Recording
 from ..static import StaticPoses, detect_static_recording
-from .detect import DiscrepancyResult, Rules, discrepancy
+from .detect import discrepancy
 from .fit import pose_data_from_static
-from .stochastic import DEFAULT_CANDIDATES
+from .stochastic import StochasticResult
+from .stochastic.implication import centred_pose_variance, pose_difference_variance
+from .stochastic.layer import DEFAULT_CANDIDATES, rest_segments, stochastic_layer
+from .vocabulary import DiscrepancyResult, Rules
 
 
 @dataclass(frozen=True)
@@ -54,12 +59,12 @@ DEFAULT_STOCHASTIC = StochasticSettings()
 
 
 @dataclass(frozen=True)
-class Analysis:
-    """Both layers on one recording."""
+class DiscrepancyReport:
+    """Both layers on one recording: what ``accelcal discrepancy`` reports (:meth:`to_dict`)."""
 
     poses: StaticPoses
     deterministic: DiscrepancyResult
-    stochastic: object | None
+    stochastic: StochasticResult | None
     stochastic_error: str
     implication: dict
     fs: float
@@ -79,8 +84,6 @@ class Analysis:
 def _pose_mean_variance(model: dict, starts, durations) -> np.ndarray:
     """Expected variance of each pose-mean error about the session's common mean under a
     noise model ``{term: value}`` (:func:`accelcal.discrepancy.stochastic.pose_difference_variance`)."""
-    from .stochastic import centred_pose_variance, pose_difference_variance
-
     return sum(centred_pose_variance(pose_difference_variance(k, v, starts, durations)) for k, v in model.items())
 
 
@@ -136,8 +139,6 @@ def rests_implication(det: DiscrepancyResult, stoch, starts, durations, alpha: f
     # Short-term reading: each pose mean only carries the extra Allan variance at its own
     # duration (no wander between poses), i.e. the named terms without their extrapolation
     # from the rests (τ up to ~10 s) to the whole session.
-    from .stochastic import model_avar
-
     dshort = np.column_stack([
         model_avar(a.model_after, durations, stoch.fs)
         - model_avar({t: v["value"] for t, v in a.fit_before.items()}, durations, stoch.fs) for a in stoch.axes])
@@ -242,9 +243,6 @@ def allan_check(noise_model: dict, stoch, level: float = 0.95, min_share: float 
     otherwise; ``not visible in the rests`` when the wander is below ``min_share`` at every
     ``τ_A`` the rests reach.
     """
-    from .allan import avar_interval, pooled_edf
-    from .stochastic import TERMS
-
     tau_c = noise_model.get("tau_s")
     K, K_ci = noise_model.get("random_walk_K"), noise_model.get("random_walk_K_ci") or [np.nan, np.nan]
     if noise_model.get("term") != "bias_wander" or K is None or not np.isfinite(K):
@@ -298,10 +296,14 @@ def allan_check(noise_model: dict, stoch, level: float = 0.95, min_share: float 
     return out
 
 
-def analyse(rec: Recording, g: float, *, rules: Rules | None = None,
-            stochastic: StochasticSettings | None = DEFAULT_STOCHASTIC, unit: str = "u",
-            static_kw: dict | None = None) -> Analysis:
-    """Both layers on one recording (``stochastic=None`` skips the stochastic layer).
+def discrepancy_report(rec: Recording, g: float, *, rules: Rules | None = None,
+                       stochastic: StochasticSettings | None = DEFAULT_STOCHASTIC, unit: str = "u",
+                       static_kw: dict | None = None) -> DiscrepancyReport:
+    """The discrepancy report of a recording: static poses, both layers and their join.
+
+    Detects the static poses, runs the deterministic layer on their means and the
+    stochastic layer on the same rests (``stochastic=None`` skips it), and joins them
+    (:func:`noise_implication`).
 
     Raises
     ------
@@ -310,8 +312,6 @@ def analyse(rec: Recording, g: float, *, rules: Rules | None = None,
         A recording whose rests are too short for the stochastic layer is not an error:
         the report says why that layer is missing.
     """
-    from .stochastic import rest_segments, stochastic_layer
-
     poses = detect_static_recording(rec, **(static_kw or {}))
     det = discrepancy(pose_data_from_static(poses, g), rules or Rules())
     stoch, err, impl = None, "", {}
@@ -329,8 +329,8 @@ def analyse(rec: Recording, g: float, *, rules: Rules | None = None,
                                      (rules or Rules()).alpha)
     else:
         err = "not run"
-    return Analysis(poses, det, stoch, err, impl, rec.rate)
+    return DiscrepancyReport(poses, det, stoch, err, impl, rec.rate)
 
 
-__all__ = ["DEFAULT_STOCHASTIC", "Analysis", "StochasticSettings", "allan_check", "analyse", "noise_implication",
-           "rests_implication"]
+__all__ = ["DEFAULT_STOCHASTIC", "DiscrepancyReport", "StochasticSettings", "allan_check", "discrepancy_report",
+           "noise_implication", "rests_implication"]

@@ -51,17 +51,22 @@ the reason (the wander can produce what the effect would), never as absent.
 from __future__ import annotations
 
 import math
+
 # replace, not Candidate(**asdict(c)): asdict deep-copies every field (4 % of a benchmark chunk)
-from dataclasses import replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from .. import distributions as dist
 from ..errors import AccelcalError
 from . import colored as C
-from .detect import (
+from .fit import Fit, PoseData, effect_columns, evaluate, fit, lopo
+from .stochastic.implication import centred_pose_variance, pose_difference_variance
+from .vocabulary import (
     Candidate,
     DiscrepancyResult,
+    OutlierPose,
+    OutlierTest,
     Rules,
     applicable,
     critical_noncentrality,
@@ -69,7 +74,6 @@ from .detect import (
     holm,
     identifiability,
 )
-from .fit import Fit, PoseData, effect_columns, fit, lopo
 
 OUTLIER = "outlier_pose"
 
@@ -178,7 +182,7 @@ def discrepancy_colored(data: PoseData, rules: Rules) -> DiscrepancyResult:
     base = fit(data)
     lopo_base = lopo(base, data)
     rng_seq = np.random.SeedSequence([int(rules.seed), 13])
-    st = _State(data, base)
+    st = _LoopState(data, base)
     rnd = 0
     while True:
         rnd += 1
@@ -195,67 +199,116 @@ def discrepancy_colored(data: PoseData, rules: Rules) -> DiscrepancyResult:
                 ident = identifiability(st.data, st.current, eid, rules, len(remaining))
                 st.rows.append(_untested(ident, rnd, (*ident.reasons, f"bias wander cannot be estimated: {err}")))
             break
-        st.noise = (st.data, st.current, prob, bas0, null)
+        st.noise = _RoundNoise(st.data, st.current, prob, bas0, null)
         rng = np.random.default_rng(rng_seq.spawn(1)[0])
-        cand_rows, out_row, rt = _round(st, prob, (bas0, null), remaining, test_outliers, rules, rnd, rng)
-        best = _choose(cand_rows, out_row)
-        st.rows += [replace(c, named=best is not None and best[3] is c) for c, _, _ in cand_rows]
-        if out_row is not None:
-            out_row["named"] = best is not None and best[2] == OUTLIER
-            st.outlier_tests.append(out_row)
+        tested, out_test, rt = _round(st, prob, (bas0, null), remaining, test_outliers, rules, rnd, rng)
+        best = _choose(tested, out_test)
+        st.rows += [replace(r.candidate, named=r is best) for r in tested]
+        if out_test is not None:
+            st.outlier_tests.append(replace(out_test, named=best is out_test))
         if best is None:
             break
-        if best[2] == OUTLIER:
-            if not _drop_outlier(st, rt.outlier_pose, out_row):
+        if best is out_test:
+            if not _drop_outlier(st, rt.outlier_pose, out_test):
                 break
         else:
-            st.named.append(best[3].effect)
+            st.named.append(best.candidate.effect)
             st.n_effects += 1
-            st.current = best[4]
+            st.current = best.fit
     return _result(data, rules, base, lopo_base, st)
 
 
-class _State:
+@dataclass
+class _RoundNoise:
+    """The noise model a round stood at: its pose set and fit, their linearised problem, the
+    :class:`~.colored.Basis` of the fit's columns and the REML noise (:func:`linearise_noise`)."""
+
+    data: PoseData
+    fit: Fit
+    problem: C.Problem
+    basis: C.Basis
+    wander: C.WanderFit
+
+
+@dataclass
+class _LoopState:
     """What the loop has named so far, and the pose set and model it stands at."""
 
-    def __init__(self, data: PoseData, base: Fit):
-        self.data, self.current = data, base
-        self.named, self.outliers, self.rows, self.errors, self.outlier_tests = [], [], [], [], []
-        self.ambiguous: set[str] = set()
-        self.n_effects = 0
-        self.wander_error = ""
-        self.noise = None   # (data, fit, problem, basis, REML noise) of the last round's current model
+    data: PoseData
+    current: Fit
+    named: list[str] = field(default_factory=list)
+    outliers: list[OutlierPose] = field(default_factory=list)
+    rows: list[Candidate] = field(default_factory=list)
+    errors: list[str] = field(default_factory=list)
+    outlier_tests: list[OutlierTest] = field(default_factory=list)
+    ambiguous: set[str] = field(default_factory=set)
+    n_effects: int = 0
+    wander_error: str = ""
+    noise: _RoundNoise | None = None   # of the last round's current model
 
 
-def _round(st: _State, prob: C.Problem, noise: tuple, remaining, test_outliers: bool, rules: Rules, rnd: int, rng):
+@dataclass(frozen=True)
+class _Prepared:
+    """A candidate of a round before its test: its row (identifiability and, if identifiable,
+    the MDE under the fitted noise), the MDE under the rests' white noise, how much the
+    wander inflates the MDE, and its contrast columns (None if not identifiable)."""
+
+    row: Candidate
+    mde_white: list
+    inflation: float = float("nan")
+    columns: np.ndarray | None = None
+
+    @property
+    def identifiable(self) -> bool:
+        return self.row.identifiable
+
+
+@dataclass(frozen=True)
+class _Tested:
+    """A candidate's row after the round's tests, its augmented weighted fit (None if the fit
+    failed or it was not tested) and its contrast columns."""
+
+    candidate: Candidate
+    fit: Fit | None
+    columns: np.ndarray | None
+
+    @property
+    def p_value(self) -> float:
+        return self.candidate.p_value
+
+    @property
+    def delta_bic(self) -> float:
+        return self.candidate.delta_bic
+
+
+def _round(st: _LoopState, prob: C.Problem, noise: tuple, remaining, test_outliers: bool, rules: Rules, rnd: int,
+           rng) -> tuple[list[_Tested], OutlierTest | None, C.RoundTests]:
     """One round: identifiability, the bootstrap tests, Holm, ΔBIC, LOPO, ambiguity.
 
     ``noise``: the :class:`~.colored.Basis` of the current model and its REML noise on
-    ``prob`` (:func:`linearise_noise`).  Returns the candidate rows ``(Candidate,
-    augmented fit, columns)``, the outlier row (or None) and the round's
-    :class:`~.colored.RoundTests`.
+    ``prob`` (:func:`linearise_noise`).  Returns the candidates' rows, the outlier
+    family's test (or None) and the round's :class:`~.colored.RoundTests`.
     """
     bas0, null = noise
     prepared = [_prepare(st.data, st.current, prob, null, eid, rules, len(remaining), rnd) for eid in remaining]
-    tested = [r for r in prepared if r["identifiable"]]
-    rt = C.round_tests(prob, [r["Xe"] for r in tested], rng, rules.n_boot, outliers=test_outliers,
+    testable = [r for r in prepared if r.identifiable]
+    rt = C.round_tests(prob, [r.columns for r in testable], rng, rules.n_boot, outliers=test_outliers,
                        extend=_more_replicates_could_pass(rules), n_boot_max=5 * (rules.n_boot + 1) - 1,
                        alpha=rules.alpha, null=null, bas0=bas0)
     padj = holm([float(v) for v in rt.p_values] + ([rt.outlier_p] if test_outliers else []), rules.correction)
     lo0 = C.studentised(prob, prob.X0, null.t, null.q_rel)[1][0]
-    cand_rows = [_tested_candidate(st, prob, r, rt, k, padj[k], lo0, rules) for k, r in enumerate(tested)]
-    cand_rows = _resolve_ambiguous(prob, cand_rows, rules.alpha)
-    st.ambiguous |= {c.effect for c, _, _ in cand_rows if c.ambiguous_with}
-    cand_rows += [(_untested_from(r), None, None) for r in prepared if not r["identifiable"]]
-    out_row = None
+    tested = [_tested_candidate(st, prob, r, rt, k, padj[k], lo0, rules) for k, r in enumerate(testable)]
+    tested = _resolve_ambiguous(prob, tested, rules.alpha)
+    st.ambiguous |= {r.candidate.effect for r in tested if r.candidate.ambiguous_with}
+    tested += [_Tested(_untested_from(r), None, None) for r in prepared if not r.identifiable]
+    out_test = None
     if test_outliers:
         i, n = rt.outlier_pose, len(st.data)
-        out_row = {"round": rnd, "pose": int(st.data.pose_index[i]), "t": float(st.data.t[i]),
-                   "statistic": rt.outlier_lr, "studentised": float(rt.outlier_t[i]),
-                   "p_value": rt.outlier_p, "p_adjusted": float(padj[-1]),
-                   "delta_bic": -rt.outlier_lr + 2.0 * math.log(n),
-                   "passed_test": bool(padj[-1] <= rules.alpha), "named": False}
-    return cand_rows, out_row, rt
+        out_test = OutlierTest(round=rnd, pose=int(st.data.pose_index[i]), t=float(st.data.t[i]),
+                               statistic=rt.outlier_lr, studentised=float(rt.outlier_t[i]), p_value=rt.outlier_p,
+                               p_adjusted=float(padj[-1]), delta_bic=-rt.outlier_lr + 2.0 * math.log(n),
+                               passed_test=bool(padj[-1] <= rules.alpha))
+    return tested, out_test, rt
 
 
 def _more_replicates_could_pass(rules: Rules):
@@ -278,10 +331,10 @@ def _more_replicates_could_pass(rules: Rules):
     return extend
 
 
-def _tested_candidate(st: _State, prob: C.Problem, r: dict, rt: C.RoundTests, k: int, p_adj: float,
-                      lo0: np.ndarray, rules: Rules):
+def _tested_candidate(st: _LoopState, prob: C.Problem, r: _Prepared, rt: C.RoundTests, k: int, p_adj: float,
+                      lo0: np.ndarray, rules: Rules) -> _Tested:
     """The :class:`Candidate` row of a tested effect, with its augmented weighted fit."""
-    X1 = np.hstack([prob.X0, r["Xe"]])
+    X1 = np.hstack([prob.X0, r.columns])
     w1 = C.fit_wander(prob, X1, fine=False, bas=rt.bases[k + 1])
     # leave-one-pose-out under one covariance for both models (the alternative's REML noise):
     # the comparison then measures what the effect adds out of sample, not a change of the
@@ -293,40 +346,40 @@ def _tested_candidate(st: _State, prob: C.Problem, r: dict, rt: C.RoundTests, k:
     dbic = -lr + 3.0 * math.log(n)
     est, se, se_noise, aug, err = [float("nan")] * 3, [float("nan")] * 3, [float("nan")] * 3, None, ""
     try:
-        aug = fit(st.data, (*st.current.effects, r["effect"]), p0=st.current.p)
+        aug = fit(st.data, (*st.current.effects, r.row.effect), p0=st.current.p)
     except AccelcalError as e:
-        err = f"{r['effect']}: fit failed: {e}"
+        err = f"{r.row.effect}: fit failed: {e}"
         st.errors.append(err)
     if aug is not None:
         sl = slice(9 + 3 * len(st.current.effects), 12 + 3 * len(st.current.effects))
         est, se = _gls_estimate(prob, X1, w1, aug, sl)
         se_noise = aug.standard_errors(False)[sl].tolist()
-    c = Candidate(**r["common"], statistic=lr, dof=(3, n - st.current.q - 3), p_value=float(rt.p_values[k]),
-                  bartlett=float(rt.bartlett[k]), p_adjusted=float(p_adj), delta_bic=dbic,
-                  lopo_gap_current=gap(lo0), lopo_gap=gap(lo1), estimate=est, se=se, se_noise=se_noise,
-                  passed_test=bool(np.isfinite(p_adj) and p_adj <= rules.alpha and aug is not None),
-                  passed_bic=bool(dbic < -rules.bic_threshold),
-                  passed_lopo=bool(np.sum(lo1 ** 2) < (1 - rules.lopo_min_improvement) * np.sum(lo0c ** 2)),
-                  test="likelihood ratio, parametric bootstrap under the fitted noise",
-                  mde_white=r["mde_white"], wander_inflation=r["inflation"], wander_alt=_wander_dict(w1))
-    confounded = not c.passed and r["inflation"] > rules.max_wander_inflation
+    c = replace(r.row, statistic=lr, dof=(3, n - st.current.q - 3), p_value=float(rt.p_values[k]),
+                bartlett=float(rt.bartlett[k]), p_adjusted=float(p_adj), delta_bic=dbic,
+                lopo_gap_current=gap(lo0), lopo_gap=gap(lo1), estimate=est, se=se, se_noise=se_noise,
+                passed_test=bool(np.isfinite(p_adj) and p_adj <= rules.alpha and aug is not None),
+                passed_bic=bool(dbic < -rules.bic_threshold),
+                passed_lopo=bool(np.sum(lo1 ** 2) < (1 - rules.lopo_min_improvement) * np.sum(lo0c ** 2)),
+                test="likelihood ratio, parametric bootstrap under the fitted noise",
+                mde_white=r.mde_white, wander_inflation=r.inflation, wander_alt=_wander_dict(w1))
+    confounded = not c.passed and r.inflation > rules.max_wander_inflation
     c = replace(c, reasons=(*c.reasons, *([err] if err else [])), confounded_with_wander=confounded)
-    return c, aug, r["Xe"]
+    return _Tested(c, aug, r.columns)
 
 
-def _choose(cand_rows: list, out_row: dict | None):
+def _choose(tested: list[_Tested], out_test: OutlierTest | None) -> _Tested | OutlierTest | None:
     """The result to name: among what passed (and is neither ambiguous nor dominated), the
     strongest evidence, the smallest ΔBIC (the bootstrap p-values saturate at
-    ``1/(n_boot + 1)`` and cannot rank strong results).  ``(p, ΔBIC, kind, Candidate, fit)``
-    or None."""
-    passing = [(c.p_value, c.delta_bic, "effect", c, a) for c, a, _ in cand_rows
-               if c.passed and not c.ambiguous_with and not c.dominated]
-    if out_row is not None and out_row["passed_test"]:
-        passing.append((out_row["p_value"], out_row["delta_bic"], OUTLIER, None, None))
-    return min(passing, key=lambda x: (x[1], x[0])) if passing else None
+    ``1/(n_boot + 1)`` and cannot rank strong results), then the smallest p-value; the
+    candidates before the outlier family on a tie.  None if nothing passed."""
+    passing: list[_Tested | OutlierTest] = [r for r in tested if r.candidate.passed and not r.candidate.ambiguous_with
+                                            and not r.candidate.dominated]
+    if out_test is not None and out_test.passed_test:
+        passing.append(out_test)
+    return min(passing, key=lambda x: (x.delta_bic, x.p_value)) if passing else None
 
 
-def _drop_outlier(st: _State, i: int, out_row: dict) -> bool:
+def _drop_outlier(st: _LoopState, i: int, test: OutlierTest) -> bool:
     """Name pose ``i`` (of the current pose set) an outlier and refit without it."""
     keep = np.arange(len(st.data)) != i
     new_data = st.data.subset(keep)
@@ -336,17 +389,16 @@ def _drop_outlier(st: _State, i: int, out_row: dict) -> bool:
         st.errors.append(f"refit without pose {int(st.data.pose_index[i])} failed: {e}")
         return False
     r_pred = _predict(st.data.subset(np.array([i])), new)
-    st.outliers.append({"pose": int(st.data.pose_index[i]), "t": float(st.data.t[i]), "shift": r_pred,
-                        "shift_sigma": r_pred / float(st.data.sigma[i]), "statistic": out_row["statistic"],
-                        "studentised": out_row["studentised"], "p": out_row["p_value"],
-                        "p_adjusted": out_row["p_adjusted"], "round": out_row["round"],
-                        "gap_before": gap(st.current.weighted), "gap_after": gap(new.weighted)})
+    st.outliers.append(OutlierPose(pose=int(st.data.pose_index[i]), t=float(st.data.t[i]), shift=r_pred,
+                                   shift_sigma=r_pred / float(st.data.sigma[i]), statistic=test.statistic,
+                                   studentised=test.studentised, p=test.p_value, p_adjusted=test.p_adjusted,
+                                   round=test.round, gap_before=gap(st.current.weighted), gap_after=gap(new.weighted)))
     st.named.append(OUTLIER)
     st.data, st.current = new_data, new
     return True
 
 
-def _resolve_ambiguous(prob: C.Problem, cand_rows: list, alpha: float) -> list:
+def _resolve_ambiguous(prob: C.Problem, tested: list[_Tested], alpha: float) -> list[_Tested]:
     """Pairs of passing candidates the data cannot tell apart (e.g. ``temperature`` and
     ``bias_drift`` when the temperature follows time).
 
@@ -356,9 +408,9 @@ def _resolve_ambiguous(prob: C.Problem, cand_rows: list, alpha: float) -> list:
     both are reported ``not_identifiable`` (``ambiguous_with``).  Only one significant
     given the other: the other is explained by it and cannot be named this round (it is
     tested again after the refit)."""
-    passing = [(i, c, Xe) for i, (c, _, Xe) in enumerate(cand_rows) if c.passed]
+    passing = [(i, r.candidate, r.columns) for i, r in enumerate(tested) if r.candidate.passed]
     if len(passing) < 2:
-        return cand_rows
+        return tested
     X0 = prob.X0
 
     def ml(X):
@@ -387,72 +439,66 @@ def _resolve_ambiguous(prob: C.Problem, cand_rows: list, alpha: float) -> list:
             elif not j_given_i:
                 drop.add(j)
     out = []
-    for k, (c, a, Xe) in enumerate(cand_rows):
+    for k, r in enumerate(tested):
+        c = r.candidate
         if k in amb and amb[k]:
             c = replace(c, reasons=(*c.reasons, "cannot be told apart from " + ", ".join(amb[k]) + " on these poses"),
                         ambiguous_with=tuple(amb[k]))
         elif k in drop:
             c = replace(c, reasons=(*c.reasons, "explained by another passing candidate this round (tested again "
                                                 "after the refit)"), dominated=True)
-        out.append((c, a, Xe))
+        out.append(_Tested(c, r.fit, r.columns))
     return out
 
 
 def _predict(one: PoseData, f: Fit) -> float:
     """Residual of a left-out pose under the fit ``f`` (unit of g)."""
-    from .fit import evaluate
-
     r, _, _ = evaluate(f.p, one, f.effects, jacobian=False)
     return float("nan") if r is None else float(r[0])
 
 
-def _prepare(data, current, prob, null, eid, rules, n_tests, rnd) -> dict:
+def _prepare(data: PoseData, current: Fit, prob: C.Problem, null: C.WanderFit, eid: str, rules: Rules, n_tests: int,
+             rnd: int) -> _Prepared:
     ident = identifiability(data, current, eid, rules, n_tests)
-    common = dict(round=rnd, effect=eid, identifiable=ident.identifiable, reasons=ident.reasons,
-                  absorbed=ident.absorbed, absorbed_axis=ident.absorbed_axis.tolist(), mde=ident.mde.tolist(),
-                  mde_data=ident.mde_data.tolist())
-    row = {"effect": eid, "common": common, "identifiable": ident.identifiable, "mde_white": ident.mde.tolist(),
-           "inflation": float("nan"), "Xe": None}
+    row = Candidate.from_identifiability(ident, rnd)
     if not ident.identifiable:
-        return row
+        return _Prepared(row, ident.mde.tolist())
     Xe = prob.columns(effect_columns(current.p, data, current.effects, eid))
     info = C.effect_information(prob, prob.X0, Xe, null.t, null.q_rel)
     lam = critical_noncentrality(3, ident.dof, rules.alpha / max(n_tests, 1), rules.power)
-    mde = _mde(info["colored"], lam) * math.sqrt(null.white_scale)
+    mde = _mde(info.colored, lam) * math.sqrt(null.white_scale)
     with np.errstate(invalid="ignore"):
         ratio = np.where(np.asarray(ident.mde) > 0, mde / np.asarray(ident.mde), np.inf)
     mde_data = np.asarray(ident.mde_data) * ratio
-    infl = _inflation(info["colored"], info["scaled_white"])
+    infl = _inflation(info.colored, info.scaled_white)
     # the gate stays the design's (the rests' noise, as in the white loop): the noise fitted
     # under the current model also carries the effects not yet named, which would make a
     # strong effect refuse itself
-    common.update(mde=mde.tolist(), mde_data=mde_data.tolist())
-    row.update(inflation=infl, Xe=Xe)
-    return row
+    return _Prepared(replace(row, mde=mde.tolist(), mde_data=mde_data.tolist()), ident.mde.tolist(), infl, Xe)
 
 
 def _untested(ident, rnd, reasons) -> Candidate:
-    return Candidate(round=rnd, effect=ident.effect, identifiable=False, reasons=tuple(reasons),
-                     absorbed=ident.absorbed, absorbed_axis=ident.absorbed_axis.tolist(), mde=ident.mde.tolist(),
-                     mde_data=ident.mde_data.tolist(), test="not tested")
+    return replace(Candidate.from_identifiability(ident, rnd), identifiable=False, reasons=tuple(reasons),
+                   test="not tested")
 
 
-def _untested_from(row) -> Candidate:
-    return Candidate(**row["common"], test="not tested", mde_white=row["mde_white"])
+def _untested_from(r: _Prepared) -> Candidate:
+    return replace(r.row, test="not tested", mde_white=r.mde_white)
 
 
-def _result(data: PoseData, rules: Rules, base: Fit, lopo_base: np.ndarray, st: _State) -> DiscrepancyResult:
+def _result(data: PoseData, rules: Rules, base: Fit, lopo_base: np.ndarray, st: _LoopState) -> DiscrepancyResult:
     cur_data, current = st.data, st.current
     lopo_final = lopo(current, cur_data) if not st.outliers else _lopo_full(current, cur_data, data)
     wander, prob, colored = None, None, {}
     wander_error = st.wander_error
     try:
         last = st.noise
-        same = last is not None and last[0] is cur_data and last[1] is current
-        prob, _, coarse = last[2:] if same else linearise_noise(cur_data, current)
-        wander = C.fit_wander(prob, prob.X0, fine=True)
-        wander = C.WanderFit(**{**wander.__dict__, "common_ci": coarse.common_ci,
-                                "common_profile": coarse.common_profile})
+        if last is not None and last.data is cur_data and last.fit is current:
+            prob, coarse = last.problem, last.wander
+        else:
+            prob, _, coarse = linearise_noise(cur_data, current)
+        wander = replace(C.fit_wander(prob, prob.X0, fine=True), common_ci=coarse.common_ci,
+                         common_profile=coarse.common_profile)
     except C.WanderError as err:
         wander_error = wander_error or str(err)
     except (AccelcalError, np.linalg.LinAlgError, ValueError) as err:
@@ -485,9 +531,9 @@ def _colored_summary(data, base, prob, wander, cur_data, current) -> dict:
     try:
         pb = linearise(data, base, taus=[wander.tau], common=prob.common)
         quad_b = _quad(*C.at(pb, wander), pb.X0) / s_w
-        before = {"gap": math.sqrt(quad_b / len(data))}
+        gap_before = math.sqrt(quad_b / len(data))
     except AccelcalError:
-        before = {"gap": float("nan")}
+        gap_before = float("nan")
     p1, q1 = C.at(prob, wander)
     quad_a = _quad(p1, q1, Xf) / s_w
     mu_rel = C.excess_distribution(p1, Xf, 0, q1, s_w)
@@ -497,21 +543,18 @@ def _colored_summary(data, base, prob, wander, cur_data, current) -> dict:
     lo, hi = (dist.gamma_ppf([0.025, 0.975], mean ** 2 / var, scale=var / mean) if var > 0 else (mean, mean))
     # per pose (every pose, outliers too): std of the wander's share of the residual about the
     # session's common mean, through the final model's gradient
-    from .fit import evaluate
-    from .stochastic import centred_pose_variance
-
     starts, durations, _ = intervals(data)
     _, J_all, _ = evaluate(current.p, data, current.effects)
     if wander.present and J_all is not None:
         tau = wander.tau
-        D = (C.pose_difference_variance("random_walk", math.sqrt(wander.q_abs), starts, durations) if np.isinf(tau)
-             else C.pose_difference_variance("gauss_markov", (math.sqrt(wander.q_abs), tau), starts, durations))
+        D = (pose_difference_variance("random_walk", math.sqrt(wander.q_abs), starts, durations) if np.isinf(tau)
+             else pose_difference_variance("gauss_markov", (math.sqrt(wander.q_abs), tau), starts, durations))
         v = centred_pose_variance(D)
         extra = np.sqrt(np.clip(v, 0, None) * C.axis_weight(J_all[:, :3], prob.common))
     else:
         extra = np.zeros(len(data))
     return {
-        "gap_colored_before": before["gap"],
+        "gap_colored_before": gap_before,
         "gap_colored_after": math.sqrt(quad_a / len(cur_data)),
         "excess_predicted": math.sqrt(mean / dof) if dof > 0 else float("nan"),
         "excess_predicted_interval": [math.sqrt(lo / dof), math.sqrt(hi / dof)] if dof > 0 else [float("nan")] * 2,

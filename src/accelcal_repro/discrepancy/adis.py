@@ -8,7 +8,7 @@ Three questions, each a tidy table (figures and claims are computed from them):
 2. **Do the stochastic layer's long-τ terms describe it?** (:func:`fit_long_tau`): every
    model of the library's terms (white plus any subset of quantization, flicker, random
    walk, ramp, and at most one Gauss–Markov) fitted by the layer's Gamma likelihood
-   (:func:`accelcal.discrepancy.stochastic.fit_avar`) on τ from ``tau_min`` (1 s: the
+   (:func:`accelcal.noise.fit_avar`) on τ from ``tau_min`` (1 s: the
    pose means of a calibration average 5–45 s, shorter τ does not reach them) to
    ``tau_max``; the model with the smallest BIC is the axis's reference model.  Reported:
    its coefficients, deviance, and the worst and RMS ratio of measured to model Allan
@@ -34,9 +34,8 @@ from itertools import combinations
 import numpy as np
 import pandas as pd
 
-from accelcal.discrepancy.allan import allan_variance, avar_interval
-from accelcal.discrepancy.stochastic import (TERMS, fit_avar, pose_difference_variance, rest_segments,
-                                             stochastic_layer)
+from accelcal.discrepancy.stochastic import pose_difference_variance, rest_segments, stochastic_layer
+from accelcal.noise import TERMS, allan_variance, fit_avar
 
 from accelcal.static import _integrated_autocorr_time
 
@@ -131,9 +130,7 @@ def chosen_models(models: pd.DataFrame) -> list[dict]:
 
 def session_layout(session) -> tuple[np.ndarray, int]:
     """Trimmed rest windows ``[start, stop)`` of the benchmark session and its length in samples."""
-    from .benchmark import _trimmed_windows
-
-    return _trimmed_windows(session, session.n_samples), session.n_samples
+    return session.trimmed_windows(), session.n_samples
 
 
 def _predicted_scatter(model: dict, starts, durations) -> float:

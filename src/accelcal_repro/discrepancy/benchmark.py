@@ -18,7 +18,7 @@ power) would detect the effect along its random direction ``d`` if it knew
 the true covariance of the pose residuals under the profile (generalised least squares
 with :func:`accelcal_repro.discrepancy.profiles.pose_mean_covariance`), computed on the
 true pose design (:func:`oracle_mde`).  For the white profile it is the loop's own MDE
-(:meth:`accelcal.discrepancy.detect.Identifiability.mde_along`); under wander it is
+(:meth:`accelcal.discrepancy.vocabulary.Identifiability.mde_along`); under wander it is
 larger, because a wandering bias hides part of any slow effect.  Rows (``truth``):
 
 * ``none``: no effect (false-positive rate);
@@ -48,9 +48,10 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from accelcal.discrepancy.detect import Rules, applicable, critical_noncentrality, discrepancy, identifiability
+from accelcal.discrepancy.detect import discrepancy
 from accelcal.discrepancy.effects import EFFECT_IDS
-from accelcal.discrepancy.fit import evaluate, fit_at, forward, pose_data, pose_data_from_static
+from accelcal.discrepancy.fit import Fit, PoseData, evaluate, fit_at, forward, pose_data, pose_data_from_static
+from accelcal.discrepancy.vocabulary import Identifiability, Rules, applicable, critical_noncentrality, identifiability
 from accelcal.errors import AccelcalError
 from accelcal.evaluation import residual_sigma
 from accelcal.model import m_from_params
@@ -104,6 +105,27 @@ class Session:
         r = self.rate
         return int(round(self.init_rest_s * r)) + (self.n_poses - 1) * (int(round(self.move_s * r))
                                                                         + int(round(self.rest_s * r)))
+
+    def rest_windows(self, n_samples: int | None = None) -> np.ndarray:
+        """``[start, stop)`` sample range of every rest of the simulated session.
+
+        ``n_samples``: the length of the simulated time series, which must be the
+        session's (:attr:`n_samples`, the default).
+        """
+        rate = self.rate
+        n_init, n_rest, n_move = (int(round(v * rate)) for v in (self.init_rest_s, self.rest_s, self.move_s))
+        starts = [0] + [n_init + i * n_move + (i - 1) * n_rest for i in range(1, self.n_poses)]
+        stops = [n_init] + [s + n_rest for s in starts[1:]]
+        out = np.array([starts, stops]).T
+        assert out[-1, 1] == (self.n_samples if n_samples is None else n_samples)
+        return out
+
+    def trimmed_windows(self, n_samples: int | None = None) -> np.ndarray:
+        """The rests the static detection will see: trimmed by ``trim_s`` next to every motion."""
+        m = int(round(self.trim_s * self.rate))
+        win = self.rest_windows(n_samples) + np.array([[m, -m]])
+        win[0, 0] = 0  # the session's start borders no motion
+        return win
 
 
 # --------------------------------------------------------------------------- rows
@@ -189,25 +211,6 @@ def chunk(df: pd.DataFrame, n_chunks: int, k: int) -> pd.DataFrame:
 # --------------------------------------------------------------------------- design and oracle
 
 
-def _rest_windows(session: Session, n_samples_total: int) -> np.ndarray:
-    """``[start, stop)`` sample range of every rest of the simulated session."""
-    rate = session.rate
-    n_init, n_rest, n_move = (int(round(v * rate)) for v in (session.init_rest_s, session.rest_s, session.move_s))
-    starts = [0] + [n_init + i * n_move + (i - 1) * n_rest for i in range(1, session.n_poses)]
-    stops = [n_init] + [s + n_rest for s in starts[1:]]
-    out = np.array([starts, stops]).T
-    assert out[-1, 1] == n_samples_total
-    return out
-
-
-def _trimmed_windows(session: Session, n: int) -> np.ndarray:
-    """The rests the static detection will see: trimmed by ``trim_s`` next to every motion."""
-    m = int(round(session.trim_s * session.rate))
-    win = _rest_windows(session, n) + np.array([[m, -m]])
-    win[0, 0] = 0  # the session's start borders no motion
-    return win
-
-
 @dataclass(frozen=True)
 class Oracle:
     """GLS information of the hidden discrepancies on the true design under the profile's noise.
@@ -255,12 +258,23 @@ class Oracle:
 # --------------------------------------------------------------------------- generator
 
 
-def _draw_sensor(rng, ss: Session):
+@dataclass(frozen=True)
+class _Sensor:
+    """A simulated sensor: sensitivities [counts per unit of g], non-orthogonality angles
+    [rad], the matrix ``M`` they make and the bias [counts]."""
+
+    sensitivity: np.ndarray
+    nonorth: np.ndarray
+    M: np.ndarray
+    bias: np.ndarray
+
+
+def _draw_sensor(rng, ss: Session) -> _Sensor:
     sens = ss.sensitivity * (1 + rng.uniform(-ss.sensitivity_rel_range, ss.sensitivity_rel_range, 3))
     lo, hi = ss.nonorth_range_deg
     th = np.deg2rad(rng.uniform(lo, hi, 3) * rng.choice((-1.0, 1.0), 3))
     bias = ss.offset_counts + rng.uniform(-ss.bias_range_counts, ss.bias_range_counts, 3)
-    return sens, th, m_from_params(sens - 1.0, th), bias
+    return _Sensor(sens, th, m_from_params(sens - 1.0, th), bias)
 
 
 def simulate_case(truth: str, size_mde: float, replicate: int, *, seed: int, session: Session, rules: Rules,
@@ -289,80 +303,37 @@ def simulate_case(truth: str, size_mde: float, replicate: int, *, seed: int, ses
     rng = np.random.default_rng(grid_seed(seed, f"discrepancy/{profile.name}/{truth}", float(size_mde),
                                           int(replicate)))
     ss = session
-    g = ss.g
-    sens, th, M, bias = _draw_sensor(rng, ss)
+    sensor = _draw_sensor(rng, ss)
     phase = rng.uniform(0, 2 * np.pi)
     effs = effects_of(truth)
     dirs = {e: rng.standard_normal(3) for e in effs}
     dirs = {e: d / np.linalg.norm(d) for e, d in dirs.items()}
     noise_rng = np.random.default_rng(rng.integers(2 ** 63))
-
-    for redraws in range(MAX_REDRAWS):
-        u = random_directions(rng, ss.n_poses)
-        sim = simulate_recording(rng, u, g, np.eye(3), np.zeros(3), 0.0, rate=ss.rate, rest_s=ss.rest_s,
-                                 move_s=ss.move_s, init_rest_s=ss.init_rest_s)
-        t, x = sim["t"], sim["acc"]  # true specific force (unit of g) along the whole session
-        span = t[-1] - t[0] + 1.0 / ss.rate
-        temp = ss.temp_mean + ss.temp_amplitude * np.sin(2 * np.pi * ss.temp_cycles * t / span + phase)
-        # The design the detection will see: trimmed rests, their mid times and temperatures.
-        win = _trimmed_windows(ss, len(t))
-        t_mid = np.array([0.5 * (t[a] + t[b - 1]) for a, b in win])
-        temp_pose = np.array([temp[a:b].mean() for a, b in win])
-        n_eff = (win[:, 1] - win[:, 0]).astype(float)
-        white_var = np.asarray(profile.white) ** 2 + 1.0 / 12.0  # white noise + rounding to integer counts
-        mean_std = np.sqrt(white_var[None, :] / n_eff[:, None])
-        z_pose = forward(g * u, M, bias, {})
-        data = pose_data(z_pose, g, mean_std, t_mid, temp_pose, sigma=residual_sigma(z_pose, mean_std, M, bias))
-        p_true = np.concatenate([bias, sens - 1.0, th])
-        base = fit_at(data, (), p_true)
-        cands, _ = applicable(data, rules.candidates)
-        idents = {e: identifiability(data, base, e, rules, len(cands)) for e in cands}
-        if all(i.identifiable for i in idents.values()):
-            break
-    else:
-        raise AccelcalError(f"{truth}: no pose design with every candidate identifiable in {MAX_REDRAWS} draws")
+    design = _draw_design(rng, ss, profile, rules, sensor, phase, truth)
+    t, win, n_eff = design.t, design.windows, design.n_eff
 
     # Oracle: the covariance of the pose residuals the profile implies (unit of g²).
     C = pose_mean_covariance(profile, t[win[:, 0]], n_eff / ss.rate, n_eff, ss.rate)
-    w = -base.J[:, :3] * base.sigma[:, None]  # ∂r/∂z = -∂r/∂b (unweighted)
-    oracle = Oracle.build(data, p_true, residual_covariance(C, w))
-
+    w = -design.base.J[:, :3] * design.base.sigma[:, None]  # ∂r/∂z = -∂r/∂b (unweighted)
+    oracle = Oracle.build(design.data, design.p_true, residual_covariance(C, w))
     # the loop's first round tests the candidates and the outlier family together (Holm)
-    family = len(cands) + bool(rules.outlier_pose)
-    params, key_eff = {}, {}
-    for e in effs:
-        a = oracle.effect_mde(data, p_true, e, dirs[e], rules, family)
-        # the white loop's MDE at the same level (its own check above is at α/len(cands))
-        a_white = identifiability(data, base, e, rules, family).mde_along(dirs[e])
-        params[e] = size_mde * a * dirs[e]
-        key_eff.update({f"mde_along_{e}": a, f"mde_along_white_{e}": a_white,
-                        **{f"param_{e}_{ax}": float(v) for ax, v in zip("xyz", params[e])},
-                        **{f"direction_{e}_{ax}": float(v) for ax, v in zip("xyz", dirs[e])}})
-    if effs:  # the first (or only) effect also under generic names
-        e = effs[0]
-        key_eff.update({"mde_along": key_eff[f"mde_along_{e}"],
-                        **{f"param_{ax}": key_eff[f"param_{e}_{ax}"] for ax in "xyz"},
-                        **{f"direction_{ax}": key_eff[f"direction_{e}_{ax}"] for ax in "xyz"}})
+    family = len(design.candidates) + bool(rules.outlier_pose)
+    params, key_eff = _effect_sizes(design, oracle, dirs, size_mde, rules, family)
+
+    temp = design.temp
     if truth == CONSTANT_TEMPERATURE:
         temp = np.full_like(t, ss.temp_mean + ss.temp_amplitude * np.sin(phase))
     temp = np.round(temp / ss.temp_resolution) * ss.temp_resolution
     # Centre the covariates as the fitter does (mean over the poses), so that the injected
     # parameters are what the extended model estimates.
-    dt = t - t_mid.mean()
-    dtemp = temp - (temp_pose.mean() if truth != CONSTANT_TEMPERATURE else ss.temp_mean)
-    z = forward(x, M, bias, params, dt=dt, dtemp=dtemp)
+    dt = t - design.t_mid.mean()
+    dtemp = temp - (design.temp_pose.mean() if truth != CONSTANT_TEMPERATURE else ss.temp_mean)
+    z = forward(design.x, sensor.M, sensor.bias, params, dt=dt, dtemp=dtemp)
     z = z + simulate_profile(profile, noise_rng, len(t), ss.rate, replicate=int(replicate), records=records)
 
     outlier = {"outlier_pose": -1, "outlier_t": np.nan, "outlier_shift_mde": np.nan, "outlier_shift": np.nan}
     if truth == OUTLIER:
-        k = int(rng.integers(1, ss.n_poses))  # never the initial rest: it sets the motion threshold
-        s_mde = oracle.shift_mde(k, rules, family)
-        shift = size_mde * s_mde * rng.choice((-1.0, 1.0))
-        delta = shift * w[k] / float(w[k] @ w[k])  # moves the residual of pose k by `shift`
-        a_, b_ = _rest_windows(ss, len(t))[k]
-        z[a_:b_] += delta[None, :]
-        outlier = {"outlier_pose": k, "outlier_t": float(t_mid[k]), "outlier_shift_mde": s_mde,
-                   "outlier_shift": float(shift)}
+        outlier = _shift_one_pose(z, rng, ss, design, oracle, w, size_mde, rules, family)
     rec = Recording(t, np.round(z), temp, f"{profile.name}__{truth}_{size_mde:g}_{replicate:04d}")
     # Real-noise profiles reuse the windows of one record: the scoring counts independent ones.
     window = window_of(profile, replicate, len(records[profile.real]), len(t))[0] if profile.real else -1
@@ -371,15 +342,104 @@ def simulate_case(truth: str, size_mde: float, replicate: int, *, seed: int, ses
         "profile": profile.name, "profile_kind": profile.kind, "truth": truth, "expected": expected_outcome(truth),
         "effects_injected": "+".join(effs) if truth != CONSTANT_TEMPERATURE else "temperature",
         "size_mde": float(size_mde), "replicate": int(replicate), "noise_window": window, "n_poses": ss.n_poses,
-        "redraws": redraws,
+        "redraws": design.redraws,
         **outlier, **key_eff,
-        **{f"absorbed_{e}": idents[e].absorbed for e in EFFECT_IDS if e in idents},
-        **{f"bias_{a}": float(v) for a, v in zip("xyz", bias)},
-        **{f"sensitivity_{a}": float(v) for a, v in zip("xyz", sens)},
-        **{f"nonorth_deg_{k}": float(v) for k, v in zip(("xy", "zx", "zy"), np.rad2deg(th))},
+        **{f"absorbed_{e}": design.identifiability[e].absorbed for e in EFFECT_IDS if e in design.identifiability},
+        **{f"bias_{a}": float(v) for a, v in zip("xyz", sensor.bias)},
+        **{f"sensitivity_{a}": float(v) for a, v in zip("xyz", sensor.sensitivity)},
+        **{f"nonorth_deg_{k}": float(v) for k, v in zip(("xy", "zx", "zy"), np.rad2deg(sensor.nonorth))},
         "temp_range": float(np.ptp(temp)),
     }
     return rec, key
+
+
+def _shift_one_pose(z: np.ndarray, rng, ss: Session, design: _Design, oracle: Oracle, w: np.ndarray,
+                    size_mde: float, rules: Rules, family: int) -> dict:
+    """Shift one pose's samples in ``z`` (in place) along its residual's gradient ``w``, by
+    ``size_mde`` times the MDE of a single-pose shift; its key columns."""
+    k = int(rng.integers(1, ss.n_poses))  # never the initial rest: it sets the motion threshold
+    s_mde = oracle.shift_mde(k, rules, family)
+    shift = size_mde * s_mde * rng.choice((-1.0, 1.0))
+    delta = shift * w[k] / float(w[k] @ w[k])  # moves the residual of pose k by `shift`
+    a_, b_ = ss.rest_windows(len(design.t))[k]
+    z[a_:b_] += delta[None, :]
+    return {"outlier_pose": k, "outlier_t": float(design.t_mid[k]), "outlier_shift_mde": s_mde,
+            "outlier_shift": float(shift)}
+
+
+@dataclass(frozen=True)
+class _Design:
+    """A simulated session before its effects and noise: the true specific force ``x`` (unit
+    of g) and temperature along the time ``t``, the trimmed rest windows the detection will
+    see with their mid times, mean temperatures and sample counts, the true pose means as
+    :class:`PoseData`, the true parameters, the base model at the truth, the applicable
+    candidates and their identifiability on it, and the designs drawn before this one."""
+
+    t: np.ndarray
+    x: np.ndarray
+    temp: np.ndarray
+    windows: np.ndarray
+    t_mid: np.ndarray
+    temp_pose: np.ndarray
+    n_eff: np.ndarray
+    data: PoseData
+    p_true: np.ndarray
+    base: Fit
+    candidates: list[str]
+    identifiability: dict[str, Identifiability]
+    redraws: int
+
+
+def _draw_design(rng, ss: Session, profile: NoiseProfile, rules: Rules, sensor: _Sensor, phase: float,
+                 truth: str) -> _Design:
+    """Pose directions, redrawn (at most :data:`MAX_REDRAWS` times) until every candidate is
+    identifiable on the true design."""
+    g = ss.g
+    for redraws in range(MAX_REDRAWS):
+        u = random_directions(rng, ss.n_poses)
+        sim = simulate_recording(rng, u, g, np.eye(3), np.zeros(3), 0.0, rate=ss.rate, rest_s=ss.rest_s,
+                                 move_s=ss.move_s, init_rest_s=ss.init_rest_s)
+        t, x = sim["t"], sim["acc"]  # true specific force (unit of g) along the whole session
+        span = t[-1] - t[0] + 1.0 / ss.rate
+        temp = ss.temp_mean + ss.temp_amplitude * np.sin(2 * np.pi * ss.temp_cycles * t / span + phase)
+        # The design the detection will see: trimmed rests, their mid times and temperatures.
+        win = ss.trimmed_windows(len(t))
+        t_mid = np.array([0.5 * (t[a] + t[b - 1]) for a, b in win])
+        temp_pose = np.array([temp[a:b].mean() for a, b in win])
+        n_eff = (win[:, 1] - win[:, 0]).astype(float)
+        white_var = np.asarray(profile.white) ** 2 + 1.0 / 12.0  # white noise + rounding to integer counts
+        mean_std = np.sqrt(white_var[None, :] / n_eff[:, None])
+        M, bias = sensor.M, sensor.bias
+        z_pose = forward(g * u, M, bias, {})
+        data = pose_data(z_pose, g, mean_std, t_mid, temp_pose, sigma=residual_sigma(z_pose, mean_std, M, bias))
+        p_true = np.concatenate([bias, sensor.sensitivity - 1.0, sensor.nonorth])
+        base = fit_at(data, (), p_true)
+        cands, _ = applicable(data, rules.candidates)
+        idents = {e: identifiability(data, base, e, rules, len(cands)) for e in cands}
+        if all(i.identifiable for i in idents.values()):
+            return _Design(t, x, temp, win, t_mid, temp_pose, n_eff, data, p_true, base, cands, idents, redraws)
+    raise AccelcalError(f"{truth}: no pose design with every candidate identifiable in {MAX_REDRAWS} draws")
+
+
+def _effect_sizes(design: _Design, oracle: Oracle, dirs: dict, size_mde: float, rules: Rules,
+                  family: int) -> tuple[dict, dict]:
+    """The hidden effects' parameters, ``size_mde`` times each one's oracle MDE along its
+    direction, and their key columns (MDEs, parameters, directions)."""
+    params, key_eff = {}, {}
+    for e, d in dirs.items():
+        a = oracle.effect_mde(design.data, design.p_true, e, d, rules, family)
+        # the white loop's MDE at the same level (its own check above is at α/len(cands))
+        a_white = identifiability(design.data, design.base, e, rules, family).mde_along(d)
+        params[e] = size_mde * a * d
+        key_eff.update({f"mde_along_{e}": a, f"mde_along_white_{e}": a_white,
+                        **{f"param_{e}_{ax}": float(v) for ax, v in zip("xyz", params[e])},
+                        **{f"direction_{e}_{ax}": float(v) for ax, v in zip("xyz", d)}})
+    if dirs:  # the first (or only) effect also under generic names
+        e = next(iter(dirs))
+        key_eff.update({"mde_along": key_eff[f"mde_along_{e}"],
+                        **{f"param_{ax}": key_eff[f"param_{e}_{ax}"] for ax in "xyz"},
+                        **{f"direction_{ax}": key_eff[f"direction_{e}_{ax}"] for ax in "xyz"}})
+    return params, key_eff
 
 
 # --------------------------------------------------------------------------- detection
@@ -387,7 +447,7 @@ def simulate_case(truth: str, size_mde: float, replicate: int, *, seed: int, ses
 
 def null_available(null: str) -> bool:
     """Can this library's loop test under ``null``?  ``white`` always (the loop of issue 7); ``colored``
-    once :class:`~accelcal.discrepancy.detect.Rules` has the ``null`` setting."""
+    once :class:`~accelcal.discrepancy.vocabulary.Rules` has the ``null`` setting."""
     if null not in NULLS:
         raise AccelcalError(f"unknown null hypothesis {null!r}; known: {', '.join(NULLS)}")
     return null == "white" or "null" in {f.name for f in dataclasses.fields(Rules)}
@@ -421,8 +481,7 @@ def _result_row(res) -> dict:
            "not_identifiable": "+".join(res.not_identifiable), "n_poses_detected": s["n_poses"],
            **{k: s[k] for k in ("gap_before", "gap_after", "gap_expected_before", "gap_expected_after",
                                 "gap_lopo_before", "gap_lopo_after", "excess_before", "excess_after")}}
-    outliers = getattr(res, "outliers", None) or ()
-    row["outlier_t_detected"] = ";".join(f"{o['t']:.3f}" for o in outliers if isinstance(o, dict) and "t" in o)
+    row["outlier_t_detected"] = ";".join(f"{o.t:.3f}" for o in res.outliers)
     for c in res.candidates:
         if c.round == 1:
             row[f"p_{c.effect}"] = c.p_value

@@ -5,11 +5,11 @@ per bootstrap replicate and, for the sinusoid, per frequency of its grid) and co
 the Allan variance of every replicate.  In numpy each small problem pays the overhead of
 dozens of array calls; these kernels run the same algorithms in one compiled loop:
 
-* :func:`irls_gamma` — :func:`accelcal.discrepancy.stochastic._irls` (Fisher scoring of
+* :func:`irls_gamma` — :func:`accelcal.noise.allan_fit._irls` (Fisher scoring of
   the Gamma likelihood, non-negative least squares by enumerating the supports, step
   halving), problem by problem;
 * :func:`allan_sums` — the sums of squared second differences of the running sums that
-  :func:`accelcal.discrepancy.allan.allan_variance` accumulates;
+  :func:`accelcal.noise.allan.allan_variance` accumulates;
 * :func:`ar1` — the Gauss–Markov recursion of the noise simulator (``lfilter``, bit for bit).
 
 Same algorithms, same arithmetic up to the order of floating-point sums (results agree
@@ -229,7 +229,7 @@ def supports(p: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def irls_gamma(H: np.ndarray, y: np.ndarray, edf: np.ndarray, max_iter: int = 200, tol: float = 1e-10):
-    """Compiled :func:`accelcal.discrepancy.stochastic._irls`: ``H`` (G, k, p), ``y`` (G, k)."""
+    """Compiled :func:`accelcal.noise.allan_fit._irls`: ``H`` (G, k, p), ``y`` (G, k)."""
     subsets, sizes = supports(H.shape[2])
     return _irls_batch(np.ascontiguousarray(H, dtype=np.float64), np.ascontiguousarray(y, dtype=np.float64),
                        np.ascontiguousarray(edf, dtype=np.float64), subsets, sizes, int(max_iter), float(tol))

@@ -35,6 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import distributions as dist
+from .. import kernels
 from ..errors import AccelcalError
 
 #: Power-law exponents α of S_y(f) ∝ f^α that :func:`edf_overlapping` knows.
@@ -223,9 +224,7 @@ def allan_variance(segments, fs: float, *, m=None, min_edf: float = DEFAULT_MIN_
     if m.size == 0 or np.any(m < 1):
         raise AllanError(f"no averaging time has pooled edf >= {min_edf:g}: the rests are too short "
                          f"(longest {max(lengths)} samples)")
-    from .. import kernels
-
-    fast = kernels.compiled("discrepancy._fast")
+    fast = kernels.compiled("noise._fast")
 
     d = segs[0].shape[1]
     sums = np.zeros((m.size, d))
