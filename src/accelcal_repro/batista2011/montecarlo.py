@@ -41,10 +41,10 @@ from accelcal.batista.filter import (
     PAPER_THETA,
     PAPER_XI,
     STATES,
-    _coefficients,
     covariance_sequence,
     kalman_filter,
     observability_gramian,
+    rotation_coefficients,
 )
 from accelcal.batista.model import accelerometer_output, euler_to_rotation, gravity_in_table, specific_force_at_rest
 from .trajectory import Attitude, StepSchedule, motion_signals, stepped_attitudes
@@ -412,7 +412,7 @@ def _blocks_bkt(w: np.ndarray, dt: float):
     (``S(w)² = w wᵀ - |w|² I``), which is much faster than batched 3x3 products."""
     w = w * dt
     th2 = np.einsum("bit,bit->bt", w, w)
-    a, b, c, d, e = _coefficients(np.sqrt(th2))
+    a, b, c, d, e = rotation_coefficients(np.sqrt(th2))
     K = np.zeros(w.shape[:1] + (3, 3) + w.shape[2:])
     K[:, 0, 1], K[:, 0, 2], K[:, 1, 2] = -w[:, 2], w[:, 1], -w[:, 0]
     K[:, 1, 0], K[:, 2, 0], K[:, 2, 1] = w[:, 2], -w[:, 1], w[:, 0]

@@ -38,7 +38,7 @@ from accelcal.discrepancy.allan import allan_variance, avar_interval
 from accelcal.discrepancy.stochastic import (TERMS, fit_avar, pose_difference_variance, rest_segments,
                                              stochastic_layer)
 
-from accelcal.static import _integrated_autocorr_time
+from accelcal.static import integrated_autocorr_time
 
 from .profiles import centred
 
@@ -164,7 +164,7 @@ def session_check(acc: np.ndarray, fs: float, session, reference: list[dict], *,
         piece = acc[k * n:(k + 1) * n]
         segs = rest_segments(piece, win)
         means = np.array([s.mean(axis=0) for s in segs])
-        se2 = np.array([s.var(axis=0, ddof=1) * _integrated_autocorr_time(s) / len(s) for s in segs])
+        se2 = np.array([s.var(axis=0, ddof=1) * integrated_autocorr_time(s) / len(s) for s in segs])
         layer = None
         if k < n_layer:
             layer = stochastic_layer(segs, fs, seed=seed + k, n_boot=n_boot, n_resim=n_resim, intervals=win,
