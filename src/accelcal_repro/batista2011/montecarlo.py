@@ -427,15 +427,24 @@ def _blocks_bkt(w: np.ndarray, dt: float):
     return tuple(out)
 
 
+def _compiled_block():
+    """The compiled block loop when the filter kernels run compiled (:mod:`accelcal.kernels`), else None."""
+    if compiled("batista._filter_kernels") is None:
+        return None
+    from . import _shared_gain_kernels
+
+    return _shared_gain_kernels
+
+
 class _FilterState:
     """Running state of :func:`shared_gain_filter` fed block by block (memory stays bounded).
 
     With numba the block runs as the compiled kernel
-    :func:`accelcal.batista._filter_kernels.shared_gain_block` (state ``x`` kept as (T, 9));
+    :func:`accelcal_repro.batista2011._shared_gain_kernels.shared_gain_block` (state ``x`` kept as (T, 9));
     the numpy loop below is the reference (state as (9, T))."""
 
     def __init__(self, x0, a0, w0, record, dt):
-        self.kernels = compiled("batista._filter_kernels")
+        self.kernels = _compiled_block()
         x0 = np.asarray(x0, float)
         self.x = np.array(x0) if self.kernels is not None else np.ascontiguousarray(x0.T)
         self.a_prev = np.array(a0, float)
