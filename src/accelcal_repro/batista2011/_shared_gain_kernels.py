@@ -7,9 +7,16 @@ per-step rotation blocks are the core filter's compiled ones
 :func:`accelcal.kernels.compiled` loads).
 
 Imported only when the filter kernels run compiled (it imports numba).
+
+The kernel's disk cache depends on the core kernel file too (:func:`_also_depends_on`):
+numba compiles ``rotation_blocks`` into this kernel's machine code but checks only this
+file when it loads the cache, so a change to the core kernels would otherwise leave a
+stale kernel in the cache.
 """
 
 from __future__ import annotations
+
+import os
 
 import numpy as np
 
@@ -62,3 +69,21 @@ def shared_gain_block(dt, x, a_prev, w_prev, a, w, y, gains, store, out, row):
         for i in range(3):
             a_prev[t, i] = a[t, a.shape[1] - 1, i]
             w_prev[t, i] = w[t, w.shape[1] - 1, i]
+
+
+def _also_depends_on(dispatcher, path) -> None:
+    """Make ``dispatcher``'s disk cache stale when the file ``path`` changes, as when its own does.
+
+    numba keys a cached function on its own source file's modification time and size;
+    compiled functions it calls from other files are part of its machine code but not of
+    that key.  Their file's time and size are added to it here.  Without a disk cache (the
+    in-memory fallback of :func:`accelcal.kernels.jit`) there is nothing to do.
+    """
+    cache_file = getattr(getattr(dispatcher, "_cache", None), "_cache_file", None)
+    if cache_file is None:
+        return
+    st = os.stat(path)
+    cache_file._source_stamp = (cache_file._source_stamp, (st.st_mtime, st.st_size))
+
+
+_also_depends_on(shared_gain_block, _FILTER_KERNELS.__file__)
