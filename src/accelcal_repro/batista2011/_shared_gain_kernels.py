@@ -1,4 +1,5 @@
-"""Compiled block loop of the shared-gain filter Monte Carlo (:func:`accelcal_repro.batista2011.montecarlo.shared_gain_filter`).
+"""Compiled block loop of the shared-gain filter Monte Carlo
+(:func:`accelcal_repro.batista2011.montecarlo.shared_gain_filter`).
 
 Many runs share one gain sequence (the covariance does not depend on the data), so each
 run's state is only propagated with its own rates and updated with the shared gain.  The
