@@ -158,3 +158,12 @@ def test_a_script_run_standalone_rebuilds_the_workflows_output(ci_workflow, tmp_
     proc = run_snakemake(work, "-n", "results/claims.csv", "--configfile", CI_CONFIG)
     assert proc.returncode == 0, proc.stderr
     shutil.rmtree(work / "results")
+
+
+@pytest.mark.parametrize("output", ["results/report.html", "results/claims.csv", "results/claims/discrepancy.csv"])
+def test_no_issue_numbers_in_the_report_and_ledger_of_a_run(ci_workflow, output):
+    """What a run writes for readers speaks of the project only (the sources: tests/test_project_text.py)."""
+    from tests.test_project_text import issue_numbers
+
+    text = (ci_workflow[0] / output).read_text(errors="replace")
+    assert text and not issue_numbers(text), issue_numbers(text)[:10]

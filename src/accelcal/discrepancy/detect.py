@@ -5,7 +5,7 @@ white per-pose noise times a common scale plus a bias wander estimated jointly w
 calibration, likelihood-ratio tests calibrated by a parametric bootstrap, outlier poses,
 ambiguity between candidates and with the wander (:mod:`.colored`, :mod:`.wander_loop`).
 ``white``: the loop described below, white per-pose noise times a common scale and
-F-tests (issue 7's loop, kept unchanged as the benchmark's negative control: on sessions
+F-tests (the benchmark's negative control: on sessions
 whose bias wanders it names ``bias_drift`` far more often than α).  Both share the
 identifiability checks, the result class and its JSON.
 

@@ -20,7 +20,7 @@ Three questions, each a tidy table (figures and claims are computed from them):
    those pose means about their session mean, pooled over pieces and axes, is compared
    with what the calibration's own standard errors imply (its ratio is the excess the
    loop sees) and with what (a) the reference model of question 2 and (b) the stochastic
-   layer run on the piece's own rests (the ≤ 10 s view of issue 13's Xsens session)
+   layer run on the piece's own rests (the ≤ 10 s view of the Xsens session)
    predict for the same layout (:func:`accelcal.discrepancy.stochastic.pose_difference_variance`).
    The ratio predicted / observed is the check: 1 when a model extrapolates correctly
    from its τ range to the session.
