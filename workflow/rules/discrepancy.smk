@@ -103,7 +103,7 @@ rule discrepancy_adis_fetch:
     threads: 1
     resources:
         mem_mb=500,
-        runtime=10,  # a download of 9 MB
+        runtime=10,  # a download of 3.2 MB
     script:
         "../scripts/discrepancy_adis_fetch.py"
 
