@@ -42,10 +42,10 @@ include: "workflow/rules/common.smk"
 check_config(config, "workflow/schemas/config.schema.yaml")
 
 
-# One rule file per stage; each declares what it adds to the final targets (a Stage:
-# figures, claims, report tables).  The rules that gather them (claims, report, all) read
-# the declarations in functions, once every file is included, so the order of the includes
-# does not matter.
+# One rule file per stage; each declares what it adds to the final targets (declare_stage:
+# figures, each also a target of its own, claims, report tables).  The rules that gather
+# them (claims, report, all) read the declarations in functions, once every file is
+# included, so the order of the includes does not matter.
 include: "workflow/rules/burkhard2024.smk"
 include: "workflow/rules/batista2011.smk"
 include: "workflow/rules/tereshkov.smk"
@@ -66,14 +66,3 @@ rule all:
     localrule: True
     input:
         get_final_output(),
-
-
-# Every figure id is a target: `snakemake burkhard2024_fig1a` (target only: no job, no log).
-for _fid in figure_ids():
-
-    rule:
-        name:
-            _fid
-        localrule: True
-        input:
-            figure_files(_fid),

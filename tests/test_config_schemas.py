@@ -158,7 +158,7 @@ def test_broken_stage_config_is_rejected_with_its_key_and_what_is_wrong(tmp_path
 
 #: One broken config per stage through the command line (the rest differ only in the message).
 CLI_CASES = ("batista_window_in_transition", "tereshkov_inverted_range", "measured_full_model_on_six_poses",
-             "discrepancy_recording_not_measured")
+             "discrepancy_confusion_size_not_scored")
 
 
 @pytest.mark.parametrize("case", CLI_CASES)

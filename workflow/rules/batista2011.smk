@@ -2,7 +2,7 @@
 against the CRLB and the full LLS, the online bias/gravity Kalman filter (Figs. 4-8), its
 observability condition, its cost per step, and the paper's claims.
 
-Needs from common.smk: Stage, results, log_path, bench_path, figure_files, figure_outputs,
+Needs from common.smk: declare_stage, results, log_path, bench_path, figure_files, figure_outputs,
 SMALL; config["batista2011"] (section batista2011 of config/config.yaml)."""
 
 BATISTA = config["batista2011"]
@@ -14,7 +14,7 @@ def batista_cfg(*sections):
     return {k: BATISTA[k] for k in ("seed", "g") + sections}
 
 BATISTA_OUT = results("batista2011")
-BATISTA_STAGE = Stage(
+BATISTA_STAGE = declare_stage(
     name="batista2011",
     figures=("batista2011_trajectories", "batista2011_calibration", "batista2011_fig4", "batista2011_fig5",
              "batista2011_errors", "batista2011_observability"),

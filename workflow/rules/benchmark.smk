@@ -8,14 +8,14 @@ job-seconds of every stage of the last run; one table and one figure.  Config: t
 Outputs live under results/timing/ and the figure id contains "timing": wall times are
 not reproducible, and the byte-identical rerun check leaves such paths out.
 
-Needs from common.smk: Stage, results, figure_ids, log_path, bench_path, figure_files,
+Needs from common.smk: declare_stage, results, figure_ids, log_path, bench_path, figure_files,
 figure_outputs, SMALL.
 """
 
 BENCHMARK = config["benchmark"]
 TIMING_DIR = results("timing")
 BENCHMARK_FIGURE = "timing_benchmark"
-BENCHMARK_STAGE = Stage(
+BENCHMARK_STAGE = declare_stage(
     name="benchmark",
     figures=(BENCHMARK_FIGURE,),
     claims=False,

@@ -8,7 +8,7 @@ come from the random stream of (pose count, noise std), so the g errors of a poi
 their trials.  A gather job writes the tidy table and its summaries, from which the
 figures and the claims are computed.
 
-Needs from common.smk: Stage, results, log_path, bench_path, figure_files, figure_outputs,
+Needs from common.smk: declare_stage, results, log_path, bench_path, figure_files, figure_outputs,
 SMALL.
 """
 
@@ -36,9 +36,9 @@ BURKHARD_FIGURE_JOBS = {
 }
 BURKHARD_FIGURES = [f for job in BURKHARD_FIGURE_JOBS.values() for f in job["figures"]]
 
-BURKHARD_STAGE = Stage(
+BURKHARD_STAGE = declare_stage(
     name="burkhard2024",
-    figures=tuple(f"burkhard2024_{f}" for f in BURKHARD_FIGURES),
+    figures=[f"burkhard2024_{f}" for f in BURKHARD_FIGURES],
     tables=(
         ("Scale-factor and non-orthogonality errors across the noise range (24 poses)",
          f"{BURKHARD_DIR}/relative_errors.csv"),

@@ -51,7 +51,7 @@ def measured_data_dir():
 
 @dataclass(frozen=True)
 class Stage:
-    """What one stage adds to the final targets, declared once in its rule file.
+    """What one stage adds to the final targets, declared once in its rule file (:func:`declare_stage`).
 
     ``figures``: figure ids (each a rule target and results/figures/<id>.png|pdf);
     ``claims``: whether it writes results/claims/<name>.csv for the ledger; ``tables``:
@@ -62,6 +62,22 @@ class Stage:
     figures: tuple = ()
     claims: bool = True
     tables: tuple = ()
+
+
+def declare_stage(name, figures=(), claims=True, tables=()):
+    """The :class:`Stage` ``name``, and each of its figure ids as a target rule of its own:
+    `snakemake <id>` makes its PNG and PDF (target only: no job, no log)."""
+    stage = Stage(name, tuple(figures), claims, tuple(tables))
+    for fid in stage.figures:
+
+        rule:
+            name:
+                fid
+            localrule: True
+            input:
+                figure_files(fid),
+
+    return stage
 
 
 # STAGES (the Snakefile: the stage declarations in the order of the ledger and the report)

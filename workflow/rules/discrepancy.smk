@@ -16,7 +16,7 @@ term is missing, and a benchmark under realistic noise that scores it.
   recordings; results/claims/discrepancy.csv: the claims.
 
 Config: section ``discrepancy`` (its cross-key rules: _check_discrepancy, common.smk).
-Needs from common.smk: Stage, results, log_path, bench_path, figure_files,
+Needs from common.smk: declare_stage, results, log_path, bench_path, figure_files,
 figure_outputs, MEASURED_CSV, MEASURED_SUMMARY, measured_data_dir, fitted_to_xsens, SMALL;
 from measured.smk: rule measured_convert and the ``measured`` config (g of each
 recording), read from the config only, so that the includes work in any order.
@@ -61,11 +61,11 @@ def per_recording(pattern, recordings=DISCREPANCY_RECORDINGS):
     return expand(pattern, recording=recordings)
 
 
-DISCREPANCY_STAGE = Stage(
+DISCREPANCY_STAGE = declare_stage(
     name="discrepancy",
-    figures=tuple(["discrepancy_fpr", "discrepancy_confusion", "discrepancy_power", "discrepancy_rows",
-                   "discrepancy_adis_allan", "discrepancy_measured_before_after", "discrepancy_allan",
-                   "discrepancy_sessions"] + (["discrepancy_stability"] if DISCREPANCY_SESSIONS["same_imu"] else [])),
+    figures=["discrepancy_fpr", "discrepancy_confusion", "discrepancy_power", "discrepancy_rows",
+             "discrepancy_adis_allan", "discrepancy_measured_before_after", "discrepancy_allan", "discrepancy_sessions"]
+    + (["discrepancy_stability"] if DISCREPANCY_SESSIONS["same_imu"] else []),
     tables=(
         ("Real sessions: pose-residual excess observed and predicted by the joint model", SESSIONS_EXCESS),
         ("Real sessions re-simulated before and after what the loop names: gap to the measured residuals",

@@ -6,7 +6,7 @@ a peer).  Config: the `measured` mapping (section `measured` of config/config.ya
 The data are fetched by a job (measured_fetch: the shared copy, else a verified download),
 run first; stages that do not need them plan and run without them.
 
-Needs from common.smk: Stage, results, log_path, bench_path, figure_files, figure_outputs,
+Needs from common.smk: declare_stage, results, log_path, bench_path, figure_files, figure_outputs,
 MEASURED_CSV, MEASURED_SUMMARY, measured_data_dir, SMALL.
 """
 
@@ -20,7 +20,7 @@ MEASURED_MANIFEST = results("measured/data/{recording}.json")
 #: The peer runs on the imucal session only if that recording is configured.
 MEASURED_PEER_TABLE = results("measured/peer_imucal.csv")
 MEASURED_PEER = [MEASURED_PEER_TABLE] if "imucal_ferraris" in MEASURED_RECORDINGS else []
-MEASURED_STAGE = Stage(
+MEASURED_STAGE = declare_stage(
     name="measured",
     figures=("measured_static_detection", "measured_calibration", "measured_residuals"),
     tables=(("Fit quality per recording and estimator (χ², leave-one-pose-out, bootstrap)", MEASURED_SUMMARY),

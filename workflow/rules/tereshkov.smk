@@ -3,13 +3,13 @@ estimator on simulated tractor runs — Monte Carlo convergence and accuracy, st
 turning observability, the artificial-bias test, an installation-angle sweep, the
 stage's claims and figures.  Config: the `tereshkov` mapping (section `tereshkov` of config/config.yaml).
 
-Needs from common.smk: Stage, results, log_path, bench_path, figure_files, figure_outputs,
+Needs from common.smk: declare_stage, results, log_path, bench_path, figure_files, figure_outputs,
 SMALL.
 """
 
 TERESHKOV = config["tereshkov"]
 TERESHKOV_DIR = results("tereshkov")
-TERESHKOV_STAGE = Stage(
+TERESHKOV_STAGE = declare_stage(
     name="tereshkov",
     # the last: Tereshkov against the Batista et al. (2011) filter on the same runs
     figures=("tereshkov_fig2", "tereshkov_fig3", "tereshkov_fig4", "tereshkov_installation",
