@@ -5,9 +5,11 @@
     .venv/bin/snakemake burkhard2024_fig1a                # one figure (every figure id is a target)
 
 Layout (snakemake-workflows style): this file loads and validates the config, then
-includes one rule file per stage from workflow/rules/.  Thin scripts in
+includes one rule file per stage from workflow/rules/; the final targets are gathered from
+the stages' declarations (get_final_output, workflow/rules/common.smk).  Thin scripts in
 workflow/scripts/ call the library (src/accelcal/).  Outputs go to results/
-(see results/README.md), logs to results/logs/.
+(see results/README.md), logs to results/logs/.  The measured data are fetched by jobs
+(the shared copy, else a verified download): the simulation stages need none.
 """
 
 import os
@@ -40,9 +42,10 @@ include: "workflow/rules/common.smk"
 check_config(config, "workflow/schemas/config.schema.yaml")
 
 
-# One rule file per stage; each appends its figure ids to FIGURES and its name to
-# CLAIM_STAGES.  The rules that gather them (claims, report, all) read those lists in
-# input functions, when the DAG is built, so the order of the includes does not matter.
+# One rule file per stage; each declares what it adds to the final targets (declare_stage:
+# figures, each also a target of its own, claims, report tables).  The rules that gather
+# them (claims, report, all) read the declarations in functions, once every file is
+# included, so the order of the includes does not matter.
 include: "workflow/rules/burkhard2024.smk"
 include: "workflow/rules/batista2011.smk"
 include: "workflow/rules/tereshkov.smk"
@@ -53,11 +56,13 @@ include: "workflow/rules/claims.smk"
 include: "workflow/rules/report.smk"
 
 
+#: The stages, in the order of the claims ledger and of the tables in each report section.
+STAGES = (BURKHARD_STAGE, BATISTA_STAGE, TERESHKOV_STAGE, MEASURED_STAGE, DISCREPANCY_STAGE, BENCHMARK_STAGE)
+
+
 rule all:
     """Every figure, the claims ledger and the report (target only: no job, hence no log or resources)."""
     default_target: True
     localrule: True
     input:
-        lambda w: expand("results/figures/{figure}.{ext}", figure=FIGURES, ext=("png", "pdf")),
-        "results/claims.csv",
-        "results/report.html",
+        get_final_output(),

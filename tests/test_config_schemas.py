@@ -1,5 +1,6 @@
-"""Schemas and cross-field rules of the config sections batista2011, tereshkov and measured
-(workflow/schemas/<stage>.schema.yaml and the stage rules in check_config, common.smk).
+"""Schemas and cross-field rules of the config sections batista2011, tereshkov, measured and
+discrepancy (workflow/schemas/<stage>.schema.yaml and the stage rules in check_config,
+common.smk).
 
 Each broken config is the CI config with one change, given as the whole config
 (--replace-workflow-config, so that a deleted key stays deleted): it must fail while the
@@ -129,6 +130,16 @@ BROKEN = {
                                                   ["full_lls", "bias_lls"]}),
                                          "measured.recordings.imucal_ferraris.estimators: full_lls need at least 10 "
                                          "poses"),
+    # ---------------------------------------------------------------- discrepancy
+    "discrepancy_confusion_size_not_scored": (changed({"discrepancy.benchmark.confusion_size_mde": 2.0}),
+                                              "discrepancy.benchmark.confusion_size_mde: 2.0 is not in sizes_mde "
+                                              "[3.0]"),
+    "discrepancy_recording_not_measured": (changed({"discrepancy.recordings": ["xsens_mti", "adis_unknown"]}),
+                                           "discrepancy.recordings: adis_unknown not in measured.recordings"),
+    "discrepancy_same_imu_not_analysed": (changed({"discrepancy.sessions.same_imu":
+                                                   {"one": ["mpu6050", "imucal_ferraris"]}}),
+                                          "discrepancy.sessions.same_imu.one: imucal_ferraris not in "
+                                          "discrepancy.recordings"),
 }
 
 
@@ -146,7 +157,8 @@ def test_broken_stage_config_is_rejected_with_its_key_and_what_is_wrong(tmp_path
 
 
 #: One broken config per stage through the command line (the rest differ only in the message).
-CLI_CASES = ("batista_window_in_transition", "tereshkov_inverted_range", "measured_full_model_on_six_poses")
+CLI_CASES = ("batista_window_in_transition", "tereshkov_inverted_range", "measured_full_model_on_six_poses",
+             "discrepancy_confusion_size_not_scored")
 
 
 @pytest.mark.parametrize("case", CLI_CASES)

@@ -387,11 +387,11 @@ def test_bootstrap_too_small_for_the_family_is_refused():
 def test_json_keeps_the_old_keys_and_adds_the_new_ones():
     import json
 
-    from accelcal.results import _finite_json
+    from accelcal.jsonsafe import json_safe
 
     rng = np.random.default_rng(12)
     d, _ = session(rng, THREE_GM)
-    out = json.loads(json.dumps(_finite_json(discrepancy(d, FAST).to_dict())))
+    out = json.loads(json.dumps(json_safe(discrepancy(d, FAST).to_dict())))
     for k in ("effect", "effects", "outcome", "not_identifiable", "candidates", "gap_before", "gap_after",
               "gap_expected_before", "gap_lopo_before", "excess_before", "excess_after", "excess_status",
               "model_before", "model_after", "poses", "rules"):
@@ -405,5 +405,5 @@ def test_json_keeps_the_old_keys_and_adds_the_new_ones():
         assert k in nm, k
     assert 0.0 <= nm["axis_correlation"] <= 1.0 and len(nm["axis_correlation_profile"]) == len(C.COMMON_GRID)
     assert out["rules"]["null"] == "colored"
-    white = _finite_json(discrepancy(d, Rules(null="white")).to_dict())
+    white = json_safe(discrepancy(d, Rules(null="white")).to_dict())
     assert white["null"] == "white" and white["noise_model"]["estimated"] is False

@@ -78,6 +78,7 @@ def test_missing_dataset_without_network_is_one_clear_line(tmp_path, monkeypatch
     msg = str(e.value)
     assert "\n" not in msg and isinstance(e.value, AccelcalError)
     assert "no shared copy at" in msg and "raw.githubusercontent.com/tomisuarez2" in msg
+    assert f"copy the dataset folder into {tmp_path / 'nowhere' / 'mpu6050_suarez'}" in msg and "network access" in msg
     assert "name resolution" in msg
     assert not list((tmp_path / "res").rglob("*.part"))
 

@@ -3,7 +3,9 @@
 ``accelcal`` is what a person calibrating an IMU imports; ``accelcal_repro`` (the paper
 reproductions, the measured-data stage, the discrepancy benchmark, the report) imports
 it, never the reverse.  The core needs only the numerical stack; matplotlib (the
-``plots`` extra) only where figures are drawn.
+``plots`` extra) only where figures are drawn.  A layer uses only the public names of the
+layers below it (workflow scripts -> ``accelcal_repro`` -> ``accelcal``): a name with a
+leading underscore is free to change inside its own package.
 """
 
 import ast
@@ -13,8 +15,13 @@ from pathlib import Path
 
 import pytest
 
-SRC = Path(__file__).resolve().parents[1] / "src"
+REPO = Path(__file__).resolve().parents[1]
+SRC = REPO / "src"
 CORE = SRC / "accelcal"
+#: The layers, each with the packages it may import from below it.  Tests are not a layer:
+#: they may look inside what they test.
+LAYERS = {"accelcal": CORE, "accelcal_repro": SRC / "accelcal_repro", "workflow": REPO / "workflow" / "scripts"}
+PACKAGES = ("accelcal", "accelcal_repro")
 #: Third-party packages the core may import anywhere, and where matplotlib is allowed.
 CORE_DEPENDENCIES = {"numpy", "scipy", "pandas", "casadi"}
 PLOTTING_MODULES = {"plotting.py", "discrepancy/figures.py"}
@@ -59,6 +66,67 @@ def test_the_boundary_check_sees_a_wrong_import(tmp_path):
     f = tmp_path / "m.py"
     f.write_text("def f():\n    from accelcal_repro.claims import Claim\n    import snakemake\n")
     assert {n for n, _ in _imports(f)} == {"accelcal_repro", "snakemake"}
+
+
+def _private(name: str) -> bool:
+    return name.startswith("_") and not (name.startswith("__") and name.endswith("__"))
+
+
+def _private_uses(path: Path, layer: str):
+    """``(line, what)`` of every private name ``path`` (in ``layer``) takes from another
+    package: a private module or name in an import, or a private attribute of a name
+    imported from another package (``import accelcal.static as S; S._x``)."""
+    tree = ast.parse(path.read_text(), filename=str(path))
+    bound = {}  # local name -> the other package's module it came from
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            if node.module.split(".")[0] not in PACKAGES or node.module.split(".")[0] == layer:
+                continue
+            if any(_private(part) for part in node.module.split(".")):
+                yield node.lineno, f"from {node.module} import ..."
+            for alias in node.names:
+                if _private(alias.name):
+                    yield node.lineno, f"from {node.module} import {alias.name}"
+                bound[alias.asname or alias.name] = node.module
+        elif isinstance(node, ast.Import):
+            for alias in node.names:
+                top = alias.name.split(".")[0]
+                if top not in PACKAGES or top == layer:
+                    continue
+                if any(_private(part) for part in alias.name.split(".")):
+                    yield node.lineno, f"import {alias.name}"
+                bound[alias.asname or top] = alias.name
+    for node in ast.walk(tree):
+        if (isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and node.value.id in bound
+                and _private(node.attr)):
+            yield node.lineno, f"{node.value.id}.{node.attr} ({bound[node.value.id]})"
+
+
+def test_no_private_name_crosses_a_package():
+    wrong = [f"{p.relative_to(REPO)}:{line}: {what}" for layer, folder in LAYERS.items()
+             for p in sorted(folder.rglob("*.py")) for line, what in _private_uses(p, layer)]
+    assert not wrong, "private names used from another package (give them a public name): " + "; ".join(wrong)
+
+
+def test_the_private_name_check_sees_each_kind_of_use(tmp_path):
+    f = tmp_path / "script.py"
+    f.write_text("from accelcal.results import _finite_json, CalibrationResult\n"
+                 "import accelcal.batista._filter_kernels\n"
+                 "from accelcal_repro.batista2011._shared_gain_kernels import shared_gain_block\n"
+                 "from accelcal import static as S, kernels\n"
+                 "import accelcal_repro.timing as T\n"
+                 "from _helpers import configure_logging\n"  # the scripts' own helpers: same layer
+                 "from accelcal import __version__\n"
+                 "def f():\n"
+                 "    return S._geyer, kernels._resolve('auto'), T.available_backends, kernels.backend\n")
+    found = [what for _, what in _private_uses(f, "workflow")]
+    assert found == ["from accelcal.results import _finite_json", "import accelcal.batista._filter_kernels",
+                     "from accelcal_repro.batista2011._shared_gain_kernels import ...", "S._geyer (accelcal)",
+                     "kernels._resolve (accelcal)"], found
+    # inside its own package a private name is fine
+    found = [what for _, what in _private_uses(f, "accelcal_repro")]
+    assert found == ["from accelcal.results import _finite_json", "import accelcal.batista._filter_kernels",
+                     "S._geyer (accelcal)", "kernels._resolve (accelcal)"], found
 
 
 @pytest.mark.parametrize("module", ["accelcal", "accelcal.cli"])

@@ -1,5 +1,6 @@
-"""Resilience (issue 8): a missing measured dataset fails before any job runs, a failing
-fetch job fails in one line, and an atomic writer killed mid-way leaves no output (the
+"""Resilience: a missing measured dataset fails its fetch job, the first job of the run, in
+one line (stages that do not need the data run without it: tests/test_workflow_structure.py),
+a damaged copy fails the same way, and an atomic writer killed mid-way leaves no output (the
 interrupted workflow run: tests/test_workflow_interrupts.py, which uses the helpers here).
 
 No test here depends on timing: the interrupted run is interrupted while a job is held
@@ -28,8 +29,8 @@ import pandas as pd
 import pytest
 
 from accelcal.atomic import atomic_output, remove_stale_temporaries
-from accelcal_repro.measured.data import DATASETS, DatasetError, check_available, local_file
-from accelcal_repro.measured.sources import SOURCES, check_source_available
+from accelcal_repro.measured.data import DATASETS, fetch_file
+from accelcal_repro.measured.sources import SOURCES, fetch_source
 
 from tests.configs import ci_config
 
@@ -60,76 +61,66 @@ def measured_overlay(path, data_dir, resources_dir):
     return path
 
 
-# --- missing dataset: fail before any job --------------------------------------------------
+# --- missing dataset: its fetch job fails first, in one line ---------------------------------
 
 
-@pytest.mark.parametrize("dry_run", [True, False], ids=["dry_run", "run"])
-def test_missing_dataset_fails_before_any_job(tmp_path, dry_run):
+def test_missing_dataset_fails_in_its_fetch_job_before_any_other_job(tmp_path):
     data_dir, cache = tmp_path / "no_data", tmp_path / "no_cache"
     data_dir.mkdir()
     cache.mkdir()
     overlay = measured_overlay(tmp_path / "offline.yaml", data_dir, cache)
     workdir = tmp_path / "work"
-    proc = snakemake(workdir, "all", "--configfile", CI, overlay, "--cores", "1", *["-n"] * dry_run,
-                     env=OFFLINE, timeout=600)
+    proc = snakemake(workdir, "all", "--configfile", CI, overlay, "--cores", "1", env=OFFLINE, timeout=600)
     out = proc.stdout + proc.stderr
     assert proc.returncode != 0, out
-    lines = [ln for ln in out.splitlines() if ln.startswith("missing measured data:")]
-    assert len(lines) == 1, out
-    first = SOURCES[next(iter(ci_config()["measured"]["recordings"]))]  # checked first
-    line = lines[0]
-    # the recording, where it was looked for, the URL and what to do
-    assert f"recording {first.name}:" in line, line
-    assert str(data_dir / first.dataset) in line and str(cache / first.dataset) in line, line
-    assert DATASETS[first.dataset][first.data_file].url in line and "unreachable" in line, line
-    assert "copy the dataset folder into" in line and "network access" in line, line
     assert "Traceback" not in out
-    assert not (workdir / "results").exists(), "a job ran despite the missing dataset"
-    assert not list(cache.rglob("*")), "the check downloaded (or started to)"
+    # the fetch jobs run first (priority); the first fails and the run stops there
+    logs = sorted((workdir / "results" / "logs").rglob("*.log"))
+    assert len(logs) == 1 and "fetch" in logs[0].name, logs
+    lines = logs[0].read_text().splitlines()
+    assert len(lines) == 1, lines
+    line = lines[0]
+    # the file, where it was looked for, the URL and what to do
+    dataset = next(d for d, files in DATASETS.items() for f in files.values() if f.url in line)
+    assert f"no shared copy at {data_dir / dataset}" in line and "failed" in line, line
+    assert f"copy the dataset folder into {data_dir / dataset}" in line and "network access" in line, line
+    made = [p for p in (workdir / "results").rglob("*") if p.is_file()]
+    assert all(p.parts[len(workdir.parts) + 1] in ("logs", "benchmarks") for p in made), made
+    assert not [p for p in cache.rglob("*") if p.is_file()], "a partial download was left behind"
 
 
 def test_data_in_the_download_cache_needs_no_network(tmp_path):
     """Offline, with the data only in the download cache (resources_dir, relative to the
-    working directory): the workflow plans normally.  A network request would be refused and
-    fail the run, so this also shows that local data means no request."""
+    working directory): the fetch jobs take it from there.  A network request would be
+    refused and fail the job, so this also shows that local data means no request."""
     workdir = tmp_path / "work"
     cache = workdir / "cache"
     cache.mkdir(parents=True)
     for dataset in DATASETS:
         (cache / dataset).symlink_to(SHARED / dataset)  # no copy of the data
     overlay = measured_overlay(tmp_path / "cache.yaml", tmp_path / "no_data", "cache")
-    proc = snakemake(workdir, "-n", "all", "--configfile", CI, overlay, "--cores", "1", env=OFFLINE, timeout=600)
+    proc = snakemake(workdir, "results/measured/data/xsens_mti.json", "results/discrepancy/adis/data.json",
+                     "--configfile", CI, overlay, "--cores", "1", env=OFFLINE, timeout=600)
     assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
-    assert "measured_fetch" in proc.stdout + proc.stderr
+    for manifest in ("measured/data/xsens_mti.json", "discrepancy/adis/data.json"):
+        files = json.loads((workdir / "results" / manifest).read_text())["files"]
+        assert all(f["path"].startswith("cache/") for f in files.values()), files
 
 
-def test_check_uses_no_network_when_the_data_is_local(tmp_path, monkeypatch):
+def test_local_data_needs_no_network(tmp_path, monkeypatch):
     def no_network(*args, **kwargs):
         raise AssertionError("network used although the data is local")
 
     monkeypatch.setattr(urllib.request, "urlopen", no_network)
     for name in SOURCES:
-        check_source_available(name, SHARED, tmp_path / "cache")  # the shared copy
-    assert local_file("imu_tk_xsens", "xsens_acc.mat", tmp_path / "none", SHARED) == SHARED / "imu_tk_xsens" / "xsens_acc.mat"
-
-
-def test_check_asks_the_url_only_when_not_local(tmp_path):
-    src = tmp_path / "upstream.mat"
-    src.write_text("1 2 3 4\n")
-    # not local, URL answers: fine (the download itself happens in the fetch job)
-    check_available("imu_tk_xsens", "xsens_acc.mat", tmp_path / "a", tmp_path / "b", url=src.as_uri())
-    # not local, URL dead: one line naming the file, the folders and the URL
-    dead = (tmp_path / "gone.mat").as_uri()
-    with pytest.raises(DatasetError) as e:
-        check_available("imu_tk_xsens", "xsens_acc.mat", tmp_path / "a", tmp_path / "b", url=dead)
-    msg = str(e.value)
-    assert "\n" not in msg and dead in msg and str(tmp_path / "a" / "imu_tk_xsens") in msg, msg
-    assert "imu_tk_xsens/xsens_acc.mat" in msg and str(tmp_path / "b" / "imu_tk_xsens") in msg
+        fetch_source(name, SHARED, tmp_path / "cache")  # the shared copy
+    assert fetch_file("smac_adis16405", "adis_16405_imu1.rda", SHARED, tmp_path / "cache").parent.parent == SHARED
+    assert not list((tmp_path / "cache").rglob("*"))
 
 
 def test_fetch_job_fails_in_one_line_on_a_damaged_copy(tmp_path):
-    """A shared copy with the wrong sha256 passes the existence check before the run; the
-    fetch job then stops with one line (no traceback) and writes no manifest."""
+    """A shared copy with the wrong sha256: the fetch job stops with one line (no traceback)
+    and writes no manifest."""
     data_dir = tmp_path / "data"
     data_dir.mkdir()
     for dataset in {d.name for d in SHARED.iterdir() if d.is_dir()} - {"mpu6050_suarez"}:  # the others whole

@@ -1,5 +1,7 @@
-"""How the workflow is put together: the order of the stage includes does not matter, every
-script is the script of a rule and runs standalone with that rule's own paths (pypsa-eur's
+"""How the workflow is put together: the order of the stage includes does not matter, the
+final targets are gathered from the stages' declarations and match the rules, the measured
+data are fetched by jobs (the simulation stages plan without them, offline), every script is
+the script of a rule and runs standalone with that rule's own paths (pypsa-eur's
 mock_snakemake: the Snakefile is the one place for paths)."""
 
 import os
@@ -11,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.configs import CI_CONFIG, REPO
+from tests.configs import CI_CONFIG, REPO, load_config
 
 from .conftest import copy_of_ci_workflow, run_snakemake
 
@@ -69,6 +71,54 @@ def workflow():
         os.chdir(cwd)
 
 
+def test_final_targets_are_the_stages_declarations_and_match_the_rules(workflow):
+    """`all` asks for every declared figure, the ledger and the report; every figure a rule
+    draws is declared by a stage, and every declared figure id is a target rule of its own."""
+    g = workflow.globals
+    declared = g["figure_ids"]()
+    assert len(declared) == len(set(declared)) > 20
+    drawn = {Path(str(f)).stem for r in workflow.rules for f in r.output
+             if str(f).startswith("results/figures/") and str(f).endswith(".png")}
+    assert drawn == set(declared)
+    assert list(workflow.get_rule("all").input) == g["get_final_output"]()
+    assert {"results/claims.csv", "results/report.html"} <= set(workflow.get_rule("all").input)
+    for fid in declared:
+        assert set(workflow.get_rule(fid).input) == {f"results/figures/{fid}.png", f"results/figures/{fid}.pdf"}
+    # the ledger's stages, in the order of the Snakefile's STAGES
+    assert g["claim_stages"]() == ["burkhard2024", "batista2011", "tereshkov", "measured", "discrepancy"]
+    tables = g["report_tables"]()
+    made = {str(f) for r in workflow.rules for f in r.output}
+    assert tables and all(path in made for _, _, path in tables), [t for t in tables if t[2] not in made]
+
+
+_OFFLINE = {k: "http://127.0.0.1:9" for k in ("http_proxy", "https_proxy", "HTTP_PROXY", "HTTPS_PROXY")}
+
+
+def test_simulation_stages_plan_without_the_measured_data(tmp_path):
+    """No shared copy, no download cache and no network: the simulation stages and their
+    figures plan and need no fetch; `all` plans too, with the fetch jobs in it (they fail
+    when they run: tests/test_resilience.py)."""
+    overlay = tmp_path / "no_data.yaml"
+    overlay.write_text(f"measured:\n  data_dir: {tmp_path / 'absent'}\n  resources_dir: {tmp_path / 'cache'}\n")
+    env = {**os.environ, **_OFFLINE, "no_proxy": "", "NO_PROXY": ""}
+
+    def dry_run(*targets):
+        proc = subprocess.run([str(Path(sys.executable).with_name("snakemake")), "--snakefile", str(REPO / "Snakefile"),
+                               "--directory", str(tmp_path / "work"), "-n", *targets, "--configfile", str(CI_CONFIG),
+                               str(overlay), "--cores", "2"], cwd=REPO, env=env, capture_output=True, text=True,
+                              timeout=300)
+        assert proc.returncode == 0, proc.stderr[-3000:]
+        return _job_counts(proc.stdout + proc.stderr)
+
+    jobs = dry_run("burkhard2024", "batista2011", "tereshkov", "burkhard2024_fig1a", "batista2011_fig4")
+    assert {"burkhard2024_mc", "batista2011_filter_mc", "tereshkov_simulate", "burkhard2024_fig1a"} <= set(jobs)
+    assert not [r for r in jobs if "fetch" in r or r.startswith(("measured", "discrepancy"))], jobs
+    jobs = dry_run("all")
+    assert jobs["measured_fetch"] == len(load_config("ci.yaml")["measured"]["recordings"])
+    assert jobs["discrepancy_adis_fetch"] == 1
+    assert not (tmp_path / "cache").exists()
+
+
 def _scripts():
     return sorted(p for p in SCRIPTS.glob("*.py") if not p.name.startswith("_"))
 
@@ -108,3 +158,12 @@ def test_a_script_run_standalone_rebuilds_the_workflows_output(ci_workflow, tmp_
     proc = run_snakemake(work, "-n", "results/claims.csv", "--configfile", CI_CONFIG)
     assert proc.returncode == 0, proc.stderr
     shutil.rmtree(work / "results")
+
+
+@pytest.mark.parametrize("output", ["results/report.html", "results/claims.csv", "results/claims/discrepancy.csv"])
+def test_no_issue_numbers_in_the_report_and_ledger_of_a_run(ci_workflow, output):
+    """What a run writes for readers speaks of the project only (the sources: tests/test_project_text.py)."""
+    from tests.test_project_text import issue_numbers
+
+    text = (ci_workflow[0] / output).read_text(errors="replace")
+    assert text and not issue_numbers(text), issue_numbers(text)[:10]

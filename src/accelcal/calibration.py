@@ -47,6 +47,7 @@ import numpy as np
 
 from .errors import (AccelcalError, DegeneratePosesError, NotConvergedError, NotPositiveDefiniteError,
                      TooFewPosesError)
+from .jsonsafe import json_safe
 from .registry import ESTIMATORS, estimator
 from .units import G0, acceleration_unit
 
@@ -333,7 +334,7 @@ class Calibration:
             "poses": {k: _jsonable(v) for k, v in self.poses.items()},
             **self.provenance,
         }
-        return _finite_json(d)
+        return json_safe(d)
 
     def to_json(self) -> str:
         return json.dumps(self.to_dict(), indent=2)
@@ -778,20 +779,6 @@ def _jsonable(v):
     if isinstance(v, tuple):
         return list(v)
     return v
-
-
-def _finite_json(obj):
-    if isinstance(obj, float):
-        return obj if np.isfinite(obj) else None
-    if isinstance(obj, dict):
-        return {k: _finite_json(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_finite_json(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _finite_json(obj.tolist())
-    if isinstance(obj, (np.floating, np.integer)):
-        return _finite_json(obj.item())
-    return obj
 
 
 __all__ = ["APPLICABLE_EFFECTS", "BiasLLSCalibration", "BiasNLLSCalibration", "CALIBRATION_CLASSES", "Calibration",

@@ -448,9 +448,9 @@ def _write_corrected(path: Path, rec, x) -> None:
 
 def _discrepancy(args) -> int:
     from .atomic import write_json_atomic
-    from .calibration import _finite_json
     from .discrepancy import report
     from .errors import RecordingError
+    from .jsonsafe import json_safe
 
     t0 = time.perf_counter()
     rec = _read(args)
@@ -477,7 +477,7 @@ def _discrepancy(args) -> int:
 
         for name, fig in figures:
             save_figure(fig, Path(args.figures) / name)
-    write_json_atomic(args.out, _finite_json(out))
+    write_json_atomic(args.out, json_safe(out))
     _discrepancy_summary(out, args.out)
     return 0
 

@@ -21,6 +21,7 @@ from functools import cached_property
 
 import numpy as np
 
+from .jsonsafe import json_safe
 from .model import params_from_m
 from .registry import N_PARAMETERS, estimator, model_of
 from .uncertainty import pose_residuals, standard_errors
@@ -123,7 +124,7 @@ class CalibrationResult:
         for k in self._extra_fields():
             v = getattr(self, k)
             out[k] = v.tolist() if isinstance(v, np.ndarray) else v
-        return _finite_json(out)
+        return json_safe(out)
 
     def _extra_fields(self) -> tuple[str, ...]:
         """Method-specific attributes written by :meth:`to_dict` after the common ones."""
@@ -131,17 +132,6 @@ class CalibrationResult:
 
 
 _CORE_FIELDS = frozenset(f.name for f in fields(CalibrationResult))
-
-
-def _finite_json(obj):
-    """NaN is not JSON: write it as null."""
-    if isinstance(obj, float):
-        return obj if np.isfinite(obj) else None
-    if isinstance(obj, dict):
-        return {k: _finite_json(v) for k, v in obj.items()}
-    if isinstance(obj, list):
-        return [_finite_json(v) for v in obj]
-    return obj
 
 
 @dataclass(frozen=True)

@@ -383,12 +383,23 @@ def _quietest_stretch(acc, v, w, fs, why: str) -> tuple[tuple[int, int], float]:
     return (j, j + L), vref
 
 
-def _integrated_autocorr_time(x: np.ndarray) -> np.ndarray:
-    """Integrated autocorrelation time of each column of ``x`` (n, 3), at least 1.
+def integrated_autocorr_time(x: np.ndarray) -> np.ndarray:
+    """Integrated autocorrelation time of each column of ``x``, at least 1.
 
     Geyer's initial positive sequence: sum the pairs ``ρ(2j) + ρ(2j+1)`` while positive,
     ``τ = 2 Σ - 1``.  It needs no lag cut-off, and truncating at the first
-    non-positive pair stops before the noisy tail of the estimate.
+    non-positive pair stops before the noisy tail of the estimate.  The variance of the
+    mean of ``n`` correlated samples is ``τ σ² / n``.
+
+    Parameters
+    ----------
+    x : numpy.ndarray, shape (n, k)
+        Samples of ``k`` series (e.g. the three axes of one rest).
+
+    Returns
+    -------
+    numpy.ndarray, shape (k,)
+        τ of each column, in samples, between 1 and ``n``.
     """
     n = x.shape[0]
     xc = x - x.mean(axis=0)
@@ -412,7 +423,7 @@ DIRECT_LAGS = 16
 
 
 def _segment_statistics(segs) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Mean, standard deviation (ddof 1) and :func:`_integrated_autocorr_time` of each segment
+    """Mean, standard deviation (ddof 1) and :func:`integrated_autocorr_time` of each segment
     (each (k, 3)), all segments of one length at once.
 
     The autocovariances of the first :data:`DIRECT_LAGS` lags are summed directly, pair of
@@ -432,7 +443,7 @@ def _segment_statistics(segs) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         C = (X - X.mean(axis=1, keepdims=True)).transpose(0, 2, 1).reshape(-1, n)  # one row per column
         tau[idx] = _geyer(_leading_autocovariances(C, min(DIRECT_LAGS, 2 * (n // 2))), n).reshape(-1, 3)
         for i in np.asarray(idx)[np.isnan(tau[idx]).any(axis=1)]:  # sequence longer than the direct lags
-            tau[i] = _integrated_autocorr_time(segs[i])
+            tau[i] = integrated_autocorr_time(segs[i])
     return means, std, tau
 
 
@@ -456,7 +467,7 @@ def _leading_autocovariances(C: np.ndarray, K: int) -> np.ndarray:
 
 def _geyer(acov: np.ndarray, n: int) -> np.ndarray:
     """Geyer's τ (c,) from the leading autocovariances (c, K) of columns of ``n`` samples
-    (:func:`_leading_autocovariances`), as :func:`_integrated_autocorr_time` sums them; NaN
+    (:func:`_leading_autocovariances`), as :func:`integrated_autocorr_time` sums them; NaN
     where all ``K/2`` pairs are positive and the full sequence is longer."""
     K = acov.shape[1]
     with np.errstate(invalid="ignore", divide="ignore"):

@@ -32,7 +32,7 @@ import pandas as pd
 
 COLUMNS = ("paper", "claim_id", "claim", "paper_value", "reproduced_value", "verdict", "evidence")
 #: Sources of claims: the three papers, and ``discrepancy``, the goals the project's
-#: discrepancy loop states for itself (issues 7 and 13), judged the same way.
+#: discrepancy loop states for itself, judged the same way.
 PAPERS = ("burkhard2024", "batista2011", "tereshkov", "discrepancy")
 VERDICTS = ("reproduced", "not_reproduced", "not_reproducible")
 

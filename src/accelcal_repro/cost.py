@@ -5,7 +5,7 @@ Inputs are the tables of :mod:`accelcal_repro.timing`: the estimator timings
 filter costs (:func:`~accelcal_repro.timing.filter_timing`), the first-call times
 (:func:`~accelcal_repro.timing.compile_timing`) and the job-seconds per stage
 (:func:`~accelcal_repro.timing.stage_job_seconds`).  :func:`headline` picks the numbers
-issue 15 sets goals for (24 poses, compiled kernels and numpy reference side by side);
+the project sets goals for (24 poses, compiled kernels and numpy reference side by side);
 :func:`plot_cost` draws all four.
 """
 
@@ -45,7 +45,7 @@ _FILTER_HEADLINES = (
 def headline(estimators: pd.DataFrame, filters: pd.DataFrame, compile_times: pd.DataFrame, stages: pd.DataFrame,
              goals: Mapping[str, float], n_poses: int = 24, interleave: str = "block") -> pd.DataFrame:
     """One row per quantity and implementation: ``quantity, backend, value, unit, goal,
-    meets_goal`` (NaN / empty where issue 15 sets no goal).  Estimator times at
+    meets_goal`` (NaN / empty where the project sets no goal).  Estimator times at
     ``n_poses`` (``interleave`` timings) and throughputs; filter cost per step; first-call
     time summed over the kernels (cold and cached); job-seconds per stage.  Throughputs
     and filter costs also from CPU time (``(CPU time)`` rows): on an idle machine the two

@@ -69,7 +69,10 @@ NO_BACKEND = "casadi"
 
 def available_backends() -> tuple[str, ...]:
     """``('numba', 'numpy')`` with numba installed, else ``('numpy',)``."""
-    return ("numba", "numpy") if kernels._resolve("auto") == "numba" else ("numpy",)
+    previous = kernels.set_backend("auto")  # what 'auto' resolves to here; then the choice made before
+    found = kernels.backend()
+    kernels.set_backend(previous)
+    return ("numba", "numpy") if found == "numba" else ("numpy",)
 
 
 def _label(key) -> tuple[str, str]:

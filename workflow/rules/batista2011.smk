@@ -2,8 +2,8 @@
 against the CRLB and the full LLS, the online bias/gravity Kalman filter (Figs. 4-8), its
 observability condition, its cost per step, and the paper's claims.
 
-Needs the helpers of common.smk (FIGURES, CLAIM_STAGES, log_path, figure_outputs, SMALL)
-and config["batista2011"] (section batista2011 of config/config.yaml)."""
+Needs from common.smk: declare_stage, results, log_path, bench_path, figure_files, figure_outputs,
+SMALL; config["batista2011"] (section batista2011 of config/config.yaml)."""
 
 BATISTA = config["batista2011"]
 
@@ -13,17 +13,12 @@ def batista_cfg(*sections):
     what it uses changes (e.g. new claim thresholds do not rerun the Monte Carlo)."""
     return {k: BATISTA[k] for k in ("seed", "g") + sections}
 
-BATISTA_OUT = "results/batista2011"
-BATISTA_FIGURES = [
-    "batista2011_trajectories",
-    "batista2011_calibration",
-    "batista2011_fig4",
-    "batista2011_fig5",
-    "batista2011_errors",
-    "batista2011_observability",
-]
-FIGURES.extend(BATISTA_FIGURES)
-CLAIM_STAGES.append("batista2011")
+BATISTA_OUT = results("batista2011")
+BATISTA_STAGE = declare_stage(
+    name="batista2011",
+    figures=("batista2011_trajectories", "batista2011_calibration", "batista2011_fig4", "batista2011_fig5",
+             "batista2011_errors", "batista2011_observability"),
+)
 
 #: Tables each figure is drawn from.
 BATISTA_FIGURE_INPUTS = {
@@ -221,7 +216,7 @@ rule batista2011_observability_mc:
 
 
 # One plotting rule per figure (rule name <id>_plot): results/figures/<id>.png|pdf.
-for _fid in BATISTA_FIGURES:
+for _fid in BATISTA_STAGE.figures:
 
     rule:
         name:
@@ -254,7 +249,7 @@ rule batista2011_claims:
         gramian=f"{BATISTA_OUT}/gramian.csv",
         error_budget=f"{BATISTA_OUT}/filter_error_budget.csv",
     output:
-        "results/claims/batista2011.csv",
+        results("claims/batista2011.csv"),
     params:
         cfg=BATISTA,
     log:
@@ -268,45 +263,8 @@ rule batista2011_claims:
         "../scripts/batista2011_claims.py"
 
 
-# Figure ids as targets: `snakemake batista2011_fig4`.
-rule batista2011_trajectories:
-    input:
-        "results/figures/batista2011_trajectories.png",
-        "results/figures/batista2011_trajectories.pdf",
-
-
-rule batista2011_calibration:
-    input:
-        "results/figures/batista2011_calibration.png",
-        "results/figures/batista2011_calibration.pdf",
-
-
-rule batista2011_fig4:
-    input:
-        "results/figures/batista2011_fig4.png",
-        "results/figures/batista2011_fig4.pdf",
-
-
-rule batista2011_fig5:
-    input:
-        "results/figures/batista2011_fig5.png",
-        "results/figures/batista2011_fig5.pdf",
-
-
-rule batista2011_errors:
-    input:
-        "results/figures/batista2011_errors.png",
-        "results/figures/batista2011_errors.pdf",
-
-
-rule batista2011_observability:
-    input:
-        "results/figures/batista2011_observability.png",
-        "results/figures/batista2011_observability.pdf",
-
-
 rule batista2011:
     """The whole stage: every figure and the claims."""
     input:
-        expand("results/figures/{figure}.{ext}", figure=BATISTA_FIGURES, ext=("png", "pdf")),
-        "results/claims/batista2011.csv",
+        figure_files(*BATISTA_STAGE.figures),
+        results("claims/batista2011.csv"),

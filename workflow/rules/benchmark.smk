@@ -1,24 +1,27 @@
-"""Target 'benchmark' (issue 15): where the compute time goes.  Time per problem vs pose
-count of every estimator, one problem at a time and batched, compiled kernels and numpy
-reference (the burkhard2024 timing job, which the speed claims also read), the cost per
-step of the Batista and Tereshkov filters, the first-call (compilation) time of the
-kernels, and the job-seconds of every stage of the last run; one table and one figure.
-Config: the `benchmark` mapping (workflow/schemas/benchmark.schema.yaml).
+"""Target 'benchmark': where the compute time goes.  Time per problem vs pose count of every
+estimator, one problem at a time and batched, compiled kernels and numpy reference (the
+burkhard2024 timing job, which the speed claims also read), the cost per step of the
+Batista and Tereshkov filters, the first-call (compilation) time of the kernels, and the
+job-seconds of every stage of the last run; one table and one figure.  Config: the
+`benchmark` mapping (workflow/schemas/benchmark.schema.yaml).
 
 Outputs live under results/timing/ and the figure id contains "timing": wall times are
 not reproducible, and the byte-identical rerun check leaves such paths out.
 
-Needs from common.smk: FIGURES, REPORT_TABLES, log_path, bench_path, figure_outputs, SMALL.
+Needs from common.smk: declare_stage, results, figure_ids, log_path, bench_path, figure_files,
+figure_outputs, SMALL.
 """
 
 BENCHMARK = config["benchmark"]
-TIMING_DIR = "results/timing"
+TIMING_DIR = results("timing")
 BENCHMARK_FIGURE = "timing_benchmark"
-
-FIGURES.append(BENCHMARK_FIGURE)
-REPORT_TABLES.append(("benchmark", "Where the compute time goes: estimators at 24 poses, filters per step, "
-                      "first-call compilation and job-seconds per stage, with the goals of issue 15",
-                      f"{TIMING_DIR}/summary.csv"))
+BENCHMARK_STAGE = declare_stage(
+    name="benchmark",
+    figures=(BENCHMARK_FIGURE,),
+    claims=False,
+    tables=(("Where the compute time goes: estimators at 24 poses, filters per step, first-call compilation "
+             "and job-seconds per stage, with the project's goals", f"{TIMING_DIR}/summary.csv"),),
+)
 
 
 rule timing_filters:
@@ -69,7 +72,7 @@ rule timing_compile:
 
 def _other_figures(wildcards):
     """Every figure but this target's: the stage table is read once every other job is done."""
-    return expand("results/figures/{figure}.png", figure=[f for f in FIGURES if f != BENCHMARK_FIGURE])
+    return [path for path in figure_files(*figure_ids()) if path.endswith(".png") and BENCHMARK_FIGURE not in path]
 
 
 rule timing_stages:
@@ -78,11 +81,11 @@ rule timing_stages:
     localrule: True  # on a cluster: the login node (reads the benchmark files)
     input:
         figures=_other_figures,
-        claims="results/claims.csv",
+        claims=results("claims.csv"),
     output:
         f"{TIMING_DIR}/stages.csv",
     params:
-        benchmarks_dir="results/benchmarks",
+        benchmarks_dir=results("benchmarks"),
     log:
         log_path("benchmark/stages"),
     benchmark:
@@ -98,7 +101,7 @@ rule timing_benchmark_figure:
     """The summary table (with the goals) and the figure."""
     localrule: True  # on a cluster: the login node (a table and a figure, last)
     input:
-        estimators="results/burkhard2024/timing_summary.csv",
+        estimators=results("burkhard2024/timing_summary.csv"),
         filters=f"{TIMING_DIR}/filters.csv",
         compile=f"{TIMING_DIR}/compile.csv",
         stages=f"{TIMING_DIR}/stages.csv",
@@ -120,18 +123,9 @@ rule timing_benchmark_figure:
         "../scripts/timing_benchmark.py"
 
 
-# The figure id as a target: `snakemake timing_benchmark`.
-rule timing_benchmark:
-    localrule: True
-    input:
-        f"results/figures/{BENCHMARK_FIGURE}.png",
-        f"results/figures/{BENCHMARK_FIGURE}.pdf",
-
-
 rule benchmark:
     """Every output of the benchmark (target only)."""
     localrule: True
     input:
         f"{TIMING_DIR}/summary.csv",
-        f"results/figures/{BENCHMARK_FIGURE}.png",
-        f"results/figures/{BENCHMARK_FIGURE}.pdf",
+        figure_files(BENCHMARK_FIGURE),

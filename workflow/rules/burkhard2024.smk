@@ -1,5 +1,5 @@
-"""Stage 'burkhard2024' (issue 3): Burkhard, Sharma, Skaloud (2024), every panel of Fig. 1,
-the compute-time claim, and where the closed form stops being enough.  Config: the
+"""Stage 'burkhard2024': Burkhard, Sharma, Skaloud (2024), every panel of Fig. 1, the
+compute-time claim, and where the closed form stops being enough.  Config: the
 `burkhard2024` mapping (workflow/schemas/burkhard2024.schema.yaml).
 
 The experiments of the config (one per panel) are merged into one Monte Carlo job per grid
@@ -8,8 +8,8 @@ come from the random stream of (pose count, noise std), so the g errors of a poi
 their trials.  A gather job writes the tidy table and its summaries, from which the
 figures and the claims are computed.
 
-Needs from common.smk: FIGURES, CLAIM_STAGES, REPORT_TABLES, log_path, bench_path,
-figure_outputs, SMALL.
+Needs from common.smk: declare_stage, results, log_path, bench_path, figure_files, figure_outputs,
+SMALL.
 """
 
 import re
@@ -19,7 +19,7 @@ from accelcal_repro.burkhard2024.grid import experiments_from_config, grid_point
 BURKHARD = config["burkhard2024"]
 #: Monte Carlo jobs: point key (e.g. n24_s0.0001) -> {n_poses, noise_std, cases}
 BURKHARD_POINTS = grid_points(experiments_from_config(BURKHARD["experiments"]))
-BURKHARD_DIR = "results/burkhard2024"
+BURKHARD_DIR = results("burkhard2024")
 #: Figures by job: the panels of Fig. 1 and the limit come from the gathered tables (one
 #: job: a plotting job costs more to start than to draw), the timing figure from the benchmark.
 BURKHARD_FIGURE_JOBS = {
@@ -36,17 +36,18 @@ BURKHARD_FIGURE_JOBS = {
 }
 BURKHARD_FIGURES = [f for job in BURKHARD_FIGURE_JOBS.values() for f in job["figures"]]
 
-FIGURES.extend(f"burkhard2024_{f}" for f in BURKHARD_FIGURES)
-CLAIM_STAGES.append("burkhard2024")
-REPORT_TABLES.extend([
-    ("burkhard2024", "Scale-factor and non-orthogonality errors across the noise range (24 poses)",
-     f"{BURKHARD_DIR}/relative_errors.csv"),
-    ("burkhard2024", "Where full LLS becomes measurably worse than NLLS and the CRLB",
-     f"{BURKHARD_DIR}/lls_limit_onsets.csv"),
-    ("burkhard2024", "Monte Carlo RMS error / Cramér–Rao bound per noise level (24 poses), NLLS iterations and "
-     "IPOPT tolerance: the NLLS baseline stops at the accuracy the problem needs",
-     f"{BURKHARD_DIR}/nlls_efficiency.csv"),
-])
+BURKHARD_STAGE = declare_stage(
+    name="burkhard2024",
+    figures=[f"burkhard2024_{f}" for f in BURKHARD_FIGURES],
+    tables=(
+        ("Scale-factor and non-orthogonality errors across the noise range (24 poses)",
+         f"{BURKHARD_DIR}/relative_errors.csv"),
+        ("Where full LLS becomes measurably worse than NLLS and the CRLB", f"{BURKHARD_DIR}/lls_limit_onsets.csv"),
+        ("Monte Carlo RMS error / Cramér–Rao bound per noise level (24 poses), NLLS iterations and "
+         "IPOPT tolerance: the NLLS baseline stops at the accuracy the problem needs",
+         f"{BURKHARD_DIR}/nlls_efficiency.csv"),
+    ),
+)
 
 
 wildcard_constraints:
@@ -168,18 +169,6 @@ for _job, _spec in BURKHARD_FIGURE_JOBS.items():
             "../scripts/burkhard2024_figure.py"
 
 
-# Figure ids as targets: `snakemake burkhard2024_fig1a` (target only: no job, no log).
-for _fig in BURKHARD_FIGURES:
-
-    rule:
-        name:
-            f"burkhard2024_{_fig}"
-        localrule: True
-        input:
-            f"results/figures/burkhard2024_{_fig}.png",
-            f"results/figures/burkhard2024_{_fig}.pdf",
-
-
 rule burkhard2024_claims:
     """Burkhard (2024) claims computed from the summaries."""
     input:
@@ -188,7 +177,7 @@ rule burkhard2024_claims:
         timing_summary=f"{BURKHARD_DIR}/timing_summary.csv",
         mc_timing_summary=f"{BURKHARD_DIR}/mc_timing_summary.csv",
     output:
-        "results/claims/burkhard2024.csv",
+        results("claims/burkhard2024.csv"),
     params:
         cfg=BURKHARD,
     log:
@@ -206,5 +195,5 @@ rule burkhard2024:
     """Every output of the stage (target only)."""
     localrule: True
     input:
-        expand("results/figures/burkhard2024_{figure}.{ext}", figure=BURKHARD_FIGURES, ext=("png", "pdf")),
-        "results/claims/burkhard2024.csv",
+        figure_files(*BURKHARD_STAGE.figures),
+        results("claims/burkhard2024.csv"),

@@ -1,21 +1,110 @@
-"""Shared helpers of the workflow: config validation, the figure and claim registries,
-log paths and default resources."""
+"""Shared helpers of the workflow: config validation, output paths, what each stage adds
+to the final targets, and default resources."""
 
 import os
 import re
+from dataclasses import dataclass
 
 import jsonschema
 import yaml
 from snakemake.exceptions import WorkflowError
 
-#: Figure ids; every id is a target rule and results/figures/<id>.png|pdf.  Each stage
-#: file appends its own (``FIGURES.append(...)``).
-FIGURES = []
-#: Stages that write results/claims/<stage>.csv; rule ``claims`` concatenates them.
-CLAIM_STAGES = []
-#: Summary tables shown in results/report.html: (section, title, path).  A stage appends
-#: its own, so the report asks only for tables the DAG knows how to make.
-REPORT_TABLES = []
+
+# --------------------------------------------------------------------------- output paths
+# As pypsa-eur's resources()/logs(): the folder layout is decided here, the rules name files.
+
+
+def results(path):
+    """An output of the workflow: results/<path> (generated, not versioned; results/README.md)."""
+    return f"results/{path}"
+
+
+def log_path(name):
+    """Log file of a job: results/logs/<name>.log."""
+    return results(f"logs/{name}.log")
+
+
+def bench_path(name):
+    """Benchmark file of a job (wall time s, max_rss MB, ...): results/benchmarks/<name>.tsv.
+    The first path component is the stage; the report sums the wall times per stage."""
+    return results(f"benchmarks/{name}.tsv")
+
+
+def figure_files(*figure_ids):
+    """results/figures/<id>.png and .pdf of each figure id."""
+    return [results(f"figures/{fid}.{ext}") for fid in figure_ids for ext in ("png", "pdf")]
+
+
+#: Outputs one stage makes and another reads (measured -> discrepancy).
+MEASURED_CSV = results("measured/{recording}.csv")  # a recording as the canonical CSV of the CLI
+MEASURED_SUMMARY = results("measured/summary.csv")
+
+
+def measured_data_dir():
+    """The shared copy of the measured data (config measured.data_dir; a relative path is
+    taken from the project root, so that `--directory elsewhere` still finds ../shared/data)."""
+    return os.path.normpath(os.path.join(workflow.basedir, config["measured"]["data_dir"]))
+
+
+# --------------------------------------------------------------------------- final targets
+
+
+@dataclass(frozen=True)
+class Stage:
+    """What one stage adds to the final targets, declared once in its rule file (:func:`declare_stage`).
+
+    ``figures``: figure ids (each a rule target and results/figures/<id>.png|pdf);
+    ``claims``: whether it writes results/claims/<name>.csv for the ledger; ``tables``:
+    (title, path) of its summary tables shown in the report, in the stage's section.
+    """
+
+    name: str
+    figures: tuple = ()
+    claims: bool = True
+    tables: tuple = ()
+
+
+def declare_stage(name, figures=(), claims=True, tables=()):
+    """The :class:`Stage` ``name``, and each of its figure ids as a target rule of its own:
+    `snakemake <id>` makes its PNG and PDF (target only: no job, no log)."""
+    stage = Stage(name, tuple(figures), claims, tuple(tables))
+    for fid in stage.figures:
+
+        rule:
+            name:
+                fid
+            localrule: True
+            input:
+                figure_files(fid),
+
+    return stage
+
+
+# STAGES (the Snakefile: the stage declarations in the order of the ledger and the report)
+# is read only in functions, called once every rule file is included.
+
+
+def figure_ids():
+    """Every stage's figure ids."""
+    return [fid for stage in STAGES for fid in stage.figures]
+
+
+def claim_stages():
+    """The stages that write results/claims/<stage>.csv, in the ledger's order."""
+    return [stage.name for stage in STAGES if stage.claims]
+
+
+def report_tables():
+    """(section, title, path) of every stage's summary tables, in the report's order."""
+    return [(stage.name, title, path) for stage in STAGES for title, path in stage.tables]
+
+
+def get_final_output():
+    """The targets of `snakemake all`: every figure (PNG and PDF), the claims ledger and the report."""
+    return figure_files(*figure_ids()) + [results("claims.csv"), results("report.html")]
+
+
+# --------------------------------------------------------------------------- config
 
 
 class ConfigError(WorkflowError):
@@ -56,7 +145,7 @@ def _validate(cfg, schema_path, prefix=""):
 def check_config(cfg, schema):
     """Validate ``cfg`` against the JSON schema, each stage's section against the stage's
     own schema (``workflow/schemas/<key>.schema.yaml``, where one exists), then the rules a
-    schema cannot express."""
+    schema cannot express (which may compare sections, so they run once all are valid)."""
     _validate(cfg, schema)
     schemas = os.path.join(workflow.basedir, "workflow", "schemas")
     for key in sorted(cfg):
@@ -64,8 +153,9 @@ def check_config(cfg, schema):
         if os.path.exists(stage_schema):
             _validate(cfg[key], stage_schema, prefix=key)
             _check_ranges(cfg[key], stage_schema, prefix=key)
-            if key in STAGE_RULES:
-                STAGE_RULES[key](cfg[key])
+    for key in sorted(cfg):
+        if key in STAGE_RULES:
+            STAGE_RULES[key](cfg[key], cfg)
 
 
 def _ranges(schema, defs, path=()):
@@ -92,7 +182,7 @@ def _check_ranges(section, schema_path, prefix):
             raise _config_error(".".join((prefix, *path)), f"low end {lo} exceeds high end {hi}")
 
 
-def _check_batista2011(b):
+def _check_batista2011(b, cfg):
     s = b["calibration"]["schedule"]
     # accelcal_repro.batista2011.trajectory.StepSchedule: the window must miss the transition
     if not s["transition_s"] <= s["window_start_s"] <= s["step_s"] - s["window_s"]:
@@ -115,7 +205,7 @@ def _check_batista2011(b):
                             f"{f['duration_s']} s")
 
 
-def _check_tereshkov(t):
+def _check_tereshkov(t, cfg):
     for part in ("monte_carlo", "sweep", "comparison"):
         start, duration = t[part]["steady_state_from_s"], t[part]["duration_s"]
         if start >= duration:
@@ -142,7 +232,7 @@ def _check_tereshkov(t):
                                 f"{t['gnss']['rate_hz']} Hz exceeds the IMU rate {where} = {rate} Hz")
 
 
-def _check_measured(m):
+def _check_measured(m, cfg):
     # The six static positions of the Ferraris session list (accelcal_repro.measured.sources.
     # FERRARIS_STATIC) are fewer than the full models need (accelcal.registry: min_poses).
     from accelcal.registry import ESTIMATORS
@@ -159,7 +249,7 @@ def _check_measured(m):
                                 "estimators only)")
 
 
-def _check_burkhard2024(b):
+def _check_burkhard2024(b, cfg):
     timing = b["timing"]
     for key, among in (("headline_interleave", "interleavings"), ("headline_n_poses", "n_poses")):
         if timing[key] not in timing[among]:
@@ -171,35 +261,51 @@ def _check_burkhard2024(b):
                             f"no noise level in claims.paper_noise_range [{lo}, {hi}]")
 
 
-#: Rules a stage's schema cannot express, run after the schema accepted the section.
+def fitted_to_xsens(bench):
+    """Whether a discrepancy benchmark profile is fitted to the Xsens session (its stochastic layer)."""
+    return any(p.get("fitted") in ("xsens_mti", "xsens_mti_joint") for p in bench["profiles"])
+
+
+def _check_discrepancy(d, cfg):
+    bench, sessions = d["benchmark"], d["sessions"]
+    if not any(abs(s - bench["confusion_size_mde"]) < 1e-12 for s in bench["sizes_mde"]):
+        raise _config_error("discrepancy.benchmark.confusion_size_mde",
+                            f"{bench['confusion_size_mde']} is not in sizes_mde {bench['sizes_mde']}")
+    measured = cfg["measured"]["recordings"]
+    missing = [r for r in d["recordings"] if r not in measured]
+    if missing:
+        raise _config_error("discrepancy.recordings", f"{', '.join(missing)} not in measured.recordings")
+    profiles = [p["name"] for p in bench["profiles"]]
+    if len(set(profiles)) != len(profiles):
+        raise _config_error("discrepancy.benchmark.profiles", "profile names must be distinct")
+    unknown = [p for p in bench["power_curve"]["profiles"] if p not in profiles]
+    if unknown:
+        raise _config_error("discrepancy.benchmark.power_curve.profiles", f"{', '.join(unknown)} not in profiles")
+    few = [r for r in sessions["few_poses"] if r not in measured]
+    if few:
+        raise _config_error("discrepancy.sessions.few_poses", f"{', '.join(few)} not in measured.recordings")
+    for group, members in sessions["same_imu"].items():
+        missing = [m for m in members if m not in d["recordings"]]
+        if missing:
+            raise _config_error(f"discrepancy.sessions.same_imu.{group}",
+                                f"{', '.join(missing)} not in discrepancy.recordings")
+    if fitted_to_xsens(bench) and "xsens_mti" not in d["recordings"]:
+        raise _config_error("discrepancy.benchmark.profiles",
+                            "a profile is fitted to xsens_mti, which is not in discrepancy.recordings")
+
+
+#: Rules a stage's schema cannot express, run once every section passed its schema:
+#: ``rule(section, config)``, a one-line ConfigError naming the key.
 STAGE_RULES = {"batista2011": _check_batista2011, "tereshkov": _check_tereshkov, "measured": _check_measured,
-               "burkhard2024": _check_burkhard2024}
-
-
-def log_path(name):
-    """Log file of a job: results/logs/<name>.log (results/ is generated, not versioned)."""
-    return f"results/logs/{name}.log"
-
-
-def bench_path(name):
-    """Benchmark file of a job (wall time s, max_rss MB, ...): results/benchmarks/<name>.tsv.
-    The first path component is the stage; the report sums the wall times per stage."""
-    return f"results/benchmarks/{name}.tsv"
+               "burkhard2024": _check_burkhard2024, "discrepancy": _check_discrepancy}
 
 
 def figure_outputs(figure_id, caption, category):
     """PNG + PDF of a figure, both in the Snakemake report with the figure's caption."""
     return {
-        "png": report(f"results/figures/{figure_id}.png", caption=caption, category=category,
-                      labels={"figure": figure_id, "format": "PNG"}),
-        "pdf": report(f"results/figures/{figure_id}.pdf", caption=caption, category=category,
-                      labels={"figure": figure_id, "format": "PDF"}),
+        ext: report(path, caption=caption, category=category, labels={"figure": figure_id, "format": ext.upper()})
+        for ext, path in zip(("png", "pdf"), figure_files(figure_id))
     }
-
-
-def noise_key(x):
-    """File-name key of a noise level, e.g. 1e-07, 0.001 (exact: 12 significant digits)."""
-    return format(float(x), ".12g")
 
 
 #: Resources of small jobs (plots, gathering tables): mem_mb [MB], runtime [min].

@@ -1,8 +1,9 @@
-"""Stage 'discrepancy' (issues 7 and 13): where simulation and measured data disagree, which
-effect or noise term is missing, and a benchmark under realistic noise that scores it.
+"""Stage 'discrepancy': where simulation and measured data disagree, which effect or noise
+term is missing, and a benchmark under realistic noise that scores it.
 
 * ADIS16405 (the 2.78 h static record): Allan deviation to ~1000 s, the library's noise
-  terms fitted to it, and what calibration-length rests predict (``discrepancy_adis*``).
+  terms fitted to it, and what calibration-length rests predict (``discrepancy_adis*``);
+  ``discrepancy_adis_fetch`` locates or downloads the record first.
 * Benchmark: ``discrepancy_profiles`` resolves the noise profiles (parametric, fitted to
   the Xsens rests and the ADIS record, and windows of the ADIS record); each
   ``discrepancy_chunk`` job simulates its recordings and runs the loop on each under
@@ -14,83 +15,67 @@ effect or noise term is missing, and a benchmark under realistic noise that scor
 * results/discrepancy/summary.csv: the benchmark's findings and those on the real
   recordings; results/claims/discrepancy.csv: the claims.
 
-Config: section ``discrepancy``.  Needs from common.smk: FIGURES, CLAIM_STAGES,
-REPORT_TABLES, log_path, bench_path, figure_outputs, SMALL, _config_error; from
-measured.smk: rule measured_convert and the ``measured`` config (g of each recording,
-data folders), read from the config only, so that the includes work in any order.
+Config: section ``discrepancy`` (its cross-key rules: _check_discrepancy, common.smk).
+Needs from common.smk: declare_stage, results, log_path, bench_path, figure_files,
+figure_outputs, MEASURED_CSV, MEASURED_SUMMARY, measured_data_dir, fitted_to_xsens, SMALL;
+from measured.smk: rule measured_convert and the ``measured`` config (g of each
+recording), read from the config only, so that the includes work in any order.
 """
-
-import os
-
-from snakemake.exceptions import WorkflowError
-
-from accelcal_repro.measured.data import DatasetError, check_available
 
 DISCREPANCY = config["discrepancy"]
 DISCREPANCY_SESSIONS = DISCREPANCY["sessions"]
-DISCREPANCY_FIGURES = ["discrepancy_fpr", "discrepancy_confusion", "discrepancy_power", "discrepancy_rows",
-                       "discrepancy_adis_allan", "discrepancy_measured_before_after", "discrepancy_allan",
-                       "discrepancy_sessions"] + (["discrepancy_stability"] if DISCREPANCY_SESSIONS["same_imu"] else [])
-FIGURES.extend(DISCREPANCY_FIGURES)
-CLAIM_STAGES.append("discrepancy")
-REPORT_TABLES.extend([
-    ("discrepancy", "Real sessions: pose-residual excess observed and predicted by the joint model",
-     "results/discrepancy/sessions/excess.csv"),
-    ("discrepancy", "Real sessions re-simulated before and after what the loop names: gap to the measured residuals",
-     "results/discrepancy/sessions/gaps.csv"),
-    ("discrepancy", "Discrepancy benchmark per noise profile: false-positive rate (colored and white null), "
-     "naming accuracy, outliers and pairs", "results/discrepancy/benchmark/headline.csv"),
-    ("discrepancy", "ADIS16405: observed and predicted pose-mean wander on session-shaped pieces",
-     "results/discrepancy/adis/session_check_summary.csv"),
-])
 DISCREPANCY_BENCH = DISCREPANCY["benchmark"]
 DISCREPANCY_CHUNKS = list(range(DISCREPANCY_BENCH["chunks"]))
 DISCREPANCY_RECORDINGS = list(DISCREPANCY["recordings"])
 DISCREPANCY_PROFILES = [p["name"] for p in DISCREPANCY_BENCH["profiles"]]
 #: Profiles that need the Xsens report (its stochastic layer's fit) or the ADIS record.
-DISCREPANCY_NEEDS_XSENS = any(p.get("fitted") in ("xsens_mti", "xsens_mti_joint") for p in DISCREPANCY_BENCH["profiles"])
+DISCREPANCY_NEEDS_XSENS = fitted_to_xsens(DISCREPANCY_BENCH)
 DISCREPANCY_NEEDS_RECORD = any(p.get("real") for p in DISCREPANCY_BENCH["profiles"])
 ADIS_DATASET, ADIS_FILE = "smac_adis16405", "adis_16405_imu1.rda"
-#: As measured.smk: a relative data_dir is taken from the project root.
-DISCREPANCY_DATA_DIR = os.path.normpath(os.path.join(workflow.basedir, config["measured"]["data_dir"]))
+
+# Outputs read by several rules, each path written once.
+ADIS_DIR = results("discrepancy/adis")
+ADIS_NOISE = f"{ADIS_DIR}/noise.npy"
+ADIS_MODELS = f"{ADIS_DIR}/models.csv"
+ADIS_CHECK_SUMMARY = f"{ADIS_DIR}/session_check_summary.csv"
+BENCH_DIR = results("discrepancy/benchmark")
+BENCH_PROFILES = f"{BENCH_DIR}/profiles.csv"
+BENCH_SUMMARY = f"{BENCH_DIR}/summary.csv"
+BENCH_RATES = f"{BENCH_DIR}/rates.csv"
+BENCH_KEY = f"{BENCH_DIR}/key/chunk_{{chunk}}.csv"
+BENCH_DETECTIONS = f"{BENCH_DIR}/detections/chunk_{{chunk}}.csv"
+#: Both layers on one real recording (the JSON `accelcal discrepancy` writes).
+RECORDING_REPORT = results("discrepancy/measured/{recording}.json")
+SESSIONS_DIR = results("discrepancy/sessions")
+SESSION_RESIM = f"{SESSIONS_DIR}/{{recording}}_resim.csv.gz"
+SESSION_GAP = f"{SESSIONS_DIR}/{{recording}}_gap.csv"
+SESSIONS_GAPS = f"{SESSIONS_DIR}/gaps.csv"
+SESSIONS_EXCESS = f"{SESSIONS_DIR}/excess.csv"
+SESSIONS_STABILITY = f"{SESSIONS_DIR}/stability.csv"
+SESSIONS_ESTIMATES = f"{SESSIONS_DIR}/estimates.csv"
+DISCREPANCY_SUMMARY = results("discrepancy/summary.csv")
 
 
-class DiscrepancyDataError(WorkflowError):
-    """The ADIS record is neither local nor downloadable (one line)."""
+def per_recording(pattern, recordings=DISCREPANCY_RECORDINGS):
+    """``pattern`` for each of the stage's recordings."""
+    return expand(pattern, recording=recordings)
 
 
-def _discrepancy_check():
-    # Cross-key rules a JSON schema cannot express; one line naming the key.
-    bench = DISCREPANCY_BENCH
-    if not any(abs(s - bench["confusion_size_mde"]) < 1e-12 for s in bench["sizes_mde"]):
-        raise _config_error("discrepancy.benchmark.confusion_size_mde",
-                            f"{bench['confusion_size_mde']} is not in sizes_mde {bench['sizes_mde']}")
-    missing = [r for r in DISCREPANCY_RECORDINGS if r not in config["measured"]["recordings"]]
-    if missing:
-        raise _config_error("discrepancy.recordings", f"{', '.join(missing)} not in measured.recordings")
-    if len(set(DISCREPANCY_PROFILES)) != len(DISCREPANCY_PROFILES):
-        raise _config_error("discrepancy.benchmark.profiles", "profile names must be distinct")
-    unknown = [p for p in bench["power_curve"]["profiles"] if p not in DISCREPANCY_PROFILES]
-    if unknown:
-        raise _config_error("discrepancy.benchmark.power_curve.profiles", f"{', '.join(unknown)} not in profiles")
-    few = [r for r in DISCREPANCY_SESSIONS["few_poses"] if r not in config["measured"]["recordings"]]
-    if few:
-        raise _config_error("discrepancy.sessions.few_poses", f"{', '.join(few)} not in measured.recordings")
-    for group, members in DISCREPANCY_SESSIONS["same_imu"].items():
-        missing = [m for m in members if m not in DISCREPANCY_RECORDINGS]
-        if missing:
-            raise _config_error(f"discrepancy.sessions.same_imu.{group}",
-                                f"{', '.join(missing)} not in discrepancy.recordings")
-    if DISCREPANCY_NEEDS_XSENS and "xsens_mti" not in DISCREPANCY_RECORDINGS:
-        raise _config_error("discrepancy.benchmark.profiles",
-                            "a profile is fitted to xsens_mti, which is not in discrepancy.recordings")
-    try:
-        check_available(ADIS_DATASET, ADIS_FILE, DISCREPANCY_DATA_DIR, config["measured"]["resources_dir"])
-    except DatasetError as e:
-        raise DiscrepancyDataError(f"missing measured data: {e}") from None
-
-
-_discrepancy_check()
+DISCREPANCY_STAGE = declare_stage(
+    name="discrepancy",
+    figures=["discrepancy_fpr", "discrepancy_confusion", "discrepancy_power", "discrepancy_rows",
+             "discrepancy_adis_allan", "discrepancy_measured_before_after", "discrepancy_allan", "discrepancy_sessions"]
+    + (["discrepancy_stability"] if DISCREPANCY_SESSIONS["same_imu"] else []),
+    tables=(
+        ("Real sessions: pose-residual excess observed and predicted by the joint model", SESSIONS_EXCESS),
+        ("Real sessions re-simulated before and after what the loop names: gap to the measured residuals",
+         SESSIONS_GAPS),
+        ("Discrepancy benchmark per noise profile: false-positive rate (colored and white null), "
+         "naming accuracy, outliers and pairs", f"{BENCH_DIR}/headline.csv"),
+        ("ADIS16405: observed and predicted pose-mean wander on session-shaped pieces", ADIS_CHECK_SUMMARY),
+        ("Discrepancy summary", DISCREPANCY_SUMMARY),
+    ),
+)
 
 
 def _bench_params():
@@ -98,19 +83,43 @@ def _bench_params():
     return dict(seed=DISCREPANCY["seed"], benchmark=DISCREPANCY_BENCH, rules=DISCREPANCY["rules"])
 
 
+rule discrepancy_adis_fetch:
+    """Locate (shared copy) or download and verify (sha256) the ADIS16405 record, as
+    measured_fetch does for the recordings; the manifest records which path was used.
+    High priority: a failing download stops the run before the long jobs."""
+    priority: 100
+    localrule: True  # on a cluster: the login node (internet access; a checksum when the data is local)
+    output:
+        f"{ADIS_DIR}/data.json",
+    params:
+        dataset=ADIS_DATASET,
+        files=[ADIS_FILE],
+        data_dir=measured_data_dir(),
+        resources_dir=config["measured"]["resources_dir"],
+    log:
+        log_path("discrepancy/adis_fetch"),
+    benchmark:
+        bench_path("discrepancy/adis_fetch"),
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=10,  # a download of 3.2 MB
+    script:
+        "../scripts/discrepancy_adis_fetch.py"
+
+
 rule discrepancy_adis:
     """The ADIS16405 record: Allan deviation, the library's models fitted on tau >= tau_min,
     and its noise (m/s², about its mean) for the benchmark's real-noise profile."""
+    input:
+        manifest=f"{ADIS_DIR}/data.json",
     output:
-        allan="results/discrepancy/adis/allan.csv",
-        models="results/discrepancy/adis/models.csv",
-        curves="results/discrepancy/adis/curves.csv",
-        noise="results/discrepancy/adis/noise.npy",
+        allan=f"{ADIS_DIR}/allan.csv",
+        models=ADIS_MODELS,
+        curves=f"{ADIS_DIR}/curves.csv",
+        noise=ADIS_NOISE,
     params:
-        dataset=ADIS_DATASET,
         file=ADIS_FILE,
-        data_dir=DISCREPANCY_DATA_DIR,
-        resources_dir=config["measured"]["resources_dir"],
         adis=DISCREPANCY["adis"],
     log:
         log_path("discrepancy/adis"),
@@ -128,11 +137,11 @@ rule discrepancy_adis_sessions:
     """Session-shaped pieces of the ADIS record: observed pose-mean wander vs the reference
     model and vs the stochastic layer run on the pieces' own rests."""
     input:
-        noise="results/discrepancy/adis/noise.npy",
-        models="results/discrepancy/adis/models.csv",
+        noise=ADIS_NOISE,
+        models=ADIS_MODELS,
     output:
-        check="results/discrepancy/adis/session_check.csv",
-        summary="results/discrepancy/adis/session_check_summary.csv",
+        check=f"{ADIS_DIR}/session_check.csv",
+        summary=ADIS_CHECK_SUMMARY,
     params:
         adis=DISCREPANCY["adis"],
         session=DISCREPANCY_BENCH["session"],
@@ -155,13 +164,13 @@ rule discrepancy_profiles:
     screen finds in the real record (record_screen.csv: the windows it leaves out)."""
     localrule: True  # on a cluster: the login node (a gather between two groups of SLURM jobs)
     input:
-        models="results/discrepancy/adis/models.csv",
-        xsens=["results/discrepancy/measured/xsens_mti.json"] if DISCREPANCY_NEEDS_XSENS else [],
-        record=["results/discrepancy/adis/noise.npy"] if DISCREPANCY_NEEDS_RECORD else [],
+        models=ADIS_MODELS,
+        xsens=per_recording(RECORDING_REPORT, ["xsens_mti"]) if DISCREPANCY_NEEDS_XSENS else [],
+        record=[ADIS_NOISE] if DISCREPANCY_NEEDS_RECORD else [],
     output:
-        profiles="results/discrepancy/benchmark/profiles.json",
-        table="results/discrepancy/benchmark/profiles.csv",
-        screen="results/discrepancy/benchmark/record_screen.csv",
+        profiles=f"{BENCH_DIR}/profiles.json",
+        table=BENCH_PROFILES,
+        screen=f"{BENCH_DIR}/record_screen.csv",
     params:
         benchmark=DISCREPANCY_BENCH,
     log:
@@ -179,11 +188,11 @@ rule discrepancy_chunk:
     """One chunk of the benchmark: simulate each recording (the key row apart) and run the
     loop on it under every null hypothesis."""
     input:
-        profiles="results/discrepancy/benchmark/profiles.json",
-        record=["results/discrepancy/adis/noise.npy"] if DISCREPANCY_NEEDS_RECORD else [],
+        profiles=f"{BENCH_DIR}/profiles.json",
+        record=[ADIS_NOISE] if DISCREPANCY_NEEDS_RECORD else [],
     output:
-        key="results/discrepancy/benchmark/key/chunk_{chunk}.csv",
-        detections="results/discrepancy/benchmark/detections/chunk_{chunk}.csv",
+        key=BENCH_KEY,
+        detections=BENCH_DETECTIONS,
     params:
         chunk=lambda w: int(w.chunk),
         **_bench_params(),
@@ -204,13 +213,13 @@ rule discrepancy_chunk:
 rule discrepancy_score:
     """Join detections and key: one row per recording and null, rates, summary, headline."""
     input:
-        key=expand("results/discrepancy/benchmark/key/chunk_{chunk}.csv", chunk=DISCREPANCY_CHUNKS),
-        detections=expand("results/discrepancy/benchmark/detections/chunk_{chunk}.csv", chunk=DISCREPANCY_CHUNKS),
+        key=expand(BENCH_KEY, chunk=DISCREPANCY_CHUNKS),
+        detections=expand(BENCH_DETECTIONS, chunk=DISCREPANCY_CHUNKS),
     output:
-        scores="results/discrepancy/benchmark/scores.csv.gz",
-        rates="results/discrepancy/benchmark/rates.csv",
-        summary="results/discrepancy/benchmark/summary.csv",
-        headline="results/discrepancy/benchmark/headline.csv",
+        scores=f"{BENCH_DIR}/scores.csv.gz",
+        rates=BENCH_RATES,
+        summary=BENCH_SUMMARY,
+        headline=f"{BENCH_DIR}/headline.csv",
     params:
         rules=DISCREPANCY["rules"],
         confusion_size=DISCREPANCY_BENCH["confusion_size_mde"],
@@ -235,7 +244,7 @@ rule discrepancy_timing:
                                                         "discrepancy_confusion_figure", "discrepancy_power_figure",
                                                         "discrepancy_rows_figure")],
     output:
-        "results/discrepancy/benchmark/timing.csv",
+        f"{BENCH_DIR}/timing.csv",
     params:
         chunks=DISCREPANCY_BENCH["chunks"],
     log:
@@ -252,9 +261,9 @@ rule discrepancy_timing:
 rule discrepancy_measured_report:
     """Both layers on one measured recording: the report `accelcal discrepancy` writes."""
     input:
-        csv="results/measured/{recording}.csv",
+        csv=MEASURED_CSV,
     output:
-        "results/discrepancy/measured/{recording}.json",
+        RECORDING_REPORT,
     params:
         g=lambda w: config["measured"]["recordings"][w.recording]["g"],
         rules=DISCREPANCY["rules"],
@@ -275,11 +284,11 @@ rule discrepancy_session:
     """One real session re-simulated under the model before and after what the loop named,
     through the same pose extraction and base fit as the measured data."""
     input:
-        report="results/discrepancy/measured/{recording}.json",
-        csv="results/measured/{recording}.csv",
+        report=RECORDING_REPORT,
+        csv=MEASURED_CSV,
     output:
-        sims="results/discrepancy/sessions/{recording}_resim.csv.gz",
-        gap="results/discrepancy/sessions/{recording}_gap.csv",
+        sims=SESSION_RESIM,
+        gap=SESSION_GAP,
     params:
         sessions=DISCREPANCY_SESSIONS,
     log:
@@ -297,10 +306,10 @@ rule discrepancy_session:
 rule discrepancy_few_poses:
     """A session of too few orientations for the loop: what can be tested, and what cannot and why."""
     input:
-        csv="results/measured/{recording}.csv",
-        measured_summary="results/measured/summary.csv",
+        csv=MEASURED_CSV,
+        measured_summary=MEASURED_SUMMARY,
     output:
-        "results/discrepancy/sessions/{recording}_few_poses.json",
+        f"{SESSIONS_DIR}/{{recording}}_few_poses.json",
     params:
         stochastic=DISCREPANCY["stochastic"],
     log:
@@ -318,19 +327,18 @@ rule discrepancy_sessions_tables:
     """Every real session: what is named, excess observed vs predicted, the re-simulation gaps,
     the evidence per candidate, and the session-to-session stability of one IMU."""
     input:
-        reports=expand("results/discrepancy/measured/{recording}.json", recording=DISCREPANCY_RECORDINGS),
-        gaps=expand("results/discrepancy/sessions/{recording}_gap.csv", recording=DISCREPANCY_RECORDINGS),
-        few_poses=expand("results/discrepancy/sessions/{recording}_few_poses.json",
-                         recording=DISCREPANCY_SESSIONS["few_poses"]),
-        csv=expand("results/measured/{recording}.csv", recording=DISCREPANCY_RECORDINGS),
+        reports=per_recording(RECORDING_REPORT),
+        gaps=per_recording(SESSION_GAP),
+        few_poses=per_recording(f"{SESSIONS_DIR}/{{recording}}_few_poses.json", DISCREPANCY_SESSIONS["few_poses"]),
+        csv=per_recording(MEASURED_CSV),
     output:
-        named="results/discrepancy/sessions/named.csv",
-        excess="results/discrepancy/sessions/excess.csv",
-        gaps="results/discrepancy/sessions/gaps.csv",
-        evidence="results/discrepancy/sessions/evidence.csv",
-        diagnostics="results/discrepancy/sessions/diagnostics.csv",
-        estimates="results/discrepancy/sessions/estimates.csv",
-        stability="results/discrepancy/sessions/stability.csv",
+        named=f"{SESSIONS_DIR}/named.csv",
+        excess=SESSIONS_EXCESS,
+        gaps=SESSIONS_GAPS,
+        evidence=f"{SESSIONS_DIR}/evidence.csv",
+        diagnostics=f"{SESSIONS_DIR}/diagnostics.csv",
+        estimates=SESSIONS_ESTIMATES,
+        stability=SESSIONS_STABILITY,
     params:
         recordings=DISCREPANCY_RECORDINGS,
         same_imu=DISCREPANCY_SESSIONS["same_imu"],
@@ -350,12 +358,12 @@ rule discrepancy_summary:
     """results/discrepancy/summary.csv (benchmark scores + measured findings) and the
     tidy table of every measured candidate test (results/discrepancy/measured.csv)."""
     input:
-        benchmark="results/discrepancy/benchmark/summary.csv",
-        reports=expand("results/discrepancy/measured/{recording}.json", recording=DISCREPANCY_RECORDINGS),
-        measured_summary="results/measured/summary.csv",
+        benchmark=BENCH_SUMMARY,
+        reports=per_recording(RECORDING_REPORT),
+        measured_summary=MEASURED_SUMMARY,
     output:
-        summary="results/discrepancy/summary.csv",
-        candidates="results/discrepancy/measured.csv",
+        summary=DISCREPANCY_SUMMARY,
+        candidates=results("discrepancy/measured.csv"),
     params:
         recordings=DISCREPANCY_RECORDINGS,
     log:
@@ -370,16 +378,17 @@ rule discrepancy_summary:
 
 
 rule discrepancy_claims:
-    """results/claims/discrepancy.csv: the issue's goals judged on the benchmark and the ADIS check."""
+    """results/claims/discrepancy.csv: the stage's goals judged on the benchmark, the ADIS check
+    and the real sessions."""
     input:
-        summary="results/discrepancy/benchmark/summary.csv",
-        profiles="results/discrepancy/benchmark/profiles.csv",
-        adis="results/discrepancy/adis/session_check_summary.csv",
-        stability="results/discrepancy/sessions/stability.csv",
-        excess="results/discrepancy/sessions/excess.csv",
-        gaps="results/discrepancy/sessions/gaps.csv",
+        summary=BENCH_SUMMARY,
+        profiles=BENCH_PROFILES,
+        adis=ADIS_CHECK_SUMMARY,
+        stability=SESSIONS_STABILITY,
+        excess=SESSIONS_EXCESS,
+        gaps=SESSIONS_GAPS,
     output:
-        "results/claims/discrepancy.csv",
+        results("claims/discrepancy.csv"),
     params:
         rules=DISCREPANCY["rules"],
         nulls=DISCREPANCY_BENCH["nulls"],
@@ -397,28 +406,21 @@ rule discrepancy_claims:
 # --------------------------------------------------------------------------- figures
 # One script draws every figure of the stage; the figure id is a param.  Inputs per figure:
 DISCREPANCY_FIGURE_INPUTS = {
-    "discrepancy_fpr": {"summary": "results/discrepancy/benchmark/summary.csv",
-                        "profiles": "results/discrepancy/benchmark/profiles.csv"},
-    "discrepancy_confusion": {"scores": "results/discrepancy/benchmark/scores.csv.gz"},
-    "discrepancy_power": {"rates": "results/discrepancy/benchmark/rates.csv"},
-    "discrepancy_rows": {"rates": "results/discrepancy/benchmark/rates.csv"},
-    "discrepancy_adis_allan": {"curves": "results/discrepancy/adis/curves.csv",
-                               "allan": "results/discrepancy/adis/allan.csv",
-                               "check": "results/discrepancy/adis/session_check_summary.csv"},
-    "discrepancy_measured_before_after": {
-        "reports": expand("results/discrepancy/measured/{recording}.json", recording=DISCREPANCY_RECORDINGS)},
-    "discrepancy_allan": {
-        "reports": expand("results/discrepancy/measured/{recording}.json", recording=DISCREPANCY_RECORDINGS)},
-    "discrepancy_sessions": {
-        "reports": expand("results/discrepancy/measured/{recording}.json", recording=DISCREPANCY_RECORDINGS),
-        "sims": expand("results/discrepancy/sessions/{recording}_resim.csv.gz", recording=DISCREPANCY_RECORDINGS),
-        "gaps": "results/discrepancy/sessions/gaps.csv"},
-    "discrepancy_stability": {"stability": "results/discrepancy/sessions/stability.csv",
-                              "estimates": "results/discrepancy/sessions/estimates.csv"},
+    "discrepancy_fpr": {"summary": BENCH_SUMMARY, "profiles": BENCH_PROFILES},
+    "discrepancy_confusion": {"scores": f"{BENCH_DIR}/scores.csv.gz"},
+    "discrepancy_power": {"rates": BENCH_RATES},
+    "discrepancy_rows": {"rates": BENCH_RATES},
+    "discrepancy_adis_allan": {"curves": f"{ADIS_DIR}/curves.csv", "allan": f"{ADIS_DIR}/allan.csv",
+                               "check": ADIS_CHECK_SUMMARY},
+    "discrepancy_measured_before_after": {"reports": per_recording(RECORDING_REPORT)},
+    "discrepancy_allan": {"reports": per_recording(RECORDING_REPORT)},
+    "discrepancy_sessions": {"reports": per_recording(RECORDING_REPORT), "sims": per_recording(SESSION_RESIM),
+                             "gaps": SESSIONS_GAPS},
+    "discrepancy_stability": {"stability": SESSIONS_STABILITY, "estimates": SESSIONS_ESTIMATES},
 }
 
 
-for _fid in DISCREPANCY_FIGURES:
+for _fid in DISCREPANCY_STAGE.figures:
 
     rule:
         name:
@@ -445,40 +447,31 @@ for _fid in DISCREPANCY_FIGURES:
         script:
             "../scripts/discrepancy_figure.py"
 
-    # The figure id as a target: `snakemake discrepancy_fpr`.
-    rule:
-        name:
-            _fid
-        input:
-            f"results/figures/{_fid}.png",
-            f"results/figures/{_fid}.pdf",
-
 
 rule discrepancy_benchmark:
     """The benchmark: scores, rates, summary, timing and its figures."""
     input:
-        "results/discrepancy/benchmark/summary.csv",
-        "results/discrepancy/benchmark/headline.csv",
-        "results/discrepancy/benchmark/timing.csv",
-        expand("results/figures/{f}.{ext}", ext=("png", "pdf"),
-               f=("discrepancy_fpr", "discrepancy_confusion", "discrepancy_power", "discrepancy_rows")),
+        BENCH_SUMMARY,
+        f"{BENCH_DIR}/headline.csv",
+        f"{BENCH_DIR}/timing.csv",
+        figure_files("discrepancy_fpr", "discrepancy_confusion", "discrepancy_power", "discrepancy_rows"),
 
 
 rule discrepancy_adis_reference:
     """The ADIS16405 reference: tables and figure."""
     input:
-        "results/discrepancy/adis/session_check_summary.csv",
-        expand("results/figures/discrepancy_adis_allan.{ext}", ext=("png", "pdf")),
+        ADIS_CHECK_SUMMARY,
+        figure_files("discrepancy_adis_allan"),
 
 
 rule discrepancy_measured:
     """The real recordings: both layers' reports, the session study and its figures."""
     input:
-        expand("results/discrepancy/measured/{recording}.json", recording=DISCREPANCY_RECORDINGS),
-        "results/discrepancy/sessions/stability.csv",
-        expand("results/figures/{f}.{ext}", ext=("png", "pdf"),
-               f=[f for f in DISCREPANCY_FIGURES if f in ("discrepancy_measured_before_after", "discrepancy_allan",
-                                                          "discrepancy_sessions", "discrepancy_stability")]),
+        per_recording(RECORDING_REPORT),
+        SESSIONS_STABILITY,
+        figure_files(*[f for f in DISCREPANCY_STAGE.figures if f in ("discrepancy_measured_before_after",
+                                                                      "discrepancy_allan", "discrepancy_sessions",
+                                                                      "discrepancy_stability")]),
 
 
 rule discrepancy:
@@ -487,6 +480,6 @@ rule discrepancy:
         rules.discrepancy_benchmark.input,
         rules.discrepancy_adis_reference.input,
         rules.discrepancy_measured.input,
-        "results/discrepancy/summary.csv",
-        "results/discrepancy/measured.csv",
-        "results/claims/discrepancy.csv",
+        DISCREPANCY_SUMMARY,
+        results("discrepancy/measured.csv"),
+        results("claims/discrepancy.csv"),

@@ -1,54 +1,32 @@
-"""Stage 'measured' (issue 6): public real-IMU recordings, calibrated with every estimator
-their pose count allows and evaluated without ground truth (noise-predicted χ²,
-leave-one-pose-out, bootstrap over poses, agreement, nominal sensitivities, and imucal's
-Ferraris calibration as a peer).  Config: the `measured` mapping
-(section `measured` of config/config.yaml).
+"""Stage 'measured': public real-IMU recordings, calibrated with every estimator their pose
+count allows and evaluated without ground truth (noise-predicted χ², leave-one-pose-out,
+bootstrap over poses, agreement, nominal sensitivities, and imucal's Ferraris calibration as
+a peer).  Config: the `measured` mapping (section `measured` of config/config.yaml).
 
-Needs from common.smk: FIGURES, CLAIM_STAGES, log_path, figure_outputs, SMALL.
+The data are fetched by a job (measured_fetch: the shared copy, else a verified download),
+run first; stages that do not need them plan and run without them.
+
+Needs from common.smk: declare_stage, results, log_path, bench_path, figure_files, figure_outputs,
+MEASURED_CSV, MEASURED_SUMMARY, measured_data_dir, SMALL.
 """
 
-import os
 import re
-
-from snakemake.exceptions import WorkflowError
-
-from accelcal_repro.measured.data import DatasetError
-from accelcal_repro.measured.sources import check_source_available
-
-FIGURES.extend(["measured_static_detection", "measured_calibration", "measured_residuals"])
-CLAIM_STAGES.append("measured")
 
 MEASURED = config["measured"]
 MEASURED_RECORDINGS = list(MEASURED["recordings"])
-#: A relative data_dir is taken from the project root (the Snakefile's folder), so that
-#: `--directory elsewhere` (the tests) still finds ../shared/data.
-MEASURED_DATA_DIR = os.path.normpath(os.path.join(workflow.basedir, MEASURED["data_dir"]))
 MEASURED_TABLES = ("poses", "params", "pose_errors", "summary", "agreement", "nominal")
+#: The manifest of one recording's files (measured_fetch), read by every job on the recording.
+MEASURED_MANIFEST = results("measured/data/{recording}.json")
 #: The peer runs on the imucal session only if that recording is configured.
-MEASURED_PEER = ["results/measured/peer_imucal.csv"] if "imucal_ferraris" in MEASURED_RECORDINGS else []
-REPORT_TABLES.extend([
-    ("measured", "Fit quality per recording and estimator (χ², leave-one-pose-out, bootstrap)",
-     "results/measured/summary.csv"),
-    ("measured", "Sensitivities against the data sheet", "results/measured/nominal.csv"),
-] + [("measured", "imucal's Ferraris calibration against accelcal", p) for p in MEASURED_PEER])
-
-
-class MeasuredDataError(WorkflowError):
-    """A configured recording that is not local and cannot be downloaded (one line)."""
-
-
-def check_measured_data(recordings, data_dir, resources_dir):
-    """Fail before any job runs if a recording is in neither data_dir nor the download
-    cache and its URL does not answer (accelcal_repro.measured.sources.check_source_available:
-    the network is asked only for a file that is not local, with a short timeout)."""
-    try:
-        for name in recordings:
-            check_source_available(name, data_dir, resources_dir)
-    except DatasetError as e:
-        raise MeasuredDataError(f"missing measured data: {e}") from None
-
-
-check_measured_data(MEASURED_RECORDINGS, MEASURED_DATA_DIR, MEASURED["resources_dir"])
+MEASURED_PEER_TABLE = results("measured/peer_imucal.csv")
+MEASURED_PEER = [MEASURED_PEER_TABLE] if "imucal_ferraris" in MEASURED_RECORDINGS else []
+MEASURED_STAGE = declare_stage(
+    name="measured",
+    figures=("measured_static_detection", "measured_calibration", "measured_residuals"),
+    tables=(("Fit quality per recording and estimator (χ², leave-one-pose-out, bootstrap)", MEASURED_SUMMARY),
+            ("Sensitivities against the data sheet", results("measured/nominal.csv")))
+    + tuple(("imucal's Ferraris calibration against accelcal", p) for p in MEASURED_PEER),
+)
 
 
 wildcard_constraints:
@@ -63,9 +41,9 @@ rule measured_fetch:
     priority: 100
     localrule: True  # on a cluster: the login node (internet access; a checksum when the data is local)
     output:
-        "results/measured/data/{recording}.json",
+        MEASURED_MANIFEST,
     params:
-        data_dir=MEASURED_DATA_DIR,
+        data_dir=measured_data_dir(),
         resources_dir=MEASURED["resources_dir"],
     log:
         log_path("measured/fetch_{recording}"),
@@ -82,9 +60,9 @@ rule measured_fetch:
 rule measured_convert:
     """The recording in the canonical CSV of the CLI (t,ax,ay,az; file units)."""
     input:
-        manifest="results/measured/data/{recording}.json",
+        manifest=MEASURED_MANIFEST,
     output:
-        "results/measured/{recording}.csv",
+        MEASURED_CSV,
     log:
         log_path("measured/convert_{recording}"),
     benchmark:
@@ -100,9 +78,9 @@ rule measured_calibrate:
     """Static detection, every configured estimator, χ², leave-one-pose-out, bootstrap; on
     the original file, read with the readers of `accelcal calibrate`."""
     input:
-        manifest="results/measured/data/{recording}.json",
+        manifest=MEASURED_MANIFEST,
     output:
-        **{t: f"results/measured/{{recording}}/{t}.csv" for t in MEASURED_TABLES},
+        **{t: results(f"measured/{{recording}}/{t}.csv") for t in MEASURED_TABLES},
     params:
         settings=lambda w: MEASURED["recordings"][w.recording],
         bootstrap=MEASURED["bootstrap"],
@@ -123,10 +101,10 @@ rule measured_peer:
     """imucal's Ferraris calibration on its example session against accelcal's bias-only
     estimators, on the section list's poses and on accelcal's detected rests."""
     input:
-        manifest="results/measured/data/imucal_ferraris.json",
-        poses="results/measured/imucal_ferraris/poses.csv",
+        manifest=MEASURED_MANIFEST.format(recording="imucal_ferraris"),
+        poses=results("measured/imucal_ferraris/poses.csv"),
     output:
-        "results/measured/peer_imucal.csv",
+        MEASURED_PEER_TABLE,
     params:
         grav=lambda w: MEASURED["recordings"]["imucal_ferraris"]["g"],
         rate_hz=MEASURED["peer"]["rate_hz"],
@@ -144,10 +122,10 @@ rule measured_peer:
 rule measured_tables:
     """Gather the per-recording tables: results/measured/<table>.csv."""
     input:
-        **{t: expand("results/measured/{recording}/{t}.csv", recording=MEASURED_RECORDINGS, t=[t])
+        **{t: expand(results("measured/{recording}/{t}.csv"), recording=MEASURED_RECORDINGS, t=[t])
            for t in MEASURED_TABLES},
     output:
-        **{t: f"results/measured/{t}.csv" for t in MEASURED_TABLES},
+        **{t: results(f"measured/{t}.csv") for t in MEASURED_TABLES},
     log:
         log_path("measured/tables"),
     benchmark:
@@ -162,12 +140,12 @@ rule measured_tables:
 rule measured_claims:
     """Ledger rows for the papers' real-data results (not reproducible: no public data)."""
     input:
-        summary="results/measured/summary.csv",
-        params="results/measured/params.csv",
-        nominal="results/measured/nominal.csv",
+        summary=MEASURED_SUMMARY,
+        params=results("measured/params.csv"),
+        nominal=results("measured/nominal.csv"),
         peer=MEASURED_PEER,
     output:
-        "results/claims/measured.csv",
+        results("claims/measured.csv"),
     log:
         log_path("measured/claims"),
     benchmark:
@@ -181,8 +159,8 @@ rule measured_claims:
 
 rule measured_static_detection_figure:
     input:
-        csv=expand("results/measured/{recording}.csv", recording=MEASURED_RECORDINGS),
-        poses="results/measured/poses.csv",
+        csv=expand(MEASURED_CSV, recording=MEASURED_RECORDINGS),
+        poses=results("measured/poses.csv"),
     output:
         **figure_outputs("measured_static_detection", "../report/measured_static_detection.rst", "Measured data"),
     params:
@@ -201,7 +179,7 @@ rule measured_static_detection_figure:
 
 rule measured_calibration_figure:
     input:
-        params="results/measured/params.csv",
+        params=results("measured/params.csv"),
         peer=MEASURED_PEER,
     output:
         **figure_outputs("measured_calibration", "../report/measured_calibration.rst", "Measured data"),
@@ -221,7 +199,7 @@ rule measured_calibration_figure:
 
 rule measured_residuals_figure:
     input:
-        pose_errors="results/measured/pose_errors.csv",
+        pose_errors=results("measured/pose_errors.csv"),
     output:
         **figure_outputs("measured_residuals", "../report/measured_residuals.rst", "Measured data"),
     params:
@@ -238,30 +216,10 @@ rule measured_residuals_figure:
         "../scripts/measured_figure.py"
 
 
-# Figure ids as targets: `snakemake measured_calibration`.
-rule measured_static_detection:
-    input:
-        "results/figures/measured_static_detection.png",
-        "results/figures/measured_static_detection.pdf",
-
-
-rule measured_calibration:
-    input:
-        "results/figures/measured_calibration.png",
-        "results/figures/measured_calibration.pdf",
-
-
-rule measured_residuals:
-    input:
-        "results/figures/measured_residuals.png",
-        "results/figures/measured_residuals.pdf",
-
-
 rule measured:
     """The whole stage: tables, the peer, claims and the three figures."""
     input:
-        expand("results/measured/{t}.csv", t=MEASURED_TABLES),
+        expand(results("measured/{t}.csv"), t=MEASURED_TABLES),
         MEASURED_PEER,
-        "results/claims/measured.csv",
-        expand("results/figures/{f}.{ext}", f=("measured_static_detection", "measured_calibration",
-                                                 "measured_residuals"), ext=("png", "pdf")),
+        results("claims/measured.csv"),
+        figure_files(*MEASURED_STAGE.figures),

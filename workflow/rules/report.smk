@@ -2,8 +2,9 @@
 papers' conclusions, the claims ledger, measured-data and discrepancy tables, config and
 seeds, locked package versions, wall time per stage).
 
-Needs from common.smk: FIGURES, REPORT_TABLES, log_path.  Inputs are functions, so
-that stages included after this file are still seen (they run once the DAG is built).
+Needs from common.smk: results, figure_ids, report_tables, log_path.  Inputs are
+functions, so that stages included after this file are still seen (they run once the DAG
+is built).
 The benchmark files (results/benchmarks/) are not inputs: the page reads whatever is there
 when it runs; it depends on every figure and the ledger, so every job has finished by then.
 """
@@ -23,23 +24,7 @@ def report_captions():
                 caption = f.flags["report"].caption
                 if caption is not None:
                     captions[name[: -len(".png")]] = os.path.normpath(caption.get_path_or_uri(secret_free=True))
-    return {fid: captions[fid] for fid in sorted(captions) if fid in FIGURES}
-
-
-#: Tables shown if some rule makes them, for stages that do not register their own in
-#: REPORT_TABLES: (section, title, path).
-REPORT_OPTIONAL_TABLES = [
-    ("discrepancy", "Discrepancy summary", "results/discrepancy/summary.csv"),
-]
-
-
-def report_tables():
-    """REPORT_TABLES, plus each optional table that a rule of the workflow makes."""
-    tables = [tuple(t) for t in REPORT_TABLES]
-    registered = {path for _, _, path in tables}
-    made = {str(f) for r in workflow.rules for f in r.output}
-    tables += [t for t in REPORT_OPTIONAL_TABLES if t[2] in made and t[2] not in registered]
-    return tables
+    return {fid: captions[fid] for fid in sorted(captions) if fid in figure_ids()}
 
 
 def report_config_files():
@@ -54,19 +39,19 @@ rule report:
     """results/report.html from every figure, the claims ledger and the stages' summary tables."""
     localrule: True  # on a cluster: the login node (the HTML of finished outputs)
     input:
-        claims="results/claims.csv",
-        figures=lambda w: expand("results/figures/{figure}.png", figure=sorted(FIGURES)),
+        claims=results("claims.csv"),
+        figures=lambda w: expand(results("figures/{figure}.png"), figure=sorted(figure_ids())),
         tables=lambda w: [path for _, _, path in report_tables()],
         captions=lambda w: sorted(report_captions().values()),
         conclusions=os.path.join(workflow.basedir, "workflow", "report", "conclusions.yaml"),
         lock=os.path.join(workflow.basedir, "environment.lock"),
     output:
-        "results/report.html",
+        results("report.html"),
     params:
-        figure_ids=lambda w: sorted(FIGURES),
+        figure_ids=lambda w: sorted(figure_ids()),
         captions=lambda w: report_captions(),
         tables=lambda w: [list(t) for t in report_tables()],
-        benchmarks_dir="results/benchmarks",
+        benchmarks_dir=results("benchmarks"),
         config_files=report_config_files(),
     log:
         log_path("report"),

@@ -1,15 +1,20 @@
-"""Stage 'tereshkov' (issue 5): Tereshkov's virtual-platform AHRS and closed-form bias
+"""Stage 'tereshkov': Tereshkov's virtual-platform AHRS and closed-form bias
 estimator on simulated tractor runs — Monte Carlo convergence and accuracy, straight vs
 turning observability, the artificial-bias test, an installation-angle sweep, the
 stage's claims and figures.  Config: the `tereshkov` mapping (section `tereshkov` of config/config.yaml).
 
-Needs from common.smk: FIGURES, CLAIM_STAGES, log_path, figure_outputs, SMALL.
+Needs from common.smk: declare_stage, results, log_path, bench_path, figure_files, figure_outputs,
+SMALL.
 """
 
-FIGURES.extend(["tereshkov_fig2", "tereshkov_fig3", "tereshkov_fig4", "tereshkov_installation"])
-CLAIM_STAGES.append("tereshkov")
-
 TERESHKOV = config["tereshkov"]
+TERESHKOV_DIR = results("tereshkov")
+TERESHKOV_STAGE = declare_stage(
+    name="tereshkov",
+    # the last: Tereshkov against the Batista et al. (2011) filter on the same runs
+    figures=("tereshkov_fig2", "tereshkov_fig3", "tereshkov_fig4", "tereshkov_installation",
+             "bias_convergence_comparison"),
+)
 #: Scenarios of equal duration share one estimator loop (its cost is per step, not per run).
 TERESHKOV_MAIN = ("field", "straight", "artificial")
 
@@ -19,8 +24,8 @@ rule tereshkov_simulate:
     (run r in job r mod monte_carlo.jobs) through one estimator loop: tidy tables
     (run × time × sensor × axis) and the wall times."""
     output:
-        **{sc: f"results/tereshkov/chunks/{sc}_{{job}}.csv.gz" for sc in TERESHKOV_MAIN},
-        timing="results/tereshkov/chunks/timing_main_{job}.csv",
+        **{sc: f"{TERESHKOV_DIR}/chunks/{sc}_{{job}}.csv.gz" for sc in TERESHKOV_MAIN},
+        timing=f"{TERESHKOV_DIR}/chunks/timing_main_{{job}}.csv",
     params:
         cfg=TERESHKOV,
         scenarios=list(TERESHKOV_MAIN),
@@ -44,8 +49,8 @@ rule tereshkov_sweep:
     """One job's share of the installation-angle sweep (same paths, biases and noise at
     every angle)."""
     output:
-        sweep="results/tereshkov/chunks/sweep_{job}.csv.gz",
-        timing="results/tereshkov/chunks/timing_sweep_{job}.csv",
+        sweep=f"{TERESHKOV_DIR}/chunks/sweep_{{job}}.csv.gz",
+        timing=f"{TERESHKOV_DIR}/chunks/timing_sweep_{{job}}.csv",
     params:
         cfg=TERESHKOV,
         scenarios=["sweep"],
@@ -72,15 +77,15 @@ def tereshkov_jobs(part, pattern, **wildcards):
 rule tereshkov_merge:
     """The jobs' tables of each scenario merged in the order of one job, and their wall times."""
     input:
-        **{sc: tereshkov_jobs("monte_carlo", f"results/tereshkov/chunks/{sc}_{{job}}.csv.gz")
+        **{sc: tereshkov_jobs("monte_carlo", f"{TERESHKOV_DIR}/chunks/{sc}_{{job}}.csv.gz")
            for sc in TERESHKOV_MAIN},
-        main_timing=tereshkov_jobs("monte_carlo", "results/tereshkov/chunks/timing_main_{job}.csv"),
-        sweep=tereshkov_jobs("sweep", "results/tereshkov/chunks/sweep_{job}.csv.gz"),
-        sweep_timing=tereshkov_jobs("sweep", "results/tereshkov/chunks/timing_sweep_{job}.csv"),
+        main_timing=tereshkov_jobs("monte_carlo", f"{TERESHKOV_DIR}/chunks/timing_main_{{job}}.csv"),
+        sweep=tereshkov_jobs("sweep", f"{TERESHKOV_DIR}/chunks/sweep_{{job}}.csv.gz"),
+        sweep_timing=tereshkov_jobs("sweep", f"{TERESHKOV_DIR}/chunks/timing_sweep_{{job}}.csv"),
     output:
-        **{sc: f"results/tereshkov/{sc}.csv.gz" for sc in TERESHKOV_MAIN + ("sweep",)},
-        timing_main="results/tereshkov/timing_main.csv",
-        timing_sweep="results/tereshkov/timing_sweep.csv",
+        **{sc: f"{TERESHKOV_DIR}/{sc}.csv.gz" for sc in TERESHKOV_MAIN + ("sweep",)},
+        timing_main=f"{TERESHKOV_DIR}/timing_main.csv",
+        timing_sweep=f"{TERESHKOV_DIR}/timing_sweep.csv",
     params:
         scenarios=list(TERESHKOV_MAIN) + ["sweep"],
     log:
@@ -99,8 +104,8 @@ rule tereshkov_observability:
     """Pairs of runs differing by a known accelerometer-bias shift: torque change in
     straight motion vs turns (eqs. 12, 13)."""
     output:
-        table="results/tereshkov/observability.csv",
-        timing="results/tereshkov/timing_observability.csv",
+        table=f"{TERESHKOV_DIR}/observability.csv",
+        timing=f"{TERESHKOV_DIR}/timing_observability.csv",
     params:
         cfg=TERESHKOV,
     log:
@@ -118,7 +123,7 @@ rule tereshkov_observability:
 rule tereshkov_headings:
     """True heading, yaw rate and speed of the example field runs (Fig. 2)."""
     output:
-        "results/tereshkov/headings.csv",
+        f"{TERESHKOV_DIR}/headings.csv",
     params:
         cfg=TERESHKOV,
     log:
@@ -136,14 +141,14 @@ rule tereshkov_summary:
     """Convergence times, steady-state errors, artificial-bias test and sweep summaries,
     and the wall times of the Monte Carlo jobs."""
     input:
-        **{sc: f"results/tereshkov/{sc}.csv.gz" for sc in TERESHKOV_MAIN},
-        sweep="results/tereshkov/sweep.csv.gz",
-        timings=expand("results/tereshkov/timing_{part}.csv", part=("main", "sweep", "observability")),
+        **{sc: f"{TERESHKOV_DIR}/{sc}.csv.gz" for sc in TERESHKOV_MAIN},
+        sweep=f"{TERESHKOV_DIR}/sweep.csv.gz",
+        timings=expand(f"{TERESHKOV_DIR}/timing_{{part}}.csv", part=("main", "sweep", "observability")),
     output:
-        summary="results/tereshkov/summary.csv",
-        artificial="results/tereshkov/artificial_summary.csv",
-        sweep="results/tereshkov/sweep_summary.csv",
-        timing="results/tereshkov/timing.csv",
+        summary=f"{TERESHKOV_DIR}/summary.csv",
+        artificial=f"{TERESHKOV_DIR}/artificial_summary.csv",
+        sweep=f"{TERESHKOV_DIR}/sweep_summary.csv",
+        timing=f"{TERESHKOV_DIR}/timing.csv",
     params:
         cfg=TERESHKOV,
     log:
@@ -161,12 +166,12 @@ rule tereshkov_summary:
 rule tereshkov_claims:
     """Tereshkov claims computed from the summaries."""
     input:
-        summary="results/tereshkov/summary.csv",
-        observability="results/tereshkov/observability.csv",
-        artificial="results/tereshkov/artificial_summary.csv",
-        sweep="results/tereshkov/sweep_summary.csv",
+        summary=f"{TERESHKOV_DIR}/summary.csv",
+        observability=f"{TERESHKOV_DIR}/observability.csv",
+        artificial=f"{TERESHKOV_DIR}/artificial_summary.csv",
+        sweep=f"{TERESHKOV_DIR}/sweep_summary.csv",
     output:
-        "results/claims/tereshkov.csv",
+        results("claims/tereshkov.csv"),
     params:
         rules=TERESHKOV["claims"],
     log:
@@ -182,7 +187,7 @@ rule tereshkov_claims:
 
 rule tereshkov_fig2_figure:
     input:
-        headings="results/tereshkov/headings.csv",
+        headings=f"{TERESHKOV_DIR}/headings.csv",
     output:
         **figure_outputs("tereshkov_fig2", "../report/tereshkov_fig2.rst", "Tereshkov"),
     params:
@@ -201,9 +206,9 @@ rule tereshkov_fig2_figure:
 
 rule tereshkov_fig3_figure:
     input:
-        field="results/tereshkov/field.csv.gz",
-        straight="results/tereshkov/straight.csv.gz",
-        summary="results/tereshkov/summary.csv",
+        field=f"{TERESHKOV_DIR}/field.csv.gz",
+        straight=f"{TERESHKOV_DIR}/straight.csv.gz",
+        summary=f"{TERESHKOV_DIR}/summary.csv",
     output:
         **figure_outputs("tereshkov_fig3", "../report/tereshkov_fig3.rst", "Tereshkov"),
     params:
@@ -223,10 +228,10 @@ rule tereshkov_fig3_figure:
 
 rule tereshkov_fig4_figure:
     input:
-        field="results/tereshkov/field.csv.gz",
-        straight="results/tereshkov/straight.csv.gz",
-        artificial="results/tereshkov/artificial.csv.gz",
-        summary="results/tereshkov/summary.csv",
+        field=f"{TERESHKOV_DIR}/field.csv.gz",
+        straight=f"{TERESHKOV_DIR}/straight.csv.gz",
+        artificial=f"{TERESHKOV_DIR}/artificial.csv.gz",
+        summary=f"{TERESHKOV_DIR}/summary.csv",
     output:
         **figure_outputs("tereshkov_fig4", "../report/tereshkov_fig4.rst", "Tereshkov"),
     params:
@@ -246,7 +251,7 @@ rule tereshkov_fig4_figure:
 
 rule tereshkov_installation_figure:
     input:
-        sweep="results/tereshkov/sweep_summary.csv",
+        sweep=f"{TERESHKOV_DIR}/sweep_summary.csv",
     output:
         **figure_outputs("tereshkov_installation", "../report/tereshkov_installation.rst", "Tereshkov"),
     params:
@@ -263,42 +268,16 @@ rule tereshkov_installation_figure:
         "../scripts/tereshkov_figure.py"
 
 
-# Figure ids as targets: `snakemake tereshkov_fig3`.
-rule tereshkov_fig2:
-    input:
-        "results/figures/tereshkov_fig2.png",
-        "results/figures/tereshkov_fig2.pdf",
-
-
-rule tereshkov_fig3:
-    input:
-        "results/figures/tereshkov_fig3.png",
-        "results/figures/tereshkov_fig3.pdf",
-
-
-rule tereshkov_fig4:
-    input:
-        "results/figures/tereshkov_fig4.png",
-        "results/figures/tereshkov_fig4.pdf",
-
-
-rule tereshkov_installation:
-    input:
-        "results/figures/tereshkov_installation.png",
-        "results/figures/tereshkov_installation.pdf",
-
-
 # ---------------------------------------------------------------------------- comparison
 # Tereshkov against the Batista et al. (2011) Kalman filter on the same simulated runs.
-FIGURES.append("bias_convergence_comparison")
 
 
 rule tereshkov_comparison:
     """Same runs, same IMU data: Tereshkov (GNSS specific force) vs the Batista filter
     (body-frame velocity), bias errors and compute cost per step."""
     output:
-        table="results/tereshkov/comparison.csv.gz",
-        summary="results/tereshkov/comparison_summary.csv",
+        table=f"{TERESHKOV_DIR}/comparison.csv.gz",
+        summary=f"{TERESHKOV_DIR}/comparison_summary.csv",
     params:
         cfg=TERESHKOV,
         # the Batista filter's tuning from its own stage config (paper Ξ, Θ; P0 choice)
@@ -318,8 +297,8 @@ rule tereshkov_comparison:
 
 rule bias_convergence_comparison_figure:
     input:
-        table="results/tereshkov/comparison.csv.gz",
-        summary="results/tereshkov/comparison_summary.csv",
+        table=f"{TERESHKOV_DIR}/comparison.csv.gz",
+        summary=f"{TERESHKOV_DIR}/comparison_summary.csv",
     output:
         **figure_outputs("bias_convergence_comparison", "../report/tereshkov_comparison.rst", "Tereshkov"),
     params:
@@ -336,16 +315,8 @@ rule bias_convergence_comparison_figure:
         "../scripts/tereshkov_figure.py"
 
 
-rule bias_convergence_comparison:
-    input:
-        "results/figures/bias_convergence_comparison.png",
-        "results/figures/bias_convergence_comparison.pdf",
-
-
 rule tereshkov:
     """The whole stage: every figure and the claims."""
     input:
-        expand("results/figures/{figure}.{ext}",
-               figure=["tereshkov_fig2", "tereshkov_fig3", "tereshkov_fig4", "tereshkov_installation",
-                       "bias_convergence_comparison"], ext=("png", "pdf")),
-        "results/claims/tereshkov.csv",
+        figure_files(*TERESHKOV_STAGE.figures),
+        results("claims/tereshkov.csv"),

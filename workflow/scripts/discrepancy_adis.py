@@ -8,8 +8,8 @@ from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 from accelcal.atomic import atomic_output
 from accelcal.errors import AccelcalError
 from accelcal_repro.discrepancy import adis as A
-from accelcal_repro.measured.data import fetch_file
 from accelcal_repro.measured.smac import read_smac_rda
+from accelcal_repro.measured.sources import read_manifest
 
 if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
     snakemake = mock_snakemake_from_argv("discrepancy_adis")
@@ -17,7 +17,7 @@ if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_
 log = configure_logging(snakemake)
 p = snakemake.params
 try:
-    path = fetch_file(p.dataset, p.file, p.data_dir, p.resources_dir)
+    path = read_manifest(snakemake.input.manifest)[p.file]
     rec = read_smac_rda(path)
 except AccelcalError as e:
     log.error("%s: %s", type(e).__name__, e)

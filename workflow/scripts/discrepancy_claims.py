@@ -1,4 +1,4 @@
-"""Claims-ledger rows of the discrepancy stage: issue 13's goals on the benchmark and the ADIS reference."""
+"""Claims-ledger rows of the discrepancy stage: the loop's goals on the benchmark and the ADIS reference."""
 
 import pandas as pd
 from _helpers import configure_logging, mock_snakemake_from_argv, write_csv

@@ -7,7 +7,7 @@ from _helpers import configure_logging, mock_snakemake_from_argv
 from accelcal.atomic import write_json_atomic
 from accelcal.discrepancy.report import StochasticSettings
 from accelcal.recording import read_recording
-from accelcal.results import _finite_json
+from accelcal.jsonsafe import json_safe
 from accelcal_repro.discrepancy import sessions as SS
 
 if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
@@ -17,6 +17,6 @@ log = configure_logging(snakemake)
 name = snakemake.wildcards.recording
 named, excess = SS.few_poses_rows(name, read_recording(snakemake.input.csv), pd.read_csv(snakemake.input.measured_summary),
                                   StochasticSettings.from_config(snakemake.params.stochastic))
-write_json_atomic(snakemake.output[0], _finite_json({"recording": name, "named": named, "excess": excess}))
+write_json_atomic(snakemake.output[0], json_safe({"recording": name, "named": named, "excess": excess}))
 for r in named:
     log.info("%s: %s %s: %s", name, r["layer"], r["item"], r["value"])

@@ -9,7 +9,7 @@ from accelcal.discrepancy.vocabulary import Rules
 from accelcal.discrepancy.report import StochasticSettings, discrepancy_report
 from accelcal_repro.measured.sources import source
 from accelcal.recording import read_recording
-from accelcal.results import _finite_json
+from accelcal.jsonsafe import json_safe
 from accelcal_repro.discrepancy.sessions import with_disjoint_rests
 
 if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
@@ -29,7 +29,7 @@ out.update({"recording": name, "g": p.g, "unit": unit, "rate": rec.rate})
 if note:
     out["notes"] = [*out.get("notes", []), note]
 with atomic_output(snakemake.output[0]) as tmp, open(tmp, "w") as fh:
-    json.dump(_finite_json(out), fh, indent=1, sort_keys=False)
+    json.dump(json_safe(out), fh, indent=1, sort_keys=False)
     fh.write("\n")
 s = analysis.deterministic.summary()
 log.info("%s: %d poses, effect %s (outcome %s), gap %.3g -> %.3g, not identifiable: %s; stochastic: %s", name,

@@ -1,4 +1,4 @@
-"""Benchmark: the headline table (with the goals of issue 15) and the figure of where the
+"""Benchmark: the headline table (with the project's goals) and the figure of where the
 compute time goes."""
 
 import pandas as pd

@@ -39,7 +39,7 @@ def _coefficients(th, c):
 
 
 @jit
-def _blocks(wx, wy, wz, dt, E, J0, J1, coef):
+def rotation_blocks(wx, wy, wz, dt, E, J0, J1, coef):
     """``E``, ``J0``, ``J1`` of :func:`accelcal.batista.filter.rotation_blocks` for one ω."""
     a0, a1, a2 = wx * dt, wy * dt, wz * dt
     th2 = a0 * a0 + a1 * a1 + a2 * a2
@@ -60,7 +60,7 @@ def _blocks(wx, wy, wz, dt, E, J0, J1, coef):
 @jit
 def _step_model(wx, wy, wz, dt, qv, qg, qb, E, J0, J1, Q, coef):
     """``E``, ``J0``, ``J1`` and the process noise ``Q`` (9x9, :func:`process_noise`) of one step."""
-    _blocks(wx, wy, wz, dt, E, J0, J1, coef)
+    rotation_blocks(wx, wy, wz, dt, E, J0, J1, coef)
     for i in range(9):
         for j in range(9):
             Q[i, j] = 0.0
@@ -197,46 +197,3 @@ def covariance_sequence(dt, w, P, Rd, qv, qg, qb, Ks, Ps):
                 Ks[k + 1, i, j] = K[i, j]
             for j in range(9):
                 Ps[k + 1, i, j] = P[i, j]
-
-
-@jit
-def shared_gain_block(dt, x, a_prev, w_prev, a, w, y, gains, store, out, row):
-    """Runs ``x`` (T, 9) with their last samples ``a_prev``, ``w_prev`` (T, 3) through
-    the samples ``a``, ``w``, ``y`` (T, B, 3) with gains ``gains`` (B, 9, 3), as
-    ``accelcal_repro.batista2011.montecarlo._FilterState.run_block``: the state is
-    propagated with each run's own rates and updated with the shared gain.  After
-    sample ``b`` with ``store[b]`` the states go to ``out[:, row]`` (then ``row + 1``).
-    ``x``, ``a_prev`` and ``w_prev`` are updated in place."""
-    E, J0, J1 = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
-    coef = np.empty(5)
-    vn, gn = np.empty(3), np.empty(3)
-    for t in range(x.shape[0]):
-        r = row
-        for b in range(a.shape[1]):
-            w0 = w_prev[t] if b == 0 else w[t, b - 1]
-            a0 = a_prev[t] if b == 0 else a[t, b - 1]
-            _blocks(0.5 * (w0[0] + w[t, b, 0]), 0.5 * (w0[1] + w[t, b, 1]), 0.5 * (w0[2] + w[t, b, 2]), dt,
-                    E, J0, J1, coef)
-            for i in range(3):
-                s = 0.0
-                for m in range(3):
-                    s += (E[i, m] * (x[t, m] + dt * x[t, 3 + m]) + J0[i, m] * (a[t, b, m] - x[t, 6 + m])
-                          + J1[i, m] / dt * (a0[m] - a[t, b, m]))
-                vn[i] = s
-                s = 0.0
-                for m in range(3):
-                    s += E[i, m] * x[t, 3 + m]
-                gn[i] = s
-            r0, r1, r2 = y[t, b, 0] - vn[0], y[t, b, 1] - vn[1], y[t, b, 2] - vn[2]
-            G = gains[b]
-            for i in range(3):
-                x[t, i] = vn[i] + G[i, 0] * r0 + G[i, 1] * r1 + G[i, 2] * r2
-                x[t, 3 + i] = gn[i] + G[3 + i, 0] * r0 + G[3 + i, 1] * r1 + G[3 + i, 2] * r2
-                x[t, 6 + i] = x[t, 6 + i] + G[6 + i, 0] * r0 + G[6 + i, 1] * r1 + G[6 + i, 2] * r2
-            if store[b]:
-                for i in range(9):
-                    out[t, r, i] = x[t, i]
-                r += 1
-        for i in range(3):
-            a_prev[t, i] = a[t, a.shape[1] - 1, i]
-            w_prev[t, i] = w[t, w.shape[1] - 1, i]

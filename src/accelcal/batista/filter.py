@@ -68,8 +68,21 @@ def system_matrix(omega) -> np.ndarray:
     return A
 
 
-def _coefficients(th: np.ndarray):
-    """Rodrigues-type coefficients (a, b, c, d, e) of θ = |ω| dt, series for small θ."""
+def rotation_coefficients(th: np.ndarray):
+    """Rodrigues-type coefficients of θ = |ω| dt that build :func:`rotation_blocks`.
+
+    Parameters
+    ----------
+    th : array_like
+        Rotation angles θ = |ω| dt [rad], any shape.
+
+    Returns
+    -------
+    list of numpy.ndarray
+        ``a, b, c, d, e`` (each of the shape of ``th``): ``sin θ/θ``, ``(1 - cos θ)/θ²``,
+        ``(θ - sin θ)/θ³``, ``(sin θ - θ cos θ)/θ³`` and ``∫₀¹ x (1 - cos θx) dx / θ²``,
+        by their Taylor series below θ = 0.02 (where the closed forms lose digits).
+    """
     th = np.asarray(th, float)
     t2 = th * th
     series = [c0 + t2 * (c1 + t2 * (c2 + t2 * c3)) for c0, c1, c2, c3 in (
@@ -110,7 +123,7 @@ def rotation_blocks(omega, dt: float):
     K = skew(w)
     th2 = np.einsum("...i,...i->...", w, w)
     K2 = w[..., :, None] * w[..., None, :] - th2[..., None, None] * np.eye(3)  # S(w)² = w wᵀ - |w|² I
-    a, b, c, d, e = (x[..., None, None] for x in _coefficients(np.sqrt(th2)))
+    a, b, c, d, e = (x[..., None, None] for x in rotation_coefficients(np.sqrt(th2)))
     eye = np.eye(3)
     E = eye - a * K + b * K2
     J0 = dt * (eye - b * K + c * K2)
@@ -393,6 +406,7 @@ __all__ = [
     "observability_gramian",
     "process_noise",
     "rotation_blocks",
+    "rotation_coefficients",
     "system_matrix",
     "transition",
 ]

@@ -41,10 +41,10 @@ from accelcal.batista.filter import (
     PAPER_THETA,
     PAPER_XI,
     STATES,
-    _coefficients,
     covariance_sequence,
     kalman_filter,
     observability_gramian,
+    rotation_coefficients,
 )
 from accelcal.batista.model import accelerometer_output, euler_to_rotation, gravity_in_table, specific_force_at_rest
 from .trajectory import Attitude, StepSchedule, motion_signals, stepped_attitudes
@@ -412,7 +412,7 @@ def _blocks_bkt(w: np.ndarray, dt: float):
     (``S(w)² = w wᵀ - |w|² I``), which is much faster than batched 3x3 products."""
     w = w * dt
     th2 = np.einsum("bit,bit->bt", w, w)
-    a, b, c, d, e = _coefficients(np.sqrt(th2))
+    a, b, c, d, e = rotation_coefficients(np.sqrt(th2))
     K = np.zeros(w.shape[:1] + (3, 3) + w.shape[2:])
     K[:, 0, 1], K[:, 0, 2], K[:, 1, 2] = -w[:, 2], w[:, 1], -w[:, 0]
     K[:, 1, 0], K[:, 2, 0], K[:, 2, 1] = w[:, 2], -w[:, 1], w[:, 0]
@@ -427,15 +427,24 @@ def _blocks_bkt(w: np.ndarray, dt: float):
     return tuple(out)
 
 
+def _compiled_block():
+    """The compiled block loop when the filter kernels run compiled (:mod:`accelcal.kernels`), else None."""
+    if compiled("batista._filter_kernels") is None:
+        return None
+    from . import _shared_gain_kernels
+
+    return _shared_gain_kernels
+
+
 class _FilterState:
     """Running state of :func:`shared_gain_filter` fed block by block (memory stays bounded).
 
     With numba the block runs as the compiled kernel
-    :func:`accelcal.batista._filter_kernels.shared_gain_block` (state ``x`` kept as (T, 9));
+    :func:`accelcal_repro.batista2011._shared_gain_kernels.shared_gain_block` (state ``x`` kept as (T, 9));
     the numpy loop below is the reference (state as (9, T))."""
 
     def __init__(self, x0, a0, w0, record, dt):
-        self.kernels = compiled("batista._filter_kernels")
+        self.kernels = _compiled_block()
         x0 = np.asarray(x0, float)
         self.x = np.array(x0) if self.kernels is not None else np.ascontiguousarray(x0.T)
         self.a_prev = np.array(a0, float)

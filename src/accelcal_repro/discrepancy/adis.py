@@ -20,7 +20,7 @@ Three questions, each a tidy table (figures and claims are computed from them):
    those pose means about their session mean, pooled over pieces and axes, is compared
    with what the calibration's own standard errors imply (its ratio is the excess the
    loop sees) and with what (a) the reference model of question 2 and (b) the stochastic
-   layer run on the piece's own rests (the ≤ 10 s view of issue 13's Xsens session)
+   layer run on the piece's own rests (the ≤ 10 s view of the Xsens session)
    predict for the same layout (:func:`accelcal.discrepancy.stochastic.pose_difference_variance`).
    The ratio predicted / observed is the check: 1 when a model extrapolates correctly
    from its τ range to the session.
@@ -37,7 +37,7 @@ import pandas as pd
 from accelcal.discrepancy.stochastic import pose_difference_variance, rest_segments, stochastic_layer
 from accelcal.noise import TERMS, allan_variance, fit_avar
 
-from accelcal.static import _integrated_autocorr_time
+from accelcal.static import integrated_autocorr_time
 
 from .profiles import centred
 
@@ -161,7 +161,7 @@ def session_check(acc: np.ndarray, fs: float, session, reference: list[dict], *,
         piece = acc[k * n:(k + 1) * n]
         segs = rest_segments(piece, win)
         means = np.array([s.mean(axis=0) for s in segs])
-        se2 = np.array([s.var(axis=0, ddof=1) * _integrated_autocorr_time(s) / len(s) for s in segs])
+        se2 = np.array([s.var(axis=0, ddof=1) * integrated_autocorr_time(s) / len(s) for s in segs])
         layer = None
         if k < n_layer:
             layer = stochastic_layer(segs, fs, seed=seed + k, n_boot=n_boot, n_resim=n_resim, intervals=win,

@@ -37,7 +37,7 @@ and replicate (:func:`accelcal_repro.montecarlo.grid_seed`), so it does not depe
 chunking.  Detection (:func:`detect_case`) gets the recording only (time, integer counts,
 temperature: what a user's CSV holds), never the key, and runs the loop under each
 requested null hypothesis on the same pose means (``colored``, and ``white``: the loop of
-issue 7, the negative control).  Scoring: :mod:`accelcal_repro.discrepancy.scoring`.
+the white-noise loop, the negative control).  Scoring: :mod:`accelcal_repro.discrepancy.scoring`.
 """
 
 from __future__ import annotations
@@ -67,7 +67,7 @@ NOT_IDENTIFIABLE = "not_identifiable"
 OUTLIER = "outlier_pose"
 CONSTANT_TEMPERATURE = "temperature_const"
 ERROR = "error"
-#: The null hypotheses of the loop the benchmark can compare (issue 13).
+#: The null hypotheses of the loop the benchmark can compare.
 NULLS = ("colored", "white")
 #: Largest number of pose designs drawn until every candidate is identifiable on the truth.
 MAX_REDRAWS = 20
@@ -446,7 +446,7 @@ def _effect_sizes(design: _Design, oracle: Oracle, dirs: dict, size_mde: float, 
 
 
 def null_available(null: str) -> bool:
-    """Can this library's loop test under ``null``?  ``white`` always (the loop of issue 7); ``colored``
+    """Can this library's loop test under ``null``?  ``white`` always (the white-noise loop); ``colored``
     once :class:`~accelcal.discrepancy.vocabulary.Rules` has the ``null`` setting."""
     if null not in NULLS:
         raise AccelcalError(f"unknown null hypothesis {null!r}; known: {', '.join(NULLS)}")

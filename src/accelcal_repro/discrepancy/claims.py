@@ -1,4 +1,4 @@
-"""Claims-ledger rows of the discrepancy stage: the goals of issue 13, judged on the benchmark
+"""Claims-ledger rows of the discrepancy stage: the loop's goals, judged on the benchmark
 and on the ADIS16405 reference (``paper = 'discrepancy'``).
 
 Each row's rule is in its claim text; values come from the stage's tables
@@ -31,7 +31,7 @@ ADIS_CHECK = "results/discrepancy/adis/session_check_summary.csv"
 
 FPR_COLORED = Claim(
     "discrepancy", "fpr_colored_null_every_profile",
-    "Issue 13, goal of point 5: under every noise profile of the benchmark (white, rounding, Gauss-Markov, flicker, "
+    "Goal: under every noise profile of the benchmark (white, rounding, Gauss-Markov, flicker, "
     "random walk, the Xsens and ADIS16405 fits and the ADIS16405 record itself), the loop with the colored null "
     "names an effect or outlier on at most alpha of effect-free sessions: reproduced iff for every profile the "
     "exact 95% interval reaches down to alpha and its upper end is at most 2 alpha (profiles with too few "
@@ -40,7 +40,7 @@ FPR_COLORED = Claim(
     "FPR <= alpha, upper bound <= 2 alpha")
 FPR_WHITE = Claim(
     "discrepancy", "fpr_white_null_inflated_by_wander",
-    "Issue 13 (negative control): the loop with the white-noise null (issue 7) names an effect on more than alpha "
+    "Negative control: the loop with the white-noise null names an effect on more than alpha "
     "of effect-free sessions whose noise has slow wander: reproduced iff on at least one wander profile the lower "
     "end of the exact 95% interval of its false-positive rate exceeds alpha (profiles with too few recordings for "
     "that, where the lower end stays at or below alpha even if every recording is a false positive, are left out; "
@@ -48,13 +48,13 @@ FPR_WHITE = Claim(
     "2 of 5 effect-free recordings named bias_drift")
 FPR_WHITE_WHITE = Claim(
     "discrepancy", "fpr_white_null_white_noise",
-    "Issue 7: on white noise the loop with the white null keeps its false-positive rate at alpha: reproduced iff "
+    "On white noise the loop with the white null keeps its false-positive rate at alpha: reproduced iff "
     "the exact 95% interval on the white profile reaches down to alpha and its upper end is at most 2 alpha (not "
     "reproducible at this scale when the upper end exceeds 2 alpha even with no false positive)",
     "FPR <= alpha")
 NAMING = Claim(
     "discrepancy", "naming_at_3mde_every_profile",
-    "Issue 13, point 5: each effect hidden at 3 times its oracle minimum detectable effect is named first by the "
+    "Goal: each effect hidden at 3 times its oracle minimum detectable effect is named first by the "
     "colored-null loop with the design power under every noise profile: reproduced iff for every (profile, "
     "effect) the upper end of the exact 95% interval of the naming accuracy at 3 MDE is at least the power (rows "
     "with too few recordings for the rule to fail, where the upper end reaches the power even with no success, "
@@ -62,7 +62,7 @@ NAMING = Claim(
     "power at >= 1 MDE")
 OUTLIERS = Claim(
     "discrepancy", "outlier_pose_named",
-    "Issue 13, point 4: one pose shifted by 3 times the minimum detectable shift is named outlier_pose at its "
+    "Goal: one pose shifted by 3 times the minimum detectable shift is named outlier_pose at its "
     "pose under every noise profile (colored null): reproduced iff the upper end of the exact 95% interval of that "
     "accuracy is at least the power for every profile (profiles with too few recordings for the rule to fail, "
     "where the upper end reaches the power even with no success, are left out; with none left the claim is not "
@@ -70,7 +70,7 @@ OUTLIERS = Claim(
     "named with the pose index")
 PAIRS = Claim(
     "discrepancy", "two_effects_named",
-    "Issue 13, point 4: two effects hidden at once, each at 3 times its oracle MDE, are both named (in any order, "
+    "Goal: two effects hidden at once, each at 3 times its oracle MDE, are both named (in any order, "
     "nothing else) under every noise profile (colored null): reproduced iff the upper end of the exact 95% "
     "interval of that accuracy is at least the power for every profile and pair (rows with too few recordings "
     "for the rule to fail, where the upper end reaches the power even with no success, are left out; with none "
@@ -78,14 +78,14 @@ PAIRS = Claim(
     "both named")
 ADIS_REFERENCE = Claim(
     "discrepancy", "adis_long_tau_terms_predict_wander",
-    "Issue 13, point 6: the stochastic layer's long-tau noise terms, fitted to the Allan deviation of the "
+    "Reference for slow bias wander: the stochastic layer's long-tau noise terms, fitted to the Allan deviation of the "
     "2.78 h ADIS16405 record on tau >= 1 s, predict the slow wander of the pose means of calibration-shaped pieces "
     "of the same record: reproduced iff the predicted scatter of the pose means about their session mean (variance, "
     "pooled over axes) lies in the 95% interval of the observed one",
     "the reference for slow bias wander")
 ADIS_SHORT = Claim(
     "discrepancy", "short_rests_overpredict_wander",
-    "Issue 13: noise terms named from calibration-length rests (<= 10 s) over-predict the pose-residual excess "
+    "Noise terms named from calibration-length rests (<= 10 s) over-predict the pose-residual excess "
     "(Xsens: 4.28 vs 2.91): reproduced iff, on session-shaped pieces of the ADIS16405 record, the stochastic "
     "layer run on the pieces' own rests predicts a scatter of the pose means above the upper end of the 95% "
     "interval of the observed one",
@@ -104,7 +104,7 @@ SESSIONS = "results/discrepancy/sessions/stability.csv"
 GAPS = "results/discrepancy/sessions/gaps.csv"
 XSENS_GAP = Claim(
     "discrepancy", "xsens_gap_closed",
-    "Issue 13: on the Xsens session the pose residuals are 2.5-2.9 times what white noise predicts and the loop "
+    "On the Xsens session the pose residuals are 2.5-2.9 times what white noise predicts and the loop "
     "must say what the excess is: reproduced iff the joint model's predicted excess interval contains the observed "
     "one and the session re-simulated with what the loop names puts the measured excess inside the central 95% of "
     "its re-simulated excesses, while the re-simulation before (white noise of the rests) does not",

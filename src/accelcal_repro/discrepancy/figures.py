@@ -30,8 +30,8 @@ LABELS = {NONE: "none", NOT_IDENTIFIABLE: "not identif.", CONSTANT_TEMPERATURE: 
           ERROR: "error", OUTLIER: "outlier pose", "quadratic": "quadratic", "cubic": "cubic",
           "bias_drift": "bias drift", "temperature": "temperature", "temperature_scale": "temp. scale"}
 COLORS = {e: f"C{i}" for i, e in enumerate(EFFECT_IDS)}
-NULL_STYLE = {"colored": {"color": "C0", "marker": "o", "label": "colored null (issue 13)"},
-              "white": {"color": "C3", "marker": "s", "label": "white null (issue 7 loop, negative control)"}}
+NULL_STYLE = {"colored": {"color": "C0", "marker": "o", "label": "colored null (time-correlated noise)"},
+              "white": {"color": "C3", "marker": "s", "label": "white null (negative control)"}}
 
 
 def _label(x: str) -> str:

@@ -1,6 +1,6 @@
 """Every real session accounted for: what the joint model names, how much of the residual excess
 it explains, whether a re-simulation with it closes the gap, and what stays stable between
-sessions of one IMU (issue 13, point 6).
+sessions of one IMU.
 
 Inputs are the public outputs of the loop: the discrepancy report of each recording
 (``results/discrepancy/measured/<recording>.json``, the JSON of ``accelcal discrepancy``)
@@ -13,7 +13,7 @@ are computed from them):
   tested and why.
 * :func:`excess_rows`: the pose-residual scatter the model predicts against the observed
   one.  ``observed`` = ``sqrt(χ²/dof)`` of the base model's residuals against the rests'
-  white noise (the excess of issue 13: 2.5–2.9 on the Xsens); ``predicted`` = the same
+  white noise (the excess: 2.5–2.9 on the Xsens); ``predicted`` = the same
   ratio the joint noise model implies, with the interval its wander's interval gives;
   ``explained`` = ``(predicted² − 1)/(observed² − 1)``, the share of the excess variance
   the model accounts for.

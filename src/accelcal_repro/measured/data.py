@@ -13,10 +13,11 @@ repository.  :func:`fetch_file` returns a local path for one file of one dataset
    verified file, never part of one).
 
 Every failure (no shared copy and no network, a checksum mismatch) is one
-:class:`DatasetError` with a one-line message.  :func:`check_available` makes the same
-"local or downloadable?" decision before a run starts (existence and one short request,
-no download), so that the workflow fails before any job rather than in the middle.  URLs point at fixed commits, so a
-verified download is byte-identical to the shared copy.
+:class:`DatasetError` with a one-line message that says what to do.  In the workflow the
+fetch is a job of its own (rules ``measured_fetch``, ``discrepancy_adis_fetch``), run
+first, so that a missing dataset stops a run before the long jobs and stages that do not
+need the data run without it.  URLs point at fixed commits, so a verified download is
+byte-identical to the shared copy.
 """
 
 from __future__ import annotations
@@ -24,7 +25,6 @@ from __future__ import annotations
 import hashlib
 import http.client
 import os
-import urllib.error
 import urllib.request
 from dataclasses import dataclass
 from pathlib import Path
@@ -184,7 +184,9 @@ def _download(url: str, dest: Path, want: str, timeout: float, shared_hint: Path
             except (OSError, ValueError, http.client.HTTPException) as e:  # URLError is an OSError
                 reason = getattr(e, "reason", None) or e
                 where = f"no shared copy at {shared_hint} and " if shared_hint is not None else ""
-                raise DatasetError(f"{where}download of {url} failed ({' '.join(str(reason).split())})") from None
+                fix = (f"; copy the dataset folder into {shared_hint.parent} (see shared/data/README.md) or run with "
+                       "network access") if shared_hint is not None else "; run with network access"
+                raise DatasetError(f"{where}download of {url} failed ({' '.join(str(reason).split())}){fix}") from None
             out.flush()
             os.fsync(out.fileno())
         got = h.hexdigest()
@@ -194,72 +196,10 @@ def _download(url: str, dest: Path, want: str, timeout: float, shared_hint: Path
     return dest
 
 
-def local_file(dataset: str, filename: str, data_dir=None, resources_dir="resources") -> Path | None:
-    """Where :func:`fetch_file` would find the file without a download, None if nowhere.
-
-    Existence only (no checksum): this is the cheap check made before a run starts;
-    :func:`fetch_file` verifies the file when the run uses it.  The download cache holds
-    only verified files (a download is renamed into place after its check).
-    """
-    for folder in (data_dir, resources_dir):
-        if folder is not None and (Path(folder) / dataset / filename).is_file():
-            return Path(folder) / dataset / filename
-    return None
-
-
-#: Seconds the reachability check waits for an answer (it runs before every workflow
-#: run that lacks a local copy, so it must be short).
-CHECK_TIMEOUT_S = 5.0
-
-
-def unreachable_reason(url: str, timeout: float = CHECK_TIMEOUT_S) -> str | None:
-    """None if ``url`` answers a HEAD request, else why not (one line).
-
-    A server that refuses HEAD (405, 501) is asked with GET instead; nothing is read.
-    """
-    for method in ("HEAD", "GET"):
-        try:
-            with urllib.request.urlopen(urllib.request.Request(url, method=method),  # noqa: S310
-                                        timeout=timeout):
-                return None
-        except urllib.error.HTTPError as e:
-            if method == "HEAD" and e.code in (405, 501):
-                continue
-            return f"HTTP {e.code} {e.reason}"
-        except (OSError, ValueError, http.client.HTTPException) as e:  # URLError is an OSError
-            return " ".join(str(getattr(e, "reason", None) or e).split())
-    return None  # pragma: no cover (the GET attempt always returns)
-
-
-def check_available(dataset: str, filename: str, data_dir=None, resources_dir="resources", *,
-                    url: str | None = None, timeout: float = CHECK_TIMEOUT_S) -> None:
-    """Fail early, with one line, if a file is not local and cannot be downloaded either.
-
-    The network is used only when the file is in neither ``data_dir`` nor
-    ``resources_dir`` (:func:`local_file`): one short request (:func:`unreachable_reason`).
-
-    Raises
-    ------
-    DatasetError
-        The file is not local and its URL does not answer; the message names the file,
-        the folders looked in, the URL and what to do.
-    """
-    if local_file(dataset, filename, data_dir, resources_dir) is not None:
-        return
-    url = url if url is not None else spec(dataset, filename).url
-    reason = unreachable_reason(url, timeout)
-    if reason is not None:
-        looked = [str(Path(d) / dataset) for d in (data_dir, resources_dir) if d is not None]
-        raise DatasetError(f"{dataset}/{filename} is not in {' nor in '.join(looked)} and its download {url} "
-                           f"is unreachable ({reason}); copy the dataset folder into {looked[0]} "
-                           "(see shared/data/README.md) or run with network access")
-
-
 def fetch_dataset(dataset: str, data_dir=None, resources_dir="resources", files=None) -> dict[str, Path]:
     """:func:`fetch_file` for several files of one dataset (all of them by default)."""
     names = list(DATASETS[dataset]) if files is None else list(files)
     return {f: fetch_file(dataset, f, data_dir, resources_dir) for f in names}
 
 
-__all__ = ["CHECK_TIMEOUT_S", "DATASETS", "DatasetError", "FileSpec", "check_available", "fetch_dataset", "fetch_file",
-           "local_file", "spec", "unreachable_reason"]
+__all__ = ["DATASETS", "DatasetError", "FileSpec", "fetch_dataset", "fetch_file", "spec"]

@@ -37,7 +37,7 @@ from accelcal.atomic import atomic_output, sha256_file, write_json_atomic
 from accelcal.errors import RecordingError
 from accelcal.readers import read
 from accelcal.recording import NominalConversion, Recording, nominal_conversion, read_imucal_section_list, write_recording
-from .data import DatasetError, check_available, fetch_file
+from .data import fetch_file
 
 
 @dataclass(frozen=True)
@@ -116,23 +116,17 @@ def fetch_source(name: str, data_dir=None, resources_dir="resources") -> dict[st
     return {f: fetch_file(s.dataset, f, data_dir, resources_dir) for f in s.files}
 
 
-def check_source_available(name: str, data_dir=None, resources_dir="resources") -> None:
-    """:func:`accelcal_repro.measured.data.check_available` for every file of recording ``name``
-    (the network only for a file that is not local); :class:`DatasetError` naming the
-    recording if one is neither local nor downloadable."""
-    s = source(name)
-    for f in s.files:
-        try:
-            check_available(s.dataset, f, data_dir, resources_dir)
-        except DatasetError as e:
-            raise DatasetError(f"recording {name}: {e}") from None
+def dataset_manifest(dataset: str, paths: dict[str, Path]) -> dict:
+    """JSON-ready record of where each file of ``dataset`` was taken from and its verified sha256
+    (:func:`read_manifest` reads it back)."""
+    return {"dataset": dataset, "files": {f: {"path": str(p), "sha256": sha256_file(p)} for f, p in paths.items()}}
 
 
 def manifest(name: str, paths: dict[str, Path]) -> dict:
-    """JSON-ready record of where each file was taken from and its verified sha256."""
+    """:func:`dataset_manifest` of recording ``name``, with its unit and description."""
     s = source(name)
     return {"recording": name, "dataset": s.dataset, "unit": s.unit, "description": s.description,
-            "files": {f: {"path": str(p), "sha256": sha256_file(p)} for f, p in paths.items()}}
+            "files": dataset_manifest(s.dataset, paths)["files"]}
 
 
 
@@ -176,5 +170,5 @@ def convert(name: str, paths: dict[str, Path], out_csv) -> Recording:
     return rec
 
 
-__all__ = ["FERRARIS_STATIC", "SOURCES", "Source", "check_source_available", "convert", "fetch_source", "manifest", "read_manifest",
-           "read_source", "section_list", "source"]
+__all__ = ["FERRARIS_STATIC", "SOURCES", "Source", "convert", "dataset_manifest", "fetch_source", "manifest",
+           "read_manifest", "read_source", "section_list", "source"]
