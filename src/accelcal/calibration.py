@@ -1,7 +1,7 @@
 """Calibrations that know their quality, save and load themselves, and apply themselves.
 
 One class per method (as imucal's ``CalibrationInfo`` subclasses), all holding the model
-``z = M P(x) + b + β Δt + γ ΔT`` of :mod:`accelcal.discrepancy.effects` (the plain
+``z = M P(x) + b + β Δt + γ ΔT`` of :mod:`accelcal.effects` (the plain
 ``z = M x + b`` when no effect was fitted):
 
 ==========================  ================  =============================================
@@ -47,6 +47,7 @@ import numpy as np
 
 from .errors import (AccelcalError, DegeneratePosesError, NotConvergedError, NotPositiveDefiniteError,
                      TooFewPosesError)
+from .effects import EFFECTS, effect
 from .registry import ESTIMATORS, estimator
 from .units import G0, acceleration_unit
 
@@ -54,7 +55,7 @@ FORMAT = "accelcal-calibration"
 #: Version of the JSON layout written by :meth:`Calibration.to_dict` (0: the CLI's output
 #: before versions, read as such).
 FORMAT_VERSION = 1
-#: Effects :meth:`Calibration.apply` can invert (those of :mod:`accelcal.discrepancy.effects`).
+#: Effects :meth:`Calibration.apply` can invert (those of :mod:`accelcal.effects`).
 APPLICABLE_EFFECTS = ("quadratic", "cubic", "bias_drift", "temperature", "temperature_scale")
 _NEWTON_ITER = 60
 _NEWTON_RTOL = 1e-14
@@ -74,7 +75,7 @@ class EffectTerm:
         ``quadratic``, ``cubic``, ``bias_drift``, ``temperature``, ``temperature_scale``.
     values : ndarray, shape (3,)
         The parameters (``k``, ``c``, ``β``, ``γ``, ``κ`` per axis), units of
-        :mod:`accelcal.discrepancy.effects` (data unit Z, unit of g G).
+        :mod:`accelcal.effects` (data unit Z, unit of g G).
     reference : float or None
         Centre of the covariate (session mean time [s] or temperature [°C]).
     standard_errors : ndarray, shape (3,), or None
@@ -86,8 +87,6 @@ class EffectTerm:
     standard_errors: np.ndarray | None = None
 
     def to_dict(self) -> dict:
-        from .discrepancy.effects import effect
-
         e = effect(self.id)
         return {"id": self.id, "kind": e.kind, "covariate": e.covariate, "reference": self.reference,
                 "unit": e.unit, "parameters": dict(zip(e.parameters, map(float, self.values))),
@@ -96,8 +95,6 @@ class EffectTerm:
 
     @classmethod
     def from_dict(cls, d: dict) -> EffectTerm:
-        from .discrepancy.effects import effect
-
         e = effect(d["id"])
         vals = np.array([float(d["parameters"][p]) for p in e.parameters])
         se = d.get("standard_errors")
@@ -246,8 +243,6 @@ class Calibration:
         n = len(z)
         cov = {"time": _covariate(t, n, "t", terms, "time"), "temperature": _covariate(temp, n, "temp", terms,
                                                                                          "temperature")}
-        from .discrepancy.effects import EFFECTS
-
         add = np.zeros_like(z)
         c1 = np.ones_like(z)
         c2 = np.zeros(3)
@@ -526,7 +521,6 @@ def _method_values(cls, d: dict) -> dict:
 
 def _from_discrepancy(d: dict) -> ExtendedCalibration:
     """The base model + named effects of an ``accelcal discrepancy`` report."""
-    from .discrepancy.effects import effect
     from .model import m_from_params
 
     after = d["model_after"]
@@ -568,8 +562,6 @@ def _from_discrepancy(d: dict) -> ExtendedCalibration:
 
 
 def _covariate(values, n: int, name: str, terms, kind: str):
-    from .discrepancy.effects import EFFECTS
-
     needed = [t.id for t in terms if EFFECTS[t.id].covariate == kind]
     if not needed:
         return None

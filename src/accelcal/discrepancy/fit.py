@@ -8,7 +8,7 @@ samples; :func:`accelcal.evaluation.residual_sigma`).  ``σ_i`` is computed once
 at the closed-form (full LLS) fit, and then held fixed, so that every model of a
 recording is fitted to, and compared on, the same weighted data.
 
-Model.  :mod:`accelcal.discrepancy.effects`: ``z = M P(x) + b + β Δt + γ ΔT`` with the
+Model.  :mod:`accelcal.effects`: ``z = M P(x) + b + β Δt + γ ΔT`` with the
 pose residual ``r_i = ||x_i|| - g`` (the magnitude a calibration predicts; the pose
 direction is a nuisance, as in the base estimators).  ``x_i`` solves ``P(x_i) = y_i``,
 ``y_i = M⁻¹(z_i - b - β Δt_i - γ ΔT_i)``, axis by axis (Newton, from ``x = y``; exact in
@@ -47,7 +47,7 @@ import numpy as np
 from .. import kernels
 from ..errors import AccelcalError, NotConvergedError
 from ..model import m_from_params, params_from_m
-from .effects import EFFECTS, TEMPERATURE, TIME, effect
+from ..effects import EFFECTS, TEMPERATURE, TIME, effect
 
 #: Stop when the Gauss–Newton step predicts a χ² decrease below this (χ² is dimensionless).
 CHI2_TOL = 1e-10
@@ -357,7 +357,7 @@ def forward(x, M, bias, params: dict, dt=None, dtemp=None) -> np.ndarray:
     M, bias : array_like
         Base model (``M`` in data unit per unit of g).
     params : dict
-        ``{effect_id: (3,) parameters}`` (:mod:`accelcal.discrepancy.effects`).
+        ``{effect_id: (3,) parameters}`` (:mod:`accelcal.effects`).
     dt, dtemp : array_like, shape (n,), optional
         Centred time and temperature of each row (needed by the effects that use them).
     """
@@ -497,7 +497,7 @@ def fit(data: PoseData, effects=(), p0=None, max_iter: int = MAX_ITER) -> Fit:
     ----------
     data : PoseData
     effects : sequence of str
-        Effect ids (:data:`accelcal.discrepancy.effects.EFFECT_IDS`).
+        Effect ids (:data:`accelcal.effects.EFFECT_IDS`).
     p0 : array_like, optional
         Start; shorter than the model's parameter vector = padded with zeros (the
         previous model's optimum).  Default: the full LLS closed form.

@@ -20,7 +20,7 @@ import math
 import numpy as np
 import pandas as pd
 
-from accelcal.discrepancy.effects import EFFECT_IDS
+from accelcal.effects import EFFECT_IDS
 from accelcal.plotting import RC, plt
 
 from .benchmark import CONSTANT_TEMPERATURE, ERROR, NONE, NOT_IDENTIFIABLE, OUTLIER
