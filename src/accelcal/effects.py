@@ -1,15 +1,22 @@
-"""The library of candidate effects: parametric extensions of the model of Burkhard et al. (2024).
+"""The library of effects: parametric extensions of the model of Burkhard et al. (2024).
 
 Every effect extends ``z = M x + b + e`` (eq. 1, ``|x| = g`` at rest) by one block of
-three parameters, one per axis, and has a stable id.  The extended model is::
+three parameters ``φ``, one per axis, and has a stable id.  The extended model is::
 
-    z = M P(x) + b + β Δt + γ ΔT + e,
-    P_j(x) = x_j (1 + κ_j ΔT) + k_j x_j² + c_j x_j³            (per axis j)
+    z = M P(x) + b + Σ_additive c φ + e,
+    P_j(x) = x_j + Σ_polynomial c φ_j x_j^p                       (per axis j)
 
-with ``Δt = t - t̄`` (time of the pose minus the mean pose time) and ``ΔT = T - T̄``
-(temperature of the pose minus the mean pose temperature).  Centring the covariates
-keeps ``b`` the bias at the session's mean time and temperature, so that adding a
-drift or temperature term does not move the bias by the (absorbed) mean offset.
+where each effect's ``c`` is its centred covariate (``Δt = t - t̄``, the time of the pose
+minus the mean pose time, or ``ΔT = T - T̄`` for the temperature) or 1, and ``p`` its
+power.  With the effects below: ``z = M P(x) + b + β Δt + γ ΔT``,
+``P_j(x) = x_j (1 + κ_j ΔT) + k_j x_j² + c_j x_j³``.  Centring the covariates keeps ``b``
+the bias at the session's mean time and temperature, so that adding a drift or
+temperature term does not move the bias by the (absorbed) mean offset.
+
+This module is the table only (no numerical code: the command line reads it for its
+help); :mod:`accelcal.extended_model` implements the model for every entry.  An effect
+of an existing kind (additive or polynomial, any power, time, temperature or no
+covariate) is one more :class:`Effect` in :data:`EFFECTS`.
 
 =====================  ======  =====================================================  ===================
 id                     block   meaning                                                unit (z in unit Z)
@@ -40,9 +47,14 @@ from dataclasses import dataclass
 
 from .errors import AccelcalError
 
-#: Covariates an effect needs from the recording.
+#: Covariates an effect can be multiplied by (centred over the recording's poses).
 TIME = "time"
 TEMPERATURE = "temperature"
+COVARIATES = (TIME, TEMPERATURE)
+#: Where an effect enters: added to ``z`` (outside ``M``), or to ``P(x)`` (inside ``M``).
+ADDITIVE = "additive"
+POLYNOMIAL = "polynomial"
+KINDS = (ADDITIVE, POLYNOMIAL)
 
 
 @dataclass(frozen=True)
@@ -54,17 +66,18 @@ class Effect:
     id : str
         Stable identifier (the name reports use).
     kind : {'additive', 'polynomial'}
-        ``additive``: enters as ``covariate · φ`` added to ``z``; ``polynomial``: enters
-        ``P(x)`` (inside ``M``).
+        ``additive``: enters as ``c φ`` added to ``z``; ``polynomial``: as ``c φ_j x_j^p``
+        added to ``P_j(x)`` (inside ``M``).
     power : int
-        Power of ``x_j`` in ``P_j`` (polynomial effects; 1 for the temperature scale).
+        ``p``: power of ``x_j`` (polynomial effects, at least 1; 0 for additive ones).
     covariate : str or None
-        ``'time'`` or ``'temperature'`` (the effect is multiplied by the centred
-        covariate), or None.
+        ``'time'`` or ``'temperature'`` (``c`` is the centred covariate), or None (``c = 1``).
     symbol : str
         Parameter symbol in reports.
     unit : str
         Unit of the parameters, with ``Z`` the data unit and ``G`` the unit of g.
+    label : str
+        Short name in figures.
     description : str
     """
 
@@ -74,7 +87,21 @@ class Effect:
     covariate: str | None
     symbol: str
     unit: str
+    label: str
     description: str
+
+    def __post_init__(self):
+        if self.kind not in KINDS:
+            raise AccelcalError(f"effect {self.id!r}: kind {self.kind!r} is not one of {', '.join(KINDS)}")
+        if self.covariate is not None and self.covariate not in COVARIATES:
+            raise AccelcalError(f"effect {self.id!r}: covariate {self.covariate!r} is not one of "
+                                f"{', '.join(COVARIATES)} (or None)")
+        if self.kind == ADDITIVE and (self.power != 0 or self.covariate is None):
+            raise AccelcalError(f"effect {self.id!r}: an additive effect has power 0 and a covariate "
+                                "(without one it is the bias)")
+        if self.kind == POLYNOMIAL and not (self.power >= 2 or (self.power == 1 and self.covariate is not None)):
+            raise AccelcalError(f"effect {self.id!r}: a polynomial effect has power >= 2, or power 1 and a "
+                                "covariate (power 1 alone is the scale factor)")
 
     @property
     def parameters(self) -> tuple[str, str, str]:
@@ -83,16 +110,16 @@ class Effect:
 
 #: The library, in a fixed order (ties and tables follow it).
 EFFECTS: dict[str, Effect] = {e.id: e for e in (
-    Effect("quadratic", "polynomial", 2, None, "k", "1/G",
-           "per-axis even nonlinearity x_j + k_j x_j^2 (Batista et al. 2011, F2)"),
-    Effect("cubic", "polynomial", 3, None, "c", "1/G^2",
-           "per-axis odd nonlinearity x_j + c_j x_j^3"),
-    Effect("bias_drift", "additive", 0, TIME, "beta", "Z/s",
-           "bias changing linearly with time over the session"),
-    Effect("temperature", "additive", 0, TEMPERATURE, "gamma", "Z/degC",
-           "bias linear in temperature"),
-    Effect("temperature_scale", "polynomial", 1, TEMPERATURE, "kappa", "1/degC",
-           "scale factor linear in temperature"),
+    Effect(id="quadratic", kind=POLYNOMIAL, power=2, covariate=None, symbol="k", unit="1/G", label="quadratic",
+           description="per-axis even nonlinearity x_j + k_j x_j^2 (Batista et al. 2011, F2)"),
+    Effect(id="cubic", kind=POLYNOMIAL, power=3, covariate=None, symbol="c", unit="1/G^2", label="cubic",
+           description="per-axis odd nonlinearity x_j + c_j x_j^3"),
+    Effect(id="bias_drift", kind=ADDITIVE, power=0, covariate=TIME, symbol="beta", unit="Z/s", label="bias drift",
+           description="bias changing linearly with time over the session"),
+    Effect(id="temperature", kind=ADDITIVE, power=0, covariate=TEMPERATURE, symbol="gamma", unit="Z/degC",
+           label="temperature", description="bias linear in temperature"),
+    Effect(id="temperature_scale", kind=POLYNOMIAL, power=1, covariate=TEMPERATURE, symbol="kappa",
+           unit="1/degC", label="temp. scale", description="scale factor linear in temperature"),
 )}
 
 #: Ids of the library, in order.
@@ -104,7 +131,8 @@ def effect(effect_id: str) -> Effect:
     try:
         return EFFECTS[effect_id]
     except KeyError:
-        raise AccelcalError(f"unknown effect {effect_id!r}; known: {', '.join(EFFECT_IDS)}") from None
+        raise AccelcalError(f"unknown effect {effect_id!r}; known: {', '.join(EFFECTS)}") from None
 
 
-__all__ = ["EFFECTS", "EFFECT_IDS", "Effect", "TEMPERATURE", "TIME", "effect"]
+__all__ = ["ADDITIVE", "COVARIATES", "EFFECTS", "EFFECT_IDS", "Effect", "KINDS", "POLYNOMIAL", "TEMPERATURE", "TIME",
+           "effect"]
