@@ -165,7 +165,7 @@ def _newton(x, y, C, dP, ok, g, rtol):
     tol = rtol * scale
     step = np.empty_like(x)
     converged = False
-    for _ in range(60):
+    for _ in range(60):  # accelcal.extended_model.NEWTON_MAX_ITER
         big = -np.inf
         for b in range(B):
             for i in range(n):
