@@ -1,7 +1,7 @@
 """Calibrations that know their quality, save and load themselves, and apply themselves.
 
 One class per method (as imucal's ``CalibrationInfo`` subclasses), all holding the model
-``z = M P(x) + b + β Δt + γ ΔT`` of :mod:`accelcal.discrepancy.effects` (the plain
+``z = M P(x) + b + β Δt + γ ΔT`` of :mod:`accelcal.effects` (the plain
 ``z = M x + b`` when no effect was fitted):
 
 ==========================  ================  =============================================
@@ -47,6 +47,8 @@ import numpy as np
 
 from .errors import (AccelcalError, DegeneratePosesError, NotConvergedError, NotPositiveDefiniteError,
                      TooFewPosesError)
+from .effects import EFFECT_IDS, EFFECTS, TEMPERATURE, TIME, effect
+from .extended_model import model_terms
 from .jsonsafe import json_safe
 from .registry import ESTIMATORS, estimator
 from .units import G0, acceleration_unit
@@ -55,10 +57,9 @@ FORMAT = "accelcal-calibration"
 #: Version of the JSON layout written by :meth:`Calibration.to_dict` (0: the CLI's output
 #: before versions, read as such).
 FORMAT_VERSION = 1
-#: Effects :meth:`Calibration.apply` can invert (those of :mod:`accelcal.discrepancy.effects`).
-APPLICABLE_EFFECTS = ("quadratic", "cubic", "bias_drift", "temperature", "temperature_scale")
-_NEWTON_ITER = 60
-_NEWTON_RTOL = 1e-14
+#: Effects :meth:`Calibration.apply` can invert: every effect of :mod:`accelcal.effects`
+#: (:mod:`accelcal.extended_model` implements the model for each).
+APPLICABLE_EFFECTS = EFFECT_IDS
 
 
 class CalibrationFileError(AccelcalError):
@@ -72,10 +73,10 @@ class EffectTerm:
     Attributes
     ----------
     id : str
-        ``quadratic``, ``cubic``, ``bias_drift``, ``temperature``, ``temperature_scale``.
+        An id of :data:`accelcal.effects.EFFECTS`.
     values : ndarray, shape (3,)
-        The parameters (``k``, ``c``, ``β``, ``γ``, ``κ`` per axis), units of
-        :mod:`accelcal.discrepancy.effects` (data unit Z, unit of g G).
+        The parameters per axis (``k``, ``c``, ``β``, ``γ``, ``κ``, ...), units of
+        :mod:`accelcal.effects` (data unit Z, unit of g G).
     reference : float or None
         Centre of the covariate (session mean time [s] or temperature [°C]).
     standard_errors : ndarray, shape (3,), or None
@@ -87,8 +88,6 @@ class EffectTerm:
     standard_errors: np.ndarray | None = None
 
     def to_dict(self) -> dict:
-        from .discrepancy.effects import effect
-
         e = effect(self.id)
         return {"id": self.id, "kind": e.kind, "covariate": e.covariate, "reference": self.reference,
                 "unit": e.unit, "parameters": dict(zip(e.parameters, map(float, self.values))),
@@ -97,8 +96,6 @@ class EffectTerm:
 
     @classmethod
     def from_dict(cls, d: dict) -> EffectTerm:
-        from .discrepancy.effects import effect
-
         e = effect(d["id"])
         vals = np.array([float(d["parameters"][p]) for p in e.parameters])
         se = d.get("standard_errors")
@@ -166,8 +163,8 @@ class Calibration:
             raise CalibrationFileError(f"a calibration needs a finite bias (3,) and M (3, 3); got M {M.shape}")
         object.__setattr__(self, "M", M)
         for e in self.effects:
-            if e.id not in APPLICABLE_EFFECTS:
-                raise CalibrationFileError(f"effect {e.id!r} cannot be applied; known: {', '.join(APPLICABLE_EFFECTS)}")
+            if e.id not in EFFECTS:
+                raise CalibrationFileError(f"effect {e.id!r} cannot be applied; known: {', '.join(EFFECTS)}")
 
     # ----------------------------------------------------------------- derived quantities
 
@@ -245,39 +242,19 @@ class Calibration:
         z = self._to_fit_unit(z, unit)
         terms = self.effects if effects else ()
         n = len(z)
-        cov = {"time": _covariate(t, n, "t", terms, "time"), "temperature": _covariate(temp, n, "temp", terms,
-                                                                                         "temperature")}
-        from .discrepancy.effects import EFFECTS
-
-        add = np.zeros_like(z)
-        c1 = np.ones_like(z)
-        c2 = np.zeros(3)
-        c3 = np.zeros(3)
-        for term in terms:
-            e = EFFECTS[term.id]
-            if e.kind == "additive":
-                add += (cov[e.covariate] - term.reference)[:, None] * term.values
-            elif e.power == 1:
-                c1 = c1 + (cov[e.covariate] - term.reference)[:, None] * term.values
-            elif e.power == 2:
-                c2 = c2 + term.values
-            else:
-                c3 = c3 + term.values
-        y = np.linalg.solve(self.M, (z - self.bias - add).T).T
-        if not any(EFFECTS[tm.id].kind == "polynomial" for tm in terms):
+        cov = {TIME: _covariate(t, n, "t", terms, TIME), TEMPERATURE: _covariate(temp, n, "temp", terms, TEMPERATURE)}
+        model = model_terms([tm.id for tm in terms], np.array([tm.values for tm in terms]).reshape(-1, 3), cov, n,
+                            references=[tm.reference for tm in terms])
+        y = np.linalg.solve(self.M, (z - self.bias - model.offset).T).T
+        if not model.polynomial:
             return y
-        x = y.copy()
-        scale = max(float(np.max(np.abs(y))), self.g)
-        for _ in range(_NEWTON_ITER):
-            slope = c1 + 2 * c2 * x + 3 * c3 * x * x
-            if np.any(slope <= 0):
-                raise CalibrationFileError("the calibration's polynomial effects are not monotonic over these "
-                                           "samples (they lie outside the calibrated range): cannot invert them")
-            step = (c1 * x + c2 * x * x + c3 * x ** 3 - y) / slope
-            x -= step
-            if np.max(np.abs(step)) <= _NEWTON_RTOL * scale:
-                return x
-        raise CalibrationFileError("the polynomial effects did not invert (Newton did not converge)")
+        x, slope, converged = model.solve(y, max(float(np.max(np.abs(y))), self.g))
+        if not np.all(slope > 0):
+            raise CalibrationFileError("the calibration's polynomial effects are not monotonic over these "
+                                       "samples (they lie outside the calibrated range): cannot invert them")
+        if not converged:
+            raise CalibrationFileError("the polynomial effects did not invert (Newton did not converge)")
+        return x
 
     def _to_fit_unit(self, z: np.ndarray, unit: str | None) -> np.ndarray:
         given = self.input_unit if unit is None else acceleration_unit(unit)
@@ -527,7 +504,6 @@ def _method_values(cls, d: dict) -> dict:
 
 def _from_discrepancy(d: dict) -> ExtendedCalibration:
     """The base model + named effects of an ``accelcal discrepancy`` report."""
-    from .discrepancy.effects import effect
     from .model import m_from_params
 
     after = d["model_after"]
@@ -538,11 +514,11 @@ def _from_discrepancy(d: dict) -> ExtendedCalibration:
     s = np.array([val[f"s_{a}"] for a in "xyz"])
     th = np.array([val[k] for k in ("theta_xy", "theta_zx", "theta_zy")])
     poses = d.get("poses") or {}
-    refs = {"time": after.get("t_ref"), "temperature": after.get("temp_ref")}
-    if refs["time"] is None and poses.get("t"):
-        refs["time"] = float(np.mean(poses["t"]))
-    if refs["temperature"] is None and poses.get("temp"):
-        refs["temperature"] = float(np.mean(poses["temp"]))
+    refs = {TIME: after.get("t_ref"), TEMPERATURE: after.get("temp_ref")}
+    if refs[TIME] is None and poses.get("t"):
+        refs[TIME] = float(np.mean(poses["t"]))
+    if refs[TEMPERATURE] is None and poses.get("temp"):
+        refs[TEMPERATURE] = float(np.mean(poses["temp"]))
     terms = []
     for eid in after.get("effects", []):
         e = effect(eid)
@@ -569,8 +545,6 @@ def _from_discrepancy(d: dict) -> ExtendedCalibration:
 
 
 def _covariate(values, n: int, name: str, terms, kind: str):
-    from .discrepancy.effects import EFFECTS
-
     needed = [t.id for t in terms if EFFECTS[t.id].covariate == kind]
     if not needed:
         return None

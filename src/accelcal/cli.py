@@ -17,6 +17,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from . import __version__
+from .effects import EFFECT_IDS, TIME, effect
 from .errors import AccelcalError
 from .registry import ESTIMATORS
 
@@ -196,8 +197,8 @@ def _parser() -> argparse.ArgumentParser:
     d = sub.add_parser("discrepancy", help="find where the calibrated model and the recording disagree, name the "
                                            "missing effect and noise term",
                        description="Fit the model of Burkhard et al. (2024) to the static poses of RECORDING, "
-                                   "test a library of candidate effects (quadratic, cubic, bias_drift, temperature, "
-                                   "temperature_scale) as nested extensions and name the one the residuals ask for "
+                                   f"test a library of candidate effects ({', '.join(EFFECT_IDS)}) as nested "
+                                   "extensions and name the one the residuals ask for "
                                    "(or 'none'); compare the Allan deviation of the rests with a white-noise "
                                    "simulator and name the missing noise term.",
                        formatter_class=argparse.RawDescriptionHelpFormatter, epilog=DISCREPANCY_HELP + epilog)
@@ -416,11 +417,12 @@ def _apply(args) -> int:
         raise AccelcalError(f"{args.recording} is read as {rec.unit} but {args.calibration} was made from "
                             f"{expected}: pass --unit {'counts' if expected == 'counts' else 'm/s2 (or g, mg)'}")
     effects = () if args.no_effects else cal.effects
-    drift = [e for e in effects if e.id == "bias_drift"]
+    # a term in time runs on the calibration session's clock: it describes that session only
+    drift = [e.id for e in effects if effect(e.id).covariate == TIME]
     if drift and cal.provenance.get("recording_sha256") != sha256_file(args.recording):
-        _warn("the calibration's bias_drift term describes the drift during its own session; it is not applied to "
-              "another recording")
-        effects = tuple(e for e in effects if e.id != "bias_drift")
+        _warn(f"the calibration's {', '.join(drift)} term describes the drift during its own session; it is not "
+              "applied to another recording")
+        effects = tuple(e for e in effects if e.id not in drift)
     cal = replace(cal, effects=effects)
     x = cal.apply(rec.acc, t=rec.t, temp=rec.temp, unit=rec.unit)
     _write_corrected(args.out, rec, x)

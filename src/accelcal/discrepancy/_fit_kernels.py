@@ -9,9 +9,11 @@ in numpy it costs dozens of array calls.  :func:`evaluate_batch` is
 algorithm (the same Newton iterations, stopped by the same batch-wide test), same
 arithmetic up to the order of floating-point sums.
 
-Effects are passed as codes (:data:`ADDITIVE`, :data:`SCALE`, or the power 2, 3 of a
-polynomial term) with their centred covariate per pose.  Imported only through
-:func:`accelcal.kernels.compiled` (it imports numba).
+Effects are passed as the arrays of :attr:`accelcal.extended_model.EffectTerms.kernel_arrays`
+(per effect: its covariate column, the power of ``x``, whether it is additive): every
+effect of :mod:`accelcal.effects` runs through the same loops, in the sums and products
+of :mod:`accelcal.extended_model`.  Imported only through :func:`accelcal.kernels.compiled`
+(it imports numba).
 """
 
 from __future__ import annotations
@@ -19,11 +21,6 @@ from __future__ import annotations
 import numpy as np
 
 from ..kernels import jit
-
-#: Effect codes: an additive term ``φ c_i``, a scale term ``P(x) = (1 + φ c_i) x``; 2 and 3
-#: are the polynomial terms ``φ x²`` and ``φ x³``.
-ADDITIVE = 0
-SCALE = 1
 
 
 def _model(p, M, dM, A):
@@ -59,51 +56,47 @@ def _model(p, M, dM, A):
     return ok
 
 
-def _evaluate_batch(P, z, cov, code, g, jacobian, rtol):
+def _evaluate_batch(P, z, cov, power, additive, g, jacobian, rtol):
     """Residuals ``r`` (B, n), Jacobian ``J`` (B, n, q) (empty if not ``jacobian``) and
     implied specific force ``x`` (B, n, 3): :func:`accelcal.discrepancy.fit.evaluate_batch`."""
     B, q = P.shape
     n = z.shape[0]
-    k = code.shape[0]
+    k = power.shape[0]
+    top = 1  # the highest power of P(x)
+    poly = False  # P(x) = y needs solving (a power-1 term too)
+    for e in range(k):
+        if not additive[e]:
+            poly = True
+            top = max(top, power[e])
     Ms = np.empty((B, 3, 3))
     dMs = np.empty((B, 6, 3, 3))
     As = np.empty((B, 3, 3))
     ok = np.empty(B, np.bool_)
     y = np.empty((B, n, 3))
-    c1 = np.ones((B, n, 3))
-    c2 = np.zeros((B, 3))
-    c3 = np.zeros((B, 3))
-    poly = False
-    for e in range(k):
-        poly = poly or code[e] != ADDITIVE  # P(x) = y needs solving (the scale term too)
+    C = np.zeros((B, n, 3, top + 1))  # C[b, i, j, p]: coefficient of x_j^p in P_j at pose i
     for b in range(B):
         ok[b] = _model(P[b], Ms[b], dMs[b], As[b])
         for i in range(n):
             d0, d1, d2 = z[i, 0] - P[b, 0], z[i, 1] - P[b, 1], z[i, 2] - P[b, 2]
             a0, a1, a2 = 0.0, 0.0, 0.0
+            for j in range(3):
+                C[b, i, j, 1] = 1.0
             for e in range(k):
                 o = 9 + 3 * e
-                if code[e] == ADDITIVE:
+                if additive[e]:
                     a0 += cov[e, i] * P[b, o]
                     a1 += cov[e, i] * P[b, o + 1]
                     a2 += cov[e, i] * P[b, o + 2]
-                elif code[e] == SCALE:
+                else:
                     for j in range(3):
-                        c1[b, i, j] += cov[e, i] * P[b, o + j]
+                        C[b, i, j, power[e]] += cov[e, i] * P[b, o + j]
             d0, d1, d2 = d0 - a0, d1 - a1, d2 - a2
             for j in range(3):
                 y[b, i, j] = d0 * As[b, j, 0] + d1 * As[b, j, 1] + d2 * As[b, j, 2]
-        for e in range(k):
-            o = 9 + 3 * e
-            for j in range(3):
-                if code[e] == 2:
-                    c2[b, j] += P[b, o + j]
-                elif code[e] == 3:
-                    c3[b, j] += P[b, o + j]
     x = y.copy()
-    dP = c1.copy()
+    dP = np.ones((B, n, 3))
     if poly:
-        _newton(x, y, c1, c2, c3, dP, ok, g, rtol)
+        _newton(x, y, C, dP, ok, g, rtol)
     r = np.empty((B, n))
     norm = np.empty((B, n))
     for b in range(B):
@@ -117,11 +110,50 @@ def _evaluate_batch(P, z, cov, code, g, jacobian, rtol):
             r[b, :] = np.nan
     J = np.empty((B, n, q if jacobian else 0))
     if jacobian:
-        _jacobian(J, x, y, norm, dP, As, dMs, cov, code)
+        _jacobian(J, x, y, norm, dP, As, dMs, cov, power, additive)
     return r, J, x
 
 
-def _newton(x, y, c1, c2, c3, dP, ok, g, rtol):
+def _ipow(x, p):
+    """``x ** p`` for an integer ``p >= 0`` as numba computes it (by squaring: ``x³ = x (x x)``)."""
+    r = 1.0
+    while p:
+        if p & 1:
+            r *= x
+        p >>= 1
+        x *= x
+    return r
+
+
+def _value_and_slope(C, b, i, j, xx):
+    """``P(x)`` and ``P'(x)`` of coordinate ``j`` of pose ``i`` (``C[b, i, j, p]`` the
+    coefficient of ``x^p``), in the sums and products of
+    :meth:`accelcal.extended_model.ModelTerms.solve` (``C₂ x²`` as ``(C₂ x) x``,
+    ``p C_p x^(p-1)`` as ``(p C_p) x … x``, powers ascending).  The squares and cubes are
+    written out: the same products as the loop, which costs half as much again."""
+    top = C.shape[3] - 1
+    c = C[b, i, j, 1]
+    value = c * xx
+    slope = c
+    if top >= 2:
+        c = C[b, i, j, 2]
+        value += c * xx * xx
+        slope += 2 * c * xx
+    if top >= 3:
+        c = C[b, i, j, 3]
+        value += c * (xx * (xx * xx))
+        slope += 3 * c * xx * xx
+    for p in range(4, top + 1):
+        c = C[b, i, j, p]
+        value += c * _ipow(xx, p)
+        t = p * c
+        for _ in range(p - 1):
+            t *= xx
+        slope += t
+    return value, slope
+
+
+def _newton(x, y, C, dP, ok, g, rtol):
     """Solve ``P(x) = y`` axis by axis in place (Newton, one stopping test for the whole
     batch, as the numpy reference), then ``dP = P'(x)``; clears ``ok`` where it fails."""
     B, n, _ = x.shape
@@ -133,15 +165,14 @@ def _newton(x, y, c1, c2, c3, dP, ok, g, rtol):
     tol = rtol * scale
     step = np.empty_like(x)
     converged = False
-    for _ in range(60):
+    for _ in range(60):  # accelcal.extended_model.NEWTON_MAX_ITER
         big = -np.inf
         for b in range(B):
             for i in range(n):
                 for j in range(3):
                     xx = x[b, i, j]
-                    d = c1[b, i, j] + 2 * c2[b, j] * xx + 3 * c3[b, j] * xx * xx
-                    f = c1[b, i, j] * xx + c2[b, j] * xx * xx + c3[b, j] * xx ** 3 - y[b, i, j]
-                    s = f / d if d > 0 else np.nan
+                    f, d = _value_and_slope(C, b, i, j, xx)
+                    s = (f - y[b, i, j]) / d if d > 0 else np.nan
                     step[b, i, j] = s
                     x[b, i, j] = xx - s
                     if abs(s) > big:  # noqa: PLR1730 (NaN never compares greater: nanmax)
@@ -154,17 +185,17 @@ def _newton(x, y, c1, c2, c3, dP, ok, g, rtol):
             for j in range(3):
                 if not converged and not abs(step[b, i, j]) <= tol:
                     ok[b] = False
-                xx = x[b, i, j]
-                dP[b, i, j] = c1[b, i, j] + 2 * c2[b, j] * xx + 3 * c3[b, j] * xx * xx
+                dP[b, i, j] = _value_and_slope(C, b, i, j, x[b, i, j])[1]
                 if not dP[b, i, j] > 0:
                     ok[b] = False
 
 
-def _jacobian(J, x, y, norm, dP, As, dMs, cov, code):
+def _jacobian(J, x, y, norm, dP, As, dMs, cov, power, additive):
     """Analytic Jacobian of the residuals (module docstring of :mod:`accelcal.discrepancy.fit`).
 
     ``∂r/∂p_k = -w (∂M/∂p_k) y``: each ``∂M/∂(s, θ)_k`` has one non-zero row with one to
-    three non-zero entries (:func:`_model`), and only those are summed."""
+    three non-zero entries (:func:`_model`), and only those are summed.  The effects'
+    columns are :meth:`accelcal.extended_model.EffectTerms.jacobian_columns`."""
     B, n, _ = x.shape
     v = np.empty(3)
     w = np.empty(3)
@@ -184,23 +215,21 @@ def _jacobian(J, x, y, norm, dP, As, dMs, cov, code):
             J[b, i, 6] = -(w[1] * (dM[3, 1, 0] * y0 + dM[3, 1, 1] * y1))
             J[b, i, 7] = -(w[2] * (dM[4, 2, 0] * y0 + dM[4, 2, 2] * y2))
             J[b, i, 8] = -(w[2] * (dM[5, 2, 1] * y1 + dM[5, 2, 2] * y2))
-            for e in range(code.shape[0]):
+            for e in range(power.shape[0]):
                 o = 9 + 3 * e
                 for j in range(3):
-                    if code[e] == ADDITIVE:
+                    if additive[e]:
                         J[b, i, o + j] = -w[j] * cov[e, i]
-                    elif code[e] == SCALE:
-                        J[b, i, o + j] = -v[j] * x[b, i, j] * cov[e, i]
                     else:
-                        J[b, i, o + j] = -v[j] * x[b, i, j] ** code[e]
+                        J[b, i, o + j] = -v[j] * _ipow(x[b, i, j], power[e]) * cov[e, i]
 
 
-def _lopo_system(P, z, cov, code, g, rtol, sig, normal):
+def _lopo_system(P, z, cov, power, additive, g, rtol, sig, normal):
     """One Gauss–Newton system per leave-one-pose-out refit (row ``b`` of ``P`` leaves out
     pose ``b``): residuals ``r`` (B, n), the reduced χ² ``cost`` (B,), and if ``normal``
     the column scales ``d`` (B, q) and the scaled normal equations ``H`` (B, q, q),
     ``grad`` (B, q), as :func:`accelcal.discrepancy.fit.lopo` forms them (else empty)."""
-    r, J, _ = _evaluate_batch(P, z, cov, code, g, normal, rtol)
+    r, J, _ = _evaluate_batch(P, z, cov, power, additive, g, normal, rtol)
     B, n = r.shape
     q = J.shape[2]
     cost = np.empty(B)
@@ -268,11 +297,11 @@ def _lu_solve(H, g, x):
     return True
 
 
-def _lopo_step(P, z, cov, code, g, rtol, sig, normal):
+def _lopo_step(P, z, cov, power, additive, g, rtol, sig, normal):
     """:func:`_lopo_system` and its Gauss–Newton step: ``(r, cost, step / d, pred, d, H, grad,
     solved)`` with ``step = -H⁻¹ grad`` and ``pred = -grad · step`` per row; ``solved`` false if
     some ``H`` is singular (then the caller takes the pseudo-inverse of every row, as numpy)."""
-    r, cost, d, H, grad = _lopo_system(P, z, cov, code, g, rtol, sig, normal)
+    r, cost, d, H, grad = _lopo_system(P, z, cov, power, additive, g, rtol, sig, normal)
     B, q = d.shape
     step = np.empty((B, q))
     pred = np.empty(B)
@@ -288,10 +317,10 @@ def _lopo_step(P, z, cov, code, g, rtol, sig, normal):
     return r, cost, step, pred, d, H, grad, solved
 
 
-def _weighted(p, z, cov, code, g, rtol, sig):
+def _weighted(p, z, cov, power, additive, g, rtol, sig):
     """Residuals, weighted Jacobian ``J / σ`` and ``x`` at one parameter vector; ``ok`` false
     where the model cannot be inverted (the numpy fit's ``fun`` returning None)."""
-    r, J, x = _evaluate_batch(p.reshape(1, -1), z, cov, code, g, True, rtol)
+    r, J, x = _evaluate_batch(p.reshape(1, -1), z, cov, power, additive, g, True, rtol)
     n, q = J.shape[1], J.shape[2]
     ok = True
     for i in range(n):
@@ -380,10 +409,10 @@ def _least_squares(A, b):
     return x
 
 
-def _lm_fit(p, z, cov, code, g, rtol, sig, max_iter, chi2_tol):
+def _lm_fit(p, z, cov, power, additive, g, rtol, sig, max_iter, chi2_tol):
     """:func:`accelcal.discrepancy.fit.fit` from the start ``p``: returns ``(p, r, J / σ, x,
     iterations, status)``, status 0 converged, 1 start not invertible, 2 not converged."""
-    r, J, x, ok = _weighted(p, z, cov, code, g, rtol, sig)
+    r, J, x, ok = _weighted(p, z, cov, power, additive, g, rtol, sig)
     if not ok:
         return p, r, J, x, 0, 1
     cost = _chi2(r, sig)
@@ -391,7 +420,7 @@ def _lm_fit(p, z, cov, code, g, rtol, sig, max_iter, chi2_tol):
     for it in range(1, max_iter + 1):
         step, pred = _lm_step(r, J, sig, cost, lam)
         p_new = p + step
-        r_new, J_new, x_new, ok = _weighted(p_new, z, cov, code, g, rtol, sig)
+        r_new, J_new, x_new, ok = _weighted(p_new, z, cov, power, additive, g, rtol, sig)
         cost_new = _chi2(r_new, sig) if ok else np.inf
         if ok and cost_new <= cost:
             p, r, J, x = p_new, r_new, J_new, x_new
@@ -411,6 +440,8 @@ def _lm_fit(p, z, cov, code, g, rtol, sig, max_iter, chi2_tol):
 
 _model = jit(_model)
 _newton = jit(_newton)
+_ipow = jit(_ipow, inline="always")
+_value_and_slope = jit(_value_and_slope, inline="always")
 _jacobian = jit(_jacobian)
 _evaluate_batch = jit(_evaluate_batch)
 _lopo_system = jit(_lopo_system)
@@ -423,28 +454,33 @@ _lm_step = jit(_lm_step)
 _lm_fit = jit(_lm_fit)
 
 
-def evaluate_batch(P, z, cov, code, g: float, jacobian: bool, rtol: float):
+def _arrays(cov, power, additive):
+    return (np.ascontiguousarray(cov, dtype=np.float64), np.ascontiguousarray(power, dtype=np.int64),
+            np.ascontiguousarray(additive, dtype=np.bool_))
+
+
+def evaluate_batch(P, z, cov, power, additive, g: float, jacobian: bool, rtol: float):
     """Residuals, Jacobian (None if not ``jacobian``) and implied specific force of the
     parameter stack ``P`` (B, q) on the pose means ``z`` (n, 3); ``cov`` (k, n) the centred
-    covariate of each effect (zeros for the polynomial ones), ``code`` (k,) its kind."""
+    covariate of each effect (ones where it has none), ``power`` (k,) the power of ``x``,
+    ``additive`` (k,) whether it is added to ``z`` (:attr:`accelcal.extended_model.EffectTerms.kernel_arrays`)."""
     r, J, x = _evaluate_batch(np.ascontiguousarray(P, dtype=np.float64), np.ascontiguousarray(z, dtype=np.float64),
-                              np.ascontiguousarray(cov, dtype=np.float64), np.asarray(code, dtype=np.int64),
-                              float(g), bool(jacobian), float(rtol))
+                              *_arrays(cov, power, additive), float(g), bool(jacobian), float(rtol))
     return r, (J if jacobian else None), x
 
 
-def lopo_step(P, z, cov, code, g: float, rtol: float, sig, normal: bool = True):
+def lopo_step(P, z, cov, power, additive, g: float, rtol: float, sig, normal: bool = True):
     """:func:`_lopo_step` on contiguous float arrays."""
     return _lopo_step(np.ascontiguousarray(P, dtype=np.float64), np.ascontiguousarray(z, dtype=np.float64),
-                        np.ascontiguousarray(cov, dtype=np.float64), np.asarray(code, dtype=np.int64), float(g),
-                        float(rtol), np.ascontiguousarray(sig, dtype=np.float64), bool(normal))
+                      *_arrays(cov, power, additive), float(g), float(rtol),
+                      np.ascontiguousarray(sig, dtype=np.float64), bool(normal))
 
 
-def lm_fit(p, z, cov, code, g: float, rtol: float, sig, max_iter: int, chi2_tol: float):
+def lm_fit(p, z, cov, power, additive, g: float, rtol: float, sig, max_iter: int, chi2_tol: float):
     """:func:`_lm_fit` on contiguous float arrays."""
     return _lm_fit(np.array(p, dtype=np.float64), np.ascontiguousarray(z, dtype=np.float64),
-                   np.ascontiguousarray(cov, dtype=np.float64), np.asarray(code, dtype=np.int64), float(g), float(rtol),
+                   *_arrays(cov, power, additive), float(g), float(rtol),
                    np.ascontiguousarray(sig, dtype=np.float64), int(max_iter), float(chi2_tol))
 
 
-__all__ = ["ADDITIVE", "SCALE", "evaluate_batch", "lm_fit", "lopo_step"]
+__all__ = ["evaluate_batch", "lm_fit", "lopo_step"]

@@ -8,15 +8,16 @@ samples; :func:`accelcal.evaluation.residual_sigma`).  ``σ_i`` is computed once
 at the closed-form (full LLS) fit, and then held fixed, so that every model of a
 recording is fitted to, and compared on, the same weighted data.
 
-Model.  :mod:`accelcal.discrepancy.effects`: ``z = M P(x) + b + β Δt + γ ΔT`` with the
-pose residual ``r_i = ||x_i|| - g`` (the magnitude a calibration predicts; the pose
-direction is a nuisance, as in the base estimators).  ``x_i`` solves ``P(x_i) = y_i``,
-``y_i = M⁻¹(z_i - b - β Δt_i - γ ΔT_i)``, axis by axis (Newton, from ``x = y``; exact in
-one step when no polynomial effect is present).  The Jacobian is analytic (implicit
-differentiation): with ``v_ij = x̂_ij / P_j'(x_ij)`` and ``w_i = v_iᵀ M⁻¹``::
+Model.  :mod:`accelcal.effects`, implemented by :mod:`accelcal.extended_model`:
+``z = M P(x) + b + Σ_additive c φ`` (``z = M P(x) + b + β Δt + γ ΔT`` with the library's
+effects) with the pose residual ``r_i = ||x_i|| - g`` (the magnitude a calibration
+predicts; the pose direction is a nuisance, as in the base estimators).  ``x_i`` solves
+``P(x_i) = y_i``, ``y_i = M⁻¹(z_i - b - Σ_additive c_i φ)``, axis by axis (Newton, from
+``x = y``; not needed when no polynomial effect is present).  The Jacobian is analytic
+(implicit differentiation): with ``v_ij = x̂_ij / P_j'(x_ij)`` and ``w_i = v_iᵀ M⁻¹``::
 
-    ∂r/∂b = -w,  ∂r/∂(s,θ)_k = -w (∂M/∂p_k) y,  ∂r/∂β_j = -w_j Δt,  ∂r/∂γ_j = -w_j ΔT,
-    ∂r/∂k_j = -v_j x_j²,  ∂r/∂c_j = -v_j x_j³,  ∂r/∂κ_j = -v_j ΔT x_j.
+    ∂r/∂b = -w,  ∂r/∂(s,θ)_k = -w (∂M/∂p_k) y,
+    ∂r/∂φ_j = -w_j c (additive effects: β, γ),  ∂r/∂φ_j = -v_j c x_j^p (polynomial: k, c, κ).
 
 At zero effect parameters ``∂r/∂(b, s, θ)`` is :func:`accelcal.uncertainty.residual_jacobian`.
 
@@ -44,18 +45,17 @@ from functools import cached_property
 
 import numpy as np
 
-from .. import kernels
+from .. import extended_model, kernels
+from ..effects import COVARIATES, TEMPERATURE, TIME, effect
 from ..errors import AccelcalError, NotConvergedError
+from ..extended_model import NEWTON_RTOL, EffectTerms, effect_terms
 from ..model import m_from_params, params_from_m
-from .effects import EFFECTS, TEMPERATURE, TIME, effect
 
 #: Stop when the Gauss–Newton step predicts a χ² decrease below this (χ² is dimensionless).
 CHI2_TOL = 1e-10
 #: Iteration caps of the full fits and of the warm-started leave-one-pose-out refits.
 MAX_ITER = 200
 MAX_ITER_LOPO = 50
-#: Relative tolerance of the per-axis Newton solve of ``P(x) = y``.
-NEWTON_RTOL = 1e-14
 N_BASE = 9
 #: The compiled kernels of :func:`evaluate_batch`, :func:`fit` and :func:`lopo` (:mod:`accelcal.kernels`).
 _KERNELS = "discrepancy._fit_kernels"
@@ -99,9 +99,25 @@ class PoseData:
     t_start: np.ndarray | None = None
     t_end: np.ndarray | None = None
     index: np.ndarray | None = None
+    _terms: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __len__(self) -> int:
         return len(self.z)
+
+    def effect_terms(self, effects) -> EffectTerms:
+        """The effects on these poses (:func:`accelcal.extended_model.effect_terms`), kept:
+        a recording's loop evaluates the same models hundreds of times.
+
+        Raises
+        ------
+        AccelcalError
+            An effect needs a covariate the recording lacks.
+        """
+        key = tuple(effects)
+        terms = self._terms.get(key)
+        if terms is None:
+            terms = self._terms[key] = effect_terms(key, {name: self.covariate(name) for name in COVARIATES}, len(self))
+        return terms
 
     def covariate(self, name: str | None) -> np.ndarray | None:
         """The centred covariate ``Δt`` or ``ΔT`` (None if the recording has no such column)."""
@@ -231,74 +247,31 @@ def evaluate_batch(P, data: PoseData, effects, jacobian: bool = True):
         The true specific force each pose implies (unit of g).
     """
     P = np.atleast_2d(np.asarray(P, float))
-    K, cov, codes = _kernel_inputs(data, effects)
+    K, terms = _model(data, effects)
     if K is not None:
-        return K.evaluate_batch(P, data.z, *codes, data.g, jacobian, NEWTON_RTOL)
-    return _evaluate_batch_numpy(P, data, effects, jacobian, cov)
+        return K.evaluate_batch(P, data.z, *terms.kernel_arrays, data.g, jacobian, NEWTON_RTOL)
+    return _evaluate_batch_numpy(P, data, terms, jacobian)
 
 
-def _kernel_inputs(data: PoseData, effects):
-    """``(K, cov, codes)``: the compiled kernel module (None: numpy runs; also when an effect's
-    covariate is missing, so that both paths fail alike), the covariates, and the effects as
-    the kernel takes them (:func:`_effect_codes`)."""
-    cov = {TIME: data.covariate(TIME), TEMPERATURE: data.covariate(TEMPERATURE)}
-    K = kernels.compiled(_KERNELS)
-    if K is None or any(EFFECTS[e].covariate is not None and cov[EFFECTS[e].covariate] is None for e in effects):
-        return None, cov, None
-    return K, cov, _effect_codes(data, effects, cov)
+def _model(data: PoseData, effects) -> tuple[object, EffectTerms]:
+    """``(K, terms)``: the compiled kernel module (None: numpy runs) and the effects on the
+    poses (:meth:`PoseData.effect_terms`; an effect whose covariate the recording lacks
+    fails here, on both paths alike)."""
+    return kernels.compiled(_KERNELS), data.effect_terms(effects)
 
 
-def _effect_codes(data: PoseData, effects, cov: dict) -> tuple[np.ndarray, np.ndarray]:
-    """The effects as the compiled kernel takes them: centred covariate per pose (k, n), zeros
-    for the polynomial terms, and kind codes (0 additive, 1 scale, 2 or 3 the power)."""
-    cols = np.zeros((len(effects), len(data)))
-    codes = np.empty(len(effects), np.int64)
-    for i, eid in enumerate(effects):
-        e = EFFECTS[eid]
-        codes[i] = 0 if e.kind == "additive" else e.power
-        if e.kind == "additive" or e.power == 1:
-            cols[i] = cov[e.covariate]
-    return cols, codes
-
-
-def _evaluate_batch_numpy(P, data: PoseData, effects, jacobian: bool, cov: dict):
+def _evaluate_batch_numpy(P, data: PoseData, terms: EffectTerms, jacobian: bool):
     """:func:`evaluate_batch` in numpy (the reference of the compiled kernel)."""
     Bn = P.shape[0]
     n = len(data)
     M, dM, ok = _m_and_derivatives(P[:, 3:6], P[:, 6:9])
     A = np.linalg.inv(np.where(ok[:, None, None], M, np.eye(3)))
-    add = np.zeros((Bn, n, 3))
-    c1 = np.ones((Bn, n, 3))
-    c2 = np.zeros((Bn, 1, 3))
-    c3 = np.zeros((Bn, 1, 3))
-    blocks = []
-    for i, eid in enumerate(effects):
-        e = EFFECTS[eid]
-        phi = P[:, None, N_BASE + 3 * i: N_BASE + 3 * i + 3]  # (B, 1, 3)
-        blocks.append(e)
-        if e.kind == "additive":
-            add = add + cov[e.covariate][None, :, None] * phi
-        elif e.power == 1:  # temperature-dependent scale factor
-            c1 = c1 + cov[e.covariate][None, :, None] * phi
-        elif e.power == 2:
-            c2 = c2 + phi
-        else:
-            c3 = c3 + phi
-    y = (data.z[None] - P[:, None, :3] - add) @ A.transpose(0, 2, 1)
-    x = y.copy()
-    dP = c1
-    if any(e.kind == "polynomial" for e in blocks):
-        scale = max(float(np.max(np.abs(y))), data.g)
-        for _ in range(60):
-            dP = c1 + 2 * c2 * x + 3 * c3 * x * x
-            step = (c1 * x + c2 * x * x + c3 * x ** 3 - y) / np.where(dP > 0, dP, np.nan)
-            x = x - step
-            if not np.nanmax(np.abs(step)) > NEWTON_RTOL * scale:
-                break
-        else:
-            ok = ok & np.all(np.abs(step) <= NEWTON_RTOL * scale, axis=(1, 2))
-        dP = c1 + 2 * c2 * x + 3 * c3 * x * x
-        ok = ok & np.all(dP > 0, axis=(1, 2))
+    model = terms.at(P[:, N_BASE:].reshape(Bn, -1, 3))
+    y = (data.z[None] - P[:, None, :3] - model.offset) @ A.transpose(0, 2, 1)
+    x, dP = y, 1.0
+    if model.polynomial:
+        x, dP, converged = model.solve(y, max(float(np.max(np.abs(y))), data.g), NEWTON_RTOL)
+        ok = ok & converged & np.all(dP > 0, axis=(1, 2))
     norm = np.linalg.norm(x, axis=2)
     r = norm - data.g
     ok = ok & np.all(np.isfinite(r), axis=1)
@@ -309,14 +282,7 @@ def _evaluate_batch_numpy(P, data: PoseData, effects, jacobian: bool, cov: dict)
     w = v @ A
     # ∂r/∂p_k = -w (∂M/∂p_k) y for the six (s, θ): all at once as one batched matmul
     dMy = (y @ dM.reshape(Bn, 18, 3).transpose(0, 2, 1)).reshape(Bn, n, 6, 3)
-    cols = [-w, -np.sum(dMy * w[:, :, None, :], axis=3)]
-    for e in blocks:
-        if e.kind == "additive":
-            cols.append(-w * cov[e.covariate][None, :, None])
-        elif e.power == 1:
-            cols.append(-v * x * cov[e.covariate][None, :, None])
-        else:
-            cols.append(-v * x ** e.power)
+    cols = [-w, -np.sum(dMy * w[:, :, None, :], axis=3), *terms.jacobian_columns(v, w, x)]
     return r, np.concatenate(cols, axis=2), x
 
 
@@ -357,27 +323,11 @@ def forward(x, M, bias, params: dict, dt=None, dtemp=None) -> np.ndarray:
     M, bias : array_like
         Base model (``M`` in data unit per unit of g).
     params : dict
-        ``{effect_id: (3,) parameters}`` (:mod:`accelcal.discrepancy.effects`).
+        ``{effect_id: (3,) parameters}`` (:mod:`accelcal.effects`).
     dt, dtemp : array_like, shape (n,), optional
         Centred time and temperature of each row (needed by the effects that use them).
     """
-    x = np.asarray(x, float)
-    cov = {TIME: None if dt is None else np.asarray(dt, float)[:, None],
-           TEMPERATURE: None if dtemp is None else np.asarray(dtemp, float)[:, None]}
-    P = x.copy()
-    add = np.zeros_like(x)
-    for eid, phi in params.items():
-        e = effect(eid)
-        phi = np.asarray(phi, float)
-        if e.covariate is not None and cov[e.covariate] is None:
-            raise AccelcalError(f"effect {eid} needs the {e.covariate} of every row")
-        if e.kind == "additive":
-            add = add + cov[e.covariate] * phi
-        elif e.power == 1:
-            P = P + cov[e.covariate] * phi * x
-        else:
-            P = P + phi * x ** e.power
-    return P @ np.asarray(M, float).T + np.asarray(bias, float) + add
+    return extended_model.forward(x, M, bias, params, {TIME: dt, TEMPERATURE: dtemp})
 
 
 def fit_at(data: PoseData, effects, p) -> Fit:
@@ -497,7 +447,7 @@ def fit(data: PoseData, effects=(), p0=None, max_iter: int = MAX_ITER) -> Fit:
     ----------
     data : PoseData
     effects : sequence of str
-        Effect ids (:data:`accelcal.discrepancy.effects.EFFECT_IDS`).
+        Effect ids (:data:`accelcal.effects.EFFECT_IDS`).
     p0 : array_like, optional
         Start; shorter than the model's parameter vector = padded with zeros (the
         previous model's optimum).  Default: the full LLS closed form.
@@ -512,11 +462,12 @@ def fit(data: PoseData, effects=(), p0=None, max_iter: int = MAX_ITER) -> Fit:
     for e in effects:
         effect(e)
     p = _start(data, effects, p0)
-    K, _, codes = _kernel_inputs(data, effects)
+    K, terms = _model(data, effects)
     if K is None:
         p, r, J, x, it, status = _fit_numpy(data, effects, p, max_iter)
     else:
-        p, r, J, x, it, status = K.lm_fit(p, data.z, *codes, data.g, NEWTON_RTOL, data.sigma, max_iter, CHI2_TOL)
+        p, r, J, x, it, status = K.lm_fit(p, data.z, *terms.kernel_arrays, data.g, NEWTON_RTOL, data.sigma,
+                                          max_iter, CHI2_TOL)
     if status == 0:
         return Fit(effects, p, r, data.sigma, J, it, x)
     if status == 1:
@@ -576,10 +527,11 @@ def _lopo_system(data: PoseData, effects):
     leaves out pose ``i``), the reduced χ², and if ``normal`` each row's Gauss–Newton step
     (in parameter units) and the χ² decrease it predicts (compiled, or in numpy)."""
     sig = data.sigma
-    K, cov, codes = _kernel_inputs(data, effects)
+    K, terms = _model(data, effects)
     if K is not None:
         def system(P, normal):
-            r, cost, step, pred, d, H, grad, solved = K.lopo_step(P, data.z, *codes, data.g, NEWTON_RTOL, sig, normal)
+            r, cost, step, pred, d, H, grad, solved = K.lopo_step(P, data.z, *terms.kernel_arrays, data.g,
+                                                                  NEWTON_RTOL, sig, normal)
             if normal and not solved:
                 step, pred = _pinv_step(H, grad, d)
             return r, cost, step, pred
@@ -588,7 +540,7 @@ def _lopo_system(data: PoseData, effects):
     keep = 1.0 - np.eye(len(data))
 
     def system(P, normal):
-        r, J, _ = _evaluate_batch_numpy(P, data, effects, normal, cov)
+        r, J, _ = _evaluate_batch_numpy(P, data, terms, normal)
         rw = r / sig * keep
         if not normal:
             return r, np.sum(rw * rw, axis=1), None, None

@@ -20,15 +20,14 @@ import math
 import numpy as np
 import pandas as pd
 
-from accelcal.discrepancy.effects import EFFECT_IDS
+from accelcal.effects import EFFECT_IDS, EFFECTS
 from accelcal.plotting import RC, plt
 
 from .benchmark import CONSTANT_TEMPERATURE, ERROR, NONE, NOT_IDENTIFIABLE, OUTLIER
 
-#: Display names.
+#: Display names: the outcomes that are not effects, and each effect's label (:mod:`accelcal.effects`).
 LABELS = {NONE: "none", NOT_IDENTIFIABLE: "not identif.", CONSTANT_TEMPERATURE: "temp. (T const)",
-          ERROR: "error", OUTLIER: "outlier pose", "quadratic": "quadratic", "cubic": "cubic",
-          "bias_drift": "bias drift", "temperature": "temperature", "temperature_scale": "temp. scale"}
+          ERROR: "error", OUTLIER: "outlier pose", **{e.id: e.label for e in EFFECTS.values()}}
 COLORS = {e: f"C{i}" for i, e in enumerate(EFFECT_IDS)}
 NULL_STYLE = {"colored": {"color": "C0", "marker": "o", "label": "colored null (time-correlated noise)"},
               "white": {"color": "C3", "marker": "s", "label": "white null (negative control)"}}
