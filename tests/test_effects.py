@@ -244,3 +244,25 @@ def test_the_figures_label_every_effect_of_the_table():
     from accelcal_repro.discrepancy.figures import LABELS
 
     assert {e: LABELS[e] for e in EFFECT_IDS} == {e: EFFECTS[e].label for e in EFFECT_IDS}
+
+
+@pytest.mark.parametrize("eid", ALL)
+def test_the_detectable_size_in_the_data_unit_is_the_model_s_own_sensitivity(eid):
+    """The identifiability check's data-unit size per unit parameter (the MDE's scale) is
+    the change of the pose means the forward model makes: ``|∂z_i/∂c_j|``, covariate included."""
+    from accelcal.discrepancy.vocabulary import _perturbation
+
+    rng = np.random.default_rng(100 + ALL.index(eid))
+    data, p, x = _poses(rng, [], n=30)
+    base = fit(data)
+    dt, dtemp = data.t - data.t.mean(), data.temp - data.temp.mean()
+    zero = {eid: np.zeros(3)}
+    z0 = forward(base.x, base.M, base.bias, zero, dt=dt, dtemp=dtemp)
+    h = _size(eid, 1e-6)
+    expected = np.empty((len(data), 3))
+    for j in range(3):
+        step = np.zeros(3)
+        step[j] = h
+        dz = forward(base.x, base.M, base.bias, {eid: step}, dt=dt, dtemp=dtemp) - z0
+        expected[:, j] = np.linalg.norm(dz, axis=1) / h
+    np.testing.assert_allclose(_perturbation(eid, data, base), expected, rtol=1e-5, atol=1e-8 * expected.max())

@@ -202,7 +202,9 @@ def _perturbation(eid: str, data: PoseData, base: Fit) -> np.ndarray:
         return np.repeat(np.abs(data.covariate(e.covariate))[:, None], 3, axis=1)
     col = np.linalg.norm(base.M, axis=0)  # |M[:, j]|: how much P_j moves z
     x = np.abs(base.x)
-    per = x ** e.power if e.power > 1 else x * np.abs(data.covariate(e.covariate))[:, None]
+    per = x if e.power == 1 else x ** e.power
+    if e.covariate is not None:
+        per = per * np.abs(data.covariate(e.covariate))[:, None]
     return per * col[None, :] if n else per
 
 
