@@ -276,7 +276,7 @@ def initial_scale(ms: MotionSet, method: str = "magnus4", rate_range=(0.05, 60.0
         return 1.0
 
     def scaled(sub):  # φ_k(c) = c φ1_k + c² φ2_k: the increments of C = c I, computed once
-        k, mask = _step_index(sub.starts, sub.stops)
+        k, mask = _step_index(sub.starts, sub.stops, len(sub.y))
         lin, _ = _increments(sub.y, sub.h, k, method)
         quad = 0.5 * (_increments(2.0 * sub.y, sub.h, k, method)[0] - 2.0 * lin)
         lin, quad = lin - quad, quad

@@ -152,11 +152,12 @@ def _check(omega, starts, stops):
     return omega, starts, stops
 
 
-def _step_index(starts, stops):
-    """Base sample of every step, padded: (m, L) indices, (m, L) mask of real steps."""
+def _step_index(starts, stops, n: int):
+    """Base sample of every step, padded: (m, L) indices (padding clamped to the ``n``
+    samples), (m, L) mask of real steps."""
     L = int((stops - starts).max())
     k = starts[:, None] + np.arange(L)[None, :]
-    return k, k < stops[:, None]
+    return np.minimum(k, n - 1), k < stops[:, None]
 
 
 def integrate_sequential(omega, h: float, starts, stops, method: str) -> np.ndarray:
@@ -167,7 +168,7 @@ def integrate_sequential(omega, h: float, starts, stops, method: str) -> np.ndar
     omega, starts, stops = _check(omega, starts, stops)
     if method in PRODUCT_METHODS:
         return integrate_intervals(omega, h, starts, stops, method).R
-    k, mask = _step_index(starts, stops)
+    k, mask = _step_index(starts, stops, len(omega))
     if method == "euler_sum":
         return expm_so3(h * np.sum(np.where(mask[..., None], omega[k], 0.0), axis=1))
     if method not in METHODS:
@@ -278,7 +279,7 @@ def integrate_intervals(omega, h: float, starts, stops, method: str = "magnus4",
         covariance ``Q`` of each interval's rotation vector error, ``Σ_j G_j Σ G_jᵀ``.
     """
     omega, starts, stops = _check(omega, starts, stops)
-    k, mask = _step_index(starts, stops)
+    k, mask = _step_index(starts, stops, len(omega))
     phi, coefs = _increments(omega, h, k, method)
     phi = np.where(mask[..., None], phi, 0.0)
     if raw is None and rate_cov is None:
