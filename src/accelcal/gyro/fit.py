@@ -44,6 +44,7 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.linalg import solve_triangular
 
 from ..errors import NotConvergedError
 from .integrate import _increments, _step_index, expm_so3, integrate_intervals, log_so3, skew, total_products
@@ -121,13 +122,16 @@ class Evaluation:
 
     @property
     def chi2(self) -> float:
-        z = np.linalg.solve(self.chol, self.r.reshape(-1))
+        z = self.whiten(self.r.reshape(-1))
         return float(z @ z)
+
+    def whiten(self, v) -> np.ndarray:
+        """``L⁻¹ v`` for the Cholesky factor ``L`` of the residual covariance."""
+        return solve_triangular(self.chol, v, lower=True, check_finite=False)
 
     def whitened(self) -> tuple[np.ndarray, np.ndarray]:
         """``L⁻¹ J`` (2m, 9) and ``L⁻¹ r`` (2m,)."""
-        Jw = np.linalg.solve(self.chol, self.J.reshape(-1, 9))
-        return Jw, np.linalg.solve(self.chol, self.r.reshape(-1))
+        return self.whiten(self.J.reshape(-1, 9)), self.whiten(self.r.reshape(-1))
 
     @property
     def angles_deg(self) -> np.ndarray:
@@ -159,18 +163,14 @@ def evaluate(ms: MotionSet, C, method: str = "magnus4") -> Evaluation:
     GC = it.G @ C
     gyro = it.Q + GC @ (ms.bias_var[:, :, None] * np.swapaxes(GC, -1, -2))
     m, p = ms.n_motions, len(ms.u)
-    A = np.zeros((2 * m, 3 * p))  # ∂r/∂u of every rest
-    rows = np.arange(m)
-    for i, (a, b) in enumerate(zip(ms.rest_before, ms.rest_after)):
-        A[2 * i:2 * i + 2, 3 * a:3 * a + 3] += Et[i] @ Rt[i]
-        A[2 * i:2 * i + 2, 3 * b:3 * b + 3] -= Et[i]
-    Ucov = np.zeros((3 * p, 3 * p))
-    for j in range(p):
-        Ucov[3 * j:3 * j + 3, 3 * j:3 * j + 3] = ms.u_cov[j]
-    cov = A @ Ucov @ A.T
-    blocks = EW @ gyro @ np.swapaxes(EW, -1, -2)
-    for i in rows:
-        cov[2 * i:2 * i + 2, 2 * i:2 * i + 2] += blocks[i]
+    A = np.zeros((m, 2, p, 3))  # ∂r_i/∂u of every rest: E_iᵀ R_iᵀ at the start, -E_iᵀ at the end
+    A[np.arange(m), :, ms.rest_before, :] += Et @ Rt
+    A[np.arange(m), :, ms.rest_after, :] -= Et
+    AU = np.einsum("mkpi,pij->mkpj", A, ms.u_cov).reshape(2 * m, 3 * p)
+    cov = AU @ A.reshape(2 * m, 3 * p).T
+    idx = 2 * np.arange(m)[:, None, None] + np.arange(2)[None, :, None], 2 * np.arange(m)[:, None, None] + \
+        np.arange(2)[None, None, :]
+    cov[idx] += EW @ gyro @ np.swapaxes(EW, -1, -2)
     return Evaluation(it.R, r, J, cov, np.linalg.cholesky(cov))
 
 
@@ -238,7 +238,7 @@ def fit_iterative(ms: MotionSet, C0, method: str = "magnus4", max_iter: int = MA
         se = np.sqrt(np.diag(cov))
         cost, lam = ev.chi2, 1.0
         while lam >= 1e-4:
-            z = np.linalg.solve(ev.chol, _residuals(ms, C + lam * d.reshape(3, 3), method))
+            z = ev.whiten(_residuals(ms, C + lam * d.reshape(3, 3), method))
             if z @ z <= cost * (1 + 1e-12):
                 break
             lam *= 0.5

@@ -74,17 +74,18 @@ class Motion:
 def random_motion(rng: np.random.Generator, angle_deg: float, peak_rate_dps: float, n_axes: int = 3) -> Motion:
     """A motion of about ``angle_deg`` in total whose fastest axis peaks at ``peak_rate_dps``.
 
-    The total angle is split at random over ``n_axes`` random orthogonal-ish axes; each
-    profile lasts ``1.875 Φ_j / peak`` so that every axis peaks at the given rate, and they
-    start staggered by up to a third of the longest.
+    The total angle is split at random over ``n_axes`` random orthogonal axes; every
+    profile lasts ``T = 1.875 max_j Φ_j / peak`` (the largest turn peaks at the given rate;
+    one duration keeps the motion's bandwidth that of a hand motion, not of a brief flick
+    of a small turn), and they start staggered by up to a third of ``T``.
     """
     Q, _ = np.linalg.qr(rng.standard_normal((3, 3)))
     axes = Q.T[:n_axes]
     share = rng.dirichlet(np.full(n_axes, 2.0))
     angles = np.deg2rad(angle_deg) * share * rng.choice([-1.0, 1.0], n_axes)
     peak = np.deg2rad(peak_rate_dps)
-    durations = np.maximum(_PEAK * np.abs(angles) / peak, 1e-3)
-    offsets = rng.uniform(0.0, durations.max() / 3, n_axes)
+    durations = np.full(n_axes, max(_PEAK * np.abs(angles).max() / peak, 1e-3))
+    offsets = rng.uniform(0.0, durations[0] / 3, n_axes)
     offsets -= offsets.min()
     return Motion(axes, angles, durations, offsets)
 
