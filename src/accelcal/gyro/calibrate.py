@@ -27,6 +27,7 @@ gravity turns, too few usable motions, a saturated gyro, a time base that does n
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 
@@ -44,6 +45,10 @@ from .result import RULES, GyroCalibration, GyroQuality
 ESTIMATORS = ("iterative", "one_step")
 #: Fewest motions the 9-parameter fit accepts (2 residuals each: 2 m - 9 >= 1).
 MIN_MOTIONS = 5
+#: Fewest rests for fitting the g-sensitivity (12 unknowns from 3 per rest) in 'auto' mode.
+MIN_RESTS_G = 10
+#: F-test level at which 'auto' fits the g-sensitivity.
+G_SENSITIVITY_P = 1e-3
 #: Integrated rotation below this many noise standard deviations: the gyro saw no motion.
 NO_MOTION_SIGMAS = 5.0
 
@@ -85,7 +90,7 @@ def _motions(intervals, gaps, saturated):
 
 def _check_motion(ms: MotionSet, u) -> None:
     """Typed errors for sessions without rotation (module docstring)."""
-    h = ms.h
+    h = float(np.mean(np.diff(ms.h))) if np.ndim(ms.h) else ms.h
     turn = np.array([np.linalg.norm(ms.y[a:b + 1].sum(axis=0) * h) for a, b in zip(ms.starts, ms.stops)])
     noise = np.array([math.sqrt((b - a + 1) * float(np.max(ms.y_var))) * h for a, b in zip(ms.starts, ms.stops)])
     tilt = np.rad2deg(np.arccos(np.clip(np.sum(u[ms.rest_before] * u[ms.rest_after], axis=1), -1, 1)))
@@ -116,6 +121,21 @@ def _nominal(raw_unit: str, nominal_sensitivity, ms: MotionSet, integrator: str)
     return initial_scale(ms, integrator), "scalar search (no sensitivity given)"
 
 
+def _use_g_sensitivity(choice, rs, bias, f_rest, acc) -> tuple[bool, dict]:
+    """Whether to fit the g-sensitivity: as given, or for 'auto' by an F test on the rest means."""
+    if choice != "auto":
+        return bool(choice), {"decided": "given"}
+    p = len(rs.means)
+    if acc is None or p < MIN_RESTS_G or bias == "first":
+        return False, {"decided": "auto", "reason": "no raw accelerometer samples" if acc is None else
+                       f"{p} rests (< {MIN_RESTS_G})" if p < MIN_RESTS_G else "bias from the first rest"}
+    without, with_g = fit_bias(rs, "all"), fit_bias(rs, "all", f_rest)
+    d1, d2 = 9, with_g.dof
+    F = ((without.chi2 - with_g.chi2) / d1) / (with_g.chi2 / d2)
+    pv = float(stats.f.sf(F, d1, d2))
+    return pv < G_SENSITIVITY_P, {"decided": "auto", "F": float(F), "p_value": pv, "dof": [d1, d2]}
+
+
 def _standard_errors(C, cov, nominal, excess, bias_est) -> dict:
     k = max(1.0, excess if math.isfinite(excess) else 1.0)
     cov = cov * k * k
@@ -136,7 +156,8 @@ def _standard_errors(C, cov, nominal, excess, bias_est) -> dict:
 
 def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, t_gyro=None,
                    nominal_sensitivity=None, estimator: str = "iterative", integrator: str = "magnus4",
-                   bias: str = "all", g_sensitivity: bool = False, gyro_range=None) -> GyroCalibration:
+                   bias: str = "interpolated", g_sensitivity="auto", gyro_range=None,
+                   time_base: str = "auto") -> GyroCalibration:
     """Calibrate the gyro of a multi-position session (module docstring).
 
     Parameters
@@ -158,11 +179,25 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
         Raw units per rad/s (counts); the start and the reference of the scale factors.
     estimator : {'iterative', 'one_step'}
     integrator : {'magnus4', 'coning'}
-    bias : {'all', 'interpolated', 'first'}
-    g_sensitivity : bool
-        Fit ``G`` (from the rests) with the bias.
+    bias : {'interpolated', 'all', 'first'}
+        How the bias is taken from the rests (:mod:`accelcal.gyro.rests`).  Default
+        'interpolated': on the eight real sessions it gave the lowest motion χ² in all
+        (by up to 2x; the Xsens unit's and the IMU-TK fork's rest means move by 6-18x
+        their noise during a session).
+    g_sensitivity : bool or 'auto'
+        Fit ``G`` (from the rests) with the bias.  'auto' (default): when the raw
+        accelerometer samples are given and there are at least ``MIN_RESTS_G`` rests, if
+        ``G`` explains the rest means significantly better (F test on the rest means, p <
+        0.001; the F test compares the two fits' own scatter, so a noise level that is off
+        does not decide it).
     gyro_range : (lo, hi), optional
         Measuring range in raw units (saturation).
+    time_base : {'auto', 'index', 'timestamps'}
+        Integrate with a constant step (the sample index at the mean rate) or with the
+        time column's own steps.  'auto': the index unless the steps jitter (more than
+        5 %); then both are fitted and the one whose motion residuals fit the noise better
+        (lower χ²) is kept — host receive times jitter while the sensor samples evenly,
+        a sensor's own time stamps jitter with its sampling — and the choice is said.
     """
     t0 = time.perf_counter()
     t = np.asarray(t, float)
@@ -177,8 +212,9 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
         check_time_base(t, t_gyro, tb.h)
     rs = rest_statistics(t, gyro, poses.intervals)
     u, u_cov, f_rest = accel_directions(accel, poses.means, poses.mean_std)
-    if g_sensitivity and acc is None:
+    if g_sensitivity is True and acc is None:
         raise GyroInputError("the g-sensitivity needs the raw accelerometer samples (acc=)")
+    g_sensitivity, g_test = _use_g_sensitivity(g_sensitivity, rs, bias, f_rest, acc)
     best = fit_bias(rs, bias, f_rest if g_sensitivity else None)
     y = gyro - bias_series(best, rs, t)
     if g_sensitivity:
@@ -202,20 +238,32 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
     ms = all_ms.subset(used)
     nominal, nominal_from = _nominal(raw_unit, nominal_sensitivity, ms, integrator)
     fitter = fit_iterative if estimator == "iterative" else fit_one_step
-    fit = fitter(ms, nominal * np.eye(3), integrator)
+    if time_base not in ("auto", "index", "timestamps"):
+        raise GyroInputError(f"unknown time base {time_base!r}; known: auto, index, timestamps")
+    bases = {"index": tb.h, "timestamps": t}
+    tried = ["index"] if (time_base == "auto" and tb.jitter <= RULES["jitter"]) else (
+        ["index", "timestamps"] if time_base == "auto" else [time_base])
+    fits = {}
+    for name in tried:
+        fits[name] = fitter(dataclasses.replace(ms, h=bases[name]), nominal * np.eye(3), integrator)
+    chosen = min(fits, key=lambda k: fits[k].chi2)
+    fit = fits[chosen]
+    all_ms = dataclasses.replace(all_ms, h=bases[chosen])
     model = GyroModel(fit.C, best.bias, best.g_sensitivity if g_sensitivity else None, raw_unit)
     se = _standard_errors(fit.C, fit.cov, nominal, fit.excess, best)
-    quality, table = _assess(fit, all_ms, used, notes, t, tb, best, integrator)
+    quality, table = _assess(fit, all_ms, used, notes, t, tb, best, integrator,
+                             {k: f.chi2 / max(f.dof, 1) for k, f in fits.items()}, chosen)
     settings = {"estimator": estimator, "integrator": integrator, "bias_mode": bias, "nominal": nominal,
                 "nominal_from": nominal_from, "iterations": fit.iterations, "fit_seconds": fit.seconds,
                 "seconds": time.perf_counter() - t0, "n_rests": len(u),
-                "time_base": {"h": tb.h, "rate": tb.rate, "jitter": tb.jitter, "gaps": int(len(tb.gaps))},
+                "time_base": {"h": tb.h, "rate": tb.rate, "jitter": tb.jitter, "gaps": int(len(tb.gaps)),
+                              "used": chosen, "chi2_per_dof": {k: f.chi2 / max(f.dof, 1) for k, f in fits.items()}},
                 "bias_rests": {"chi2": best.chi2, "dof": best.dof, "excess": best.excess},
-                "g_sensitivity": bool(g_sensitivity)}
+                "g_sensitivity": bool(g_sensitivity), "g_sensitivity_test": g_test}
     return GyroCalibration(model, se, quality, table, settings)
 
 
-def _assess(fit, all_ms: MotionSet, used, notes, t, tb, best, integrator):
+def _assess(fit, all_ms: MotionSet, used, notes, t, tb, best, integrator, base_chi2, chosen):
     """Quality, warnings and the per-motion table of a fit."""
     ev = fit.evaluation
     ms = all_ms.subset(used)
@@ -276,8 +324,11 @@ def _assess(fit, all_ms: MotionSet, used, notes, t, tb, best, integrator):
         warnings.append(f"{n_gap} motions left out: samples are missing in them (time gaps)")
     if tb.jitter > RULES["jitter"]:
         flags.append("jitter")
-        warnings.append(f"time steps jitter by {100 * tb.jitter:.0f}% of the step (host receive times?): the "
-                        f"motions are integrated with the sample index at the mean rate {tb.rate:.4g} Hz")
+        how = ("with the sample index at the mean rate {:.4g} Hz (host receive times?)".format(tb.rate)
+               if chosen == "index" else "with the time stamps' own steps (the sensor's sampling jitters)")
+        tried = ", ".join(f"{k} {v:.3g}" for k, v in base_chi2.items())
+        warnings.append(f"time steps jitter by {100 * tb.jitter:.0f}% of the step: the motions are integrated {how}"
+                        f" (chi2/dof: {tried})")
     if best.mode == "all" and best.dof > 0 and best.excess > RULES["bias_excess"]:
         flags.append("bias_drift")
         warnings.append(f"the gyro's rest means scatter {best.excess:.3g}x their noise: the bias moves during the "

@@ -160,8 +160,9 @@ def _step_index(starts, stops, n: int):
     return np.minimum(k, n - 1), k < stops[:, None]
 
 
-def integrate_sequential(omega, h: float, starts, stops, method: str) -> np.ndarray:
-    """Rotations (m, 3, 3) of the intervals ``[start, stop]`` (samples, inclusive) by
+def integrate_sequential(omega, h, starts, stops, method: str) -> np.ndarray:
+    """Rotations (m, 3, 3) of the intervals ``[start, stop]`` (samples, inclusive; ``h`` a
+    constant step or the sample times) by
     ``euler_sum``, ``euler`` or ``rk4`` (any method of :data:`METHODS`: the product ones
     go to :func:`integrate_intervals`).  Time steps are loop iterations, vectorised over
     the intervals."""
@@ -169,8 +170,10 @@ def integrate_sequential(omega, h: float, starts, stops, method: str) -> np.ndar
     if method in PRODUCT_METHODS:
         return integrate_intervals(omega, h, starts, stops, method).R
     k, mask = _step_index(starts, stops, len(omega))
+    dts = _step_lengths(h, k, len(omega))
+    dts = np.broadcast_to(dts, k.shape)[..., None]  # (m, L, 1)
     if method == "euler_sum":
-        return expm_so3(h * np.sum(np.where(mask[..., None], omega[k], 0.0), axis=1))
+        return expm_so3(np.sum(np.where(mask[..., None], dts * omega[k], 0.0), axis=1))
     if method not in METHODS:
         raise InputShapeError(f"unknown integrator {method!r}; known: {', '.join(METHODS)}")
     m = len(starts)
@@ -178,6 +181,7 @@ def integrate_sequential(omega, h: float, starts, stops, method: str) -> np.ndar
     q[:, 0] = 1.0
     for j in range(k.shape[1]):
         w0, w1, on = omega[k[:, j]], omega[np.minimum(k[:, j] + 1, len(omega) - 1)], mask[:, j:j + 1]
+        h = dts[:, j]
         if method == "euler":
             qn = q + h * _qdot(q, w0)
         else:  # IMU-TK's quatIntegrationStepRK4
@@ -192,24 +196,62 @@ def integrate_sequential(omega, h: float, starts, stops, method: str) -> np.ndar
     return quat_to_matrix(q)
 
 
+def _step_lengths(h, k, n):
+    """Per-step length (m, L) from a constant step ``h`` or the sample times ``h`` (n,)."""
+    if np.ndim(h) == 0:
+        return float(h)
+    t = np.asarray(h, float)
+    return t[np.minimum(k + 1, n - 1)] - t[k]
+
+
+def _magnus_weights(h, k, n):
+    """Lagrange weights (2, 4, m, L) of the samples k-1..k+2 at the two Gauss points of each
+    step: the constants for a constant step, else from the sample times (constants where
+    the four samples are not distinct, at the recording's ends)."""
+    if np.ndim(h) == 0:
+        return np.stack([_WA, _WB])[:, :, None, None]
+    t = np.asarray(h, float)
+    idx = [np.clip(k + o, 0, n - 1) for o in (-1, 0, 1, 2)]
+    dt = t[idx[2]] - t[idx[1]]
+    ok = (idx[0] < idx[1]) & (idx[2] < idx[3]) & (dt > 0)
+    sdt = np.where(ok, dt, 1.0)
+    s = [np.where(ok, (t[i] - t[idx[1]]) / sdt, float(o)) for i, o in zip(idx, (-1, 0, 1, 2))]
+    out = np.empty((2, 4) + k.shape)
+    for g, tau in enumerate((_GA, _GB)):
+        for j in range(4):
+            w = np.ones(k.shape)
+            for i in range(4):
+                if i != j:
+                    w = w * (tau - s[i]) / (s[j] - s[i])
+            out[g, j] = w
+    return out
+
+
 def _increments(omega, h, k, method):
     """``φ_k`` (m, L, 3) and its derivatives ``[(offset, D (m, L, 3, 3))]`` w.r.t. the rate
-    samples ``k + offset`` (indices clamped to the recording)."""
+    samples ``k + offset`` (indices clamped to the recording); ``h`` a constant step or the
+    sample times."""
     n = len(omega)
+    dt = _step_lengths(h, k, n)
+    hh = dt if np.ndim(dt) == 0 else dt[..., None]
+    hm = dt if np.ndim(dt) == 0 else dt[..., None, None]
     if method == "coning":
         w0, w1 = omega[np.minimum(k, n - 1)], omega[np.minimum(k + 1, n - 1)]
-        phi = 0.5 * h * (w0 + w1) + h * h / 12.0 * np.cross(w0, w1)
-        half = 0.5 * h * np.eye(3)
-        return phi, [(0, half - h * h / 12.0 * skew(w1)), (1, half + h * h / 12.0 * skew(w0))]
+        phi = 0.5 * hh * (w0 + w1) + hh * hh / 12.0 * np.cross(w0, w1)
+        half = 0.5 * hm * np.eye(3)
+        return phi, [(0, half - hm * hm / 12.0 * skew(w1)), (1, half + hm * hm / 12.0 * skew(w0))]
     if method == "magnus4":
         W = [omega[np.clip(k + o, 0, n - 1)] for o in (-1, 0, 1, 2)]
-        wa = sum(c * w for c, w in zip(_WA, W))
-        wb = sum(c * w for c, w in zip(_WB, W))
-        c = np.sqrt(3.0) / 12.0 * h * h
-        phi = 0.5 * h * (wa + wb) + c * np.cross(wa, wb)
-        da = 0.5 * h * np.eye(3) - c * skew(wb)  # ∂φ/∂w_a
-        db = 0.5 * h * np.eye(3) + c * skew(wa)  # ∂φ/∂w_b
-        return phi, [(o, _WA[i] * da + _WB[i] * db) for i, o in enumerate((-1, 0, 1, 2))]
+        L = _magnus_weights(h, k, n)
+        wa = sum(L[0, j][..., None] * w for j, w in enumerate(W))
+        wb = sum(L[1, j][..., None] * w for j, w in enumerate(W))
+        c = np.sqrt(3.0) / 12.0 * hh * hh
+        phi = 0.5 * hh * (wa + wb) + c * np.cross(wa, wb)
+        cm = np.sqrt(3.0) / 12.0 * hm * hm
+        da = 0.5 * hm * np.eye(3) - cm * skew(wb)  # ∂φ/∂w_a
+        db = 0.5 * hm * np.eye(3) + cm * skew(wa)  # ∂φ/∂w_b
+        return phi, [(o, L[0, j][..., None, None] * da + L[1, j][..., None, None] * db)
+                     for j, o in enumerate((-1, 0, 1, 2))]
     raise InputShapeError(f"{method!r} is not a product integrator; use one of {', '.join(PRODUCT_METHODS)}")
 
 
@@ -256,7 +298,7 @@ class Integration:
     Q: np.ndarray | None = None  #: (m, 3, 3): covariance of the rotation from white rate noise
 
 
-def integrate_intervals(omega, h: float, starts, stops, method: str = "magnus4", *, raw=None,
+def integrate_intervals(omega, h, starts, stops, method: str = "magnus4", *, raw=None,
                         rate_cov=None) -> Integration:
     """Rotations of the intervals by a product method, their Jacobian in ``C`` and their noise.
 
@@ -265,8 +307,9 @@ def integrate_intervals(omega, h: float, starts, stops, method: str = "magnus4",
     omega : array_like, shape (n, 3)
         Rates [rad/s] of the whole recording (neighbouring samples outside an interval
         are used by ``magnus4``'s cubic).
-    h : float
-        Sample interval [s].
+    h : float or array_like (n,)
+        Constant sample interval [s], or the sample times [s] (every step its own length;
+        ``magnus4`` interpolates through the actual times).
     starts, stops : array_like of int, shape (m,)
         First and last sample of each interval (steps ``start -> stop``).
     method : {'coning', 'magnus4'}

@@ -4,12 +4,13 @@ Bias.  Every rest measures ``b + G f_i + (Earth rate)``: the bias, the g-sensiti
 times the rest's specific force, and the Earth's rotation projected on the sensor
 (7.3e-5 rad/s at most, ≈ 0.004 °/s).  Three ways to take ``b`` (``bias=``):
 
-* ``'all'`` (default) — the mean of all rests, each weighted by its own standard error
-  (its samples' scatter with their autocorrelation); with ``g_sensitivity=True`` the
+* ``'all'`` — the mean of all rests, each weighted by its own standard error
+  (its samples' scatter with their autocorrelation); with the g-sensitivity the
   weighted least squares of ``b`` and ``G`` (12 unknowns) on the rest means;
 * ``'interpolated'`` — a bias that moves: linear in time between the centres of the
   rests, so each motion gets the bias of the rests around it (a drifting bias,
-  a warm-up);
+  a warm-up); with the g-sensitivity, ``G`` from the least squares above and each
+  rest's mean minus ``G f_i`` interpolated;
 * ``'first'`` — the initial rest only, as IMU-TK does.
 
 The scatter of the rest means about the chosen model, against their standard errors
@@ -116,6 +117,7 @@ class BiasEstimate:
     chi2: float  #: scatter of the rest means about the model, in their standard errors
     dof: int
     rest_residuals: np.ndarray  #: (p, 3) rest means minus the model
+    rest_bias: np.ndarray  #: (p, 3) each rest's mean minus its g-sensitivity term (what 'interpolated' follows)
 
     @property
     def excess(self) -> float:
@@ -124,13 +126,15 @@ class BiasEstimate:
 
 def fit_bias(rs: RestStatistics, mode: str = "all", f_rest=None) -> BiasEstimate:
     """The gyro bias from the rests (module docstring).  ``f_rest`` (p, 3) [m/s²], the
-    calibrated specific force of each rest, turns on the g-sensitivity (mode 'all' only)."""
+    calibrated specific force of each rest, turns on the g-sensitivity: ``G`` by weighted
+    least squares of the rest means on ``[1, f]`` (modes 'all' and 'interpolated'; the
+    latter then follows each rest's mean minus ``G f_i`` in time)."""
     if mode not in BIAS_MODES:
         raise GyroInputError(f"unknown gyro bias mode {mode!r}; known: {', '.join(BIAS_MODES)}")
     m, se = rs.means, np.maximum(rs.mean_std, 1e-300)
     p = len(m)
-    if f_rest is not None and mode != "all":
-        raise GyroInputError("the g-sensitivity is fitted with the bias from all rests (bias mode 'all')")
+    if f_rest is not None and mode == "first":
+        raise GyroInputError("the g-sensitivity needs the bias from all rests (bias mode 'all' or 'interpolated')")
     if f_rest is not None:
         X = np.column_stack([np.ones(p), np.asarray(f_rest, float)])  # (p, 4)
         coef, cov_diag = np.zeros((4, 3)), np.zeros((4, 3))
@@ -141,14 +145,14 @@ def fit_bias(rs: RestStatistics, mode: str = "all", f_rest=None) -> BiasEstimate
             cov_diag[:, a] = np.diag(cov)
         res = m - X @ coef
         return BiasEstimate(mode, coef[0], coef[1:].T, np.sqrt(cov_diag[0]), np.sqrt(cov_diag[1:]).T,
-                            float(np.sum((res / se) ** 2)), 3 * (p - 4), res)
+                            float(np.sum((res / se) ** 2)), 3 * (p - 4), res, m - X[:, 1:] @ coef[1:])
     w = 1.0 / se ** 2
     b = np.sum(w * m, axis=0) / np.sum(w, axis=0)
     res = m - b
     chi2 = float(np.sum((res / se) ** 2))
     if mode == "first":
-        return BiasEstimate(mode, m[0], None, rs.mean_std[0], None, chi2, 3 * (p - 1), m - m[0])
-    return BiasEstimate(mode, b, None, np.sqrt(1.0 / np.sum(w, axis=0)), None, chi2, 3 * (p - 1), res)
+        return BiasEstimate(mode, m[0], None, rs.mean_std[0], None, chi2, 3 * (p - 1), m - m[0], m)
+    return BiasEstimate(mode, b, None, np.sqrt(1.0 / np.sum(w, axis=0)), None, chi2, 3 * (p - 1), res, m)
 
 
 def bias_series(est: BiasEstimate, rs: RestStatistics, t) -> np.ndarray:
@@ -156,7 +160,7 @@ def bias_series(est: BiasEstimate, rs: RestStatistics, t) -> np.ndarray:
     t = np.asarray(t, float)
     if est.mode != "interpolated":
         return np.broadcast_to(est.bias, (len(t), 3)).copy()
-    return np.column_stack([np.interp(t, rs.t_mid, rs.means[:, a]) for a in range(3)])
+    return np.column_stack([np.interp(t, rs.t_mid, est.rest_bias[:, a]) for a in range(3)])
 
 
 def motion_bias_variance(est: BiasEstimate, rs: RestStatistics, before, after) -> np.ndarray:

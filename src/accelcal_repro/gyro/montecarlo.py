@@ -34,6 +34,8 @@ BASE = {"n_motions": 20, "angle_deg": 90.0, "rate_dps": 150.0, "fs": 100.0, "gyr
 FACTORS = {"gyro_noise": (0.0005, 0.005, 0.05), "n_motions": (8, 20, 60), "angle_deg": (30.0, 90.0, 180.0),
            "rate_dps": (50.0, 150.0, 400.0), "scale_std": (0.005, 0.02, 0.06)}
 ESTIMATORS = {"one_step": fit_one_step, "iterative": fit_iterative}
+AXIS_LABELS = {"gyro_noise": "gyro noise [rad/s per sample]", "n_motions": "motions", "angle_deg": "angle per motion [deg]",
+               "rate_dps": "peak rate [deg/s]", "scale_std": "scale errors (std) from nominal"}
 
 
 def configurations(factors=FACTORS, base=BASE):
@@ -116,9 +118,12 @@ def figure(table: pd.DataFrame):
                     ax.plot(s.index.astype(float), s.values, ls, marker="o", ms=3, color=color,
                             label=f"{est.replace('_', '-')}, {kind}")
             ax.set_xscale("log")
-            ax.set_yscale("log")
+            vals = sorted(float(v) for v in sub.value.unique())
+            ax.set_xticks(vals, [f"{v:g}" for v in vals])
+            ax.minorticks_off()
             ax.axhline(1.0, color="0.4", lw=0.8)
-            ax.set_xlabel(f.replace("_", " "))
+            ax.set_ylim(bottom=0)
+            ax.set_xlabel(AXIS_LABELS.get(f, f))
         axes[0, 0].set_ylabel("RMS error / CRLB")
         axes[0, -1].legend(fontsize=6.5)
         fig.suptitle("gyro: one-step (one linearised solve about C = I) vs iterative, against the Cramér–Rao bound",
