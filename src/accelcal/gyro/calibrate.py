@@ -45,6 +45,8 @@ from .result import RULES, GyroCalibration, GyroQuality
 ESTIMATORS = ("iterative", "one_step")
 #: Fewest motions the 9-parameter fit accepts (2 residuals each: 2 m - 9 >= 1).
 MIN_MOTIONS = 5
+#: Total rotation [deg] about a gyro axis below which its column of C is not determined.
+MIN_AXIS_TURN_DEG = 5.0
 #: Fewest rests for fitting the g-sensitivity (12 unknowns from 3 per rest) in 'auto' mode.
 MIN_RESTS_G = 10
 #: F-test level at which 'auto' fits the g-sensitivity.
@@ -105,6 +107,17 @@ def _check_motion(ms: MotionSet, u) -> None:
                             f"in only {int(np.sum(moved))} of {len(turn)} motions (integrated rate within "
                             f"{NO_MOTION_SIGMAS:g} noise std of zero): wrong gyro columns, or a gyro not recorded "
                             "with the accelerometer (--gyro FILE, --columns)")
+
+
+def _check_axes(ms: MotionSet, nominal: float, h: float) -> None:
+    """Every gyro axis must turn: a column of ``C`` whose axis never moves is not determined."""
+    turn = np.rad2deg(abs(nominal) * h * np.array([np.abs(ms.y[a:b + 1].sum(axis=0)) for a, b in
+                                                    zip(ms.starts, ms.stops)]).sum(axis=0))
+    idle = [a for a in range(3) if turn[a] < MIN_AXIS_TURN_DEG]
+    if idle:
+        raise TooFewMotionsError("the motions never turn the sensor about " + " or ".join(
+            f"its {'xyz'[a]} axis ({turn[a]:.1f} deg in all)" for a in idle) + ": that gyro's scale and "
+            "misalignment cannot be determined; turn the sensor about every axis between rests")
 
 
 def _nominal(raw_unit: str, nominal_sensitivity, ms: MotionSet, integrator: str) -> tuple[float, str]:
@@ -237,6 +250,7 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
                   "suggest")
     ms = all_ms.subset(used)
     nominal, nominal_from = _nominal(raw_unit, nominal_sensitivity, ms, integrator)
+    _check_axes(ms, nominal, tb.h)
     fitter = fit_iterative if estimator == "iterative" else fit_one_step
     if time_base not in ("auto", "index", "timestamps"):
         raise GyroInputError(f"unknown time base {time_base!r}; known: auto, index, timestamps")

@@ -63,6 +63,15 @@ class Motion:
             tail = A[:, j] @ tail
         return w
 
+    def orientations(self, t) -> np.ndarray:
+        """Orientation (k, 3, 3) at times ``t`` relative to the start (body -> start body)."""
+        tau = (np.asarray(t, float)[:, None] - self.offsets) / self.durations
+        A = expm_so3(self.axes[None, :, :] * (self.angles * _s(tau))[:, :, None])
+        R = np.broadcast_to(np.eye(3), (len(tau), 3, 3))
+        for j in range(len(self.angles)):
+            R = R @ A[:, j]
+        return R
+
     def rotation(self) -> np.ndarray:
         """The motion's rotation (end body frame -> start body frame)."""
         R = np.eye(3)
@@ -159,6 +168,52 @@ def simulate_session(rng: np.random.Generator, *, n_motions: int = 20, angle_deg
     return SimulatedSession(data, clean, C, np.array(rots), rates)
 
 
+def simulate_recording(rng: np.random.Generator, *, n_motions: int = 24, angle_deg: float = 100.0,
+                       peak_rate_dps: float = 150.0, fs: float = 100.0, rest_s: float = 3.0, init_rest_s: float = 20.0,
+                       g: float = 9.81, M=None, acc_bias=None, acc_noise: float = 0.01, C=None, gyro_bias=None,
+                       gyro_noise: float = 0.003, g_sensitivity=None, axis=None) -> dict:
+    """A whole multi-position recording (time series) with its truth: an initial rest, then
+    motions between rests; the sensor turns about itself (no linear acceleration).
+
+    Accelerometer ``M f + b + noise`` (f the specific force, ``|f| = g``), gyro ``C⁻¹ ω +
+    b_g + G f + noise``.  ``axis`` (3,): every motion turns about this one body axis
+    (alternating sense), instead of random moving axes.  Returns ``t``, ``acc``, ``gyro``
+    and the truth (``C``, ``M``, the biases, ``G``).
+    """
+    M = np.eye(3) if M is None else np.asarray(M, float)
+    C = np.eye(3) if C is None else np.asarray(C, float)
+    ab = np.zeros(3) if acc_bias is None else np.asarray(acc_bias, float)
+    gb = np.zeros(3) if gyro_bias is None else np.asarray(gyro_bias, float)
+    h = 1.0 / fs
+    up = np.array([0.0, 0.0, 1.0])
+    R_world = np.linalg.qr(rng.standard_normal((3, 3)))[0]
+    R_world *= np.sign(np.linalg.det(R_world))
+    n0, nr = int(round(init_rest_s * fs)), int(round(rest_s * fs))
+    Rs, ws = [np.broadcast_to(R_world, (n0, 3, 3))], [np.zeros((n0, 3))]
+    for i in range(n_motions):
+        if axis is None:
+            mo = random_motion(rng, angle_deg, peak_rate_dps)
+        else:
+            ang = np.deg2rad(angle_deg) * (-1) ** i
+            mo = Motion(np.asarray(axis, float)[None] / np.linalg.norm(axis), np.array([ang]),
+                        np.array([_PEAK * abs(ang) / np.deg2rad(peak_rate_dps)]), np.zeros(1))
+        tt = np.arange(1, int(np.ceil(mo.duration * fs)) + 1) * h
+        Rs.append(R_world @ mo.orientations(tt))
+        ws.append(mo.rates(tt))
+        R_world = R_world @ mo.rotation()
+        Rs.append(np.broadcast_to(R_world, (nr, 3, 3)))
+        ws.append(np.zeros((nr, 3)))
+    R = np.concatenate(Rs)
+    w = np.concatenate(ws)
+    f = g * np.einsum("nji,j->ni", R, up)  # specific force in the body frame
+    acc = f @ M.T + ab + acc_noise * rng.standard_normal(f.shape)
+    gyro = w @ np.linalg.inv(C).T + gb + gyro_noise * rng.standard_normal(w.shape)
+    if g_sensitivity is not None:
+        gyro = gyro + f @ np.asarray(g_sensitivity, float).T
+    return {"t": np.arange(len(f)) * h, "acc": acc, "gyro": gyro, "rates": w, "C": C, "M": M, "acc_bias": ab,
+            "gyro_bias": gb, "g_sensitivity": g_sensitivity, "g": g}
+
+
 def random_gyro_matrix(rng: np.random.Generator, scale_std: float = 0.02, misalignment_std_deg: float = 1.0,
                        nominal: float = 1.0) -> np.ndarray:
     """A plausible ``C``: ``nominal (I + diag(s)) + off-diagonal misalignments`` (rad)."""
@@ -175,4 +230,4 @@ def rotation_error_deg(R_est, R_true) -> np.ndarray:
 
 
 __all__ = ["Motion", "SimulatedSession", "random_gyro_matrix", "random_motion", "rotation_error_deg",
-           "simulate_session", "skew"]
+           "simulate_recording", "simulate_session"]
