@@ -108,3 +108,18 @@ def test_rotation_noise_matches_monte_carlo():
         errs.append(log_so3(np.swapaxes(it.R, -1, -2) @ R)[0])
     emp = np.cov(np.array(errs).T)
     np.testing.assert_allclose(np.diag(emp), np.diag(it.Q[0]), rtol=0.2)
+
+
+def test_grouping_by_length_changes_nothing():
+    from accelcal.gyro import integrate as I
+
+    rng = np.random.default_rng(4)
+    y = np.cumsum(0.05 * rng.standard_normal((3000, 3)), axis=0)
+    starts = np.sort(rng.choice(2500, 30, replace=False))
+    stops = starts + rng.integers(5, 400, 30)
+    stops = np.minimum(stops, 2999)
+    grouped = I.integrate_intervals(y, 0.01, starts, stops, "magnus4", raw=y, rate_cov=np.eye(3) * 1e-4)
+    whole = I._integrate(y, 0.01, starts, stops, "magnus4", y, np.eye(3) * 1e-4)
+    assert len(starts) > 2 * I.GROUP
+    for name in ("R", "dphi_dC", "G", "Q"):
+        np.testing.assert_allclose(getattr(grouped, name), getattr(whole, name), atol=1e-12)

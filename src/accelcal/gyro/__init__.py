@@ -22,7 +22,7 @@ _LAZY = {
     "calibrate_gyro": "calibrate", "evaluate_model": "calibrate",
     "GyroCalibration": "result", "GyroQuality": "result",
     "fit_iterative": "fit", "fit_one_step": "fit", "crlb": "fit", "MotionSet": "fit",
-    "fit_ferraris": "ferraris", "FerrarisFit": "ferraris",
+    "fit_ferraris": "ferraris", "FerrarisFit": "ferraris", "calibrate_ferraris_session": "ferraris",
     "integrate_intervals": "integrate", "integrate_sequential": "integrate",
 }
 

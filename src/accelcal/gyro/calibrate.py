@@ -32,7 +32,7 @@ import math
 import time
 
 import numpy as np
-from scipy import stats
+from scipy import special
 
 from .errors import GyroInputError, NoMotionError, SaturatedGyroError, TooFewMotionsError
 from .fit import MotionSet, evaluate, fit_iterative, fit_one_step, initial_scale, rotation_angles_deg
@@ -145,7 +145,7 @@ def _use_g_sensitivity(choice, rs, bias, f_rest, acc) -> tuple[bool, dict]:
     without, with_g = fit_bias(rs, "all"), fit_bias(rs, "all", f_rest)
     d1, d2 = 9, with_g.dof
     F = ((without.chi2 - with_g.chi2) / d1) / (with_g.chi2 / d2)
-    pv = float(stats.f.sf(F, d1, d2))
+    pv = float(special.fdtrc(d1, d2, F))
     return pv < G_SENSITIVITY_P, {"decided": "auto", "F": float(F), "p_value": pv, "dof": [d1, d2]}
 
 
@@ -300,7 +300,7 @@ def _assess(fit, all_ms: MotionSet, used, notes, t, tb, best, integrator, base_c
         table["integration_deg"][i] = float(e)
     turn = np.rad2deg(np.sum(np.abs(log_so3(ev.R)), axis=0))
     dof = fit.dof
-    p = float(stats.chi2.sf(fit.chi2, dof)) if dof > 0 else float("nan")
+    p = float(special.chdtrc(dof, fit.chi2)) if dof > 0 else float("nan")
     warnings, flags = [], []
     if dof > 0 and fit.excess > RULES["excess"] and p < RULES["p_value"]:
         flags.append("excess")

@@ -125,4 +125,95 @@ def fit_ferraris(segments, h: float, angles_deg, axes=None, *, nominal: float = 
     return FerrarisFit("sum", C, cov, senses, np.rad2deg(np.linalg.norm(Y @ C.T, axis=1)), nominal_deg, 1)
 
 
-__all__ = ["FerrarisFit", "fit_ferraris"]
+#: imucal's section names: static holds and rotations.
+REST_SECTIONS = ("x_p", "x_a", "y_p", "y_a", "z_p", "z_a")
+ROTATION_SECTIONS = ("x_rot", "y_rot", "z_rot")
+
+
+def calibrate_ferraris_session(t, gyro, sections: dict, *, raw_unit: str = "deg/s", angles_deg=360.0, accel=None,
+                               acc=None, nominal_sensitivity=None, angle_std_deg: float = 0.0,
+                               rest_names=REST_SECTIONS, rotation_names=ROTATION_SECTIONS):
+    """Calibrate the gyro of a Ferraris session (static holds and three rotations of known angle).
+
+    Parameters
+    ----------
+    t : array_like (n,)
+        Time [s] (a constant step is taken from it).
+    gyro : array_like (n, 3)
+        Raw gyro samples.
+    sections : dict
+        ``{name: (start, stop)}`` half-open sample ranges (imucal's section list); the rests
+        ``rest_names`` give the bias, the rotations ``rotation_names`` the scale.
+    angles_deg : float or sequence of 3
+        Stated angle of each rotation (magnitudes; the sense comes from the data).
+    accel, acc
+        An accelerometer calibration (``apply(raw) -> m/s²``) and the raw accelerometer
+        samples: the rotation axes are then the gravity directions during the rotations and
+        ``C`` is in the accelerometer frame; without them the nominal axes (imucal's
+        assumption).
+    nominal_sensitivity : float, optional
+        Raw units per rad/s (counts).
+
+    Returns
+    -------
+    GyroCalibration
+        Exactly determined: no residual, ``dof = 0``; the standard errors come from the
+        noise (module docstring).
+    """
+    from .model import RAW_UNITS, GyroModel
+    from .rests import fit_bias, rest_noise, rest_statistics, sample_interval
+    from .result import GyroCalibration, GyroQuality
+
+    missing = [k for k in (*rest_names, *rotation_names) if k not in sections]
+    if missing:
+        raise RotationAngleError(f"the section list lacks {', '.join(missing)}: a Ferraris session needs the rests "
+                                 f"{', '.join(rest_names)} and the rotations {', '.join(rotation_names)} (--intervals)")
+    gyro = np.asarray(gyro, float)
+    tb = sample_interval(t)
+    rs = rest_statistics(t, gyro, np.array([sections[k] for k in rest_names]))
+    best = fit_bias(rs, "all")
+    nominal = 1.0 / float(nominal_sensitivity) if nominal_sensitivity is not None else RAW_UNITS[raw_unit]
+    if nominal is None:
+        raise RotationAngleError("raw counts need the nominal gyro sensitivity (--gyro-sensitivity) to check the "
+                                 "rotation angles")
+    segs = [gyro[slice(*sections[k])] - best.bias for k in rotation_names]
+    axes, axis_cov = None, None
+    if accel is not None and acc is not None:
+        from .calibrate import accel_directions
+
+        acc = np.asarray(acc, float)
+        seg_acc = [acc[slice(*sections[k])] for k in rotation_names]
+        means = np.array([s.mean(axis=0) for s in seg_acc])
+        se = np.array([s.std(axis=0, ddof=1) / np.sqrt(len(s)) for s in seg_acc])
+        axes, axis_cov, _ = accel_directions(accel, means, se)
+    angles = np.broadcast_to(np.asarray(angles_deg, float), (3,))
+    fit = fit_ferraris(segs, tb.h, angles, axes, nominal=nominal, y_var=rest_noise(rs),
+                       bias_var=best.bias_se ** 2, axis_cov=axis_cov, angle_std_deg=angle_std_deg,
+                       names=tuple(n.split("_")[0] for n in rotation_names))
+    model = GyroModel(fit.C, best.bias, None, raw_unit)
+    se_C = np.sqrt(np.clip(np.diag(fit.cov), 0, None)).reshape(3, 3)
+    Jt = np.zeros((9, 9))
+    for i in range(3):
+        for j in range(3):
+            if i != j:
+                Jt[3 * i + j, 3 * i + j] = 1.0 / fit.C[j, j]
+                Jt[3 * i + j, 4 * j] = -fit.C[i, j] / fit.C[j, j] ** 2
+    se = {"C": se_C, "T": np.sqrt(np.clip(np.diag(Jt @ fit.cov @ Jt.T), 0, None)).reshape(3, 3),
+          "scale_factors": np.diag(se_C) / abs(nominal), "bias": best.bias_se * max(1.0, best.excess)}
+    warnings = ["three rotations determine the nine parameters exactly: no residual checks the fit; the ± rest on "
+                "the noise alone (and on --rotation-angle's uncertainty)"]
+    if axes is None:
+        warnings.append("no accelerometer: the rotation axes are assumed to be the sensor's x, y and z (imucal's "
+                        "assumption); the misalignments are relative to them")
+    quality = GyroQuality(n_motions=3, n_parameters=9, dof=0, chi2=float("nan"), p_value=float("nan"),
+                          excess=float("nan"), residual_rms_deg=0.0, predicted_rms_deg=float("nan"),
+                          axis_turn_deg=tuple(float(a) for a in fit.angles_deg), warnings=tuple(warnings),
+                          flags=("exactly_determined",))
+    settings = {"estimator": "ferraris_sum", "integrator": "sum", "bias_mode": "all", "nominal": nominal,
+                "time_base": {"h": tb.h, "rate": tb.rate, "jitter": tb.jitter}, "angles_deg": angles.tolist(),
+                "senses": fit.senses.tolist(), "nominal_angles_deg": fit.nominal_angles_deg.tolist(),
+                "axes": None if axes is None else np.asarray(axes).tolist(), "iterations": 1}
+    return GyroCalibration(model, se, quality, {}, settings)
+
+
+__all__ = ["FerrarisFit", "REST_SECTIONS", "ROTATION_SECTIONS", "calibrate_ferraris_session", "fit_ferraris"]

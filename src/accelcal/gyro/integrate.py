@@ -322,6 +322,29 @@ def integrate_intervals(omega, h, starts, stops, method: str = "magnus4", *, raw
         covariance ``Q`` of each interval's rotation vector error, ``Σ_j G_j Σ G_jᵀ``.
     """
     omega, starts, stops = _check(omega, starts, stops)
+    if len(starts) <= 2 * GROUP:
+        return _integrate(omega, h, starts, stops, method, raw, rate_cov)
+    # intervals of similar length together: the padding of each group to its longest stays small
+    order = np.argsort(stops - starts, kind="stable")
+    parts = [(g, _integrate(omega, h, starts[g], stops[g], method, raw, rate_cov))
+             for g in np.array_split(order, -(-len(order) // GROUP))]
+    fields = {}
+    for name in ("R", "dphi_dC", "G", "Q"):
+        if getattr(parts[0][1], name) is None:
+            fields[name] = None
+            continue
+        out = np.empty((len(starts),) + getattr(parts[0][1], name).shape[1:])
+        for g, it in parts:
+            out[g] = getattr(it, name)
+        fields[name] = out
+    return Integration(**fields)
+
+
+#: Intervals integrated together (one padded array) by :func:`integrate_intervals`.
+GROUP = 10
+
+
+def _integrate(omega, h, starts, stops, method, raw, rate_cov) -> Integration:
     k, mask = _step_index(starts, stops, len(omega))
     phi, coefs = _increments(omega, h, k, method)
     phi = np.where(mask[..., None], phi, 0.0)

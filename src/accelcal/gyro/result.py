@@ -122,8 +122,9 @@ class GyroCalibration:
         lines = [f"gyroscope: {s.get('estimator', '?')} ({s.get('integrator', '?')} integration), "
                  f"{q.n_motions} motions between rests, bias from {s.get('bias_mode', '?')} rests"]
         sf, sse = self.scale_factors, se.get("scale_factors", np.full(3, np.nan))
-        lines.append("  scale factors [ppm]: " + ", ".join(
-            f"{a} {1e6 * v:+.0f} ± {1e6 * e:.0f}" for a, v, e in zip("xyz", sf, sse)))
+        if unit != "counts" or not str(s.get("nominal_from", "")).startswith("scalar search"):
+            lines.append("  scale factors [ppm]: " + ", ".join(
+                f"{a} {1e6 * v:+.0f} ± {1e6 * e:.0f}" for a, v, e in zip("xyz", sf, sse)))
         if unit == "counts":
             k = 1.0 / np.diag(m.C)
             ke = np.diag(se.get("C", np.full((3, 3), np.nan))) / np.diag(m.C) ** 2
