@@ -103,4 +103,40 @@ def run(out: Path, peers_dir: Path, sessions=SESSIONS) -> dict[str, pd.DataFrame
     return tabs
 
 
-__all__ = ["GROUPS", "run", "stability"]
+COLORS = {"accelcal": "C0", "imutk_run": "C1", "imutk_published": "C3", "factory": "C2", "imucal": "C4",
+          "accelcal_nominal_axes": "C0", "accelcal_measured_axes": "C9"}
+
+
+def figure(fom: pd.DataFrame, imucal_fom: pd.DataFrame | None = None):
+    """RMS per-motion misfit [deg] per session and calibration (own bias), and the noise level."""
+    import matplotlib.pyplot as plt
+
+    from accelcal.plotting import RC
+
+    sub = fom[fom.bias == "own_bias"]
+    if imucal_fom is not None:
+        sub = pd.concat([sub, imucal_fom.assign(bias="own_bias")], ignore_index=True)
+    sessions = list(dict.fromkeys(sub.session))
+    with plt.rc_context(RC):
+        fig, ax = plt.subplots(figsize=(8.0, 3.3), layout="constrained")
+        seen = set()
+        for i, sname in enumerate(sessions):
+            d = sub[sub.session == sname]
+            width = 0.8 / len(d)
+            for j, (c, v) in enumerate(zip(d.calibration, d.rms_deg)):
+                ax.bar(i + (j - (len(d) - 1) / 2) * width, v, width, color=COLORS.get(c, "0.5"),
+                       label=None if c in seen else c.replace("_", " "))
+                seen.add(c)
+        noise = sub.groupby("session").noise_rms_deg.first()
+        ax.scatter(range(len(sessions)), [noise[s] for s in sessions], marker="_", s=400, color="k", zorder=3,
+                   label="noise (rests)")
+        ax.set_yscale("log")
+        ax.set_xticks(range(len(sessions)), [s.replace("_", " ") for s in sessions], rotation=20, fontsize=7.5)
+        ax.set_ylabel("RMS gravity misfit per motion [deg]")
+        ax.legend(fontsize=6.5, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+        ax.set_title("gravity at each rest vs the previous rest's carried by the calibrated gyro (Magnus-4)",
+                     fontsize=8.5)
+    return fig
+
+
+__all__ = ["GROUPS", "figure", "run", "stability"]
