@@ -88,3 +88,29 @@ def test_dict_round_trip_and_bad_input():
         GyroModel(np.eye(3), np.zeros(3), raw_unit="rpm")
     with pytest.raises(InputShapeError):
         _random_model(g_sens=True).correct(np.zeros((2, 3)))  # g-sensitivity needs the specific force
+
+
+def test_exports_are_read_by_the_peers_as_the_same_calibration(tmp_path):
+    from accelcal.gyro.export import imucal_json, imutk_files
+
+    rng = np.random.default_rng(7)
+    M = np.tril(np.eye(3) + 0.02 * rng.standard_normal((3, 3)))  # accelcal's lower-triangular accelerometer
+    ab = 0.1 * rng.standard_normal(3)
+    g = _random_model(g_sens=False)
+    raw_a, raw_g = 9.8 * rng.standard_normal((6, 3)), rng.standard_normal((6, 3))
+    f = np.linalg.solve(M, (raw_a - ab).T).T
+    files = imutk_files(M, ab, g)
+    rows = [[float(v) for v in line.split()] for line in files["gyro"].splitlines() if line.strip()]
+    T, K, b = np.array(rows[0:3]), np.array(rows[3:6]), np.array([r[0] for r in rows[6:9]])
+    np.testing.assert_allclose((T @ K @ (raw_g - b).T).T, g.correct(raw_g), atol=1e-10)
+    rows = [[float(v) for v in line.split()] for line in files["acc"].splitlines() if line.strip()]
+    Ta, Ka, ba = np.array(rows[0:3]), np.array(rows[3:6]), np.array([r[0] for r in rows[6:9]])
+    np.testing.assert_allclose((Ta @ Ka @ (raw_a - ba).T).T, f, atol=1e-10)
+    imucal = pytest.importorskip("imucal")
+    gs = _random_model(g_sens=True, raw_unit="deg/s")
+    info = imucal.CalibrationInfo.from_json(imucal_json(M, ab, gs))
+    acc_out, gyr_out = info.calibrate(raw_a, raw_g, "m/s^2", "deg/s")
+    np.testing.assert_allclose(acc_out, f, atol=1e-10)
+    np.testing.assert_allclose(np.deg2rad(gyr_out), gs.correct(raw_g, f), atol=1e-10)
+    with pytest.raises(InputShapeError, match="g-sensitivity"):
+        imutk_files(M, ab, gs)

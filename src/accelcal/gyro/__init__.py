@@ -24,6 +24,7 @@ _LAZY = {
     "fit_iterative": "fit", "fit_one_step": "fit", "crlb": "fit", "MotionSet": "fit",
     "fit_ferraris": "ferraris", "FerrarisFit": "ferraris", "calibrate_ferraris_session": "ferraris",
     "integrate_intervals": "integrate", "integrate_sequential": "integrate",
+    "imutk_files": "export", "imucal_json": "export",
 }
 
 
