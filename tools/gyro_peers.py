@@ -75,7 +75,10 @@ DRIVER = r"""
 using namespace imu_tk;
 using namespace Eigen;
 int main(int argc, char **argv) {
-  if (argc < 9) { std::cerr << "usage: imutk_calib ACC GYRO G INIT_S ACC_BIAS0 GYRO_SCALE0 N_SAMPLES OUT" << std::endl; return 2; }
+  if (argc < 9) {
+    std::cerr << "usage: imutk_calib ACC GYRO G INIT_S ACC_BIAS0 GYRO_SCALE0 N_SAMPLES OUT" << std::endl;
+    return 2;
+  }
   std::vector< TriadData > acc, gyro;
   importAsciiData(argv[1], acc, imu_tk::TIMESTAMP_UNIT_SEC);
   importAsciiData(argv[2], gyro, imu_tk::TIMESTAMP_UNIT_SEC);
@@ -134,7 +137,8 @@ def build_imutk(peers: Path) -> Path:
         subprocess.run(["g++", *flags, "-c", str(cpp), "-o", str(obj)], check=True)
         objs.append(str(obj))
     libs = ["-lceres", "-lglog", "-lgflags", "-lpthread"]
-    for app, cpp in (("test_imu_calib", src / "apps" / "test_imu_calib.cpp"), ("imutk_calib", build / "imutk_calib.cpp")):
+    apps = (("test_imu_calib", src / "apps" / "test_imu_calib.cpp"), ("imutk_calib", build / "imutk_calib.cpp"))
+    for app, cpp in apps:
         subprocess.run(["g++", *flags, str(cpp), *objs, "-o", str(build / app), *libs], check=True)
     return build
 
@@ -164,8 +168,9 @@ def _timed(cmd: list[str], cwd: Path, runs: int) -> tuple[subprocess.CompletedPr
 #: samples per interval (IMU-TK's default 100).  The fork's app rests 5 s at the start; the SNU
 #: sessions start with 7-9 s at rest.
 SESSIONS = {
-    **{f"fork_{s}": (DATA / "imutk_fork_sessions" / s / "acc_data.txt", DATA / "imutk_fork_sessions" / s / "gyro_data.txt",
-                     9.81, 5.0, 0.0, 1.0, 100) for s in ("data1", "data2", "data3", "data4")},
+    **{f"fork_{s}": (DATA / "imutk_fork_sessions" / s / "acc_data.txt",
+                     DATA / "imutk_fork_sessions" / s / "gyro_data.txt", 9.81, 5.0, 0.0, 1.0, 100)
+       for s in ("data1", "data2", "data3", "data4")},
     **{f"snu_{s}": (DATA / "snu_static3" / f"imu_{s}.txt", None, 9.79871, 7.0, 0.0, 1.0, 100)
        for s in ("good1", "good2", "good3")},
 }
@@ -247,7 +252,8 @@ def run_imucal(out: Path) -> None:
     rec = {k: np.asarray(getattr(cal, k)).tolist() for k in ("K_a", "R_a", "b_a", "K_g", "R_g", "K_ga", "b_g")}
     out.mkdir(parents=True, exist_ok=True)
     (out / "imucal.json").write_text(json.dumps(
-        {"meta": {"peer": "imucal", "version": imucal.__version__, "sampling_rate_hz": IMUCAL_EXAMPLE_RATE_HZ, "grav": 9.81,
+        {"meta": {"peer": "imucal", "version": imucal.__version__, "sampling_rate_hz": IMUCAL_EXAMPLE_RATE_HZ,
+                  "grav": 9.81,
                   "expected_angle": -360.0, "wall_s": wall}, "calibration": rec}, indent=1))
     print(f"wrote {out / 'imucal.json'}")
 

@@ -177,7 +177,8 @@ def choose_static(t, acc, g: float, *, unit: str | None = None, min_poses: int =
     if best is None:
         most = max(table, key=lambda r: r["n_poses"])
         raise RecordingError(f"no detection setting finds {min_poses} static poses in distinct orientations (at most "
-                             f"{most['n_poses']}, threshold x{most['threshold_factor']:g}, window {most['window']:g} s): "
+                             f"{most['n_poses']}, threshold x{most['threshold_factor']:g}, "
+                             f"window {most['window']:g} s): "
                              "record more poses, or hold each still for longer")
     return StaticChoice(best[1], best[2], best[0], table)
 

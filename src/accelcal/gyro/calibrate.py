@@ -317,7 +317,8 @@ def _assess(fit, all_ms: MotionSet, used, notes, t, tb, best, integrator, base_c
     long = int(np.sum(rotation_angles_deg(ev.R) >= 30.0))
     if long < RULES["min_long_motions"]:
         flags.append("short_motions")
-        warnings.append(f"only {long} motions turn 30 deg or more ({int(np.sum(rotation_angles_deg(ev.R) < RULES['short_deg']))} "
+        short = int(np.sum(rotation_angles_deg(ev.R) < RULES["short_deg"]))
+        warnings.append(f"only {long} motions turn 30 deg or more ({short} "
                         f"turn less than {RULES['short_deg']:g} deg): short motions hardly determine the scales; "
                         "turn the sensor further between rests")
     bad_int = int_err > RULES["integration_fraction"] * ev.predicted_deg

@@ -52,7 +52,8 @@ def imucal_json(acc_M, acc_bias, gyro: GyroModel, *, acc_raw_unit: str = "m/s^2"
     M = np.asarray(acc_M, float)
     k = np.linalg.norm(M, axis=1)
     g = gyro.to_imucal("deg/s")
-    d = {"cal_type": "Ferraris", "_format_version": IMUCAL_FORMAT_VERSION, "acc_unit": "m/s^2", "gyr_unit": "deg/s", "from_acc_unit": acc_raw_unit,
+    d = {"cal_type": "Ferraris", "_format_version": IMUCAL_FORMAT_VERSION, "acc_unit": "m/s^2", "gyr_unit": "deg/s",
+         "from_acc_unit": acc_raw_unit,
          "from_gyr_unit": gyro.raw_unit, "comment": comment,
          "K_a": np.diag(k).tolist(), "R_a": (M / k[:, None]).tolist(), "b_a": np.asarray(acc_bias, float).tolist(),
          "K_g": g["K_g"].tolist(), "R_g": g["R_g"].tolist(), "K_ga": g["K_ga"].tolist(), "b_g": g["b_g"].tolist()}

@@ -29,7 +29,8 @@ Estimators, both on ``vec(C)`` (9 unknowns):
 * :func:`fit_iterative` — Gauss-Newton with the exact Jacobian of the product
   integrator (``dphi_dC``), backtracking on the weighted cost, until every step is below
   ``STEP_TOL`` (1 %) of its standard error (the fit is then within far less than that of
-  its optimum: Gauss-Newton converges quadratically on these nearly linear residuals).  IPOPT is not needed: the Jacobian is analytic
+  its optimum: Gauss-Newton converges quadratically on these nearly linear residuals).
+  IPOPT is not needed: the Jacobian is analytic
   (checked against finite differences in the tests) and each iteration costs one pass
   over the motions' samples; the repro compares both (same minimum).
 * :func:`fit_one_step` — one linearised solve about the nominal model ``C0``: a single

@@ -372,5 +372,6 @@ def _integrate(omega, h, starts, stops, method, raw, rate_cov) -> Integration:
     return Integration(R, None if dC is None else dC.reshape(m, 3, 9), Gpos.sum(axis=1), Q)
 
 
-__all__ = ["Integration", "METHODS", "PRODUCT_METHODS", "expm_so3", "integrate_intervals", "integrate_sequential", "log_so3",
+__all__ = ["Integration", "METHODS", "PRODUCT_METHODS", "expm_so3", "integrate_intervals", "integrate_sequential",
+           "log_so3",
            "quat_to_matrix", "right_jacobian", "skew", "suffix_products", "total_products"]

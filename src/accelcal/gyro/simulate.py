@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .fit import MotionSet
-from .integrate import expm_so3, skew
+from .integrate import expm_so3
 
 _PEAK = 1.875  # max of s'(τ) for the minimum-jerk profile
 

@@ -40,7 +40,8 @@ CTU_RATE_HZ = 100.0
 def imucal_session():
     d = DATA / "imucal_ferraris"
     df = pd.read_csv(d / "example_ferraris_session.csv")
-    sec = {k: (v["start"], v["end"]) for k, v in json.loads((d / "example_ferraris_session_list.json").read_text()).items()}
+    raw = json.loads((d / "example_ferraris_session_list.json").read_text())
+    sec = {k: (v["start"], v["end"]) for k, v in raw.items()}
     t = df.n_samples.to_numpy(float) / IMUCAL_RATE_HZ
     return t, df[["acc_x", "acc_y", "acc_z"]].to_numpy(), df[["gyr_x", "gyr_y", "gyr_z"]].to_numpy(), sec
 

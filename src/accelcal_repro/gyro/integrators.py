@@ -115,7 +115,8 @@ def figure(table: pd.DataFrame):
         axes[1, 0].set_ylabel("RMS angle error / angle [ppm]")
         axes[1, -1].legend(loc="lower right", fontsize=6.5)
         fig.suptitle(f"integration error on {int(table.n_motions.iloc[0])} simulated motions of "
-                     f"{table.angle_deg.iloc[0]:g} deg about moving axes (dotted: 100 ppm; bottom: Euler, RK4 and coning "
+                     f"{table.angle_deg.iloc[0]:g} deg about moving axes (dotted: 100 ppm; "
+                     "bottom: Euler, RK4 and coning "
                      "overlap)", fontsize=8.5)
     return fig
 

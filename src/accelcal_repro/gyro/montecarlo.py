@@ -34,7 +34,8 @@ BASE = {"n_motions": 20, "angle_deg": 90.0, "rate_dps": 150.0, "fs": 100.0, "gyr
 FACTORS = {"gyro_noise": (0.0005, 0.005, 0.05), "n_motions": (8, 20, 60), "angle_deg": (30.0, 90.0, 180.0),
            "rate_dps": (50.0, 150.0, 400.0), "scale_std": (0.005, 0.02, 0.06)}
 ESTIMATORS = {"one_step": fit_one_step, "iterative": fit_iterative}
-AXIS_LABELS = {"gyro_noise": "gyro noise [rad/s per sample]", "n_motions": "motions", "angle_deg": "angle per motion [deg]",
+AXIS_LABELS = {"gyro_noise": "gyro noise [rad/s per sample]", "n_motions": "motions",
+               "angle_deg": "angle per motion [deg]",
                "rate_dps": "peak rate [deg/s]", "scale_std": "scale errors (std) from nominal"}
 
 
@@ -95,8 +96,7 @@ def monte_carlo(n_trials: int = 100, seed: int = 24, factors=FACTORS, base=BASE,
 
 def summary(table: pd.DataFrame) -> pd.DataFrame:
     """Median ratio per configuration, estimator and kind of parameter (scale, misalignment)."""
-    return (table.groupby(["config", "factor", "value", "estimator", "kind"], sort=False).ratio.median()
-            .unstack(["estimator", "kind"]))
+    return table.groupby(["config", "estimator", "kind"], sort=False).ratio.median().unstack(["estimator", "kind"])
 
 
 def figure(table: pd.DataFrame):

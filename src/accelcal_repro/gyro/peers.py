@@ -84,8 +84,8 @@ def peer_calibrations(session: str, raw_unit: str, peers_dir: Path) -> dict:
             out["imutk_run"] = _imutk_pair(rec["acc"], rec["gyro"], raw_unit)
     if session.startswith("fork_"):
         d = DATA / "imutk_fork_sessions" / session[5:]
-        out["imutk_published"] = _imutk_pair(read_calib(d / "test_imu_acc.calib"), read_calib(d / "test_imu_gyro.calib"),
-                                             raw_unit)
+        out["imutk_published"] = _imutk_pair(read_calib(d / "test_imu_acc.calib"),
+                                             read_calib(d / "test_imu_gyro.calib"), raw_unit)
     if session == "xsens":
         f = XSENS_FACTORY
         out["factory"] = (AffineAccel(f["acc_scale"] @ f["acc_misal"], f["acc_offset"]),
