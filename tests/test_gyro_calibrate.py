@@ -80,6 +80,9 @@ def test_saturated_motions_are_left_out_or_refused():
     clipped = {**r, "gyro": np.clip(r["gyro"], -lim, lim)}
     g, _, _ = _calibrate(clipped, gyro_range=(-lim, lim))
     assert "saturated" in g.quality.flags and g.quality.n_motions < 24
+    assert "near_range" in g.quality.flags  # the motions kept still come within 10 % of the range
+    clean, _, _ = _calibrate(r, gyro_range=(-5 * lim, 5 * lim))
+    assert "near_range" not in clean.quality.flags
     hard = {**r, "gyro": np.clip(r["gyro"], -0.3, 0.3)}
     with pytest.raises(SaturatedGyroError, match="saturated"):
         _calibrate(hard, gyro_range=(-0.3, 0.3))

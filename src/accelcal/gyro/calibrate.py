@@ -38,8 +38,8 @@ from .errors import GyroInputError, NoMotionError, SaturatedGyroError, TooFewMot
 from .fit import MotionSet, evaluate, fit_iterative, fit_one_step, initial_scale, rotation_angles_deg
 from .integrate import integrate_intervals, log_so3
 from .model import RAW_UNITS, GyroModel
-from .rests import (bias_series, check_time_base, fit_bias, motion_bias_variance, rest_noise, rest_statistics,
-                    sample_interval, saturated_samples)
+from .rests import (bias_series, check_time_base, fit_bias, measuring_range, motion_bias_variance, rest_noise,
+                    rest_statistics, sample_interval, saturated_samples)
 from .result import RULES, GyroCalibration, GyroQuality
 
 ESTIMATORS = ("iterative", "one_step")
@@ -266,7 +266,8 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
     model = GyroModel(fit.C, best.bias, best.g_sensitivity if g_sensitivity else None, raw_unit)
     se = _standard_errors(fit.C, fit.cov, nominal, fit.excess, best)
     quality, table = _assess(fit, all_ms, used, notes, t, tb, best, integrator,
-                             {k: f.chi2 / max(f.dof, 1) for k, f in fits.items()}, chosen)
+                             {k: f.chi2 / max(f.dof, 1) for k, f in fits.items()}, chosen,
+                             _range_use(gyro, gyro_range, all_ms.subset(used)))
     settings = {"estimator": estimator, "integrator": integrator, "bias_mode": bias, "nominal": nominal,
                 "nominal_from": nominal_from, "iterations": fit.iterations, "fit_seconds": fit.seconds,
                 "seconds": time.perf_counter() - t0, "n_rests": len(u),
@@ -277,7 +278,16 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
     return GyroCalibration(model, se, quality, table, settings)
 
 
-def _assess(fit, all_ms: MotionSet, used, notes, t, tb, best, integrator, base_chi2, chosen):
+def _range_use(gyro, gyro_range, ms: MotionSet) -> float:
+    """Largest fraction of the measuring range (half-span about its centre) the used motions reach (NaN: unknown)."""
+    rng = measuring_range(gyro, gyro_range)
+    if rng is None:
+        return float("nan")
+    centre, half = 0.5 * (rng[0] + rng[1]), 0.5 * (rng[1] - rng[0])
+    return max(float(np.max(np.abs(gyro[a:b + 1] - centre))) / half for a, b in zip(ms.starts, ms.stops))
+
+
+def _assess(fit, all_ms: MotionSet, used, notes, t, tb, best, integrator, base_chi2, chosen, range_use):
     """Quality, warnings and the per-motion table of a fit."""
     ev = fit.evaluation
     ms = all_ms.subset(used)
@@ -333,6 +343,10 @@ def _assess(fit, all_ms: MotionSet, used, notes, t, tb, best, integrator, base_c
         flags.append("saturated")
         warnings.append(f"{n_sat} motions left out: the gyro reaches its range in them (saturation); turn the "
                         "sensor more slowly between poses")
+    if range_use > RULES["range_fraction"]:
+        flags.append("near_range")
+        warnings.append(f"the motions reach {100 * range_use:.0f}% of the gyro's measuring range: near saturation the "
+                        "scale may not be linear; turn the sensor more slowly, or give the range (--gyro-range)")
     n_gap = sum("missing" in n for n in notes)
     if n_gap:
         flags.append("gaps")

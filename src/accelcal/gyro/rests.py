@@ -171,6 +171,20 @@ def motion_bias_variance(est: BiasEstimate, rs: RestStatistics, before, after) -
     return np.broadcast_to(est.bias_se ** 2, (len(before), 3)).copy()
 
 
+def measuring_range(gyro, gyro_range=None):
+    """``(lo, hi)`` of the gyro's output: as given, or for integer counts inside 0..65535 or
+    -32768..32767 those limits; None when unknown."""
+    if gyro_range is not None:
+        return float(gyro_range[0]), float(gyro_range[1])
+    g = np.asarray(gyro, float)
+    if np.all(g == np.round(g)):
+        if g.min() >= 0 and g.max() <= 65535:
+            return 0.0, 65535.0
+        if g.min() >= -32768 and g.max() <= 32767:
+            return -32768.0, 32767.0
+    return None
+
+
 def saturated_samples(gyro, gyro_range=None) -> np.ndarray:
     """Samples (n,) bool where an axis is at its measuring range.
 
@@ -181,12 +195,7 @@ def saturated_samples(gyro, gyro_range=None) -> np.ndarray:
     """
     g = np.asarray(gyro, float)
     sat = np.zeros(len(g), bool)
-    lo, hi = (None, None) if gyro_range is None else (float(gyro_range[0]), float(gyro_range[1]))
-    if lo is None and np.all(g == np.round(g)):
-        if g.min() >= 0 and g.max() <= 65535:
-            lo, hi = 0.0, 65535.0
-        elif g.min() >= -32768 and g.max() <= 32767:
-            lo, hi = -32768.0, 32767.0
+    lo, hi = measuring_range(g, gyro_range) or (None, None)
     if lo is not None:
         margin = 0.002 * (hi - lo)
         sat |= np.any((g <= lo + margin) | (g >= hi - margin), axis=1)
@@ -203,4 +212,4 @@ def saturated_samples(gyro, gyro_range=None) -> np.ndarray:
 
 
 __all__ = ["BIAS_MODES", "BiasEstimate", "RestStatistics", "TimeBase", "bias_series", "check_time_base", "fit_bias",
-           "motion_bias_variance", "rest_noise", "rest_statistics", "sample_interval", "saturated_samples"]
+           "measuring_range", "motion_bias_variance", "rest_noise", "rest_statistics", "sample_interval", "saturated_samples"]

@@ -13,7 +13,8 @@ from .model import RAW_UNITS, GyroModel
 
 #: Thresholds of the warnings (:mod:`accelcal.gyro.calibrate`).
 RULES = {"excess": 1.5, "p_value": 1e-3, "scale_rel_se": 0.01, "min_axis_turn_deg": 90.0, "short_deg": 10.0,
-         "min_long_motions": 5, "integration_fraction": 0.3, "jitter": 0.05, "bias_excess": 3.0}
+         "min_long_motions": 5, "integration_fraction": 0.3, "jitter": 0.05, "bias_excess": 3.0,
+         "range_fraction": 0.9}
 
 
 @dataclass(frozen=True)
