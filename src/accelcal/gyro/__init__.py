@@ -9,8 +9,12 @@ Modules: :mod:`~accelcal.gyro.model` (``ω = C (y - b - G f)`` and the peers'
 parametrisations), :mod:`~accelcal.gyro.integrate` (five integrators, the exact Jacobian),
 :mod:`~accelcal.gyro.fit` (the iterative and the one-step estimate, the Cramér–Rao bound),
 :mod:`~accelcal.gyro.rests` (bias, noise, time base, saturation),
-:mod:`~accelcal.gyro.calibrate` (the whole session), :mod:`~accelcal.gyro.ferraris`
-(rotations of known angle), :mod:`~accelcal.gyro.simulate`.
+:mod:`~accelcal.gyro.calibrate` (the whole session, its trust lines and typed errors,
+:mod:`~accelcal.gyro.errors`), :mod:`~accelcal.gyro.result` (``to_dict``/``from_dict``,
+``summary()``), :mod:`~accelcal.gyro.ferraris` (rotations of known angle),
+:mod:`~accelcal.gyro.export` (IMU-TK's ``.calib`` and imucal's JSON),
+:mod:`~accelcal.gyro.simulate` (sessions with an exactly known rotation).  The static
+detection settings for sessions with short still phases: :mod:`accelcal.static_auto`.
 """
 
 from __future__ import annotations
