@@ -1,0 +1,389 @@
+"""Gyro calibration of a multi-position session, from arrays to a :class:`GyroCalibration`.
+
+:func:`calibrate_gyro` takes what the accelerometer side already has — the time column,
+the static poses found in the accelerometer (:mod:`accelcal.static`) and the accelerometer
+calibration (anything with ``apply(raw) -> m/s²``, e.g. :class:`accelcal.calibration.Calibration`)
+— and the gyro samples on the same time base, and:
+
+1. checks the time base (same rows as the accelerometer; jitter: the sample index is
+   used; gaps: the motions across them are left out);
+2. takes the bias from the rests (:mod:`accelcal.gyro.rests`; all rests by default) and
+   the noise that every motion integrates;
+3. turns each pair of consecutive rests into a motion; leaves out motions in which the gyro
+   reaches its range (saturation) or samples are missing, saying which;
+4. fits ``C`` (:mod:`accelcal.gyro.fit`: iterative by default, or the one-step estimate)
+   from the nominal model (the unit's factor, a given sensitivity, or for raw counts a
+   scalar search);
+5. judges the result: χ² of the motion residuals against the noise, the rotation each
+   gyro axis saw, the integration error (the two product integrators differ by more than
+   a fraction of the noise: the sample rate is too low for the motion), the bias moving
+   between rests, jittery timestamps.  Each finding is a plain sentence in
+   ``quality.warnings``.
+
+Bad input raises a typed error (:mod:`accelcal.gyro.errors`) with one line naming the
+cause and the fix: no rotation between the rests, a gyro that shows no rotation where
+gravity turns, too few usable motions, a saturated gyro, a time base that does not match.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+
+import numpy as np
+from scipy import special
+
+from .errors import GyroInputError, NoMotionError, SaturatedGyroError, TooFewMotionsError
+from .fit import MotionSet, evaluate, fit_iterative, fit_one_step, initial_scale, rotation_angles_deg
+from .integrate import integrate_intervals, log_so3
+from .model import RAW_UNITS, GyroModel
+from .rests import (bias_series, check_time_base, fit_bias, measuring_range, motion_bias_variance, rest_noise,
+                    rest_statistics, sample_interval, saturated_samples)
+from .result import RULES, GyroCalibration, GyroQuality
+
+ESTIMATORS = ("iterative", "one_step")
+#: Fewest motions the 9-parameter fit accepts (2 residuals each: 2 m - 9 >= 1).
+MIN_MOTIONS = 5
+#: Total rotation [deg] about a gyro axis below which its column of C is not determined.
+MIN_AXIS_TURN_DEG = 5.0
+#: Fewest rests for fitting the g-sensitivity (12 unknowns from 3 per rest) in 'auto' mode.
+MIN_RESTS_G = 10
+#: F-test level at which 'auto' fits the g-sensitivity.
+G_SENSITIVITY_P = 1e-3
+#: Integrated rotation below this many noise standard deviations: the gyro saw no motion.
+NO_MOTION_SIGMAS = 5.0
+
+
+def accel_directions(accel, means, mean_std):
+    """Unit gravity directions of the poses (p, 3), their covariance (p, 3, 3) and the
+    calibrated specific force (p, 3) [m/s²], from an accelerometer calibration's ``apply``."""
+    z = np.asarray(means, float)
+    f = np.asarray(accel.apply(z), float)
+    eps = 1e-3 * np.maximum(np.abs(z), 1.0)
+    J = np.stack([(np.asarray(accel.apply(z + eps[:, [k]] * np.eye(3)[k]), float) - f) / eps[:, [k]]
+                  for k in range(3)], axis=2)  # (p, 3, 3): ∂f/∂z (apply is affine)
+    cov_f = np.einsum("pik,pk,pjk->pij", J, np.asarray(mean_std, float) ** 2, J)
+    norm = np.linalg.norm(f, axis=1)
+    u = f / norm[:, None]
+    P = (np.eye(3)[None] - u[:, :, None] * u[:, None, :]) / norm[:, None, None]
+    return u, P @ cov_f @ np.swapaxes(P, -1, -2), f
+
+
+def _motions(intervals, gaps, saturated):
+    """Consecutive rests -> motions: (starts, stops, before, after, notes)."""
+    iv = np.asarray(intervals)
+    starts, stops = iv[:-1, 1] - 1, iv[1:, 0]
+    notes = []
+    starts = np.minimum(starts, stops - 1)  # overlapping rests: a placeholder, never integrated
+    csat = np.concatenate([[0], np.cumsum(saturated)])
+    for a, b in zip(starts, stops):
+        if b <= a + 1:
+            notes.append("rests overlap (no motion between them)")
+        elif np.any((gaps >= a) & (gaps < b)):
+            notes.append("samples missing (time gap)")
+        elif csat[b + 1] - csat[a] > 0:
+            notes.append(f"gyro at its range in {int(csat[b + 1] - csat[a])} samples (saturated)")
+        else:
+            notes.append("")
+    before = np.arange(len(starts))
+    return starts, stops, before, before + 1, notes
+
+
+def _check_motion(ms: MotionSet, u) -> None:
+    """Typed errors for sessions without rotation (module docstring)."""
+    h = float(np.mean(np.diff(ms.h))) if np.ndim(ms.h) else ms.h
+    turn = np.array([np.linalg.norm(ms.y[a:b + 1].sum(axis=0) * h) for a, b in zip(ms.starts, ms.stops)])
+    noise = np.array([math.sqrt((b - a + 1) * float(np.max(ms.y_var))) * h for a, b in zip(ms.starts, ms.stops)])
+    tilt = np.rad2deg(np.arccos(np.clip(np.sum(u[ms.rest_before] * u[ms.rest_after], axis=1), -1, 1)))
+    moved = turn > NO_MOTION_SIGMAS * noise
+    if not np.any(moved) and tilt.max() < 5.0:
+        raise NoMotionError(f"the sensor does not turn between its {len(u)} rests (gravity moves by at most "
+                            f"{tilt.max():.2g} deg, the gyro shows no rotation): the gyro needs rotations between "
+                            "rests in different orientations; record them, or calibrate the accelerometer alone "
+                            "(--no-gyro)")
+    if np.sum(moved) < MIN_MOTIONS and tilt.max() >= 5.0:
+        raise NoMotionError(f"gravity turns by up to {tilt.max():.0f} deg between rests but the gyro shows rotation "
+                            f"in only {int(np.sum(moved))} of {len(turn)} motions (integrated rate within "
+                            f"{NO_MOTION_SIGMAS:g} noise std of zero): wrong gyro columns, or a gyro not recorded "
+                            "with the accelerometer (--gyro FILE, --columns)")
+
+
+def _check_axes(ms: MotionSet, nominal: float, h: float) -> None:
+    """Every gyro axis must turn: a column of ``C`` whose axis never moves is not determined."""
+    turn = np.rad2deg(abs(nominal) * h * np.array([np.abs(ms.y[a:b + 1].sum(axis=0)) for a, b in
+                                                    zip(ms.starts, ms.stops)]).sum(axis=0))
+    idle = [a for a in range(3) if turn[a] < MIN_AXIS_TURN_DEG]
+    if idle:
+        raise TooFewMotionsError("the motions never turn the sensor about " + " or ".join(
+            f"its {'xyz'[a]} axis ({turn[a]:.1f} deg in all)" for a in idle) + ": that gyro's scale and "
+            "misalignment cannot be determined; turn the sensor about every axis between rests")
+
+
+def _nominal(raw_unit: str, nominal_sensitivity, ms: MotionSet, integrator: str) -> tuple[float, str]:
+    if raw_unit not in RAW_UNITS:
+        raise GyroInputError(f"unknown gyro unit {raw_unit!r}; known: {', '.join(RAW_UNITS)}")
+    if nominal_sensitivity is not None:
+        s = float(nominal_sensitivity)
+        if not (math.isfinite(s) and s != 0):
+            raise GyroInputError(f"gyro sensitivity must be a non-zero number of {raw_unit} per rad/s, got {s}")
+        return 1.0 / s, f"given sensitivity {s:g} {raw_unit} per rad/s"
+    k = RAW_UNITS[raw_unit]
+    if k is not None:
+        return k, f"unit {raw_unit}"
+    return initial_scale(ms, integrator), "scalar search (no sensitivity given)"
+
+
+def _use_g_sensitivity(choice, rs, bias, f_rest, acc) -> tuple[bool, dict]:
+    """Whether to fit the g-sensitivity: as given, or for 'auto' by an F test on the rest means."""
+    if choice != "auto":
+        return bool(choice), {"decided": "given"}
+    p = len(rs.means)
+    if acc is None or p < MIN_RESTS_G or bias == "first":
+        return False, {"decided": "auto", "reason": "no raw accelerometer samples" if acc is None else
+                       f"{p} rests (< {MIN_RESTS_G})" if p < MIN_RESTS_G else "bias from the first rest"}
+    without, with_g = fit_bias(rs, "all"), fit_bias(rs, "all", f_rest)
+    d1, d2 = 9, with_g.dof
+    F = ((without.chi2 - with_g.chi2) / d1) / (with_g.chi2 / d2)
+    pv = float(special.fdtrc(d1, d2, F))
+    return pv < G_SENSITIVITY_P, {"decided": "auto", "F": float(F), "p_value": pv, "dof": [d1, d2]}
+
+
+def _standard_errors(C, cov, nominal, excess, bias_est) -> dict:
+    k = max(1.0, excess if math.isfinite(excess) else 1.0)
+    cov = cov * k * k
+    se_C = np.sqrt(np.clip(np.diag(cov), 0, None)).reshape(3, 3)
+    Jt = np.zeros((9, 9))  # ∂vec(T)/∂vec(C), T_ij = C_ij / C_jj
+    for i in range(3):
+        for j in range(3):
+            if i != j:
+                Jt[3 * i + j, 3 * i + j] = 1.0 / C[j, j]
+                Jt[3 * i + j, 4 * j] = -C[i, j] / C[j, j] ** 2
+    se_T = np.sqrt(np.clip(np.diag(Jt @ cov @ Jt.T), 0, None)).reshape(3, 3)
+    kb = max(1.0, bias_est.excess if math.isfinite(bias_est.excess) else 1.0)
+    out = {"C": se_C, "T": se_T, "scale_factors": np.diag(se_C) / abs(nominal), "bias": bias_est.bias_se * kb}
+    if bias_est.g_sensitivity_se is not None:
+        out["g_sensitivity"] = bias_est.g_sensitivity_se * kb
+    return out
+
+
+def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, t_gyro=None,
+                   nominal_sensitivity=None, estimator: str = "iterative", integrator: str = "magnus4",
+                   bias: str = "interpolated", g_sensitivity="auto", gyro_range=None,
+                   time_base: str = "auto") -> GyroCalibration:
+    """Calibrate the gyro of a multi-position session (module docstring).
+
+    Parameters
+    ----------
+    t : array_like (n,)
+        Time [s] of the accelerometer samples.
+    gyro : array_like (n, 3)
+        Raw gyro samples in ``raw_unit``, sampled with the accelerometer.
+    poses : StaticPoses
+        The accelerometer's static poses (``intervals``, ``means``, ``mean_std``).
+    accel : object with ``apply(raw) -> m/s²``
+        The accelerometer calibration fitted to ``poses``.
+    raw_unit : {'rad/s', 'deg/s', 'counts'}
+    acc : array_like (n, 3), optional
+        Raw accelerometer samples (needed with ``g_sensitivity``).
+    t_gyro : array_like (n,), optional
+        The gyro's own time column, checked against ``t``.
+    nominal_sensitivity : float, optional
+        Raw units per rad/s (counts); the start and the reference of the scale factors.
+    estimator : {'iterative', 'one_step'}
+    integrator : {'magnus4', 'coning'}
+    bias : {'interpolated', 'all', 'first'}
+        How the bias is taken from the rests (:mod:`accelcal.gyro.rests`).  Default
+        'interpolated': on the eight real sessions it gave the lowest motion χ² in all
+        (by up to 2x; the Xsens unit's and the IMU-TK fork's rest means move by 6-18x
+        their noise during a session).
+    g_sensitivity : bool or 'auto'
+        Fit ``G`` (from the rests) with the bias.  'auto' (default): when the raw
+        accelerometer samples are given and there are at least ``MIN_RESTS_G`` rests, if
+        ``G`` explains the rest means significantly better (F test on the rest means, p <
+        0.001; the F test compares the two fits' own scatter, so a noise level that is off
+        does not decide it).
+    gyro_range : (lo, hi), optional
+        Measuring range in raw units (saturation).
+    time_base : {'auto', 'index', 'timestamps'}
+        Integrate with a constant step (the sample index at the mean rate) or with the
+        time column's own steps.  'auto': the index unless the steps jitter (more than
+        5 %); then both are fitted and the one whose motion residuals fit the noise better
+        (lower χ²) is kept — host receive times jitter while the sensor samples evenly,
+        a sensor's own time stamps jitter with its sampling — and the choice is said.
+    """
+    t0 = time.perf_counter()
+    t = np.asarray(t, float)
+    gyro = np.asarray(gyro, float)
+    if gyro.shape != (t.size, 3) or not np.all(np.isfinite(gyro)):
+        raise GyroInputError(f"gyro samples must be finite, shape ({t.size}, 3) like the accelerometer's; got "
+                             f"{gyro.shape}")
+    if estimator not in ESTIMATORS:
+        raise GyroInputError(f"unknown gyro estimator {estimator!r}; known: {', '.join(ESTIMATORS)}")
+    tb = sample_interval(t)
+    if t_gyro is not None:
+        check_time_base(t, t_gyro, tb.h)
+    rs = rest_statistics(t, gyro, poses.intervals)
+    u, u_cov, f_rest = accel_directions(accel, poses.means, poses.mean_std)
+    if g_sensitivity is True and acc is None:
+        raise GyroInputError("the g-sensitivity needs the raw accelerometer samples (acc=)")
+    g_sensitivity, g_test = _use_g_sensitivity(g_sensitivity, rs, bias, f_rest, acc)
+    best = fit_bias(rs, bias, f_rest if g_sensitivity else None)
+    y = gyro - bias_series(best, rs, t)
+    if g_sensitivity:
+        y = y - np.asarray(accel.apply(np.asarray(acc, float)), float) @ best.g_sensitivity.T
+    sat = saturated_samples(gyro, gyro_range)
+    starts, stops, before, after, notes = _motions(poses.intervals, tb.gaps, sat)
+    all_ms = MotionSet(y, tb.h, starts, stops, before, after, u, u_cov, rest_noise(rs),
+                       motion_bias_variance(best, rs, before, after))
+    if all_ms.n_motions < MIN_MOTIONS:
+        raise TooFewMotionsError(f"{len(u)} rests give {all_ms.n_motions} motions; the gyro's 9 parameters need at "
+                                 f"least {MIN_MOTIONS}: record more poses (or shorter still phases: --min-duration)")
+    _check_motion(all_ms, u)
+    used = np.array([n == "" for n in notes])
+    n_sat = sum("saturated" in n for n in notes)
+    if used.sum() < MIN_MOTIONS:
+        cls = SaturatedGyroError if n_sat else TooFewMotionsError
+        raise cls(f"only {int(used.sum())} of {len(notes)} motions are usable ({n_sat} saturated, "
+                  f"{sum('missing' in n for n in notes)} with missing samples), {MIN_MOTIONS} needed: turn the sensor "
+                  "more slowly between poses, or give the range with --gyro-range if it is wider than the data "
+                  "suggest")
+    ms = all_ms.subset(used)
+    nominal, nominal_from = _nominal(raw_unit, nominal_sensitivity, ms, integrator)
+    _check_axes(ms, nominal, tb.h)
+    fitter = fit_iterative if estimator == "iterative" else fit_one_step
+    if time_base not in ("auto", "index", "timestamps"):
+        raise GyroInputError(f"unknown time base {time_base!r}; known: auto, index, timestamps")
+    bases = {"index": tb.h, "timestamps": t}
+    tried = ["index"] if (time_base == "auto" and tb.jitter <= RULES["jitter"]) else (
+        ["index", "timestamps"] if time_base == "auto" else [time_base])
+    fits = {}
+    for name in tried:
+        fits[name] = fitter(dataclasses.replace(ms, h=bases[name]), nominal * np.eye(3), integrator)
+    chosen = min(fits, key=lambda k: fits[k].chi2)
+    fit = fits[chosen]
+    all_ms = dataclasses.replace(all_ms, h=bases[chosen])
+    model = GyroModel(fit.C, best.bias, best.g_sensitivity if g_sensitivity else None, raw_unit)
+    se = _standard_errors(fit.C, fit.cov, nominal, fit.excess, best)
+    quality, table = _assess(fit, all_ms, used, notes, t, tb, best, integrator,
+                             {k: f.chi2 / max(f.dof, 1) for k, f in fits.items()}, chosen,
+                             _range_use(gyro, gyro_range, all_ms.subset(used)))
+    settings = {"estimator": estimator, "integrator": integrator, "bias_mode": bias, "nominal": nominal,
+                "nominal_from": nominal_from, "iterations": fit.iterations, "fit_seconds": fit.seconds,
+                "seconds": time.perf_counter() - t0, "n_rests": len(u),
+                "time_base": {"h": tb.h, "rate": tb.rate, "jitter": tb.jitter, "gaps": int(len(tb.gaps)),
+                              "used": chosen, "chi2_per_dof": {k: f.chi2 / max(f.dof, 1) for k, f in fits.items()}},
+                "bias_rests": {"chi2": best.chi2, "dof": best.dof, "excess": best.excess},
+                "g_sensitivity": bool(g_sensitivity), "g_sensitivity_test": g_test}
+    return GyroCalibration(model, se, quality, table, settings)
+
+
+def _range_use(gyro, gyro_range, ms: MotionSet) -> float:
+    """Largest fraction of the measuring range (half-span about its centre) the used motions reach (NaN: unknown)."""
+    rng = measuring_range(gyro, gyro_range)
+    if rng is None:
+        return float("nan")
+    centre, half = 0.5 * (rng[0] + rng[1]), 0.5 * (rng[1] - rng[0])
+    return max(float(np.max(np.abs(gyro[a:b + 1] - centre))) / half for a, b in zip(ms.starts, ms.stops))
+
+
+def _assess(fit, all_ms: MotionSet, used, notes, t, tb, best, integrator, base_chi2, chosen, range_use):
+    """Quality, warnings and the per-motion table of a fit."""
+    ev = fit.evaluation
+    ms = all_ms.subset(used)
+    C = fit.C
+    omega = all_ms.y @ C.T
+    R_all = integrate_intervals(omega, all_ms.h, all_ms.starts, all_ms.stops, integrator).R
+    other = "coning" if integrator == "magnus4" else "magnus4"
+    R_other = integrate_intervals(omega, ms.h, ms.starts, ms.stops, other).R
+    int_err = rotation_angles_deg(np.swapaxes(ev.R, -1, -2) @ R_other)
+    peak = np.array([np.rad2deg(np.linalg.norm(omega[a:b + 1], axis=1).max()) for a, b in
+                     zip(all_ms.starts, all_ms.stops)])
+    res_all = np.full(all_ms.n_motions, np.nan)
+    pred_all = np.full(all_ms.n_motions, np.nan)
+    res_all[used], pred_all[used] = ev.angles_deg, ev.predicted_deg
+    table = {"t_start": t[all_ms.starts].tolist(), "t_end": t[all_ms.stops].tolist(),
+             "angle_deg": rotation_angles_deg(R_all).tolist(), "peak_rate_dps": peak.tolist(),
+             "residual_deg": res_all.tolist(), "predicted_deg": pred_all.tolist(),
+             "integration_deg": [None] * all_ms.n_motions, "used": used.tolist(), "note": list(notes)}
+    for i, e in zip(np.flatnonzero(used), int_err):
+        table["integration_deg"][i] = float(e)
+    turn = np.rad2deg(np.sum(np.abs(log_so3(ev.R)), axis=0))
+    dof = fit.dof
+    p = float(special.chdtrc(dof, fit.chi2)) if dof > 0 else float("nan")
+    warnings, flags = [], []
+    if dof > 0 and fit.excess > RULES["excess"] and p < RULES["p_value"]:
+        flags.append("excess")
+        warnings.append(f"motion residuals are {fit.excess:.3g}x what the rest noise predicts (chi2/dof = "
+                        f"{fit.chi2 / dof:.3g} on {dof} dof): the gyro model, the integration or the rests miss "
+                        "something (a disturbed rest, saturation, bias drift); the ± include this factor")
+    rel = np.sqrt(np.diag(fit.cov)[[0, 4, 8]]) * max(1.0, fit.excess) / np.abs(np.diag(C))
+    weak = [a for a in range(3) if rel[a] > RULES["scale_rel_se"] or turn[a] < RULES["min_axis_turn_deg"]]
+    if weak:
+        flags.append("few_axes")
+        warnings.append("the motions turn the sensor little about " + ", ".join(
+            f"{'xyz'[a]} ({turn[a]:.0f} deg in all, scale ± {100 * rel[a]:.2g}%)" for a in weak)
+            + ": that gyro's scale is poorly determined; add rotations about that axis between rests")
+    long = int(np.sum(rotation_angles_deg(ev.R) >= 30.0))
+    if long < RULES["min_long_motions"]:
+        flags.append("short_motions")
+        short = int(np.sum(rotation_angles_deg(ev.R) < RULES["short_deg"]))
+        warnings.append(f"only {long} motions turn 30 deg or more ({short} "
+                        f"turn less than {RULES['short_deg']:g} deg): short motions hardly determine the scales; "
+                        "turn the sensor further between rests")
+    bad_int = int_err > RULES["integration_fraction"] * ev.predicted_deg
+    if np.any(bad_int):
+        flags.append("sample_rate")
+        warnings.append(f"in {int(bad_int.sum())} motions the two integrators differ by up to {int_err.max():.2g} deg "
+                        f"(noise {np.median(ev.predicted_deg):.2g} deg): the sample rate ({tb.rate:.4g} Hz) is low "
+                        "for these motions (up to {:.0f} deg/s); record faster or turn more slowly".format(
+                            np.nanmax(peak[used])))
+    n_sat = sum("saturated" in n for n in notes)
+    if n_sat:
+        flags.append("saturated")
+        warnings.append(f"{n_sat} motions left out: the gyro reaches its range in them (saturation); turn the "
+                        "sensor more slowly between poses")
+    if range_use > RULES["range_fraction"]:
+        flags.append("near_range")
+        warnings.append(f"the motions reach {100 * range_use:.0f}% of the gyro's measuring range: near saturation the "
+                        "scale may not be linear; turn the sensor more slowly, or give the range (--gyro-range)")
+    n_gap = sum("missing" in n for n in notes)
+    if n_gap:
+        flags.append("gaps")
+        warnings.append(f"{n_gap} motions left out: samples are missing in them (time gaps)")
+    if tb.jitter > RULES["jitter"]:
+        flags.append("jitter")
+        how = ("with the sample index at the mean rate {:.4g} Hz (host receive times?)".format(tb.rate)
+               if chosen == "index" else "with the time stamps' own steps (the sensor's sampling jitters)")
+        tried = ", ".join(f"{k} {v:.3g}" for k, v in base_chi2.items())
+        warnings.append(f"time steps jitter by {100 * tb.jitter:.0f}% of the step: the motions are integrated {how}"
+                        f" (chi2/dof: {tried})")
+    if best.mode == "all" and best.dof > 0 and best.excess > RULES["bias_excess"]:
+        flags.append("bias_drift")
+        warnings.append(f"the gyro's rest means scatter {best.excess:.3g}x their noise: the bias moves during the "
+                        "session (warm-up, drift); bias 'interpolated' follows it")
+    quality = GyroQuality(n_motions=ms.n_motions, n_parameters=9, dof=dof, chi2=fit.chi2, p_value=p,
+                          excess=fit.excess, residual_rms_deg=float(np.sqrt(np.mean(ev.angles_deg ** 2))),
+                          predicted_rms_deg=float(np.sqrt(np.mean(ev.predicted_deg ** 2))),
+                          axis_turn_deg=tuple(float(v) for v in turn), warnings=tuple(warnings), flags=tuple(flags))
+    return quality, table
+
+
+def evaluate_model(t, gyro, poses, accel, C, bias_vector, *, integrator: str = "magnus4", g_sensitivity=None,
+                   acc=None):
+    """Per-motion misfit [deg] of *any* gyro calibration (a peer's) on a session: the angle between
+    each rest's gravity direction and the previous rest's carried over by the calibrated,
+    integrated gyro — the figure of merit no calibration optimises.  Returns the
+    :class:`~accelcal.gyro.fit.Evaluation` and the motion set."""
+    tb = sample_interval(t)
+    u, u_cov, _ = accel_directions(accel, poses.means, poses.mean_std)
+    rs = rest_statistics(t, gyro, poses.intervals)
+    y = np.asarray(gyro, float) - np.asarray(bias_vector, float)
+    if g_sensitivity is not None:
+        y = y - np.asarray(accel.apply(np.asarray(acc, float)), float) @ np.asarray(g_sensitivity).T
+    starts, stops, before, after, _ = _motions(poses.intervals, tb.gaps, np.zeros(len(t), bool))
+    ms = MotionSet(y, tb.h, starts, stops, before, after, u, u_cov, rest_noise(rs), np.zeros((len(starts), 3)))
+    return evaluate(ms, C, integrator), ms
+
+
+__all__ = ["ESTIMATORS", "MIN_MOTIONS", "accel_directions", "calibrate_gyro", "evaluate_model"]

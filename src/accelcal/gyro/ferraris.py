@@ -1,0 +1,219 @@
+"""Gyro calibration from rotations of known angle (the Ferraris protocol, as imucal runs it).
+
+The sensor rests, then turns by a known angle ``θ_j`` about an axis ``a_j`` (once about
+each of three axes), then rests.  The calibrated, integrated gyro must give exactly that
+rotation::
+
+    log R_j(C) = s_j θ_j a_j          (3 equations per rotation, 9 for three)
+
+``s_j = ±1`` is the turning sense, taken from the data (imucal fixes it with
+``expected_angle = -360``).  The axis ``a_j``:
+
+* when the accelerometer is known, the gravity direction during the rotation (the
+  sensor lies on a face and turns on the table, i.e. about the vertical): then ``C`` is
+  in the accelerometer frame, as for the multi-position fit;
+* otherwise the nominal axis ``e_j`` (imucal's assumption, and the only one possible for
+  a gyro-only record such as the CTU rig's): the frame is then that of the rotation axes.
+
+The estimate is imucal's linear one, with measured axes instead of assumed ones: for a
+rotation about an axis fixed in the sensor the integral of the rate is exactly ``C⁻¹ θ_j
+a_j`` whatever the angle, so the plain sums ``Y_j = h Σ y`` give ``C = [s_j θ_j a_j]
+[Y_j]⁻¹`` in one solve.  No product integrator and no iteration: the end rotation of a
+full turn is the identity for *every* axis (``exp(2π [a]×) = I``), so it cannot
+determine the axis, and a rotation-vector fit of it is singular at 360 deg (its right
+Jacobian vanishes across the axis); the integral of the rate is the quantity that
+carries the axis.  Three rotations determine the nine parameters exactly (no residual,
+no χ²): the standard errors come from the noise alone (the angle random walk of each
+sum, the bias error times the rotation's duration, the axis direction's noise, and
+``angle_std``, the uncertainty of the stated angles).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import RotationAngleError
+
+
+@dataclass(frozen=True)
+class FerrarisFit:
+    """A gyro matrix from rotations of known angle."""
+
+    estimator: str
+    C: np.ndarray  #: (3, 3) rad/s per raw unit
+    cov: np.ndarray  #: (9, 9) covariance of vec(C)
+    senses: np.ndarray  #: (3,) ±1 turning sense of each rotation
+    angles_deg: np.ndarray  #: (3,) angle of each rotation by the fitted gyro
+    nominal_angles_deg: np.ndarray  #: (3,) angle by the nominal gyro (the check on the stated angle)
+    iterations: int
+
+    def to_dict(self) -> dict:
+        return {"estimator": self.estimator, "C": self.C.tolist(), "cov": self.cov.tolist(),
+                "senses": self.senses.tolist(), "angles_deg": self.angles_deg.tolist(),
+                "nominal_angles_deg": self.nominal_angles_deg.tolist(), "iterations": self.iterations}
+
+
+def _stack(segments):
+    """One array of the rotation segments (each (k_j, 3)), one guard sample apart, and their ranges."""
+    y, starts, stops, pos = [], [], [], 0
+    for s in segments:
+        s = np.asarray(s, float)
+        y += [s, np.zeros((1, 3))]
+        starts.append(pos)
+        stops.append(pos + len(s) - 1)
+        pos += len(s) + 1
+    return np.concatenate(y), np.array(starts), np.array(stops)
+
+
+def fit_ferraris(segments, h: float, angles_deg, axes=None, *, nominal: float = 1.0, y_var=None, bias_var=None,
+                 axis_cov=None, angle_std_deg: float = 0.0, angle_tolerance: float = 0.1,
+                 names=("x", "y", "z")) -> FerrarisFit:
+    """Fit ``C`` from three rotations (module docstring).
+
+    Parameters
+    ----------
+    segments : sequence of 3 arrays (k_j, 3)
+        Gyro samples of each rotation, bias removed, raw unit (rests around it may be
+        included: they add only noise).
+    h : float
+        Sample interval [s].
+    angles_deg : array_like (3,)
+        Stated rotation angles (magnitudes) [deg].
+    axes : array_like (3, 3), optional
+        Unit rotation axis of each rotation (rows) in the output frame; default identity.
+    nominal : float
+        Nominal rad/s per raw unit (the stated-angle check).
+    y_var, bias_var : array_like (3,), optional
+        Per-sample variance for sums and variance of the removed bias (raw unit²).
+    axis_cov : array_like (3, 3, 3), optional
+        Covariance of each axis direction.
+    angle_std_deg : float
+        Uncertainty of each stated angle.
+    angle_tolerance : float
+        Relative difference between the nominal gyro's angle and the stated one above which
+        the rotation is refused (:class:`RotationAngleError`).
+    """
+    segs = [np.asarray(s, float) for s in segments]
+    theta = np.deg2rad(np.abs(np.asarray(angles_deg, float)))
+    A = np.eye(3) if axes is None else np.asarray(axes, float)
+    A = A / np.linalg.norm(A, axis=1, keepdims=True)
+    Y = np.array([h * s.sum(axis=0) for s in segs])  # (3, 3): row j = plain sum of rotation j
+    nominal_deg = np.rad2deg(abs(nominal) * np.linalg.norm(Y, axis=1))
+    for j in range(3):
+        if abs(nominal_deg[j] - np.rad2deg(theta[j])) > angle_tolerance * np.rad2deg(theta[j]):
+            raise RotationAngleError(
+                f"the {names[j]} rotation turns {nominal_deg[j]:.1f} deg by the nominal gyro scale, not the stated "
+                f"{np.rad2deg(theta[j]):.1f} deg: check the rotation angle (--rotation-angle), the section of that "
+                "rotation in the section list, or the gyro unit/sensitivity")
+    senses = np.where(np.sum(Y * A, axis=1) * nominal >= 0, 1.0, -1.0)
+    target = (senses * theta)[:, None] * A
+    Yinv = np.linalg.inv(Y.T)  # C Y.T = target.T
+    C = target.T @ Yinv
+    cov = np.zeros((9, 9))
+    yv = np.zeros(3) if y_var is None else np.asarray(y_var, float)
+    bv = np.zeros(3) if bias_var is None else np.asarray(bias_var, float)
+    for j, s in enumerate(segs):
+        dur = h * len(s)
+        covY = np.diag(h * h * len(s) * yv + dur * dur * bv)
+        covT = np.deg2rad(angle_std_deg) ** 2 * np.outer(A[j], A[j])
+        if axis_cov is not None:
+            covT = covT + theta[j] ** 2 * np.asarray(axis_cov, float)[j]
+        Jj = np.kron(np.eye(3), Yinv[j][:, None])  # vec(δC) = Σ_j (δT_j - C δY_j) ⊗ row j of Y⁻ᵀ
+        cov += Jj @ (C @ covY @ C.T + covT) @ Jj.T
+    return FerrarisFit("sum", C, cov, senses, np.rad2deg(np.linalg.norm(Y @ C.T, axis=1)), nominal_deg, 1)
+
+
+#: imucal's section names: static holds and rotations.
+REST_SECTIONS = ("x_p", "x_a", "y_p", "y_a", "z_p", "z_a")
+ROTATION_SECTIONS = ("x_rot", "y_rot", "z_rot")
+
+
+def calibrate_ferraris_session(t, gyro, sections: dict, *, raw_unit: str = "deg/s", angles_deg=360.0, accel=None,
+                               acc=None, nominal_sensitivity=None, angle_std_deg: float = 0.0,
+                               rest_names=REST_SECTIONS, rotation_names=ROTATION_SECTIONS):
+    """Calibrate the gyro of a Ferraris session (static holds and three rotations of known angle).
+
+    Parameters
+    ----------
+    t : array_like (n,)
+        Time [s] (a constant step is taken from it).
+    gyro : array_like (n, 3)
+        Raw gyro samples.
+    sections : dict
+        ``{name: (start, stop)}`` half-open sample ranges (imucal's section list); the rests
+        ``rest_names`` give the bias, the rotations ``rotation_names`` the scale.
+    angles_deg : float or sequence of 3
+        Stated angle of each rotation (magnitudes; the sense comes from the data).
+    accel, acc
+        An accelerometer calibration (``apply(raw) -> m/s²``) and the raw accelerometer
+        samples: the rotation axes are then the gravity directions during the rotations and
+        ``C`` is in the accelerometer frame; without them the nominal axes (imucal's
+        assumption).
+    nominal_sensitivity : float, optional
+        Raw units per rad/s (counts).
+
+    Returns
+    -------
+    GyroCalibration
+        Exactly determined: no residual, ``dof = 0``; the standard errors come from the
+        noise (module docstring).
+    """
+    from .model import RAW_UNITS, GyroModel
+    from .rests import fit_bias, rest_noise, rest_statistics, sample_interval
+    from .result import GyroCalibration, GyroQuality
+
+    missing = [k for k in (*rest_names, *rotation_names) if k not in sections]
+    if missing:
+        raise RotationAngleError(f"the section list lacks {', '.join(missing)}: a Ferraris session needs the rests "
+                                 f"{', '.join(rest_names)} and the rotations {', '.join(rotation_names)} (--intervals)")
+    gyro = np.asarray(gyro, float)
+    tb = sample_interval(t)
+    rs = rest_statistics(t, gyro, np.array([sections[k] for k in rest_names]))
+    best = fit_bias(rs, "all")
+    nominal = 1.0 / float(nominal_sensitivity) if nominal_sensitivity is not None else RAW_UNITS[raw_unit]
+    if nominal is None:
+        raise RotationAngleError("raw counts need the nominal gyro sensitivity (--gyro-sensitivity) to check the "
+                                 "rotation angles")
+    segs = [gyro[slice(*sections[k])] - best.bias for k in rotation_names]
+    axes, axis_cov = None, None
+    if accel is not None and acc is not None:
+        from .calibrate import accel_directions
+
+        acc = np.asarray(acc, float)
+        seg_acc = [acc[slice(*sections[k])] for k in rotation_names]
+        means = np.array([s.mean(axis=0) for s in seg_acc])
+        se = np.array([s.std(axis=0, ddof=1) / np.sqrt(len(s)) for s in seg_acc])
+        axes, axis_cov, _ = accel_directions(accel, means, se)
+    angles = np.broadcast_to(np.asarray(angles_deg, float), (3,))
+    fit = fit_ferraris(segs, tb.h, angles, axes, nominal=nominal, y_var=rest_noise(rs),
+                       bias_var=best.bias_se ** 2, axis_cov=axis_cov, angle_std_deg=angle_std_deg,
+                       names=tuple(n.split("_")[0] for n in rotation_names))
+    model = GyroModel(fit.C, best.bias, None, raw_unit)
+    se_C = np.sqrt(np.clip(np.diag(fit.cov), 0, None)).reshape(3, 3)
+    Jt = np.zeros((9, 9))
+    for i in range(3):
+        for j in range(3):
+            if i != j:
+                Jt[3 * i + j, 3 * i + j] = 1.0 / fit.C[j, j]
+                Jt[3 * i + j, 4 * j] = -fit.C[i, j] / fit.C[j, j] ** 2
+    se = {"C": se_C, "T": np.sqrt(np.clip(np.diag(Jt @ fit.cov @ Jt.T), 0, None)).reshape(3, 3),
+          "scale_factors": np.diag(se_C) / abs(nominal), "bias": best.bias_se * max(1.0, best.excess)}
+    warnings = ["three rotations determine the nine parameters exactly: no residual checks the fit; the ± rest on "
+                "the noise alone (and on --rotation-angle's uncertainty)"]
+    if axes is None:
+        warnings.append("no accelerometer: the rotation axes are assumed to be the sensor's x, y and z (imucal's "
+                        "assumption); the misalignments are relative to them")
+    quality = GyroQuality(n_motions=3, n_parameters=9, dof=0, chi2=float("nan"), p_value=float("nan"),
+                          excess=float("nan"), residual_rms_deg=0.0, predicted_rms_deg=float("nan"),
+                          axis_turn_deg=tuple(float(a) for a in fit.angles_deg), warnings=tuple(warnings),
+                          flags=("exactly_determined",))
+    settings = {"estimator": "ferraris_sum", "integrator": "sum", "bias_mode": "all", "nominal": nominal,
+                "time_base": {"h": tb.h, "rate": tb.rate, "jitter": tb.jitter}, "angles_deg": angles.tolist(),
+                "senses": fit.senses.tolist(), "nominal_angles_deg": fit.nominal_angles_deg.tolist(),
+                "axes": None if axes is None else np.asarray(axes).tolist(), "iterations": 1}
+    return GyroCalibration(model, se, quality, {}, settings)
+
+
+__all__ = ["FerrarisFit", "REST_SECTIONS", "ROTATION_SECTIONS", "calibrate_ferraris_session", "fit_ferraris"]

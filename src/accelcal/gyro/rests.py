@@ -1,0 +1,215 @@
+"""What the rests tell about the gyro: its bias (from all of them), its noise, its time base.
+
+Bias.  Every rest measures ``b + G f_i + (Earth rate)``: the bias, the g-sensitivity
+times the rest's specific force, and the Earth's rotation projected on the sensor
+(7.3e-5 rad/s at most, ≈ 0.004 °/s).  Three ways to take ``b`` (``bias=``):
+
+* ``'all'`` — the mean of all rests, each weighted by its own standard error
+  (its samples' scatter with their autocorrelation); with the g-sensitivity the
+  weighted least squares of ``b`` and ``G`` (12 unknowns) on the rest means;
+* ``'interpolated'`` — a bias that moves: linear in time between the centres of the
+  rests, so each motion gets the bias of the rests around it (a drifting bias,
+  a warm-up); with the g-sensitivity, ``G`` from the least squares above and each
+  rest's mean minus ``G f_i`` interpolated;
+* ``'first'`` — the initial rest only, as IMU-TK does.
+
+The scatter of the rest means about the chosen model, against their standard errors
+(``χ²``), says whether the bias moved during the session (:class:`BiasEstimate`).
+
+Noise.  The integrated rate of a motion accumulates the gyro's white noise: its variance
+per sample *for sums* is the per-sample variance times the integrated autocorrelation
+time, i.e. ``mean_std² × n`` of a rest; pooled over the rests (:func:`rest_noise`).
+
+Time base.  The integrators use a constant step ``h``: the mean step of the time column,
+i.e. the sample index.  Host receive times jitter by milliseconds while the sensor samples
+on its own clock; integrating the jittered steps would add that jitter to every motion.
+:func:`sample_interval` reports the jitter and the gaps (dropped samples).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import GyroInputError
+
+BIAS_MODES = ("all", "interpolated", "first")
+#: Relative jitter of the time steps above which a warning says the sample index is used.
+JITTER_WARN = 0.05
+#: A step this many times the median is a gap (dropped samples).
+GAP_FACTOR = 1.5
+
+
+@dataclass(frozen=True)
+class TimeBase:
+    h: float  #: constant step used [s]
+    rate: float  #: 1 / h [Hz]
+    jitter: float  #: std of the steps / median step
+    gaps: np.ndarray  #: indices i with t[i+1] - t[i] > GAP_FACTOR × median
+
+
+def sample_interval(t) -> TimeBase:
+    """The constant step of a time column (mean step), its jitter and its gaps."""
+    t = np.asarray(t, float)
+    dt = np.diff(t)
+    if t.ndim != 1 or len(t) < 3 or not np.all(np.isfinite(t)) or np.any(dt <= 0):
+        raise GyroInputError("the time column must be finite and strictly increasing (at least 3 samples)")
+    med = float(np.median(dt))
+    gaps = np.flatnonzero(dt > GAP_FACTOR * med)
+    good = dt[dt <= GAP_FACTOR * med]
+    h = float(good.mean()) if len(good) else med
+    return TimeBase(h, 1.0 / h, float(np.std(good) / med) if len(good) > 1 else 0.0, gaps)
+
+
+def check_time_base(t_acc, t_gyro, h: float) -> None:
+    """The gyro must be sampled with the accelerometer (same rows, same times within h/2)."""
+    t_acc, t_gyro = np.asarray(t_acc, float), np.asarray(t_gyro, float)
+    if t_acc.shape != t_gyro.shape:
+        raise GyroInputError(f"the gyro has {t_gyro.size} samples, the accelerometer {t_acc.size}: their time "
+                             "bases do not match; give gyro and accelerometer sampled together (--gyro FILE with the "
+                             "same time column)")
+    off = float(np.max(np.abs(t_acc - t_gyro)))
+    if off > 0.5 * h:
+        i = int(np.argmax(np.abs(t_acc - t_gyro)))
+        raise GyroInputError(f"gyro and accelerometer times differ by {off:.4g} s at sample {i} (more than half a "
+                             f"sample, {0.5 * h:.3g} s): their time bases do not match; resample both onto one "
+                             "time column (--gyro FILE)")
+
+
+@dataclass(frozen=True)
+class RestStatistics:
+    """Gyro statistics of each rest (raw unit)."""
+
+    means: np.ndarray  #: (p, 3)
+    mean_std: np.ndarray  #: (p, 3) standard error of each mean (autocorrelation included)
+    noise_std: np.ndarray  #: (p, 3) per-sample std
+    t_mid: np.ndarray  #: (p,) centre time [s]
+    intervals: np.ndarray  #: (p, 2) [start, stop)
+
+
+def rest_statistics(t, gyro, intervals) -> RestStatistics:
+    """Mean, standard error and noise of the gyro at each rest ``[start, stop)``."""
+    from ..static import static_poses_from_intervals
+
+    iv = np.asarray(intervals, dtype=np.int64).reshape(-1, 2)
+    # one at a time: detected rests may overlap by a few samples (a brief blip between two quiet runs)
+    each = [static_poses_from_intervals(t, gyro, iv[i:i + 1]) for i in range(len(iv))]
+    return RestStatistics(np.concatenate([e.means for e in each]), np.concatenate([e.mean_std for e in each]),
+                          np.concatenate([e.noise_std for e in each]), np.concatenate([e.t_mid for e in each]), iv)
+
+
+def rest_noise(rs: RestStatistics) -> np.ndarray:
+    """Per-axis variance of one sample *for sums* (σ² τ), pooled over the rests (raw unit²)."""
+    n = (rs.intervals[:, 1] - rs.intervals[:, 0])[:, None]
+    return np.sum(rs.mean_std ** 2 * n * n, axis=0) / np.sum(n, axis=0)
+
+
+@dataclass(frozen=True)
+class BiasEstimate:
+    """The bias model and how well the rests agree with it."""
+
+    mode: str
+    bias: np.ndarray  #: (3,) constant part (raw unit); for 'interpolated' the weighted mean
+    g_sensitivity: np.ndarray | None  #: (3, 3) raw unit per m/s²
+    bias_se: np.ndarray  #: (3,) standard error of ``bias``
+    g_sensitivity_se: np.ndarray | None
+    chi2: float  #: scatter of the rest means about the model, in their standard errors
+    dof: int
+    rest_residuals: np.ndarray  #: (p, 3) rest means minus the model
+    rest_bias: np.ndarray  #: (p, 3) each rest's mean minus its g-sensitivity term (what 'interpolated' follows)
+
+    @property
+    def excess(self) -> float:
+        return float(np.sqrt(self.chi2 / self.dof)) if self.dof > 0 else float("nan")
+
+
+def fit_bias(rs: RestStatistics, mode: str = "all", f_rest=None) -> BiasEstimate:
+    """The gyro bias from the rests (module docstring).  ``f_rest`` (p, 3) [m/s²], the
+    calibrated specific force of each rest, turns on the g-sensitivity: ``G`` by weighted
+    least squares of the rest means on ``[1, f]`` (modes 'all' and 'interpolated'; the
+    latter then follows each rest's mean minus ``G f_i`` in time)."""
+    if mode not in BIAS_MODES:
+        raise GyroInputError(f"unknown gyro bias mode {mode!r}; known: {', '.join(BIAS_MODES)}")
+    m, se = rs.means, np.maximum(rs.mean_std, 1e-300)
+    p = len(m)
+    if f_rest is not None and mode == "first":
+        raise GyroInputError("the g-sensitivity needs the bias from all rests (bias mode 'all' or 'interpolated')")
+    if f_rest is not None:
+        X = np.column_stack([np.ones(p), np.asarray(f_rest, float)])  # (p, 4)
+        coef, cov_diag = np.zeros((4, 3)), np.zeros((4, 3))
+        for a in range(3):
+            Xw, yw = X / se[:, a:a + 1], m[:, a] / se[:, a]
+            cov = np.linalg.inv(Xw.T @ Xw)
+            coef[:, a] = cov @ (Xw.T @ yw)
+            cov_diag[:, a] = np.diag(cov)
+        res = m - X @ coef
+        return BiasEstimate(mode, coef[0], coef[1:].T, np.sqrt(cov_diag[0]), np.sqrt(cov_diag[1:]).T,
+                            float(np.sum((res / se) ** 2)), 3 * (p - 4), res, m - X[:, 1:] @ coef[1:])
+    w = 1.0 / se ** 2
+    b = np.sum(w * m, axis=0) / np.sum(w, axis=0)
+    res = m - b
+    chi2 = float(np.sum((res / se) ** 2))
+    if mode == "first":
+        return BiasEstimate(mode, m[0], None, rs.mean_std[0], None, chi2, 3 * (p - 1), m - m[0], m)
+    return BiasEstimate(mode, b, None, np.sqrt(1.0 / np.sum(w, axis=0)), None, chi2, 3 * (p - 1), res, m)
+
+
+def bias_series(est: BiasEstimate, rs: RestStatistics, t) -> np.ndarray:
+    """The bias at every sample (n, 3): constant, or linear between rest centres ('interpolated')."""
+    t = np.asarray(t, float)
+    if est.mode != "interpolated":
+        return np.broadcast_to(est.bias, (len(t), 3)).copy()
+    return np.column_stack([np.interp(t, rs.t_mid, est.rest_bias[:, a]) for a in range(3)])
+
+
+def motion_bias_variance(est: BiasEstimate, rs: RestStatistics, before, after) -> np.ndarray:
+    """Variance (m, 3) of the bias removed during each motion (between rests ``before`` and ``after``)."""
+    before, after = np.asarray(before), np.asarray(after)
+    if est.mode == "interpolated":
+        return 0.25 * (rs.mean_std[before] ** 2 + rs.mean_std[after] ** 2)
+    return np.broadcast_to(est.bias_se ** 2, (len(before), 3)).copy()
+
+
+def measuring_range(gyro, gyro_range=None):
+    """``(lo, hi)`` of the gyro's output: as given, or for integer counts inside 0..65535 or
+    -32768..32767 those limits; None when unknown."""
+    if gyro_range is not None:
+        return float(gyro_range[0]), float(gyro_range[1])
+    g = np.asarray(gyro, float)
+    if np.all(g == np.round(g)):
+        if g.min() >= 0 and g.max() <= 65535:
+            return 0.0, 65535.0
+        if g.min() >= -32768 and g.max() <= 32767:
+            return -32768.0, 32767.0
+    return None
+
+
+def saturated_samples(gyro, gyro_range=None) -> np.ndarray:
+    """Samples (n,) bool where an axis is at its measuring range.
+
+    ``gyro_range`` (lo, hi) in raw units when known; else, for integer counts inside
+    0..65535 or -32768..32767, those limits.  In any case a flat top: three or more equal
+    consecutive samples within 3 % of an axis's extreme excursion from its median (an
+    analog stage that clips before the converter).
+    """
+    g = np.asarray(gyro, float)
+    sat = np.zeros(len(g), bool)
+    lo, hi = measuring_range(g, gyro_range) or (None, None)
+    if lo is not None:
+        margin = 0.002 * (hi - lo)
+        sat |= np.any((g <= lo + margin) | (g >= hi - margin), axis=1)
+    med = np.median(g, axis=0)
+    dev = g - med
+    for a in range(3):
+        top, bot = dev[:, a].max(), dev[:, a].min()
+        near = (dev[:, a] >= 0.97 * top) | (dev[:, a] <= 0.97 * bot)
+        same = np.concatenate([[False], g[1:, a] == g[:-1, a]])
+        flat = same & np.concatenate([same[1:], [False]])  # sample equal to both neighbours
+        flat_run = flat | np.roll(flat, 1) | np.roll(flat, -1)
+        sat |= near & flat_run & (np.abs(dev[:, a]) > 0)
+    return sat
+
+
+__all__ = ["BIAS_MODES", "BiasEstimate", "RestStatistics", "TimeBase", "bias_series", "check_time_base", "fit_bias",
+           "measuring_range", "motion_bias_variance", "rest_noise", "rest_statistics", "sample_interval", "saturated_samples"]

@@ -1,0 +1,150 @@
+"""A gyro calibration with its uncertainty, its trust lines and its motions, as the lead's
+calibration file (format 2) and summary will carry it: ``to_dict``/``from_dict`` and
+``summary()``."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from .model import RAW_UNITS, GyroModel
+
+#: Thresholds of the warnings (:mod:`accelcal.gyro.calibrate`).
+RULES = {"excess": 1.5, "p_value": 1e-3, "scale_rel_se": 0.01, "min_axis_turn_deg": 90.0, "short_deg": 10.0,
+         "min_long_motions": 5, "integration_fraction": 0.3, "jitter": 0.05, "bias_excess": 3.0,
+         "range_fraction": 0.9}
+
+
+@dataclass(frozen=True)
+class GyroQuality:
+    """Whether the gyro calibration can be trusted (residuals vs the noise, coverage, warnings)."""
+
+    n_motions: int
+    n_parameters: int
+    dof: int
+    chi2: float
+    p_value: float
+    excess: float
+    residual_rms_deg: float  #: RMS per-motion misfit [deg]
+    predicted_rms_deg: float  #: RMS misfit the noise predicts [deg]
+    axis_turn_deg: tuple  #: total rotation about each gyro axis over the used motions [deg]
+    warnings: tuple[str, ...]
+    flags: tuple[str, ...] = ()
+
+    @property
+    def trustworthy(self) -> bool:
+        return not self.warnings
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d.update(warnings=list(self.warnings), flags=list(self.flags), axis_turn_deg=list(self.axis_turn_deg),
+                 trustworthy=self.trustworthy, rules=dict(RULES))
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict) -> GyroQuality:
+        keys = set(cls.__dataclass_fields__)
+        v = {k: d[k] for k in keys if k in d}
+        v["warnings"], v["flags"] = tuple(v.get("warnings", ())), tuple(v.get("flags", ()))
+        v["axis_turn_deg"] = tuple(v.get("axis_turn_deg", ()))
+        for k in ("chi2", "p_value", "excess", "residual_rms_deg", "predicted_rms_deg"):
+            v[k] = float("nan") if v.get(k) is None else float(v[k])
+        return cls(**v)
+
+
+def _f(x):
+    if isinstance(x, np.ndarray):
+        return [_f(v) for v in x.tolist()]
+    if isinstance(x, (list, tuple)):
+        return [_f(v) for v in x]
+    if isinstance(x, (float, np.floating)):
+        return None if not math.isfinite(float(x)) else float(x)
+    if isinstance(x, np.integer):
+        return int(x)
+    if isinstance(x, dict):
+        return {k: _f(v) for k, v in x.items()}
+    return x
+
+
+@dataclass(frozen=True, eq=False)
+class GyroCalibration:
+    """A fitted gyro model, its standard errors, quality, motion table and settings.
+
+    Attributes
+    ----------
+    model : GyroModel
+    standard_errors : dict of ndarray
+        From the rest noise, scaled by ``max(1, excess)``: ``C`` (3, 3), ``bias`` (3,),
+        ``g_sensitivity`` (3, 3) or absent, ``scale_factors`` (3,) (relative to
+        ``nominal``), ``T`` (3, 3) (IMU-TK's misalignment, zero on the diagonal).
+    quality : GyroQuality
+    motions : dict of lists
+        Per motion: ``t_start``, ``t_end``, ``angle_deg`` (integrated rotation),
+        ``peak_rate_dps``, ``residual_deg``, ``predicted_deg``, ``used`` and ``note``
+        (why a motion was left out).
+    settings : dict
+        ``estimator``, ``integrator``, ``bias_mode``, ``time_base`` (``h``, ``rate``,
+        ``jitter``), ``nominal`` (rad/s per raw unit), ``iterations``, ``seconds``,
+        ``bias_chi2``...
+    """
+
+    model: GyroModel
+    standard_errors: dict
+    quality: GyroQuality
+    motions: dict = field(default_factory=dict)
+    settings: dict = field(default_factory=dict)
+
+    @property
+    def nominal(self) -> float:
+        return float(self.settings.get("nominal", RAW_UNITS.get(self.model.raw_unit) or 1.0))
+
+    @property
+    def scale_factors(self) -> np.ndarray:
+        return self.model.scale_factors(self.nominal)
+
+    def to_dict(self) -> dict:
+        return _f({"sensor": "gyroscope", "model": self.model.to_dict(),
+                   "standard_errors": {k: np.asarray(v) for k, v in self.standard_errors.items()},
+                   "quality": self.quality.to_dict(), "motions": self.motions, "settings": self.settings})
+
+    @classmethod
+    def from_dict(cls, d: dict) -> GyroCalibration:
+        se = {k: np.array(v, dtype=float) for k, v in d.get("standard_errors", {}).items() if v is not None}
+        return cls(GyroModel.from_dict(d["model"]), se, GyroQuality.from_dict(d["quality"]),
+                   dict(d.get("motions", {})), dict(d.get("settings", {})))
+
+    def summary(self) -> str:
+        """Lines for the command line: the triad with ±, the fit, the trust lines."""
+        m, se, q, s = self.model, self.standard_errors, self.quality, self.settings
+        nom = self.nominal
+        unit = m.raw_unit
+        lines = [f"gyroscope: {s.get('estimator', '?')} ({s.get('integrator', '?')} integration), "
+                 f"{q.n_motions} motions between rests, bias from {s.get('bias_mode', '?')} rests"]
+        sf, sse = self.scale_factors, se.get("scale_factors", np.full(3, np.nan))
+        if unit != "counts" or not str(s.get("nominal_from", "")).startswith("scalar search"):
+            lines.append("  scale factors [ppm]: " + ", ".join(
+                f"{a} {1e6 * v:+.0f} ± {1e6 * e:.0f}" for a, v, e in zip("xyz", sf, sse)))
+        if unit == "counts":
+            k = 1.0 / np.diag(m.C)
+            ke = np.diag(se.get("C", np.full((3, 3), np.nan))) / np.diag(m.C) ** 2
+            lines.append("  sensitivity [counts per rad/s]: " + ", ".join(
+                f"{a} {v:.2f} ± {e:.2f}" for a, v, e in zip("xyz", k, ke)))
+        T, Te = m.T, se.get("T", np.full((3, 3), np.nan))
+        off = [(i, j) for i in range(3) for j in range(3) if i != j]
+        lines.append("  misalignment T (vs accelerometer frame) [mrad]: " + ", ".join(
+            f"{'xyz'[i]}{'xyz'[j]} {1e3 * T[i, j]:+.2f} ± {1e3 * Te[i, j]:.2f}" for i, j in off))
+        be = se.get("bias", np.full(3, np.nan))
+        lines.append(f"  bias [{unit}]: " + ", ".join(f"{a} {v:.6g} ± {e:.2g}" for a, v, e in zip("xyz", m.bias, be)))
+        if m.g_sensitivity is not None:
+            lines.append(f"  g-sensitivity [{unit} per m/s^2]: " + np.array2string(m.g_sensitivity, precision=3))
+        lines.append(f"  motion residuals: {q.residual_rms_deg:.3g} deg RMS vs {q.predicted_rms_deg:.3g} deg "
+                     f"from the rest noise (chi2/dof = {q.chi2 / max(q.dof, 1):.3g} on {q.dof} dof, "
+                     f"excess {q.excess:.3g})")
+        lines.append(f"  nominal {nom:.6g} rad/s per {unit}")
+        lines += [f"warning: gyroscope: {w}" for w in q.warnings]
+        return "\n".join(lines)
+
+
+__all__ = ["GyroCalibration", "GyroQuality", "RULES"]

@@ -1,0 +1,1 @@
+"""Reproductions and measurements of the gyroscope calibration (issue: the whole IMU)."""

@@ -1,0 +1,142 @@
+"""Every real session with gyro data: accelcal's calibration, the peers', the figure of merit,
+and the session-to-session stability of the gyro parameters.
+
+Tables (tidy, written by :func:`run`):
+
+* ``sessions.csv`` — per session: poses, motions, how the rests were found, χ²/dof, RMS
+  motion residual vs the noise, the time base used, g-sensitivity test, warnings, and the
+  accelerometer and gyro times;
+* ``parameters.csv`` — per session and parameter: ours ± s.e.
+  (:func:`accelcal_repro.gyro.peers.compare_parameters` adds the peers and the difference
+  in s.e.: ``peer_parameters.csv``);
+* ``figure_of_merit.csv`` — per session and calibration (:func:`accelcal_repro.gyro.peers.figure_of_merit`);
+* ``imucal_parameters.csv``, ``imucal_figure_of_merit.csv``, ``ctu_parameters.csv`` — the
+  Ferraris sessions (:mod:`accelcal_repro.gyro.ferraris_sessions`);
+* ``stability.csv`` — per group of sessions of one unit (IMU-TK fork data1-4, SNU good2-3)
+  and parameter: mean, scatter between sessions, the median s.e., and the excess
+  ``sqrt(χ²/dof)`` of the sessions about their weighted mean (1: the sessions agree within
+  their standard errors).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .peers import compare_parameters, figure_of_merit, peer_calibrations
+from .sessions import SESSIONS, calibrate_session, load
+
+GROUPS = {"imutk_fork": ("fork_data1", "fork_data2", "fork_data3", "fork_data4"),
+          "snu": ("snu_good1", "snu_good2", "snu_good3")}
+
+
+def _our_parameters(name: str, g) -> list[dict]:
+    m, se = g.model, g.standard_errors
+    rows = []
+    for a in range(3):
+        rows.append({"session": name, "parameter": f"s_{'xyz'[a]}", "unit": "ppm",
+                     "value": 1e6 * g.scale_factors[a], "se": 1e6 * se["scale_factors"][a]})
+    for i in range(3):
+        for j in range(3):
+            if i != j:
+                rows.append({"session": name, "parameter": f"T_{'xyz'[i]}{'xyz'[j]}", "unit": "mrad",
+                             "value": 1e3 * m.T[i, j], "se": 1e3 * se["T"][i, j]})
+    for a in range(3):
+        rows.append({"session": name, "parameter": f"b_{'xyz'[a]}", "unit": m.raw_unit, "value": m.bias[a],
+                     "se": se["bias"][a]})
+    return rows
+
+
+def stability(params: pd.DataFrame, groups=GROUPS) -> pd.DataFrame:
+    """Session-to-session scatter of each parameter within each group (module docstring)."""
+    rows = []
+    for group, names in groups.items():
+        sub = params[params.session.isin(names)]
+        for p, d in sub.groupby("parameter", sort=False):
+            if len(d) < 2:
+                continue
+            w = 1.0 / d.se.to_numpy() ** 2
+            mean = float(np.sum(w * d.value) / np.sum(w))
+            chi2 = float(np.sum(w * (d.value - mean) ** 2))
+            rows.append({"group": group, "parameter": p, "unit": d.unit.iloc[0], "sessions": len(d),
+                         "weighted_mean": mean, "scatter_std": float(d.value.std(ddof=1)),
+                         "median_se": float(d.se.median()), "excess": math.sqrt(chi2 / (len(d) - 1))})
+    return pd.DataFrame(rows)
+
+
+def run(out: Path, peers_dir: Path, sessions=SESSIONS) -> dict[str, pd.DataFrame]:
+    """Calibrate every session, compare, and write the tables into ``out``."""
+    out.mkdir(parents=True, exist_ok=True)
+    srows, prows, peer_tabs, foms = [], [], [], []
+    for name in sessions:
+        s = load(name)
+        try:
+            r = calibrate_session(s)
+        except Exception as e:  # noqa: BLE001 - a session that cannot be calibrated is a finding, recorded
+            srows.append({"session": name, "error": f"{type(e).__name__}: {e}"})
+            continue
+        g, q = r["gyro"], r["gyro"].quality
+        srows.append({"session": name, "poses": len(r["poses"]), "motions": q.n_motions, "rests": r["static_note"],
+                      "chi2_per_dof": q.chi2 / q.dof, "excess": q.excess, "residual_rms_deg": q.residual_rms_deg,
+                      "predicted_rms_deg": q.predicted_rms_deg, "time_base": g.settings["time_base"]["used"],
+                      "jitter": g.settings["time_base"]["jitter"], "g_sensitivity": g.settings["g_sensitivity"],
+                      "acc_s": r["acc_seconds"], "gyro_s": r["gyro_seconds"], "iterations": g.settings["iterations"],
+                      "warnings": " | ".join(q.warnings), "error": ""})
+        prows += _our_parameters(name, g)
+        peers = peer_calibrations(name, s.gyro_unit, peers_dir)
+        if peers:
+            peer_tabs.append(compare_parameters(name, g, peers))
+        foms.append(figure_of_merit(name, s, r["poses"], r["acc"], g, peers))
+    tabs = {"sessions": pd.DataFrame(srows), "parameters": pd.DataFrame(prows),
+            "peer_parameters": pd.concat(peer_tabs, ignore_index=True) if peer_tabs else pd.DataFrame(),
+            "figure_of_merit": pd.concat(foms, ignore_index=True)}
+    tabs["stability"] = stability(tabs["parameters"])
+    from .ferraris_sessions import ctu_calibration, imucal_comparison
+
+    tabs["imucal_parameters"], tabs["imucal_figure_of_merit"] = imucal_comparison(peers_dir / "imucal.json")
+    tabs["ctu_parameters"] = ctu_calibration()
+    for k, v in tabs.items():
+        v.to_csv(out / f"{k}.csv", index=False)
+    return tabs
+
+
+COLORS = {"accelcal": "C0", "imutk_run": "C1", "imutk_published": "C3", "factory": "C2", "imucal": "C4",
+          "accelcal_nominal_axes": "C0", "accelcal_measured_axes": "C9"}
+
+
+def figure(fom: pd.DataFrame, imucal_fom: pd.DataFrame | None = None):
+    """RMS per-motion misfit [deg] per session and calibration (own bias), and the noise level."""
+    import matplotlib.pyplot as plt
+
+    from accelcal.plotting import RC
+
+    sub = fom[fom.bias == "own_bias"]
+    if imucal_fom is not None:
+        sub = pd.concat([sub, imucal_fom.assign(bias="own_bias")], ignore_index=True)
+    sessions = list(dict.fromkeys(sub.session))
+    with plt.rc_context(RC):
+        fig, ax = plt.subplots(figsize=(8.0, 3.3), layout="constrained")
+        seen = set()
+        for i, sname in enumerate(sessions):
+            d = sub[sub.session == sname]
+            width = 0.8 / len(d)
+            for j, (c, v) in enumerate(zip(d.calibration, d.rms_deg)):
+                ax.bar(i + (j - (len(d) - 1) / 2) * width, v, width, color=COLORS.get(c, "0.5"),
+                       label=None if c in seen else c.replace("_", " "))
+                seen.add(c)
+        noise = sub.groupby("session").noise_rms_deg.first()
+        ax.scatter(range(len(sessions)), [noise[s] for s in sessions], marker="_", s=400, color="k", zorder=3,
+                   label="noise (rests)")
+        ax.set_yscale("log")
+        ax.set_xticks(range(len(sessions)), [s.replace("_", " ") for s in sessions], rotation=20, fontsize=7.5)
+        ax.set_ylabel("RMS gravity misfit per motion [deg]")
+        ax.legend(fontsize=6.5, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+        ax.set_title("gravity at each rest vs the previous rest's carried by the calibrated gyro (Magnus-4)",
+                     fontsize=8.5)
+    return fig
+
+
+__all__ = ["GROUPS", "figure", "run", "stability"]
