@@ -9,7 +9,7 @@ import pytest
 
 from accelcal.discrepancy import detect as D
 from accelcal.discrepancy.effects import EFFECT_IDS
-from accelcal.recording import read_recording, write_recording
+from accelcal.formats import read_recording, write_recording
 from accelcal_repro.discrepancy import benchmark as B
 from accelcal_repro.discrepancy import profiles as P
 from accelcal_repro.discrepancy import scoring as S

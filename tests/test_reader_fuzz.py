@@ -26,7 +26,7 @@ from hypothesis import strategies as st
 
 from accelcal import cli
 from accelcal.errors import RecordingError
-from accelcal.readers import read
+from accelcal.formats import read
 from accelcal.recording import MIN_ROWS
 
 N = int(os.environ.get("ACCELCAL_FUZZ_EXAMPLES", "250"))

@@ -8,9 +8,15 @@ import numpy as np
 import pytest
 
 from accelcal.errors import RecordingError
-from accelcal.recording import (Recording, nominal_conversion, read_block_log, read_imucal_annotated,
-                                read_imucal_section_list, read_imucal_session, read_imutk_ascii, read_mpu6050_csv, read_recording,
-                                write_recording)
+from accelcal.formats import read_recording, write_recording
+from accelcal.formats.block_log import read_block_log
+from accelcal.formats.imucal import read_imucal_session
+from accelcal.formats.imucal_annotated import read_imucal_annotated
+from accelcal.formats.imutk import read_imutk_ascii
+from accelcal.formats.intervals import read_imucal_section_list
+from accelcal.formats.mpu6050 import read_mpu6050_csv
+from accelcal.nominal import nominal_conversion
+from accelcal.recording import Recording
 
 
 @pytest.fixture(scope="module")

@@ -229,7 +229,7 @@ def _step(what: str, after_s: float = 2.0):
 
 
 def _read(args):
-    from .readers import read
+    from .formats import read
 
     with _step(f"reading {args.recording}"):
         return read(args.recording, format=args.format, columns=args.columns, unit=args.unit,
@@ -274,7 +274,7 @@ def _nominal(args, rec):
                             "(pass --unit counts if they are counts)")
     import numpy as np
 
-    from .recording import NominalConversion
+    from .nominal import NominalConversion
     from .units import G0
 
     def triple(text, what):

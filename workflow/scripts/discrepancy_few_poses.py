@@ -6,7 +6,7 @@ from _helpers import configure_logging, mock_snakemake_from_argv
 
 from accelcal.atomic import write_json_atomic
 from accelcal.discrepancy.report import StochasticSettings
-from accelcal.recording import read_recording
+from accelcal.formats import read_recording
 from accelcal.results import _finite_json
 from accelcal_repro.discrepancy import sessions as SS
 

@@ -8,7 +8,7 @@ from accelcal.atomic import atomic_output
 from accelcal.discrepancy.detect import Rules
 from accelcal.discrepancy.report import StochasticSettings, analyse
 from accelcal_repro.measured.sources import source
-from accelcal.recording import read_recording
+from accelcal.formats import read_recording
 from accelcal.results import _finite_json
 from accelcal_repro.discrepancy.sessions import with_disjoint_rests
 

@@ -5,7 +5,7 @@ import json
 import pandas as pd
 from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 
-from accelcal.recording import read_recording
+from accelcal.formats import read_recording
 from accelcal_repro.discrepancy import sessions as SS
 
 if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv

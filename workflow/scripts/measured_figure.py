@@ -5,7 +5,7 @@ from _helpers import configure_logging, mock_snakemake_from_argv
 
 from accelcal_repro.measured.figures import plot_calibration, plot_residuals, plot_static_detection
 from accelcal.plotting import save_figure
-from accelcal.recording import read_recording
+from accelcal.formats import read_recording
 
 if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
     snakemake = mock_snakemake_from_argv("measured_calibration_figure")

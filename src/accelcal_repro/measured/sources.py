@@ -19,11 +19,11 @@ The fork sessions do not start at rest (the first seconds are 6-9x noisier than 
 later rests), so the static detection takes its noise level from their quietest stretch
 (:func:`accelcal.static.detect_static`, ``noise_reference='auto'``).  The FXOS8700 logs
 have no time stamps and no motion between poses; each block is a known static interval
-(:func:`accelcal.recording.read_block_log`), carried into the canonical CSV as its
+(:func:`accelcal.formats.block_log.read_block_log`), carried into the canonical CSV as its
 ``pose`` column, so no detection runs on them.
 
 :func:`read_source` reads the original file with the readers of
-:mod:`accelcal.recording`; :func:`convert` writes the canonical CSV of the CLI
+:mod:`accelcal.formats`; :func:`convert` writes the canonical CSV of the CLI
 (``t,ax,ay,az``), which is what the calibration step reads.
 """
 
@@ -35,8 +35,10 @@ from pathlib import Path
 
 from accelcal.atomic import atomic_output, sha256_file, write_json_atomic
 from accelcal.errors import RecordingError
-from accelcal.readers import read
-from accelcal.recording import NominalConversion, Recording, nominal_conversion, read_imucal_section_list, write_recording
+from accelcal.formats import read, write_recording
+from accelcal.formats.intervals import read_imucal_section_list
+from accelcal.nominal import NominalConversion, nominal_conversion
+from accelcal.recording import Recording
 from .data import DatasetError, check_available, fetch_file
 
 
@@ -57,7 +59,7 @@ class Source:
     fmt : str
         Reader: ``'imutk_ascii'``, ``'mpu6050'``, ``'imucal_session'`` or ``'block_log'``.
     nominal : str
-        Key of :func:`accelcal.recording.nominal_conversion`.
+        Key of :func:`accelcal.nominal.nominal_conversion`.
     unit : str
         Unit of the file's acceleration values, ``'counts'`` or ``'m/s^2'``.
     description : str
@@ -145,13 +147,13 @@ def read_manifest(path) -> dict[str, Path]:
         raise RecordingError(f"{path}: not a measured-data manifest ({type(e).__name__})") from None
 
 
-#: Each source format as :func:`accelcal.readers.read` names it.
+#: Each source format as :func:`accelcal.formats.read` names it.
 READER_FORMAT = {"imutk_ascii": "csv", "mpu6050": "mpu6050", "imucal_session": "imucal", "block_log": "block-log"}
 
 
 def read_source(name: str, paths: dict[str, Path]) -> Recording:
     """Read the original accelerometer file of recording ``name`` (units as stored) with the
-    readers of ``accelcal calibrate`` (:func:`accelcal.readers.read`), so that the workflow
+    readers of ``accelcal calibrate`` (:func:`accelcal.formats.read`), so that the workflow
     and the CLI see the same numbers.  IMU-TK ASCII is read as a plain table (headerless
     t, x, y, z), which is what the CLI detects it as."""
     s = source(name)
