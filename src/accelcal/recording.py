@@ -1,8 +1,8 @@
-"""The accelerometer recording every reader returns: :class:`Recording`.
+"""The inertial recording every reader returns: :class:`Recording`.
 
 A recording is time [s], specific force (n, 3) in one unit (m/s² or raw counts), an
-optional temperature, and what the file said about it: known static intervals, notes on
-what a reader assumed, the unit.  Readers of the file formats are in
+optional temperature and angular rate, and what the file said about it: known static
+intervals, notes on what a reader assumed, the units.  Readers of the file formats are in
 :mod:`accelcal.formats`.
 """
 
@@ -20,7 +20,7 @@ MIN_ROWS = 10
 
 @dataclass(frozen=True)
 class Recording:
-    """One accelerometer recording.
+    """One recording of an accelerometer (and, when the file has one, a gyroscope).
 
     Attributes
     ----------
@@ -48,6 +48,11 @@ class Recording:
     time_column : tuple (str, ndarray of str), or None
         The file's time column as written (name, values), so that a corrected copy can
         keep it (``accelcal apply``); None when the file has none.
+    gyro : ndarray, shape (n, 3), or None
+        Angular rate at the same instants as ``acc``, in ``gyro_unit``; None when the
+        file has no gyroscope (or the reader does not read it).
+    gyro_unit : {'rad/s', 'counts'} or None
+        Unit of ``gyro`` when known (data in deg/s are converted to rad/s when read).
     """
 
     t: np.ndarray
@@ -59,6 +64,8 @@ class Recording:
     notes: tuple[str, ...] = ()
     unit: str | None = None
     time_column: tuple | None = None
+    gyro: np.ndarray | None = None
+    gyro_unit: str | None = None
 
     def __post_init__(self):
         t = np.array(self.t, dtype=float)
@@ -68,13 +75,15 @@ class Recording:
             raise RecordingError(
                 f"{self.source}: inconsistent shapes t{t.shape}, acc{acc.shape}"
                 + ("" if temp is None else f", temp{temp.shape}"))
+        gyro = _check_gyro(self.gyro, self.gyro_unit, t.size, self.source)
         intervals, labels = _check_intervals(self.intervals, self.labels, t.size, self.source)
-        for a in (t, acc, temp, intervals):
+        for a in (t, acc, temp, intervals, gyro):
             if a is not None:
                 a.setflags(write=False)  # frozen means frozen: no in-place edits of shared data
         object.__setattr__(self, "t", t)
         object.__setattr__(self, "acc", acc)
         object.__setattr__(self, "temp", temp)
+        object.__setattr__(self, "gyro", gyro)
         object.__setattr__(self, "intervals", intervals)
         object.__setattr__(self, "labels", labels)
         object.__setattr__(self, "notes", tuple(self.notes))
@@ -91,6 +100,22 @@ class Recording:
     def rate(self) -> float:
         """Sampling rate [Hz] from the median time step."""
         return 1.0 / float(np.median(np.diff(self.t)))
+
+
+def _check_gyro(gyro, unit: str | None, n: int, source: str):
+    """The angular rate as an (n, 3) float array (or None), its unit one a Recording holds."""
+    if gyro is None:
+        if unit is not None:
+            raise RecordingError(f"{source}: a gyroscope unit ({unit!r}) without gyroscope data")
+        return None
+    gyro = np.array(gyro, dtype=float)
+    if gyro.shape != (n, 3):
+        raise RecordingError(f"{source}: gyroscope data of shape {gyro.shape}, expected ({n}, 3) like the "
+                             "accelerometer")
+    if unit not in (None, "rad/s", "counts"):
+        raise RecordingError(f"{source}: gyroscope unit {unit!r}; a Recording holds rad/s or counts "
+                             "(convert deg/s when reading)")
+    return gyro
 
 
 def _check_intervals(intervals, labels, n: int, source: str):
