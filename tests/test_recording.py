@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from accelcal.errors import RecordingError
-from accelcal.formats import read_recording, write_recording
+from accelcal.formats import read, write_recording
 from accelcal.formats.block_log import read_block_log
 from accelcal.formats.imucal import read_imucal_session
 from accelcal.formats.imucal_annotated import read_imucal_annotated
@@ -44,7 +44,11 @@ def _good_lines(n=12):
     return [f"{i / 100:.2f},0.1,0.2,9.8" for i in range(n)]
 
 
-def _raises(path, reader=read_recording, match=None) -> str:
+def _strict(path):
+    return read(path, strict=True)
+
+
+def _raises(path, reader=_strict, match=None) -> str:
     with pytest.raises(RecordingError) as e:
         reader(path)
     msg = str(e.value)
@@ -62,7 +66,7 @@ def test_round_trip_is_exact(tmp_path, temp):
     rec = _rec(temp=temp)
     p = tmp_path / "out.csv"
     write_recording(p, rec)
-    back = read_recording(p)
+    back = _strict(p)
     np.testing.assert_array_equal(back.t, rec.t)
     np.testing.assert_array_equal(back.acc, rec.acc)
     if temp:
@@ -76,12 +80,12 @@ def test_round_trip_is_exact(tmp_path, temp):
 def test_write_replaces_existing_file(tmp_path):
     p = _csv(tmp_path, "old content\n", "out.csv")
     write_recording(p, _rec(n=20, temp=False))
-    assert read_recording(p).n == 20
+    assert _strict(p).n == 20
 
 
 def test_extra_columns_ignored_and_header_whitespace_tolerated(tmp_path):
     lines = [" t , ax,ay ,az,gx,comment"] + [f"{i / 100},{i},{2 * i},{3 * i},0,x" for i in range(12)]
-    rec = read_recording(_csv(tmp_path, "\n".join(lines) + "\n\n"))  # trailing blank line is harmless
+    rec = _strict(_csv(tmp_path, "\n".join(lines) + "\n\n"))  # trailing blank line is harmless
     assert rec.n == 12 and rec.temp is None
     np.testing.assert_array_equal(rec.acc[3], [3, 6, 9])
     assert rec.rate == pytest.approx(100.0)
@@ -270,7 +274,7 @@ def test_pose_column_round_trips_known_intervals(tmp_path):
                     labels=("x_p", "x_a", "x_p"))
     p = tmp_path / "out.csv"
     write_recording(p, rec)
-    back = read_recording(p)
+    back = _strict(p)
     np.testing.assert_array_equal(back.intervals, [(0, 20), (20, 35), (40, 60)])
     assert back.labels == ("x_p", "x_a", "x_p")
     np.testing.assert_array_equal(back.acc, rec.acc)

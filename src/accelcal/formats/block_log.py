@@ -13,8 +13,15 @@ from ..recording import MIN_ROWS, Recording
 #: Prompt that opens a block of a serial-monitor block log (FastAhrs' FXOS8700 calibration sketch).
 _BLOCK_START = re.compile(r">>>\s*Gathering data for\s+([0-9.]+)\s*seconds", re.IGNORECASE)
 _UNIT_LINE = re.compile(r"^\s*Type:\s*Acceleration\s*\((.+)\)\s*$", re.IGNORECASE)
+#: What recognises a block log anywhere in the first lines (comments included).
+_BLOCK_PROMPT = re.compile(r">>>\s*Gathering data for", re.IGNORECASE)
 #: Largest relative spread of the per-block sampling rates (rows / stated seconds).
 BLOCK_RATE_TOLERANCE = 0.02
+
+
+def sniff(path: Path, head: str) -> bool:
+    """Whether the file's first characters hold a block prompt (``>>> Gathering data for``)."""
+    return bool(_BLOCK_PROMPT.search(head))
 
 
 def read_block_log(path, text: str | None = None) -> Recording:

@@ -29,7 +29,7 @@ OPTIONAL_COLUMNS = ("temp",)
 POSE_COLUMN = "pose"
 
 
-def read_recording(path) -> Recording:
+def read_canonical(path) -> Recording:
     """Read the canonical recording CSV of the CLI.
 
     Parameters
@@ -79,11 +79,11 @@ def _is_number(s: str) -> bool:
     return True
 
 
-def write_recording(path, rec: Recording) -> None:
+def write_canonical(path, rec: Recording) -> None:
     """Write ``rec`` as canonical CSV, atomically (temp file in the same folder, then rename).
 
     Floats are written with the shortest repr that round-trips, so
-    ``read_recording(write_recording(p, rec))`` reproduces ``rec`` exactly.
+    ``read_canonical(write_canonical(p, rec))`` reproduces ``rec`` exactly.
     """
     path = Path(path)
     data = {"t": rec.t, "ax": rec.acc[:, 0], "ay": rec.acc[:, 1], "az": rec.acc[:, 2]}

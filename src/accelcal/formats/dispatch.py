@@ -1,77 +1,54 @@
 """Reading the files people have: one entry point, :func:`read`, for every format.
 
-Formats (``format=``; ``'auto'`` detects them from the first lines):
+Two strictnesses, chosen by the caller:
 
-``csv``
-    Any delimited text table (:func:`read_table`): comma, semicolon, tab, ``|`` or
-    whitespace, decimal point or decimal comma, ``#``/``%``/``//`` comment lines,
-    metadata lines above the header, gzip-compressed or not.  Columns are found by their
-    usual names (``t``, ``time``, ``timestamp``, ``acc_x``, ``accX``, ``AX``, ``Accel. X``,
-    ``linear_acceleration.x`` ...; :data:`ALIASES`) or given with ``columns=``.  A
-    headerless table of 4 numbers per row is IMU-TK's layout (t, x, y, z).
-``imutk``
-    IMU-TK ASCII (``xsens_acc.mat``; :func:`accelcal.formats.imutk.read_imutk_ascii`).
-``mpu6050``
-    tomisuarez2/ImuCalibration's logger (``Fs,100`` lines, then ``ax,ay,az,gx,gy,gz``).
-``imucal``
-    an imucal session (``n_samples, gyr_*, acc_*``; the rate is not in the file:
-    ``rate=`` or imucal's 204.8 Hz).
-``imucal-annotated``
-    imucal's annotated session (a ``part`` column; its static parts become known
-    static intervals).
-``block-log``
-    a serial-monitor log of poses as blocks (FastAhrs FXOS8700; every block is a known
-    static interval).
-
-Units.  Acceleration comes out in m/s² or raw counts (:mod:`accelcal.units`): a unit in
-the header (``acc_x [g]``, ``ax_mg``), ``unit=`` (which wins), or, failing both, the
-magnitude of the data (median ``|a|`` near 1 → g, near 9.8 → m/s², ...), stated in
-:attr:`~accelcal.recording.Recording.notes`.  Time comes out in seconds from the first
-sample: its unit from ``time_unit=``, the header (``time_ms``), or the values (epoch
-magnitudes; integer steps → the unit that makes the rate nearest 100 Hz), ISO 8601
-date-times parsed, or ``rate=`` (time from the sample index).  Every guess is a note.
+* ``strict=False`` (the default, ``accelcal calibrate``): the file as people write it.
+  The format is detected (:data:`~accelcal.formats.registry.FORMATS`, in its order) or
+  named; a table's delimiter, header, columns, units and time are found
+  (:mod:`accelcal.formats.table`, :mod:`accelcal.formats.inference`); gzip and
+  Windows-1252 are undone.  Every guess is stated in
+  :attr:`~accelcal.recording.Recording.notes`.
+* ``strict=True`` (the workflow, reading back what it wrote): the canonical CSV
+  (:mod:`accelcal.formats.canonical`) exactly as :func:`write_recording` writes it,
+  nothing guessed, no option.
 
 Every refusal is a :class:`~accelcal.errors.RecordingError` with one line that names the
 file, the cause and the option that fixes it.
+
+This module imports only the standard library; a format's reader is imported when a file
+of that format is read.
 """
 
 from __future__ import annotations
 
-import re
+import math
 from dataclasses import replace
 from pathlib import Path
 
-import numpy as np
-
 from ..errors import RecordingError
-from ..recording import Recording, intervals_from_labels
-from ..units import acceleration_unit, time_unit
-from .block_log import read_block_log
-from .imucal import read_imucal_session
-from .imucal_annotated import read_imucal_annotated
-from .imutk import read_imutk_ascii
-from .inference import convert_acc, with_inferred_unit
-from .intervals import read_intervals
-from .mpu6050 import read_mpu6050_csv
-from .table import read_table
-from .text import is_comment, load_text
-
-FORMATS = ("auto", "csv", "imutk", "mpu6050", "imucal", "imucal-annotated", "block-log")
+from ..units import acceleration_unit
+from ..units import time_unit as time_unit_name
+from .registry import BINARY_HEAD_BYTES, FALLBACK, FORMATS, TEXT_HEAD_CHARS, Format, format_named
+from .text import load_text
 
 
-def read(path, *, format: str = "auto", columns=None, unit: str | None = None, time_unit: str | None = None,
-         rate: float | None = None, intervals=None) -> Recording:
-    """Read an accelerometer recording in any supported format.
+def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit: str | None = None,
+         time_unit: str | None = None, rate: float | None = None, intervals=None):
+    """Read an accelerometer recording.
 
     Parameters
     ----------
     path : str or Path
-        The file (gzip-compressed or not).
+        The file (gzip-compressed or not, for text formats).
+    strict : bool
+        False: detect the format and guess what the file does not say (stated in the
+        notes).  True: the canonical CSV only (header ``t,ax,ay,az[,temp][,pose]``, as
+        :func:`write_recording` writes it), nothing guessed; no other option may be given.
     format : str
-        One of :data:`FORMATS`; ``'auto'`` detects it (:func:`detect_format`).
+        ``'auto'`` (detect it) or a name of :data:`~accelcal.formats.registry.FORMATS`.
     columns : str or dict, optional
         Which column is which: ``'t=time,ax=AccX,ay=AccY,az=AccZ[,temp=T]'`` or a dict;
-        names or 1-based column numbers (:func:`parse_columns`).
+        names or 1-based column numbers (:func:`accelcal.formats.table.parse_columns`).
     unit : str, optional
         Unit of the acceleration values (``g``, ``mg``, ``m/s2``, ``counts``); overrides
         the header.
@@ -82,66 +59,136 @@ def read(path, *, format: str = "auto", columns=None, unit: str | None = None, t
         Sampling rate [Hz]: time from the sample index (for files without time, or whose
         time column is unusable).
     intervals : str or Path, optional
-        A file of known static intervals (:func:`read_intervals`).
+        A file of known static intervals (:func:`accelcal.formats.intervals.read_intervals`).
 
     Returns
     -------
     Recording
-        In m/s² or counts (``unit`` set), time in seconds, notes saying what was assumed.
+        In m/s² or counts (``unit`` set; strict: as in the file, ``unit`` None), time in
+        seconds, notes saying what was assumed.
     """
     path = Path(path)
-    if format not in FORMATS:
-        raise RecordingError(f"unknown format {format!r}; known: {', '.join(FORMATS)}")
-    if unit is not None and acceleration_unit(unit) is None:
-        raise RecordingError(f"unknown acceleration unit {unit!r}; use one of g, mg, m/s2, counts")
-    if time_unit is not None and globals()["time_unit"](time_unit) is None:
-        raise RecordingError(f"unknown time unit {time_unit!r}; use one of s, ms, us, ns")
-    if rate is not None and not (np.isfinite(rate) and rate > 0):
-        raise RecordingError(f"--rate must be a positive number of Hz, got {rate!r}")
-    text, notes = load_text(path)
-    fmt = detect_format(text) if format == "auto" else format
-    if format == "auto" and fmt != "csv":
-        notes.append(f"format: {fmt} (detected; pass --format to choose another)")
-    if fmt == "csv":
-        rec = read_table(path, text=text, columns=columns, unit=unit, time_unit=time_unit, rate=rate)
-    else:
-        if columns is not None:
-            raise RecordingError(f"{path}: --columns applies to the csv format, not to {fmt} "
-                                 "(pass --format csv to read it as a plain table)")
-        rec = _read_known_format(path, fmt, text, rate)
-        rec = _with_unit(rec, unit, path)
-        if time_unit is not None:
-            notes.append(f"--time-unit ignored: the {fmt} format defines its time")
+    options = {"columns": columns, "unit": unit, "time_unit": time_unit, "rate": rate}
+    if strict:
+        return _read_strict(path, format, {**options, "intervals": intervals})
+    fmt = None if format == "auto" else format_named(format)
+    _check_options(unit, time_unit, rate)
+    notes: list[str] = []
+    text = None
+    if fmt is None:
+        fmt = _sniff_binary(path)
+        if fmt is not None:
+            notes.append(_detected(fmt))
+    if fmt is None or fmt.text:
+        text, notes = load_text(path)
+        if fmt is None:
+            fmt = _sniff_text(path, text)
+            if fmt.name != FALLBACK:
+                notes.append(_detected(fmt))
+    rec = _read_format(path, fmt, text, options, notes)
     rec = replace(rec, notes=tuple(notes) + rec.notes)
     if intervals is not None:
+        from .intervals import read_intervals
+
         rec = read_intervals(intervals, rec)
     return rec
 
 
-def _read_known_format(path: Path, fmt: str, text: str, rate):
-    kw = {} if rate is None else {"rate_hz": rate}
-    if fmt == "imutk":
-        rec = read_imutk_ascii(path, text=text)
-    elif fmt == "mpu6050":
-        rec = read_mpu6050_csv(path, text=text)
-    elif fmt == "imucal":
-        rec = read_imucal_session(path, text=text, **kw)
-    elif fmt == "imucal-annotated":
-        rec, parts = read_imucal_annotated(path, text=text, **kw)
-        static = np.array([p if not p.endswith("_rot") else "" for p in parts])
-        iv, labels = intervals_from_labels(static)
-        rec = replace(rec, intervals=iv, labels=labels,
-                      notes=rec.notes + ("imucal annotated session: its static parts (not *_rot) are the known "
-                                         "static intervals",))
-    else:
-        rec = read_block_log(path, text=text)
-    if rate is not None and fmt in ("imutk", "mpu6050", "block-log"):
+def write_recording(path, rec, *, format: str = FALLBACK) -> None:
+    """Write ``rec`` in ``format`` (the canonical CSV by default), atomically.
+
+    ``read(path, strict=True)`` reads it back exactly.
+    """
+    fmt = format_named(format)
+    writer = fmt.load_writer()
+    if writer is None:
+        raise RecordingError(f"no writer for the {fmt.name} format; "
+                             f"formats with one: {', '.join(f.name for f in FORMATS.values() if f.writer)}")
+    writer(path, rec)
+
+
+def detect_format(path) -> str:
+    """The name of the format :func:`read` would detect for ``path`` (``format='auto'``)."""
+    path = Path(path)
+    fmt = _sniff_binary(path)
+    if fmt is None:
+        text, _ = load_text(path)
+        fmt = _sniff_text(path, text)
+    return fmt.name
+
+
+def _detected(fmt: Format) -> str:
+    return f"format: {fmt.name} (detected; pass --format to choose another)"
+
+
+def _check_options(unit, time_unit, rate) -> None:
+    if unit is not None and acceleration_unit(unit) is None:
+        raise RecordingError(f"unknown acceleration unit {unit!r}; use one of g, mg, m/s2, counts")
+    if time_unit is not None and time_unit_name(time_unit) is None:
+        raise RecordingError(f"unknown time unit {time_unit!r}; use one of s, ms, us, ns")
+    if rate is not None and not (math.isfinite(rate) and rate > 0):
+        raise RecordingError(f"--rate must be a positive number of Hz, got {rate!r}")
+
+
+def _read_strict(path: Path, format: str, options: dict):
+    fmt = format_named(FALLBACK if format == "auto" else format)
+    given = [name for name, value in options.items() if value is not None]
+    if given:
+        raise RecordingError(f"{path}: strict reading takes the file as it is; {', '.join(given)} "
+                             "apply to strict=False")
+    reader = fmt.load_strict_reader()
+    if reader is None:
+        raise RecordingError(f"the {fmt.name} format has no strict reader; strict=True reads "
+                             f"{', '.join(f.name for f in FORMATS.values() if f.strict_reader)}")
+    fmt.check_extra(path)
+    return reader(path)
+
+
+def _sniff_binary(path: Path) -> Format | None:
+    """The first binary format that recognises ``path`` from its first bytes, or None."""
+    binary = [f for f in FORMATS.values() if not f.text and f.sniff is not None]
+    if not binary:
+        return None
+    head = b""
+    if path.is_file():
+        with open(path, "rb") as fh:
+            head = fh.read(BINARY_HEAD_BYTES)
+    return next((f for f in binary if f.load_sniff()(path, head)), None)
+
+
+def _sniff_text(path: Path, text: str) -> Format:
+    """The first text format that recognises the text's head, else the fallback (a table)."""
+    head = text[:TEXT_HEAD_CHARS]
+    found = (f for f in FORMATS.values() if f.text and f.sniff is not None and f.load_sniff()(path, head))
+    return next(found, FORMATS[FALLBACK])
+
+
+def _read_format(path: Path, fmt: Format, text: str | None, options: dict, notes: list[str]):
+    """Run ``fmt``'s reader with the options it takes; apply the others (see
+    :data:`~accelcal.formats.registry.READING_OPTIONS`); notes on the file go to ``notes``."""
+    if options["columns"] is not None and "columns" not in fmt.options:
+        takers = " or ".join(f.name for f in FORMATS.values() if "columns" in f.options)
+        raise RecordingError(f"{path}: --columns applies to the {takers} format, not to {fmt.name} "
+                             f"(pass --format {FALLBACK} to read it as a plain table)")
+    reader = fmt.load_reader(path)
+    own = {k: v for k, v in options.items() if k in fmt.options and v is not None}
+    rec = reader(path, text=text, **own) if fmt.text else reader(path, **own)
+    rate = options["rate"]
+    if rate is not None and "rate" not in fmt.options:
+        import numpy as np
+
         rec = replace(rec, t=np.arange(rec.n) / rate, notes=rec.notes + (f"t = sample index / {rate:g} Hz (--rate)",))
+    if "unit" not in fmt.options:
+        rec = _with_unit(rec, options["unit"], path)
+    if options["time_unit"] is not None and "time_unit" not in fmt.options:
+        notes.append(f"--time-unit ignored: the {fmt.name} format defines its time")
     return rec
 
 
-def _with_unit(rec: Recording, unit: str | None, path) -> Recording:
+def _with_unit(rec, unit: str | None, path):
     """Apply ``unit=`` to a format reader's recording (converting g, mg to m/s²)."""
+    from .inference import convert_acc, with_inferred_unit
+
     if unit is None:
         return rec if rec.unit is not None else with_inferred_unit(rec)
     u = acceleration_unit(unit)
@@ -151,20 +198,4 @@ def _with_unit(rec: Recording, unit: str | None, path) -> Recording:
     return replace(rec, acc=acc, unit="counts" if u == "counts" else "m/s^2", notes=rec.notes + (note,))
 
 
-def detect_format(text: str) -> str:
-    """The format of a recording from its first lines (:data:`FORMATS` without ``'auto'``)."""
-    head = text[:8192]
-    if re.search(r">>>\s*Gathering data for", head, re.IGNORECASE):
-        return "block-log"
-    lines = [ln.strip() for ln in head.splitlines() if ln.strip() and not is_comment(ln)]
-    if not lines:
-        return "csv"
-    if lines[0].replace(" ", "").lower().startswith("fs,") and len(lines) > 4 \
-            and lines[4].replace(" ", "").lower().startswith("ax,ay,az,gx,gy,gz"):
-        return "mpu6050"
-    header = {c.strip().lower() for c in lines[0].split(",")}
-    if {"n_samples", "acc_x", "acc_y", "acc_z", "gyr_x"} <= header:
-        return "imucal"
-    if {"part", "samples", "acc_x", "acc_y", "acc_z"} <= header:
-        return "imucal-annotated"
-    return "csv"
+__all__ = ["detect_format", "read", "write_recording"]

@@ -2,20 +2,43 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+from pathlib import Path
+
 import numpy as np
 
 from ..errors import RecordingError
-from ..recording import Recording
+from ..recording import Recording, intervals_from_labels
 from .imucal import IMUCAL_RATE_HZ
 from .parsing import check_counter, check_time, drop_trailing_blank, read_delimited, require_columns, to_float
+from .text import content_lines, header_fields
+
+#: Columns whose presence in the header recognises an annotated session.
+_SIGNATURE = {"part", "samples", "acc_x", "acc_y", "acc_z"}
 
 
-def read_imucal_annotated(csv_path, rate_hz: float = IMUCAL_RATE_HZ,
+def sniff(path: Path, head: str) -> bool:
+    """Whether the header names ``part``, ``samples`` and ``acc_*``."""
+    lines = content_lines(head)
+    return bool(lines) and _SIGNATURE <= header_fields(lines[0])
+
+
+def read_annotated_session(path, text: str | None = None, rate: float = IMUCAL_RATE_HZ) -> Recording:
+    """The annotated session with its static parts (all but ``*_rot``) as known static intervals."""
+    rec, parts = read_imucal_annotated(path, rate, text=text)
+    static = np.array([p if not p.endswith("_rot") else "" for p in parts])
+    iv, labels = intervals_from_labels(static)
+    return replace(rec, intervals=iv, labels=labels,
+                   notes=rec.notes + ("imucal annotated session: its static parts (not *_rot) are the known "
+                                      "static intervals",))
+
+
+def read_imucal_annotated(csv_path, rate: float = IMUCAL_RATE_HZ,
                           text: str | None = None) -> tuple[Recording, np.ndarray]:
     """Read imucal's annotated session (``part, samples, acc_*, gyr_*``, raw counts).
 
     The file is grouped by section, not in time order; rows are sorted by the
-    ``samples`` counter, which must be unique integers.  ``t = samples / rate_hz``.
+    ``samples`` counter, which must be unique integers.  ``t = samples / rate``.
 
     Returns
     -------
@@ -35,6 +58,6 @@ def read_imucal_annotated(csv_path, rate_hz: float = IMUCAL_RATE_HZ,
     if (parts == "").any():
         raise RecordingError(f"{csv_path}: empty 'part' label at line {2 + int(np.flatnonzero(parts == '')[0])}")
     acc = np.column_stack([v["acc_x"], v["acc_y"], v["acc_z"]])[order]
-    t = s[order] / rate_hz
+    t = s[order] / rate
     check_time(t, csv_path, first_line=2)
     return Recording(t, acc, None, str(csv_path), unit="counts"), parts

@@ -9,6 +9,14 @@ import numpy as np
 from ..errors import RecordingError
 from ..recording import Recording
 from .parsing import check_time, drop_trailing_blank, read_delimited, require_columns, to_float
+from .text import content_lines
+
+
+def sniff(path: Path, head: str) -> bool:
+    """Whether the first lines are ``Fs,<rate>``, three metadata lines and ``ax,ay,az,gx,gy,gz``."""
+    lines = content_lines(head)
+    return (bool(lines) and lines[0].replace(" ", "").lower().startswith("fs,") and len(lines) > 4
+            and lines[4].replace(" ", "").lower().startswith("ax,ay,az,gx,gy,gz"))
 
 
 def read_mpu6050_csv(path, text: str | None = None) -> Recording:

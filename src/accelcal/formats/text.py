@@ -71,3 +71,13 @@ def binary_kind(raw: bytes) -> str | None:
 def is_comment(line: str) -> bool:
     s = line.lstrip()
     return s.startswith(COMMENT_MARKERS)
+
+
+def content_lines(head: str) -> list[str]:
+    """The non-blank, non-comment lines of ``head``, stripped (what the sniffs look at)."""
+    return [ln.strip() for ln in head.splitlines() if ln.strip() and not is_comment(ln)]
+
+
+def header_fields(line: str) -> set[str]:
+    """The comma-separated names of a header line, stripped and in lower case."""
+    return {c.strip().lower() for c in line.split(",")}

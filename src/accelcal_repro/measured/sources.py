@@ -57,7 +57,8 @@ class Source:
     extra_files : tuple of str
         Other files the analysis needs (the imucal section list).
     fmt : str
-        Reader: ``'imutk_ascii'``, ``'mpu6050'``, ``'imucal_session'`` or ``'block_log'``.
+        The format the file is read as (:data:`accelcal.formats.FORMATS`), the one
+        ``accelcal calibrate`` detects: IMU-TK ASCII files are read as tables (``csv``).
     nominal : str
         Key of :func:`accelcal.nominal.nominal_conversion`.
     unit : str
@@ -84,18 +85,18 @@ class Source:
 
 
 SOURCES: dict[str, Source] = {
-    "xsens_mti": Source("xsens_mti", "imu_tk_xsens", "xsens_acc.mat", (), "imutk_ascii", "imutk_xsens", "counts",
+    "xsens_mti": Source("xsens_mti", "imu_tk_xsens", "xsens_acc.mat", (), "csv", "imutk_xsens", "counts",
                         "Xsens MTi, IMU-TK example session (hand-placed static poses)"),
     "mpu6050": Source("mpu6050", "mpu6050_suarez", "example_data_calibration.csv", (), "mpu6050", "mpu6050",
                       "counts", "InvenSense MPU-6050, tomisuarez2/ImuCalibration example (hand-placed poses)"),
     "imucal_ferraris": Source("imucal_ferraris", "imucal_ferraris", "example_ferraris_session.csv",
-                              ("example_ferraris_session_list.json",), "imucal_session", "imucal_session", "m/s^2",
+                              ("example_ferraris_session_list.json",), "imucal", "imucal_session", "m/s^2",
                               "imucal example Ferraris session (six static positions, three rotations)"),
-    **{f"imutk_fork_{d}": Source(f"imutk_fork_{d}", "imutk_fork_sessions", f"{d}/acc_data.txt", (), "imutk_ascii",
+    **{f"imutk_fork_{d}": Source(f"imutk_fork_{d}", "imutk_fork_sessions", f"{d}/acc_data.txt", (), "csv",
                                  "imutk_fork", "m/s^2",
                                  f"IMU-TK fork (GetOverMassif) session {d}: one ROS IMU, hand-placed static poses")
        for d in ("data2", "data3", "data4")},
-    **{f"fxos8700_sample{k}": Source(f"fxos8700_sample{k}", "fastahrs_fxos8700", f, (), "block_log", "fxos8700",
+    **{f"fxos8700_sample{k}": Source(f"fxos8700_sample{k}", "fastahrs_fxos8700", f, (), "block-log", "fxos8700",
                                      "m/s^2", f"NXP FXOS8700 (FastAhrs {f}): poses logged as blocks, known rests")
        for k, f in ((1, "data_sample.csv"), (2, "data_sample2.csv"))},
 }
@@ -147,17 +148,12 @@ def read_manifest(path) -> dict[str, Path]:
         raise RecordingError(f"{path}: not a measured-data manifest ({type(e).__name__})") from None
 
 
-#: Each source format as :func:`accelcal.formats.read` names it.
-READER_FORMAT = {"imutk_ascii": "csv", "mpu6050": "mpu6050", "imucal_session": "imucal", "block_log": "block-log"}
-
-
 def read_source(name: str, paths: dict[str, Path]) -> Recording:
     """Read the original accelerometer file of recording ``name`` (units as stored) with the
     readers of ``accelcal calibrate`` (:func:`accelcal.formats.read`), so that the workflow
-    and the CLI see the same numbers.  IMU-TK ASCII is read as a plain table (headerless
-    t, x, y, z), which is what the CLI detects it as."""
+    and the CLI see the same numbers."""
     s = source(name)
-    return read(paths[s.data_file], format=READER_FORMAT[s.fmt], unit=_UNIT[s.unit])
+    return read(paths[s.data_file], format=s.fmt, unit=_UNIT[s.unit])
 
 
 _UNIT = {"counts": "counts", "m/s^2": "m/s2"}
