@@ -44,6 +44,29 @@ def read_block_log(path, text: str | None = None) -> Recording:
     lines = _text_lines(path, what) if text is None else text.splitlines()
     if not lines:
         raise RecordingError(f"{path}: empty file (expected {what})")
+    rows, blocks, seconds, unit = _parse_blocks(lines, path)
+    rate = _block_rate(blocks, seconds, path)
+    acc = np.array(rows, dtype=float)
+    t = np.arange(len(acc)) / rate
+    notes = [f"no time stamps: t = sample index / {rate:g} Hz (rows per block over its stated seconds); "
+             "the time between blocks is unknown and taken as zero",
+             f"{len(blocks)} blocks read as known static intervals"]
+    canonical = None
+    if unit:
+        from ..units import G0, acceleration_unit
+
+        canonical = acceleration_unit(unit)
+        if canonical in ("g", "mg"):
+            acc = acc * (G0 if canonical == "g" else G0 * 1e-3)
+            canonical = "m/s^2"
+        notes.append(f"unit from the banner: {unit}")
+    return Recording(t, acc, None, str(path), intervals=[(a, b) for a, b, _ in blocks],
+                     labels=tuple(f"block{k:02d}" for k in range(len(blocks))), notes=tuple(notes), unit=canonical)
+
+
+def _parse_blocks(lines: list[str], path):
+    """Rows ``x, y, z``; blocks ``[first row, end row, line of the prompt]``; each block's
+    stated seconds; the unit of the banner (or None)."""
     rows, blocks, seconds, unit = [], [], [], None
     current = None  # index into blocks of the block being filled, None outside a block
     for no, line in enumerate(lines, start=1):
@@ -75,6 +98,11 @@ def read_block_log(path, text: str | None = None) -> Recording:
                                  f"got {s[:40]!r}")
         rows.append(vals)
         blocks[current][1] = len(rows)
+    return rows, blocks, seconds, unit
+
+
+def _block_rate(blocks, seconds, path) -> float:
+    """The sampling rate every block gives (rows over stated seconds); an error if one is short or off."""
     if not blocks:
         raise RecordingError(f"{path}: no '>>> Gathering data for N seconds' block found; not a block log "
                              "(pass --format to choose another reader)")
@@ -92,22 +120,7 @@ def read_block_log(path, text: str | None = None) -> Recording:
         k = int(off[0])
         raise RecordingError(f"{path}: block {k} (line {blocks[k][2]}) has {blocks[k][1] - blocks[k][0]} rows for "
                              f"{seconds[k]:g} s where the others give {rate:g} Hz (truncated or interrupted block?)")
-    acc = np.array(rows, dtype=float)
-    t = np.arange(len(acc)) / rate
-    notes = [f"no time stamps: t = sample index / {rate:g} Hz (rows per block over its stated seconds); "
-             "the time between blocks is unknown and taken as zero",
-             f"{len(blocks)} blocks read as known static intervals"]
-    canonical = None
-    if unit:
-        from ..units import G0, acceleration_unit
-
-        canonical = acceleration_unit(unit)
-        if canonical in ("g", "mg"):
-            acc = acc * (G0 if canonical == "g" else G0 * 1e-3)
-            canonical = "m/s^2"
-        notes.append(f"unit from the banner: {unit}")
-    return Recording(t, acc, None, str(path), intervals=[(a, b) for a, b, _ in blocks],
-                     labels=tuple(f"block{k:02d}" for k in range(len(blocks))), notes=tuple(notes), unit=canonical)
+    return rate
 
 
 def _text_lines(path: Path, what: str) -> list[str]:

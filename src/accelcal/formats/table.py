@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -110,6 +111,19 @@ def sniff(lines: list[str]) -> tuple[str, bool, int]:
     return best[1], best[2], best[3]
 
 
+class _Table(NamedTuple):
+    """The rows of a table: header names (or None), data rows, their file line numbers, the
+    lines above the header (line number, fields), delimiter, decimal comma, field count."""
+
+    names: list[str] | None
+    data: list[list[str]]
+    lines: list[int]
+    preamble: list[tuple[int, list[str]]]
+    delim: str
+    dc: bool
+    k: int
+
+
 def read_table(path, *, text: str | None = None, columns=None, unit: str | None = None,
                time_unit: str | None = None, rate: float | None = None) -> Recording:
     """Read a delimited text table (the ``csv`` format; see the module docstring).
@@ -124,6 +138,42 @@ def read_table(path, *, text: str | None = None, columns=None, unit: str | None 
     notes: list[str] = []
     if text is None:
         text, notes = load_text(path)
+    tab = _split_table(text, path)
+    names, dc, lines = tab.names, tab.dc, tab.lines
+    what = {"\t": "tab", ";": "semicolon", ",": "comma", "|": "'|'", " ": "whitespace"}[tab.delim]
+    if tab.delim != "," or dc:
+        notes.append(f"{what}-separated" + (", decimal comma" if dc else ""))
+    roles, units = _map_columns(names, tab.k, parse_columns(columns), path)
+    if names is None:
+        notes.append("no header: columns read as " + ", ".join(
+            f"{r}=column {i + 1}" for r, i in roles.items()) + " (pass --columns to change)")
+    cols = list(zip(*tab.data))
+
+    def column(role):
+        return np.asarray(cols[roles[role]], dtype=object)
+
+    acc = np.column_stack([parse_numbers(column(a), dc, path, a, names, roles[a], lines) for a in ("ax", "ay", "az")])
+    acc, unit_name, note = resolve_acceleration_unit(acc, units, unit, path)
+    notes.append(note)
+    t, tnote = time_seconds(column("t") if "t" in roles else None, rate, time_unit, units.get("t"), names, roles, dc,
+                            path, lines, tab.preamble)
+    notes.append(tnote)
+    temp = None
+    if "temp" in roles:
+        temp = parse_numbers(column("temp"), dc, path, "temp", names, roles["temp"], lines)
+        if units.get("temp") in ("K", "degF"):
+            temp = to_celsius(temp, units["temp"])
+            notes.append(f"temperature converted from {units['temp']} to degC")
+    iv, labels = (intervals_from_labels(column("pose").astype(str)) if "pose" in roles else (None, None))
+    time_column = None
+    if "t" in roles and rate is None:
+        time_column = (names[roles["t"]].strip() if names is not None else "t", column("t").astype(str))
+    return Recording(t, acc, temp, str(path), intervals=iv, labels=labels, notes=tuple(n for n in notes if n),
+                     unit=unit_name, time_column=time_column)
+
+
+def _split_table(text: str, path) -> _Table:
+    """Delimiter, header and data rows of the text (comments and blank lines skipped)."""
     all_lines = text.splitlines()
     numbered = [(no, ln) for no, ln in enumerate(all_lines, start=1) if ln.strip() and not is_comment(ln)]
     if not numbered:
@@ -151,37 +201,7 @@ def read_table(path, *, text: str | None = None, columns=None, unit: str | None 
                              "(truncated, or a line of another kind inside the data)")
     if len(data) < MIN_ROWS:
         raise RecordingError(f"{path}: only {len(data)} data rows; need at least {MIN_ROWS}")
-    names = rows[header] if header is not None else None
-    what = {"\t": "tab", ";": "semicolon", ",": "comma", "|": "'|'", " ": "whitespace"}[delim]
-    if delim != "," or dc:
-        notes.append(f"{what}-separated" + (", decimal comma" if dc else ""))
-    roles, units = _map_columns(names, k, parse_columns(columns), path)
-    if names is None:
-        notes.append("no header: columns read as " + ", ".join(
-            f"{r}=column {i + 1}" for r, i in roles.items()) + " (pass --columns to change)")
-    cols = list(zip(*data))
-
-    def column(role):
-        return np.asarray(cols[roles[role]], dtype=object)
-
-    acc = np.column_stack([parse_numbers(column(a), dc, path, a, names, roles[a], lines) for a in ("ax", "ay", "az")])
-    acc, unit_name, note = resolve_acceleration_unit(acc, units, unit, path)
-    notes.append(note)
-    t, tnote = time_seconds(column("t") if "t" in roles else None, rate, time_unit, units.get("t"), names, roles, dc, path,
-                     lines, preamble)
-    notes.append(tnote)
-    temp = None
-    if "temp" in roles:
-        temp = parse_numbers(column("temp"), dc, path, "temp", names, roles["temp"], lines)
-        if units.get("temp") in ("K", "degF"):
-            temp = to_celsius(temp, units["temp"])
-            notes.append(f"temperature converted from {units['temp']} to degC")
-    iv, labels = (intervals_from_labels(column("pose").astype(str)) if "pose" in roles else (None, None))
-    time_column = None
-    if "t" in roles and rate is None:
-        time_column = (names[roles["t"]].strip() if names is not None else "t", column("t").astype(str))
-    return Recording(t, acc, temp, str(path), intervals=iv, labels=labels, notes=tuple(n for n in notes if n),
-                     unit=unit_name, time_column=time_column)
+    return _Table(rows[header] if header is not None else None, data, lines, preamble, delim, dc, k)
 
 
 def _comment_header(all_lines, numbered, rows, delim, k):
