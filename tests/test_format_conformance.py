@@ -173,8 +173,10 @@ def test_help_lists_the_formats_without_loading_numpy():
 
 
 def _format_choices() -> list[str]:
+    """The names the help of ``--format`` lists."""
     calibrate = next(a for a in cli._parser()._actions if a.dest == "command").choices["calibrate"]
-    return next(a for a in calibrate._actions if a.dest == "format").choices
+    text = next(a for a in calibrate._actions if a.dest == "format").help
+    return text[text.index("(") + 1:text.index(";")].split(", ")
 
 
 # --------------------------------------------------------------------------- toy formats
@@ -254,5 +256,8 @@ def test_a_missing_extra_is_one_line_and_exit_2(toys, tmp_path):
 
 
 def test_an_unknown_format_is_refused_in_one_line(tmp_path):
-    with pytest.raises(RecordingError, match="unknown format 'xyz'; known: auto, block-log"):
+    known = ", ".join(["auto", *FORMATS])
+    with pytest.raises(RecordingError, match=f"unknown format 'xyz'; known: {known}$"):
         read(Path(tmp_path / "x.csv"), format="xyz")
+    code, _, err = _cli("calibrate", tmp_path / "x.csv", "--out", tmp_path / "o.json", "--format", "xyz")
+    assert code == 2 and err.splitlines() == [f"accelcal: error: unknown format 'xyz'; known: {known}"]

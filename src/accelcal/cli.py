@@ -131,9 +131,9 @@ def _gravity(text: str) -> float:
 
 def _reader_options(p) -> None:
     r = p.add_argument_group("reading the recording")
-    choices = ["auto", *FORMATS]
-    r.add_argument("--format", default="auto", choices=choices, metavar="FMT",
-                   help=f"file format ({', '.join(choices)}; default auto)")
+    # the reader checks the name (one error line, as for every input), so no argparse choices
+    names = ", ".join(["auto", *FORMATS])
+    r.add_argument("--format", default="auto", metavar="FMT", help=f"file format ({names}; default auto)")
     r.add_argument("--columns", metavar="SPEC",
                    help="which column is which: t=NAME,ax=NAME,ay=NAME,az=NAME[,temp=NAME] (names or 1-based numbers)")
     r.add_argument("--unit", metavar="UNIT", help="acceleration unit: m/s2, g, mg or counts (overrides the header)")
