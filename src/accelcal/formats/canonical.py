@@ -66,7 +66,8 @@ def read_canonical(path) -> Recording:
         raise RecordingError(f"{path}: header but no data rows")
     cols = {c: to_float(df, c, path, first_line=2) for c in (*REQUIRED_COLUMNS, *OPTIONAL_COLUMNS) if c in df}
     check_time(cols["t"], path, first_line=2)
-    intervals, labels = intervals_from_labels(df[POSE_COLUMN].to_numpy(dtype=str)) if POSE_COLUMN in df else (None, None)
+    intervals, labels = (intervals_from_labels(df[POSE_COLUMN].to_numpy(dtype=str)) if POSE_COLUMN in df
+                         else (None, None))
     return Recording(cols["t"], np.column_stack([cols["ax"], cols["ay"], cols["az"]]), cols.get("temp"), str(path),
                      intervals=intervals, labels=labels)
 
