@@ -330,6 +330,7 @@ def test_block_log_small(tmp_path):
     (lambda L: L[:8] + ["0.1, 9.8"] + L[9:], "expected three numbers"),
     (lambda L: [l for l in L if not l.startswith(">>> Gathering")], "no '>>> Gathering data"),
     (lambda L: L[:-35], "has 5 rows"),
+    (lambda L: [l.replace("for 0.1 seconds", "for 1.2.3 seconds") for l in L], "duration '1.2.3' is not a number"),
 ])
 def test_damaged_block_log_raises(tmp_path, edit, match):
     _raises(_csv(tmp_path, "\n".join(edit(_block_log(3))) + "\n"), reader=read_block_log, match=match)

@@ -75,7 +75,11 @@ def _parse_blocks(lines: list[str], path):
             continue
         m = _BLOCK_START.search(s)
         if m:
-            seconds.append(float(m.group(1)))
+            try:
+                seconds.append(float(m.group(1)))
+            except ValueError:  # '1.2.3' matches the prompt's pattern and is no number
+                raise RecordingError(f"{path}: line {no}: the block's duration {m.group(1)!r} is not a number of "
+                                     "seconds") from None
             blocks.append([len(rows), len(rows), no])
             current = len(blocks) - 1
             continue
