@@ -212,7 +212,7 @@ def test_discrepancy_report_applies_its_named_effect(effect, tmp_path, monkeypat
     from accelcal.calibration import load_calibration
     from accelcal.discrepancy import report
     from accelcal.discrepancy.vocabulary import Rules
-    from accelcal.recording import write_recording
+    from accelcal.formats import write_recording
     from accelcal.static import detect_static_recording
     from accelcal_repro.discrepancy import benchmark as B
 

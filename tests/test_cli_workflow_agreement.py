@@ -1,6 +1,6 @@
 """`accelcal calibrate` and the measured stage give the same numbers, to the last digit.
 
-Both read the original file with :func:`accelcal.readers.read` and fit with
+Both read the original file with :func:`accelcal.formats.read` and fit with
 :func:`accelcal.calibration.calibrate_poses`; this checks that nothing in between (the
 stage's pose selection, unit conversion, table writing, the CLI's JSON) changes a bit.
 The stage side is :func:`accelcal_repro.measured.calibrate.calibrate_recording` with the

@@ -10,7 +10,7 @@ import pytest
 from accelcal.discrepancy import vocabulary as D
 from accelcal.discrepancy import white_loop
 from accelcal.discrepancy.effects import EFFECT_IDS
-from accelcal.recording import read_recording, write_recording
+from accelcal.formats import read, write_recording
 from accelcal_repro.discrepancy import benchmark as B
 from accelcal_repro.discrepancy import profiles as P
 from accelcal_repro.discrepancy import record_screen as RS
@@ -153,7 +153,7 @@ def test_detection_reads_only_the_recording_and_the_csv_gives_the_same(tmp_path)
     assert not set(rows[0]) & {"truth", "expected", "size_mde", "param_bias_drift_x", "profile"}
     assert rows[0]["outcome"] == "bias_drift"
     write_recording(tmp_path / "r.csv", rec)
-    again = B.detect_nulls(read_recording(tmp_path / "r.csv"), SESSION.g, RULES, ("white",))
+    again = B.detect_nulls(read(tmp_path / "r.csv", strict=True), SESSION.g, RULES, ("white",))
     assert again[0]["outcome"] == rows[0]["outcome"]
     assert again[0]["gap_before"] == pytest.approx(rows[0]["gap_before"], rel=1e-9)
 

@@ -14,7 +14,8 @@ from accelcal import cli
 from accelcal_repro.discrepancy import benchmark as B
 from accelcal.discrepancy import report
 from accelcal.discrepancy.vocabulary import Rules
-from accelcal.recording import Recording, write_recording
+from accelcal.formats import write_recording
+from accelcal.recording import Recording
 from accelcal.simulation import random_directions, simulate_recording
 
 from tests.configs import load_config

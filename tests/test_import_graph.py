@@ -32,8 +32,6 @@ EXEMPT = ("_*_kernels.py", "_fast.py")
 #: budget (or no longer exists), so that the list cannot outlive the splits.
 PENDING_SPLIT = {
     "accelcal/calibration.py",
-    "accelcal/readers.py",
-    "accelcal/recording.py",
     "accelcal/discrepancy/fit.py",
     "accelcal_repro/batista2011/montecarlo.py",
 }

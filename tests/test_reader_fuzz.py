@@ -2,12 +2,16 @@
 RecordingError line, never another exception; through the CLI, exit 0 or 2 with one line
 and no output on failure, never an internal error (exit 3).
 
-Inputs are generated malformed files: valid tables damaged by deletion, insertion and
-replacement of characters and lines, odd delimiters and decimal marks, comments and
-blank lines, binary garbage, gzip of any of these, and random headers.  The number of
-examples is ``ACCELCAL_FUZZ_EXAMPLES`` (default 250 for the reader, 60 through the CLI,
-so the suite stays fast); the closing note's count comes from a larger run of the same
-tests.  Every example run is counted and the total printed (``pytest -s``).
+The reader property runs over every registered format (``format=`` each name of
+:data:`accelcal.formats.FORMATS`, ``auto``, and the strict reading of each format that
+has one).  Inputs are generated malformed files: valid files damaged by deletion,
+insertion and replacement of characters and lines (tables with odd delimiters, decimal
+marks and headers, and the sample file of the format under test,
+tests/format_samples.py), comments and blank lines, binary garbage, gzip of any of
+these.  The number of examples is ``ACCELCAL_FUZZ_EXAMPLES`` per format (default 250;
+a quarter of it through the CLI), so the suite stays fast; the closing note's count
+comes from a larger run of the same tests.  Every example run is counted, per format,
+and the totals printed (``pytest -s``).
 """
 
 from __future__ import annotations
@@ -26,11 +30,17 @@ from hypothesis import strategies as st
 
 from accelcal import cli
 from accelcal.errors import RecordingError
-from accelcal.readers import read
+from accelcal.formats import FORMATS, read
 from accelcal.recording import MIN_ROWS
 
+from .format_samples import SAMPLES
+
 N = int(os.environ.get("ACCELCAL_FUZZ_EXAMPLES", "250"))
-COUNT = {"reader": 0, "cli": 0, "read": 0, "refused": 0}
+#: (format, strict) -> {"read": n, "refused": n}; "cli" -> files through `accelcal calibrate`.
+COUNT: dict = {"cli": 0}
+#: What the reader property runs over: every format, auto, and every strict reading.
+READINGS = [("auto", False), *((name, False) for name in FORMATS),
+            *((name, True) for name, f in FORMATS.items() if f.strict_reader)]
 
 HEADERS = ["t,ax,ay,az", "time,acc_x,acc_y,acc_z", "timestamp;accX;accY;accZ", "TIME\tAX\tAY\tAZ", "t ax ay az",
            "time [ms],ax [g],ay [g],az [g]", "%time,field.linear_acceleration.x,field.linear_acceleration.y,"
@@ -56,15 +66,23 @@ def _valid_table(draw) -> str:
     return "\n".join(lines) + draw(st.sampled_from(["\n", "", "\r\n", "\n\n\n"]))
 
 
+def _sample(draw, fmt: str) -> str:
+    """The sample file of ``fmt`` (of any format for ``auto``), decoded."""
+    name = draw(st.sampled_from(sorted(SAMPLES))) if fmt == "auto" else fmt
+    return SAMPLES[name](np.random.default_rng(draw(st.integers(0, 2 ** 16)))).decode("utf-8")
+
+
 @st.composite
-def damaged_files(draw) -> bytes:
-    kind = draw(st.sampled_from(["table", "table", "table", "bytes", "lines"]))
+def damaged_files(draw, fmt: str | None = None) -> bytes:
+    """A damaged file; with ``fmt``, half of them start from that format's sample."""
+    kinds = ["table", "table", "table", "bytes", "lines"] + (["sample"] * 5 if fmt else [])
+    kind = draw(st.sampled_from(kinds))
     if kind == "bytes":
         data = draw(st.binary(max_size=400))
     elif kind == "lines":
         data = "\n".join(draw(st.lists(st.text(max_size=40), max_size=30))).encode("utf-8", "surrogatepass")
     else:
-        text = _valid_table(draw)
+        text = _valid_table(draw) if kind == "table" else _sample(draw, fmt)
         for _ in range(draw(st.integers(0, 6))):
             op = draw(st.sampled_from(["delete", "insert", "replace", "cut", "dupline", "comment", "blank"]))
             lines = text.split("\n")
@@ -99,34 +117,37 @@ def damaged_files(draw) -> bytes:
     return data
 
 
-def _check_recording(rec) -> None:
+def _check_recording(rec, fmt: str, strict: bool) -> None:
     assert rec.acc.ndim == 2 and rec.acc.shape == (rec.n, 3) and rec.n >= MIN_ROWS
     assert np.all(np.isfinite(rec.acc)) and np.all(np.isfinite(rec.t)) and np.all(np.diff(rec.t) > 0)
-    assert rec.unit in ("m/s^2", "counts")
+    assert rec.unit in ((None, "m/s^2", "counts") if strict else ("m/s^2", "counts"))
     assert rec.temp is None or (rec.temp.shape == (rec.n,) and np.all(np.isfinite(rec.temp)))
+    if fmt != "auto" and not FORMATS[fmt].intervals:
+        assert rec.intervals is None, f"{fmt} does not declare known intervals"
 
 
+@pytest.mark.parametrize("fmt, strict", READINGS, ids=[f + ("-strict" if s else "") for f, s in READINGS])
 @settings(max_examples=N, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
-@given(damaged_files(), st.sampled_from(["auto", "auto", "csv", "imutk", "block-log", "mpu6050", "imucal"]))
-def test_reader_returns_a_recording_or_one_line(data, fmt):
-    COUNT["reader"] += 1
+@given(data=st.data())
+def test_reader_returns_a_recording_or_one_line(fmt, strict, data):
+    count = COUNT.setdefault((fmt, strict), {"read": 0, "refused": 0})
     with tempfile.TemporaryDirectory() as tmp:
         p = Path(tmp) / "rec.csv"
-        p.write_bytes(data)
+        p.write_bytes(data.draw(damaged_files(fmt)))
         try:
-            rec = read(p, format=fmt)
+            rec = read(p, format=fmt, strict=strict)
         except RecordingError as e:
             msg = str(e)
             assert msg and "\n" not in msg and "Traceback" not in msg
-            COUNT["refused"] += 1
+            count["refused"] += 1
         else:
-            _check_recording(rec)
-            COUNT["read"] += 1
+            _check_recording(rec, fmt, strict)
+            count["read"] += 1
 
 
 @settings(max_examples=max(N // 4, 20), deadline=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
-@given(damaged_files())
+@given(damaged_files("auto"))
 def test_cli_exits_0_or_2_in_one_line(data):
     COUNT["cli"] += 1
     with tempfile.TemporaryDirectory() as tmp:
@@ -144,11 +165,12 @@ def test_cli_exits_0_or_2_in_one_line(data):
 
 
 def test_report_count():
-    """Print how many inputs were tried (run after the two properties, `pytest -s`)."""
-    print(f"\nfuzz: {COUNT['reader']} files through the readers ({COUNT['read']} read, {COUNT['refused']} refused), "
-          f"{COUNT['cli']} through `accelcal calibrate`")
-    if COUNT["reader"]:
-        assert COUNT["read"] + COUNT["refused"] == COUNT["reader"]
+    """Print how many inputs were tried, per format (run after the two properties, `pytest -s`)."""
+    rows = [(f + (" (strict)" if s else ""), c) for (f, s), c in ((k, v) for k, v in COUNT.items() if k != "cli")]
+    total = sum(c["read"] + c["refused"] for _, c in rows)
+    print(f"\nfuzz: {total} files through the readers, {COUNT['cli']} through `accelcal calibrate`; per format:")
+    for name, c in rows:
+        print(f"  {name:<24} {c['read'] + c['refused']:>6} files: {c['read']:>5} read, {c['refused']:>5} refused")
 
 
 pytestmark = pytest.mark.filterwarnings("ignore::UserWarning")

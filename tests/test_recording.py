@@ -8,9 +8,15 @@ import numpy as np
 import pytest
 
 from accelcal.errors import RecordingError
-from accelcal.recording import (Recording, nominal_conversion, read_block_log, read_imucal_annotated,
-                                read_imucal_section_list, read_imucal_session, read_imutk_ascii, read_mpu6050_csv, read_recording,
-                                write_recording)
+from accelcal.formats import read, write_recording
+from accelcal.formats.block_log import read_block_log
+from accelcal.formats.imucal import read_imucal_session
+from accelcal.formats.imucal_annotated import read_imucal_annotated
+from accelcal.formats.imutk import read_imutk_ascii
+from accelcal.formats.intervals import read_imucal_section_list
+from accelcal.formats.mpu6050 import read_mpu6050_csv
+from accelcal.nominal import nominal_conversion
+from accelcal.recording import Recording
 
 
 @pytest.fixture(scope="module")
@@ -38,7 +44,11 @@ def _good_lines(n=12):
     return [f"{i / 100:.2f},0.1,0.2,9.8" for i in range(n)]
 
 
-def _raises(path, reader=read_recording, match=None) -> str:
+def _strict(path):
+    return read(path, strict=True)
+
+
+def _raises(path, reader=_strict, match=None) -> str:
     with pytest.raises(RecordingError) as e:
         reader(path)
     msg = str(e.value)
@@ -56,7 +66,7 @@ def test_round_trip_is_exact(tmp_path, temp):
     rec = _rec(temp=temp)
     p = tmp_path / "out.csv"
     write_recording(p, rec)
-    back = read_recording(p)
+    back = _strict(p)
     np.testing.assert_array_equal(back.t, rec.t)
     np.testing.assert_array_equal(back.acc, rec.acc)
     if temp:
@@ -70,12 +80,12 @@ def test_round_trip_is_exact(tmp_path, temp):
 def test_write_replaces_existing_file(tmp_path):
     p = _csv(tmp_path, "old content\n", "out.csv")
     write_recording(p, _rec(n=20, temp=False))
-    assert read_recording(p).n == 20
+    assert _strict(p).n == 20
 
 
 def test_extra_columns_ignored_and_header_whitespace_tolerated(tmp_path):
     lines = [" t , ax,ay ,az,gx,comment"] + [f"{i / 100},{i},{2 * i},{3 * i},0,x" for i in range(12)]
-    rec = read_recording(_csv(tmp_path, "\n".join(lines) + "\n\n"))  # trailing blank line is harmless
+    rec = _strict(_csv(tmp_path, "\n".join(lines) + "\n\n"))  # trailing blank line is harmless
     assert rec.n == 12 and rec.temp is None
     np.testing.assert_array_equal(rec.acc[3], [3, 6, 9])
     assert rec.rate == pytest.approx(100.0)
@@ -264,7 +274,7 @@ def test_pose_column_round_trips_known_intervals(tmp_path):
                     labels=("x_p", "x_a", "x_p"))
     p = tmp_path / "out.csv"
     write_recording(p, rec)
-    back = read_recording(p)
+    back = _strict(p)
     np.testing.assert_array_equal(back.intervals, [(0, 20), (20, 35), (40, 60)])
     assert back.labels == ("x_p", "x_a", "x_p")
     np.testing.assert_array_equal(back.acc, rec.acc)
@@ -320,6 +330,7 @@ def test_block_log_small(tmp_path):
     (lambda L: L[:8] + ["0.1, 9.8"] + L[9:], "expected three numbers"),
     (lambda L: [l for l in L if not l.startswith(">>> Gathering")], "no '>>> Gathering data"),
     (lambda L: L[:-35], "has 5 rows"),
+    (lambda L: [l.replace("for 0.1 seconds", "for 1.2.3 seconds") for l in L], "duration '1.2.3' is not a number"),
 ])
 def test_damaged_block_log_raises(tmp_path, edit, match):
     _raises(_csv(tmp_path, "\n".join(edit(_block_log(3))) + "\n"), reader=read_block_log, match=match)

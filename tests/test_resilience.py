@@ -225,7 +225,7 @@ WRITERS = {
                           "write_json_atomic({target!r}, {{'a': 1}})", "out/manifest.json"),
     "write_report": ("from accelcal_repro.report import write_report",
                      "write_report('<!DOCTYPE html>\\n<html><body>x</body></html>\\n', {target!r})", "out/report.html"),
-    "write_recording": ("import numpy as np\nfrom accelcal.recording import Recording, write_recording",
+    "write_recording": ("import numpy as np\nfrom accelcal.formats import write_recording\nfrom accelcal.recording import Recording",
                         "write_recording({target!r}, Recording(np.arange(500.0), np.full((500, 3), 0.25), None, ''))",
                         "out/recording.csv"),
     "download": ("from accelcal_repro.measured.data import fetch_file",
@@ -247,7 +247,7 @@ def writer_inputs(tmp_path_factory):
     stochastic layer: its bootstrap is the cost)."""
     from accelcal_repro.discrepancy import benchmark as B
     from accelcal.discrepancy.vocabulary import Rules
-    from accelcal.recording import write_recording
+    from accelcal.formats import write_recording
 
     inputs = tmp_path_factory.mktemp("inputs")
     upstream = inputs / "upstream.mat"

@@ -11,8 +11,12 @@ from scipy.optimize import least_squares
 from scipy.signal import lfilter
 
 from accelcal.errors import AccelcalError, RecordingError
-from accelcal.recording import (nominal_conversion, read_imucal_annotated, read_imucal_section_list,
-                                read_imucal_session, read_imutk_ascii, read_mpu6050_csv)
+from accelcal.formats.imucal import read_imucal_session
+from accelcal.formats.imucal_annotated import read_imucal_annotated
+from accelcal.formats.imutk import read_imutk_ascii
+from accelcal.formats.intervals import read_imucal_section_list
+from accelcal.formats.mpu6050 import read_mpu6050_csv
+from accelcal.nominal import nominal_conversion
 from accelcal.static import detect_static, detect_static_recording
 
 G = 9.81

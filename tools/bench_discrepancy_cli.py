@@ -45,7 +45,8 @@ FLICKER_B = 0.3  # counts
 def make_recording(path: Path) -> dict:
     """Write the benchmark recording (canonical CSV) and return its description."""
     from accelcal.model import m_from_params
-    from accelcal.recording import Recording, write_recording
+    from accelcal.formats import write_recording
+    from accelcal.recording import Recording
     from accelcal.simulation import random_directions, simulate_recording
     from accelcal.noise import simulate_noise
 

@@ -69,7 +69,8 @@ def main(argv: list[str] | None = None) -> int:
 
     import pandas as pd
 
-    from accelcal.recording import read_imutk_ascii, write_recording
+    from accelcal.formats import write_recording
+    from accelcal.formats.imutk import read_imutk_ascii
 
     bindir = Path(sys.executable).parent
     accelcal = shutil.which("accelcal", path=str(bindir)) or str(bindir / "accelcal")

@@ -45,7 +45,7 @@ _LAZY = {
     "BatchResult": "results", "CalibrationResult": "results", "LLSResult": "results", "NLLSResult": "results",
     "CramerRaoBound": "uncertainty", "crlb": "uncertainty", "crlb_mean": "uncertainty",
     "Calibration": "calibration", "calibrate_recording": "calibration", "load_calibration": "calibration",
-    "read": "readers",
+    "read": "formats",
 }
 
 

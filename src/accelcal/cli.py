@@ -19,6 +19,7 @@ from pathlib import Path
 from . import __version__
 from .effects import EFFECT_IDS, TIME, effect
 from .errors import AccelcalError
+from .formats.registry import FORMATS, formats_help
 from .registry import ESTIMATORS
 
 STANDARD_GRAVITY = 9.80665
@@ -37,9 +38,8 @@ input: a table with time and three acceleration columns, e.g. a CSV with header
   t,ax,ay,az[,temp]; columns are found by their usual names (time, timestamp,
   acc_x, accX, AX, Accel. X, ...) or named with --columns t=...,ax=...,ay=...,az=...;
   comma, semicolon, tab or whitespace separated, decimal comma, # comments, gzip.
-  Also read directly (--format, or detected): IMU-TK ASCII, the MPU-6050 logger,
-  imucal sessions, serial-monitor block logs (each block a known rest).
   temp      optional temperature column [degC]
+{formats}
 units: acceleration in m/s^2, g, mg or raw counts (from the header, --unit, or the
   data's magnitude); g and mg are converted to m/s^2. --g is the local gravity in
   m/s^2. For raw counts the full models' M carries the sensitivity (counts per
@@ -132,8 +132,9 @@ def _gravity(text: str) -> float:
 
 def _reader_options(p) -> None:
     r = p.add_argument_group("reading the recording")
-    from_formats = "auto, csv, imutk, mpu6050, imucal, imucal-annotated, block-log"
-    r.add_argument("--format", default="auto", metavar="FMT", help=f"file format ({from_formats}; default auto)")
+    # the reader checks the name (one error line, as for every input), so no argparse choices
+    names = ", ".join(["auto", *FORMATS])
+    r.add_argument("--format", default="auto", metavar="FMT", help=f"file format ({names}; default auto)")
     r.add_argument("--columns", metavar="SPEC",
                    help="which column is which: t=NAME,ax=NAME,ay=NAME,az=NAME[,temp=NAME] (names or 1-based numbers)")
     r.add_argument("--unit", metavar="UNIT", help="acceleration unit: m/s2, g, mg or counts (overrides the header)")
@@ -158,7 +159,7 @@ def _static_options(p) -> None:
 
 
 def _parser() -> argparse.ArgumentParser:
-    epilog = MODEL_HELP.format(methods=_methods_help())
+    epilog = MODEL_HELP.format(methods=_methods_help(), formats=formats_help())
     p = argparse.ArgumentParser(prog="accelcal", description="Accelerometer calibration from static poses.",
                                 formatter_class=argparse.RawDescriptionHelpFormatter, epilog=epilog)
     p.add_argument("--version", action="version", version=f"accelcal {__version__}")
@@ -230,7 +231,7 @@ def _step(what: str, after_s: float = 2.0):
 
 
 def _read(args):
-    from .readers import read
+    from .formats import read
 
     with _step(f"reading {args.recording}"):
         return read(args.recording, format=args.format, columns=args.columns, unit=args.unit,
@@ -275,7 +276,7 @@ def _nominal(args, rec):
                             "(pass --unit counts if they are counts)")
     import numpy as np
 
-    from .recording import NominalConversion
+    from .nominal import NominalConversion
     from .units import G0
 
     def triple(text, what):

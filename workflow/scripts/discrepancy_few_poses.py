@@ -6,7 +6,7 @@ from _helpers import configure_logging, mock_snakemake_from_argv
 
 from accelcal.atomic import write_json_atomic
 from accelcal.discrepancy.report import StochasticSettings
-from accelcal.recording import read_recording
+from accelcal.formats import read
 from accelcal.jsonsafe import json_safe
 from accelcal_repro.discrepancy import sessions as SS
 
@@ -15,7 +15,8 @@ if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_
 
 log = configure_logging(snakemake)
 name = snakemake.wildcards.recording
-named, excess = SS.few_poses_rows(name, read_recording(snakemake.input.csv), pd.read_csv(snakemake.input.measured_summary),
+named, excess = SS.few_poses_rows(name, read(snakemake.input.csv, strict=True),
+                                  pd.read_csv(snakemake.input.measured_summary),
                                   StochasticSettings.from_config(snakemake.params.stochastic))
 write_json_atomic(snakemake.output[0], json_safe({"recording": name, "named": named, "excess": excess}))
 for r in named:

@@ -8,7 +8,7 @@ from accelcal.atomic import atomic_output
 from accelcal.discrepancy.vocabulary import Rules
 from accelcal.discrepancy.report import StochasticSettings, discrepancy_report
 from accelcal_repro.measured.sources import source
-from accelcal.recording import read_recording
+from accelcal.formats import read
 from accelcal.jsonsafe import json_safe
 from accelcal_repro.discrepancy.sessions import with_disjoint_rests
 
@@ -18,7 +18,7 @@ if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_
 log = configure_logging(snakemake)
 name = snakemake.wildcards.recording
 p = snakemake.params
-rec, note = with_disjoint_rests(read_recording(snakemake.input.csv))
+rec, note = with_disjoint_rests(read(snakemake.input.csv, strict=True))
 if note:
     log.warning("%s: %s", name, note)
 unit = source(name).unit

@@ -5,7 +5,7 @@ import json
 import pandas as pd
 from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 
-from accelcal.recording import read_recording
+from accelcal.formats import read
 from accelcal_repro.discrepancy import sessions as SS
 
 if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
@@ -16,7 +16,7 @@ name = snakemake.wildcards.recording
 cfg = snakemake.params.sessions
 with open(snakemake.input.report) as f:
     report = json.load(f)
-rec = read_recording(snakemake.input.csv)
+rec = read(snakemake.input.csv, strict=True)
 rec, _ = SS.with_disjoint_rests(rec)  # the poses of the report (workflow/scripts/discrepancy_measured.py)
 sims = SS.resimulate(rec, report, n_rep=cfg["replicates"], seed=cfg["seed"])
 gaps = pd.DataFrame(SS.gap_rows(name, report, sims, rec), columns=SS.GAP_COLUMNS)

@@ -5,7 +5,7 @@ import json
 import pandas as pd
 from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 
-from accelcal.recording import read_recording
+from accelcal.formats import read
 from accelcal_repro.discrepancy import sessions as SS
 
 if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
@@ -26,7 +26,7 @@ for path in snakemake.input.few_poses:  # sessions of too few orientations for t
     excess += few["excess"]
 diagnostics = []
 for name, path in zip(p.recordings, snakemake.input.csv):
-    rec, _ = SS.with_disjoint_rests(read_recording(path))
+    rec, _ = SS.with_disjoint_rests(read(path, strict=True))
     diagnostics.append(SS.diagnostics_row(name, rec, reports[name]))
 evidence = [r for n, rep in reports.items() for r in SS.evidence_rows(n, rep)]
 estimates = pd.DataFrame([r for n, rep in reports.items() for r in SS.estimates_of(n, rep)])

@@ -5,7 +5,7 @@ from _helpers import configure_logging, mock_snakemake_from_argv
 
 from accelcal_repro.measured.figures import plot_calibration, plot_residuals, plot_static_detection
 from accelcal.plotting import save_figure
-from accelcal.recording import read_recording
+from accelcal.formats import read
 
 if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
     snakemake = mock_snakemake_from_argv("measured_calibration_figure")
@@ -15,7 +15,7 @@ fid = snakemake.params.figure
 if fid == "measured_static_detection":
     recs = {}
     for name, path in zip(snakemake.params.recordings, snakemake.input.csv):
-        r = read_recording(path)
+        r = read(path, strict=True)
         recs[name] = (r.t, r.acc)
     fig = plot_static_detection(recs, pd.read_csv(snakemake.input.poses))
 elif fid == "measured_calibration":

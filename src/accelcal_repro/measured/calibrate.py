@@ -5,7 +5,7 @@ Xsens and MPU-6050 files) with g in m/s², so that ``M`` carries the sensitivity
 counts per m/s² and ``b`` is in counts (as in IMU-TK).  The bias-only models fix
 ``M = I`` and therefore need z and g in one unit: they are fitted to the pose means
 converted with the recording's *nominal* conversion (``(z - offset) / counts_per_unit``,
-:func:`accelcal.recording.nominal_conversion`), and their bias is converted back to the
+:func:`accelcal.nominal.nominal_conversion`), and their bias is converted back to the
 file unit for the tables (``offset + counts_per_unit · b``).  Where the true sensitivity
 differs from the nominal one, the bias-only model is wrong by that much, and its
 residuals and χ² show it.  Residuals are in m/s² for every estimator.

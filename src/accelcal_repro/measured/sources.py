@@ -19,11 +19,11 @@ The fork sessions do not start at rest (the first seconds are 6-9x noisier than 
 later rests), so the static detection takes its noise level from their quietest stretch
 (:func:`accelcal.static.detect_static`, ``noise_reference='auto'``).  The FXOS8700 logs
 have no time stamps and no motion between poses; each block is a known static interval
-(:func:`accelcal.recording.read_block_log`), carried into the canonical CSV as its
+(:func:`accelcal.formats.block_log.read_block_log`), carried into the canonical CSV as its
 ``pose`` column, so no detection runs on them.
 
 :func:`read_source` reads the original file with the readers of
-:mod:`accelcal.recording`; :func:`convert` writes the canonical CSV of the CLI
+:mod:`accelcal.formats`; :func:`convert` writes the canonical CSV of the CLI
 (``t,ax,ay,az``), which is what the calibration step reads.
 """
 
@@ -35,8 +35,10 @@ from pathlib import Path
 
 from accelcal.atomic import atomic_output, sha256_file, write_json_atomic
 from accelcal.errors import RecordingError
-from accelcal.readers import read
-from accelcal.recording import NominalConversion, Recording, nominal_conversion, read_imucal_section_list, write_recording
+from accelcal.formats import read, write_recording
+from accelcal.formats.intervals import read_imucal_section_list
+from accelcal.nominal import NominalConversion, nominal_conversion
+from accelcal.recording import Recording
 from .data import fetch_file
 
 
@@ -55,9 +57,10 @@ class Source:
     extra_files : tuple of str
         Other files the analysis needs (the imucal section list).
     fmt : str
-        Reader: ``'imutk_ascii'``, ``'mpu6050'``, ``'imucal_session'`` or ``'block_log'``.
+        The format the file is read as (:data:`accelcal.formats.FORMATS`), the one
+        ``accelcal calibrate`` detects: IMU-TK ASCII files are read as tables (``csv``).
     nominal : str
-        Key of :func:`accelcal.recording.nominal_conversion`.
+        Key of :func:`accelcal.nominal.nominal_conversion`.
     unit : str
         Unit of the file's acceleration values, ``'counts'`` or ``'m/s^2'``.
     description : str
@@ -82,18 +85,18 @@ class Source:
 
 
 SOURCES: dict[str, Source] = {
-    "xsens_mti": Source("xsens_mti", "imu_tk_xsens", "xsens_acc.mat", (), "imutk_ascii", "imutk_xsens", "counts",
+    "xsens_mti": Source("xsens_mti", "imu_tk_xsens", "xsens_acc.mat", (), "csv", "imutk_xsens", "counts",
                         "Xsens MTi, IMU-TK example session (hand-placed static poses)"),
     "mpu6050": Source("mpu6050", "mpu6050_suarez", "example_data_calibration.csv", (), "mpu6050", "mpu6050",
                       "counts", "InvenSense MPU-6050, tomisuarez2/ImuCalibration example (hand-placed poses)"),
     "imucal_ferraris": Source("imucal_ferraris", "imucal_ferraris", "example_ferraris_session.csv",
-                              ("example_ferraris_session_list.json",), "imucal_session", "imucal_session", "m/s^2",
+                              ("example_ferraris_session_list.json",), "imucal", "imucal_session", "m/s^2",
                               "imucal example Ferraris session (six static positions, three rotations)"),
-    **{f"imutk_fork_{d}": Source(f"imutk_fork_{d}", "imutk_fork_sessions", f"{d}/acc_data.txt", (), "imutk_ascii",
+    **{f"imutk_fork_{d}": Source(f"imutk_fork_{d}", "imutk_fork_sessions", f"{d}/acc_data.txt", (), "csv",
                                  "imutk_fork", "m/s^2",
                                  f"IMU-TK fork (GetOverMassif) session {d}: one ROS IMU, hand-placed static poses")
        for d in ("data2", "data3", "data4")},
-    **{f"fxos8700_sample{k}": Source(f"fxos8700_sample{k}", "fastahrs_fxos8700", f, (), "block_log", "fxos8700",
+    **{f"fxos8700_sample{k}": Source(f"fxos8700_sample{k}", "fastahrs_fxos8700", f, (), "block-log", "fxos8700",
                                      "m/s^2", f"NXP FXOS8700 (FastAhrs {f}): poses logged as blocks, known rests")
        for k, f in ((1, "data_sample.csv"), (2, "data_sample2.csv"))},
 }
@@ -139,17 +142,12 @@ def read_manifest(path) -> dict[str, Path]:
         raise RecordingError(f"{path}: not a measured-data manifest ({type(e).__name__})") from None
 
 
-#: Each source format as :func:`accelcal.readers.read` names it.
-READER_FORMAT = {"imutk_ascii": "csv", "mpu6050": "mpu6050", "imucal_session": "imucal", "block_log": "block-log"}
-
-
 def read_source(name: str, paths: dict[str, Path]) -> Recording:
     """Read the original accelerometer file of recording ``name`` (units as stored) with the
-    readers of ``accelcal calibrate`` (:func:`accelcal.readers.read`), so that the workflow
-    and the CLI see the same numbers.  IMU-TK ASCII is read as a plain table (headerless
-    t, x, y, z), which is what the CLI detects it as."""
+    readers of ``accelcal calibrate`` (:func:`accelcal.formats.read`), so that the workflow
+    and the CLI see the same numbers."""
     s = source(name)
-    return read(paths[s.data_file], format=READER_FORMAT[s.fmt], unit=_UNIT[s.unit])
+    return read(paths[s.data_file], format=s.fmt, unit=_UNIT[s.unit])
 
 
 _UNIT = {"counts": "counts", "m/s^2": "m/s2"}

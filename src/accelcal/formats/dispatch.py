@@ -1,0 +1,201 @@
+"""Reading the files people have: one entry point, :func:`read`, for every format.
+
+Two strictnesses, chosen by the caller:
+
+* ``strict=False`` (the default, ``accelcal calibrate``): the file as people write it.
+  The format is detected (:data:`~accelcal.formats.registry.FORMATS`, in its order) or
+  named; a table's delimiter, header, columns, units and time are found
+  (:mod:`accelcal.formats.table`, :mod:`accelcal.formats.inference`); gzip and
+  Windows-1252 are undone.  Every guess is stated in
+  :attr:`~accelcal.recording.Recording.notes`.
+* ``strict=True`` (the workflow, reading back what it wrote): the canonical CSV
+  (:mod:`accelcal.formats.canonical`) exactly as :func:`write_recording` writes it,
+  nothing guessed, no option.
+
+Every refusal is a :class:`~accelcal.errors.RecordingError` with one line that names the
+file, the cause and the option that fixes it.
+
+This module imports only the standard library; a format's reader is imported when a file
+of that format is read.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from pathlib import Path
+
+from ..errors import RecordingError
+from ..units import acceleration_unit
+from ..units import time_unit as time_unit_name
+from .registry import BINARY_HEAD_BYTES, FALLBACK, FORMATS, TEXT_HEAD_CHARS, Format, format_named
+from .text import load_text
+
+
+def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit: str | None = None,
+         time_unit: str | None = None, rate: float | None = None, intervals=None):
+    """Read an accelerometer recording.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file (gzip-compressed or not, for text formats).
+    strict : bool
+        False: detect the format and guess what the file does not say (stated in the
+        notes).  True: the canonical CSV only (header ``t,ax,ay,az[,temp][,pose]``, as
+        :func:`write_recording` writes it), nothing guessed; no other option may be given.
+    format : str
+        ``'auto'`` (detect it) or a name of :data:`~accelcal.formats.registry.FORMATS`.
+    columns : str or dict, optional
+        Which column is which: ``'t=time,ax=AccX,ay=AccY,az=AccZ[,temp=T]'`` or a dict;
+        names or 1-based column numbers (:func:`accelcal.formats.table.parse_columns`).
+    unit : str, optional
+        Unit of the acceleration values (``g``, ``mg``, ``m/s2``, ``counts``); overrides
+        the header.
+    time_unit : str, optional
+        Unit of the time column (``s``, ``ms``, ``us``, ``ns``); overrides the header and
+        the inference.
+    rate : float, optional
+        Sampling rate [Hz]: time from the sample index (for files without time, or whose
+        time column is unusable).
+    intervals : str or Path, optional
+        A file of known static intervals (:func:`accelcal.formats.intervals.read_intervals`).
+
+    Returns
+    -------
+    Recording
+        In m/s² or counts (``unit`` set; strict: as in the file, ``unit`` None), time in
+        seconds, notes saying what was assumed.
+    """
+    path = Path(path)
+    options = {"columns": columns, "unit": unit, "time_unit": time_unit, "rate": rate}
+    if strict:
+        return _read_strict(path, format, {**options, "intervals": intervals})
+    fmt = None if format == "auto" else format_named(format)
+    _check_options(unit, time_unit, rate)
+    notes: list[str] = []
+    text = None
+    if fmt is None:
+        fmt = _sniff_binary(path)
+        if fmt is not None:
+            notes.append(_detected(fmt))
+    if fmt is None or fmt.text:
+        text, notes = load_text(path)
+        if fmt is None:
+            fmt = _sniff_text(path, text)
+            if fmt.name != FALLBACK:
+                notes.append(_detected(fmt))
+    rec = _read_format(path, fmt, text, options, notes)
+    rec = replace(rec, notes=tuple(notes) + rec.notes)
+    if intervals is not None:
+        from .intervals import read_intervals
+
+        rec = read_intervals(intervals, rec)
+    return rec
+
+
+def write_recording(path, rec, *, format: str = FALLBACK) -> None:
+    """Write ``rec`` in ``format`` (the canonical CSV by default), atomically.
+
+    ``read(path, strict=True)`` reads it back exactly.
+    """
+    fmt = format_named(format)
+    writer = fmt.load_writer()
+    if writer is None:
+        raise RecordingError(f"no writer for the {fmt.name} format; "
+                             f"formats with one: {', '.join(f.name for f in FORMATS.values() if f.writer)}")
+    writer(path, rec)
+
+
+def detect_format(path) -> str:
+    """The name of the format :func:`read` would detect for ``path`` (``format='auto'``)."""
+    path = Path(path)
+    fmt = _sniff_binary(path)
+    if fmt is None:
+        text, _ = load_text(path)
+        fmt = _sniff_text(path, text)
+    return fmt.name
+
+
+def _detected(fmt: Format) -> str:
+    return f"format: {fmt.name} (detected; pass --format to choose another)"
+
+
+def _check_options(unit, time_unit, rate) -> None:
+    if unit is not None and acceleration_unit(unit) is None:
+        raise RecordingError(f"unknown acceleration unit {unit!r}; use one of g, mg, m/s2, counts")
+    if time_unit is not None and time_unit_name(time_unit) is None:
+        raise RecordingError(f"unknown time unit {time_unit!r}; use one of s, ms, us, ns")
+    if rate is not None and not (math.isfinite(rate) and rate > 0):
+        raise RecordingError(f"--rate must be a positive number of Hz, got {rate!r}")
+
+
+def _read_strict(path: Path, format: str, options: dict):
+    fmt = format_named(FALLBACK if format == "auto" else format)
+    given = [name for name, value in options.items() if value is not None]
+    if given:
+        raise RecordingError(f"{path}: strict reading takes the file as it is; {', '.join(given)} "
+                             "apply to strict=False")
+    reader = fmt.load_strict_reader()
+    if reader is None:
+        raise RecordingError(f"the {fmt.name} format has no strict reader; strict=True reads "
+                             f"{', '.join(f.name for f in FORMATS.values() if f.strict_reader)}")
+    fmt.check_extra(path)
+    return reader(path)
+
+
+def _sniff_binary(path: Path) -> Format | None:
+    """The first binary format that recognises ``path`` from its first bytes, or None."""
+    binary = [f for f in FORMATS.values() if not f.text and f.sniff is not None]
+    if not binary:
+        return None
+    head = b""
+    if path.is_file():
+        with open(path, "rb") as fh:
+            head = fh.read(BINARY_HEAD_BYTES)
+    return next((f for f in binary if f.load_sniff()(path, head)), None)
+
+
+def _sniff_text(path: Path, text: str) -> Format:
+    """The first text format that recognises the text's head, else the fallback (a table)."""
+    head = text[:TEXT_HEAD_CHARS]
+    found = (f for f in FORMATS.values() if f.text and f.sniff is not None and f.load_sniff()(path, head))
+    return next(found, FORMATS[FALLBACK])
+
+
+def _read_format(path: Path, fmt: Format, text: str | None, options: dict, notes: list[str]):
+    """Run ``fmt``'s reader with the options it takes; apply the others (see
+    :data:`~accelcal.formats.registry.READING_OPTIONS`); notes on the file go to ``notes``."""
+    if options["columns"] is not None and "columns" not in fmt.options:
+        takers = " or ".join(f.name for f in FORMATS.values() if "columns" in f.options)
+        raise RecordingError(f"{path}: --columns applies to the {takers} format, not to {fmt.name} "
+                             f"(pass --format {FALLBACK} to read it as a plain table)")
+    reader = fmt.load_reader(path)
+    own = {k: v for k, v in options.items() if k in fmt.options and v is not None}
+    rec = reader(path, text=text, **own) if fmt.text else reader(path, **own)
+    rate = options["rate"]
+    if rate is not None and "rate" not in fmt.options:
+        import numpy as np
+
+        rec = replace(rec, t=np.arange(rec.n) / rate, notes=rec.notes + (f"t = sample index / {rate:g} Hz (--rate)",))
+    if "unit" not in fmt.options:
+        rec = _with_unit(rec, options["unit"], path)
+    if options["time_unit"] is not None and "time_unit" not in fmt.options:
+        notes.append(f"--time-unit ignored: the {fmt.name} format defines its time")
+    return rec
+
+
+def _with_unit(rec, unit: str | None, path):
+    """Apply ``unit=`` to a format reader's recording (converting g, mg to m/s²)."""
+    from .inference import convert_acc, with_inferred_unit
+
+    if unit is None:
+        return rec if rec.unit is not None else with_inferred_unit(rec)
+    u = acceleration_unit(unit)
+    if rec.unit is not None and rec.unit != ("counts" if u == "counts" else "m/s^2"):
+        raise RecordingError(f"{path}: --unit {unit} contradicts the format, whose values are in {rec.unit}")
+    acc, note = convert_acc(rec.acc, u, "--unit")
+    return replace(rec, acc=acc, unit="counts" if u == "counts" else "m/s^2", notes=rec.notes + (note,))
+
+
+__all__ = ["detect_format", "read", "write_recording"]

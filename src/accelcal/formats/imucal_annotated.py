@@ -1,0 +1,63 @@
+"""imucal's annotated session (``part, samples, acc_*, gyr_*``, raw counts, grouped by section)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import RecordingError
+from ..recording import Recording, intervals_from_labels
+from .imucal import IMUCAL_RATE_HZ
+from .parsing import check_counter, check_time, drop_trailing_blank, read_delimited, require_columns, to_float
+from .text import content_lines, header_fields
+
+#: Columns whose presence in the header recognises an annotated session.
+_SIGNATURE = {"part", "samples", "acc_x", "acc_y", "acc_z"}
+
+
+def sniff(path: Path, head: str) -> bool:
+    """Whether the header names ``part``, ``samples`` and ``acc_*``."""
+    lines = content_lines(head)
+    return bool(lines) and _SIGNATURE <= header_fields(lines[0])
+
+
+def read_annotated_session(path, text: str | None = None, rate: float = IMUCAL_RATE_HZ) -> Recording:
+    """The annotated session with its static parts (all but ``*_rot``) as known static intervals."""
+    rec, parts = read_imucal_annotated(path, rate, text=text)
+    static = np.array([p if not p.endswith("_rot") else "" for p in parts])
+    iv, labels = intervals_from_labels(static)
+    return replace(rec, intervals=iv, labels=labels,
+                   notes=rec.notes + ("imucal annotated session: its static parts (not *_rot) are the known "
+                                      "static intervals",))
+
+
+def read_imucal_annotated(csv_path, rate: float = IMUCAL_RATE_HZ,
+                          text: str | None = None) -> tuple[Recording, np.ndarray]:
+    """Read imucal's annotated session (``part, samples, acc_*, gyr_*``, raw counts).
+
+    The file is grouped by section, not in time order; rows are sorted by the
+    ``samples`` counter, which must be unique integers.  ``t = samples / rate``.
+
+    Returns
+    -------
+    rec : Recording
+        Time-ordered acceleration in raw counts (no documented nominal scale).
+    parts : ndarray of str, shape (n,)
+        Section label of each sample (``x_p``, ..., ``z_rot``), in time order.
+    """
+    cols = ("part", "samples", "acc_x", "acc_y", "acc_z", "gyr_x", "gyr_y", "gyr_z")
+    df = drop_trailing_blank(read_delimited(csv_path, "an imucal annotated session CSV", text))
+    require_columns(df, cols, csv_path)
+    v = {c: to_float(df, c, csv_path, first_line=2) for c in cols[1:]}
+    s = v["samples"]
+    order = np.argsort(s, kind="stable")
+    check_counter(s[order], "samples", csv_path, first_line=None)
+    parts = df["part"].str.strip().to_numpy(dtype=str)[order]
+    if (parts == "").any():
+        raise RecordingError(f"{csv_path}: empty 'part' label at line {2 + int(np.flatnonzero(parts == '')[0])}")
+    acc = np.column_stack([v["acc_x"], v["acc_y"], v["acc_z"]])[order]
+    t = s[order] / rate
+    check_time(t, csv_path, first_line=2)
+    return Recording(t, acc, None, str(csv_path), unit="counts"), parts

@@ -1,0 +1,188 @@
+"""What the table reader infers when the file does not say: the acceleration unit and the time.
+
+Acceleration comes out in m/s² or raw counts (:mod:`accelcal.units`): a unit in the
+header (``acc_x [g]``, ``ax_mg``), ``unit=`` (which wins), or, failing both, the
+magnitude of the data (median ``|a|`` near 1 → g, near 9.8 → m/s², ...).  Time comes out
+in seconds from the first sample: its unit from ``time_unit=``, the header
+(``time_ms``), or the values (epoch magnitudes; integer steps → the unit that makes the
+rate nearest 100 Hz), ISO 8601 date-times parsed, or ``rate=`` (time from the sample
+index).  Every guess is a note.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import replace
+
+import numpy as np
+
+from ..errors import RecordingError
+from ..recording import Recording
+from ..units import G0, acceleration_unit, time_unit
+from .parsing import DECIMAL_COMMA, NUMBER, norm_name, parse_numbers
+
+#: Canonical sampling rate the time-unit inference aims at [Hz] (typical IMU logging).
+TYPICAL_RATE_HZ = 100.0
+
+
+def convert_acc(acc, u: str, how: str):
+    if u in ("g", "mg"):
+        f = G0 if u == "g" else G0 * 1e-3
+        return acc * f, f"unit: {u} ({how}), converted to m/s^2 with standard gravity {G0} m/s^2 per g"
+    return acc, f"unit: {u} ({how})"
+
+
+def resolve_acceleration_unit(acc, units: dict, unit: str | None, path):
+    """Acceleration in m/s² or counts, its unit name, and a note saying where the unit came from."""
+    header = units.get("acc_units", {})
+    if unit is not None:
+        u, how = acceleration_unit(unit), "--unit"
+        if header and set(header.values()) != {u}:
+            how = f"--unit, overriding the header's {'/'.join(sorted(set(header.values())))}"
+    elif header:
+        if len(header) < 3 and set(header.values()) != {"counts"}:
+            pass
+        if len(set(header.values())) > 1:
+            raise RecordingError(f"{path}: the acceleration columns are in different units "
+                                 f"({', '.join(f'{r}: {v}' for r, v in sorted(header.items()))}); "
+                                 "convert them to one unit or pass --unit")
+        u, how = next(iter(header.values())), "from the header"
+    else:
+        return infer_acceleration_unit(acc, path)
+    acc, note = convert_acc(acc, u, how)
+    return acc, "counts" if u == "counts" else "m/s^2", note
+
+
+def infer_acceleration_unit(acc, path):
+    norm = float(np.median(np.linalg.norm(acc, axis=1)))
+    integer = bool(np.all(acc == np.round(acc)))
+    if 0.3 <= norm <= 3.0:
+        u = "g"
+    elif 3.0 < norm <= 30.0:
+        u = "m/s^2"
+    elif 300.0 <= norm <= 3000.0 and not integer:
+        u = "mg"
+    else:
+        u = "counts"
+    acc, note = convert_acc(acc, u, f"inferred from the median |a| = {norm:.4g}; pass --unit if wrong")
+    return acc, "counts" if u == "counts" else "m/s^2", note
+
+
+def with_inferred_unit(rec: Recording) -> Recording:
+    acc, u, note = infer_acceleration_unit(rec.acc, rec.source)
+    return replace(rec, acc=acc, unit=u, notes=rec.notes + (note,))
+
+
+_RATE_KEYS = {"fs", "rate", "samplerate", "samplingrate", "samplingfrequency", "frequency", "hz", "odr",
+              "samplingratehz", "ratehz", "fshz"}
+
+
+def _preamble_rate(preamble) -> tuple[float | None, str]:
+    for no, r in preamble:
+        if len(r) >= 2 and norm_name(r[0]) in _RATE_KEYS:
+            try:
+                fs = float(r[1].replace(",", "."))
+            except ValueError:
+                continue
+            if np.isfinite(fs) and fs > 0:
+                return fs, f"t = sample index / {fs:g} Hz (rate from the line {no} '{r[0]}')"
+    return None, ""
+
+
+def time_seconds(values, rate, tu, header_unit, names, roles, dc, path, lines, preamble):
+    """Time [s] from the first sample, and a note on how it was obtained."""
+    n = len(lines)
+    if rate is not None:
+        ignored = " (time column ignored)" if values is not None else ""
+        return np.arange(n) / rate, f"t = sample index / {rate:g} Hz (--rate){ignored}"
+    if values is None:
+        fs, note = _preamble_rate(preamble)
+        if fs is None:
+            found = ", ".join(names)[:150] if names is not None else "none"
+            raise RecordingError(f"{path}: no time column (found: {found}); pass --rate HZ to time the samples "
+                                 "by their index, or --columns t=NAME")
+        return np.arange(n) / fs, note
+    s = np.char.strip(values.astype(str))
+    label = f"time (column {names[roles['t']].strip()!r})" if names is not None else "time"
+    numeric = np.array([bool(NUMBER.match(v) or (dc and DECIMAL_COMMA.match(v))) for v in s[:1000]])
+    if not numeric.all():
+        return _datetime_time(s, path, label, lines)
+    if dc:
+        s = np.char.replace(s, ",", ".")
+    integer = all(re.fullmatch(r"[+-]?\d+", v) for v in s[:1000]) and all(re.fullmatch(r"[+-]?\d+", v) for v in s)
+    if integer and all(len(v.lstrip("+-")) < 19 for v in s):
+        ti = s.astype(np.int64)
+        rel = (ti - ti[0]).astype(float)  # exact in int64, then float: epoch ns keep their digits
+        x = ti.astype(float)
+        t0 = float(ti[0])
+    else:
+        x = parse_numbers(values, dc, path, "t", names, roles["t"], lines)
+        t0 = float(x[0])
+        rel = x - x[0]
+    _check_increasing(rel, path, label, lines)
+    if tu is not None:
+        unit, how = time_unit(tu), "--time-unit"
+    elif header_unit is not None:
+        unit, how = header_unit, "from the header"
+    else:
+        unit, how = _infer_time_unit(rel, t0, integer)
+    f = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}[unit]
+    epoch = abs(t0) * f >= 1e6  # clock or epoch time: seconds from the first sample keep the digits
+    t = rel * f if epoch else x * f
+    rate_hz = 1.0 / float(np.median(np.diff(t)))
+    note = f"time unit: {unit} ({how}): {rate_hz:.4g} Hz over {t[-1] - t[0]:.4g} s"
+    if how.startswith("inferred") or not 1.0 <= rate_hz <= 20000.0:
+        note += "; pass --time-unit if wrong"
+    if epoch:
+        note += f"; counted from the first sample (t0 = {t0:.17g} {unit})"
+    return t, note
+
+
+def _infer_time_unit(rel, t0: float, integer: bool) -> tuple[str, str]:
+    """The time unit from the values: epoch magnitude first, else the sampling rate."""
+    factors = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
+    if abs(t0) >= 1e8:  # an epoch time stamp: its magnitude names the unit (years 1973-2286)
+        for u, f in factors.items():
+            if 1e8 <= abs(t0) * f < 1e10:
+                return u, f"inferred from the epoch time stamp {t0:.6g}"
+    dt = float(np.median(np.diff(rel)))
+    cands = ("ms", "us", "ns", "s") if integer else ("s", "ms")
+    best = min(cands, key=lambda u: abs(np.log10(1.0 / (dt * factors[u]) / TYPICAL_RATE_HZ)))
+    why = "integer steps" if integer else "fractional values"
+    return best, f"inferred: {why} of median {dt:.4g} give {1 / (dt * factors[best]):.4g} Hz in {best}"
+
+
+def _datetime_time(s, path, label, lines):
+    import pandas as pd
+
+    try:
+        ts = pd.to_datetime(pd.Series(s), format="ISO8601", utc=True)
+    except (ValueError, TypeError):
+        ts = None
+    if ts is None or ts.isna().any():
+        bad = 0 if ts is None else int(np.flatnonzero(ts.isna().to_numpy())[0])
+        if ts is None:
+            for i, v in enumerate(s):
+                try:
+                    pd.to_datetime(v, format="ISO8601")
+                except (ValueError, TypeError):
+                    bad = i
+                    break
+        raise RecordingError(f"{path}: {label}: {s[bad][:30]!r} at line {lines[bad]} is neither a number nor an "
+                             "ISO 8601 date-time; pass --rate HZ to time the samples by their index")
+    ns = ts.dt.tz_localize(None).to_numpy().astype("datetime64[ns]").astype(np.int64)
+    t = (ns - ns[0]).astype(float) * 1e-9
+    _check_increasing(t, path, label, lines)
+    rate_hz = 1.0 / float(np.median(np.diff(t)))
+    return t, (f"time: ISO 8601 date-times from {ts.iloc[0].isoformat()} (UTC): {rate_hz:.4g} Hz, {t[-1]:.4g} s")
+
+
+def _check_increasing(t, path, label, lines):
+    d = np.diff(t)
+    bad = np.flatnonzero(d <= 0)
+    if bad.size:
+        i = int(bad[0]) + 1
+        what = "repeats" if d[bad[0]] == 0 else "goes back"
+        hint = ("time stamps coarser than the sampling? pass --rate HZ to time the samples by their index"
+                if d[bad[0]] == 0 else "rows out of order or two recordings joined; sort or split the file")
+        raise RecordingError(f"{path}: {label} {what} at line {lines[i]} ({int(bad.size)} such step(s)); {hint}")

@@ -1,0 +1,320 @@
+"""Any delimited text table (the ``csv`` format): delimiter, header and columns found.
+
+Comma, semicolon, tab, ``|`` or whitespace, decimal point or decimal comma,
+``#``/``%``/``//`` comment lines, metadata lines above the header, gzip-compressed or
+not.  Columns are found by their usual names (``t``, ``time``, ``timestamp``, ``acc_x``,
+``accX``, ``AX``, ``Accel. X``, ``linear_acceleration.x`` ...; :data:`ALIASES`) or given
+with ``columns=``.  A headerless table of 4 numbers per row is IMU-TK's layout (t, x, y,
+z).  Units and time are inferred when the file does not say (:mod:`.inference`).
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+
+from ..errors import RecordingError
+from ..recording import MIN_ROWS, Recording, intervals_from_labels
+from ..units import to_celsius, unit_in_name
+from .inference import resolve_acceleration_unit, time_seconds
+from .parsing import DECIMAL_COMMA, NUMBER, norm_name, parse_numbers, split_fields
+from .text import is_comment, load_text
+
+ROLES = ("t", "ax", "ay", "az", "temp", "pose")
+#: Delimiters tried, in order of preference when two fit equally well.
+DELIMITERS = ("\t", ";", ",", "|", " ")
+
+#: Column names (lower case, without unit, separators removed) for each role.
+_ACC = re.compile(r"^(?:field)?(?:imu)?(?:linear)?(?:acc|accel|accl|acceleration|accelerometer|acceleromter|a)"
+                  r"(?:raw|meas|measured)?(?P<axis>[xyz])$")
+_ACC_AXIS_FIRST = re.compile(r"^(?P<axis>[xyz])(?:acc|accel|acceleration|a)$")
+_TIME = {"t", "time", "times", "timestamp", "timestamps", "ts", "stamp", "sec", "secs", "seconds", "elapsed",
+         "elapsedtime", "datetime", "date", "clock", "millis", "micros", "nanos", "tsec", "fieldheaderstamp",
+         "headerstamp", "%time", "timeus", "timems", "timens", "zeit", "zeitstempel", "tiempo", "temps", "tempo"}
+_TIME_UNIT_BY_NAME = {"millis": "ms", "micros": "us", "nanos": "ns", "timems": "ms", "timeus": "us", "timens": "ns"}
+_TEMP = {"temp", "temperature", "imutemp", "dietemp", "temperaturec", "tempc", "thermometer"}
+_POSE = {"pose", "poseid", "staticpose", "posename"}
+#: Documented for the CLI's help: what each role is found by.
+ALIASES = {
+    "t": "t, time, timestamp, ts, stamp, seconds, elapsed, datetime, millis, micros, %time, field.header.stamp",
+    "ax, ay, az": "ax, acc_x, accX, AX, accel_x, Accel. X, a_x, x_acc, acceleration_x, accelerometer_x, "
+                  "linear_acceleration.x (x, y, z alone when nothing else matches)",
+    "temp": "temp, temperature, imu_temp, die_temp",
+    "pose": "pose, pose_id (label of the known static pose of each sample; empty between poses)",
+}
+
+
+def parse_columns(spec) -> dict:
+    """``'t=time,ax=AccX,...'`` (or a dict) → ``{role: name or 0-based index}``.
+
+    Numbers are 1-based column positions (as a user counts them); names match the header
+    with its whitespace stripped, case-insensitively.
+    """
+    if spec is None:
+        return {}
+    items = spec.items() if isinstance(spec, dict) else (
+        (p.split("=", 1) if "=" in p else (p, None)) for p in str(spec).split(",") if p.strip())
+    out = {}
+    for role, col in items:
+        role = str(role).strip().lower()
+        if role not in ROLES or col is None or str(col).strip() == "":
+            raise RecordingError(f"--columns: expected ROLE=COLUMN with ROLE in {', '.join(ROLES)} "
+                                 f"(e.g. t=time,ax=AccX,ay=AccY,az=AccZ), got {role!r}")
+        col = str(col).strip()
+        if col.isdigit():
+            if int(col) < 1:
+                raise RecordingError(f"--columns: column numbers start at 1, got {role}={col}")
+            out[role] = int(col) - 1
+        else:
+            out[role] = col
+    return out
+
+
+def _numeric_share(rows, decimal_comma: bool) -> float:
+    cells = [c for r in rows for c in r]
+    if not cells:
+        return 0.0
+    pat = DECIMAL_COMMA if decimal_comma else NUMBER
+    return sum(1 for c in cells if NUMBER.match(c) or pat.match(c)) / len(cells)
+
+
+def sniff(lines: list[str]) -> tuple[str, bool, int]:
+    """Delimiter, decimal comma and field count of the data rows (the last lines).
+
+    The delimiter that splits the last (up to 200) content lines into the same number of
+    fields (at least 3) with the largest share of numbers wins; a decimal comma is
+    recognised when the delimiter is not a comma and fields look like ``9,81``.
+    """
+    tail = lines[-200:]
+    best = None
+    for order, delim in enumerate(DELIMITERS):
+        rows = [split_fields(ln, delim) for ln in tail]
+        rows = [r[:-1] if r and r[-1] == "" and len(r) > 1 else r for r in rows]  # trailing delimiter
+        counts = np.bincount([len(r) for r in rows])
+        k = int(np.argmax(counts))
+        if k < 3:
+            continue
+        consistent = counts[k] / len(rows)
+        same = [r for r in rows if len(r) == k]
+        dc = delim != "," and any(DECIMAL_COMMA.match(c) for r in same[:50] for c in r)
+        score = consistent * _numeric_share(same, dc)
+        if best is None or score > best[0] + 1e-9:
+            best = (score, delim, dc, k, order)
+    if best is None or best[0] < 0.3:
+        widest = max((len(split_fields(ln, d)), d) for d in DELIMITERS for ln in tail[:1])
+        first = ", ".join(split_fields(lines[0], widest[1]))[:80] if widest[0] > 1 else lines[0][:60]
+        raise RecordingError(f"no table of 3 or more columns found (first line: {first!r}); a recording needs "
+                             "three acceleration columns (and time): name them with --columns t=..,ax=..,ay=..,az=..")
+    return best[1], best[2], best[3]
+
+
+class _Table(NamedTuple):
+    """The rows of a table: header names (or None), data rows, their file line numbers, the
+    lines above the header (line number, fields), delimiter, decimal comma, field count."""
+
+    names: list[str] | None
+    data: list[list[str]]
+    lines: list[int]
+    preamble: list[tuple[int, list[str]]]
+    delim: str
+    dc: bool
+    k: int
+
+
+def read_table(path, *, text: str | None = None, columns=None, unit: str | None = None,
+               time_unit: str | None = None, rate: float | None = None) -> Recording:
+    """Read a delimited text table (the ``csv`` format; see the module docstring).
+
+    Raises
+    ------
+    RecordingError
+        No table, missing or ambiguous columns, bad values (with the line), time that
+        does not increase, a unit that cannot be determined consistently.
+    """
+    path = Path(path)
+    notes: list[str] = []
+    if text is None:
+        text, notes = load_text(path)
+    tab = _split_table(text, path)
+    names, dc, lines = tab.names, tab.dc, tab.lines
+    what = {"\t": "tab", ";": "semicolon", ",": "comma", "|": "'|'", " ": "whitespace"}[tab.delim]
+    if tab.delim != "," or dc:
+        notes.append(f"{what}-separated" + (", decimal comma" if dc else ""))
+    roles, units = _map_columns(names, tab.k, parse_columns(columns), path)
+    if names is None:
+        notes.append("no header: columns read as " + ", ".join(
+            f"{r}=column {i + 1}" for r, i in roles.items()) + " (pass --columns to change)")
+    cols = list(zip(*tab.data))
+
+    def column(role):
+        return np.asarray(cols[roles[role]], dtype=object)
+
+    acc = np.column_stack([parse_numbers(column(a), dc, path, a, names, roles[a], lines) for a in ("ax", "ay", "az")])
+    acc, unit_name, note = resolve_acceleration_unit(acc, units, unit, path)
+    notes.append(note)
+    t, tnote = time_seconds(column("t") if "t" in roles else None, rate, time_unit, units.get("t"), names, roles, dc,
+                            path, lines, tab.preamble)
+    notes.append(tnote)
+    temp = None
+    if "temp" in roles:
+        temp = parse_numbers(column("temp"), dc, path, "temp", names, roles["temp"], lines)
+        if units.get("temp") in ("K", "degF"):
+            temp = to_celsius(temp, units["temp"])
+            notes.append(f"temperature converted from {units['temp']} to degC")
+    iv, labels = (intervals_from_labels(column("pose").astype(str)) if "pose" in roles else (None, None))
+    time_column = None
+    if "t" in roles and rate is None:
+        time_column = (names[roles["t"]].strip() if names is not None else "t", column("t").astype(str))
+    return Recording(t, acc, temp, str(path), intervals=iv, labels=labels, notes=tuple(n for n in notes if n),
+                     unit=unit_name, time_column=time_column)
+
+
+def _split_table(text: str, path) -> _Table:
+    """Delimiter, header and data rows of the text (comments and blank lines skipped)."""
+    all_lines = text.splitlines()
+    numbered = [(no, ln) for no, ln in enumerate(all_lines, start=1) if ln.strip() and not is_comment(ln)]
+    if not numbered:
+        raise RecordingError(f"{path}: only comments and blank lines, no data")
+    try:
+        delim, dc, k = sniff([ln for _, ln in numbered])
+    except RecordingError as e:
+        raise RecordingError(f"{path}: {e}") from None
+    rows = []
+    for no, ln in numbered:
+        r = split_fields(ln, delim)
+        if len(r) == k + 1 and r[-1] == "":
+            r = r[:-1]
+        rows.append(r)
+    header, first = _find_header(rows, k, dc)
+    if header is None and first == 0:  # a header that looks like a comment: rostopic's '%time,field...'
+        rows, numbered, header = _comment_header(all_lines, numbered, rows, delim, k)
+        first = 1 if header is not None else 0
+    preamble = [(numbered[i][0], rows[i]) for i in range(first if header is None else header)]
+    data = rows[first:]
+    lines = [numbered[i][0] for i in range(first, len(rows))]
+    bad = next((i for i, r in enumerate(data) if len(r) != k), None)
+    if bad is not None:
+        raise RecordingError(f"{path}: line {lines[bad]} has {len(data[bad])} fields where the table has {k} "
+                             "(truncated, or a line of another kind inside the data)")
+    if len(data) < MIN_ROWS:
+        raise RecordingError(f"{path}: only {len(data)} data rows; need at least {MIN_ROWS}")
+    return _Table(rows[header] if header is not None else None, data, lines, preamble, delim, dc, k)
+
+
+def _comment_header(all_lines, numbered, rows, delim, k):
+    """The comment line just above the data as the header, if it has the data's field
+    count and names (``%time,field.header.seq,...`` of ``rostopic echo -p``)."""
+    above = numbered[0][0] - 1  # 1-based line number of the line above the first data row
+    if above < 1 or not is_comment(all_lines[above - 1]):
+        return rows, numbered, None
+    cand = split_fields(all_lines[above - 1].strip(), delim)
+    if len(cand) != k or sum(1 for c in cand if NUMBER.match(c)) > 0:
+        return rows, numbered, None
+    return [cand] + rows, [(above, all_lines[above - 1])] + numbered, 0
+
+
+def _find_header(rows, k: int, dc: bool) -> tuple[int | None, int]:
+    """(header row index or None, first data row index).
+
+    Data start at the first row of ``k`` fields from which on every row has ``k`` fields
+    (or, for a damaged file, the first row of ``k`` mostly numeric fields); the header is
+    the row just before it if it has ``k`` fields and is not mostly numeric.
+    """
+    def numeric(r):
+        return sum(1 for c in r if NUMBER.match(c) or (dc and DECIMAL_COMMA.match(c))) >= max(2, len(r) // 2)
+
+    first = next((i for i, r in enumerate(rows) if len(r) == k and numeric(r)), None)
+    if first is None:
+        raise RecordingError("no data rows found")
+    if first > 0 and len(rows[first - 1]) == k and not numeric(rows[first - 1]):
+        return first - 1, first
+    return None, first
+
+
+def _map_columns(names, k: int, given: dict, path) -> tuple[dict, dict]:
+    """``{role: column index}`` and ``{role: unit found in the header}``."""
+    roles, units = {}, {}
+    if names is None:
+        if set(given) - {"t", "ax", "ay", "az", "temp", "pose"} or any(isinstance(v, str) for v in given.values()):
+            raise RecordingError(f"{path}: the file has no header, so --columns needs column numbers "
+                                 "(e.g. t=1,ax=2,ay=3,az=4)")
+        default = {4: ("t", "ax", "ay", "az"), 3: ("ax", "ay", "az"), 5: ("t", "ax", "ay", "az", "temp")}
+        if not given and k not in default:
+            raise RecordingError(f"{path}: no header and {k} columns: say which is which with --columns "
+                                 "(e.g. t=1,ax=2,ay=3,az=4)")
+        roles = dict(given) if given else {r: i for i, r in enumerate(default[k])}
+    else:
+        stripped = [n.strip() for n in names]
+        for role, col in given.items():
+            if isinstance(col, int):
+                if col >= k:
+                    raise RecordingError(f"{path}: --columns {role}={col + 1}: the table has {k} columns")
+                roles[role] = col
+            else:
+                hits = [i for i, n in enumerate(stripped) if n.lower() == col.lower()]
+                if not hits:
+                    raise RecordingError(f"{path}: --columns {role}={col}: no such column "
+                                         f"(found: {', '.join(stripped)[:150]})")
+                roles[role] = hits[0]
+        _find_roles(stripped, roles, path)
+    missing = [r for r in ("ax", "ay", "az") if r not in roles]
+    if missing:
+        found = ", ".join(n.strip() for n in names)[:150] if names is not None else f"{k} unnamed columns"
+        raise RecordingError(f"{path}: no column for {', '.join(missing)} (found: {found}); "
+                             "name them with --columns t=TIME,ax=X,ay=Y,az=Z")
+    used = {}
+    for role, i in roles.items():
+        if i in used:
+            raise RecordingError(f"{path}: column {i + 1} given for both {used[i]} and {role}")
+        used[i] = role
+    if names is not None:
+        for role, i in roles.items():
+            kind = {"t": "time", "temp": "temperature", "pose": None}.get(role, "acceleration")
+            if kind:
+                base, u = unit_in_name(names[i].strip(), kind)
+                if role == "t" and u is None:
+                    u = _TIME_UNIT_BY_NAME.get(norm_name(base))
+                if u is not None:
+                    units.setdefault(role, u)
+                    if role in ("ax", "ay", "az"):
+                        units.setdefault("acc_units", {})[role] = u
+    return roles, units
+
+
+def _find_roles(names, roles: dict, path) -> None:
+    """Fill ``roles`` (in place) from the header by the aliases, for roles not given."""
+    cand = {r: [] for r in ROLES}
+    for i, n in enumerate(names):
+        if i in roles.values():
+            continue
+        for kind in ("acceleration", "time", "temperature"):
+            base, _ = unit_in_name(n, kind)
+            key = norm_name(base)
+            m = _ACC.match(key) or _ACC_AXIS_FIRST.match(key)
+            if kind == "acceleration" and m:
+                cand["a" + m.group("axis")].append(i)
+            elif kind == "time" and (key in _TIME or key in _TIME_UNIT_BY_NAME):
+                cand["t"].append(i)
+            elif kind == "temperature" and key in _TEMP:
+                cand["temp"].append(i)
+        if norm_name(n) in _POSE:
+            cand["pose"].append(i)
+    if not any(cand[a] for a in ("ax", "ay", "az")) and not any(r in roles for r in ("ax", "ay", "az")):
+        for i, n in enumerate(names):  # plain x, y, z columns (FastAhrs 'x, y, z')
+            if norm_name(n) in ("x", "y", "z") and i not in roles.values():
+                cand["a" + norm_name(n)].append(i)
+    for role, hits in cand.items():
+        hits = sorted(set(hits))
+        if role in roles or not hits:
+            continue
+        if role == "t" and len(hits) > 1 and {norm_name(names[i]) for i in hits} == {"%time", "fieldheaderstamp"}:
+            # rostopic echo -p: %time is when the message was received, the header stamp
+            # when the sensor sampled it
+            hits = [i for i in hits if norm_name(names[i]) == "fieldheaderstamp"]
+        if len(hits) > 1:
+            raise RecordingError(f"{path}: {len(hits)} columns could be {role} ({', '.join(names[i] for i in hits)}); "
+                                 f"choose one with --columns {role}=NAME")
+        roles[role] = hits[0]
