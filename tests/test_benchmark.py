@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 
 from accelcal import kernels
-from accelcal_repro import timing
+from accelcal_repro import first_calls, timing
 from accelcal_repro.cost import headline, plot_cost
 
 BACKENDS = timing.available_backends()
@@ -108,7 +108,7 @@ def test_compile_timing_refuses_unknown_calls():
 def test_first_call_script_names_every_call_and_defines_what_they_use():
     """The script run in fresh processes by compile_timing: its calls are FIRST_CALLS and
     every name they use is defined (checked without running them: that compiles)."""
-    script = timing._FIRST_CALLS
+    script = first_calls.SCRIPT
     head = script[:script.index("wanted = ")]
     namespace = {}
     exec(compile(head.replace("import numba\n", ""), "<first calls>", "exec"), namespace)
