@@ -3,6 +3,9 @@ beyond) from static poses, with the closed forms of Burkhard et al. (2024), a co
 (ALS) correction, an iterative CasADi/IPOPT baseline and the Cramér–Rao bound.
 
 >>> from accelcal import full_lls, bias_lls, full_nlls, bias_nlls
+>>> from accelcal import ESTIMATORS        # the registry: every estimator and what it needs
+>>> ESTIMATORS["full_lls"].min_poses
+10
 
 Names are loaded on first use (module ``__getattr__``, PEP 562): ``import accelcal``
 imports neither numpy nor scipy, casadi, pandas or numba, so that the command line
@@ -38,10 +41,12 @@ __version__ = "0.1.0"
 
 #: Public name -> submodule that defines it (imported on first access).
 _LAZY = {
-    "full_als": "als",
+    "ESTIMATORS": "registry",
+    "full_als": "als", "full_als_batch": "als",
     "bias_lls": "lls", "bias_lls_batch": "lls", "full_lls": "lls", "full_lls_batch": "lls",
     "m_from_params": "model", "params_from_m": "model",
-    "bias_nlls": "nlls", "full_nlls": "nlls", "nlls_batch": "nlls",
+    "bias_nlls": "nlls", "bias_nlls_batch": "nlls", "full_nlls": "nlls", "full_nlls_batch": "nlls",
+    "nlls_batch": "nlls",
     "BatchResult": "results", "CalibrationResult": "results", "LLSResult": "results", "NLLSResult": "results",
     "CramerRaoBound": "uncertainty", "crlb": "uncertainty", "crlb_mean": "uncertainty",
     "Calibration": "calibration", "calibrate_recording": "calibration", "load_calibration": "calibration",
@@ -52,10 +57,6 @@ _LAZY = {
 def __getattr__(name: str):
     if name in _LAZY:
         value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
-    elif name == "ESTIMATORS":  # estimator functions by the CLI's names, from the one registry
-        from .registry import ESTIMATORS as registry
-
-        value = {e.cli_name: e.load() for e in registry.values()}
     else:
         try:  # a submodule: accelcal.nlls, accelcal.batista, ...
             value = importlib.import_module(f".{name}", __name__)
@@ -93,12 +94,15 @@ __all__ = [
     "bias_lls",
     "bias_lls_batch",
     "bias_nlls",
+    "bias_nlls_batch",
     "crlb",
     "crlb_mean",
     "full_als",
+    "full_als_batch",
     "full_lls",
     "full_lls_batch",
     "full_nlls",
+    "full_nlls_batch",
     "m_from_params",
     "nlls_batch",
     "params_from_m",

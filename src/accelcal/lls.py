@@ -484,7 +484,8 @@ def _bias_lls_lstsq(z, g: float) -> LLSResult:
 def full_lls_batch(z, g: float) -> BatchResult:
     """Full LLS over many trials at once: ``z`` of shape ``(trials, poses, 3)``.
 
-    Trials whose estimate is not an ellipsoid are marked ``valid=False`` and hold NaN.
+    Trials whose estimate is not an ellipsoid are marked ``valid=False``, hold NaN and
+    have the status ``'NotPositiveDefiniteError'`` (what :func:`full_lls` raises).
     The estimate of each trial is that of the SVD (:func:`_full_lls_batch_svd`, the
     reference); the compiled kernel computes it by the certified Gram-matrix route of
     :func:`full_lls` and hands the trials it cannot certify to the SVD.
@@ -506,7 +507,7 @@ def full_lls_batch(z, g: float) -> BatchResult:
     if len(ref):
         r = _full_lls_batch_svd(z[ref], g)
         bias[ref], M[ref], valid[ref] = r.bias, r.M, r.valid
-    return BatchResult(method="full_lls", bias=bias, M=M, valid=valid)
+    return BatchResult(method="full_lls", bias=bias, M=M, valid=valid, status=_status(valid, NotPositiveDefiniteError))
 
 
 def _full_lls_batch_svd(z, g: float) -> BatchResult:
@@ -515,15 +516,22 @@ def _full_lls_batch_svd(z, g: float) -> BatchResult:
     X = design_matrix(z / k[:, None, None])
     _, _, Vt = np.linalg.svd(X, full_matrices=False)
     b, M, _, valid = theta_to_model(Vt[:, -1, :], g / k)
-    return BatchResult(method="full_lls", bias=b * k[:, None], M=M, valid=valid)
+    return BatchResult(method="full_lls", bias=b * k[:, None], M=M, valid=valid,
+                       status=_status(valid, NotPositiveDefiniteError))
+
+
+def _status(valid: np.ndarray, error: type) -> np.ndarray:
+    """``'ok'`` per valid trial, else the name of the error the single-problem estimator raises."""
+    return np.where(valid, "ok", error.__name__)
 
 
 def bias_lls_batch(z, g: float) -> BatchResult:
     """Bias-only LLS over many trials at once: ``z`` of shape ``(trials, poses, 3)``.
 
     Trials whose poses do not determine the bias (singular normal equations) are marked
-    ``valid=False`` and hold NaN.  The compiled kernel solves each trial by the centred
-    normal equations of :func:`bias_lls` and hands the trials whose scatter is not
+    ``valid=False``, hold NaN and have the status ``'DegeneratePosesError'``.  The
+    compiled kernel solves each trial by the centred normal equations of
+    :func:`bias_lls` and hands the trials whose scatter is not
     clearly three-dimensional to the reference (:func:`_bias_lls_batch_normal`).
     """
     K = compiled(_KERNELS)
@@ -544,7 +552,7 @@ def bias_lls_batch(z, g: float) -> BatchResult:
     if len(ref):
         r = _bias_lls_batch_normal(z[ref])
         bias[ref], valid[ref] = r.bias, r.valid
-    return BatchResult(method="bias_lls", bias=bias, M=M, valid=valid)
+    return BatchResult(method="bias_lls", bias=bias, M=M, valid=valid, status=_status(valid, DegeneratePosesError))
 
 
 def _bias_lls_batch_normal(z) -> BatchResult:
@@ -565,4 +573,5 @@ def _bias_lls_batch_normal(z) -> BatchResult:
     if valid.any():
         sol[valid] = np.linalg.solve(HtH[valid], Hty[valid][..., None])[..., 0]
     return BatchResult(method="bias_lls", bias=sol[:, :3] * k[:, None],
-                       M=np.broadcast_to(np.eye(3), (T, 3, 3)).copy(), valid=valid)
+                       M=np.broadcast_to(np.eye(3), (T, 3, 3)).copy(), valid=valid,
+                       status=_status(valid, DegeneratePosesError))
