@@ -420,6 +420,44 @@ def test_auto_loads_numba_for_batches_and_filters_not_for_one_problem():
     assert out.stdout.split() == ["auto", "False", "True", "True"]
 
 
+def test_auto_switches_one_problem_calls_to_the_kernels_after_switch_after_calls():
+    """Under ``auto`` a process's single-problem solves run in numpy up to SWITCH_AFTER
+    calls (of any of them; ALS counts its LLS too), then load the kernels by themselves
+    (numba imported in that call) and run compiled; the forced backends never count."""
+    code = ("import sys, numpy as np\n"
+            "from accelcal import full_lls, bias_lls, full_als, kernels\n"
+            "from accelcal.simulation import random_directions, simulate_poses\n"
+            "kernels.SWITCH_AFTER = 5\n"
+            "rng = np.random.default_rng(0)\n"
+            "z = simulate_poses(random_directions(rng, 24), 9.8, np.eye(3), np.full(3, 0.01), 1e-4, rng)\n"
+            "seen = []\n"
+            "for f in (full_lls, bias_lls, full_als, full_lls, full_lls):\n"
+            "    f(z, 9.8); seen.append('numba' in sys.modules)\n"
+            "print(kernels.choice(), *seen, sorted(kernels._loaded))\n")
+    outs = {}
+    for choice in ("auto", "numpy", "numba"):
+        env = dict(os.environ, ACCELCAL_KERNELS=choice)
+        outs[choice] = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True,
+                                      check=True).stdout.split()
+    # calls 1-2 (full_lls, bias_lls), 3-4 (ALS: its LLS, then itself), 5 (full_lls) in numpy; the sixth loads
+    assert outs["auto"] == ["auto", "False", "False", "False", "False", "True", "['_lls_kernels']"]
+    assert outs["numpy"] == ["numpy", "False", "False", "False", "False", "False", "[]"]
+    assert outs["numba"] == ["numba", "True", "True", "True", "True", "True", "['_lls_kernels']"]
+
+
+def test_the_switch_threshold_is_the_count_of_calls(monkeypatch):
+    """In process: SWITCH_AFTER numpy calls, then the kernels (no clock involved)."""
+    monkeypatch.setattr(kernels, "SWITCH_AFTER", 3)
+    monkeypatch.setattr(kernels, "_loaded", {})
+    kernels.set_backend(None)
+    kernels.set_backend("auto")
+    got = [kernels.compiled("_lls_kernels", single=True) is not None for _ in range(5)]
+    assert got == [False, False, False, True, True]
+    kernels.set_backend(None)  # the count starts again with the choice
+    kernels.set_backend("auto")
+    assert kernels.compiled("_lls_kernels", single=True) is not None  # loaded now: no count needed
+
+
 # ----------------------------------------------------------------------------- discrepancy fits
 def _pose_set(seed, n=30):
     """Raw-count pose means (415 counts per m/s², offset 32768) with a quadratic term, time and

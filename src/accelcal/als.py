@@ -141,6 +141,15 @@ def full_als(z, g: float, noise_std: float | None = None) -> LLSResult:
     -------
     LLSResult
         ``noise_var`` holds the σ² corrected for, in the unit of ``z`` squared.
+
+    Notes
+    -----
+    Speed: with numba installed (``ACCELCAL_KERNELS=auto``, the default) a process's
+    first :data:`accelcal.kernels.SWITCH_AFTER` single-problem solves (this one counts
+    two: it starts from the full LLS) run in numpy (no numba start-up for a one-off
+    calibration); the next one loads the compiled kernels (about 0.5 s once, from
+    numba's disk cache) and every later call runs compiled, several times faster.  ``ACCELCAL_KERNELS=numba`` or ``numpy`` forces either path
+    from the first call; the two agree to rounding.
     """
     # the LLS it corrects validates z and g and raises the same errors (degenerate poses,
     # no ellipsoid) as the LLS would

@@ -19,10 +19,16 @@ Selection, per process (environment variable ``ACCELCAL_KERNELS``, or :func:`set
 * ``auto`` (default): with numba installed, the batched estimators and the filters run
   compiled (numba is imported at their first call); the single-problem estimators
   (:func:`~accelcal.full_lls`, :func:`~accelcal.bias_lls`, :func:`~accelcal.full_als`)
-  run compiled once the kernels are loaded in the process, and in numpy before: numba's
-  start-up (importing it and initialising its compiler, about 0.5 s of CPU) costs more
-  than ten thousand numpy solves, so a one-off calibration (the command line, a
-  bootstrap of a recording) never pays it;
+  start in numpy and switch to the compiled kernels by themselves once the process has
+  made :data:`SWITCH_AFTER` single-problem solves (or as soon as some kernel module is
+  loaded): numba's start-up (importing it and loading the kernels from the disk cache,
+  about 0.5 s) costs as much as that many numpy solves, so a one-off calibration (the
+  command line, a bootstrap of a recording) never pays it, and a process that keeps
+  solving pays it once, in the call that crosses the threshold (the kernels load, or
+  compile if the disk cache is empty, in that call's thread), and then runs about ten
+  times faster (``tools/bench_kernel_crossover.py`` measures the crossover).  The switch
+  depends only on the count of calls, so a process gives the same numbers every time it
+  runs (the two paths agree to rounding, not bit for bit);
 * ``numba``: every estimator and filter compiled (an :class:`ImportError` if numba is
   missing);
 * ``numpy``: the numpy reference implementations only.
@@ -48,9 +54,16 @@ import warnings
 #: Values of ``ACCELCAL_KERNELS``.
 BACKENDS = ("auto", "numpy", "numba")
 
+#: Single-problem solves a process makes in numpy under ``auto`` before it loads the
+#: compiled kernels: about numba's start-up (import and loading the kernels from the disk
+#: cache, ~0.5 s) over the time a compiled solve saves (~30 µs for the full LLS on 24
+#: poses); ``tools/bench_kernel_crossover.py`` measures both.
+SWITCH_AFTER = 10_000
+
 _choice: str | None = None  # auto, numpy or numba: what was asked for
 _backend: str | None = None  # numba or numpy: what runs
 _loaded: dict[str, object] = {}
+_single_calls = 0  # single-problem solves under auto before the kernels were loaded
 _cache_warned = False
 
 
@@ -87,10 +100,11 @@ def _resolve(choice: str) -> str:
 def set_backend(choice: str) -> str | None:
     """Ask for ``choice`` (one of :data:`BACKENDS`); returns the previous choice (None if
     none had been made), which restores it."""
-    global _choice, _backend
+    global _choice, _backend, _single_calls
     previous = _choice
     if choice is None:
         _choice = _backend = None
+        _single_calls = 0
         return previous
     _backend = _resolve(choice)
     _choice = choice
@@ -100,19 +114,21 @@ def set_backend(choice: str) -> str | None:
 def compiled(module: str, single: bool = False):
     """The kernel module ``accelcal.<module>`` if it is to run compiled, else None.
 
-    ``single``: the caller solves one problem; under ``auto`` it gets the kernels only
-    once some kernel module is loaded in this process (see the module docstring).  The
-    module (and numba with it) is imported on the first call; a dictionary lookup after.
+    ``single``: the caller solves one problem; under ``auto`` it gets the kernels once
+    some kernel module is loaded in this process or after :data:`SWITCH_AFTER` such
+    calls (see the module docstring).  The module (and numba with it) is imported on
+    the first call that gets it; a dictionary lookup after.
     """
-    global _backend
+    global _backend, _single_calls
     if _backend != "numba" and backend() != "numba":
         return None
-    try:
-        return _loaded[module]
-    except KeyError:
-        pass
+    mod = _loaded.get(module)
+    if mod is not None:
+        return mod
     if single and _choice == "auto" and not _loaded:
-        return None
+        _single_calls += 1
+        if _single_calls <= SWITCH_AFTER:
+            return None
     try:
         mod = _loaded[module] = importlib.import_module(f"accelcal.{module}")
     except ImportError as exc:  # numba found but not importable (broken install, wrong llvmlite)
@@ -207,4 +223,4 @@ def _one_compiler_at_a_time(dispatcher):
     return dispatcher
 
 
-__all__ = ["BACKENDS", "KERNEL_MODULES", "backend", "choice", "compiled", "jit", "load", "set_backend"]
+__all__ = ["BACKENDS", "KERNEL_MODULES", "SWITCH_AFTER", "backend", "choice", "compiled", "jit", "load", "set_backend"]

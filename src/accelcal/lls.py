@@ -293,6 +293,15 @@ def full_lls(z, g: float) -> LLSResult:
     ------
     TooFewPosesError, DegeneratePosesError, NonFiniteError, InputShapeError,
     NotPositiveDefiniteError
+
+    Notes
+    -----
+    Speed: with numba installed (``ACCELCAL_KERNELS=auto``, the default) a process's
+    first :data:`accelcal.kernels.SWITCH_AFTER` single-problem solves run in numpy (no
+    numba start-up for a one-off calibration); the next one loads the compiled kernels
+    (about 0.5 s once, from numba's disk cache) and every later call runs compiled,
+    about ten times faster.  ``ACCELCAL_KERNELS=numba`` or ``numpy`` forces either path
+    from the first call; the two agree to rounding.
     """
     K = compiled(_KERNELS, single=True)
     if K is not None:
@@ -387,6 +396,15 @@ def bias_lls(z, g: float) -> LLSResult:
     Returns
     -------
     LLSResult
+
+    Notes
+    -----
+    Speed: with numba installed (``ACCELCAL_KERNELS=auto``, the default) a process's
+    first :data:`accelcal.kernels.SWITCH_AFTER` single-problem solves run in numpy (no
+    numba start-up for a one-off calibration); the next one loads the compiled kernels
+    (about 0.5 s once, from numba's disk cache) and every later call runs compiled,
+    several times faster.  ``ACCELCAL_KERNELS=numba`` or ``numpy`` forces either path
+    from the first call; the two agree to rounding.
     """
     K = compiled(_KERNELS, single=True)
     if K is not None:
