@@ -1,8 +1,8 @@
 """Adding an estimator touches one file: this one.  A toy estimator (the bias-only model
 fitted by Gauss-Newton from the algebraic solution, in numpy) and its calibration class
-are defined here and registered; from the registry alone it then passes the conformance
-checks, runs from the command line (``--method bias-gn``), saves and loads its
-calibration file, and runs in the Monte Carlo.  In the package, the same is one module
+are defined here and registered; from the registry alone it then is a name of the
+package (``accelcal.bias_gn``), passes the conformance checks, runs from the command line
+(``--method bias-gn``), saves and loads its calibration file, and runs in the Monte Carlo.  In the package, the same is one module
 (the function and its calibration class) and one entry of ``accelcal.registry``.
 """
 
@@ -65,6 +65,15 @@ def toy():
     register(TOY)
     yield ESTIMATORS["bias_gn"]
     unregister("bias_gn")
+
+
+def test_the_toy_is_a_name_of_the_package(toy):
+    import accelcal
+
+    try:
+        assert accelcal.bias_gn is bias_gn  # from the registry, no list of names edited
+    finally:
+        vars(accelcal).pop("bias_gn", None)
 
 
 @pytest.mark.parametrize("check", CHECKS, ids=lambda c: c.__name__.removeprefix("check_"))
