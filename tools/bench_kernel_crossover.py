@@ -1,7 +1,8 @@
 """Time per call of a single-problem estimator against the calls a process makes: the
 numpy path, the compiled kernels forced (``ACCELCAL_KERNELS=numba``) and the default
-(``auto``, which switches to the kernels after :data:`accelcal.kernels.SWITCH_AFTER`
-calls), side by side in one run.
+(``auto``, which switches to the kernels once its calls would have saved, compiled,
+numba's start-up :data:`accelcal.kernels.STARTUP_S`: about 14 300 full LLS calls),
+side by side in one run.
 
 Every point is a fresh process (as a user's script is): it imports accelcal, makes one
 problem (24 poses by default, Burkhard et al.'s truth ranges, noise 1e-3 m/s²) and
@@ -32,7 +33,7 @@ import subprocess
 import sys
 import tempfile
 
-CALLS = (1, 10, 100, 1000, 3000, 10000, 10001, 20000, 30000, 100000)
+CALLS = (1, 10, 100, 1000, 3000, 10000, 14000, 14300, 20000, 30000, 100000)
 #: Label -> (ACCELCAL_KERNELS, cache).
 PATHS = {"numpy": ("numpy", None), "numba, warm cache": ("numba", "warm"), "numba, cold cache": ("numba", "cold"),
          "auto, warm cache": ("auto", "warm"), "auto, cold cache": ("auto", "cold")}
@@ -138,8 +139,12 @@ def main(argv=None) -> int:
             w.writeheader()
             w.writerows(rows)
     paths = list(PATHS)
+    from accelcal.lls import SAVES_S
+
+    saves = SAVES_S[args.method] + (SAVES_S["full_lls"] if args.method == "full_als" else 0.0)  # ALS runs its LLS
     print(f"{args.method}, {args.poses} poses; median of {args.repeat} fresh processes, numba's import and kernel "
-          f"loading included; auto switches after {kernels.SWITCH_AFTER} calls")
+          f"loading included; auto switches in call {int(-(-kernels.STARTUP_S // saves))} "
+          f"(STARTUP_S {kernels.STARTUP_S} s / {1e6 * saves:.1f} µs saved per call)")
     for column, what in (("cpu_us_per_call", "CPU µs per call"), ("us_per_call", "wall µs per call")):
         med, fig = summary(rows, column)
         print(f"\n{what}\n{'calls':>8}  " + "  ".join(f"{p:>18}" for p in paths))

@@ -91,6 +91,11 @@ _RIGHT[[0, 1, 2, 1, 2, 2, 3, 3, 3, 3], range(10)] = [1.0, 1.0, 1.0, 2.0, 2.0, 2.
 _EYE3 = np.eye(3)
 #: The compiled kernels of this module (:mod:`accelcal._lls_kernels`, via :func:`accelcal.kernels.compiled`).
 _KERNELS = "_lls_kernels"
+#: CPU time a compiled call saves over numpy [s] (24 poses, ``tools/bench_kernel_crossover.py``:
+#: full LLS 37 -> 2.2 µs, bias-only LLS 11.1 -> 2.4 µs, ALS 75.6 -> 18.7 µs of which its
+#: LLS is the full LLS's): what a single-problem call adds towards the switch to the
+#: kernels under ``auto`` (:func:`accelcal.kernels.compiled`).
+SAVES_S = {"full_lls": 35e-6, "bias_lls": 8.7e-6, "full_als": 22e-6}
 _NON_FINITE = "pose measurements contain NaN or infinite values"
 for _constant in (_START, _LEFT, _RIGHT, _EYE3):
     _constant.setflags(write=False)  # shared by every call (LAPACK gets copies)
@@ -296,14 +301,15 @@ def full_lls(z, g: float) -> LLSResult:
 
     Notes
     -----
-    Speed: with numba installed (``ACCELCAL_KERNELS=auto``, the default) a process's
-    first :data:`accelcal.kernels.SWITCH_AFTER` single-problem solves run in numpy (no
-    numba start-up for a one-off calibration); the next one loads the compiled kernels
-    (about 0.5 s once, from numba's disk cache) and every later call runs compiled,
-    about ten times faster.  ``ACCELCAL_KERNELS=numba`` or ``numpy`` forces either path
-    from the first call; the two agree to rounding.
+    Speed: with numba installed (``ACCELCAL_KERNELS=auto``, the default) the calls of a
+    process run in numpy (no numba start-up for a one-off calibration) until they would
+    have saved, compiled, numba's start-up (about 14 000 calls of this function on 24
+    poses; :mod:`accelcal.kernels`); that call loads the compiled kernels (about 0.5 s
+    once, from numba's disk cache) and every later call runs compiled, about 15
+    times faster.  ``ACCELCAL_KERNELS=numba`` or ``numpy`` forces either path from the
+    first call; the two agree to rounding.
     """
-    K = compiled(_KERNELS, single=True)
+    K = compiled(_KERNELS, single=True, saves_s=SAVES_S["full_lls"])
     if K is not None:
         return _full_lls_compiled(K, z, g)
     return _full_lls_numpy(z, g)
@@ -399,14 +405,15 @@ def bias_lls(z, g: float) -> LLSResult:
 
     Notes
     -----
-    Speed: with numba installed (``ACCELCAL_KERNELS=auto``, the default) a process's
-    first :data:`accelcal.kernels.SWITCH_AFTER` single-problem solves run in numpy (no
-    numba start-up for a one-off calibration); the next one loads the compiled kernels
-    (about 0.5 s once, from numba's disk cache) and every later call runs compiled,
-    several times faster.  ``ACCELCAL_KERNELS=numba`` or ``numpy`` forces either path
-    from the first call; the two agree to rounding.
+    Speed: with numba installed (``ACCELCAL_KERNELS=auto``, the default) the calls of a
+    process run in numpy (no numba start-up for a one-off calibration) until they would
+    have saved, compiled, numba's start-up (about 57 000 calls of this function on 24
+    poses; :mod:`accelcal.kernels`); that call loads the compiled kernels (about 0.5 s
+    once, from numba's disk cache) and every later call runs compiled, about 4
+    times faster.  ``ACCELCAL_KERNELS=numba`` or ``numpy`` forces either path from the
+    first call; the two agree to rounding.
     """
-    K = compiled(_KERNELS, single=True)
+    K = compiled(_KERNELS, single=True, saves_s=SAVES_S["bias_lls"])
     if K is not None:
         return _bias_lls_compiled(K, z, g)
     return _bias_lls_numpy(z, g)
