@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 
 from accelcal import kernels
-from accelcal_repro import timing
+from accelcal_repro import first_calls, timing
 from accelcal_repro.cost import headline, plot_cost
 
 BACKENDS = timing.available_backends()
@@ -108,7 +108,7 @@ def test_compile_timing_refuses_unknown_calls():
 def test_first_call_script_names_every_call_and_defines_what_they_use():
     """The script run in fresh processes by compile_timing: its calls are FIRST_CALLS and
     every name they use is defined (checked without running them: that compiles)."""
-    script = timing._FIRST_CALLS
+    script = first_calls.SCRIPT
     head = script[:script.index("wanted = ")]
     namespace = {}
     exec(compile(head.replace("import numba\n", ""), "<first calls>", "exec"), namespace)
@@ -116,10 +116,20 @@ def test_first_call_script_names_every_call_and_defines_what_they_use():
     import builtins
     import dis
 
+    from functools import partial
+
     for name, call in namespace["calls"]:
+        if isinstance(call, partial):  # an estimator's call, from the registry
+            assert call.func.__self__.name == name.split(" ")[0].removesuffix("_batch"), name
+            continue
         used = {i.argval for i in dis.get_instructions(call) if i.opname in ("LOAD_GLOBAL", "LOAD_NAME")}
         missing = sorted(n for n in used if n not in namespace and not hasattr(builtins, n))
         assert not missing, (name, missing)
+    # every registered estimator with a compiled kernel has its first calls timed
+    from accelcal.registry import estimators
+
+    for e in estimators("accelerometer", compiled=True):
+        assert e.name in timing.FIRST_CALLS and e.batch_name in timing.FIRST_CALLS, e.name
 
 
 def _tables():

@@ -9,6 +9,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from accelcal.registry import estimators
 from accelcal.simulation import classic_directions, random_directions, sample_truth, simulate_recording
 
 G = 9.80665
@@ -38,7 +39,7 @@ def session(tmp_path_factory):
     return path, tr, len(u)
 
 
-@pytest.mark.parametrize("method", ["full-lls", "full-als", "full-nlls", "bias-lls", "bias-nlls"])
+@pytest.mark.parametrize("method", [e.cli_name for e in estimators("accelerometer")])
 def test_calibrate_end_to_end(session, tmp_path, method):
     path, tr, n = session
     out = tmp_path / "result.json"

@@ -420,6 +420,57 @@ def test_auto_loads_numba_for_batches_and_filters_not_for_one_problem():
     assert out.stdout.split() == ["auto", "False", "True", "True"]
 
 
+def test_auto_switches_one_problem_calls_to_the_kernels_once_they_would_have_repaid_the_start_up():
+    """Under ``auto`` a process's single-problem solves run in numpy until the time their
+    compiled forms would have saved (accelcal.lls.SAVES_S per call; ALS adds its LLS's)
+    reaches STARTUP_S, then load the kernels by themselves (numba imported in that call)
+    and run compiled; the forced backends start compiled or stay in numpy."""
+    code = ("import sys, numpy as np\n"
+            "from accelcal import full_lls, bias_lls, full_als, kernels, lls\n"
+            "from accelcal.simulation import random_directions, simulate_poses\n"
+            "kernels.STARTUP_S = 3.5 * lls.SAVES_S['full_lls']\n"
+            "rng = np.random.default_rng(0)\n"
+            "z = simulate_poses(random_directions(rng, 24), 9.8, np.eye(3), np.full(3, 0.01), 1e-4, rng)\n"
+            "def run(calls):\n"
+            "    seen = []\n"
+            "    for f in calls:\n"
+            "        f(z, 9.8); seen.append(int('numba' in sys.modules))\n"
+            "    return ''.join(map(str, seen))\n"
+            "print(kernels.choice(), run([WHICH] * 20), sorted(kernels._loaded))\n")
+    outs = {}
+    for choice, which in (("auto", "full_lls"), ("auto", "bias_lls"), ("auto", "full_als"), ("numpy", "full_lls"),
+                          ("numba", "bias_lls")):
+        env = dict(os.environ, ACCELCAL_KERNELS=choice)
+        outs[choice, which] = subprocess.run([sys.executable, "-c", code.replace("WHICH", which)], env=env,
+                                             capture_output=True, text=True, check=True).stdout.split()
+    from accelcal.lls import SAVES_S
+
+    # full LLS: 3 calls in numpy (3 x 35 µs < 3.5 x 35 µs), the 4th loads the kernels
+    assert outs["auto", "full_lls"] == ["auto", "0" * 3 + "1" * 17, "['_lls_kernels']"]
+    # bias-only LLS saves less per call: more calls before the switch
+    n = int(np.ceil(3.5 * SAVES_S["full_lls"] / SAVES_S["bias_lls"]))
+    assert outs["auto", "bias_lls"] == ["auto", "0" * (n - 1) + "1" * (21 - n), "['_lls_kernels']"]
+    # ALS adds its own saving and its LLS's: two calls add 2 x (35 + 22) = 114 µs < 122.5, the third's LLS crosses
+    assert outs["auto", "full_als"] == ["auto", "00" + "1" * 18, "['_lls_kernels']"]
+    assert outs["numpy", "full_lls"] == ["numpy", "0" * 20, "[]"]
+    assert outs["numba", "bias_lls"] == ["numba", "1" * 20, "['_lls_kernels']"]
+
+
+def test_the_switch_adds_up_the_calls_savings_not_a_clock(monkeypatch):
+    """In process: numpy until the savings reach STARTUP_S, then the kernels."""
+    monkeypatch.setattr(kernels, "STARTUP_S", 3.0)
+    monkeypatch.setattr(kernels, "_loaded", {})
+    kernels.set_backend(None)
+    kernels.set_backend("auto")
+    got = [kernels.compiled("_lls_kernels", single=True, saves_s=1.0) is not None for _ in range(5)]
+    assert got == [False, False, True, True, True]  # 1, 2 < 3; the third reaches it
+    assert kernels.compiled("_lls_kernels") is not None  # batched callers: at once
+    kernels.set_backend(None)  # the sum starts again with the choice
+    kernels.set_backend("auto")
+    monkeypatch.setattr(kernels, "_loaded", {})
+    assert kernels.compiled("_lls_kernels", single=True) is None  # a caller that saves nothing never switches
+
+
 # ----------------------------------------------------------------------------- discrepancy fits
 def _pose_set(seed, n=30):
     """Raw-count pose means (415 counts per m/s², offset 32768) with a quadratic term, time and

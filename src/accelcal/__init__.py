@@ -3,6 +3,9 @@ beyond) from static poses, with the closed forms of Burkhard et al. (2024), a co
 (ALS) correction, an iterative CasADi/IPOPT baseline and the Cramér–Rao bound.
 
 >>> from accelcal import full_lls, bias_lls, full_nlls, bias_nlls
+>>> from accelcal import ESTIMATORS        # the registry: every estimator and what it needs
+>>> ESTIMATORS["full_lls"].min_poses
+10
 
 Names are loaded on first use (module ``__getattr__``, PEP 562): ``import accelcal``
 imports neither numpy nor scipy, casadi, pandas or numba, so that the command line
@@ -34,14 +37,22 @@ from .errors import (
     TooFewPosesError,
 )
 
+from .registry import ESTIMATORS
+
 __version__ = "0.1.0"
 
-#: Public name -> submodule that defines it (imported on first access).
+
+def _estimator_functions() -> dict[str, str]:
+    """Public name -> ``'module:function'`` of every registered estimator and of its
+    batched form (the registry is the one list of them)."""
+    return {path.partition(":")[2]: path for e in ESTIMATORS.values() for path in (e.function, e.batch) if path}
+
+
+#: Public name -> submodule that defines it (imported on first access); the estimators
+#: come from the registry (:func:`_estimator_functions`).
 _LAZY = {
-    "full_als": "als",
-    "bias_lls": "lls", "bias_lls_batch": "lls", "full_lls": "lls", "full_lls_batch": "lls",
     "m_from_params": "model", "params_from_m": "model",
-    "bias_nlls": "nlls", "full_nlls": "nlls", "nlls_batch": "nlls",
+    "nlls_batch": "nlls",
     "BatchResult": "results", "CalibrationResult": "results", "LLSResult": "results", "NLLSResult": "results",
     "CramerRaoBound": "uncertainty", "crlb": "uncertainty", "crlb_mean": "uncertainty",
     "Calibration": "calibration", "calibrate_recording": "calibration", "load_calibration": "calibration",
@@ -50,12 +61,12 @@ _LAZY = {
 
 
 def __getattr__(name: str):
+    functions = _estimator_functions()
     if name in _LAZY:
         value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
-    elif name == "ESTIMATORS":  # estimator functions by the CLI's names, from the one registry
-        from .registry import ESTIMATORS as registry
-
-        value = {e.cli_name: e.load() for e in registry.values()}
+    elif name in functions:
+        module, _, attr = functions[name].partition(":")
+        value = getattr(importlib.import_module(module), attr)
     else:
         try:  # a submodule: accelcal.nlls, accelcal.batista, ...
             value = importlib.import_module(f".{name}", __name__)
@@ -71,7 +82,7 @@ def __dir__():
     return sorted(set(globals()) | set(__all__))
 
 
-__all__ = [
+__all__ = sorted([
     "ESTIMATORS",
     "Calibration",
     "calibrate_recording",
@@ -90,16 +101,10 @@ __all__ = [
     "NotPositiveDefiniteError",
     "RecordingError",
     "TooFewPosesError",
-    "bias_lls",
-    "bias_lls_batch",
-    "bias_nlls",
     "crlb",
     "crlb_mean",
-    "full_als",
-    "full_lls",
-    "full_lls_batch",
-    "full_nlls",
     "m_from_params",
     "nlls_batch",
     "params_from_m",
-]
+    *_estimator_functions(),
+])

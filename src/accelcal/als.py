@@ -28,8 +28,8 @@ import numpy as np
 
 from .errors import AccelcalError, NonFiniteError, NotPositiveDefiniteError
 from .kernels import compiled
-from .lls import (_KERNELS, EIGVEC_TOL, MIN_GAP, _float_or_nan, _scale_single, _theta_to_model_single, full_lls,
-                  normal_matrix)
+from .lls import (_KERNELS, EIGVEC_TOL, MIN_GAP, SAVES_S, _float_or_nan, _scale_single, _theta_to_model_single,
+                  full_lls, normal_matrix)
 from .results import BatchResult, LLSResult
 from .validation import check_finite, check_g, pose_array
 
@@ -141,11 +141,21 @@ def full_als(z, g: float, noise_std: float | None = None) -> LLSResult:
     -------
     LLSResult
         ``noise_var`` holds the σ² corrected for, in the unit of ``z`` squared.
+
+    Notes
+    -----
+    Speed: with numba installed (``ACCELCAL_KERNELS=auto``, the default) the calls of a
+    process run in numpy (no numba start-up for a one-off calibration) until they would
+    have saved, compiled, numba's start-up (about 9 000 calls of this function on 24
+    poses; :mod:`accelcal.kernels`); that call loads the compiled kernels (about 0.5 s
+    once, from numba's disk cache) and every later call runs compiled, about 4
+    times faster.  ``ACCELCAL_KERNELS=numba`` or ``numpy`` forces either path from the
+    first call; the two agree to rounding.
     """
     # the LLS it corrects validates z and g and raises the same errors (degenerate poses,
     # no ellipsoid) as the LLS would
     lls = full_lls(z, g)
-    K = compiled(_KERNELS, single=True)
+    K = compiled(_KERNELS, single=True, saves_s=SAVES_S["full_als"])
     if K is not None:
         return _full_als_compiled(K, lls.poses, lls.g, noise_std)
     return _full_als_numpy(lls.poses, lls.g, noise_std)

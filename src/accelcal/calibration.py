@@ -16,6 +16,11 @@ class                       ``cal_type``      made by
                                               effects (``accelcal discrepancy``'s report)
 ==========================  ================  =============================================
 
+A class declares its method-specific keys once, as its own dataclass fields;
+:func:`calibrate_poses` fills them from the estimator result's attributes of the same
+names, and a file's class is found from its ``cal_type`` among the subclasses
+(:func:`calibration_class`), so a new estimator's class needs no table here.
+
 Apply.  :meth:`Calibration.apply` turns raw samples into calibrated specific force in
 m/s²: ``y = M⁻¹(z - b - β Δt - γ ΔT)``, then per axis ``P_j(x_j) = y_j`` solved for
 ``x_j`` (Newton; exact at once without polynomial effects), with ``Δt = t - t_ref`` and
@@ -403,10 +408,38 @@ class ExtendedCalibration(Calibration):
     base_effects_named: tuple[str, ...] = ()
 
 
-#: ``cal_type`` → class.
-CALIBRATION_CLASSES: dict[str, type[Calibration]] = {c.CAL_TYPE: c for c in (
-    FullLLSCalibration, FullALSCalibration, FullNLLSCalibration, BiasLLSCalibration, BiasNLLSCalibration,
-    ExtendedCalibration)}
+def calibration_class(cal_type: str) -> type[Calibration]:
+    """The :class:`Calibration` subclass whose own ``CAL_TYPE`` is ``cal_type``.
+
+    Found by walking the subclasses (as imucal's ``CalibrationInfo``), after importing the
+    class the registry names for that estimator, so that a class defined anywhere (a
+    registered estimator's module, a user's script) loads its files.
+
+    Raises
+    ------
+    CalibrationFileError
+        No such class (the message lists the known types).
+    """
+    if cal_type in ESTIMATORS:
+        ESTIMATORS[cal_type].load_calibration()
+    for cls in _subclasses(Calibration):
+        if cls.__dict__.get("CAL_TYPE") == cal_type:
+            return cls
+    known = [c.CAL_TYPE for c in _all_calibration_classes()]
+    raise CalibrationFileError(f"unknown calibration type {cal_type!r}; known: {', '.join(known)}")
+
+
+def _subclasses(cls):
+    for sub in cls.__subclasses__():
+        yield sub
+        yield from _subclasses(sub)
+
+
+def _all_calibration_classes() -> list[type[Calibration]]:
+    """Every subclass that declares a ``CAL_TYPE`` (the registered estimators' imported first)."""
+    for e in ESTIMATORS.values():
+        e.load_calibration()
+    return [c for c in _subclasses(Calibration) if "CAL_TYPE" in c.__dict__]
 
 
 # --------------------------------------------------------------------------- loading
@@ -444,10 +477,7 @@ def _from_dict(d, source: str) -> Calibration:
             raise CalibrationFileError(f"{source}: calibration format {version} is newer than this accelcal reads "
                                        f"({FORMAT_VERSION}); upgrade accelcal")
         cal_type = d.get("cal_type") or str(d.get("method", "")).replace("-", "_")
-        cls = CALIBRATION_CLASSES.get(cal_type)
-        if cls is None:
-            raise CalibrationFileError(f"{source}: unknown calibration type {cal_type!r}; known: "
-                                       f"{', '.join(CALIBRATION_CLASSES)}")
+        cls = calibration_class(cal_type)
         return cls(**_common(d, version), **_method_values(cls, d))
     except CalibrationFileError as e:
         if str(e).startswith(source):
@@ -473,8 +503,8 @@ def _common(d: dict, version: int) -> dict:
         poses["n_samples"] = poses["n_samples"].astype(int)
     known = {"format", "format_version", "cal_type", "method", "model", "g", "n_poses", "bias", "M", "scale_factors",
              "nonorthogonality_deg", "gain", "residual_rms", "residuals", "standard_errors", "standard_errors_noise",
-             "unit", "units", "input", "effects", "quality", "poses", "singular_values", "lam", "c", "noise_var",
-             "noise_source", "status", "iterations", "cost", "base_effects_named"}
+             "unit", "units", "input", "effects", "quality", "poses"}
+    known |= {k for c in _all_calibration_classes() for k in c._method_field_names()}
     return {
         "bias": _arr(d["bias"]), "M": _arr(d["M"]), "g": float(d["g"]), "unit": unit,
         "input_offset": _arr(inp.get("offset", [0.0] * 3)),
@@ -560,12 +590,6 @@ def _covariate(values, n: int, name: str, terms, kind: str):
 # --------------------------------------------------------------------------- calibrating
 
 
-#: The estimator result's extra attributes each calibration class keeps.
-_RESULT_FIELDS = {"full_lls": ("lam", "singular_values"), "full_als": ("lam", "noise_var", "singular_values"),
-                  "full_nlls": ("status", "iterations", "cost"), "bias_lls": ("c", "singular_values"),
-                  "bias_nlls": ("status", "iterations", "cost")}
-
-
 def pose_noise_std(mean_std) -> float:
     """One noise level for the pose means: the RMS of their per-axis standard errors.
 
@@ -622,15 +646,17 @@ def calibrate_poses(poses, g: float, method: str = "full_lls", *, unit: str | No
     except (DegeneratePosesError, NotPositiveDefiniteError, NotConvergedError) as e:
         raise _orientation_cause(e, z, est) from None
     quality, se_noise = assess(z, se, r.M, r.bias, r.residuals, est.n_parameters, est.model, est.min_poses)
-    extra = {k: getattr(r, k) for k in _RESULT_FIELDS[est.name]}
-    if "noise_source" in CALIBRATION_CLASSES[est.name]._method_field_names():
+    cls = est.load_calibration()
+    # the class's own fields, declared once there, taken from the estimator's result
+    extra = {k: getattr(r, k) for k in cls._method_field_names() if hasattr(r, k)}
+    if "noise_source" in cls._method_field_names():
         extra["noise_source"] = "rests: RMS of the pose-mean standard errors"
     labels = getattr(poses, "labels", None)
     pose_table = {"t_start": poses.t_start, "t_end": poses.t_end, "mean": z, "mean_std": se,
                   "n_samples": poses.n_samples, "temp": poses.temp}
     if labels is not None:
         pose_table["labels"] = list(labels)
-    return CALIBRATION_CLASSES[est.name](
+    return cls(
         bias=r.bias, M=r.M, g=float(g), unit=fit_unit, input_offset=offset, input_sensitivity=sens,
         input_unit=input_unit,
         standard_errors=dict(r.standard_errors), standard_errors_noise=se_noise, quality=quality,
@@ -755,7 +781,7 @@ def _jsonable(v):
     return v
 
 
-__all__ = ["APPLICABLE_EFFECTS", "BiasLLSCalibration", "BiasNLLSCalibration", "CALIBRATION_CLASSES", "Calibration",
-           "CalibrationFileError", "EffectTerm", "ExtendedCalibration", "FORMAT", "FORMAT_VERSION",
-           "FullALSCalibration", "FullLLSCalibration", "FullNLLSCalibration", "calibrate_poses",
-           "calibrate_recording", "load_calibration", "pose_noise_std"]
+__all__ = ["APPLICABLE_EFFECTS", "BiasLLSCalibration", "BiasNLLSCalibration", "Calibration", "CalibrationFileError",
+           "EffectTerm", "ExtendedCalibration", "FORMAT", "FORMAT_VERSION", "FullALSCalibration", "FullLLSCalibration",
+           "FullNLLSCalibration", "calibrate_poses", "calibrate_recording", "calibration_class", "load_calibration",
+           "pose_noise_std"]

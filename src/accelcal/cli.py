@@ -20,7 +20,7 @@ from . import __version__
 from .effects import EFFECT_IDS, TIME, effect
 from .errors import AccelcalError
 from .formats.registry import FORMATS, formats_help
-from .registry import ESTIMATORS
+from .registry import ESTIMATORS, estimators
 
 STANDARD_GRAVITY = 9.80665
 
@@ -80,7 +80,7 @@ writes the calibrated ax, ay, az in m/s^2 (and temp, if present).
 
 
 def _methods_help() -> str:
-    return "\n".join(f"  {e.cli_name:<10} {e.description}, >= {e.min_poses} poses" for e in ESTIMATORS.values())
+    return "\n".join(f"  {e.cli_name:<10} {e.description}, >= {e.min_poses} poses" for e in estimators("accelerometer"))
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -171,7 +171,7 @@ def _parser() -> argparse.ArgumentParser:
     c.add_argument("recording", type=Path, help="the recording (see 'input' below)")
     c.add_argument("--g", type=_gravity, default=None,
                    help=f"local gravity magnitude [m/s^2] (default {STANDARD_GRAVITY}, standard gravity)")
-    c.add_argument("--method", choices=[e.cli_name for e in ESTIMATORS.values()], default="full-lls",
+    c.add_argument("--method", choices=[e.cli_name for e in estimators("accelerometer")], default="full-lls",
                    help="estimator (default full-lls)")
     c.add_argument("--out", type=Path, required=True, help="calibration JSON (written only on success)")
     c.add_argument("--figures", type=Path, default=None, metavar="DIR",

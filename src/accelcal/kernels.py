@@ -19,10 +19,18 @@ Selection, per process (environment variable ``ACCELCAL_KERNELS``, or :func:`set
 * ``auto`` (default): with numba installed, the batched estimators and the filters run
   compiled (numba is imported at their first call); the single-problem estimators
   (:func:`~accelcal.full_lls`, :func:`~accelcal.bias_lls`, :func:`~accelcal.full_als`)
-  run compiled once the kernels are loaded in the process, and in numpy before: numba's
-  start-up (importing it and initialising its compiler, about 0.5 s of CPU) costs more
-  than ten thousand numpy solves, so a one-off calibration (the command line, a
-  bootstrap of a recording) never pays it;
+  start in numpy and switch to the compiled kernels by themselves (or as soon as some
+  kernel module is loaded) once their calls in the process would have saved, compiled,
+  numba's start-up (:data:`STARTUP_S`: importing it and loading the kernels from the
+  disk cache, about 0.5 s): each call adds the time its compiled form saves
+  (:data:`accelcal.lls.SAVES_S`), which makes about 14 000 full LLS, 9 000 ALS or
+  57 000 bias-only LLS calls on 24 poses.  A one-off calibration (the command line, a
+  bootstrap of a recording) never pays the start-up; a process that keeps solving pays
+  it once, in the call that crosses the threshold (the kernels load, or compile if the
+  disk cache is empty, in that call's thread), and then runs 4-16 times faster
+  (``tools/bench_kernel_crossover.py`` measures the crossover).  The switch depends on
+  the calls made, not on a clock, so a process gives the same numbers every time it runs
+  (the two paths agree to rounding, not bit for bit);
 * ``numba``: every estimator and filter compiled (an :class:`ImportError` if numba is
   missing);
 * ``numpy``: the numpy reference implementations only.
@@ -48,9 +56,16 @@ import warnings
 #: Values of ``ACCELCAL_KERNELS``.
 BACKENDS = ("auto", "numpy", "numba")
 
+#: numba's start-up in a process [s] (import, and loading the kernels of one module from
+#: the disk cache): under ``auto`` the single-problem estimators switch to the compiled
+#: kernels once the time their compiled forms would have saved reaches it (measured
+#: 0.42-0.50 s of CPU by ``tools/bench_kernel_crossover.py``).
+STARTUP_S = 0.5
+
 _choice: str | None = None  # auto, numpy or numba: what was asked for
 _backend: str | None = None  # numba or numpy: what runs
 _loaded: dict[str, object] = {}
+_forgone_s = 0.0  # time the compiled kernels would have saved the single-problem calls so far
 _cache_warned = False
 
 
@@ -87,32 +102,36 @@ def _resolve(choice: str) -> str:
 def set_backend(choice: str) -> str | None:
     """Ask for ``choice`` (one of :data:`BACKENDS`); returns the previous choice (None if
     none had been made), which restores it."""
-    global _choice, _backend
+    global _choice, _backend, _forgone_s
     previous = _choice
     if choice is None:
         _choice = _backend = None
+        _forgone_s = 0.0
         return previous
     _backend = _resolve(choice)
     _choice = choice
     return previous
 
 
-def compiled(module: str, single: bool = False):
+def compiled(module: str, single: bool = False, saves_s: float = 0.0):
     """The kernel module ``accelcal.<module>`` if it is to run compiled, else None.
 
-    ``single``: the caller solves one problem; under ``auto`` it gets the kernels only
-    once some kernel module is loaded in this process (see the module docstring).  The
-    module (and numba with it) is imported on the first call; a dictionary lookup after.
+    ``single``: the caller solves one problem, which a compiled call makes ``saves_s``
+    seconds faster; under ``auto`` it gets the kernels once some kernel module is loaded
+    in this process, or once such calls have added up :data:`STARTUP_S` (see the module
+    docstring).  The module (and numba with it) is imported on the first call that gets
+    it; a dictionary lookup after.
     """
-    global _backend
+    global _backend, _forgone_s
     if _backend != "numba" and backend() != "numba":
         return None
-    try:
-        return _loaded[module]
-    except KeyError:
-        pass
+    mod = _loaded.get(module)
+    if mod is not None:
+        return mod
     if single and _choice == "auto" and not _loaded:
-        return None
+        _forgone_s += saves_s
+        if _forgone_s < STARTUP_S:
+            return None
     try:
         mod = _loaded[module] = importlib.import_module(f"accelcal.{module}")
     except ImportError as exc:  # numba found but not importable (broken install, wrong llvmlite)
@@ -207,4 +226,4 @@ def _one_compiler_at_a_time(dispatcher):
     return dispatcher
 
 
-__all__ = ["BACKENDS", "KERNEL_MODULES", "backend", "choice", "compiled", "jit", "load", "set_backend"]
+__all__ = ["BACKENDS", "KERNEL_MODULES", "STARTUP_S", "backend", "choice", "compiled", "jit", "load", "set_backend"]

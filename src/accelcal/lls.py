@@ -91,6 +91,11 @@ _RIGHT[[0, 1, 2, 1, 2, 2, 3, 3, 3, 3], range(10)] = [1.0, 1.0, 1.0, 2.0, 2.0, 2.
 _EYE3 = np.eye(3)
 #: The compiled kernels of this module (:mod:`accelcal._lls_kernels`, via :func:`accelcal.kernels.compiled`).
 _KERNELS = "_lls_kernels"
+#: CPU time a compiled call saves over numpy [s] (24 poses, ``tools/bench_kernel_crossover.py``:
+#: full LLS 37 -> 2.2 µs, bias-only LLS 11.1 -> 2.4 µs, ALS 75.6 -> 18.7 µs of which its
+#: LLS is the full LLS's): what a single-problem call adds towards the switch to the
+#: kernels under ``auto`` (:func:`accelcal.kernels.compiled`).
+SAVES_S = {"full_lls": 35e-6, "bias_lls": 8.7e-6, "full_als": 22e-6}
 _NON_FINITE = "pose measurements contain NaN or infinite values"
 for _constant in (_START, _LEFT, _RIGHT, _EYE3):
     _constant.setflags(write=False)  # shared by every call (LAPACK gets copies)
@@ -293,8 +298,18 @@ def full_lls(z, g: float) -> LLSResult:
     ------
     TooFewPosesError, DegeneratePosesError, NonFiniteError, InputShapeError,
     NotPositiveDefiniteError
+
+    Notes
+    -----
+    Speed: with numba installed (``ACCELCAL_KERNELS=auto``, the default) the calls of a
+    process run in numpy (no numba start-up for a one-off calibration) until they would
+    have saved, compiled, numba's start-up (about 14 000 calls of this function on 24
+    poses; :mod:`accelcal.kernels`); that call loads the compiled kernels (about 0.5 s
+    once, from numba's disk cache) and every later call runs compiled, about 15
+    times faster.  ``ACCELCAL_KERNELS=numba`` or ``numpy`` forces either path from the
+    first call; the two agree to rounding.
     """
-    K = compiled(_KERNELS, single=True)
+    K = compiled(_KERNELS, single=True, saves_s=SAVES_S["full_lls"])
     if K is not None:
         return _full_lls_compiled(K, z, g)
     return _full_lls_numpy(z, g)
@@ -387,8 +402,18 @@ def bias_lls(z, g: float) -> LLSResult:
     Returns
     -------
     LLSResult
+
+    Notes
+    -----
+    Speed: with numba installed (``ACCELCAL_KERNELS=auto``, the default) the calls of a
+    process run in numpy (no numba start-up for a one-off calibration) until they would
+    have saved, compiled, numba's start-up (about 57 000 calls of this function on 24
+    poses; :mod:`accelcal.kernels`); that call loads the compiled kernels (about 0.5 s
+    once, from numba's disk cache) and every later call runs compiled, about 4
+    times faster.  ``ACCELCAL_KERNELS=numba`` or ``numpy`` forces either path from the
+    first call; the two agree to rounding.
     """
-    K = compiled(_KERNELS, single=True)
+    K = compiled(_KERNELS, single=True, saves_s=SAVES_S["bias_lls"])
     if K is not None:
         return _bias_lls_compiled(K, z, g)
     return _bias_lls_numpy(z, g)
@@ -484,7 +509,8 @@ def _bias_lls_lstsq(z, g: float) -> LLSResult:
 def full_lls_batch(z, g: float) -> BatchResult:
     """Full LLS over many trials at once: ``z`` of shape ``(trials, poses, 3)``.
 
-    Trials whose estimate is not an ellipsoid are marked ``valid=False`` and hold NaN.
+    Trials whose estimate is not an ellipsoid are marked ``valid=False``, hold NaN and
+    have the status ``'NotPositiveDefiniteError'`` (what :func:`full_lls` raises).
     The estimate of each trial is that of the SVD (:func:`_full_lls_batch_svd`, the
     reference); the compiled kernel computes it by the certified Gram-matrix route of
     :func:`full_lls` and hands the trials it cannot certify to the SVD.
@@ -506,7 +532,7 @@ def full_lls_batch(z, g: float) -> BatchResult:
     if len(ref):
         r = _full_lls_batch_svd(z[ref], g)
         bias[ref], M[ref], valid[ref] = r.bias, r.M, r.valid
-    return BatchResult(method="full_lls", bias=bias, M=M, valid=valid)
+    return BatchResult(method="full_lls", bias=bias, M=M, valid=valid, status=_status(valid, NotPositiveDefiniteError))
 
 
 def _full_lls_batch_svd(z, g: float) -> BatchResult:
@@ -515,15 +541,22 @@ def _full_lls_batch_svd(z, g: float) -> BatchResult:
     X = design_matrix(z / k[:, None, None])
     _, _, Vt = np.linalg.svd(X, full_matrices=False)
     b, M, _, valid = theta_to_model(Vt[:, -1, :], g / k)
-    return BatchResult(method="full_lls", bias=b * k[:, None], M=M, valid=valid)
+    return BatchResult(method="full_lls", bias=b * k[:, None], M=M, valid=valid,
+                       status=_status(valid, NotPositiveDefiniteError))
+
+
+def _status(valid: np.ndarray, error: type) -> np.ndarray:
+    """``'ok'`` per valid trial, else the name of the error the single-problem estimator raises."""
+    return np.where(valid, "ok", error.__name__)
 
 
 def bias_lls_batch(z, g: float) -> BatchResult:
     """Bias-only LLS over many trials at once: ``z`` of shape ``(trials, poses, 3)``.
 
     Trials whose poses do not determine the bias (singular normal equations) are marked
-    ``valid=False`` and hold NaN.  The compiled kernel solves each trial by the centred
-    normal equations of :func:`bias_lls` and hands the trials whose scatter is not
+    ``valid=False``, hold NaN and have the status ``'DegeneratePosesError'``.  The
+    compiled kernel solves each trial by the centred normal equations of
+    :func:`bias_lls` and hands the trials whose scatter is not
     clearly three-dimensional to the reference (:func:`_bias_lls_batch_normal`).
     """
     K = compiled(_KERNELS)
@@ -544,7 +577,7 @@ def bias_lls_batch(z, g: float) -> BatchResult:
     if len(ref):
         r = _bias_lls_batch_normal(z[ref])
         bias[ref], valid[ref] = r.bias, r.valid
-    return BatchResult(method="bias_lls", bias=bias, M=M, valid=valid)
+    return BatchResult(method="bias_lls", bias=bias, M=M, valid=valid, status=_status(valid, DegeneratePosesError))
 
 
 def _bias_lls_batch_normal(z) -> BatchResult:
@@ -565,4 +598,5 @@ def _bias_lls_batch_normal(z) -> BatchResult:
     if valid.any():
         sol[valid] = np.linalg.solve(HtH[valid], Hty[valid][..., None])[..., 0]
     return BatchResult(method="bias_lls", bias=sol[:, :3] * k[:, None],
-                       M=np.broadcast_to(np.eye(3), (T, 3, 3)).copy(), valid=valid)
+                       M=np.broadcast_to(np.eye(3), (T, 3, 3)).copy(), valid=valid,
+                       status=_status(valid, DegeneratePosesError))

@@ -7,8 +7,9 @@ and g as parameters, so that repeated calls (Monte Carlo, timing) pay only the s
 
 The data are divided by ``k = sqrt(mean ||z||²)`` as in the closed forms and the
 residuals by g, so that IPOPT sees O(1) numbers whatever the unit.  A solve that IPOPT does not report as converged
-raises :class:`NotConvergedError` (or, in :func:`nlls_batch`, is recorded with its
-status and NaN estimates).
+raises :class:`NotConvergedError` (or, in the batched forms :func:`full_nlls_batch`,
+:func:`bias_nlls_batch` and :func:`nlls_batch`, is recorded with its status and NaN
+estimates).
 
 Stopping rule (a fair baseline stops at the accuracy the problem needs).  IPOPT stops
 when the gradient of the scaled cost is below ``tol``; what is left of the error is
@@ -34,7 +35,7 @@ import numpy as np
 
 from .errors import InputShapeError, NotConvergedError
 from .model import m_from_params_single
-from .results import NLLSResult
+from .results import BatchResult, NLLSResult
 from .validation import check_g, check_poses
 
 #: IPOPT statuses accepted as converged.
@@ -233,3 +234,19 @@ def nlls_batch(z, g: float, model: str, noise_std: float | None = None) -> dict[
         if status in CONVERGED:
             out["bias"][i], out["M"][i], out["valid"][i] = b, M, True
     return out
+
+
+def full_nlls_batch(z, g: float, noise_std: float | None = None) -> BatchResult:
+    """:func:`full_nlls` over trials ``z`` (T, n, 3) (:func:`nlls_batch`): ``status`` is
+    IPOPT's return status of each trial, ``iterations`` its iteration count."""
+    return _batch_result(nlls_batch(z, g, "full", noise_std=noise_std), "full_nlls")
+
+
+def bias_nlls_batch(z, g: float, noise_std: float | None = None) -> BatchResult:
+    """:func:`bias_nlls` over trials ``z`` (T, n, 3), as :func:`full_nlls_batch`."""
+    return _batch_result(nlls_batch(z, g, "bias", noise_std=noise_std), "bias_nlls")
+
+
+def _batch_result(out: dict, method: str) -> BatchResult:
+    return BatchResult(method=method, bias=out["bias"], M=out["M"], valid=out["valid"],
+                       status=out["status"].astype(str), iterations=out["iterations"])

@@ -173,12 +173,13 @@ class NLLSResult(CalibrationResult):
 
 @dataclass(frozen=True)
 class BatchResult:
-    """Batched closed-form estimates over many trials (Monte Carlo).
+    """Batched estimates over many trials (Monte Carlo).
 
     ``valid`` marks trials where the estimator produced a model (for the full LLS:
     Ŝ positive definite and λ > 0); invalid trials hold NaN, never a number.
-    ``status`` (estimators that record why a trial failed, e.g. ALS): ``'ok'`` or the
-    name of the error the single-problem estimator raised on that trial.
+    ``status`` per trial: ``'ok'`` or the name of the error the single-problem
+    estimator raises on that trial (the iterative ones: IPOPT's return status).
+    ``iterations``: the solver's iterations per trial (iterative estimators; else None).
     """
 
     method: str
@@ -186,3 +187,4 @@ class BatchResult:
     M: np.ndarray  # (T, 3, 3)
     valid: np.ndarray  # (T,) bool
     status: np.ndarray | None = None  # (T,) str
+    iterations: np.ndarray | None = None  # (T,) int

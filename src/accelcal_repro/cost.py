@@ -18,22 +18,27 @@ import numpy as np
 import pandas as pd
 
 from accelcal.plotting import RC, style
+from accelcal import registry
 
 from .timing import preferred_backend
 
-#: Headline quantities: (name, table, selector, column, unit, goal key, goal is a minimum).
-_ESTIMATOR_HEADLINES = (
-    ("full LLS, one problem", "single", "full_lls", "median_s", "µs", None, None),
-    ("bias-only LLS, one problem", "single", "bias_lls", "median_s", "µs", None, None),
-    ("full ALS, one problem (noise known)", "single", "full_als", "median_s", "µs", None, None),
-    ("full NLLS, one problem", "single", "full_nlls", "median_s", "µs", None, None),
-    ("bias-only NLLS, one problem", "single", "bias_nlls", "median_s", "µs", None, None),
-    ("speed-up full NLLS / full LLS", "single", "full_lls", "speedup_median", "×", "full_lls_speedup", True),
-    ("speed-up bias-only NLLS / bias-only LLS", "single", "bias_lls", "speedup_median", "×", "bias_lls_speedup", True),
-    ("batched full LLS", "batch", "full_lls_batch", "problems_per_s", "problems/s", "full_lls_batch_per_s", True),
-    ("batched bias-only LLS", "batch", "bias_lls_batch", "problems_per_s", "problems/s", "bias_lls_batch_per_s", True),
-    ("batched full ALS", "batch", "full_als_batch", "problems_per_s", "problems/s", None, None),
-)
+def _estimator_headlines(goals: Mapping[str, float]) -> list[tuple]:
+    """Headline quantities of the registry's estimators: (name, table, selector, column,
+    unit, goal key, goal is a minimum).  The time of every estimator on one problem (closed
+    forms first, those without a noise level before the others); the speed-up over its
+    baseline of each estimator with a goal for it (``<name>_speedup``); the throughput of
+    every closed form's batched form (goal ``<name>_batch_per_s``)."""
+    timed = sorted(registry.estimators("accelerometer"), key=lambda e: (e.family != "closed_form", e.needs_noise))
+    rows = [(f"{e.label}, one problem" + (" (noise known)" if e.noise_use == "correction" else ""), "single",
+             e.name, "median_s", "µs", None, None) for e in timed]
+    rows += [(f"speed-up {registry.ESTIMATORS[e.baseline].label} / {e.label}", "single", e.name, "speedup_median", "×",
+              f"{e.name}_speedup", True) for e in timed if e.baseline and f"{e.name}_speedup" in goals]
+    rows += [(f"batched {e.label}", "batch", e.batch_name, "problems_per_s", "problems/s",
+              f"{e.batch_name}_per_s" if f"{e.batch_name}_per_s" in goals else None, True)
+             for e in timed if e.batch and e.family == "closed_form"]
+    return rows
+
+
 _FILTER_HEADLINES = (
     ("Batista filter (own covariance), one run", "batista", "kalman_filter", "us_per_step", "batista_us_per_step"),
     ("Batista shared-gain Monte Carlo, per run", "batista", "shared_gain", "us_per_run_step", None),
@@ -53,7 +58,7 @@ def headline(estimators: pd.DataFrame, filters: pd.DataFrame, compile_times: pd.
     measures the code."""
     rows = []
     t = estimators if "backend" in estimators else estimators.assign(backend="")
-    for name, mode, method, col, unit, goal, at_least in _ESTIMATOR_HEADLINES:
+    for name, mode, method, col, unit, goal, at_least in _estimator_headlines(goals):
         d = t[(t["mode"] == mode) & (t["method"] == method) & (t["n_poses"] == n_poses)]
         if mode == "single":
             d = d[d["interleave"] == interleave]
@@ -112,9 +117,9 @@ def plot_cost(estimators: pd.DataFrame, filters: pd.DataFrame, compile_times: pd
         single = t[(t["mode"] == "single") & (t["interleave"] == interleave)]
         batch = t[t["mode"] == "batch"]
         methods = []
-        for m, rows, batched in [(m, single, False) for m in ("full_lls", "full_als", "full_nlls", "bias_lls",
-                                                             "bias_nlls")] + \
-                                [(m, batch, True) for m in ("full_lls_batch", "full_als_batch", "bias_lls_batch")]:
+        timed = registry.estimators("accelerometer")
+        for m, rows, batched in [(e.name, single, False) for e in timed] + \
+                                [(e.batch_name, batch, True) for e in timed if e.batch and e.family == "closed_form"]:
             for be in sorted(set(rows.loc[rows["method"] == m, "backend"])):
                 d = rows[(rows["method"] == m) & (rows["backend"] == be)].sort_values("n_poses")
                 st = style(m)

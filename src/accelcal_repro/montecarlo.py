@@ -43,26 +43,23 @@ import struct
 import time
 import zlib
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from functools import partial
 
 import numpy as np
 import pandas as pd
 
-from accelcal.als import full_als_batch
-from accelcal.lls import bias_lls_batch, full_lls_batch
 from accelcal.model import dM_dparams, params_from_m
-from accelcal.nlls import nlls_batch
+from accelcal.registry import ESTIMATORS, estimator, estimators
 from accelcal.simulation import random_directions, sample_truth, simulate_poses
-from accelcal.registry import ESTIMATORS, estimator
 
 #: Gravity of the Burkhard simulations (Sec. 2).
 G_BURKHARD = 9.8055
 
-#: A batch estimator: ``(z (T, n, 3), g, noise_std) -> dict(bias (T,3), M (T,3,3), valid (T,), status (T,))``.
+#: A batch estimator: ``(z (T, n, 3), g, noise_std) -> dict(bias (T,3), M (T,3,3), valid (T,), status (T,)[,
+#: iterations (T,)])``.
 BatchEstimator = Callable[[np.ndarray, float, float], dict]
 
-#: Every method, in the order tables and figures use (the registry's).
-METHODS = tuple(ESTIMATORS)
+#: Every method, in the order tables and figures use (the registry's accelerometer estimators).
+METHODS = tuple(e.name for e in estimators("accelerometer"))
 FULL_METHODS = tuple(m for m in METHODS if ESTIMATORS[m].model == "full")
 BIAS_METHODS = tuple(m for m in METHODS if ESTIMATORS[m].model == "bias")
 #: The two data sets of a grid point (see the module docstring).
@@ -72,46 +69,28 @@ AXES = {"bias": ("x", "y", "z"), "scale": ("x", "y", "z"), "nonorth": ("xy", "zx
 QUANTITIES = tuple(AXES)
 
 
-def _lls_full(z, g, noise_std):
-    r = full_lls_batch(z, g)
-    return {"bias": r.bias, "M": r.M, "valid": r.valid,
-            "status": np.where(r.valid, "ok", "NotPositiveDefiniteError")}
+def batch_estimator(method: str, known_noise: Mapping[str, bool] | None = None) -> BatchEstimator:
+    """The registry's batched form of ``method`` (:meth:`accelcal.registry.Estimator.fit_batch`)
+    as a Monte Carlo estimator; typed failures are recorded in ``status``, not raised.
 
-
-def _lls_bias(z, g, noise_std):
-    r = bias_lls_batch(z, g)
-    return {"bias": r.bias, "M": r.M, "valid": r.valid, "status": np.where(r.valid, "ok", "invalid")}
-
-
-def _nlls(model):
-    def run(z, g, noise_std, known_noise: bool = True):
-        r = nlls_batch(z, g, model, noise_std=noise_std if known_noise else None)
-        return {"bias": r["bias"], "M": r["M"], "valid": r["valid"], "status": r["status"].astype(str),
-                "iterations": r["iterations"]}
-    run.__name__ = f"{model}_nlls"
-    return run
-
-
-def als_loop(z, g, noise_std, known_noise: bool = True) -> dict:
-    """:func:`accelcal.als.full_als_batch` (ALS on every trial); typed failures are
-    recorded in ``status``, not raised.
-
-    ``known_noise``: pass the simulation's noise std to ALS (the project's default: a
-    simulation knows it, and a real calibration measures it at rest) or let ALS
-    estimate it from the poses.
+    ``known_noise``: per use of the noise level (:data:`accelcal.registry.NOISE_USES`:
+    ALS's ``correction``, NLLS's ``stopping``), whether the estimator is told the
+    simulation's noise std (default: yes; a simulation knows it, and a real calibration
+    measures it at rest) or works without it (ALS estimates it from the poses, NLLS
+    stops at IPOPT's default tolerance).
     """
-    r = full_als_batch(z, g, noise_std=noise_std if known_noise else None)
-    return {"bias": r.bias, "M": r.M, "valid": r.valid, "status": r.status}
+    e = estimator(method)
+    told = e.needs_noise and (known_noise or {}).get(e.noise_use, True)
 
+    def run(z, g, noise_std):
+        r = e.fit_batch(z, g, noise_std=noise_std if told else None)
+        out = {"bias": r.bias, "M": r.M, "valid": r.valid, "status": r.status}
+        if r.iterations is not None:
+            out["iterations"] = r.iterations
+        return out
 
-#: The batch estimators of the Monte Carlo, by method name.
-BATCH_ESTIMATORS: dict[str, BatchEstimator] = {
-    "full_lls": _lls_full,
-    "full_als": als_loop,
-    "full_nlls": _nlls("full"),
-    "bias_lls": _lls_bias,
-    "bias_nlls": _nlls("bias"),
-}
+    run.__name__ = f"{method}_batch"
+    return run
 
 
 def method_model(method: str) -> str:
@@ -264,10 +243,12 @@ def mc_point(seed: int, n_poses: int, noise_std: float, cases: Iterable, trials:
     trials : int
         Monte Carlo runs.
     als_known_noise, nlls_known_noise : bool
-        Tell ALS (its correction) and NLLS (its stopping tolerance,
-        :func:`accelcal.nlls.solver_tol`) the noise std of the simulation.
+        Tell the estimators that use the noise level for a correction (ALS) and those
+        that use it for their stopping rule (NLLS, :func:`accelcal.nlls.solver_tol`) the
+        noise std of the simulation (:func:`batch_estimator`).
     estimators : mapping, optional
-        Replace or add batch estimators (tests inject deliberately wrong ones).
+        Replace or add batch estimators (tests inject deliberately wrong ones); the
+        others are the registry's (:func:`batch_estimator`).
 
     Returns
     -------
@@ -275,19 +256,17 @@ def mc_point(seed: int, n_poses: int, noise_std: float, cases: Iterable, trials:
         One row per trial × case × method (columns in the module docstring).
     timing : DataFrame
         ``n_poses, noise_std, data_model, g_error, method, trials, seconds``: wall time of
-        each method over all trials of a case (batched closed forms, per-trial loops for
-        ALS and NLLS), measured while the Monte Carlo runs.
+        each method over all trials of a case (its batched form), measured while the
+        Monte Carlo runs.
     """
-    table = dict(BATCH_ESTIMATORS)
-    table["full_als"] = partial(als_loop, known_noise=als_known_noise)
-    for m in ("full_nlls", "bias_nlls"):
-        table[m] = partial(BATCH_ESTIMATORS[m], known_noise=nlls_known_noise)
-    if estimators:
-        table.update(estimators)
     cases = normalise_cases(cases)
-    unknown = sorted({m for _, _, ms in cases for m in ms} - set(table))
+    told = {"correction": als_known_noise, "stopping": nlls_known_noise}
+    wanted = {m for _, _, ms in cases for m in ms}
+    table = {m: batch_estimator(m, told) for m in wanted if m in ESTIMATORS}
+    table.update(estimators or {})
+    unknown = sorted(wanted - set(table))
     if unknown:
-        raise KeyError(f"unknown method(s) {unknown}; known: {sorted(table)}")
+        raise KeyError(f"unknown method(s) {unknown}; known: {sorted(set(ESTIMATORS) | set(table))}")
     data = simulate_trials(grid_seed(seed, stage, int(n_poses), float(noise_std)), trials, int(n_poses), g,
                            noise_std, truth_ranges)
     truth = data["truth"]
@@ -421,9 +400,10 @@ def summarize(df: pd.DataFrame) -> pd.DataFrame:
     return out.drop(columns="_m")
 
 
-#: Method pairs compared trial by trial (method, reference): ratio = RMS(method) / RMS(reference).
-PAIRS = (("full_lls", "full_nlls"), ("full_als", "full_nlls"), ("full_lls", "full_als"),
-         ("bias_lls", "bias_nlls"))
+#: Method pairs compared trial by trial (method, reference): ratio = RMS(method) / RMS(reference);
+#: every estimator against its baseline, and the estimator a method corrects against it (registry).
+PAIRS = tuple((m, ESTIMATORS[m].baseline) for m in METHODS if ESTIMATORS[m].baseline) + \
+    tuple((ESTIMATORS[m].corrects, m) for m in METHODS if ESTIMATORS[m].corrects)
 
 
 def compare_methods(df: pd.DataFrame, pairs: Sequence[tuple[str, str]] = PAIRS) -> pd.DataFrame:
@@ -463,7 +443,6 @@ def summarize_mc_timing(timing: pd.DataFrame) -> pd.DataFrame:
 
 __all__ = [
     "AXES",
-    "BATCH_ESTIMATORS",
     "BIAS_METHODS",
     "CASE_KEYS",
     "DATA_MODELS",
@@ -472,7 +451,7 @@ __all__ = [
     "METHODS",
     "PAIRS",
     "QUANTITIES",
-    "als_loop",
+    "batch_estimator",
     "compare_methods",
     "crlb_batch",
     "crlb_per_trial",

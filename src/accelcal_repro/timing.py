@@ -47,22 +47,26 @@ import numpy as np
 import pandas as pd
 
 from accelcal import kernels
-from accelcal.als import full_als, full_als_batch
 from accelcal.errors import AccelcalError
-from accelcal.registry import ESTIMATORS
+from accelcal.registry import estimators
 from accelcal.simulation import random_directions, sample_truth, simulate_poses
 
-from .montecarlo import grid_seed, min_poses
+from .first_calls import FIRST_CALLS, SCRIPT
+from .montecarlo import grid_seed
 
-#: Single-problem estimators timed (``f(z, g)``; ALS and NLLS get the noise std in
-#: :func:`run_benchmark`), and their batched forms: the registry's.
-SINGLE_METHODS: dict[str, Callable] = {name: e.load() for name, e in ESTIMATORS.items()}
-BATCH_METHODS: dict[str, Callable] = {f"{name}_batch": e.load_batch() for name, e in ESTIMATORS.items() if e.batch}
-#: The NLLS baseline each closed form is compared with.
-BASELINE = {"full_lls": "full_nlls", "full_als": "full_nlls", "bias_lls": "bias_nlls",
-            "full_lls_batch": "full_nlls", "bias_lls_batch": "bias_nlls", "full_als_batch": "full_nlls"}
+#: The estimators timed: the registry's accelerometer estimators.
+_TIMED = estimators("accelerometer")
+#: Single-problem estimators timed (``f(z, g)``; those that use the noise level get the
+#: noise std in :func:`run_benchmark`), and the batched forms of the closed forms.
+SINGLE_METHODS: dict[str, Callable] = {e.name: e.load() for e in _TIMED}
+BATCH_METHODS: dict[str, Callable] = {e.batch_name: e.load_batch() for e in _TIMED
+                                      if e.batch and e.family == "closed_form"}
+#: The estimator of each timed method (single or batched).
+_ESTIMATOR_OF = {e.name: e for e in _TIMED} | {e.batch_name: e for e in _TIMED if e.batch}
+#: The baseline each method is compared with (the registry's).
+BASELINE = {m: e.baseline for m, e in _ESTIMATOR_OF.items() if e.baseline and m in {*SINGLE_METHODS, *BATCH_METHODS}}
 #: Methods with a compiled kernel, timed under each backend; the others (NLLS) once.
-COMPILED_METHODS = ("full_lls", "full_als", "bias_lls", "full_lls_batch", "bias_lls_batch", "full_als_batch")
+COMPILED_METHODS = tuple(m for m, e in _ESTIMATOR_OF.items() if e.compiled and m in {*SINGLE_METHODS, *BATCH_METHODS})
 #: Backend label of the methods without a compiled path.
 NO_BACKEND = "casadi"
 
@@ -288,31 +292,31 @@ def run_benchmark(seed: int, g: float, noise_std: float, n_poses: Sequence[int],
     Returns ``(single, batched)`` raw timing tables, each with an ``n_poses`` column.
     """
     backends = tuple(backends or available_backends())
-    fns = {m: SINGLE_METHODS[m] for m in single_methods}
-    if "full_als" in fns and als_known_noise:  # as in the Monte Carlo: ALS is told the noise std
-        fns["full_als"] = partial(full_als, noise_std=noise_std)
-    for m in ("full_nlls", "bias_nlls"):  # and NLLS, for its stopping tolerance
-        if m in fns and nlls_known_noise:
-            fns[m] = partial(SINGLE_METHODS[m], noise_std=noise_std)
-    bfns = {m: BATCH_METHODS[m] for m in batch_methods}
-    if "full_als_batch" in bfns and als_known_noise:
-        bfns["full_als_batch"] = partial(full_als_batch, noise_std=noise_std)
+    # as in the Monte Carlo: ALS is told the noise std for its correction, NLLS for its stopping rule
+    told = {"correction": als_known_noise, "stopping": nlls_known_noise}
+
+    def with_noise(m, f):
+        e = _ESTIMATOR_OF[m]
+        return partial(f, noise_std=noise_std) if e.needs_noise and told[e.noise_use] else f
+
+    fns = {m: with_noise(m, SINGLE_METHODS[m]) for m in single_methods}
+    bfns = {m: with_noise(m, BATCH_METHODS[m]) for m in batch_methods}
     singles, batches = [], []
     for n in n_poses:
         n = int(n)
         ss_single, ss_batch = grid_seed(seed, stage, n).spawn(2)
         zf = make_problems(np.random.default_rng(ss_single), n_problems, n, g, noise_std)
         zb = make_problems(np.random.default_rng(ss_single), n_problems, n, g, noise_std, identity_m=True)
-        here = {(m, be if m in COMPILED_METHODS else NO_BACKEND): f for m, f in fns.items() if n >= min_poses(m)
-                for be in (backends if m in COMPILED_METHODS else (NO_BACKEND,))}
-        problems = {k: (zb if ESTIMATORS[k[0]].model == "bias" else zf) for k in here}
+        here = {(m, be if m in COMPILED_METHODS else NO_BACKEND): f for m, f in fns.items()
+                if n >= _ESTIMATOR_OF[m].min_poses for be in (backends if m in COMPILED_METHODS else (NO_BACKEND,))}
+        problems = {k: (zb if _ESTIMATOR_OF[k[0]].model == "bias" else zf) for k in here}
         for il in interleavings:
             singles.append(time_interleaved(problems, g, here, repeats, interleave=il).assign(n_poses=n))
-        bm = {(m, be): f for m, f in bfns.items() if n >= min_poses(m.removesuffix("_batch")) for be in backends}
+        bm = {(m, be): f for m, f in bfns.items() if n >= _ESTIMATOR_OF[m].min_poses for be in backends}
         if bm and batch_problems > 0:
             zbf = make_problems(np.random.default_rng(ss_batch), batch_problems, n, g, noise_std)
             zbb = make_problems(np.random.default_rng(ss_batch), batch_problems, n, g, noise_std, identity_m=True)
-            bproblems = {k: (zbb if ESTIMATORS[k[0].removesuffix("_batch")].model == "bias" else zbf) for k in bm}
+            bproblems = {k: (zbb if _ESTIMATOR_OF[k[0]].model == "bias" else zbf) for k in bm}
             batches.append(time_batched(bproblems, g, bm, batch_repeats).assign(n_poses=n))
     single = pd.concat(singles, ignore_index=True)
     single = single[["n_poses"] + [c for c in single.columns if c != "n_poses"]]
@@ -409,56 +413,6 @@ def tereshkov_inputs(cfg: Mapping, runs: int, duration_s: float) -> dict:
 
 
 # ----------------------------------------------------------------------------- compilation
-#: Calls that trigger every compiled kernel once, in the order of the table (run in a
-#: fresh process by :func:`compile_timing`).
-_FIRST_CALLS = """
-import json, sys, time
-t0 = time.perf_counter()
-import numpy as np
-from accelcal import kernels
-from accelcal.als import full_als, full_als_batch
-from accelcal.lls import bias_lls, bias_lls_batch, full_lls, full_lls_batch
-from accelcal.batista.filter import covariance_sequence, kalman_filter
-from accelcal.tereshkov.estimator import run_estimator
-from accelcal.simulation import random_directions, sample_truth, simulate_poses
-rows = [("import accelcal estimators", time.perf_counter() - t0)]
-t0 = time.perf_counter()
-import numba
-rows.append(("import numba", time.perf_counter() - t0))
-rng = np.random.default_rng(0)
-tr = sample_truth(rng, 4)
-z = simulate_poses(random_directions(rng, 24, 4), 9.8, tr["M"], tr["bias"], 1e-3, rng)
-n = 50
-t = np.arange(n) * 0.01
-w = np.full((n, 3), 0.1)
-a = np.zeros((n, 3))
-f = np.zeros((1, n, 3))
-f[..., 2] = -9.8
-calls = [
-    ("full_lls", lambda: full_lls(z[0], 9.8)),
-    ("bias_lls", lambda: bias_lls(z[0], 9.8)),
-    ("full_als", lambda: full_als(z[0], 9.8, 1e-3)),
-    ("full_als (noise estimated)", lambda: full_als(z[0], 9.8)),
-    ("full_lls_batch", lambda: full_lls_batch(z, 9.8)),
-    ("bias_lls_batch", lambda: bias_lls_batch(z, 9.8)),
-    ("full_als_batch", lambda: full_als_batch(z, 9.8, 1e-3)),
-    ("kalman_filter", lambda: kalman_filter(t, a, w, a, np.zeros(9), np.ones(9))),
-    ("covariance_sequence", lambda: covariance_sequence(t, w, np.ones(9))),
-    ("tereshkov run_estimator", lambda: run_estimator(f * 0, f, f, np.zeros((1, n)), np.ones((1, n)), 0.01)),
-]
-wanted = json.loads(sys.argv[1])
-for name, call in calls:
-    if wanted == "all" or name in wanted:
-        t0 = time.perf_counter()
-        call()
-        rows.append((name, time.perf_counter() - t0))
-print(json.dumps({"backend": kernels.backend(), "rows": rows}))
-"""
-#: The calls :func:`compile_timing` can time (names in ``_FIRST_CALLS``).
-FIRST_CALLS = ("full_lls", "bias_lls", "full_als", "full_als (noise estimated)", "full_lls_batch", "bias_lls_batch",
-               "full_als_batch", "kalman_filter", "covariance_sequence", "tereshkov run_estimator")
-
-
 def compile_timing(calls: Sequence[str] | str = "all", python: str = sys.executable) -> pd.DataFrame:
     """First-call time of compiled kernels, in fresh processes with their own numba cache
     folder (``NUMBA_CACHE_DIR``, so the project's own cache is neither used nor touched):
@@ -480,7 +434,7 @@ def compile_timing(calls: Sequence[str] | str = "all", python: str = sys.executa
     with tempfile.TemporaryDirectory(prefix="accelcal-numba-cache-") as cache:
         env = dict(os.environ, NUMBA_CACHE_DIR=cache, ACCELCAL_KERNELS="numba")
         for which in ("cold", "cached"):
-            out = subprocess.run([python, "-c", _FIRST_CALLS, json.dumps(calls)], env=env, capture_output=True,
+            out = subprocess.run([python, "-c", SCRIPT, json.dumps(calls)], env=env, capture_output=True,
                                  text=True, check=True)
             runs[which] = dict(json.loads(out.stdout.strip().splitlines()[-1])["rows"])
     return pd.DataFrame({"call": list(runs["cold"]), "cold_s": list(runs["cold"].values()),

@@ -232,7 +232,24 @@ def _check_tereshkov(t, cfg):
                                 f"{t['gnss']['rate_hz']} Hz exceeds the IMU rate {where} = {rate} Hz")
 
 
+def _check_names(names, known, where, what):
+    """Every name of a config list is one of ``known`` (the schemas do not restate the
+    registries: the names are checked here, against the code)."""
+    for i, name in enumerate(names):
+        if name not in known:
+            raise _config_error(f"{where}.{i}", f"{name!r} is not {what}; known: {', '.join(known)}")
+
+
+def _check_estimators(names, where):
+    """Every name is a registered accelerometer estimator (accelcal.registry)."""
+    from accelcal.registry import estimators
+
+    _check_names(names, [e.name for e in estimators("accelerometer")], where, "a registered estimator")
+
+
 def _check_measured(m, cfg):
+    for name, rec in m["recordings"].items():
+        _check_estimators(rec["estimators"], f"measured.recordings.{name}.estimators")
     # The six static positions of the Ferraris session list (accelcal_repro.measured.sources.
     # FERRARIS_STATIC) are fewer than the full models need (accelcal.registry: min_poses).
     from accelcal.registry import ESTIMATORS
@@ -250,6 +267,8 @@ def _check_measured(m, cfg):
 
 
 def _check_burkhard2024(b, cfg):
+    for name, exp in b["experiments"].items():
+        _check_estimators(exp["methods"], f"burkhard2024.experiments.{name}.methods")
     timing = b["timing"]
     for key, among in (("headline_interleave", "interleavings"), ("headline_n_poses", "n_poses")):
         if timing[key] not in timing[among]:
@@ -294,10 +313,18 @@ def _check_discrepancy(d, cfg):
                             "a profile is fitted to xsens_mti, which is not in discrepancy.recordings")
 
 
+def _check_benchmark(b, cfg):
+    if b["compile_calls"] != "all":
+        from accelcal_repro.first_calls import FIRST_CALLS
+
+        _check_names(b["compile_calls"], FIRST_CALLS, "benchmark.compile_calls", "a first call of a compiled kernel")
+
+
 #: Rules a stage's schema cannot express, run once every section passed its schema:
 #: ``rule(section, config)``, a one-line ConfigError naming the key.
 STAGE_RULES = {"batista2011": _check_batista2011, "tereshkov": _check_tereshkov, "measured": _check_measured,
-               "burkhard2024": _check_burkhard2024, "discrepancy": _check_discrepancy}
+               "burkhard2024": _check_burkhard2024, "discrepancy": _check_discrepancy,
+               "benchmark": _check_benchmark}
 
 
 def figure_outputs(figure_id, caption, category):

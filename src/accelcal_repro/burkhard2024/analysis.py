@@ -15,7 +15,9 @@ from collections.abc import Iterable, Sequence
 import numpy as np
 import pandas as pd
 
-from ..montecarlo import AXES, QUANTITIES, rms_and_se
+from accelcal.registry import ESTIMATORS, estimators
+
+from ..montecarlo import AXES, FULL_METHODS, QUANTITIES, rms_and_se
 from .checks import in_range
 from .grid import Experiment, select
 
@@ -39,13 +41,13 @@ def efficiency(summary: pd.DataFrame, experiments: Iterable[Experiment], g: floa
         cols += [f"{q}_ratio", f"{q}_ratio_se"]
     cols += ["iterations_mean", "iterations_max"]
     out = t[cols].sort_values(["data_model", "n_poses", "noise_std", "method"], kind="stable", ignore_index=True)
-    iterative = out["method"].str.endswith("_nlls")
-    out["ipopt_tol"] = np.where(iterative, [solver_tol(s, g) for s in out["noise_std"]], np.nan)
+    stops_at_noise = out["method"].map(lambda m: ESTIMATORS[m].noise_use == "stopping").astype(bool)
+    out["ipopt_tol"] = np.where(stops_at_noise, [solver_tol(s, g) for s in out["noise_std"]], np.nan)
     return out
 
 
 def relative_errors(tidy: pd.DataFrame, exp: Experiment, noise_range: Sequence[float],
-                    methods: Sequence[str] = ("full_lls", "full_als", "full_nlls")) -> pd.DataFrame:
+                    methods: Sequence[str] = FULL_METHODS) -> pd.DataFrame:
     """Scale-factor and non-orthogonality errors per noise level × method, absolute and
     relative to the true value, in three readings of "the estimation error":
 
@@ -80,11 +82,13 @@ def relative_errors(tidy: pd.DataFrame, exp: Experiment, noise_range: Sequence[f
     return out
 
 
-#: Which comparisons the limit analysis makes, per data set: (name, method, reference).
-LIMIT_PAIRS = {"full": (("lls_vs_nlls", "full_lls", "full_nlls"), ("als_vs_nlls", "full_als", "full_nlls")),
-               "bias": (("lls_vs_nlls", "bias_lls", "bias_nlls"),)}
-LIMIT_METHODS = {"full": {"lls": "full_lls", "als": "full_als", "nlls": "full_nlls"},
-                 "bias": {"lls": "bias_lls", "nlls": "bias_nlls"}}
+#: The estimators of the limit analysis per data set, by algorithm (``lls``, ``als``, ``nlls``).
+LIMIT_METHODS = {dm: {e.algorithm: e.name for e in estimators("accelerometer", model=dm)} for dm in ("full", "bias")}
+#: Which comparisons it makes, per data set: (name, method, reference): every estimator
+#: against its baseline (``lls_vs_nlls``).
+LIMIT_PAIRS = {dm: tuple((f"{e.algorithm}_vs_{ESTIMATORS[e.baseline].algorithm}", e.name, e.baseline)
+                         for e in estimators("accelerometer", model=dm) if e.baseline)
+               for dm in ("full", "bias")}
 
 
 def _worse(r: float, se: float, z: float, min_effect: float) -> bool:
