@@ -83,6 +83,8 @@ class Recording:
     notes: tuple[str, ...] = ()
     unit: str | None = None
     time_column: tuple | None = None
+    gyro: np.ndarray | None = None
+    gyro_unit: str | None = None
 
     def __post_init__(self):
         t = np.array(self.t, dtype=float)
