@@ -19,7 +19,9 @@ damaged bytes in is refused (its samples cannot be trusted).
 from __future__ import annotations
 
 import contextlib
-import io
+import os
+import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -66,14 +68,16 @@ def read(path, *, topic: str | None = None, time_source: str = "header", instanc
 
     if not path.is_file():
         raise LogFormatError(f"{path}: no such file")
-    chatter = io.StringIO()
-    with contextlib.redirect_stderr(chatter), contextlib.redirect_stdout(chatter):
+    with _captured_output() as chatter:
         try:
             log = DFReader.DFReader_binary(str(path), zero_time_base=True)
         except Exception as e:
-            raise LogFormatError(f"{path}: not a readable DataFlash log ({_why(e)}); download it again") from None
-    if "bad header" in chatter.getvalue() or "unknown msg type" in chatter.getvalue():
-        raise LogFormatError(f"{path}: the DataFlash log has damaged bytes ({_why(chatter.getvalue())}); its samples "
+            log = e
+    said = "".join(chatter)
+    if isinstance(log, Exception):
+        raise LogFormatError(f"{path}: not a readable DataFlash log ({_why(log)}); download it again")
+    if "bad header" in said or "unknown msg type" in said:
+        raise LogFormatError(f"{path}: the DataFlash log has damaged bytes ({_why(said)}); its samples "
                              "cannot be trusted: download the log again")
     try:
         counts = {name: int(log.counts[log.name_to_id[name]]) for name in _NAMES if name in log.name_to_id}
@@ -90,6 +94,31 @@ def read(path, *, topic: str | None = None, time_source: str = "header", instanc
                         kind=f"{name} instance", option="--instance"))
     rows = rows[inst == chosen]
     return _recording(path, name, chosen, rows, time_source)
+
+
+@contextlib.contextmanager
+def _captured_output():
+    """Capture stdout and stderr at the file-descriptor level: pymavlink's compiled indexer writes
+    its warnings there, past ``sys.stderr``."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = os.dup(1), os.dup(2)
+    said: list[str] = []
+    with tempfile.TemporaryFile(mode="w+") as f:
+        os.dup2(f.fileno(), 1)
+        os.dup2(f.fileno(), 2)
+        try:
+            with contextlib.redirect_stdout(f), contextlib.redirect_stderr(f):
+                yield said
+        finally:
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os.dup2(saved[0], 1)
+            os.dup2(saved[1], 2)
+            os.close(saved[0])
+            os.close(saved[1])
+            f.seek(0)
+            said.append(f.read())
 
 
 def _why(e) -> str:
@@ -113,12 +142,12 @@ def _stream(log, path, name: str, count: int, progress) -> np.ndarray:
                 out.extend(np.array(block, dtype=np.float64))
                 block.clear()
                 report(out.n)
+        if block:
+            out.extend(np.array(block, dtype=np.float64))
     except KeyError as e:
         raise LogFormatError(f"{path}: {name} messages lack the field {e} (not ArduPilot's IMU message)") from None
     except Exception as e:
         raise LogFormatError(f"{path}: damaged {name} message after {out.n + len(block)} ({_why(e)})") from None
-    if block:
-        out.extend(np.array(block, dtype=np.float64))
     return out.result()
 
 

@@ -321,6 +321,11 @@ def _recording(path, topic, kind, decoded, time_source):
         if np.all(header_ns == 0):
             raise LogFormatError(f"{path}: topic {topic}: every header stamp is zero (the driver does not stamp its "
                                  "messages); use the bag's record time (--time-source log)")
+        late = int(np.sum(np.diff(header_ns) < 0))
+        if late:  # a bag is in record order: latency jitter can swap messages the sensor stamped in order
+            order = np.argsort(header_ns, kind="stable")
+            acc, gyro, header_ns, log_ns = acc[order], gyro[order], header_ns[order], log_ns[order]
+            notes.append(f"{late} message(s) were recorded out of header-stamp order: sorted by header stamp")
         t = stamps_to_time(header_ns, path, f"topic {topic}: header.stamp",
                            "the driver's stamps are not in order; use the bag's record time (--time-source log)")
         notes.append("time: header.stamp, t = 0 at the first message")
