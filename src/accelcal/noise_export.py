@@ -52,7 +52,7 @@ FORMAT = "accelcal-noise"
 FORMAT_VERSION = 1
 #: Unit of each term's coefficient, for data unit ``u``.
 TERM_UNITS = {"quantization": "{u}*s", "white": "{u}/sqrt(Hz)", "bias_instability": "{u}",
-              "random_walk": "{u}/s/sqrt(Hz)", "drift_ramp": "{u}/s"}
+              "random_walk": "{w}", "drift_ramp": "{u}/s"}
 #: (yaml key, sensor, report key, unit) of the exported values.
 KALIBR_KEYS = (("accelerometer_noise_density", "accelerometer", "noise_density", "m/s^2/sqrt(Hz)"),
                ("accelerometer_random_walk", "accelerometer", "random_walk", "m/s^3/sqrt(Hz)"),
@@ -82,13 +82,18 @@ def _sensor_dict(s) -> dict:
     a = s.allan
     axes = {}
     for j, (ax, terms) in enumerate(zip("xyz", s.terms)):
-        axes[ax] = {"terms": {k: {**e.to_dict(), "unit": TERM_UNITS[k].format(u=s.unit)} for k, e in terms.items()},
+        axes[ax] = {"terms": {k: {**e.to_dict(), "unit": TERM_UNITS[k].format(u=s.unit, w=walk_unit(s.unit))} for k, e in terms.items()},
                     **exported_values(s, j), "allan_variance_ros": avr_convention(a.taus, a.adev[:, j]),
                     "adev_floor": {"value": 0.664 * terms["bias_instability"].value, "unit": s.unit,
                                    "meaning": "flicker floor of the fit, 0.664 B"},
                     "conversions": conversions(s.sensor, s.unit, terms)}
     return {"unit": s.unit, "taus_s": a.taus, "m": a.m, "n_terms": a.n_terms, "adev": a.adev,
             "adev_interval": s.adev_interval, "edf": s.edf, "adev_model": s.model_adev(a.taus), "axes": axes}
+
+
+def walk_unit(unit: str) -> str:
+    """Unit of a random walk coefficient K of data in ``unit`` (``u/s/sqrt(Hz)``, spelled out for SI data)."""
+    return {"m/s^2": "m/s^3/sqrt(Hz)", "rad/s": "rad/s^2/sqrt(Hz)"}.get(unit, f"{unit}/s/sqrt(Hz)")
 
 
 def exported_values(s, j: int) -> dict:
@@ -98,7 +103,7 @@ def exported_values(s, j: int) -> dict:
     rw = k.value if k.resolved else k.hi
     u = s.unit
     return {"noise_density": {"value": w.value, "interval": [w.lo, w.hi], "unit": f"{u}/sqrt(Hz)"},
-            "random_walk": {"value": rw, "interval": [k.lo, k.hi], "unit": f"{u}/s/sqrt(Hz)",
+            "random_walk": {"value": rw, "interval": [k.lo, k.hi], "unit": walk_unit(u),
                             "upper_bound": not k.resolved, "fitted": k.value}}
 
 
@@ -236,4 +241,4 @@ def _accelerometer_intrinsics(cal) -> tuple[np.ndarray, np.ndarray, list[str]]:
 
 
 __all__ = ["ExportError", "FORMAT", "FORMAT_VERSION", "KALIBR_KEYS", "avr_convention", "conversions",
-           "exported_values", "kalibr_yaml", "openvins_yaml", "report_dict"]
+           "exported_values", "kalibr_yaml", "openvins_yaml", "report_dict", "walk_unit"]
