@@ -107,12 +107,14 @@ def main(argv=None) -> int:
             if reader == "rosbags deserialise" and args.skip_deserialise:
                 continue
             results[reader] = r = run(reader, bag["path"])
-            print(f"  {reader:<20} wall {r['wall_s']:7.2f} s  cpu {r['cpu_s']:7.2f} s  peak RSS {r['peak_rss_mb']:7.0f} MB"
+            print(f"  {reader:<20} wall {r['wall_s']:7.2f} s  cpu {r['cpu_s']:7.2f} s  "
+                  f"peak RSS {r['peak_rss_mb']:7.0f} MB"
                   f"  ({r['messages']:,} messages)", flush=True)
         base = results["imports only"]["peak_rss_mb"]
         acc = results["accelcal"]
         output_mb = bag["messages"] * (6 * 8 + 8 + 8) / 2**20
-        print(f"  accelcal: {acc['wall_s'] / bag['messages'] * 1e6:.2f} us per message; peak RSS {acc['peak_rss_mb']:.0f} MB"
+        print(f"  accelcal: {acc['cpu_s'] / bag['messages'] * 1e6:.2f} us of CPU per message; "
+              f"peak RSS {acc['peak_rss_mb']:.0f} MB"
               f" = {base:.0f} MB (interpreter and libraries) + {acc['peak_rss_mb'] - base:.0f} MB; the output arrays "
               f"(t, acc, gyro, time column) are {output_mb:.0f} MB")
         if "rosbags deserialise" in results:

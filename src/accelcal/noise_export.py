@@ -82,7 +82,8 @@ def _sensor_dict(s) -> dict:
     a = s.allan
     axes = {}
     for j, (ax, terms) in enumerate(zip("xyz", s.terms)):
-        axes[ax] = {"terms": {k: {**e.to_dict(), "unit": TERM_UNITS[k].format(u=s.unit, w=walk_unit(s.unit))} for k, e in terms.items()},
+        units = {k: TERM_UNITS[k].format(u=s.unit, w=walk_unit(s.unit)) for k in terms}
+        axes[ax] = {"terms": {k: {**e.to_dict(), "unit": units[k]} for k, e in terms.items()},
                     **exported_values(s, j), "allan_variance_ros": avr_convention(a.taus, a.adev[:, j]),
                     "adev_floor": {"value": 0.664 * terms["bias_instability"].value, "unit": s.unit,
                                    "meaning": "flicker floor of the fit, 0.664 B"},
@@ -212,7 +213,8 @@ def openvins_yaml(report, *, rostopic: str = "/imu0", inflate: float = 1.0, cali
               '  model: "kalibr"  # lower-triangular D (accelcal\'s M is lower triangular), R_IMUtoACC = I',
               "  # gyroscope: not calibrated by accelcal: Tw = I, R_IMUtoGYRO = I, Tg = 0"]
     lines += _matrix("Tw", np.eye(3)) + _matrix("R_IMUtoGYRO", np.eye(3))
-    lines += [f"  # Ta: {source}"] + _matrix("Ta", Ta) + _matrix("R_IMUtoACC", np.eye(3)) + _matrix("Tg", np.zeros((3, 3)))
+    lines += [f"  # Ta: {source}"] + _matrix("Ta", Ta) + _matrix("R_IMUtoACC", np.eye(3))
+    lines += _matrix("Tg", np.zeros((3, 3)))
     if bias is not None:
         lines.append("  # accelerometer bias b_a of the calibration (not a field: OpenVINS estimates it online) "
                      f"[ m/s^2 ]: [{', '.join(f'{b:.6g}' for b in bias)}]")

@@ -188,8 +188,8 @@ def _sensor(name, x, unit, fs, level, n_boot, seed_seq, min_edf) -> SensorNoise:
         raise NoiseAnalysisError(f"the {name} holds non-finite values")
     allan = allan_variance(x, fs, min_edf=min_edf)
     if allan.taus.size < 5:
-        raise NoiseAnalysisError(f"the recording reaches only {allan.taus.size} octaves of tau ({allan.taus[-1]:.3g} s);"
-                                 " the five noise terms need at least 5: record longer")
+        raise NoiseAnalysisError(f"the recording reaches only {allan.taus.size} octaves of tau "
+                                 f"({allan.taus[-1]:.3g} s); the five noise terms need at least 5: record longer")
     if np.any(allan.avar <= 0):
         axis = "xyz"[int(np.argmax(np.any(allan.avar <= 0, axis=0)))]
         raise NoiseAnalysisError(f"the {name}'s {axis} axis is constant (zero Allan variance): a stuck sensor?")
@@ -404,13 +404,14 @@ def static_check(acc, gyro, fs: float) -> dict:
         out["max_rate_departure"] = float(dep.max())
         at = float(np.argmax(dep) * b.shape[1] / fs)
         if dep.max() > REFUSE_RATE and out["refuse"] is None:
-            out["refuse"] = f"the gyro's 1 s mean rate departs from its median by {dep.max():.3g} rad/s (at t = {at:.0f} s)"
+            out["refuse"] = (f"the gyro's 1 s mean rate departs from its median by {dep.max():.3g} rad/s "
+                             f"(at t = {at:.0f} s)")
         elif dep.max() > WARN_RATE:
             out["warnings"].append(f"the gyro's 1 s mean rate departs from its median by up to {dep.max():.2g} rad/s "
                                    f"(at t = {at:.0f} s)")
     if noisy:
-        out["warnings"].append(f"{noisy} of {len(var)} 1 s blocks are more than {NOISY_BLOCK_FACTOR:g}x noisier than the "
-                               "median block (taps or vibration): they raise the short-tau Allan deviation")
+        out["warnings"].append(f"{noisy} of {len(var)} 1 s blocks are more than {NOISY_BLOCK_FACTOR:g}x noisier "
+                               "than the median block (taps or vibration): they raise the short-tau Allan deviation")
     return out
 
 

@@ -113,7 +113,8 @@ def _message(store, stamp_ns: int, acc, gyro, frame_id: str):
     header = Header(stamp=Time(sec=sec, nanosec=nsec), frame_id=frame_id) if "seq" not in Header.__dataclass_fields__ \
         else Header(seq=0, stamp=Time(sec=sec, nanosec=nsec), frame_id=frame_id)
     return Imu(header=header, orientation=Quat(x=0.0, y=0.0, z=0.0, w=1.0), orientation_covariance=z9,
-               angular_velocity=Vec(x=float(gyro[0]), y=float(gyro[1]), z=float(gyro[2])), angular_velocity_covariance=z9,
+               angular_velocity=Vec(x=float(gyro[0]), y=float(gyro[1]), z=float(gyro[2])),
+               angular_velocity_covariance=z9,
                linear_acceleration=Vec(x=float(acc[0]), y=float(acc[1]), z=float(acc[2])),
                linear_acceleration_covariance=z9)
 
@@ -165,7 +166,8 @@ def _default_message(store, msgtype: str, ros1: bool) -> bytes:
     elif msgtype == "std_msgs/msg/String":
         msg = store.types[msgtype](data="not an IMU")
     else:
-        raise AccelcalError(f"extra topics of type {msgtype} are not supported (sensor_msgs/msg/Imu, std_msgs/msg/String)")
+        raise AccelcalError(f"extra topics of type {msgtype} are not supported "
+                            "(sensor_msgs/msg/Imu, std_msgs/msg/String)")
     return bytes(store.serialize_ros1(msg, msgtype) if ros1 else store.serialize_cdr(msg, msgtype))
 
 
