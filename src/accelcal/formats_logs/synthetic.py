@@ -11,6 +11,7 @@ byte-identical to ``rosbags``' serialisation of the same message.
 from __future__ import annotations
 
 import shutil
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -56,7 +57,8 @@ def write_imu_bag(path, t, acc, gyro, *, kind: str = "ros2-sqlite3", topic: str 
     ros1 = kind == "ros1"
     store = get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.LATEST)
     path = Path(path)
-    target = path.with_suffix("") if kind == "mcap" else path
+    # a bare MCAP file is the storage file of a ROS 2 bag written beside it, then moved out
+    target = Path(tempfile.mkdtemp(prefix=".mcap-", dir=path.parent)) / "bag" if kind == "mcap" else path
     with _writer(target, kind) as w:
         conn = _connection(w, topic, "sensor_msgs/msg/Imu", store, ros1)
         extras = [(_connection(w, name, typ, store, ros1), typ) for name, typ in (extra_topics or {}).items()]
@@ -71,7 +73,7 @@ def write_imu_bag(path, t, acc, gyro, *, kind: str = "ros2-sqlite3", topic: str 
         return path
     inner = next(target.glob("*.mcap"))
     shutil.move(str(inner), path)
-    shutil.rmtree(target)
+    shutil.rmtree(target.parent)
     return path
 
 
