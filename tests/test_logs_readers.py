@@ -309,6 +309,7 @@ def test_dataflash_imu_instances(tmp_path):
 
 @pytest.mark.parametrize("fmt, module", [("ros", "rosbags"), ("px4", "pyulog"), ("ardupilot", "pymavlink")])
 def test_a_missing_extra_is_one_line_naming_the_pip_install(tmp_path, fmt, module):
+    (tmp_path / "x").write_bytes(b"\0" * 64)
     code = (f"import sys\nclass Block:\n    def find_spec(self, name, path=None, target=None):\n"
             f"        if name.split('.')[0] == {module!r}:\n"
             f"            raise ModuleNotFoundError(name)\nsys.meta_path.insert(0, Block())\n"

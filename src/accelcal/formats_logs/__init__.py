@@ -72,6 +72,8 @@ def detect_log(path) -> str | None:
 
 def read_log(path, *, format: str | None = None, **kw):
     """Read a log with the reader of ``format`` (default: detected); keywords as the readers'."""
+    if not Path(path).exists():
+        raise LogFormatError(f"{path}: no such file or folder")
     name = format or detect_log(path)
     if name is None:
         raise LogFormatError(f"{path}: not a ROS bag, MCAP, ULog or DataFlash log")
