@@ -78,6 +78,8 @@ def read(path, *, topic: str | None = None, time_source: str = "header", instanc
     pyulog = import_extra("pyulog", EXTRA, "PX4 ULog files")
     ulog = _parse(pyulog, path, progress)
     data = {(d.name, d.multi_id): d for d in ulog.data_list}
+    for d in data.values():
+        _require(path, d, ("timestamp",))
     raw = {i: len(d.data["timestamp"]) for (name, i), d in data.items() if name == "sensor_accel"}
     usable = {i: n for i, n in raw.items() if n >= MIN_ROWS}
     everything = {name: f"{len(d.data['timestamp'])} samples" for (name, _), d in data.items()}
@@ -129,6 +131,15 @@ def _parse(pyulog, path: Path, progress):
     return ulog
 
 
+def _require(path, d, fields) -> None:
+    """The fields a topic must have; a damaged definition (or an unknown PX4 version) is one line."""
+    missing = [f for f in fields if f not in d.data]
+    if missing:
+        raise LogFormatError(f"{path}: {d.name} instance {d.multi_id} lacks the field(s) {', '.join(missing)} (a "
+                             f"damaged ULog, or a PX4 version this reader does not know; it has "
+                             f"{', '.join(list(d.data)[:8])})")
+
+
 def _rate(d) -> float:
     ts = d.data.get("timestamp_sample", d.data["timestamp"])
     step = np.median(np.diff(ts.astype(np.int64))) if len(ts) > 1 else 0
@@ -146,6 +157,7 @@ def _stamps(path, d, time_source: str, topic: str, notes: list):
 
 def _raw(path, data, inst: int, ulog, time_source: str, notes: list):
     acc_d = data[("sensor_accel", inst)]
+    _require(path, acc_d, ("x", "y", "z"))
     sample, log = _stamps(path, acc_d, time_source, "sensor_accel", notes)
     chosen = sample if time_source == "header" else log
     name = "timestamp_sample_us" if time_source == "header" and "timestamp_sample" in acc_d.data else "timestamp_us"
@@ -177,6 +189,7 @@ def _gyro(path, data, inst: int, time_source: str, at_us: np.ndarray, notes: lis
     if d is None or len(d.data["timestamp"]) < MIN_ROWS:
         notes.append(f"no sensor_gyro instance {inst} with at least {MIN_ROWS} samples: the recording has no gyro")
         return None
+    _require(path, d, ("x", "y", "z"))
     sample, log = _stamps(path, d, time_source, "sensor_gyro", [])
     ts = sample if time_source == "header" else log
     w = np.column_stack([d.data[k].astype(np.float64) for k in ("x", "y", "z")])
@@ -196,6 +209,7 @@ def _gyro(path, data, inst: int, time_source: str, at_us: np.ndarray, notes: lis
 
 
 def _combined(path, d, time_source: str, notes: list):
+    _require(path, d, [f"{k}[{i}]" for k in ("accelerometer_m_s2", "gyro_rad") for i in range(3)])
     ts = d.data["timestamp"].astype(np.int64)
     t = stamps_to_time(ts * 1000, path, "sensor_combined: timestamp", "the log's stamps are not in order")
     acc = np.column_stack([d.data[f"accelerometer_m_s2[{k}]"].astype(np.float64) for k in range(3)])
