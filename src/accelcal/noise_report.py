@@ -16,9 +16,9 @@ For the accelerometer and (when recorded) the gyroscope of one static recording:
    added to every point's (:func:`fit_ieee`), so that no τ range dominates the fit by its
    degrees of freedom alone; the intervals then include the misfit.
 3. Intervals.  Each Allan variance point is ``A_j χ²_ν/ν`` with ν the model's edf; the
-   intervals are percentiles of the coefficients refitted to ``n_boot`` draws of the
-   fitted model's points (a parametric bootstrap of the fit, fast because it redraws
-   the Allan variances, not the time series).  The overlapping estimates at
+   intervals come from the coefficients refitted to ``n_boot`` draws of the fitted
+   model's points (a parametric bootstrap of the fit, fast because it redraws the Allan
+   variances, not the time series; basic or percentile intervals, :func:`_term_table`).  The overlapping estimates at
    neighbouring octaves are correlated (0.5 one octave apart for white noise, 0.9 for a
    random walk: :data:`OCTAVE_CORRELATION`, measured by simulation); drawing them
    independently gave 84 % coverage for white noise at a stated 95 %, so the draws are
@@ -340,6 +340,12 @@ def octave_correlations(rng, term: str, n: int = 2**16, reps: int = 1000, batch:
 
 
 def _term_table(fit: NoiseFit, boot: np.ndarray, taus, fs: float, level: float) -> dict:
+    """Each term's estimate and interval: the basic bootstrap interval ``[2θ̂ − q_hi, 2θ̂ − q_lo]`` (which
+    corrects the shift of the refitted values, e.g. a random walk refitted 8 % low) where the bootstrap
+    puts less than ``(1 − level)/2`` of its mass at zero, else the percentile interval ``[q_lo, q_hi]``
+    (a term at or near its bound of zero).  Measured: the basic interval covered a dominant random
+    walk 93 % of the time at 95 % where the percentile interval covered it 72 %; at the bound the
+    basic interval collapses onto zero."""
     coef = fit.coefficients
     lo_q, hi_q = 100 * (0.5 - level / 2), 100 * (0.5 + level / 2)
     parts = np.array([c * TERMS[k].basis(taus, fs) for k, c in zip(fit.term_ids, fit.c)])
@@ -348,6 +354,8 @@ def _term_table(fit: NoiseFit, boot: np.ndarray, taus, fs: float, level: float) 
     for i, k in enumerate(fit.term_ids):
         dom = share[i] >= RESOLVED_SHARE
         lo, hi = (float(np.percentile(boot[:, i], q)) for q in (lo_q, hi_q))
+        if np.mean(boot[:, i] <= 0) < (1 - level) / 2:
+            lo, hi = max(2 * coef[k] - hi, 0.0), 2 * coef[k] - lo
         # resolved: the term carries the model somewhere, and its interval excludes zero
         out[k] = TermEstimate(value=coef[k], lo=lo, hi=hi, resolved=bool(dom.any() and lo > 0),
                               dominant_taus=(float(taus[dom][0]), float(taus[dom][-1])) if dom.any() else None)
