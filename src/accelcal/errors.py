@@ -38,3 +38,19 @@ class NotConvergedError(AccelcalError):
 
 class RecordingError(AccelcalError):
     """A recording file that cannot be read or used (columns, values, no rest)."""
+
+
+class MissingExtraError(AccelcalError):
+    """An optional dependency (an extra of the package) that a format or a feature needs is not installed."""
+
+
+class LogFormatError(RecordingError):
+    """A robotics log (ROS bag, MCAP, ULog, DataFlash) that is damaged, truncated or not of its format."""
+
+
+class TopicError(RecordingError):
+    """No usable IMU topic in a log: none, several to choose from, the wrong message type, or empty."""
+
+
+class NotStaticError(AccelcalError):
+    """A recording given to the noise analysis that is not static (the sensor moved)."""

@@ -1,0 +1,195 @@
+"""What the log readers share: optional imports, topic choice, time stamps, bounded buffers, progress.
+
+A log holds many topics and two clocks.  The readers (:mod:`.ros`, :mod:`.px4`,
+:mod:`.ardupilot`) differ in how they decode messages; they agree on everything here:
+
+* an optional extra that is missing is one line naming the ``pip install`` that fixes it;
+* the IMU topic is chosen automatically only when there is exactly one; several are
+  listed in one line with the option that picks one;
+* time: the sensor's own stamp (a ROS header stamp, PX4's ``timestamp_sample``) by
+  default, the time the log recorded the message on request; when both exist and they
+  disagree (a latency that jumps by more than two sample periods, or clocks more than a
+  second apart) a note says so;
+* samples are streamed into preallocated arrays (:class:`ColumnBuffer`), never into a
+  list of message objects, so memory is the size of the output;
+* a read that lasts longer than a couple of seconds reports its progress on stderr.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+import time
+from collections.abc import Callable, Sequence
+
+import numpy as np
+
+from ..errors import LogFormatError, MissingExtraError, TopicError
+from ..recording import MIN_ROWS, Recording
+
+#: ``time_source`` values of every log reader.
+TIME_SOURCES = ("header", "log")
+#: Largest spread (1st to 99th percentile) of the latency log − sensor stamp, in sample
+#: periods, that is not reported as a disagreement of the two clocks.
+MAX_LATENCY_SPREAD_PERIODS = 2.0
+#: Largest median latency [s] not reported (two clocks more than this apart: sim time,
+#: a device clock that was never synchronised).
+MAX_LATENCY_S = 1.0
+#: Seconds a read may take before it reports progress.
+PROGRESS_AFTER_S = 2.0
+PROGRESS_EVERY_S = 5.0
+
+
+def import_extra(module: str, extra: str, what: str):
+    """Import an optional dependency, or raise :class:`MissingExtraError` naming its extra."""
+    try:
+        return importlib.import_module(module)
+    except ImportError:
+        raise MissingExtraError(f"reading {what} needs the optional package {module.split('.')[0]!r}: "
+                                f"pip install 'accelcal[{extra}]'") from None
+
+
+def check_time_source(time_source: str) -> str:
+    if time_source not in TIME_SOURCES:
+        raise TopicError(f"time_source must be one of {', '.join(TIME_SOURCES)}, got {time_source!r}")
+    return time_source
+
+
+def choose(path, candidates: dict[str, str], given: str | None, everything: dict[str, str], *,
+           kind: str, option: str) -> str:
+    """The one IMU topic of a log: ``given`` if it is one, the only candidate, else a one-line error.
+
+    Parameters
+    ----------
+    candidates : dict
+        IMU topics -> a short description (type, message count).
+    everything : dict
+        Every topic -> its description, to list when the given one is not an IMU topic.
+    kind : str
+        What a candidate is ("sensor_msgs/Imu topic", "IMU instance").
+    option : str
+        The option that chooses (``--topic``, ``--instance``).
+    """
+    if given is not None:
+        if given in candidates:
+            return given
+        if given in everything:
+            raise TopicError(f"{path}: {given} is {everything[given]}, not a {kind}; "
+                             f"{_listing(candidates, kind)}")
+        raise TopicError(f"{path}: {given} is not in this log; {_listing(candidates, kind)}")
+    if len(candidates) == 1:
+        return next(iter(candidates))
+    if not candidates:
+        others = ", ".join(f"{k} ({v})" for k, v in list(everything.items())[:8]) or "none"
+        raise TopicError(f"{path}: no {kind} in this log (topics: {others})")
+    raise TopicError(f"{path}: {len(candidates)} {kind}s: "
+                     + ", ".join(f"{k} ({v})" for k, v in candidates.items()) + f"; choose one with {option}")
+
+
+def _listing(candidates: dict, kind: str) -> str:
+    if not candidates:
+        return f"this log has no {kind}"
+    return f"{kind}s: " + ", ".join(f"{k} ({v})" for k, v in candidates.items())
+
+
+class ColumnBuffer:
+    """Rows of fixed width appended in blocks into one preallocated array (grown by doubling).
+
+    ``capacity`` is the expected number of rows (the log's message count); a log that holds
+    more grows the array, one that holds fewer is trimmed by :meth:`result`.
+    """
+
+    def __init__(self, capacity: int, width: int, dtype=np.float64):
+        self._a = np.empty((max(int(capacity), 16), width), dtype=dtype)
+        self.n = 0
+
+    def extend(self, block: np.ndarray) -> None:
+        k = len(block)
+        if self.n + k > len(self._a):
+            grown = np.empty((max(2 * len(self._a), self.n + k), self._a.shape[1]), dtype=self._a.dtype)
+            grown[: self.n] = self._a[: self.n]
+            self._a = grown
+        self._a[self.n: self.n + k] = block
+        self.n += k
+
+    def result(self) -> np.ndarray:
+        return self._a[: self.n]
+
+
+class Progress:
+    """Progress of a long read on stderr: silent for :data:`PROGRESS_AFTER_S`, then a line every few seconds.
+
+    ``progress``: None (this default behaviour), False (silent) or a callable
+    ``f(done, total)`` called instead of printing.
+    """
+
+    def __init__(self, what: str, total: int | None, progress=None, unit: str = "messages"):
+        self.what, self.total, self.unit = what, total, unit
+        self.callback: Callable | None = progress if callable(progress) else None
+        self.silent = progress is False
+        self.start = self.last = time.monotonic()
+        self.printed = False
+
+    def __call__(self, done: int) -> None:
+        if self.callback is not None:
+            self.callback(done, self.total)
+            return
+        if self.silent:
+            return
+        now = time.monotonic()
+        if now - self.start < PROGRESS_AFTER_S or (self.printed and now - self.last < PROGRESS_EVERY_S):
+            return
+        share = f" ({100 * done / self.total:.0f} %)" if self.total else ""
+        print(f"accelcal: reading {self.what}: {done:,} {self.unit}{share} ...", file=sys.stderr, flush=True)
+        self.last, self.printed = now, True
+
+
+def stamps_to_time(stamps_ns: np.ndarray, path, label: str, fix: str) -> np.ndarray:
+    """Seconds since the first stamp of strictly increasing integer nanosecond stamps; else one line."""
+    d = np.diff(stamps_ns)
+    bad = np.flatnonzero(d <= 0)
+    if bad.size:
+        i = int(bad[0]) + 1
+        what = "repeats" if d[i - 1] == 0 else "goes back"
+        raise LogFormatError(f"{path}: {label} {what} at message {i} ({int(stamps_ns[i])} ns after "
+                             f"{int(stamps_ns[i - 1])} ns; {bad.size} such steps): {fix}")
+    return (stamps_ns - stamps_ns[0]) * 1e-9
+
+
+def clock_note(sensor_ns: np.ndarray, log_ns: np.ndarray, sensor_name: str, log_name: str) -> str | None:
+    """A note when the sensor stamps and the log times disagree (module docstring), else None."""
+    lat = (log_ns - sensor_ns).astype(np.float64) * 1e-9
+    if lat.size < 2:
+        return None
+    period = float(np.median(np.diff(sensor_ns))) * 1e-9
+    lo, med, hi = np.percentile(lat, [1, 50, 99])
+    if abs(med) <= MAX_LATENCY_S and hi - lo <= MAX_LATENCY_SPREAD_PERIODS * period:
+        return None
+    return (f"the {sensor_name} and the {log_name} disagree: latency {log_name} - {sensor_name} median "
+            f"{1e3 * med:.4g} ms, 1-99 % spread {1e3 * (hi - lo):.3g} ms (sample period {1e3 * period:.3g} ms)")
+
+
+def check_rows(path, topic: str, n: int) -> None:
+    if n == 0:
+        raise TopicError(f"{path}: topic {topic} has no messages (an empty topic: record the IMU again, or choose "
+                         "another topic)")
+    if n < MIN_ROWS:
+        raise TopicError(f"{path}: topic {topic} has only {n} messages; need at least {MIN_ROWS}")
+
+
+def check_finite(path, topic: str, values: np.ndarray, what: str) -> None:
+    bad = ~np.all(np.isfinite(values), axis=1)
+    if bad.any():
+        raise LogFormatError(f"{path}: topic {topic}: non-finite {what} in message {int(np.flatnonzero(bad)[0])} "
+                             f"({int(bad.sum())} such messages)")
+
+
+def make_recording(path, *, t, acc, gyro, notes: Sequence[str], time_name: str, time_values,
+                   temp=None) -> Recording:
+    """The :class:`Recording` of an IMU topic: acc in m/s², gyro in rad/s, the recorded time column kept."""
+    return Recording(t, acc, temp, str(path), notes=tuple(notes), unit="m/s^2", time_column=(time_name, time_values),
+                     gyro=gyro, gyro_unit=None if gyro is None else "rad/s")
+
+
+__all__ = ["ColumnBuffer", "Progress", "TIME_SOURCES", "check_finite", "check_rows", "check_time_source", "choose",
+           "clock_note", "import_extra", "make_recording", "stamps_to_time"]

@@ -1,0 +1,343 @@
+"""ROS 1 bags, ROS 2 bags (sqlite3 or MCAP, a bag folder or its storage file) and bare MCAP files.
+
+Read through the ``rosbags`` library (pure Python, the ``ros`` extra), one
+``sensor_msgs/Imu`` topic into a :class:`~accelcal.recording.Recording`:
+``linear_acceleration`` [m/s²] as ``acc``, ``angular_velocity`` [rad/s] as ``gyro``.
+
+Type stores: ROS 1 messages are checked against the ROS 1 (Noetic) definition of
+``sensor_msgs/Imu`` (its md5 sum, which every ROS 1 bag stores), ROS 2 messages against
+the newest ROS 2 store (the RIHS01 hash where the bag stores one); the definition has
+not changed between distributions.  A topic of that name with another definition is
+refused rather than misread.
+
+Decoding.  ``rosbags`` deserialises a message into Python objects at about 16 µs each,
+as much again as iterating the bag; an hour at 400 Hz would spend half a minute there.
+``sensor_msgs/Imu`` has one variable-length field, ``header.frame_id``, before 37
+doubles, so the layout of a message follows from its frame id's length (CDR aligns the
+doubles to 8 bytes; ROS 1 serialisation does not align): messages are gathered in
+chunks of :data:`CHUNK` raw byte strings and decoded together with numpy.  Every message
+is checked to have exactly the standard length for its frame id, and the first one is
+also deserialised by ``rosbags`` and compared, so a layout that is not the standard one
+cannot be read silently wrong.  Memory: the output arrays (preallocated from the bag's
+message count) plus one chunk.
+
+Time: ``time_source='header'`` (default) uses ``header.stamp``, ``'log'`` the time the
+bag recorded the message; ``t`` is seconds since the first sample, and the recorded
+nanoseconds are kept as the recording's time column (``header_stamp_ns`` or
+``log_time_ns``).
+"""
+
+from __future__ import annotations
+
+import struct
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import LogFormatError, TopicError
+from ._common import (ColumnBuffer, Progress, check_finite, check_rows, check_time_source, choose, clock_note,
+                      import_extra, make_recording, stamps_to_time)
+
+IMU_TYPE = "sensor_msgs/msg/Imu"
+ROS1_MAGIC = b"#ROSBAG V2.0\n"
+MCAP_MAGIC = b"\x89MCAP0\r\n"
+SQLITE_MAGIC = b"SQLite format 3\x00"
+#: Raw messages decoded together (bounded memory: CHUNK × ~330 bytes).
+CHUNK = 8192
+#: Bytes of the 37 doubles after the header: orientation (4), its covariance (9),
+#: angular_velocity (3), covariance (9), linear_acceleration (3), covariance (9).
+_BODY = 37 * 8
+_GYRO_AT, _ACC_AT = (4 + 9) * 8, (4 + 9 + 3 + 9) * 8
+EXTRA = "ros"
+
+
+def sniff(path, head: bytes) -> bool:
+    """True for a ROS 1 bag, a ROS 2 bag folder (or its metadata.yaml), a .db3 bag file or an MCAP file."""
+    path = Path(path)
+    if path.is_dir():
+        return (path / "metadata.yaml").is_file()
+    if path.name == "metadata.yaml":
+        return head.lstrip().startswith(b"rosbag2_bagfile_information")
+    return head.startswith(ROS1_MAGIC) or head.startswith(MCAP_MAGIC) or \
+        (head.startswith(SQLITE_MAGIC) and path.suffix == ".db3")
+
+
+def read(path, *, topic: str | None = None, time_source: str = "header", instance=None, progress=None):
+    """Read the ``sensor_msgs/Imu`` topic of a ROS bag or MCAP file.
+
+    Parameters
+    ----------
+    path : path-like
+        ROS 1 ``.bag``; ROS 2 bag folder, its ``metadata.yaml``, or its ``.db3`` / ``.mcap``
+        storage file; a bare ``.mcap`` file.
+    topic : str, optional
+        The IMU topic; default the only ``sensor_msgs/Imu`` topic (several: an error
+        that lists them).
+    time_source : {'header', 'log'}
+        ``header.stamp`` (default) or the bag's record time.
+    instance : None
+        Not used by ROS logs (a PX4 option); must be None.
+    progress : None, False or callable
+        Progress on stderr after 2 s (None), silent (False), or ``f(done, total)``.
+
+    Returns
+    -------
+    Recording
+        ``acc`` [m/s²], ``gyro`` [rad/s], ``t`` [s] from the first sample, ``notes``.
+
+    Raises
+    ------
+    MissingExtraError, LogFormatError, TopicError
+        One line naming the cause and the fix.
+    """
+    check_time_source(time_source)
+    if instance is not None:
+        raise TopicError(f"{path}: --instance chooses a PX4 sensor instance; a ROS bag has topics (--topic)")
+    path = Path(path)
+    import_extra("rosbags", EXTRA, "ROS bags and MCAP files")
+    bag_path, kind = _locate(path)
+    from rosbags.typesys import Stores, get_typestore
+
+    ros1 = kind == "ROS 1 bag"
+    typestore = get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.LATEST)
+    with _open(bag_path, kind) as reader:
+        conns = _connections(reader, bag_path, kind)
+        everything = {c.topic: f"{c.msgtype}, {c.msgcount} messages" for c in conns}
+        imu = {c.topic: f"{c.msgcount} messages" for c in conns if c.msgtype == IMU_TYPE}
+        name = choose(path, imu, topic, everything, kind="sensor_msgs/Imu topic", option="--topic")
+        mine = [c for c in conns if c.topic == name]
+        _check_definition(path, name, mine, typestore, ros1)
+        count = sum(max(int(c.msgcount or 0), 0) for c in mine)
+        decoded = _stream(reader, mine, path, name, kind, count, ros1, typestore, progress)
+    return _recording(path, name, kind, decoded, time_source)
+
+
+def _locate(path: Path) -> tuple[Path, str]:
+    """The path rosbags opens and the kind of log, or a one-line error."""
+    if not path.exists():
+        raise LogFormatError(f"{path}: no such file or folder")
+    if path.is_dir():
+        if not (path / "metadata.yaml").is_file():
+            raise LogFormatError(f"{path}: a folder without metadata.yaml is not a ROS 2 bag; give the .db3 or .mcap "
+                                 "file inside it")
+        return path, "ROS 2 bag"
+    if path.name == "metadata.yaml":
+        return path.parent, "ROS 2 bag"
+    with open(path, "rb") as f:
+        head = f.read(16)
+    if head.startswith(ROS1_MAGIC):
+        return path, "ROS 1 bag"
+    if head.startswith(MCAP_MAGIC):
+        if path.suffix != ".mcap":
+            raise LogFormatError(f"{path}: an MCAP file named without .mcap; rename it to end in .mcap")
+        return path, "MCAP file"
+    if head.startswith(SQLITE_MAGIC) and path.suffix == ".db3":
+        return path, "ROS 2 bag file (sqlite3)"
+    raise LogFormatError(f"{path}: not a ROS bag or MCAP file (no ROS 1, MCAP or sqlite3 signature)")
+
+
+class _open:
+    """Open a bag with rosbags; every failure becomes one LogFormatError line."""
+
+    def __init__(self, path: Path, kind: str):
+        self.path, self.kind = path, kind
+
+    def __enter__(self):
+        try:
+            if self.kind == "ROS 1 bag":
+                from rosbags.rosbag1 import Reader
+            else:
+                from rosbags.rosbag2 import Reader
+            self.reader = Reader(self.path)
+            self.reader.open()
+        except Exception as e:  # rosbags, sqlite3, struct, yaml, zstd: all mean a damaged or foreign file
+            raise LogFormatError(f"{self.path}: cannot open this {self.kind} ({_why(e)}); "
+                                 f"{_fix(self.kind)}") from None
+        return self.reader
+
+    def __exit__(self, *exc):
+        try:
+            self.reader.close()
+        except Exception:  # closing a damaged bag may fail again; the first error is the one to report
+            pass
+        return False
+
+
+def _why(e: Exception) -> str:
+    text = " ".join(str(e).split()) or type(e).__name__
+    return text[:160]
+
+
+def _fix(kind: str) -> str:
+    if kind == "ROS 1 bag":
+        return "the bag is damaged or was not closed (an unindexed bag: run `rosbag reindex` on it)"
+    return "the bag is damaged or truncated (a bag still being recorded, or a partial copy): record or copy it again"
+
+
+def _connections(reader, path, kind):
+    try:
+        return list(reader.connections)
+    except Exception as e:
+        raise LogFormatError(f"{path}: cannot list the topics of this {kind} ({_why(e)}); {_fix(kind)}") from None
+
+
+def _check_definition(path, topic, conns, typestore, ros1: bool) -> None:
+    """Refuse a topic typed sensor_msgs/Imu whose stored definition is not the standard one."""
+    for c in conns:
+        if ros1:
+            want = typestore.generate_msgdef(IMU_TYPE)[1]
+            if c.digest and c.digest != want:
+                raise TopicError(f"{path}: topic {topic} is sensor_msgs/Imu with a non-standard definition "
+                                 f"(md5 {c.digest}, the standard one is {want}); it cannot be read as an IMU")
+        elif c.digest and c.digest.startswith("RIHS01_") and c.digest != typestore.hash_rihs01(IMU_TYPE):
+            raise TopicError(f"{path}: topic {topic} is sensor_msgs/msg/Imu with a non-standard definition "
+                             f"(type hash {c.digest[:20]}...); it cannot be read as an IMU")
+
+
+def _stream(reader, conns, path, topic, kind, count, ros1, typestore, progress) -> dict:
+    """Decode every message of the topic into preallocated arrays (module docstring)."""
+    floats = ColumnBuffer(count, 6)
+    stamps = ColumnBuffer(count, 2, np.int64)
+    report = Progress(f"{path} {topic}", count or None, progress)
+    decoder = _Decoder(path, topic, ros1)
+    raws, logs, frames = [], [], set()
+    first = True
+    try:
+        for _, log_ns, raw in reader.messages(connections=conns):
+            if first:
+                _compare_with_rosbags(path, topic, raw, ros1, typestore, decoder)
+                first = False
+            raws.append(bytes(raw))
+            logs.append(log_ns)
+            if len(raws) == CHUNK:
+                decoder.flush(raws, logs, floats, stamps, frames)
+                report(floats.n)
+        decoder.flush(raws, logs, floats, stamps, frames)
+    except (LogFormatError, TopicError):
+        raise
+    except Exception as e:  # a damaged chunk, index or compressed block in the middle of the bag
+        raise LogFormatError(f"{path}: {kind} damaged after {floats.n + len(raws)} messages of {topic} "
+                             f"({_why(e)}); {_fix(kind)}") from None
+    return {"floats": floats.result(), "stamps": stamps.result(), "frames": frames}
+
+
+class _Decoder:
+    """Numpy decoding of raw ``sensor_msgs/Imu`` messages, ROS 1 or CDR (module docstring)."""
+
+    def __init__(self, path, topic, ros1: bool):
+        self.path, self.topic, self.ros1 = path, topic, ros1
+        self.count = 0
+
+    def layout(self, raw: bytes) -> tuple[int, str, int]:
+        """(offset of the first double, byte order, frame id length) of one message; checks its length."""
+        n = len(raw)
+        if self.ros1:  # seq, secs, nsecs, string length: little-endian, no alignment
+            if n < 16:
+                self._short(n, 16)
+            flen = struct.unpack_from("<I", raw, 12)[0]
+            body, order = 16 + flen, "<"
+        else:  # 4-byte encapsulation header, then the CDR payload; doubles aligned to 8 within it
+            if n < 16 or raw[0] != 0 or raw[1] not in (0, 1):
+                raise LogFormatError(f"{self.path}: topic {self.topic}: message {self.count} is not plain CDR "
+                                     f"(encapsulation {raw[:2].hex() if n >= 2 else 'missing'})")
+            order = "<" if raw[1] == 1 else ">"
+            flen = struct.unpack_from(order + "I", raw, 12)[0]
+            body = 4 + -(-(12 + flen) // 8) * 8
+        if n != body + _BODY:
+            self._short(n, body + _BODY)
+        return body, order, flen
+
+    def _short(self, n: int, want: int) -> None:
+        raise LogFormatError(f"{self.path}: topic {self.topic}: message {self.count} has {n} bytes where a standard "
+                             f"sensor_msgs/Imu with its frame id has {want} (truncated or not the standard type)")
+
+    def flush(self, raws: list, logs: list, floats: ColumnBuffer, stamps: ColumnBuffer, frames: set) -> None:
+        if not raws:
+            return
+        lay = [self.layout(r) for r in raws] if len({len(r) for r in raws}) > 1 else None
+        if lay is None:
+            body, order, flen = self.layout(raws[0])
+            block = np.frombuffer(b"".join(raws), dtype=np.uint8).reshape(len(raws), -1)
+            flens = _field(block, 12, order + "u4")
+            if np.all(flens == flen):
+                floats.extend(np.hstack([_field(block, body + _ACC_AT, order + "f8", 3),
+                                         _field(block, body + _GYRO_AT, order + "f8", 3)]))
+                # both serialisations put the stamp at byte 4 and the frame id's characters at byte 16
+                sec = _field(block, 4, order + ("u4" if self.ros1 else "i4")).astype(np.int64)
+                nsec = _field(block, 8, order + "u4").astype(np.int64)
+                stamps.extend(np.column_stack([sec * 1_000_000_000 + nsec, np.asarray(logs, dtype=np.int64)]))
+                frames.add(bytes(block[0, 16:16 + flen]).rstrip(b"\0"))
+                self.count += len(raws)
+                raws.clear()
+                logs.clear()
+                return
+            lay = [self.layout(r) for r in raws]
+        for raw, log_ns, (body, order, flen) in zip(raws, logs, lay):  # frame ids of varying length: one by one
+            acc = struct.unpack_from(order + "3d", raw, body + _ACC_AT)
+            gyro = struct.unpack_from(order + "3d", raw, body + _GYRO_AT)
+            sec, nsec = struct.unpack_from(order + ("II" if self.ros1 else "iI"), raw, 4)
+            floats.extend(np.array([acc + gyro]))
+            stamps.extend(np.array([[sec * 1_000_000_000 + nsec, log_ns]], dtype=np.int64))
+            frames.add(raw[16:16 + flen].rstrip(b"\0"))
+            self.count += 1
+        raws.clear()
+        logs.clear()
+
+
+def _field(block: np.ndarray, at: int, dtype: str, k: int = 1) -> np.ndarray:
+    """Column ``at`` .. ``at + k·size`` of a block of equal-length messages as values of ``dtype``."""
+    size = np.dtype(dtype).itemsize
+    out = np.ascontiguousarray(block[:, at: at + k * size]).view(dtype)
+    return out if k > 1 else out[:, 0]
+
+
+def _compare_with_rosbags(path, topic, raw, ros1, typestore, decoder) -> None:
+    """Deserialise the first message with rosbags too: the fast layout must give the same numbers."""
+    try:
+        msg = typestore.deserialize_ros1(raw, IMU_TYPE) if ros1 else typestore.deserialize_cdr(raw, IMU_TYPE)
+    except Exception as e:
+        raise LogFormatError(f"{path}: topic {topic}: the first message does not deserialise as sensor_msgs/Imu "
+                             f"({_why(e)})") from None
+    body, order, _ = decoder.layout(bytes(raw))
+    fast = struct.unpack_from(order + "3d", raw, body + _ACC_AT) + struct.unpack_from(order + "3d", raw,
+                                                                                      body + _GYRO_AT)
+    ref = (msg.linear_acceleration.x, msg.linear_acceleration.y, msg.linear_acceleration.z,
+           msg.angular_velocity.x, msg.angular_velocity.y, msg.angular_velocity.z)
+    if not np.array_equal(np.array(fast), np.array(ref), equal_nan=True):
+        raise LogFormatError(f"{path}: topic {topic}: the message layout is not the standard sensor_msgs/Imu")
+
+
+def _recording(path, topic, kind, decoded, time_source):
+    floats, stamps = decoded["floats"], decoded["stamps"]
+    check_rows(path, topic, len(floats))
+    acc, gyro = floats[:, :3], floats[:, 3:]
+    check_finite(path, topic, acc, "linear_acceleration")
+    check_finite(path, topic, gyro, "angular_velocity")
+    header_ns, log_ns = stamps[:, 0], stamps[:, 1]
+    frames = ", ".join(sorted(f.decode("utf-8", "replace") or "''" for f in decoded["frames"]))
+    notes = [f"{kind}, topic {topic} (sensor_msgs/Imu, frame {frames}): {len(acc)} messages; "
+             "linear_acceleration [m/s^2] and angular_velocity [rad/s]"]
+    if time_source == "header":
+        if np.all(header_ns == 0):
+            raise LogFormatError(f"{path}: topic {topic}: every header stamp is zero (the driver does not stamp its "
+                                 "messages); use the bag's record time (--time-source log)")
+        late = int(np.sum(np.diff(header_ns) < 0))
+        if late:  # a bag is in record order: latency jitter can swap messages the sensor stamped in order
+            order = np.argsort(header_ns, kind="stable")
+            acc, gyro, header_ns, log_ns = acc[order], gyro[order], header_ns[order], log_ns[order]
+            notes.append(f"{late} message(s) were recorded out of header-stamp order: sorted by header stamp")
+        t = stamps_to_time(header_ns, path, f"topic {topic}: header.stamp",
+                           "the driver's stamps are not in order; use the bag's record time (--time-source log)")
+        notes.append("time: header.stamp, t = 0 at the first message")
+        time_col = ("header_stamp_ns", header_ns.copy())
+    else:
+        t = stamps_to_time(log_ns, path, f"topic {topic}: the bag's record time", "the bag is damaged")
+        notes.append("time: the bag's record time (--time-source log), t = 0 at the first message")
+        time_col = ("log_time_ns", log_ns.copy())
+    note = clock_note(header_ns, log_ns, "header stamps", "bag record times")
+    if note and np.any(header_ns != 0):
+        notes.append(f"warning: {note}; {'header stamps used' if time_source == 'header' else 'record times used'}")
+    return make_recording(path, t=t, acc=acc, gyro=gyro, notes=notes, time_name=time_col[0], time_values=time_col[1])
+
+
+__all__ = ["EXTRA", "IMU_TYPE", "read", "sniff"]

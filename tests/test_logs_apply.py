@@ -1,0 +1,77 @@
+"""A calibration applied to a log's IMU topic, written as a table (time as recorded, calibrated
+accelerometer, gyroscope passed through)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import accelcal
+from accelcal.calibration import FullLLSCalibration
+from accelcal.errors import AccelcalError
+from accelcal.formats_logs import ros, px4
+from accelcal.formats_logs.apply import apply_to_log
+from accelcal.formats_logs.synthetic import write_imu_bag
+
+DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
+BAG = DATA / "imutk_fork_sessions" / "data1" / "rosbag2_2023_08_11-21_37_35"
+ULOG = DATA / "px4_ulog" / "sample_log_small.ulg"
+STATIC = {"window": 0.5, "min_duration": 0.5, "trim": 0.1}
+
+
+@pytest.fixture(scope="module")
+def calibration(tmp_path_factory):
+    if not BAG.is_dir():
+        pytest.skip("shared data not present")
+    cal, _ = accelcal.calibrate_recording(ros.read(BAG), 9.80665, "full_lls", static=STATIC)
+    path = tmp_path_factory.mktemp("cal") / "cal.json"
+    cal.save(path)
+    return path
+
+
+def test_the_real_bag_calibrated_with_its_own_calibration(tmp_path, calibration):
+    out = tmp_path / "calibrated.csv"
+    summary = apply_to_log(BAG, calibration, out)
+    table = pd.read_csv(out)
+    rec = ros.read(BAG)
+    assert summary["n"] == len(table) == rec.n
+    assert list(table.columns) == ["header_stamp_ns", "ax", "ay", "az", "gx", "gy", "gz"]
+    assert np.array_equal(table["header_stamp_ns"].to_numpy(), rec.time_column[1])
+    expected = accelcal.load_calibration(calibration).apply(rec.acc)
+    assert np.array_equal(table[["ax", "ay", "az"]].to_numpy(), expected)  # round-trip float repr
+    assert np.array_equal(table[["gx", "gy", "gz"]].to_numpy(), rec.gyro)
+    # the calibration moves the static norm towards g
+    norm = np.linalg.norm(expected, axis=1)
+    assert abs(np.median(norm) - 9.80665) < abs(np.median(np.linalg.norm(rec.acc, axis=1)) - 9.80665)
+
+
+def test_a_px4_log_is_applied_with_its_time_column(tmp_path, calibration):
+    if not ULOG.is_file():
+        pytest.skip("shared data not present")
+    out = tmp_path / "px4.csv"
+    apply_to_log(ULOG, calibration, out)
+    table = pd.read_csv(out)
+    assert len(table) == px4.read(ULOG).n and table.columns[0] == "timestamp_us"
+    assert np.all(np.diff(table["timestamp_us"]) > 0)
+
+
+def test_a_failing_read_writes_nothing(tmp_path, calibration):
+    bad = tmp_path / "bad.bag"
+    bad.write_bytes(b"#ROSBAG V2.0\n" + b"\0" * 50)
+    out = tmp_path / "out.csv"
+    with pytest.raises(AccelcalError):
+        apply_to_log(bad, calibration, out)
+    assert not out.exists()
+
+
+def test_a_counts_calibration_on_a_log_in_m_s2_is_refused(tmp_path):
+    rng = np.random.default_rng(2)
+    cal = FullLLSCalibration(bias=np.zeros(3), M=400 * np.eye(3), g=9.80665, unit="counts", input_unit="counts")
+    p = write_imu_bag(tmp_path / "b", 1.7e9 + np.arange(50) / 100, np.tile([0, 0, 9.8], (50, 1)) +
+                      rng.normal(size=(50, 3)) * 0.01, np.zeros((50, 3)))
+    with pytest.raises(AccelcalError, match="m/s\\^2.*counts"):
+        apply_to_log(p, cal, tmp_path / "o.csv")
+    assert not (tmp_path / "o.csv").exists()
