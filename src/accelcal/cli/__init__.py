@@ -1,0 +1,60 @@
+"""Command line: ``accelcal calibrate``, ``accelcal apply``, ``accelcal discrepancy``, ``accelcal noise``.
+
+One module per subcommand (``add_parser`` and its handler), the shared options in
+:mod:`.common`.
+
+Nothing numerical is imported at module level: ``accelcal --help`` must start at once.
+Every failure the user can fix is one ``accelcal: error:`` line on stderr naming the
+cause and the option that fixes it, exit status 2, and no output file; warnings about a
+result that was written are ``warning:`` lines (a clean fit prints none).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+from .. import __version__
+from ..errors import AccelcalError
+from ..formats.registry import formats_help
+from . import apply, calibrate, discrepancy, noise
+from .common import MODEL_HELP, STANDARD_GRAVITY, _methods_help, fail
+
+#: The subcommands, in the order the help lists them.
+SUBCOMMANDS = (calibrate, apply, discrepancy, noise)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = _parser()
+    args = parser.parse_args(argv)
+    try:
+        return args.func(args)
+    except AccelcalError as exc:
+        return fail(str(exc))
+    except OSError as exc:
+        return fail(f"{exc.strerror or exc}: {exc.filename}" if getattr(exc, "filename", None) else str(exc))
+    except KeyboardInterrupt:
+        return fail("interrupted", code=130)
+    except Exception as exc:  # never a traceback for the user; ACCELCAL_DEBUG=1 shows it
+        if os.environ.get("ACCELCAL_DEBUG"):
+            raise
+        return fail(f"internal error ({type(exc).__name__}: {exc}); rerun with ACCELCAL_DEBUG=1 and report it", code=3)
+
+
+def _parser() -> argparse.ArgumentParser:
+    epilog = MODEL_HELP.format(methods=_methods_help(), formats=formats_help())
+    p = argparse.ArgumentParser(prog="accelcal", description="Accelerometer calibration from static poses.",
+                                formatter_class=argparse.RawDescriptionHelpFormatter, epilog=epilog)
+    p.add_argument("--version", action="version", version=f"accelcal {__version__}")
+    sub = p.add_subparsers(dest="command", required=True)
+    for command in SUBCOMMANDS:
+        command.add_parser(sub, epilog)
+    return p
+
+
+__all__ = ["STANDARD_GRAVITY", "main"]
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,73 @@
+"""``accelcal apply``: a calibration applied to a recording, written as a table."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from ..effects import TIME, effect
+from ..errors import AccelcalError
+from .common import _read, _reader_options, warn
+
+APPLY_HELP = """\
+CALIBRATION is the JSON of `accelcal calibrate` or the report of `accelcal
+discrepancy` (its base model plus the named effects, e.g. a temperature term).
+RECORDING is read with the same readers and options as for calibrate, in the unit
+the calibration was made from. The output CSV keeps the time column as it was and
+writes the calibrated ax, ay, az in m/s^2 (and temp, if present).
+"""
+
+
+def add_parser(sub, epilog: str) -> None:
+    """The ``apply`` subcommand."""
+    a = sub.add_parser("apply", help="apply a calibration to a recording",
+                       description="Apply CALIBRATION to RECORDING: calibrated specific force in m/s^2.",
+                       formatter_class=argparse.RawDescriptionHelpFormatter, epilog=APPLY_HELP)
+    a.add_argument("calibration", type=Path, help="calibration JSON (accelcal calibrate, or a discrepancy report)")
+    a.add_argument("recording", type=Path, help="the recording to correct")
+    a.add_argument("--out", type=Path, required=True, help="output CSV (written only on success)")
+    a.add_argument("--no-effects", action="store_true", help="apply the base model only, not the fitted effects")
+    _reader_options(a)
+    a.set_defaults(func=_apply)
+
+
+def _apply(args) -> int:
+    from dataclasses import replace
+
+    from ..atomic import sha256_file
+    from ..calibration import load_calibration
+
+    cal = load_calibration(args.calibration)
+    rec = _read(args)
+    expected = cal.input_unit or cal.unit
+    if expected is not None and rec.unit != ("counts" if expected == "counts" else "m/s^2"):
+        raise AccelcalError(f"{args.recording} is read as {rec.unit} but {args.calibration} was made from "
+                            f"{expected}: pass --unit {'counts' if expected == 'counts' else 'm/s2 (or g, mg)'}")
+    effects = () if args.no_effects else cal.effects
+    # a term in time runs on the calibration session's clock: it describes that session only
+    drift = [e.id for e in effects if effect(e.id).covariate == TIME]
+    if drift and cal.provenance.get("recording_sha256") != sha256_file(args.recording):
+        warn(f"the calibration's {', '.join(drift)} term describes the drift during its own session; it is not "
+              "applied to another recording")
+        effects = tuple(e for e in effects if e.id not in drift)
+    cal = replace(cal, effects=effects)
+    x = cal.apply(rec.acc, t=rec.t, temp=rec.temp, unit=rec.unit)
+    _write_corrected(args.out, rec, x)
+    names = ", ".join(e.id for e in effects) or "none"
+    print(f"apply: {rec.n} samples of {args.recording} calibrated with {args.calibration} ({cal.CAL_TYPE}; "
+          f"effects applied: {names}); ax, ay, az in m/s^2 written to {args.out}", file=sys.stderr)
+    return 0
+
+
+def _write_corrected(path: Path, rec, x) -> None:
+    import pandas as pd
+
+    from ..atomic import atomic_output
+
+    time_name, time_values = rec.time_column if rec.time_column is not None else ("t", rec.t)
+    data = {time_name: time_values, "ax": x[:, 0], "ay": x[:, 1], "az": x[:, 2]}
+    if rec.temp is not None:
+        data["temp"] = rec.temp
+    with atomic_output(path) as tmp, open(tmp, "w", newline="") as f:
+        pd.DataFrame(data).to_csv(f, index=False)

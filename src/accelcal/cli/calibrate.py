@@ -1,0 +1,113 @@
+"""``accelcal calibrate``: estimate the errors from a recording's static poses and say whether to trust them."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from ..registry import ESTIMATORS, estimators
+from .common import (STANDARD_GRAVITY, _gravity, _nominal, _provenance, _rate_hint, _read, _reader_options,
+                     _static_options, _static_settings, _step, _fmt, warn)
+
+
+def add_parser(sub, epilog: str) -> None:
+    """The ``calibrate`` subcommand."""
+    c = sub.add_parser("calibrate", help="estimate bias, scale factors and non-orthogonality from a recording",
+                       description="Find the static poses of RECORDING, estimate the accelerometer errors and say "
+                                   "whether the fit can be trusted (residuals against the noise measured at the rests).",
+                       formatter_class=argparse.RawDescriptionHelpFormatter, epilog=epilog)
+    c.add_argument("recording", type=Path, help="the recording (see 'input' below)")
+    c.add_argument("--g", type=_gravity, default=None,
+                   help=f"local gravity magnitude [m/s^2] (default {STANDARD_GRAVITY}, standard gravity)")
+    c.add_argument("--method", choices=[e.cli_name for e in estimators("accelerometer")], default="full-lls",
+                   help="estimator (default full-lls)")
+    c.add_argument("--out", type=Path, required=True, help="calibration JSON (written only on success)")
+    c.add_argument("--figures", type=Path, default=None, metavar="DIR",
+                   help="also draw calibration_coverage (.png, .pdf): the pose directions on the sphere")
+    _reader_options(c)
+    n = c.add_argument_group("raw counts to m/s^2 before the fit (the bias-only models need it)")
+    n.add_argument("--sensitivity", metavar="S[,S,S][/g|/m/s2]",
+                   help="the data sheet's sensitivity, counts per g (default) or per m/s2; then M is the gain "
+                        "relative to it and b is in m/s^2")
+    n.add_argument("--zero", metavar="C[,C,C]", help="the output at zero specific force [counts] (default 0)")
+    _static_options(c)
+    c.set_defaults(func=_calibrate)
+
+
+def _calibrate(args) -> int:
+    from ..calibration import calibrate_recording
+    from ..errors import RecordingError
+
+    t0 = time.perf_counter()
+    rec = _read(args)
+    g = STANDARD_GRAVITY if args.g is None else args.g
+    static = _static_settings(args, rec)
+    method = args.method
+    with _step(f"detecting static poses and estimating {method} from {rec.n} samples"):
+        try:
+            cal, poses = calibrate_recording(rec, g, method, static=static, conversion=_nominal(args, rec))
+        except RecordingError as e:
+            raise RecordingError(f"{e}{_rate_hint(rec)}") from None
+    prov = {**_provenance(args, t0), "g_source": "--g" if args.g is not None else "standard gravity (no --g)"}
+    cal = _with_provenance(cal, prov)
+    figures = []
+    if args.figures is not None:
+        from ..calibration_figures import coverage_figure
+
+        with _step("drawing figures"):
+            figures = [("calibration_coverage", coverage_figure(cal, title=args.recording.name))]
+    cal.save(args.out)
+    if figures:
+        from ..plotting import save_figure
+
+        for name, fig in figures:
+            save_figure(fig, Path(args.figures) / name)
+    _summary(cal, poses, rec, args)
+    for w in cal.quality.warnings:
+        warn(w)
+    return 0
+
+
+def _with_provenance(cal, extra: dict):
+    from dataclasses import replace
+
+    return replace(cal, provenance={**cal.provenance, **extra})
+
+
+def _summary(cal, poses, rec, args) -> None:
+    import numpy as np
+
+    q = cal.quality
+    est = ESTIMATORS[cal.CAL_TYPE]
+    where = {"initial_rest": f"noise reference: initial rest (0-{rec.t[poses.init_rest[1] - 1] - rec.t[0]:.1f} s)",
+             "quietest_stretch": "noise reference: the quietest 2 s (no initial rest)",
+             "known_intervals": "known static intervals"}[poses.reference]
+    g_note = f"g = {cal.g:g} m/s^2" + ("" if args.g is not None else " (standard gravity: pass --g for the local value)")
+    data = cal.unit if cal.input_unit in (None, cal.unit) else \
+        f"{cal.input_unit}, converted to {cal.unit} by the nominal sensitivity"
+    lines = [f"{est.cli_name}: {cal.n_poses} poses ({where}); data in {data}; {g_note}"]
+    lines += [f"  read: {n}" for n in rec.notes if n]
+    if poses.reference_note:
+        lines.append(f"  {poses.reference_note}")
+    excess = f"{q.excess:.3g}x the pose noise (chi2/dof {q.chi2 / q.dof:.3g} on {q.dof} dof, p = {q.p_value:.2g})" \
+        if q.dof > 0 else "not checkable (no degree of freedom)"
+    lines.append(f"  residual RMS {1e3 * q.residual_rms:.3g} mm/s^2 = {excess}; noise alone predicts "
+                 f"{1e3 * q.predicted_rms:.3g} mm/s^2 per pose")
+    lines.append(f"  poses: {q.distinct_orientations} distinct orientations, sphere coverage {100 * q.coverage:.0f}% "
+                 f"(within 30 deg)")
+    se = cal.standard_errors_noise
+    z = cal.unit
+    lines.append(f"  bias [{z}]".ljust(26) + _fmt(cal.bias, se["bias"]))
+    if cal.model == "full":
+        if cal.unit == "counts":
+            lines.append("  gain [counts/(m/s^2)]".ljust(26) + _fmt(cal.gain, se["scale_factors"]))
+        else:
+            lines.append("  scale [ppm]".ljust(26) + _fmt(cal.scale_factors * 1e6, se["scale_factors"] * 1e6))
+        lines.append("  nonorth [deg]".ljust(26) + _fmt(cal.nonorthogonality_deg, se["nonorthogonality_deg"]))
+    k = max(1.0, q.excess) if np.isfinite(q.excess) else 1.0
+    lines.append("  ±: standard errors from the pose noise measured at the rests"
+                 + (f", x{k:.3g} for the excess" if k > 1 else ""))
+    lines.append(f"  written to {args.out}")
+    print("\n".join(lines), file=sys.stderr)

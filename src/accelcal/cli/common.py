@@ -1,0 +1,208 @@
+"""What the subcommands share: the reading and static-detection options, option types,
+the one-line error and warning, the progress line, provenance."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import threading
+import time
+from contextlib import contextmanager
+from pathlib import Path
+
+from .. import __version__
+from ..errors import AccelcalError
+from ..formats.registry import FORMATS
+from ..registry import estimators
+
+STANDARD_GRAVITY = 9.80665
+
+MODEL_HELP = """\
+model (Burkhard et al. 2024, eq. 1):  z = M x + b + e
+  z  measured specific force of a static pose (mean of the rest interval)
+  x  true specific force, |x| = g at rest
+  b  bias;  M lower triangular, row i = (1 + s_i) u_i with scale factors s and
+     non-orthogonality angles (theta_xy, theta_zx, theta_zy), see accelcal.model
+
+methods:
+{methods}
+
+input: a table with time and three acceleration columns, e.g. a CSV with header
+  t,ax,ay,az[,temp]; columns are found by their usual names (time, timestamp,
+  acc_x, accX, AX, Accel. X, ...) or named with --columns t=...,ax=...,ay=...,az=...;
+  comma, semicolon, tab or whitespace separated, decimal comma, # comments, gzip.
+  temp      optional temperature column [degC]
+{formats}
+units: acceleration in m/s^2, g, mg or raw counts (from the header, --unit, or the
+  data's magnitude); g and mg are converted to m/s^2. --g is the local gravity in
+  m/s^2. For raw counts the full models' M carries the sensitivity (counts per
+  m/s^2) and b is in counts; the bias-only models need physical units.
+  Time in s, ms, us, ns or ISO 8601 date-times (from the header, --time-unit, or
+  the values), or --rate HZ when there is none.
+rests: the recording should start at rest (its noise sets the detection threshold,
+  as in IMU-TK); if it does not, the quietest 2 s stretch is used, and said so.
+  Known rests can be given with --intervals (imucal section list, CSV start,end).
+"""
+
+def _methods_help() -> str:
+    return "\n".join(f"  {e.cli_name:<10} {e.description}, >= {e.min_poses} poses" for e in estimators("accelerometer"))
+
+
+def fail(message: str, code: int = 2) -> int:
+    print(f"accelcal: error: {message.splitlines()[0] if message else 'failed'}", file=sys.stderr)
+    return code
+
+
+def warn(message: str) -> None:
+    print(f"warning: {message}", file=sys.stderr)
+
+
+def _positive(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not v > 0 or v != v or v == float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    return v
+
+
+def _gravity(text: str) -> float:
+    v = _positive(text)
+    if not 9.7 <= v <= 9.9:
+        raise argparse.ArgumentTypeError(f"{text} is not a gravity magnitude in m/s^2 (9.78-9.83 on the Earth's "
+                                         "surface; data in g are converted, pass --unit g)")
+    return v
+
+
+def _reader_options(p) -> None:
+    r = p.add_argument_group("reading the recording")
+    # the reader checks the name (one error line, as for every input), so no argparse choices
+    names = ", ".join(["auto", *FORMATS])
+    r.add_argument("--format", default="auto", metavar="FMT", help=f"file format ({names}; default auto)")
+    r.add_argument("--columns", metavar="SPEC",
+                   help="which column is which: t=NAME,ax=NAME,ay=NAME,az=NAME[,temp=NAME] (names or 1-based numbers)")
+    r.add_argument("--unit", metavar="UNIT", help="acceleration unit: m/s2, g, mg or counts (overrides the header)")
+    r.add_argument("--time-unit", metavar="UNIT", help="unit of the time column: s, ms, us or ns")
+    r.add_argument("--rate", type=_positive, metavar="HZ", help="sampling rate: time from the sample index")
+    r.add_argument("--intervals", type=Path, metavar="FILE",
+                   help="known static intervals: imucal section list (JSON), JSON [[start, end], ...] in s, "
+                        "or CSV with start,end columns (s, or start_index,end_index in samples)")
+
+
+def _static_options(p) -> None:
+    s = p.add_argument_group("static detection (ignored with known intervals)")
+    s.add_argument("--init-rest", default="auto", metavar="auto|none|SECONDS",
+                   help="noise reference: auto (the initial rest, or the quietest 2 s if the recording does not start "
+                        "at rest), none (the quietest 2 s), or the initial rest's length in s (default auto)")
+    s.add_argument("--window", type=_positive, metavar="S", help="moving-variance window [s] (default 1)")
+    s.add_argument("--threshold", type=_positive, metavar="K",
+                   help="static if the window variance is below K x the reference's (default 6)")
+    s.add_argument("--min-duration", type=float, metavar="S", help="shortest pose kept [s] (default 1)")
+    s.add_argument("--trim", type=float, metavar="S", help="cut from each end of a pose that borders motion [s] "
+                                                           "(default 0.25)")
+
+
+@contextmanager
+def _step(what: str, after_s: float = 2.0):
+    """Announce ``what`` on stderr only if it is still running after ``after_s`` seconds,
+    so that quick runs print nothing but their summary (or their one-line error)."""
+    timer = threading.Timer(after_s, lambda: print(f"accelcal: {what} ...", file=sys.stderr, flush=True))
+    timer.daemon = True
+    timer.start()
+    try:
+        yield
+    finally:
+        timer.cancel()
+
+
+def _read(args):
+    from ..formats import read
+
+    with _step(f"reading {args.recording}"):
+        return read(args.recording, format=args.format, columns=args.columns, unit=args.unit,
+                    time_unit=args.time_unit, rate=args.rate, intervals=args.intervals)
+
+
+def _static_settings(args, rec) -> dict:
+    """Keyword arguments of accelcal.static.detect_static from the options."""
+    kw = {}
+    init = str(args.init_rest).strip().lower()
+    if init == "none":
+        kw["noise_reference"] = "quietest"
+    elif init != "auto":
+        try:
+            kw["init_duration"] = float(init)
+        except ValueError:
+            raise AccelcalError(f"--init-rest must be auto, none or a duration in s, got {args.init_rest!r}") from None
+        if not kw["init_duration"] > 0:
+            raise AccelcalError(f"--init-rest must be a positive duration in s, got {args.init_rest!r}")
+        kw["noise_reference"] = "initial"
+    for opt, key in (("window", "window"), ("threshold", "threshold_factor"), ("min_duration", "min_duration"),
+                     ("trim", "trim")):
+        v = getattr(args, opt)
+        if v is not None:
+            kw[key] = v
+    if "threshold_factor" in kw and kw["threshold_factor"] <= 1:
+        raise AccelcalError(f"--threshold must exceed 1 (a multiple of the reference variance), got {args.threshold}")
+    for key in ("min_duration", "trim"):
+        if key in kw and not kw[key] >= 0:
+            raise AccelcalError(f"--{key.replace('_', '-')} must be >= 0, got {kw[key]}")
+    return kw
+
+
+def _nominal(args, rec):
+    """The --sensitivity/--zero conversion of raw counts to m/s^2, or None."""
+    if args.sensitivity is None:
+        if args.zero is not None:
+            raise AccelcalError("--zero needs --sensitivity (counts per g or per m/s2)")
+        return None
+    if rec.unit != "counts":
+        raise AccelcalError(f"--sensitivity converts raw counts, but the data are read as {rec.unit} "
+                            "(pass --unit counts if they are counts)")
+    import numpy as np
+
+    from ..nominal import NominalConversion
+    from ..units import G0
+
+    def triple(text, what):
+        try:
+            v = np.array([float(x) for x in text.split(",")])
+        except ValueError:
+            raise AccelcalError(f"{what} must be one or three numbers separated by commas, got {text!r}") from None
+        if v.size not in (1, 3) or not np.all(np.isfinite(v)):
+            raise AccelcalError(f"{what} must be one or three numbers separated by commas, got {text!r}")
+        return np.broadcast_to(v, (3,)).astype(float)
+
+    text, per = args.sensitivity, "g"
+    if "/" in text:
+        text, per = text.split("/", 1)
+    per = per.strip().lower().replace("²", "2").replace("^", "")
+    if per not in ("g", "m/s2"):
+        raise AccelcalError(f"--sensitivity: counts per g or per m/s2, got per {per!r}")
+    sens = triple(text, "--sensitivity")
+    if not np.all(sens > 0):
+        raise AccelcalError("--sensitivity must be positive")
+    cpu = sens / G0 if per == "g" else sens
+    zero = np.zeros(3) if args.zero is None else triple(args.zero, "--zero")
+    return NominalConversion(zero, cpu, None, f"--sensitivity {args.sensitivity}" +
+                             (f" --zero {args.zero}" if args.zero else ""))
+
+
+def _rate_hint(rec) -> str:
+    rate = rec.rate
+    if 1.0 <= rate <= 20000.0:
+        return ""
+    return (f" (the sampling rate is {rate:.4g} Hz from the time column: if its unit is not what was assumed, "
+            "pass --time-unit s|ms|us|ns)")
+
+
+def _provenance(args, t0: float) -> dict:
+    from ..atomic import sha256_file
+
+    return {"accelcal_version": __version__, "recording": str(args.recording),
+            "recording_sha256": sha256_file(args.recording), "elapsed_s": time.perf_counter() - t0}
+
+
+def _fmt(values, errors) -> str:
+    return "  ".join(f"{v:+.6g} ± {e:.2g}" for v, e in zip(values, errors))

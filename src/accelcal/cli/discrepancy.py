@@ -1,0 +1,137 @@
+"""``accelcal discrepancy``: where the calibrated model and the recording disagree."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from ..effects import EFFECT_IDS
+from ..errors import AccelcalError
+from .common import _gravity, _provenance, _rate_hint, _read, _reader_options, _static_options, _static_settings, _step
+
+DISCREPANCY_HELP = """\
+discrepancy report (JSON):
+  effect       effect named in the first round, or 'none'
+  effects      every effect named, in order (refit after each)
+  outcome      effect, or 'not_identifiable' when nothing was named and a candidate
+               could not be tested with these poses, or 'none'
+  candidates   per candidate and round: identifiable (absorbed fraction, minimum
+               detectable effect), F statistic, p_value (Holm-adjusted: p_adjusted),
+               delta_bic, leave-one-pose-out gap, estimate and standard error
+  gap_before, gap_after   RMS pose residual in units of its noise, base model and
+               base + named effects (noise alone: gap_expected_*)
+  stochastic   Allan deviation of the rests vs a white-noise simulator, named noise
+               terms, Allan gap before/after; noise_implication: what they mean for
+               the pose residuals
+  The report is also a calibration: `accelcal apply REPORT.json RECORDING` applies
+  its base model with the named effects.
+
+"""
+
+def add_parser(sub, epilog: str) -> None:
+    """The ``discrepancy`` subcommand."""
+    d = sub.add_parser("discrepancy", help="find where the calibrated model and the recording disagree, name the "
+                                           "missing effect and noise term",
+                       description="Fit the model of Burkhard et al. (2024) to the static poses of RECORDING, "
+                                   f"test a library of candidate effects ({', '.join(EFFECT_IDS)}) as nested "
+                                   "extensions and name the one the residuals ask for "
+                                   "(or 'none'); compare the Allan deviation of the rests with a white-noise "
+                                   "simulator and name the missing noise term.",
+                       formatter_class=argparse.RawDescriptionHelpFormatter, epilog=DISCREPANCY_HELP + epilog)
+    d.add_argument("recording", type=Path, help="the recording (see 'input' below)")
+    d.add_argument("--g", type=_gravity, required=True, help="local gravity magnitude [m/s^2] (e.g. 9.80665)")
+    d.add_argument("--out", type=Path, required=True, help="report JSON (written only on success)")
+    d.add_argument("--figures", type=Path, default=None, metavar="DIR",
+                   help="also write discrepancy_residuals and discrepancy_allan (.png, .pdf) to DIR")
+    _reader_options(d)
+    _static_options(d)
+    d.set_defaults(func=_discrepancy)
+
+
+def _discrepancy(args) -> int:
+    from ..atomic import write_json_atomic
+    from ..discrepancy import report
+    from ..errors import RecordingError
+    from ..jsonsafe import json_safe
+
+    t0 = time.perf_counter()
+    rec = _read(args)
+    if rec.unit is None:
+        raise AccelcalError("the acceleration unit is unknown: pass --unit")
+    static = _static_settings(args, rec)
+    with _step("static detection, deterministic and stochastic layers (the noise bootstrap takes a while)"):
+        try:
+            analysis = report.discrepancy_report(rec, args.g, stochastic=report.DEFAULT_STOCHASTIC, unit=rec.unit,
+                                                static_kw=static)
+        except RecordingError as e:
+            raise RecordingError(f"{e}{_rate_hint(rec)}") from None
+    figures = []
+    if args.figures is not None:
+        from ..discrepancy.figures import recording_figures
+
+        with _step("drawing figures"):
+            figures = recording_figures(analysis, title=args.recording.name)
+    out = analysis.to_dict()
+    out.update({**_provenance(args, t0), "g": args.g, "unit": rec.unit, "notes": list(rec.notes),
+                "input": {"unit": rec.unit}})
+    if figures:
+        from ..plotting import save_figure
+
+        for name, fig in figures:
+            save_figure(fig, Path(args.figures) / name)
+    write_json_atomic(args.out, json_safe(out))
+    _discrepancy_summary(out, args.out)
+    return 0
+
+
+def _discrepancy_summary(out: dict, path: Path) -> None:
+    det = out
+    lines = [f"discrepancy: {det['n_poses']} poses; effect named: {det['effect']}"
+             + (f" (then {', '.join(det['effects'][1:])})" if len(det["effects"]) > 1 else ""),
+             f"  gap (RMS residual / noise) {det['gap_before']:.3g} -> {det['gap_after']:.3g} "
+             f"(noise alone: {det['gap_expected_after']:.3g}); excess {det['excess_before']:.3g} -> "
+             f"{det['excess_after']:.3g}"]
+    if det["not_identifiable"]:
+        lines.append(f"  not identifiable with these poses: {', '.join(det['not_identifiable'])}")
+    for o in det.get("outliers", []):
+        lines.append(f"  outlier pose {o['pose']} at t = {o['t']:.1f} s: shifted {o['shift_sigma']:+.3g} sigma "
+                     f"(p = {o['p']:.3g}); gap {o['gap_before']:.3g} -> {o['gap_after']:.3g} without it")
+    nm = det.get("noise_model") or {}
+    if nm.get("term") == "bias_wander":
+        def v(x):  # the JSON holds None for inf (a random walk has no finite size)
+            return "inf" if x is None else f"{x:.3g}"
+
+        def ci(x):
+            return "[" + ", ".join(map(v, x)) + "]"
+
+        lines.append(f"  bias wander ({nm['process']}): size {v(nm['size'])} {ci(nm['size_ci'])}, "
+                     f"tau {v(nm['tau_s'])} s {ci(nm['tau_ci'])}, random-walk K {v(nm['random_walk_K'])} "
+                     f"{ci(nm['random_walk_K_ci'])}"
+                     + (f", correlation between the axes {v(nm['axis_correlation'])} {ci(nm['axis_correlation_ci'])}"
+                        if nm.get("axis_correlation") is not None else "") + " (95 % profile likelihood)"
+                     + ("" if nm.get("time_correlation_established") else
+                        "; its time correlation is not established (tau may be below the poses: extra white noise)"))
+    elif nm.get("estimated") is False and det.get("null") == "colored":
+        lines.append(f"  bias wander not estimated: {nm.get('reason', '')}")
+    elif nm.get("term") == "none" and det.get("null") == "colored":
+        lines.append("  bias wander: none detected (REML estimate 0)")
+    if det.get("excess_predicted") is not None and det.get("null") == "colored":
+        lo, hi = det["excess_predicted_interval"]
+        lines.append(f"  residual excess observed {det['excess_observed']:.3g}, predicted by white + wander "
+                     f"{det['excess_predicted']:.3g} (95 % interval {lo:.3g}-{hi:.3g})")
+    for e in det.get("errors", []):
+        lines.append(f"  did not converge: {e}")
+    st = out.get("stochastic")
+    if st:
+        named = {ax: a["named"] for ax, a in st["axes"].items()}
+        lines.append("  noise terms named: " + "; ".join(f"{ax}: {', '.join(v)}" for ax, v in named.items()))
+        imp = out.get("noise_implication") or {}
+        if imp:
+            lines.append(f"  residual excess expected from the noise model {imp['expected_excess']:.3g}, "
+                         f"observed {imp['observed_excess']:.3g} (explained: {'yes' if imp['explains_excess'] else 'no'})")
+    else:
+        lines.append(f"  stochastic layer: {out.get('stochastic_error', 'not run')}")
+    lines.append(f"  written to {path}")
+    print("\n".join(lines), file=sys.stderr)
