@@ -18,7 +18,8 @@ import pytest
 from accelcal import kernels
 from accelcal.als import full_als, full_als_batch
 from accelcal.errors import AccelcalError
-from accelcal.lls import bias_lls, bias_lls_batch, full_lls, full_lls_batch
+from accelcal.lls import bias_lls, full_lls
+from accelcal.lls_batch import bias_lls_batch, full_lls_batch
 from accelcal.simulation import random_directions, sample_truth, simulate_poses
 
 pytestmark = pytest.mark.skipif(kernels._resolve("auto") != "numba",

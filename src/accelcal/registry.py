@@ -199,7 +199,7 @@ _CAL = "accelcal.calibration"
 #: The estimators, by name, in the order tables and help list them.
 ESTIMATORS: dict[str, Estimator] = {e.name: e for e in (
     Estimator(name="full_lls", model="full", algorithm="lls", label="full LLS", family="closed_form",
-              function="accelcal.lls:full_lls", batch="accelcal.lls:full_lls_batch",
+              function="accelcal.lls:full_lls", batch="accelcal.lls_batch:full_lls_batch",
               calibration=f"{_CAL}:FullLLSCalibration", baseline="full_nlls", compiled=True,
               conditioning="accelcal.lls:design_singular_values",
               description="closed form (SVD), bias + scale + non-orthogonality (Burkhard et al. 2024)"),
@@ -215,7 +215,7 @@ ESTIMATORS: dict[str, Estimator] = {e.name: e for e in (
               conditioning="accelcal.lls:design_singular_values",
               description="iterative (CasADi/IPOPT) from b = 0, M = I"),
     Estimator(name="bias_lls", model="bias", algorithm="lls", label="bias-only LLS", family="closed_form",
-              function="accelcal.lls:bias_lls", batch="accelcal.lls:bias_lls_batch",
+              function="accelcal.lls:bias_lls", batch="accelcal.lls_batch:bias_lls_batch",
               calibration=f"{_CAL}:BiasLLSCalibration", baseline="bias_nlls", compiled=True, needs_g=False,
               conditioning="accelcal.lls:design_singular_values",
               description="closed form with M = I; the bias does not depend on g"),

@@ -32,7 +32,7 @@ import numpy as np
 import pandas as pd
 
 from accelcal.kernels import compiled
-from accelcal.lls import full_lls_batch
+from accelcal.lls_batch import full_lls_batch
 from accelcal.model import dM_dparams, params_from_m
 from accelcal.uncertainty import crlb as lls_crlb
 from accelcal.batista.calibration import PARAMETERS, WindowStatistics, calibrate_batch
