@@ -1,45 +1,5 @@
-"""Calibrations that know their quality, save and load themselves, and apply themselves.
-
-One class per method (as imucal's ``CalibrationInfo`` subclasses), all holding the model
-``z = M P(x) + b + β Δt + γ ΔT`` of :mod:`accelcal.effects` (the plain
-``z = M x + b`` when no effect was fitted):
-
-==========================  ================  =============================================
-class                       ``cal_type``      made by
-==========================  ================  =============================================
-:class:`FullLLSCalibration`   ``full_lls``    :func:`calibrate_recording` / ``calibrate``
-:class:`FullALSCalibration`   ``full_als``    (the registry's estimators,
-:class:`FullNLLSCalibration`  ``full_nlls``   :mod:`accelcal.registry`)
-:class:`BiasLLSCalibration`   ``bias_lls``
-:class:`BiasNLLSCalibration`  ``bias_nlls``
-:class:`ExtendedCalibration`  ``extended``    the discrepancy loop: base model + the named
-                                              effects (``accelcal discrepancy``'s report)
-==========================  ================  =============================================
-
-A class declares its method-specific keys once, as its own dataclass fields;
-:func:`calibrate_poses` fills them from the estimator result's attributes of the same
-names, and a file's class is found from its ``cal_type`` among the subclasses
-(:func:`calibration_class`), so a new estimator's class needs no table here.
-
-Apply.  :meth:`Calibration.apply` turns raw samples into calibrated specific force in
-m/s²: ``y = M⁻¹(z - b - β Δt - γ ΔT)``, then per axis ``P_j(x_j) = y_j`` solved for
-``x_j`` (Newton; exact at once without polynomial effects), with ``Δt = t - t_ref`` and
-``ΔT = T - T_ref`` against the references of the calibration session.  Raw data must be
-in the unit the calibration was fitted in (``unit``: m/s² or counts; g and mg are
-converted, counts against an m/s² calibration only through the calibration's own
-nominal conversion, ``input_offset``/``input_sensitivity``).
-
-File format (JSON, ``format: accelcal-calibration``, ``format_version`` below).  The keys
-the CLI always wrote keep their meaning (``method``, ``g``, ``n_poses``, ``bias``, ``M``,
-``scale_factors``, ``nonorthogonality_deg``, ``residual_rms``, ``residuals``,
-``standard_errors``, ``poses``, ...); new ones: ``cal_type``, ``unit`` and ``units``
-(every quantity's unit spelled out: ``M`` and ``gain`` are counts per m/s² for raw
-counts, dimensionless for m/s²), ``gain``, ``quality`` (:mod:`accelcal.quality`),
-``standard_errors_noise``, ``effects``, ``input``, ``static``.  :func:`load_calibration`
-reads it (and older files without a version: format 0), and also the report of
-``accelcal discrepancy`` (its ``model_after``: base model + named effects).  A newer
-format version than this code knows is refused with the version it needs.
-"""
+"""The calibrated model ``z = M P(x) + b + ...``: :class:`Calibration` (units, quality,
+provenance, ``apply``, JSON), the fitted effects it carries and the file format's constants."""
 
 from __future__ import annotations
 
@@ -50,13 +10,12 @@ from typing import ClassVar
 
 import numpy as np
 
-from .errors import (AccelcalError, DegeneratePosesError, NotConvergedError, NotPositiveDefiniteError,
-                     TooFewPosesError)
-from .effects import EFFECT_IDS, EFFECTS, TEMPERATURE, TIME, effect
-from .extended_model import model_terms
-from .jsonsafe import json_safe
-from .registry import ESTIMATORS, estimator
-from .units import G0, acceleration_unit
+from ..errors import (AccelcalError)
+from ..effects import EFFECT_IDS, EFFECTS, TEMPERATURE, TIME, effect
+from ..extended_model import model_terms
+from ..jsonsafe import json_safe
+from ..registry import ESTIMATORS
+from ..units import G0, acceleration_unit
 
 FORMAT = "accelcal-calibration"
 #: Version of the JSON layout written by :meth:`Calibration.to_dict` (0: the CLI's output
@@ -188,13 +147,13 @@ class Calibration:
 
     @property
     def scale_factors(self) -> np.ndarray:
-        from .model import params_from_m
+        from ..model import params_from_m
 
         return params_from_m(self.M)[0]
 
     @property
     def nonorthogonality_deg(self) -> np.ndarray:
-        from .model import params_from_m
+        from ..model import params_from_m
 
         return np.rad2deg(params_from_m(self.M)[1])
 
@@ -323,7 +282,7 @@ class Calibration:
 
     def save(self, path) -> None:
         """Write the JSON atomically (whole or not at all)."""
-        from .atomic import write_json_atomic
+        from ..atomic import write_json_atomic
 
         write_json_atomic(path, self.to_dict())
 
@@ -351,61 +310,35 @@ class Calibration:
 _BASE_FIELDS = frozenset(f.name for f in fields(Calibration))
 
 
-@dataclass(frozen=True, eq=False)
-class FullLLSCalibration(Calibration):
-    """Burkhard et al.'s closed-form full model (``full_lls``): λ of eq. 5, the singular values of the design."""
-
-    CAL_TYPE: ClassVar[str] = "full_lls"
-    lam: float = float("nan")
-    singular_values: np.ndarray | None = None
-
-
-@dataclass(frozen=True, eq=False)
-class FullALSCalibration(Calibration):
-    """Adjusted least squares (``full_als``): the noise variance it corrected for, and where it came from."""
-
-    CAL_TYPE: ClassVar[str] = "full_als"
-    lam: float = float("nan")
-    noise_var: float = float("nan")
-    noise_source: str = ""
-    singular_values: np.ndarray | None = None
+def _covariate(values, n: int, name: str, terms, kind: str):
+    needed = [t.id for t in terms if EFFECTS[t.id].covariate == kind]
+    if not needed:
+        return None
+    if values is None:
+        raise CalibrationFileError(f"the calibration's {', '.join(needed)} term needs the {name} of every sample; "
+                                   f"the data have none" + (" (a temp column)" if name == "temp" else ""))
+    v = np.asarray(values, dtype=float)
+    if v.shape != (n,) or not np.all(np.isfinite(v)):
+        raise CalibrationFileError(f"{name} must be {n} finite values, one per sample")
+    return v
 
 
-@dataclass(frozen=True, eq=False)
-class FullNLLSCalibration(Calibration):
-    """Iterative full model (``full_nlls``, CasADi/IPOPT): solver status, iterations, cost."""
-
-    CAL_TYPE: ClassVar[str] = "full_nlls"
-    status: str = ""
-    iterations: int = 0
-    cost: float = float("nan")
+def _json_float(x):
+    x = float(x)
+    return x if np.isfinite(x) else None
 
 
-@dataclass(frozen=True, eq=False)
-class BiasLLSCalibration(Calibration):
-    """Bias-only closed form (``bias_lls``, ``M = I``): the fitted ``g² - bᵀb`` (``c``) and the singular values."""
-
-    CAL_TYPE: ClassVar[str] = "bias_lls"
-    c: float = float("nan")
-    singular_values: np.ndarray | None = None
-
-
-@dataclass(frozen=True, eq=False)
-class BiasNLLSCalibration(Calibration):
-    """Bias-only iterative (``bias_nlls``): solver status, iterations, cost."""
-
-    CAL_TYPE: ClassVar[str] = "bias_nlls"
-    status: str = ""
-    iterations: int = 0
-    cost: float = float("nan")
+def _jsonable(v):
+    if isinstance(v, np.ndarray):
+        return v.tolist()
+    if isinstance(v, (np.floating, np.integer)):
+        return v.item()
+    if isinstance(v, tuple):
+        return list(v)
+    return v
 
 
-@dataclass(frozen=True, eq=False)
-class ExtendedCalibration(Calibration):
-    """The base model plus the effects the discrepancy loop named (``accelcal discrepancy``)."""
-
-    CAL_TYPE: ClassVar[str] = "extended"
-    base_effects_named: tuple[str, ...] = ()
+# --------------------------------------------------------------------------- the classes by type tag
 
 
 def calibration_class(cal_type: str) -> type[Calibration]:
@@ -494,7 +427,7 @@ def _arr(v):
 
 
 def _common(d: dict, version: int) -> dict:
-    from .quality import FitQuality
+    from ..quality import FitQuality
 
     inp = d.get("input") or {}
     unit = d.get("unit")
@@ -532,9 +465,9 @@ def _method_values(cls, d: dict) -> dict:
     return out
 
 
-def _from_discrepancy(d: dict) -> ExtendedCalibration:
+def _from_discrepancy(d: dict) -> Calibration:
     """The base model + named effects of an ``accelcal discrepancy`` report."""
-    from .model import m_from_params
+    from ..model import m_from_params
 
     after = d["model_after"]
     p = after["parameters"]
@@ -563,7 +496,7 @@ def _from_discrepancy(d: dict) -> ExtendedCalibration:
     inp = d.get("input") or {}
     keep = {k: d[k] for k in ("recording", "recording_sha256", "accelcal_version") if k in d}
     keep["source"] = "accelcal discrepancy report (model_after)"
-    return ExtendedCalibration(
+    return calibration_class("extended")(
         bias=bias, M=m_from_params(s, th), g=float(d["g"]), unit=unit, input_unit=inp.get("unit", unit),
         effects=tuple(terms),
         standard_errors={"bias": np.array([se[f"b_{a}"] for a in "xyz"]),
@@ -572,216 +505,3 @@ def _from_discrepancy(d: dict) -> ExtendedCalibration:
         residuals=_arr((poses.get("residual_after"))),
         poses={"t_mid": _arr(poses.get("t")), "temp": _arr(poses.get("temp"))} if poses.get("t") else {},
         provenance=keep, base_effects_named=tuple(after.get("effects", [])))
-
-
-def _covariate(values, n: int, name: str, terms, kind: str):
-    needed = [t.id for t in terms if EFFECTS[t.id].covariate == kind]
-    if not needed:
-        return None
-    if values is None:
-        raise CalibrationFileError(f"the calibration's {', '.join(needed)} term needs the {name} of every sample; "
-                                   f"the data have none" + (" (a temp column)" if name == "temp" else ""))
-    v = np.asarray(values, dtype=float)
-    if v.shape != (n,) or not np.all(np.isfinite(v)):
-        raise CalibrationFileError(f"{name} must be {n} finite values, one per sample")
-    return v
-
-
-# --------------------------------------------------------------------------- calibrating
-
-
-def pose_noise_std(mean_std) -> float:
-    """One noise level for the pose means: the RMS of their per-axis standard errors.
-
-    What ALS is given: its correction removes ``Σ_i σ_i²`` from the moment matrix, which
-    this RMS reproduces exactly for the terms linear in ``σ²`` (the mean of the variances).
-    """
-    return float(np.sqrt(np.mean(np.square(mean_std))))
-
-
-def calibrate_poses(poses, g: float, method: str = "full_lls", *, unit: str | None, conversion=None,
-                    provenance: dict | None = None) -> Calibration:
-    """Fit ``method`` to static poses and assess the fit.
-
-    Parameters
-    ----------
-    poses : StaticPoses
-        From :func:`accelcal.static.detect_static` or known intervals.
-    g : float
-        Local gravity [m/s²].
-    method : str
-        Registry name (``full_lls`` or ``full-lls``, ...).
-    unit : {'m/s^2', 'counts'} or None
-        Unit of the pose means.
-    conversion : NominalConversion, optional
-        Nominal counts → m/s² conversion applied before the fit (how a bias-only model,
-        which fixes ``M = I``, can be fitted to raw counts).
-    provenance : dict, optional
-        Extra keys for the JSON.
-
-    Noise.  ALS is given the noise level of the pose means measured at the rests
-    (:func:`pose_noise_std`), not the one it could estimate from the poses: the rests
-    measure it independently, from thousands of samples, whereas the poses would mix
-    the noise with any misfit of the model (the Xsens residuals are 2.5x the noise) and
-    give a noisy value from a few dozen points.
-    """
-    from .quality import assess
-
-    est = estimator(method)
-    z = np.asarray(poses.means, float)
-    se = np.asarray(poses.mean_std, float)
-    offset, sens, fit_unit, input_unit = np.zeros(3), np.ones(3), unit, unit
-    if conversion is not None:
-        offset = np.asarray(conversion.offset, float)
-        sens = np.asarray(conversion.counts_per_unit, float)
-        z, se, fit_unit = (z - offset) / sens, se / sens, "m/s^2"
-    if est.model == "bias" and fit_unit == "counts":
-        raise AccelcalError(f"{est.cli_name} fixes M = I, so the data must be in m/s^2 (or g); these are raw counts: "
-                            "use a full model (full-lls), or pass the unit (--unit) if they are not counts")
-    if len(z) < est.min_poses:
-        raise TooFewPosesError(f"{len(z)} static poses found, {est.cli_name} needs at least {est.min_poses}")
-    noise = pose_noise_std(se) if est.needs_noise else None
-    try:
-        r = est.fit(z, g, noise_std=noise)
-    except (DegeneratePosesError, NotPositiveDefiniteError, NotConvergedError) as e:
-        raise _orientation_cause(e, z, est) from None
-    quality, se_noise = assess(z, se, r.M, r.bias, r.residuals, est.n_parameters, est.model, est.min_poses)
-    cls = est.load_calibration()
-    # the class's own fields, declared once there, taken from the estimator's result
-    extra = {k: getattr(r, k) for k in cls._method_field_names() if hasattr(r, k)}
-    if "noise_source" in cls._method_field_names():
-        extra["noise_source"] = "rests: RMS of the pose-mean standard errors"
-    labels = getattr(poses, "labels", None)
-    pose_table = {"t_start": poses.t_start, "t_end": poses.t_end, "mean": z, "mean_std": se,
-                  "n_samples": poses.n_samples, "temp": poses.temp}
-    if labels is not None:
-        pose_table["labels"] = list(labels)
-    return cls(
-        bias=r.bias, M=r.M, g=float(g), unit=fit_unit, input_offset=offset, input_sensitivity=sens,
-        input_unit=input_unit,
-        standard_errors=dict(r.standard_errors), standard_errors_noise=se_noise, quality=quality,
-        residuals=np.asarray(r.residuals), poses=pose_table, provenance=dict(provenance or {}), **extra)
-
-
-def _raw_directions(z) -> np.ndarray:
-    """Pose directions before any fit: about the centre of the best sphere through the poses
-    (the bias-only LLS, which needs no g), so that raw counts with a large offset work too."""
-    z = np.asarray(z, float)
-    try:
-        centre = estimator("bias_lls").fit(z, 1.0).bias
-    except AccelcalError:
-        centre = z.mean(axis=0)
-    d = z - centre
-    return d / np.linalg.norm(d, axis=1, keepdims=True)
-
-
-def _orientation_cause(err: AccelcalError, z, est) -> AccelcalError:
-    """A failed fit on poses that repeat too few orientations says so (the likely cause)."""
-    from .quality import distinct_orientations
-
-    k = distinct_orientations(_raw_directions(z))
-    if k >= est.min_poses:
-        return err
-    return DegeneratePosesError(f"{len(z)} poses but only {k} distinct orientations (10 deg apart): {est.cli_name} "
-                                f"needs at least {est.min_poses}; turn the sensor to new orientations between rests "
-                                f"(or use a bias-only method, >= 4) [{err}]")
-
-
-def calibrate_recording(rec, g: float, method: str = "full_lls", *, static: dict | None = None,
-                        conversion=None, provenance: dict | None = None) -> tuple[Calibration, object]:
-    """Static poses of ``rec`` (its known intervals, or detected), then :func:`calibrate_poses`.
-
-    Parameters
-    ----------
-    rec : Recording
-    g : float
-        Local gravity [m/s²].
-    method : str
-    static : dict, optional
-        Keyword arguments of :func:`accelcal.static.detect_static` (``window``,
-        ``threshold_factor``, ``min_duration``, ``trim``, ``init_duration``,
-        ``noise_reference``).
-    conversion, provenance
-        As for :func:`calibrate_poses`.
-
-    Returns
-    -------
-    calibration : Calibration
-    poses : StaticPoses
-        The poses it was fitted to.
-
-    Raises
-    ------
-    RecordingError
-        No static poses (the message says what was tried).
-    TooFewPosesError, DegeneratePosesError
-        Not enough poses or orientations for the method (the message names the count and
-        what to do).
-    """
-    from .static import detect_static_recording
-
-    if not (np.isfinite(g) and 9.7 <= g <= 9.9):
-        raise AccelcalError(f"g = {g:g}: the local gravity magnitude in m/s^2 (9.78-9.83 on the Earth's surface; "
-                            "data in g are converted, pass --unit g)")
-    poses = detect_static_recording(rec, **(static or {}))
-    prov = dict(provenance or {})
-    prov.setdefault("static", {})
-    prov["static"].update({"reference": poses.reference, "note": poses.reference_note,
-                           "known_intervals": rec.intervals is not None, **(static or {})})
-    prov.setdefault("notes", list(rec.notes))
-    labels = rec.labels if rec.intervals is not None else None
-    est = estimator(method)
-    try:
-        cal = calibrate_poses(_Poses(poses, labels), g, method, unit=rec.unit, conversion=conversion, provenance=prov)
-    except TooFewPosesError as e:
-        raise TooFewPosesError(f"{e}; {_too_few_hint(rec, poses, est)}") from None
-    return cal, poses
-
-
-@dataclass(frozen=True)
-class _Poses:
-    """StaticPoses with the labels of known intervals (for the pose table)."""
-
-    base: object
-    labels: tuple | None
-
-    def __getattr__(self, name):
-        return getattr(self.base, name)
-
-
-def _too_few_hint(rec, poses, est) -> str:
-    from .quality import distinct_orientations
-
-    k = distinct_orientations(_raw_directions(poses.means)) if len(poses) >= 4 else len(poses)
-    rate = rec.rate
-    if not 1.0 <= rate <= 20000.0:
-        return (f"the sampling rate is {rate:.4g} Hz from the time column: if its unit is not seconds, pass "
-                "--time-unit (ms, us, ns)")
-    if rec.intervals is not None:
-        return f"the file gives {len(rec.intervals)} known static intervals; record more poses"
-    return (f"{k} distinct orientations; record more rests in new orientations (at least {est.min_poses}), "
-            "loosen the detection (--threshold, --window, --min-duration) or use a bias-only method (>= 4 poses)")
-
-
-# --------------------------------------------------------------------------- JSON helpers
-
-
-def _json_float(x):
-    x = float(x)
-    return x if np.isfinite(x) else None
-
-
-def _jsonable(v):
-    if isinstance(v, np.ndarray):
-        return v.tolist()
-    if isinstance(v, (np.floating, np.integer)):
-        return v.item()
-    if isinstance(v, tuple):
-        return list(v)
-    return v
-
-
-__all__ = ["APPLICABLE_EFFECTS", "BiasLLSCalibration", "BiasNLLSCalibration", "Calibration", "CalibrationFileError",
-           "EffectTerm", "ExtendedCalibration", "FORMAT", "FORMAT_VERSION", "FullALSCalibration", "FullLLSCalibration",
-           "FullNLLSCalibration", "calibrate_poses", "calibrate_recording", "calibration_class", "load_calibration",
-           "pose_noise_std"]
