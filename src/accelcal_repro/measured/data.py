@@ -1,6 +1,6 @@
 """Getting the measured recordings: the shared copy if present, else a verified download.
 
-The three public recordings (``shared/data/README.md``) are inputs, never part of the
+The public recordings (``shared/data/README.md``) are inputs, never part of the
 repository.  :func:`fetch_file` returns a local path for one file of one dataset:
 
 1. ``<data_dir>/<dataset>/<file>`` (the shared copy, ``../shared/data`` from the project
@@ -57,13 +57,30 @@ _FORK = ("GetOverMassif/imu_tk", "92022128c1dad9d7ef7f46d6d82b0d9a10a58e22")
 _FASTAHRS_1 = ("vspruyt/FastAhrs", "62347ae9d6c1c7531939da5535ed6a9a79769c33")
 _FASTAHRS_2 = ("vspruyt/FastAhrs", "b7016d56b13aa405cfbc7bdf145201879f0336ee")
 _SMAC = ("SMAC-Group/imudata", "dd603068355f2dfa757a474645cd327c5cb6dbb5")
+_CTU = ("labliscvut/imu_calibration", "053aa5d56669c115fba484ea119e50af8ddc1e79")
+_SNU = ("ChanghyeonKim93/IMU_calibration_staticposes", "468a3dc3db1575a73222128461b1c19e565bd377")
+_PYULOG = ("PX4/pyulog", "3cf17793f14709713ab297d3743314c658874068")
 _FORK_SHA256 = {
+    "data1/acc_data.txt": "d1fc1ad4b19bde88c2cdd6aee4a852e32399d8acbd9bcbbc24157e4c13a385d8",
+    "data1/gyro_data.txt": "a97e7fe4334c0012581dd77888c988050494b7a75715a81756bc839a0abe5739",
+    "data1/rosbag2_2023_08_11-21_37_35/metadata.yaml": "f94142d182f8c688ffdba071ab39cc58cfb8a10212f66d0af0c935333f733667",
+    "data1/rosbag2_2023_08_11-21_37_35/rosbag2_2023_08_11-21_37_35_0.db3": "8fea2b3cd5bb88053b4e67ddceb42fb8b372df27cb181d4b3d53b649c5923fa2",
+    "data1/test_imu_acc.calib": "6963b532efa2db9506f37ed68f67710718676ee78089dfd7185da332b3ff4259",
+    "data1/test_imu_gyro.calib": "7008122559c7463bb7c0291c8e57d74c1637a728fa9f49817e4c5ab0137fad2d",
     "data2/acc_data.txt": "f621b1fa75d327acdadac6e506aa416466d4290f4db209c80651e6cee7482bd3",
     "data2/gyro_data.txt": "9c83d1b7864f7df3f1dd34d24875bce9485596d70911b6a9ad915c5b813ae54f",
+    "data2/test_imu_acc.calib": "86cca43ece5c1623f58c4a83659c492b3b1516506343261128bd45ebe83d31e8",
+    "data2/test_imu_gyro.calib": "44b5613d795dfa91e3f8ec0325b2b91ce0aa53d1e4267f635c2a5937661602da",
     "data3/acc_data.txt": "b908e8626ac1c2df61638b1c7a54e1cc346f584473707c17928c22140d4f40c5",
     "data3/gyro_data.txt": "94b02855ce68f757d1d2eb23a6c5655ccc2812e21b676e38cd39b015524f1333",
+    "data3/test_imu_acc.calib": "1d770b8ee9ecf698439b267080bcfa4769dceee6a203fa35da8e85b4a1389c97",
+    "data3/test_imu_gyro.calib": "e871129d543bc8d4fc8a13d812eaba6937f27ea98bc7b6ed19263e1dcc68656a",
     "data4/acc_data.txt": "1719259ab4282c263cbc2a27f49532d724adc00736fa560cc9b06d8addc11b73",
     "data4/gyro_data.txt": "28c766723cd680661c81e8590c8dc6b06aea61d6536ff2aa38dceaaea8fb0411",
+    "data4/test_imu_acc.calib": "ce302f293e1f6876abea410222a822bd9ea0ca2e06b4556a49f6247a5fad08cf",
+    "data4/test_imu_gyro.calib": "a6e6d88176111f0a846d7e68a9468ff0ef6f4884ef8db8b36864bf815faa9862",
+    "data_sample.csv": "29d9fc9eca89152280d0158c969dd4a74d33f2e9e7e94e2c50747e1a4bc503ee",
+    "data_sample2.csv": "c6f068238e402991238935f3173a5815d77484a9ade15dc9200810a48c294428",
 }
 
 #: ``{dataset: {file: FileSpec}}``, from ``shared/data/README.md`` (source, commit, sha256).
@@ -90,7 +107,8 @@ DATASETS: dict[str, dict[str, FileSpec]] = {
             _raw(*_MPU, "calibration data/example_data_calibration.csv"),
             "e6185b2814aa51fcb981048de5c00481af53aee568ed8ce209f46004a228cf54"),
     },
-    # one IMU, three hand-placed sessions (data2, data3, data4), IMU-TK's ASCII layout
+    # one IMU, four hand-placed sessions (data1 with its ROS 2 bag), IMU-TK's ASCII layout, and
+    # IMU-TK's own results published with them (test_imu_{acc,gyro}.calib)
     "imutk_fork_sessions": {f: FileSpec(_raw(*_FORK, f"data/{f}"), s) for f, s in _FORK_SHA256.items()},
     "fastahrs_fxos8700": {
         "data_sample.csv": FileSpec(_raw(*_FASTAHRS_1, "notebooks/data_sample.csv"),
@@ -101,6 +119,25 @@ DATASETS: dict[str, dict[str, FileSpec]] = {
     "smac_adis16405": {
         "adis_16405_imu1.rda": FileSpec(_raw(*_SMAC, "data/adis_16405_imu1.rda"),
                                         "1eb09074beabd7cfc15b402cb8043b5302f6e4edfd9e4ebfbf8117436f8b9fa9"),
+    },
+    "ctu_ferraris": {
+        "measured_angular_rates.mat": FileSpec(_raw(*_CTU, "gyro_calibration/measured_angular_rates.mat"),
+                                               "0cc8bf2c28d1525f194d67ee1374749d0409896d615e28ea9c27855c6f068962"),
+        "measured_accelerations.mat": FileSpec(_raw(*_CTU, "acc_calibration/measured_accelerations.mat"),
+                                               "22722ffa2dadc54b89ef85063b9446e22a996e7c25cb7e44a39a5b3657646cec"),
+        "measured_accelerations_50orientations.mat": FileSpec(
+            _raw(*_CTU, "acc_calibration/measured_accelerations_50orientations.mat"),
+            "436e34f33ea241e94eba7d8361453b6f19bc3a1baae79cb85e69baf06bf6f511"),
+    },
+    "snu_static3": {f"imu_good{i}.txt": FileSpec(_raw(*_SNU, f"imu_good{i}.txt"), s)
+                    for i, s in enumerate(("6eb2d25e637580306cb07c821c6f807573f25c8e9c668e3cdd034936640c4ca0",
+                                           "8bf71efcd5f500caf0cbc3c1de97b6041129e3594824f5d8584325b7741b7014",
+                                           "b34ed1cc40003f5323568df8976b39c3813f0494e3f065a0ee988119bfe21e9e"), start=1)},
+    "px4_ulog": {
+        "sample.ulg": FileSpec(_raw(*_PYULOG, "test/sample.ulg"),
+                               "81952e6059bc095717e7911c010e07f85749d6b04d332a5ffc51575a3fd0a558"),
+        "sample_log_small.ulg": FileSpec(_raw(*_PYULOG, "test/sample_log_small.ulg"),
+                                         "68d1020f688109f027dba08d2950247cc0ae34aaefdcf37e4a7d60838f3e1aa3"),
     },
 }
 
