@@ -204,7 +204,7 @@ def test_gap_shrinks_to_the_noise_after_the_refit(null):
     rules = NULL_RULES[null]
     rec, _ = B.simulate_case("quadratic", 4.0, 0, seed=20240707, session=SESSION, rules=RULES)
     res = discrepancy(pose_data_from_static(detect_static_recording(rec), SESSION.g), rules)
-    s = res.summary()
+    s = res.statistics()
     assert res.effects[0] == "quadratic"
     # before: far beyond what noise explains (χ² upper tail); after: consistent with it
     assert s["chi2_p_before"] < 1e-6 and s["gap_before"] > 1.5 * s["gap_expected_before"]
@@ -213,7 +213,7 @@ def test_gap_shrinks_to_the_noise_after_the_refit(null):
     assert s["excess_status"] == "explained"
     # effect-free: the base model is already at the noise level
     rec0, _ = B.simulate_case(B.NONE, 0.0, 1, seed=20240707, session=SESSION, rules=RULES)
-    s0 = discrepancy(pose_data_from_static(detect_static_recording(rec0), SESSION.g), rules).summary()
+    s0 = discrepancy(pose_data_from_static(detect_static_recording(rec0), SESSION.g), rules).statistics()
     assert s0["excess_status"] == "no excess" and s0["gap_after"] == s0["gap_before"]
 
 

@@ -34,6 +34,7 @@ from .fit import pose_data_from_static
 from .stochastic import StochasticResult
 from .stochastic.implication import centred_pose_variance, pose_difference_variance
 from .stochastic.layer import DEFAULT_CANDIDATES, rest_segments, stochastic_layer
+from .summary import report_summary
 from .vocabulary import DiscrepancyResult, Rules
 
 
@@ -79,6 +80,25 @@ class DiscrepancyReport:
                            "mean": self.poses.means.tolist(), "mean_std": self.poses.mean_std.tolist(),
                            "n_samples": self.poses.n_samples.tolist()})
         return d
+
+    def summary(self, *, written_to=None) -> str:
+        """Both layers in a few lines: what ``accelcal discrepancy`` prints.
+
+        The deterministic layer's lines (:meth:`DiscrepancyResult.summary
+        <accelcal.discrepancy.vocabulary.DiscrepancyResult.summary>`), the noise terms
+        named from the rests and what they imply for the pose residuals.
+
+        Parameters
+        ----------
+        written_to : path, optional
+            Where the report was written (a line says so).
+
+        Returns
+        -------
+        str
+            Lines without a final newline.
+        """
+        return report_summary(self, written_to)
 
 
 def _pose_mean_variance(model: dict, starts, durations) -> np.ndarray:
