@@ -370,9 +370,11 @@ def _jsonable(v):
 def calibration_class(cal_type: str) -> type[Calibration]:
     """The :class:`Calibration` subclass whose own ``CAL_TYPE`` is ``cal_type``.
 
-    Found by walking the subclasses (as imucal's ``CalibrationInfo``), after importing the
-    class the registry names for that estimator, so that a class defined anywhere (a
-    registered estimator's module, a user's script) loads its files.
+    The class the registry names for that estimator, else found by walking the subclasses
+    (as imucal's ``CalibrationInfo``), so that a class defined anywhere (a registered
+    estimator's module, a user's script) loads its files.  The registry's class comes
+    first: another subclass may declare the same ``CAL_TYPE`` (a script's class defined
+    again, an estimator of that name registered before).
 
     Raises
     ------
@@ -380,7 +382,9 @@ def calibration_class(cal_type: str) -> type[Calibration]:
         No such class (the message lists the known types).
     """
     if cal_type in ESTIMATORS:
-        ESTIMATORS[cal_type].load_calibration()
+        cls = ESTIMATORS[cal_type].load_calibration()
+        if cls.__dict__.get("CAL_TYPE") == cal_type:
+            return cls
     for cls in _subclasses(Calibration):
         if cls.__dict__.get("CAL_TYPE") == cal_type:
             return cls
