@@ -202,7 +202,3 @@ def _provenance(args, t0: float) -> dict:
 
     return {"accelcal_version": __version__, "recording": str(args.recording),
             "recording_sha256": sha256_file(args.recording), "elapsed_s": time.perf_counter() - t0}
-
-
-def _fmt(values, errors) -> str:
-    return "  ".join(f"{v:+.6g} ± {e:.2g}" for v, e in zip(values, errors))
