@@ -35,16 +35,13 @@ import numpy as np
 from scipy import special
 
 from .errors import GyroInputError, NoMotionError, SaturatedGyroError, TooFewMotionsError
-from .fit import MotionSet, evaluate, fit_iterative, fit_one_step, initial_scale, rotation_angles_deg
+from .fit import MIN_MOTIONS, MotionSet, evaluate, initial_scale, rotation_angles_deg
 from .integrate import integrate_intervals, log_so3
 from .model import RAW_UNITS, GyroModel
 from .rests import (bias_series, check_time_base, fit_bias, measuring_range, motion_bias_variance, rest_noise,
                     rest_statistics, sample_interval, saturated_samples)
 from .result import RULES, GyroCalibration, GyroQuality
 
-ESTIMATORS = ("iterative", "one_step")
-#: Fewest motions the 9-parameter fit accepts (2 residuals each: 2 m - 9 >= 1).
-MIN_MOTIONS = 5
 #: Total rotation [deg] about a gyro axis below which its column of C is not determined.
 MIN_AXIS_TURN_DEG = 5.0
 #: Fewest rests for fitting the g-sensitivity (12 unknowns from 3 per rest) in 'auto' mode.
@@ -149,6 +146,19 @@ def _use_g_sensitivity(choice, rs, bias, f_rest, acc) -> tuple[bool, dict]:
     return pv < G_SENSITIVITY_P, {"decided": "auto", "F": float(F), "p_value": pv, "dof": [d1, d2]}
 
 
+def motion_estimator(name: str):
+    """The registry's entry of a gyro estimator of motions between rests (``gyro_iterative``,
+    ``gyro_one_step``, or their CLI spellings); one line naming the known ones otherwise."""
+    from ..registry import estimators
+
+    known = {e.name: e for e in estimators("gyroscope", data="motions")}
+    e = known.get(str(name).replace("-", "_"))
+    if e is None:
+        raise GyroInputError(f"unknown gyro estimator {name!r} for motions between rests; known: "
+                             f"{', '.join(known)}")
+    return e
+
+
 def _standard_errors(C, cov, nominal, excess, bias_est) -> dict:
     k = max(1.0, excess if math.isfinite(excess) else 1.0)
     cov = cov * k * k
@@ -168,7 +178,7 @@ def _standard_errors(C, cov, nominal, excess, bias_est) -> dict:
 
 
 def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, t_gyro=None,
-                   nominal_sensitivity=None, estimator: str = "iterative", integrator: str = "magnus4",
+                   nominal_sensitivity=None, estimator: str = "gyro_iterative", integrator: str = "magnus4",
                    bias: str = "interpolated", g_sensitivity="auto", gyro_range=None,
                    time_base: str = "auto") -> GyroCalibration:
     """Calibrate the gyro of a multi-position session (module docstring).
@@ -190,7 +200,9 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
         The gyro's own time column, checked against ``t``.
     nominal_sensitivity : float, optional
         Raw units per rad/s (counts); the start and the reference of the scale factors.
-    estimator : {'iterative', 'one_step'}
+    estimator : str
+        A gyroscope estimator of motions of the registry (:mod:`accelcal.registry`):
+        ``'gyro_iterative'`` (default) or ``'gyro_one_step'``; the calibration is of its class.
     integrator : {'magnus4', 'coning'}
     bias : {'interpolated', 'all', 'first'}
         How the bias is taken from the rests (:mod:`accelcal.gyro.rests`).  Default
@@ -218,8 +230,7 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
     if gyro.shape != (t.size, 3) or not np.all(np.isfinite(gyro)):
         raise GyroInputError(f"gyro samples must be finite, shape ({t.size}, 3) like the accelerometer's; got "
                              f"{gyro.shape}")
-    if estimator not in ESTIMATORS:
-        raise GyroInputError(f"unknown gyro estimator {estimator!r}; known: {', '.join(ESTIMATORS)}")
+    est = motion_estimator(estimator)
     tb = sample_interval(t)
     if t_gyro is not None:
         check_time_base(t, t_gyro, tb.h)
@@ -251,7 +262,7 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
     ms = all_ms.subset(used)
     nominal, nominal_from = _nominal(raw_unit, nominal_sensitivity, ms, integrator)
     _check_axes(ms, nominal, tb.h)
-    fitter = fit_iterative if estimator == "iterative" else fit_one_step
+    fitter = est.load()
     if time_base not in ("auto", "index", "timestamps"):
         raise GyroInputError(f"unknown time base {time_base!r}; known: auto, index, timestamps")
     bases = {"index": tb.h, "timestamps": t}
@@ -268,14 +279,14 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
     quality, table = _assess(fit, all_ms, used, notes, t, tb, best, integrator,
                              {k: f.chi2 / max(f.dof, 1) for k, f in fits.items()}, chosen,
                              _range_use(gyro, gyro_range, all_ms.subset(used)))
-    settings = {"estimator": estimator, "integrator": integrator, "bias_mode": bias, "nominal": nominal,
+    settings = {"estimator": est.name, "integrator": integrator, "bias_mode": bias, "nominal": nominal,
                 "nominal_from": nominal_from, "iterations": fit.iterations, "fit_seconds": fit.seconds,
                 "seconds": time.perf_counter() - t0, "n_rests": len(u),
                 "time_base": {"h": tb.h, "rate": tb.rate, "jitter": tb.jitter, "gaps": int(len(tb.gaps)),
                               "used": chosen, "chi2_per_dof": {k: f.chi2 / max(f.dof, 1) for k, f in fits.items()}},
                 "bias_rests": {"chi2": best.chi2, "dof": best.dof, "excess": best.excess},
                 "g_sensitivity": bool(g_sensitivity), "g_sensitivity_test": g_test}
-    return GyroCalibration(model, se, quality, table, settings)
+    return est.load_calibration()(model, se, quality, table, settings)
 
 
 def _range_use(gyro, gyro_range, ms: MotionSet) -> float:
@@ -386,4 +397,4 @@ def evaluate_model(t, gyro, poses, accel, C, bias_vector, *, integrator: str = "
     return evaluate(ms, C, integrator), ms
 
 
-__all__ = ["ESTIMATORS", "MIN_MOTIONS", "accel_directions", "calibrate_gyro", "evaluate_model"]
+__all__ = ["MIN_MOTIONS", "accel_directions", "calibrate_gyro", "evaluate_model", "motion_estimator"]

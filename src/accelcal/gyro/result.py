@@ -1,11 +1,18 @@
-"""A gyro calibration with its uncertainty, its trust lines and its motions, as the lead's
-calibration file (format 2) and summary will carry it: ``to_dict``/``from_dict`` and
-``summary()``."""
+"""A gyro calibration with its uncertainty, its trust lines and its motions, as the
+calibration file (format 2, its ``gyroscope`` object) and the summary carry it:
+``to_dict``/``from_dict`` and ``summary()``.
+
+One class per estimator of the registry (:mod:`accelcal.registry`), found by its
+``CAL_TYPE`` among the subclasses of :class:`GyroCalibration`
+(:func:`accelcal.calibration.calibration_class`), as the accelerometer's are.
+"""
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import asdict, dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
@@ -90,6 +97,8 @@ class GyroCalibration:
         ``bias_chi2``...
     """
 
+    CAL_TYPE: ClassVar[str] = ""
+
     model: GyroModel
     standard_errors: dict
     quality: GyroQuality
@@ -104,16 +113,31 @@ class GyroCalibration:
     def scale_factors(self) -> np.ndarray:
         return self.model.scale_factors(self.nominal)
 
+    @property
+    def method(self) -> str:
+        return self.CAL_TYPE
+
     def to_dict(self) -> dict:
-        return _f({"sensor": "gyroscope", "model": self.model.to_dict(),
+        return _f({"sensor": "gyroscope", "cal_type": self.CAL_TYPE or None, "model": self.model.to_dict(),
                    "standard_errors": {k: np.asarray(v) for k, v in self.standard_errors.items()},
                    "quality": self.quality.to_dict(), "motions": self.motions, "settings": self.settings})
 
     @classmethod
     def from_dict(cls, d: dict) -> GyroCalibration:
+        """Rebuild from :meth:`to_dict`'s object, as the class of its ``cal_type``."""
+        from ..calibration.base import calibration_class
+
+        kind = calibration_class(d["cal_type"], root=GyroCalibration) if d.get("cal_type") else GyroCalibration
         se = {k: np.array(v, dtype=float) for k, v in d.get("standard_errors", {}).items() if v is not None}
-        return cls(GyroModel.from_dict(d["model"]), se, GyroQuality.from_dict(d["quality"]),
-                   dict(d.get("motions", {})), dict(d.get("settings", {})))
+        return kind(GyroModel.from_dict(d["model"]), se, GyroQuality.from_dict(d["quality"]),
+                    dict(d.get("motions", {})), dict(d.get("settings", {})))
+
+    def __eq__(self, other) -> bool:
+        if type(self) is not type(other):
+            return NotImplemented
+        return json.dumps(self.to_dict(), sort_keys=True) == json.dumps(other.to_dict(), sort_keys=True)
+
+    __hash__ = None
 
     def summary(self) -> str:
         """Lines for the command line: the triad with ±, the fit, the trust lines."""
@@ -147,4 +171,26 @@ class GyroCalibration:
         return "\n".join(lines)
 
 
-__all__ = ["GyroCalibration", "GyroQuality", "RULES"]
+@dataclass(frozen=True, eq=False)
+class GyroIterativeCalibration(GyroCalibration):
+    """Weighted Gauss-Newton on the motions between rests (``gyro_iterative``)."""
+
+    CAL_TYPE: ClassVar[str] = "gyro_iterative"
+
+
+@dataclass(frozen=True, eq=False)
+class GyroOneStepCalibration(GyroCalibration):
+    """One linearised solve about the nominal model (``gyro_one_step``)."""
+
+    CAL_TYPE: ClassVar[str] = "gyro_one_step"
+
+
+@dataclass(frozen=True, eq=False)
+class GyroFerrarisCalibration(GyroCalibration):
+    """Three rotations of known angle (``gyro_ferraris``): exactly determined, no residual."""
+
+    CAL_TYPE: ClassVar[str] = "gyro_ferraris"
+
+
+__all__ = ["GyroCalibration", "GyroFerrarisCalibration", "GyroIterativeCalibration", "GyroOneStepCalibration",
+           "GyroQuality", "RULES"]

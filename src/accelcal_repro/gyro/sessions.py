@@ -67,7 +67,7 @@ def load(name: str, data: Path = DATA) -> Session:
     raise KeyError(f"unknown session {name!r}; known: {', '.join(SESSIONS)}")
 
 
-def calibrate_session(s: Session, *, estimator: str = "iterative", integrator: str = "magnus4",
+def calibrate_session(s: Session, *, estimator: str = "gyro_iterative", integrator: str = "magnus4",
                       bias: str = "interpolated", g_sensitivity="auto", static: str = "auto") -> dict:
     """Accelerometer and gyro of one session; ``static``: 'auto' (defaults, candidates if
     they find too few poses), 'search' (always the candidates), 'default'."""
