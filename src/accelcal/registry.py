@@ -317,5 +317,5 @@ def model_of(name: str) -> str:
     return estimator(name).model
 
 
-__all__ = ["DATA", "ESTIMATORS", "Estimator", "FAMILIES", "NOISE_USES", "N_PARAMETERS", "estimator", "estimators", "model_of",
-           "register", "unregister"]
+__all__ = ["DATA", "ESTIMATORS", "Estimator", "FAMILIES", "NOISE_USES", "N_PARAMETERS", "estimator", "estimators",
+           "model_of", "register", "unregister"]

@@ -110,8 +110,9 @@ def fit_ferraris(segments, h: float, angles_deg, axes=None, *, nominal: float = 
     nominal_deg = np.rad2deg(abs(nominal) * np.linalg.norm(Y, axis=1))
     for j in range(len(segs)):
         if abs(nominal_deg[j] - np.rad2deg(theta[j])) > angle_tolerance * np.rad2deg(theta[j]):
+            name = names[j] if j < len(names) else f"#{j + 1}"
             raise RotationAngleError(
-                f"the {names[j] if j < len(names) else f'#{j + 1}'} rotation turns {nominal_deg[j]:.1f} deg by the nominal gyro scale, not the stated "
+                f"the {name} rotation turns {nominal_deg[j]:.1f} deg by the nominal gyro scale, not the stated "
                 f"{np.rad2deg(theta[j]):.1f} deg: check the rotation angle (--rotation-angle), the section of that "
                 "rotation in the section list, or the gyro unit/sensitivity")
     senses = np.where(np.sum(Y * A, axis=1) * nominal >= 0, 1.0, -1.0)

@@ -1,10 +1,10 @@
 """The two Ferraris sessions: imucal's example (beside imucal itself) and the CTU rig's rotations.
 
 imucal's session (``../shared/data/imucal_ferraris``): six static holds and three turns of
-360 deg, with its section list.  The sampling rate is 102.4 Hz: imucal's own example says so
-since commit 278a2c3 ("Fixed wrong samplingrate in example", the commit of the stored
-data); at the 204.8 Hz the data README and accelcal's reader assume, each turn integrates
-to about 180 deg.  accelcal's Ferraris fit runs twice: with the nominal axes (imucal's
+360 deg, with its section list, read by accelcal's imucal reader at its sampling rate
+(:data:`accelcal.formats.imucal.IMUCAL_RATE_HZ`, 102.4 Hz: imucal's own example says so
+since commit 278a2c3; at the 204.8 Hz the data README states, each turn integrates to
+about 180 deg).  accelcal's Ferraris fit runs twice: with the nominal axes (imucal's
 assumption, comparable parameter by parameter) and with the axes measured by the
 accelerometer.  Six holds do not determine accelcal's full accelerometer model (it needs
 ten poses; the bias-only model leaves imucal's 2 % scale errors in the directions), so the
@@ -31,19 +31,20 @@ from accelcal.gyro.rests import rest_noise, rest_statistics
 from .peers import AffineAccel
 from .sessions import DATA
 
-IMUCAL_RATE_HZ = 102.4
 CTU_WINDOWS = {"x": (2420, 2910), "y": (2565, 3120), "z": (2975, 3500)}  # 1-based, inclusive
 CTU_ANGLES = (361.338, 367.160, 363.6703)
 CTU_RATE_HZ = 100.0
 
 
 def imucal_session():
+    """Time [s], acc [m/s²], gyro [deg/s, imucal's unit] and the section list of imucal's example."""
+    from accelcal.formats import read
+
     d = DATA / "imucal_ferraris"
-    df = pd.read_csv(d / "example_ferraris_session.csv")
+    rec = read(d / "example_ferraris_session.csv")
     raw = json.loads((d / "example_ferraris_session_list.json").read_text())
     sec = {k: (v["start"], v["end"]) for k, v in raw.items()}
-    t = df.n_samples.to_numpy(float) / IMUCAL_RATE_HZ
-    return t, df[["acc_x", "acc_y", "acc_z"]].to_numpy(), df[["gyr_x", "gyr_y", "gyr_z"]].to_numpy(), sec
+    return rec.t, rec.acc, np.rad2deg(rec.gyro), sec
 
 
 def _params(name: str, model: GyroModel, se: dict | None) -> list[dict]:
