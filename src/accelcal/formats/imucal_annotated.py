@@ -28,9 +28,11 @@ def read_annotated_session(path, text: str | None = None, rate: float = IMUCAL_R
     rec, parts = read_imucal_annotated(path, rate, text=text)
     static = np.array([p if not p.endswith("_rot") else "" for p in parts])
     iv, labels = intervals_from_labels(static)
-    return replace(rec, intervals=iv, labels=labels,
+    turns, names = intervals_from_labels(np.array([p if p.endswith("_rot") else "" for p in parts]))
+    rotations = None if turns is None else dict(zip(names, map(tuple, turns)))
+    return replace(rec, intervals=iv, labels=labels, rotations=rotations,
                    notes=rec.notes + ("imucal annotated session: its static parts (not *_rot) are the known "
-                                      "static intervals",))
+                                      "static intervals, its *_rot parts rotations",))
 
 
 def read_imucal_annotated(csv_path, rate: float = IMUCAL_RATE_HZ,

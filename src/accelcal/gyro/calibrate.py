@@ -103,7 +103,7 @@ def _check_motion(ms: MotionSet, u) -> None:
         raise NoMotionError(f"gravity turns by up to {tilt.max():.0f} deg between rests but the gyro shows rotation "
                             f"in only {int(np.sum(moved))} of {len(turn)} motions (integrated rate within "
                             f"{NO_MOTION_SIGMAS:g} noise std of zero): wrong gyro columns, or a gyro not recorded "
-                            "with the accelerometer (--gyro FILE, --columns)")
+                            "with the accelerometer (--gyro FILE, --columns; --no-gyro to leave it out)")
 
 
 def _check_axes(ms: MotionSet, nominal: float, h: float) -> None:
@@ -115,6 +115,35 @@ def _check_axes(ms: MotionSet, nominal: float, h: float) -> None:
         raise TooFewMotionsError("the motions never turn the sensor about " + " or ".join(
             f"its {'xyz'[a]} axis ({turn[a]:.1f} deg in all)" for a in idle) + ": that gyro's scale and "
             "misalignment cannot be determined; turn the sensor about every axis between rests")
+
+
+#: Median ratio of the integrated nominal rate to gravity's turn beyond which the nominal scale is wrong.
+UNIT_RATIO = 5.0
+
+
+def _check_nominal(ms: MotionSet, u, nominal: float, nominal_from: str) -> None:
+    """The nominal scale must turn the sensor about as far as gravity turns between the rests.
+
+    Gravity's turn between two rests is a lower bound of the rotation, and for the
+    mostly single-axis turns of a hand the integrated rate is near it: a unit or
+    sensitivity off by 57.3 (rad vs deg) or more gives a median ratio far outside
+    ``[1/UNIT_RATIO, UNIT_RATIO]``.
+    """
+    if nominal_from.startswith("scalar search"):
+        return
+    h = float(np.mean(np.diff(ms.h))) if np.ndim(ms.h) else ms.h
+    turn = np.array([abs(nominal) * h * np.linalg.norm(ms.y[a:b + 1].sum(axis=0)) for a, b in
+                     zip(ms.starts, ms.stops)])
+    tilt = np.arccos(np.clip(np.sum(u[ms.rest_before] * u[ms.rest_after], axis=1), -1, 1))
+    big = tilt > np.deg2rad(20.0)
+    if big.sum() < 3:
+        return
+    ratio = float(np.median(turn[big] / tilt[big]))
+    if not 1.0 / UNIT_RATIO <= ratio <= UNIT_RATIO:
+        fix = "--gyro-sensitivity" if "sensitivity" in nominal_from else "--gyro-unit (rad/s, deg/s, counts)"
+        raise GyroInputError(f"with the {nominal_from} the gyro turns the sensor {ratio:.3g} times as far as gravity "
+                             f"turns between the rests (median of {int(big.sum())} motions): the gyro's unit or "
+                             f"sensitivity is wrong; pass {fix}")
 
 
 def _nominal(raw_unit: str, nominal_sensitivity, ms: MotionSet, integrator: str) -> tuple[float, str]:
@@ -261,6 +290,7 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
                   "suggest")
     ms = all_ms.subset(used)
     nominal, nominal_from = _nominal(raw_unit, nominal_sensitivity, ms, integrator)
+    _check_nominal(ms, u, nominal, nominal_from)
     _check_axes(ms, nominal, tb.h)
     fitter = est.load()
     if time_base not in ("auto", "index", "timestamps"):

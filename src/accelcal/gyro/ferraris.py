@@ -219,8 +219,8 @@ def calibrate_ferraris_session(t, gyro, sections: dict, *, raw_unit: str = "deg/
     warnings = ["three rotations determine the nine parameters exactly: no residual checks the fit; the ± rest on "
                 "the noise alone (and on --rotation-angle's uncertainty)"]
     if axes is None:
-        warnings.append("no accelerometer: the rotation axes are assumed to be the sensor's x, y and z (imucal's "
-                        "assumption); the misalignments are relative to them")
+        warnings.append("the rotation axes are assumed to be the sensor's x, y and z (imucal's assumption; measured "
+                        "ones need a full accelerometer calibration): the misalignments are relative to them")
     quality = GyroQuality(n_motions=3, n_parameters=9, dof=0, chi2=float("nan"), p_value=float("nan"),
                           excess=float("nan"), residual_rms_deg=0.0, predicted_rms_deg=float("nan"),
                           axis_turn_deg=tuple(float(a) for a in fit.angles_deg), warnings=tuple(warnings),

@@ -144,8 +144,11 @@ class GyroCalibration:
         m, se, q, s = self.model, self.standard_errors, self.quality, self.settings
         nom = self.nominal
         unit = m.raw_unit
+        exact = "exactly_determined" in q.flags
+        what = (f"{q.n_motions} rotations of known angle ({', '.join(f'{a:g}' for a in s.get('angles_deg', ()))} deg)"
+                if exact else f"{q.n_motions} motions between rests")
         lines = [f"gyroscope: {s.get('estimator', '?')} ({s.get('integrator', '?')} integration), "
-                 f"{q.n_motions} motions between rests, bias from {s.get('bias_mode', '?')} rests"]
+                 f"{what}, bias from {s.get('bias_mode', '?')} rests"]
         sf, sse = self.scale_factors, se.get("scale_factors", np.full(3, np.nan))
         if unit != "counts" or not str(s.get("nominal_from", "")).startswith("scalar search"):
             lines.append("  scale factors [ppm]: " + ", ".join(
@@ -162,11 +165,15 @@ class GyroCalibration:
         be = se.get("bias", np.full(3, np.nan))
         lines.append(f"  bias [{unit}]: " + ", ".join(f"{a} {v:.6g} ± {e:.2g}" for a, v, e in zip("xyz", m.bias, be)))
         if m.g_sensitivity is not None:
-            lines.append(f"  g-sensitivity [{unit} per m/s^2]: " + np.array2string(m.g_sensitivity, precision=3))
-        lines.append(f"  motion residuals: {q.residual_rms_deg:.3g} deg RMS vs {q.predicted_rms_deg:.3g} deg "
-                     f"from the rest noise (chi2/dof = {q.chi2 / max(q.dof, 1):.3g} on {q.dof} dof, "
-                     f"excess {q.excess:.3g})")
-        lines.append(f"  nominal {nom:.6g} rad/s per {unit}")
+            Ge = se.get("g_sensitivity", np.full((3, 3), np.nan))
+            lines.append(f"  g-sensitivity [{unit} per m/s^2]: " + ", ".join(
+                f"{'xyz'[i]}{'xyz'[j]} {m.g_sensitivity[i, j]:+.3g} ± {Ge[i, j]:.2g}"
+                for i in range(3) for j in range(3)))
+        if not exact:
+            lines.append(f"  motion residuals: {q.residual_rms_deg:.3g} deg RMS vs {q.predicted_rms_deg:.3g} deg "
+                         f"from the rest noise (chi2/dof = {q.chi2 / max(q.dof, 1):.3g} on {q.dof} dof, "
+                         f"excess {q.excess:.3g})")
+        lines.append(f"  nominal {nom:.6g} rad/s per {unit} ({s.get('nominal_from', 'unit')})")
         lines += [f"warning: gyroscope: {w}" for w in q.warnings]
         return "\n".join(lines)
 
