@@ -20,7 +20,7 @@ import numpy as np
 from ..errors import RecordingError
 from .inference import resolve_gyro_unit, time_seconds
 from .parsing import parse_numbers
-from .table import ACC_ROLES, GYRO_ROLES, _map_columns, _split_table
+from .table import ACC_ROLES, GYRO_ROLES, _map_columns, _numeric_block, _split_table
 from .text import load_text
 
 
@@ -40,7 +40,12 @@ def read_gyro_table(path, *, gyro_unit: str | None = None, time_unit: str | None
     def column(role):
         return np.asarray(cols[roles[role]], dtype=object)
 
-    raw = np.column_stack([parse_numbers(column(r), tab.dc, path, r, tab.names, roles[r], tab.lines) for r in triad])
+    block = _numeric_block(tab)
+    if block is not None and np.all(np.isfinite(block[:, [roles[r] for r in triad]])):
+        raw = block[:, [roles[r] for r in triad]]
+    else:  # column by column: names the first bad value and its line
+        raw = np.column_stack([parse_numbers(column(r), tab.dc, path, r, tab.names, roles[r], tab.lines)
+                               for r in triad])
     gyro, unit, note = resolve_gyro_unit(raw, units, gyro_unit, path)
     t = None
     if "t" in roles:

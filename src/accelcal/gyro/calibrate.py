@@ -32,7 +32,8 @@ import math
 import time
 
 import numpy as np
-from scipy import special
+
+from .. import distributions as dist
 
 from .errors import GyroInputError, NoMotionError, SaturatedGyroError, TooFewMotionsError
 from .fit import MIN_MOTIONS, MotionSet, evaluate, initial_scale, rotation_angles_deg
@@ -171,7 +172,7 @@ def _use_g_sensitivity(choice, rs, bias, f_rest, acc) -> tuple[bool, dict]:
     without, with_g = fit_bias(rs, "all"), fit_bias(rs, "all", f_rest)
     d1, d2 = 9, with_g.dof
     F = ((without.chi2 - with_g.chi2) / d1) / (with_g.chi2 / d2)
-    pv = float(special.fdtrc(d1, d2, F))
+    pv = float(dist.f_sf(F, d1, d2))
     return pv < G_SENSITIVITY_P, {"decided": "auto", "F": float(F), "p_value": pv, "dof": [d1, d2]}
 
 
@@ -351,7 +352,7 @@ def _assess(fit, all_ms: MotionSet, used, notes, t, tb, best, integrator, base_c
         table["integration_deg"][i] = float(e)
     turn = np.rad2deg(np.sum(np.abs(log_so3(ev.R)), axis=0))
     dof = fit.dof
-    p = float(special.chdtrc(dof, fit.chi2)) if dof > 0 else float("nan")
+    p = float(dist.chi2_sf(fit.chi2, dof)) if dof > 0 else float("nan")
     warnings, flags = [], []
     if dof > 0 and fit.excess > RULES["excess"] and p < RULES["p_value"]:
         flags.append("excess")

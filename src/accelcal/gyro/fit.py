@@ -46,7 +46,6 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import solve_triangular
 
 from ..errors import NotConvergedError
 from .errors import TooFewMotionsError
@@ -135,7 +134,7 @@ class Evaluation:
 
     def whiten(self, v) -> np.ndarray:
         """``L⁻¹ v`` for the Cholesky factor ``L`` of the residual covariance."""
-        return solve_triangular(self.chol, v, lower=True, check_finite=False)
+        return np.linalg.solve(self.chol, v)  # numpy's LU on the (2m, 2m) factor: no scipy.linalg import
 
     def whitened(self) -> tuple[np.ndarray, np.ndarray]:
         """``L⁻¹ J`` (2m, 9) and ``L⁻¹ r`` (2m,)."""
