@@ -14,10 +14,8 @@ from __future__ import annotations
 import math
 
 from ..errors import AccelcalError
+from ..gyro.recording import MIN_RESTS as GYRO_MIN_RESTS  # imports no numerical library
 from ..registry import estimators
-
-#: Rests a gyro calibration from motions needs (one more than its fewest motions).
-GYRO_MIN_RESTS = 6
 
 
 def add_gyro_options(c) -> None:
@@ -79,35 +77,20 @@ def wants_gyro(args, rec) -> bool:
 
 def calibrate(args, rec, cal, poses):
     """The gyro of ``rec``, calibrated with the accelerometer calibration ``cal`` on its ``poses``."""
-    from ..gyro.calibrate import calibrate_gyro
+    from ..gyro.recording import calibrate_recording_gyro
 
-    sens = nominal_sensitivity(args.gyro_sensitivity)
-    unit = rec.gyro_unit or "rad/s"
-    if rec.rotations:
-        return _ferraris(args, rec, cal, unit, sens)
-    if args.rotation_angle is not None:
-        raise AccelcalError("--rotation-angle applies to a Ferraris session, whose rotations are marked (imucal's "
-                            "*_rot sections: --intervals SECTION_LIST, or an annotated session); this recording has "
-                            "none")
     rng = None if args.gyro_range is None else _numbers(args.gyro_range, "--gyro-range", (2,))
     if rng is not None and not rng[0] < rng[1]:
         raise AccelcalError(f"--gyro-range must be LO,HI with LO < HI, got {args.gyro_range!r}")
-    g_sens = {"auto": "auto", "on": True, "off": False}[args.gyro_g_sensitivity]
-    return calibrate_gyro(rec.t, rec.gyro, poses, cal, raw_unit=unit, acc=rec.acc, nominal_sensitivity=sens,
-                          estimator=args.gyro_method, gyro_range=rng, g_sensitivity=g_sens)
-
-
-def _ferraris(args, rec, cal, unit, sens):
-    from ..gyro.ferraris import calibrate_ferraris_session
-
-    angles = _numbers(args.rotation_angle or "360", "--rotation-angle", (1, 3))
-    if not all(0 < a <= 3600 for a in angles):
-        raise AccelcalError(f"--rotation-angle: angles in degrees, positive, got {args.rotation_angle!r}")
-    sections = {**{k: tuple(v) for k, v in zip(rec.labels or (), rec.intervals if rec.intervals is not None
-                                                else ())}, **rec.rotations}
-    accel = {"accel": cal, "acc": rec.acc} if cal.model == "full" else {}
-    return calibrate_ferraris_session(rec.t, rec.gyro, sections, raw_unit=unit, angles_deg=angles,
-                                      nominal_sensitivity=sens, **accel)
+    angles = None
+    if args.rotation_angle is not None:
+        angles = _numbers(args.rotation_angle, "--rotation-angle", (1, 3))
+        if not all(0 < a <= 3600 for a in angles):
+            raise AccelcalError(f"--rotation-angle: angles in degrees, positive, got {args.rotation_angle!r}")
+    return calibrate_recording_gyro(rec, cal, poses, estimator=args.gyro_method,
+                                    nominal_sensitivity=nominal_sensitivity(args.gyro_sensitivity), gyro_range=rng,
+                                    g_sensitivity={"auto": "auto", "on": True, "off": False}[args.gyro_g_sensitivity],
+                                    rotation_angles=angles)
 
 
 def search_line(cal) -> str | None:
