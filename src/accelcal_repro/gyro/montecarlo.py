@@ -127,7 +127,7 @@ def figure(table: pd.DataFrame):
             ax.set_ylim(bottom=0)
             ax.set_xlabel(AXIS_LABELS.get(f, f))
         axes[0, 0].set_ylabel("RMS error / CRLB")
-        axes[0, -1].legend(fontsize=6.5)
+        axes[0, -1].legend(fontsize=6.5, handlelength=3.0)
         fig.suptitle("gyro: one-step (one linearised solve about C = I) vs iterative, against the Cramér–Rao bound",
                      fontsize=8.5)
     return fig
