@@ -35,10 +35,8 @@ def read_gyro_table(path, *, gyro_unit: str | None = None, time_unit: str | None
         found = ", ".join(n.strip() for n in tab.names)[:150] if tab.names is not None else f"{tab.k} columns"
         raise RecordingError(f"{path}: no gyro columns (found: {found}); a gyro file is t x y z (IMU-TK's layout) "
                              "or names its columns gx, gy, gz")
-    cols = list(zip(*tab.data))
-
     def column(role):
-        return np.asarray(cols[roles[role]], dtype=object)
+        return tab.column(roles[role])
 
     block = _numeric_block(tab)
     if block is not None and np.all(np.isfinite(block[:, [roles[r] for r in triad]])):
