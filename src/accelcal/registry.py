@@ -312,10 +312,39 @@ def estimators(sensor: str | None = None, **where) -> tuple[Estimator, ...]:
                  if (sensor is None or e.sensor == sensor) and all(getattr(e, k) == v for k, v in where.items()))
 
 
+def class_of_type(root: type, cal_type: str) -> type | None:
+    """The subclass of ``root`` whose own ``CAL_TYPE`` is ``cal_type``, or None.
+
+    The class the registry names for that estimator comes first (another subclass may
+    declare the same ``CAL_TYPE``: a script's class defined again); else the subclasses are
+    walked (as imucal's ``CalibrationInfo``), so that a class defined anywhere loads its
+    files.  ``root`` is :class:`accelcal.calibration.Calibration` or
+    :class:`accelcal.gyro.result.GyroCalibration`."""
+    if cal_type in ESTIMATORS:
+        cls = ESTIMATORS[cal_type].load_calibration()
+        if issubclass(cls, root) and cls.__dict__.get("CAL_TYPE") == cal_type:
+            return cls
+    return next((c for c in subclasses(root) if c.__dict__.get("CAL_TYPE") == cal_type), None)
+
+
+def subclasses(cls):
+    """Every subclass of ``cls``, depth first."""
+    for sub in cls.__subclasses__():
+        yield sub
+        yield from subclasses(sub)
+
+
+def types_of(root: type) -> list[str]:
+    """The ``CAL_TYPE`` of every subclass of ``root`` that declares one (the registered classes imported first)."""
+    for e in ESTIMATORS.values():
+        e.load_calibration()
+    return [c.CAL_TYPE for c in subclasses(root) if "CAL_TYPE" in c.__dict__]
+
+
 def model_of(name: str) -> str:
     """The model (``'full'``, ``'bias'``) of the estimator ``name``."""
     return estimator(name).model
 
 
-__all__ = ["DATA", "ESTIMATORS", "Estimator", "FAMILIES", "NOISE_USES", "N_PARAMETERS", "estimator", "estimators",
-           "model_of", "register", "unregister"]
+__all__ = ["DATA", "ESTIMATORS", "Estimator", "FAMILIES", "NOISE_USES", "N_PARAMETERS", "class_of_type", "estimator",
+           "estimators", "model_of", "register", "subclasses", "types_of", "unregister"]

@@ -14,7 +14,7 @@ from ..errors import (AccelcalError)
 from ..effects import EFFECT_IDS, EFFECTS, TEMPERATURE, TIME, effect
 from ..extended_model import model_terms
 from ..jsonsafe import json_safe
-from ..registry import ESTIMATORS
+from ..registry import ESTIMATORS, class_of_type, subclasses, types_of
 from ..units import G0, acceleration_unit
 
 FORMAT = "accelcal-calibration"
@@ -375,11 +375,9 @@ def _jsonable(v):
 
 def calibration_class(cal_type: str, root: type | None = None) -> type:
     """The subclass of ``root`` (default :class:`Calibration`; the gyroscope's:
-    :class:`accelcal.gyro.result.GyroCalibration`) whose own ``CAL_TYPE`` is ``cal_type``.
-
-    Found by walking the subclasses (as imucal's ``CalibrationInfo``), after importing the
-    class the registry names for that estimator, so that a class defined anywhere (a
-    registered estimator's module, a user's script) loads its files.
+    :class:`accelcal.gyro.result.GyroCalibration`) whose own ``CAL_TYPE`` is ``cal_type``
+    (:func:`accelcal.registry.class_of_type`: the registry's class first, else a subclass
+    defined anywhere, a registered estimator's module or a user's script).
 
     Raises
     ------
@@ -387,27 +385,16 @@ def calibration_class(cal_type: str, root: type | None = None) -> type:
         No such class (the message lists the known types).
     """
     root = Calibration if root is None else root
-    if cal_type in ESTIMATORS:
-        ESTIMATORS[cal_type].load_calibration()
-    for cls in _subclasses(root):
-        if cls.__dict__.get("CAL_TYPE") == cal_type:
-            return cls
-    known = [c.CAL_TYPE for c in _all_calibration_classes(root)]
-    raise CalibrationFileError(f"unknown calibration type {cal_type!r}; known: {', '.join(known)}")
+    cls = class_of_type(root, cal_type)
+    if cls is None:
+        raise CalibrationFileError(f"unknown calibration type {cal_type!r}; known: {', '.join(types_of(root))}")
+    return cls
 
 
-def _subclasses(cls):
-    for sub in cls.__subclasses__():
-        yield sub
-        yield from _subclasses(sub)
-
-
-def _all_calibration_classes(root: type | None = None) -> list[type]:
-    """Every subclass of ``root`` (default :class:`Calibration`) that declares a ``CAL_TYPE``
-    (the registered estimators' imported first)."""
-    for e in ESTIMATORS.values():
-        e.load_calibration()
-    return [c for c in _subclasses(Calibration if root is None else root) if "CAL_TYPE" in c.__dict__]
+def _all_calibration_classes() -> list[type]:
+    """Every :class:`Calibration` subclass that declares a ``CAL_TYPE`` (the registered estimators' imported first)."""
+    types_of(Calibration)
+    return [c for c in subclasses(Calibration) if "CAL_TYPE" in c.__dict__]
 
 
 # --------------------------------------------------------------------------- loading
@@ -490,12 +477,16 @@ def _common(d: dict, version: int) -> dict:
 
 
 def _gyro(d):
-    """The ``gyroscope`` object of a format-2 file (None: absent, or a format-0/1 file)."""
+    """The ``gyroscope`` object of a format-2 file (None: absent, or a format-0/1 file), as
+    the class the registry names for its ``cal_type`` (by name: the gyro package is not
+    imported here, it imports this one's lookup)."""
     if not d:
         return None
-    from ..gyro.result import GyroCalibration
-
-    return GyroCalibration.from_dict(d)
+    gyro = [e for e in ESTIMATORS.values() if e.sensor == "gyroscope"]
+    if d.get("cal_type") not in {e.name for e in gyro}:
+        raise CalibrationFileError(f"gyroscope: unknown calibration type {d.get('cal_type')!r}; known: "
+                                   f"{', '.join(e.name for e in gyro)}")
+    return ESTIMATORS[d["cal_type"]].load_calibration().from_dict(d)
 
 
 def _method_values(cls, d: dict) -> dict:

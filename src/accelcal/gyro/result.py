@@ -124,10 +124,15 @@ class GyroCalibration:
 
     @classmethod
     def from_dict(cls, d: dict) -> GyroCalibration:
-        """Rebuild from :meth:`to_dict`'s object, as the class of its ``cal_type``."""
-        from ..calibration.base import calibration_class
+        """Rebuild from :meth:`to_dict`'s object, as the class of its ``cal_type``
+        (:func:`accelcal.registry.class_of_type`; without one, this class)."""
+        from ..errors import InputShapeError
+        from ..registry import class_of_type, types_of
 
-        kind = calibration_class(d["cal_type"], root=GyroCalibration) if d.get("cal_type") else GyroCalibration
+        kind = class_of_type(GyroCalibration, d["cal_type"]) if d.get("cal_type") else GyroCalibration
+        if kind is None:
+            raise InputShapeError(f"gyroscope: unknown calibration type {d['cal_type']!r}; known: "
+                                  f"{', '.join(types_of(GyroCalibration))}")
         se = {k: np.array(v, dtype=float) for k, v in d.get("standard_errors", {}).items() if v is not None}
         return kind(GyroModel.from_dict(d["model"]), se, GyroQuality.from_dict(d["quality"]),
                     dict(d.get("motions", {})), dict(d.get("settings", {})))
