@@ -47,8 +47,9 @@ def read_gyro_table(path, *, gyro_unit: str | None = None, time_unit: str | None
     gyro, unit, note = resolve_gyro_unit(raw, units, gyro_unit, path)
     t = None
     if "t" in roles:
+        tcol = block[:, roles["t"]] if block is not None and np.all(np.isfinite(block[:, roles["t"]])) else None
         t, _ = time_seconds(column("t"), None, time_unit, units.get("t"), tab.names, roles, tab.dc, path, tab.lines,
-                            tab.preamble)
+                            tab.preamble, parsed=tcol)
     return t, gyro, unit, [*notes, f"gyro from {path.name}: {note}"]
 
 

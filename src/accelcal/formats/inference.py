@@ -131,8 +131,9 @@ def _preamble_rate(preamble) -> tuple[float | None, str]:
     return None, ""
 
 
-def time_seconds(values, rate, tu, header_unit, names, roles, dc, path, lines, preamble):
-    """Time [s] from the first sample, and a note on how it was obtained."""
+def time_seconds(values, rate, tu, header_unit, names, roles, dc, path, lines, preamble, parsed=None):
+    """Time [s] from the first sample, and a note on how it was obtained (``parsed``: the
+    column already converted to floats, when the table reader has it)."""
     n = len(lines)
     if rate is not None:
         ignored = " (time column ignored)" if values is not None else ""
@@ -158,7 +159,7 @@ def time_seconds(values, rate, tu, header_unit, names, roles, dc, path, lines, p
         x = ti.astype(float)
         t0 = float(ti[0])
     else:
-        x = parse_numbers(values, dc, path, "t", names, roles["t"], lines)
+        x = parsed if parsed is not None else parse_numbers(values, dc, path, "t", names, roles["t"], lines)
         t0 = float(x[0])
         rel = x - x[0]
     _check_increasing(rel, path, label, lines)

@@ -172,14 +172,19 @@ def read_table(path, *, text: str | None = None, columns=None, unit: str | None 
         notes.append("no header: columns read as " + ", ".join(
             f"{r}=column {i + 1}" for r, i in roles.items()) + " (pass --columns to change)")
     block = _numeric_block(tab)
+    strings = {}
 
     def column(role):
-        return tab.column(roles[role])
+        if role not in strings:
+            strings[role] = tab.column(roles[role])
+        return strings[role]
+
+    def parsed(role):  # the column's floats when the whole table converted (else parse_numbers names the bad value)
+        return block[:, roles[role]] if block is not None and np.all(np.isfinite(block[:, roles[role]])) else None
 
     def numbers(role):
-        if block is not None and np.all(np.isfinite(block[:, roles[role]])):
-            return block[:, roles[role]]
-        return parse_numbers(column(role), dc, path, role, names, roles[role], lines)  # names the bad value
+        x = parsed(role)
+        return x if x is not None else parse_numbers(column(role), dc, path, role, names, roles[role], lines)
 
     def triad(axes):
         return np.column_stack([numbers(a) for a in axes])
@@ -192,7 +197,7 @@ def read_table(path, *, text: str | None = None, columns=None, unit: str | None 
         gyro, gyro_unit_name, note = resolve_gyro_unit(triad(GYRO_ROLES), units, gyro_unit, path)
         notes.append(note)
     t, tnote = time_seconds(column("t") if "t" in roles else None, rate, time_unit, units.get("t"), names, roles, dc,
-                            path, lines, tab.preamble)
+                            path, lines, tab.preamble, parsed=parsed("t") if "t" in roles else None)
     notes.append(tnote)
     temp = None
     if "temp" in roles:
