@@ -136,9 +136,10 @@ def figure(fom: pd.DataFrame, imucal_fom: pd.DataFrame | None = None):
 
     from accelcal.plotting import RC
 
-    sub = fom[fom.bias == "own_bias"]
-    if imucal_fom is not None:
-        sub = pd.concat([sub, imucal_fom.assign(bias="own_bias")], ignore_index=True)
+    frames = [f for f in (fom, imucal_fom) if f is not None and "rms_deg" in f.columns]  # a table may be empty
+    sub = pd.concat([f[f.bias == "own_bias"] if "bias" in f.columns else f.assign(bias="own_bias") for f in frames],
+                    ignore_index=True) if frames else pd.DataFrame(columns=["session", "calibration", "rms_deg",
+                                                                            "noise_rms_deg"])
     sessions = list(dict.fromkeys(sub.session))
     with plt.rc_context(RC):
         fig, ax = plt.subplots(figsize=(8.0, 3.3), layout="constrained")
