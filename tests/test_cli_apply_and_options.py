@@ -150,7 +150,7 @@ def test_xsens_warns_that_residuals_exceed_the_noise(tmp_path):
 def test_mpu6050_ten_poses_warn_about_one_degree_of_freedom(tmp_path):
     code, err = run("calibrate", DATA / "mpu6050_suarez" / "example_data_calibration.csv", "--out", tmp_path / "m.json")
     assert code == 0
-    w = warnings_of(err)
+    w = [x for x in warnings_of(err) if not x.startswith("warning: gyroscope:")]  # the accelerometer's
     assert len(w) == 1 and "1 degree(s) of freedom" in w[0]
 
 
@@ -184,7 +184,7 @@ def test_imucal_section_list_as_known_intervals(tmp_path):
     # imucal's own Ferraris calibration of these samples (results/measured/peer_imucal.csv): b = (0.537, -0.616, 0.399)
     np.testing.assert_allclose(js["bias"], [0.537, -0.616, 0.399], atol=2e-3)
     csv = tmp_path / "iv.csv"
-    csv.write_text("start,end,label\n" + "\n".join(f"{a / 204.8},{(b - 1) / 204.8},{k}" for k, (a, b) in
+    csv.write_text("start,end,label\n" + "\n".join(f"{a / 102.4},{(b - 1) / 102.4},{k}" for k, (a, b) in
                                                    zip(["x_p", "x_a", "y_p", "y_a", "z_p", "z_a"],
                                                        [(540, 1271), (1620, 2361), (2814, 3298), (3740, 4152),
                                                         (4522, 4975), (5376, 5983)])) + "\n")

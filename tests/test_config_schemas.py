@@ -21,7 +21,7 @@ from tests.test_workflow import CI, REPO, snakemake
 
 DEFAULT = REPO / "config" / "config.yaml"
 SCHEMAS = REPO / "workflow" / "schemas"
-STAGES = ("batista2011", "tereshkov", "measured")
+STAGES = ("batista2011", "tereshkov", "measured", "gyro")
 
 
 def schema(stage):
@@ -147,6 +147,15 @@ BROKEN = {
                                                    {"one": ["mpu6050", "imucal_ferraris"]}}),
                                           "discrepancy.sessions.same_imu.one: imucal_ferraris not in "
                                           "discrepancy.recordings"),
+    # ----------------------------------------------------------------------- gyro
+    "gyro_unknown_session": (changed({"gyro.sessions": ["xsens", "ctu"]}),
+                             "gyro.sessions.1: 'ctu' is not a gyro session; known: xsens, fork_data1"),
+    "gyro_imutk_run_missing": (changed({"gyro.imutk_run": "results/gyro/peers/none.json"}),
+                               "gyro.imutk_run: results/gyro/peers/none.json: no such file"),
+    "gyro_too_few_motions": (changed({"gyro.ipopt_check.motions": 4}),
+                             "gyro.ipopt_check.motions: 4 is less than the minimum of 5"),
+    "gyro_unknown_key": (changed({"gyro.monte_carlo.chunks": 2}),
+                         "gyro.monte_carlo: Additional properties are not allowed ('chunks' was unexpected)"),
 }
 
 
@@ -196,6 +205,8 @@ EDGES = {
                          "tereshkov.sweep.kinds": ["all"], "tereshkov.sweep.steady_state_from_s": 699}),
     "measured": changed({"measured.recordings.imucal_ferraris": {
         "g": 9.81, "estimators": ["full_lls", "bias_lls"], "pose_selection": "all"}}),
+    "gyro": changed({"gyro.sessions": ["imucal_ferraris"], "gyro.monte_carlo.trials": 2,
+                     "gyro.ipopt_check.motions": 5, "gyro.integrators.angle_deg": 360}),
 }
 
 
@@ -227,7 +238,7 @@ def test_default_config_passes_the_dry_run(tmp_path):
 
 
 def test_every_key_is_required_and_no_other_key_allowed():
-    """Every object of the three schemas lists all its properties as required and forbids
+    """Every object of the stages' schemas lists all its properties as required and forbids
     others, except measured.recordings (a subset of the known recordings, by name)."""
     def walk(s, where):
         if "properties" in s and where != "measured.recordings":

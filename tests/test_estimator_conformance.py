@@ -1,7 +1,9 @@
-"""Every registered estimator meets the same contracts (in the spirit of scikit-learn's
-``parametrize_with_checks``): each check is a function of a registry entry, run here on
-every entry of :data:`accelcal.registry.ESTIMATORS`, and by ``tests/test_add_estimator.py``
-on an estimator a test registers, so a new estimator is checked without a new test.
+"""Every registered estimator of pose means meets the same contracts (in the spirit of
+scikit-learn's ``parametrize_with_checks``): each check is a function of a registry entry,
+run here on every accelerometer entry of :data:`accelcal.registry.ESTIMATORS`, and by
+``tests/test_add_estimator.py`` on an estimator a test registers, so a new estimator is
+checked without a new test.  The gyroscope's entries have their own checks
+(``tests/test_gyro_conformance.py``); a test below sees that every entry is covered by one.
 
 * the entry: its function, batch form and calibration class load; the class's
   ``CAL_TYPE`` is the name; baseline and corrected estimator are registered, of the same
@@ -212,10 +214,18 @@ def run_check(check, e: Estimator, tmp_path):
     return check(e, rng)
 
 
-@pytest.mark.parametrize("name", list(ESTIMATORS))
+@pytest.mark.parametrize("name", [e.name for e in estimators("accelerometer")])
 @pytest.mark.parametrize("check", CHECKS, ids=lambda c: c.__name__.removeprefix("check_"))
 def test_conformance(check, name, tmp_path):
     run_check(check, ESTIMATORS[name], tmp_path)
+
+
+def test_every_registered_estimator_has_a_conformance_suite():
+    """The accelerometer's here, the gyroscope's in test_gyro_conformance: no entry unchecked."""
+    from .test_gyro_conformance import GYRO_CHECKS
+
+    assert {e.sensor for e in ESTIMATORS.values()} <= {"accelerometer", *GYRO_CHECKS}
+    assert all(e.data == "poses" for e in estimators("accelerometer"))
 
 
 def test_the_checks_can_fail(tmp_path):

@@ -57,7 +57,7 @@ def test_no_g_sensitivity_when_there_is_none():
 def test_one_step_and_coning_integrator_agree_with_the_iterative_estimate():
     r = _recording(seed=7)
     it, poses, cal = _calibrate(r)
-    one = calibrate_gyro(r["t"], r["gyro"], poses, cal, acc=r["acc"], estimator="one_step")
+    one = calibrate_gyro(r["t"], r["gyro"], poses, cal, acc=r["acc"], estimator="gyro_one_step")
     con = calibrate_gyro(r["t"], r["gyro"], poses, cal, acc=r["acc"], integrator="coning")
     se = it.standard_errors["C"]
     assert np.abs((one.model.C - it.model.C) / se).max() < 1.0

@@ -1,33 +1,46 @@
-"""The real sessions with gyro data (../shared/data): what the calibration must find on them."""
+"""The real sessions with gyro data (../shared/data): what the calibration must find on them,
+through the command line's route (accelcal_repro.gyro.sessions)."""
 
 import numpy as np
 import pytest
 
-from accelcal_repro.gyro.sessions import DATA, calibrate_session, load
+from accelcal_repro.gyro.sessions import DATA, SESSIONS, calibrate_session, files_needed, local_paths
 
 pytestmark = pytest.mark.skipif(not (DATA / "imu_tk_xsens").is_dir(), reason="shared data not present")
 
 
+def _calibrate(name):
+    return calibrate_session(SESSIONS[name], local_paths([name]))
+
+
 def test_xsens_sensitivities_agree_with_the_data_sheet_and_the_fit_with_the_noise():
-    r = calibrate_session(load("xsens"))
+    r = _calibrate("xsens")
     g = r["gyro"]
     sens = 1.0 / np.diag(g.model.C)
     np.testing.assert_allclose(sens, [4778.0, 4758.0, 4766.0], rtol=2e-3)  # data sheet, 4 digits
     assert g.settings["g_sensitivity"]  # this unit's rest means follow gravity (F test)
     assert g.quality.chi2 / g.quality.dof < 2.0  # with it the motions fit the rest noise
     assert len(r["poses"]) == 38 and g.quality.n_motions == 37
+    assert r["acc"].gyro is g  # one calibration holds both
 
 
 def test_fork_data1_short_still_phases_need_no_hand_tuning():
-    r = calibrate_session(load("fork_data1"))
+    r = _calibrate("fork_data1")
     assert len(r["poses"]) >= 30
     assert r["static_note"].startswith("static detection chosen from")
     assert r["gyro"].quality.n_motions >= 29
 
 
 def test_snu_host_timestamps_integrate_by_the_sample_index():
-    g = calibrate_session(load("snu_good2"))["gyro"]
+    g = _calibrate("snu_good2")["gyro"]
     tb = g.settings["time_base"]
     assert tb["jitter"] > 0.05 and tb["used"] == "index"
     assert tb["chi2_per_dof"]["index"] < 0.5 * tb["chi2_per_dof"]["timestamps"]
     assert any("sample index" in w for w in g.quality.warnings)
+
+
+def test_the_files_each_session_needs_are_in_the_data_table():
+    from accelcal_repro.measured.data import DATASETS
+
+    for dataset, files in files_needed(list(SESSIONS)).items():
+        assert set(files) <= set(DATASETS[dataset]), dataset

@@ -17,10 +17,14 @@ def _tables(ours_fom: float):
                        for k in ("scale", "misalignment")])
     ipopt = pd.DataFrame([{"max_diff_in_se": 0.01}])
     fom = pd.DataFrame([{"session": "a", "calibration": "accelcal", "bias": "own_bias", "rms_deg": ours_fom},
-                        {"session": "a", "calibration": "imutk_run", "bias": "own_bias", "rms_deg": 0.3}])
+                        {"session": "a", "calibration": "imutk_run", "bias": "own_bias", "rms_deg": 0.3},
+                        {"session": "b", "calibration": "accelcal", "bias": "own_bias", "rms_deg": 0.1},
+                        {"session": "b", "calibration": "imutk_published", "bias": "own_bias", "rms_deg": 0.2}])
     peer = pd.DataFrame([{"session": "xsens", "peer": "factory", "parameter": "K_x", "ours": 4780.0,
                           "peer_value": 4778.0}])
-    return integ, mc, ipopt, fom, peer
+    imucal = pd.DataFrame([{"calibration": c, "parameter": "s_x", "diff_in_se": d}
+                           for c, d in (("accelcal", 0.0), ("imucal", 2.0 if ours_fom < 0.3 else 4.0))])
+    return integ, mc, ipopt, fom, peer, imucal
 
 
 def test_verdicts_follow_the_tables():
@@ -28,8 +32,12 @@ def test_verdicts_follow_the_tables():
     bad = claims(*_tables(0.4)).set_index("claim_id").verdict
     assert good["figure_of_merit_vs_imutk"] == "reproduced"
     assert bad["figure_of_merit_vs_imutk"] == "not_reproduced"
+    assert good["imucal_agrees"] == "reproduced" and bad["imucal_agrees"] == "not_reproduced"
     assert good["one_step_not_enough"] == "reproduced" and good["iterative_efficient"] == "reproduced"
     assert good["xsens_data_sheet"] == "reproduced"  # 2 counts in 4778: 0.04 %
+    from accelcal_repro.claims import validate_rows
+
+    validate_rows(claims(*_tables(0.2)))  # the ledger's rules (paper key gyro)
 
 
 def test_stability_excess_is_one_for_sessions_that_agree_within_their_errors():

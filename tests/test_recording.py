@@ -187,8 +187,10 @@ def test_read_imutk_ascii(data_dir):
 def test_read_imucal_session(data_dir):
     rec = read_imucal_session(data_dir / "imucal_ferraris" / "example_ferraris_session.csv")
     assert rec.n == 10376
-    np.testing.assert_allclose(rec.t, np.arange(10376) / 204.8)  # n_samples is the row counter
+    np.testing.assert_allclose(rec.t, np.arange(10376) / 102.4)  # n_samples is the row counter; imucal's rate
     assert np.linalg.norm(rec.acc[0]) == pytest.approx(10.35, abs=0.05)  # m/s²
+    np.testing.assert_allclose(rec.gyro[0], np.deg2rad([-0.6103515625, -0.30517578125, 0.06103515625]))
+    assert rec.gyro_unit == "rad/s"
 
 
 def test_read_imucal_section_list(data_dir):
@@ -200,7 +202,8 @@ def test_read_imucal_section_list(data_dir):
 def test_read_imucal_annotated(data_dir):
     rec, parts = read_imucal_annotated(data_dir / "imucal_ferraris" / "annotated_session.csv")
     assert rec.n == len(parts) == 9414
-    np.testing.assert_allclose(np.diff(rec.t), 1 / 204.8)
+    np.testing.assert_allclose(np.diff(rec.t), 1 / 102.4)
+    assert rec.gyro_unit == "counts" and rec.gyro.shape == (9414, 3)
     order = [parts[0]] + [b for a, b in zip(parts[:-1], parts[1:]) if a != b]
     assert order == ["x_p", "x_a", "y_p", "y_a", "z_p", "z_a", "x_rot", "y_rot", "z_rot"]  # contiguous, time order
     assert abs(rec.acc[parts == "x_p", 0].mean() - 2040) < 10  # raw counts

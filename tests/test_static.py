@@ -349,14 +349,21 @@ def test_imucal_session_matches_section_list(data_dir):
     for name in ("x_rot", "y_rot", "z_rot"):
         s, e = sections[name]
         overlap = np.minimum(iv[:, 1], e) - np.maximum(iv[:, 0], s)
-        assert overlap.max() <= 0, name  # nothing static detected inside a rotation
+        # nothing static detected inside a rotation, up to the hand-set bounds of the section list
+        # (at imucal's 102.4 Hz a rest reaches 4 samples, 40 ms, into y_rot)
+        assert overlap.max() <= 0.05 * rec.rate, name
     assert len(p) == 13  # regression: the six positions, repeated x/y/z rests around the rotations, initial rest
 
 
 def test_imucal_annotated_static_parts(data_dir):
     rec, parts = read_imucal_annotated(data_dir / "imucal_ferraris" / "annotated_session.csv")
     p = detect_static_recording(rec)
-    assert len(p) == 6
     for (a, b), name in zip(p.intervals, ("x_p", "x_a", "y_p", "y_a", "z_p", "z_a")):
         assert set(parts[a:b]) == {name}
         assert b - a > 0.5 * np.count_nonzero(parts == name)
+    # at imucal's 102.4 Hz the detection also finds the pauses of 1.4-2.3 s inside the *_rot parts
+    # (the part labels cover the whole turn): the gyro is at rest there, not turning
+    turning = np.linalg.norm(rec.gyro[np.char.endswith(parts.astype(str), "_rot")], axis=1).mean()
+    assert len(p) == 9
+    for a, b in p.intervals[6:]:
+        assert str(parts[a]).endswith("_rot") and np.linalg.norm(rec.gyro[a:b], axis=1).mean() < 0.05 * turning

@@ -12,7 +12,9 @@ without the gyro), which is what ``accelcal calibrate`` does.
 
 ``accelcal calibrate`` gets the same session as the canonical CSV (written once into a
 temporary folder, not timed: each tool reads its own format), ``--g 9.81744`` (the value
-the IMU-TK example uses) and the full LLS.  Also timed: ``python -c "import accelcal"`` and
+the IMU-TK example uses) and the full LLS; and, as IMU-TK does, accelerometer and gyro from
+the very files IMU-TK reads (``xsens_acc.mat --gyro xsens_gyro.mat``), with and without
+the nominal gyro sensitivity (the data sheet's: no scalar search for the start).  Also timed: ``python -c "import accelcal"`` and
 ``accelcal --help`` (the start-up the CLI pays before any work).
 
 The commands run in turn (A B C ... A B C ...), after one untimed warm-up each, so that
@@ -82,6 +84,11 @@ def main(argv: list[str] | None = None) -> int:
             "imutk test_imu_calib (acc + gyro)": [args.imutk, str(acc), str(gyro)],
             "accelcal calibrate (full-lls)": [accelcal, "calibrate", str(csv), "--g", G_XSENS, "--method", "full-lls",
                                               "--out", str(tmp / "result.json")],
+            "accelcal calibrate (acc + gyro, the same files)": [
+                accelcal, "calibrate", str(acc), "--gyro", str(gyro), "--g", G_XSENS, "--out", str(tmp / "both.json")],
+            "accelcal calibrate (acc + gyro, --gyro-sensitivity 4770/rad/s, the data sheet's)": [
+                accelcal, "calibrate", str(acc), "--gyro", str(gyro), "--g", G_XSENS, "--gyro-sensitivity",
+                "4770/rad/s", "--out", str(tmp / "both_s.json")],
             "accelcal --help": [accelcal, "--help"],
             "python -c 'import accelcal'": [sys.executable, "-c", "import accelcal"],
         }

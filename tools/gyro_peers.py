@@ -25,7 +25,11 @@ Runs:
   calls with the settings as arguments) on the IMU-TK fork sessions data1-4 and the SNU
   sessions, for which the example's Xsens settings (raw counts, 50 s initial rest) do not
   apply;
-* imucal's ``FerrarisCalibration`` on its own example session (``run-imucal``).
+* imucal's ``FerrarisCalibration`` on its own example session (``run-imucal``; the workflow's
+  gyro stage runs it itself).
+
+The workflow cannot build IMU-TK (no downloads or builds at run time): its gyro stage reads
+``imutk.json`` when the config's ``gyro.imutk_run`` names it.
 
 Everything is written as JSON into ``--out`` with the command, the settings, the peer's
 version and the wall time, so that the comparison can be rerun.
@@ -228,33 +232,17 @@ def run_imutk(peers: Path, out: Path, runs: int) -> None:
     print(f"wrote {out / 'imutk.json'}")
 
 
-#: Sampling rate of imucal's example session: its example script (examples/basic_ferraris.py) says
-#: 102.4 Hz since commit 278a2c3 ("Fixed wrong samplingrate in example"), the commit of the stored
-#: data; at 204.8 Hz each "360 deg" rotation integrates to about 180 deg (and K_g to 0.5).
-IMUCAL_EXAMPLE_RATE_HZ = 102.4
-
-
 def run_imucal(out: Path) -> None:
-    """imucal's Ferraris calibration of its example session (its own example's settings)."""
-    import imucal
-    import numpy as np
-    import pandas as pd
-    from imucal import FerrarisCalibration, ferraris_regions_from_section_list
+    """imucal's Ferraris calibration of its example session (its own example's settings,
+    accelcal_repro.gyro.ferraris_sessions.run_imucal: the workflow's gyro stage runs the same)."""
+    from accelcal_repro.gyro.ferraris_sessions import run_imucal as imucal_of
 
     d = DATA / "imucal_ferraris"
-    data = pd.read_csv(d / "example_ferraris_session.csv", header=0, index_col=0)
-    sections = pd.read_json(d / "example_ferraris_session_list.json").T
-    t0 = time.perf_counter()
-    regions = ferraris_regions_from_section_list(data, sections)
-    cal = FerrarisCalibration().compute(regions, sampling_rate_hz=IMUCAL_EXAMPLE_RATE_HZ, from_acc_unit="m/s^2",
-                                        from_gyr_unit="deg/s")
-    wall = time.perf_counter() - t0
-    rec = {k: np.asarray(getattr(cal, k)).tolist() for k in ("K_a", "R_a", "b_a", "K_g", "R_g", "K_ga", "b_g")}
+    cal = imucal_of(d / "example_ferraris_session.csv", d / "example_ferraris_session_list.json")
+    meta = cal.pop("meta")
     out.mkdir(parents=True, exist_ok=True)
-    (out / "imucal.json").write_text(json.dumps(
-        {"meta": {"peer": "imucal", "version": imucal.__version__, "sampling_rate_hz": IMUCAL_EXAMPLE_RATE_HZ,
-                  "grav": 9.81,
-                  "expected_angle": -360.0, "wall_s": wall}, "calibration": rec}, indent=1))
+    (out / "imucal.json").write_text(json.dumps({"meta": {**meta, "expected_angle": -360.0}, "calibration": cal},
+                                                indent=1))
     print(f"wrote {out / 'imucal.json'}")
 
 

@@ -43,9 +43,11 @@ __version__ = "0.1.0"
 
 
 def _estimator_functions() -> dict[str, str]:
-    """Public name -> ``'module:function'`` of every registered estimator and of its
-    batched form (the registry is the one list of them)."""
-    return {path.partition(":")[2]: path for e in ESTIMATORS.values() for path in (e.function, e.batch) if path}
+    """Public name -> ``'module:function'`` of every registered estimator of pose means and
+    of its batched form (the registry is the one list of them; the gyroscope's estimators
+    are in :mod:`accelcal.gyro`)."""
+    return {path.partition(":")[2]: path for e in ESTIMATORS.values() if e.data == "poses"
+            for path in (e.function, e.batch) if path}
 
 
 #: Public name -> submodule that defines it (imported on first access); the estimators

@@ -6,7 +6,8 @@ checking its arguments (see the ``_sf``/``_ppf``/``_isf`` methods in
 and every process pays it: each workflow job and each ``accelcal`` call; importing
 ``scipy.special`` costs about 0.25 s, and happens at the first call that needs it.  The χ²
 tail at a whole number of degrees of freedom, the one the calibration summary needs, is a
-closed form in ``math``.  The functions return what ``scipy.stats`` returns, including
+closed form in ``math``; the F tail at whole degrees of freedom (the gyro's g-sensitivity
+test) is the regularised incomplete beta function by its continued fraction, in ``math``.  The functions return what ``scipy.stats`` returns, including
 outside the support (``sf = 1`` below it) and for invalid degrees of freedom (NaN).
 ``tests/test_distributions.py`` checks them against ``scipy.stats``.
 """
@@ -81,8 +82,43 @@ def chi2_ppf(q, df):
     return _out(np.where(_valid(df), 2 * special.gammaincinv(df / 2, q), np.nan))
 
 
+def _betainc_cf(a: float, b: float, x: float) -> float:
+    """The continued fraction of the regularised incomplete beta ``I_x(a, b)`` (modified
+    Lentz; Numerical Recipes 6.4), for ``x < (a + 1) / (a + b + 2)``, where it converges fast."""
+    tiny, qab, qap, qam = 1e-300, a + b, a + 1.0, a - 1.0
+    c, d = 1.0, 1.0 - qab * x / qap
+    d = 1.0 / (d if abs(d) > tiny else tiny)
+    h = d
+    for m in range(1, 10000):
+        for aa in (m * (b - m) * x / ((qam + 2 * m) * (a + 2 * m)),
+                   -(a + m) * (qab + m) * x / ((a + 2 * m) * (qap + 2 * m))):
+            d = 1.0 + aa * d
+            d = 1.0 / (d if abs(d) > tiny else tiny)
+            c = 1.0 + aa / c
+            c = c if abs(c) > tiny else tiny
+            h *= d * c
+        if abs(d * c - 1.0) < 1e-16:
+            break
+    front = math.exp(a * math.log(x) + b * math.log1p(-x) - (math.lgamma(a) + math.lgamma(b) - math.lgamma(a + b)))
+    return front * h / a
+
+
+def _f_sf_whole(x: float, dfn: int, dfd: int) -> float:
+    """``P(F > x)`` for whole degrees of freedom: ``I_w(dfd/2, dfn/2)``, ``w = dfd / (dfd + dfn x)``."""
+    if x <= 0.0:
+        return 1.0
+    a, b = 0.5 * dfd, 0.5 * dfn
+    w = dfd / (dfd + dfn * x)
+    if w < (a + 1.0) / (a + b + 2.0):
+        return _betainc_cf(a, b, w)
+    return 1.0 - _betainc_cf(b, a, dfn * x / (dfd + dfn * x))  # 1 - w without its rounding
+
+
 def f_sf(x, dfn, dfd):
     """Upper tail of the F distribution (``stats.f.sf``)."""
+    if (np.ndim(x) == 0 and np.ndim(dfn) == 0 and np.ndim(dfd) == 0 and math.isfinite(float(x))
+            and all(float(d) == int(d) and 1 <= d <= 10 ** 6 for d in (dfn, dfd))):
+        return _f_sf_whole(float(x), int(dfn), int(dfd))
     x = np.asarray(x, float)
     p = np.where(x < 0, 1.0, special.fdtrc(dfn, dfd, np.maximum(x, 0.0)))
     return _out(np.where(_valid(dfn, dfd), p, np.nan))

@@ -53,6 +53,11 @@ class Recording:
         file has no gyroscope (or the reader does not read it).
     gyro_unit : {'rad/s', 'counts'} or None
         Unit of ``gyro`` when known (data in deg/s are converted to rad/s when read).
+    rotations : dict or None
+        Known rotations of a Ferraris session (imucal's ``x_rot``, ``y_rot``, ``z_rot``
+        sections): ``{label: (start, stop)}``, sample ranges; None when the file does not
+        mark them.  The gyro's Ferraris calibration (:mod:`accelcal.gyro.ferraris`) uses them
+        with the known static intervals.
     """
 
     t: np.ndarray
@@ -66,6 +71,7 @@ class Recording:
     time_column: tuple | None = None
     gyro: np.ndarray | None = None
     gyro_unit: str | None = None
+    rotations: dict | None = None
 
     def __post_init__(self):
         t = np.array(self.t, dtype=float)
@@ -87,6 +93,7 @@ class Recording:
         object.__setattr__(self, "intervals", intervals)
         object.__setattr__(self, "labels", labels)
         object.__setattr__(self, "notes", tuple(self.notes))
+        object.__setattr__(self, "rotations", _check_rotations(self.rotations, t.size, self.source))
         if self.unit not in (None, "m/s^2", "counts"):
             raise RecordingError(f"{self.source}: unit {self.unit!r}; a Recording holds m/s^2 or counts "
                                  "(convert g and mg when reading)")
@@ -116,6 +123,20 @@ def _check_gyro(gyro, unit: str | None, n: int, source: str):
         raise RecordingError(f"{source}: gyroscope unit {unit!r}; a Recording holds rad/s or counts "
                              "(convert deg/s when reading)")
     return gyro
+
+
+def _check_rotations(rotations, n: int, source: str):
+    """Known rotations as ``{label: (start, stop)}`` of int ranges inside ``[0, n)`` (or None)."""
+    if rotations is None:
+        return None
+    out = {}
+    for name, (a, b) in dict(rotations).items():
+        a, b = int(a), int(b)
+        if not 0 <= a < b <= n:
+            raise RecordingError(f"{source}: rotation {name!r} (samples {a}-{b}) is not a range inside the "
+                                 f"recording's {n} samples")
+        out[str(name)] = (a, b)
+    return out or None
 
 
 def _check_intervals(intervals, labels, n: int, source: str):

@@ -7,25 +7,34 @@ check — instead of guessing from a name or keeping a table of its own.  Functi
 classes are named by ``module:attribute`` and imported on first use, so that reading
 the registry (``accelcal --help``) imports no numerical library.
 
-=============  =====  =====  ==  ==========  ===========  =========  ======================================
-name           model  poses  g   noise       family       baseline   what
-=============  =====  =====  ==  ==========  ===========  =========  ======================================
-``full_lls``   full   10     ✓   —           closed form  full_nlls  Burkhard et al. 2024, eqs. 3-6 (SVD)
-``full_als``   full   10     ✓   correction  closed form  full_nlls  full LLS without its O(σ²) bias
-``full_nlls``  full   10     ✓   stopping    iterative    —          CasADi/IPOPT from b = 0, M = I
-``bias_lls``   bias   4      —   —           closed form  bias_nlls  eq. 7, M = I; b does not depend on g
-``bias_nlls``  bias   4      ✓   stopping    iterative    —          CasADi/IPOPT with M = I
-=============  =====  =====  ==  ==========  ===========  =========  ======================================
+==================  ======  ===========  ==  ==========  ===========  ==============  ===========================
+name                model   fewest       g   noise       family       baseline        what
+==================  ======  ===========  ==  ==========  ===========  ==============  ===========================
+``full_lls``        full    10 poses     ✓   —           closed form  full_nlls       Burkhard et al., eqs. 3-6
+``full_als``        full    10 poses     ✓   correction  closed form  full_nlls       LLS without its O(σ²) bias
+``full_nlls``       full    10 poses     ✓   stopping    iterative    —               CasADi/IPOPT, b = 0, M = I
+``bias_lls``        bias    4 poses      —   —           closed form  bias_nlls       eq. 7, M = I
+``bias_nlls``       bias    4 poses      ✓   stopping    iterative    —               CasADi/IPOPT with M = I
+``gyro_iterative``  s.m.    5 motions    —   —           iterative    —               Gauss-Newton (IMU-TK's)
+``gyro_one_step``   s.m.    5 motions    —   —           closed form  gyro_iterative  one linearised solve
+``gyro_ferraris``   s.m.    3 rotations  —   —           closed form  —               Ferraris (imucal's)
+==================  ======  ===========  ==  ==========  ===========  ==============  ===========================
 
-*poses*: the fewest poses it accepts.  *g*: the estimate depends on the gravity
+*model*: s.m. is the gyroscope's ``scale_misalignment``.
+*fewest*: the fewest poses (motions between rests, rotations: :attr:`Estimator.data`) it
+accepts: enough equations for the unknowns plus :attr:`Estimator.redundancy`.  *g*: the estimate depends on the gravity
 magnitude (every estimator takes g; the bias-only LLS bias does not change with it).
 *noise*: what the estimator uses the noise level of the pose means for
 (:meth:`Estimator.fit`, ``noise_std``): ALS for its correction (else it estimates the
 level from the poses), NLLS for its stopping tolerance (else IPOPT's default).  A
 calibration gives them the level measured at the rests.  *baseline*: the estimator its
-accuracy and speed are compared with.  All five calibrate an accelerometer (``sensor``);
-an estimator of another sensor or model is one more entry, with its own ``sensor`` and a
-model of :data:`N_PARAMETERS`.
+accuracy and speed are compared with.  The first five calibrate an accelerometer
+(``sensor``) from pose means (:meth:`Estimator.fit`); the gyroscope's take the motions
+between the rests (:class:`accelcal.gyro.fit.MotionSet`, whose rest noise weights them:
+no separate noise level) or rotations of known angle, through their own function
+(:meth:`Estimator.load`, :mod:`accelcal.gyro`), and their calibrations are
+:class:`accelcal.gyro.result.GyroCalibration` subclasses.  An estimator of another sensor
+or model is one more entry, with its own ``sensor`` and a model of :data:`N_PARAMETERS`.
 
 Adding an estimator is one entry (a line of :data:`ESTIMATORS`, or :func:`register` at
 run time) naming its function and its calibration class; the CLI, the calibration
@@ -41,8 +50,13 @@ from dataclasses import dataclass
 
 from .errors import AccelcalError
 
-#: Unknowns of each model (bias; bias + scale + non-orthogonality).
-N_PARAMETERS = {"full": 9, "bias": 3}
+#: Unknowns of each model (bias; bias + scale + non-orthogonality; the gyro's scale and
+#: misalignment, ``C`` of :mod:`accelcal.gyro.model`, its bias taken from the rests).
+N_PARAMETERS = {"full": 9, "bias": 3, "scale_misalignment": 9}
+#: What an estimator fits, and how many equations each of them gives: a pose mean one
+#: (its norm), a motion between two rests two (the tangent components of gravity carried
+#: over), a rotation of known angle three (its rotation vector).
+DATA = {"poses": 1, "motions": 2, "rotations": 3}
 #: What an estimator may use the noise level of the pose means for.
 NOISE_USES = ("correction", "stopping")
 #: Families: closed forms (microseconds, a batch form that vectorises) and iterative solvers.
@@ -59,7 +73,7 @@ class Estimator:
         Registry key and the function's name (``'full_lls'``); the CLI spells it with a
         hyphen (:attr:`cli_name`).  It is also the ``cal_type`` of its calibrations.
     sensor : str
-        The sensor it calibrates (``'accelerometer'``).
+        The sensor it calibrates (``'accelerometer'``, ``'gyroscope'``).
     model : str
         A key of :data:`N_PARAMETERS`: ``'full'`` (``z = M x + b``) or ``'bias'``
         (``M = I``, only ``b`` is estimated).
@@ -95,6 +109,12 @@ class Estimator:
     noise_use : {'correction', 'stopping'} or None
         What it uses the noise level of the pose means for (``noise_std``), if anything.
     conditioning_uses_noise : bool
+    data : str
+        A key of :data:`DATA`: what it fits (``'poses'``, ``'motions'``, ``'rotations'``).
+    redundancy : int
+        Equations beyond the unknowns that the fewest data must leave: 1, so that a
+        residual checks the fit; 0 for an estimate that is exactly determined by design
+        (the Ferraris protocol's three rotations).
     """
 
     name: str
@@ -114,6 +134,8 @@ class Estimator:
     needs_g: bool = True
     noise_use: str | None = None
     conditioning_uses_noise: bool = False
+    data: str = "poses"
+    redundancy: int = 1
 
     def __post_init__(self):
         if self.model not in N_PARAMETERS:
@@ -122,6 +144,8 @@ class Estimator:
             raise ValueError(f"{self.name}: family {self.family!r} is not one of {', '.join(FAMILIES)}")
         if self.noise_use not in (None, *NOISE_USES):
             raise ValueError(f"{self.name}: noise_use {self.noise_use!r} is not one of {', '.join(NOISE_USES)}")
+        if self.data not in DATA:
+            raise ValueError(f"{self.name}: data {self.data!r} is not one of {', '.join(DATA)}")
 
     @property
     def n_parameters(self) -> int:
@@ -129,8 +153,10 @@ class Estimator:
 
     @property
     def min_poses(self) -> int:
-        """Fewest poses the estimator accepts: one more than its unknowns (Burkhard et al. Sec. 1.2)."""
-        return self.n_parameters + 1
+        """Fewest poses (motions, rotations: :attr:`data`) the estimator accepts: enough
+        equations for its unknowns and :attr:`redundancy` more (poses: one more than the
+        unknowns, Burkhard et al. Sec. 1.2)."""
+        return -(-(self.n_parameters + self.redundancy) // DATA[self.data])
 
     @property
     def cli_name(self) -> str:
@@ -167,7 +193,9 @@ class Estimator:
 
         ``noise_std`` (the standard error of one pose-mean coordinate, same unit as
         ``z``) is passed to the estimators that use it and ignored by the others.
+        Estimators of other data (:attr:`data`) are called through :meth:`load`.
         """
+        self._check_poses()
         f = self.load()
         if self.needs_noise and noise_std is not None:
             return f(z, g, noise_std=noise_std)
@@ -180,6 +208,7 @@ class Estimator:
         trial that fails is NaN, ``valid=False``, with the name of its error in
         ``status`` (``'ok'`` otherwise).  ``noise_std`` as for :meth:`fit`.
         """
+        self._check_poses()
         f = self.load_batch()
         if f is None:
             # by name, as every function here: the batched loop builds results, which read the registry
@@ -187,6 +216,12 @@ class Estimator:
         if self.needs_noise and noise_std is not None:
             return f(z, g, noise_std=noise_std)
         return f(z, g)
+
+
+    def _check_poses(self) -> None:
+        if self.data != "poses":
+            raise AccelcalError(f"{self.name} fits {self.data}, not pose means: call its function "
+                                f"({self.function}, Estimator.load)")
 
 
 def _resolve(path: str):
@@ -224,6 +259,23 @@ ESTIMATORS: dict[str, Estimator] = {e.name: e for e in (
               calibration=f"{_CAL}:BiasNLLSCalibration", noise_use="stopping",
               conditioning="accelcal.lls:design_singular_values",
               description="iterative with M = I"),
+    Estimator(name="gyro_iterative", sensor="gyroscope", model="scale_misalignment", algorithm="iterative",
+              label="gyro iterative", family="iterative", data="motions",
+              function="accelcal.gyro.fit:fit_iterative", calibration="accelcal.gyro.result:GyroIterativeCalibration",
+              conditioning="accelcal.gyro.fit:motion_singular_values", needs_g=False,
+              description="weighted Gauss-Newton on the gravity directions carried between rests (IMU-TK's "
+                          "protocol)"),
+    Estimator(name="gyro_one_step", sensor="gyroscope", model="scale_misalignment", algorithm="one_step",
+              label="gyro one-step", family="closed_form", data="motions", baseline="gyro_iterative",
+              function="accelcal.gyro.fit:fit_one_step", calibration="accelcal.gyro.result:GyroOneStepCalibration",
+              conditioning="accelcal.gyro.fit:motion_singular_values", needs_g=False,
+              description="one linearised solve about the nominal gyro model"),
+    Estimator(name="gyro_ferraris", sensor="gyroscope", model="scale_misalignment", algorithm="sum",
+              label="gyro Ferraris", family="closed_form", data="rotations", redundancy=0,
+              function="accelcal.gyro.ferraris:fit_ferraris",
+              calibration="accelcal.gyro.result:GyroFerrarisCalibration",
+              conditioning="accelcal.gyro.ferraris:rotation_singular_values", needs_g=False,
+              description="three rotations of known angle, the rate summed (Ferraris, imucal's protocol)"),
 )}
 
 
@@ -260,10 +312,39 @@ def estimators(sensor: str | None = None, **where) -> tuple[Estimator, ...]:
                  if (sensor is None or e.sensor == sensor) and all(getattr(e, k) == v for k, v in where.items()))
 
 
+def class_of_type(root: type, cal_type: str) -> type | None:
+    """The subclass of ``root`` whose own ``CAL_TYPE`` is ``cal_type``, or None.
+
+    The class the registry names for that estimator comes first (another subclass may
+    declare the same ``CAL_TYPE``: a script's class defined again); else the subclasses are
+    walked (as imucal's ``CalibrationInfo``), so that a class defined anywhere loads its
+    files.  ``root`` is :class:`accelcal.calibration.Calibration` or
+    :class:`accelcal.gyro.result.GyroCalibration`."""
+    if cal_type in ESTIMATORS:
+        cls = ESTIMATORS[cal_type].load_calibration()
+        if issubclass(cls, root) and cls.__dict__.get("CAL_TYPE") == cal_type:
+            return cls
+    return next((c for c in subclasses(root) if c.__dict__.get("CAL_TYPE") == cal_type), None)
+
+
+def subclasses(cls):
+    """Every subclass of ``cls``, depth first."""
+    for sub in cls.__subclasses__():
+        yield sub
+        yield from subclasses(sub)
+
+
+def types_of(root: type) -> list[str]:
+    """The ``CAL_TYPE`` of every subclass of ``root`` that declares one (the registered classes imported first)."""
+    for e in ESTIMATORS.values():
+        e.load_calibration()
+    return [c.CAL_TYPE for c in subclasses(root) if "CAL_TYPE" in c.__dict__]
+
+
 def model_of(name: str) -> str:
     """The model (``'full'``, ``'bias'``) of the estimator ``name``."""
     return estimator(name).model
 
 
-__all__ = ["ESTIMATORS", "Estimator", "FAMILIES", "NOISE_USES", "N_PARAMETERS", "estimator", "estimators", "model_of",
-           "register", "unregister"]
+__all__ = ["DATA", "ESTIMATORS", "Estimator", "FAMILIES", "NOISE_USES", "N_PARAMETERS", "class_of_type", "estimator",
+           "estimators", "model_of", "register", "subclasses", "types_of", "unregister"]

@@ -63,8 +63,10 @@ class StaticChoice:
 
 
 def _score(t, acc, g, unit, kw, min_poses):
-    from .calibration import calibrate_poses
-    from .quality import distinct_orientations
+    # the registry's full LLS and the quality assessment directly, not accelcal.calibration
+    # (which calls this module when the default detection finds too few poses)
+    from .quality import assess, distinct_orientations
+    from .registry import estimator
     from .static import detect_static
 
     poses = detect_static(t, acc, **kw)
@@ -72,8 +74,11 @@ def _score(t, acc, g, unit, kw, min_poses):
         poses = merge_split_rests(poses)
     if len(poses) < min_poses:
         return poses, math.inf, float("nan"), 0, f"{len(poses)} poses"
-    cal = calibrate_poses(poses, g, "full_lls", unit=unit)
-    q = cal.quality
+    e = estimator("full_lls")
+    z = np.asarray(poses.means, float)
+    cal = e.fit(z, g)
+    q, _ = assess(z, np.asarray(poses.mean_std, float), cal.M, cal.bias, cal.residuals, e.n_parameters, e.model,
+                  e.min_poses)
     distinct = distinct_orientations(_directions(cal, poses))
     if distinct < min_poses:
         return poses, math.inf, q.excess, distinct, f"{distinct} distinct orientations"

@@ -1,12 +1,13 @@
-"""Units of acceleration, time and temperature: names people write, and conversions.
+"""Units of acceleration, angular rate, time and temperature: names people write, and conversions.
 
 accelcal works in two acceleration units only: **m/s²** (physical) and **counts** (raw
 sensor output, whose sensitivity the full model estimates).  Data in ``g`` or ``mg`` are
 converted to m/s² when read, with standard gravity ``G0 = 9.80665 m/s²`` — the
 definition of the unit ``g`` in data sheets, not the local gravity (``--g``), which is a
-property of the site.  Time is always seconds.
+property of the site.  Angular rate is **rad/s** or **counts** (deg/s converted when
+read).  Time is always seconds.
 
-:func:`acceleration_unit`, :func:`time_unit` and :func:`temperature_unit` turn what a
+:func:`acceleration_unit`, :func:`angular_rate_unit`, :func:`time_unit` and :func:`temperature_unit` turn what a
 header or an option says (``m/s^2``, ``m/s²``, ``mps2``, ``G``, ``milli-g``, ``LSB``,
 ``ms``, ``µs``, ``degC`` ...) into a canonical name, or None when the text names no unit
 of that kind.  :func:`unit_in_name` finds a unit written into a column name
@@ -18,6 +19,7 @@ import path).
 
 from __future__ import annotations
 
+import math
 import re
 
 #: Standard gravity [m/s²]: the unit ``g`` of data sheets (CGPM 1901).
@@ -25,6 +27,8 @@ G0 = 9.80665
 
 #: Canonical acceleration units and the factor to m/s² (None: raw counts, no factor).
 ACCELERATION_UNITS = {"m/s^2": 1.0, "g": G0, "mg": G0 * 1e-3, "counts": None}
+#: Canonical angular-rate units and the factor to rad/s (None: raw counts).
+ANGULAR_RATE_UNITS = {"rad/s": 1.0, "deg/s": math.pi / 180.0, "counts": None}
 #: Canonical time units and the factor to seconds.
 TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
 TEMPERATURE_UNITS = ("degC", "K", "degF")
@@ -35,6 +39,11 @@ _ACC_SPELLINGS = {
     "g": ("g", "gs", "g0", "gee", "g_n", "gn"),
     "mg": ("mg", "millig", "milli-g", "milli_g", "mgee"),
     "counts": ("counts", "count", "cnt", "cnts", "lsb", "lsbs", "raw", "adc", "digits", "digit", "ticks", "dn"),
+}
+_RATE_SPELLINGS = {
+    "rad/s": ("rad/s", "rad/sec", "rads", "rad_s", "radps", "rad s^-1", "rad*s^-1"),
+    "deg/s": ("deg/s", "deg/sec", "dps", "degps", "deg_s", "°/s", "º/s", "degrees/s", "degree/s", "degs"),
+    "counts": _ACC_SPELLINGS["counts"],
 }
 _TIME_SPELLINGS = {
     "s": ("s", "sec", "secs", "second", "seconds"),
@@ -63,6 +72,11 @@ def acceleration_unit(text: str) -> str | None:
     ``G`` and ``g`` both mean the unit g; case is otherwise ignored.
     """
     return _lookup(text, _ACC_SPELLINGS)
+
+
+def angular_rate_unit(text: str) -> str | None:
+    """Canonical angular-rate unit (``'rad/s'``, ``'deg/s'``, ``'counts'``) named by ``text``, else None."""
+    return _lookup(text, _RATE_SPELLINGS)
 
 
 def time_unit(text: str) -> str | None:
@@ -102,7 +116,7 @@ def unit_in_name(name: str, kind: str) -> tuple[str, str | None]:
     ----------
     name : str
         Column header as written.
-    kind : {'acceleration', 'time', 'temperature'}
+    kind : {'acceleration', 'angular_rate', 'time', 'temperature'}
 
     Returns
     -------
@@ -112,7 +126,8 @@ def unit_in_name(name: str, kind: str) -> tuple[str, str | None]:
     unit : str or None
         Canonical unit, or None.
     """
-    parse = {"acceleration": acceleration_unit, "time": time_unit, "temperature": temperature_unit}[kind]
+    parse = {"acceleration": acceleration_unit, "angular_rate": angular_rate_unit, "time": time_unit,
+             "temperature": temperature_unit}[kind]
     m = _BRACKETED.match(name)
     if m:
         u = parse(m.group("unit"))
@@ -125,5 +140,5 @@ def unit_in_name(name: str, kind: str) -> tuple[str, str | None]:
     return name.strip(), None
 
 
-__all__ = ["ACCELERATION_UNITS", "G0", "TEMPERATURE_UNITS", "TIME_UNITS", "acceleration_factor",
-           "acceleration_unit", "temperature_unit", "time_unit", "to_celsius", "unit_in_name"]
+__all__ = ["ACCELERATION_UNITS", "ANGULAR_RATE_UNITS", "G0", "TEMPERATURE_UNITS", "TIME_UNITS", "acceleration_factor",
+           "acceleration_unit", "angular_rate_unit", "temperature_unit", "time_unit", "to_celsius", "unit_in_name"]

@@ -45,9 +45,10 @@ import numpy as np
 import pandas as pd
 
 COLUMNS = ("paper", "claim_id", "claim", "paper_value", "reproduced_value", "verdict", "evidence")
-#: Sources of claims: the three papers, and ``discrepancy``, the goals the project's
-#: discrepancy loop states for itself, judged the same way.
-PAPERS = ("burkhard2024", "batista2011", "tereshkov", "discrepancy")
+#: Sources of claims: the three papers, and the goals the project states for itself, judged
+#: the same way: ``discrepancy`` (its discrepancy loop) and ``gyro`` (the gyroscope's
+#: calibration, :mod:`accelcal_repro.gyro.stage`).
+PAPERS = ("burkhard2024", "batista2011", "tereshkov", "discrepancy", "gyro")
 #: The verdict of a rule whose sample is too small for the data to decide it.
 NOT_TESTABLE = "not_testable_at_this_scale"
 VERDICTS = ("reproduced", "not_reproduced", NOT_TESTABLE, "not_reproducible")

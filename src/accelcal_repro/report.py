@@ -44,6 +44,8 @@ FIGURE_SECTIONS = (
      ("tereshkov_", "bias_convergence_comparison")),
     ("measured", "Measured data: public recordings calibrated without ground truth", ("measured_",)),
     ("discrepancy", "Discrepancy: where simulation and measured data disagree, and the missing effect", ("discrepancy_",)),
+    ("gyro", "Gyroscope: calibrated from the same session, one-step vs iterative, and the peers side by side",
+     ("gyro_",)),
     ("benchmark", "Benchmark: where the compute time goes (estimators, filters, compilation, stages)", ("timing_",)),
 )
 OTHER_SECTION = ("other", "Other figures")
@@ -287,6 +289,15 @@ TABLE_VIEWS = {
         "columns": ["recording", "effect", "metric", "value", "ci_low", "ci_high", "n", "target", "verdict"],
         "group": "section"},
 }
+TABLE_VIEWS.update({
+    "results/gyro/sessions/sessions.csv": {
+        "columns": ["session", "estimator", "poses", "motions", "chi2_per_dof", "excess", "residual_rms_deg",
+                    "predicted_rms_deg", "time_base", "g_sensitivity", "warnings", "error"]},
+    "results/gyro/sessions/figure_of_merit.csv": {"group": "session"},
+    "results/gyro/sessions/peer_parameters.csv": {"group": "session", "rows": 45},
+    "results/gyro/sessions/stability.csv": {"group": "group", "rows": 12},
+    "results/gyro/montecarlo_summary.csv": {"rows": 30},
+})
 DEFAULT_VIEW = {"max_columns": 12, "rows": 25}
 
 

@@ -320,11 +320,21 @@ def _check_benchmark(b, cfg):
         _check_names(b["compile_calls"], FIRST_CALLS, "benchmark.compile_calls", "a first call of a compiled kernel")
 
 
+def _check_gyro(g, cfg):
+    # IMU-TK's run from source is read, never made, by the workflow: the file must exist
+    if g["imutk_run"] and not os.path.isfile(os.path.join(workflow.basedir, g["imutk_run"])):
+        raise _config_error("gyro.imutk_run", f"{g['imutk_run']}: no such file (tools/gyro_peers.py run-imutk "
+                            "writes it; null compares with IMU-TK's published results only)")
+    from accelcal_repro.gyro.sessions import SESSIONS
+
+    _check_names(g["sessions"], list(SESSIONS), "gyro.sessions", "a gyro session")
+
+
 #: Rules a stage's schema cannot express, run once every section passed its schema:
 #: ``rule(section, config)``, a one-line ConfigError naming the key.
 STAGE_RULES = {"batista2011": _check_batista2011, "tereshkov": _check_tereshkov, "measured": _check_measured,
                "burkhard2024": _check_burkhard2024, "discrepancy": _check_discrepancy,
-               "benchmark": _check_benchmark}
+               "benchmark": _check_benchmark, "gyro": _check_gyro}
 
 
 def figure_outputs(figure_id, caption, category):

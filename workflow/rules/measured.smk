@@ -107,7 +107,6 @@ rule measured_peer:
         MEASURED_PEER_TABLE,
     params:
         grav=lambda w: MEASURED["recordings"]["imucal_ferraris"]["g"],
-        rate_hz=MEASURED["peer"]["rate_hz"],
     log:
         log_path("measured/peer_imucal"),
     benchmark:

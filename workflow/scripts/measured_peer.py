@@ -15,7 +15,7 @@ poses = pd.read_csv(snakemake.input.poses).set_index("label")
 detected = {k: (int(poses.loc[k, "start_index"]), int(poses.loc[k, "stop_index"]))
             for k in FERRARIS_STATIC if k in poses.index}
 df = ferraris_comparison(paths["example_ferraris_session.csv"], paths["example_ferraris_session_list.json"],
-                         grav=float(snakemake.params.grav), rate_hz=float(snakemake.params.rate_hz),
+                         grav=float(snakemake.params.grav),
                          detected=detected if len(detected) == len(FERRARIS_STATIC) else None)
 for r in df[df.tool == "accelcal"].itertuples():
     log.info("%s %s (%s, %s poses): %.6g, minus imucal %.2g %s", r.parameter, r.axis, r.method, r.poses, r.value,

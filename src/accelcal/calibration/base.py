@@ -14,14 +14,15 @@ from ..errors import (AccelcalError)
 from ..effects import EFFECT_IDS, EFFECTS, TEMPERATURE, TIME, effect
 from ..extended_model import model_terms
 from ..jsonsafe import json_safe
-from ..registry import ESTIMATORS
+from ..registry import ESTIMATORS, class_of_type, subclasses, types_of
 from ..units import G0, acceleration_unit
 from .summary import calibration_summary
 
 FORMAT = "accelcal-calibration"
 #: Version of the JSON layout written by :meth:`Calibration.to_dict` (0: the CLI's output
-#: before versions, read as such).
-FORMAT_VERSION = 1
+#: before versions, read as such; 1: the accelerometer alone; 2: its ``gyroscope`` object,
+#: null when the recording had none).
+FORMAT_VERSION = 2
 #: Effects :meth:`Calibration.apply` can invert: every effect of :mod:`accelcal.effects`
 #: (:mod:`accelcal.extended_model` implements the model for each).
 APPLICABLE_EFFECTS = EFFECT_IDS
@@ -101,6 +102,9 @@ class Calibration:
     provenance : dict
         ``recording``, ``recording_sha256``, ``accelcal_version``, ``notes``, ``static``,
         ``elapsed_s`` ... (copied to the JSON as they are).
+    gyro : GyroCalibration or None
+        The gyroscope calibrated from the same session (:mod:`accelcal.gyro`), in this
+        accelerometer's frame; None when the recording had no gyro (or a format-0/1 file).
     """
 
     CAL_TYPE: ClassVar[str] = ""
@@ -119,6 +123,7 @@ class Calibration:
     residuals: np.ndarray | None = None
     poses: dict = field(default_factory=dict)
     provenance: dict = field(default_factory=dict)
+    gyro: object | None = None
 
     def __post_init__(self):
         for name in ("bias", "input_offset", "input_sensitivity"):
@@ -246,6 +251,32 @@ class Calibration:
             raise CalibrationFileError("the polynomial effects did not invert (Newton did not converge)")
         return x
 
+    def apply_gyro(self, raw_gyro, raw_acc=None, *, t=None, temp=None, unit: str | None = None) -> np.ndarray:
+        """Calibrated angular rate [rad/s] in this accelerometer's frame (:attr:`gyro`).
+
+        Parameters
+        ----------
+        raw_gyro : array_like, shape (n, 3)
+            Raw gyro samples in the unit the gyro was calibrated from (``gyro.model.raw_unit``).
+        raw_acc : array_like, shape (n, 3), optional
+            The raw accelerometer samples of the same instants: needed when the gyro model
+            has a g-sensitivity (its specific force is :meth:`apply`'s); ``t``, ``temp`` and
+            ``unit`` as for :meth:`apply`.
+        """
+        if self.gyro is None:
+            raise CalibrationFileError("this calibration has no gyroscope (calibrated from a recording without gyro "
+                                       "columns, or a format-1 file)")
+        model = self.gyro.model
+        f = None
+        if model.g_sensitivity is not None:
+            if raw_acc is None:
+                raise CalibrationFileError("the gyro model has a g-sensitivity: it needs the accelerometer samples")
+            f = self.apply(raw_acc, t=t, temp=temp, unit=unit)
+        y = np.asarray(raw_gyro, dtype=float)
+        if y.ndim != 2 or y.shape[1] != 3 or not np.all(np.isfinite(y)):
+            raise CalibrationFileError(f"apply_gyro needs finite raw samples of shape (n, 3), got {y.shape}")
+        return model.correct(y, f)
+
     def _to_fit_unit(self, z: np.ndarray, unit: str | None) -> np.ndarray:
         given = self.input_unit if unit is None else acceleration_unit(unit)
         if unit is not None and given is None:
@@ -299,6 +330,7 @@ class Calibration:
             "quality": None if q is None else q.to_dict(),
             **self._method_fields(),
             "poses": {k: _jsonable(v) for k, v in self.poses.items()},
+            "gyroscope": None if self.gyro is None else self.gyro.to_dict(),
             **self.provenance,
         }
         return json_safe(d)
@@ -367,42 +399,28 @@ def _jsonable(v):
 # --------------------------------------------------------------------------- the classes by type tag
 
 
-def calibration_class(cal_type: str) -> type[Calibration]:
-    """The :class:`Calibration` subclass whose own ``CAL_TYPE`` is ``cal_type``.
-
-    The class the registry names for that estimator, else found by walking the subclasses
-    (as imucal's ``CalibrationInfo``), so that a class defined anywhere (a registered
-    estimator's module, a user's script) loads its files.  The registry's class comes
-    first: another subclass may declare the same ``CAL_TYPE`` (a script's class defined
-    again, an estimator of that name registered before).
+def calibration_class(cal_type: str, root: type | None = None) -> type:
+    """The subclass of ``root`` (default :class:`Calibration`; the gyroscope's:
+    :class:`accelcal.gyro.result.GyroCalibration`) whose own ``CAL_TYPE`` is ``cal_type``
+    (:func:`accelcal.registry.class_of_type`: the registry's class first, else a subclass
+    defined anywhere, a registered estimator's module or a user's script).
 
     Raises
     ------
     CalibrationFileError
         No such class (the message lists the known types).
     """
-    if cal_type in ESTIMATORS:
-        cls = ESTIMATORS[cal_type].load_calibration()
-        if cls.__dict__.get("CAL_TYPE") == cal_type:
-            return cls
-    for cls in _subclasses(Calibration):
-        if cls.__dict__.get("CAL_TYPE") == cal_type:
-            return cls
-    known = [c.CAL_TYPE for c in _all_calibration_classes()]
-    raise CalibrationFileError(f"unknown calibration type {cal_type!r}; known: {', '.join(known)}")
+    root = Calibration if root is None else root
+    cls = class_of_type(root, cal_type)
+    if cls is None:
+        raise CalibrationFileError(f"unknown calibration type {cal_type!r}; known: {', '.join(types_of(root))}")
+    return cls
 
 
-def _subclasses(cls):
-    for sub in cls.__subclasses__():
-        yield sub
-        yield from _subclasses(sub)
-
-
-def _all_calibration_classes() -> list[type[Calibration]]:
-    """Every subclass that declares a ``CAL_TYPE`` (the registered estimators' imported first)."""
-    for e in ESTIMATORS.values():
-        e.load_calibration()
-    return [c for c in _subclasses(Calibration) if "CAL_TYPE" in c.__dict__]
+def _all_calibration_classes() -> list[type]:
+    """Every :class:`Calibration` subclass that declares a ``CAL_TYPE`` (the registered estimators' imported first)."""
+    types_of(Calibration)
+    return [c for c in subclasses(Calibration) if "CAL_TYPE" in c.__dict__]
 
 
 # --------------------------------------------------------------------------- loading
@@ -466,7 +484,7 @@ def _common(d: dict, version: int) -> dict:
         poses["n_samples"] = poses["n_samples"].astype(int)
     known = {"format", "format_version", "cal_type", "method", "model", "g", "n_poses", "bias", "M", "scale_factors",
              "nonorthogonality_deg", "gain", "residual_rms", "residuals", "standard_errors", "standard_errors_noise",
-             "unit", "units", "input", "effects", "quality", "poses"}
+             "unit", "units", "input", "effects", "quality", "poses", "gyroscope"}
     known |= {k for c in _all_calibration_classes() for k in c._method_field_names()}
     return {
         "bias": _arr(d["bias"]), "M": _arr(d["M"]), "g": float(d["g"]), "unit": unit,
@@ -480,7 +498,21 @@ def _common(d: dict, version: int) -> dict:
         "residuals": _arr(d.get("residuals")),
         "poses": poses,
         "provenance": {k: v for k, v in d.items() if k not in known},
+        "gyro": _gyro(d.get("gyroscope")),
     }
+
+
+def _gyro(d):
+    """The ``gyroscope`` object of a format-2 file (None: absent, or a format-0/1 file), as
+    the class the registry names for its ``cal_type`` (by name: the gyro package is not
+    imported here, it imports this one's lookup)."""
+    if not d:
+        return None
+    gyro = [e for e in ESTIMATORS.values() if e.sensor == "gyroscope"]
+    if d.get("cal_type") not in {e.name for e in gyro}:
+        raise CalibrationFileError(f"gyroscope: unknown calibration type {d.get('cal_type')!r}; known: "
+                                   f"{', '.join(e.name for e in gyro)}")
+    return ESTIMATORS[d["cal_type"]].load_calibration().from_dict(d)
 
 
 def _method_values(cls, d: dict) -> dict:

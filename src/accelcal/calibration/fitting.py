@@ -112,7 +112,8 @@ def _orientation_cause(err: AccelcalError, z, est) -> AccelcalError:
 
 
 def calibrate_recording(rec, g: float, method: str = "full_lls", *, static: dict | None = None,
-                        conversion=None, provenance: dict | None = None) -> tuple[Calibration, object]:
+                        conversion=None, provenance: dict | None = None, search: bool = False,
+                        min_poses: int = 0) -> tuple[Calibration, object]:
     """Static poses of ``rec`` (its known intervals, or detected), then :func:`calibrate_poses`.
 
     Parameters
@@ -127,6 +128,16 @@ def calibrate_recording(rec, g: float, method: str = "full_lls", *, static: dict
         ``noise_reference``).
     conversion, provenance
         As for :func:`calibrate_poses`.
+    search : bool
+        When the detection with ``static`` finds fewer poses than the method needs (or
+        ``min_poses``, if more), try the candidate settings of
+        :func:`accelcal.static_auto.choose_static` (IMU-TK's threshold multipliers 2-10,
+        and shorter windows for still phases of about a second) and keep the most precise
+        fit; the choice is in ``provenance['static']['search']`` (its ``description``
+        says it in a line).  Not for known intervals.
+    min_poses : int
+        Fewest poses wanted beyond the method's own minimum (a gyro calibration needs
+        six rests) before the search starts.
 
     Returns
     -------
@@ -142,24 +153,53 @@ def calibrate_recording(rec, g: float, method: str = "full_lls", *, static: dict
         Not enough poses or orientations for the method (the message names the count and
         what to do).
     """
-    from ..static import detect_static_recording
-
     if not (np.isfinite(g) and 9.7 <= g <= 9.9):
         raise AccelcalError(f"g = {g:g}: the local gravity magnitude in m/s^2 (9.78-9.83 on the Earth's surface; "
                             "data in g are converted, pass --unit g)")
-    poses = detect_static_recording(rec, **(static or {}))
+    est = estimator(method)
+    poses, searched = _static_poses(rec, g, static or {}, max(est.min_poses, min_poses) if search else 0)
     prov = dict(provenance or {})
     prov.setdefault("static", {})
     prov["static"].update({"reference": poses.reference, "note": poses.reference_note,
                            "known_intervals": rec.intervals is not None, **(static or {})})
+    if searched is not None:
+        prov["static"].update(searched["settings"])
+        prov["static"]["search"] = searched
     prov.setdefault("notes", list(rec.notes))
     labels = rec.labels if rec.intervals is not None else None
-    est = estimator(method)
     try:
         cal = calibrate_poses(_Poses(poses, labels), g, method, unit=rec.unit, conversion=conversion, provenance=prov)
     except TooFewPosesError as e:
         raise TooFewPosesError(f"{e}; {_too_few_hint(rec, poses, est)}") from None
     return cal, poses
+
+
+def _static_poses(rec, g: float, static: dict, need: int):
+    """The poses with ``static``, or, if they are fewer than ``need`` (0: never), the
+    candidates' best (:func:`accelcal.static_auto.choose_static`); the search's record or None."""
+    from ..static import detect_static_recording
+
+    failed = None
+    try:
+        poses = detect_static_recording(rec, **static)
+        found, why = len(poses), ""
+    except AccelcalError as e:
+        if not need or rec.intervals is not None:
+            raise
+        poses, found, why, failed = None, 0, str(e), e
+    if not need or rec.intervals is not None or found >= need:
+        return poses, None
+    from ..static_auto import choose_static
+
+    try:
+        choice = choose_static(rec.t, rec.acc, g, unit=rec.unit, min_poses=need,
+                               init_duration=static.get("init_duration"))
+    except AccelcalError:
+        if failed is not None:  # the defaults' own reason says more than "no setting finds enough"
+            raise failed from None
+        return poses, None
+    return choice.poses, {"settings": dict(choice.settings), "description": choice.describe(),
+                          "defaults_found": found, "defaults_note": why[:200], "candidates": len(choice.table)}
 
 
 @dataclass(frozen=True)

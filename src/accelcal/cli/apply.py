@@ -15,7 +15,9 @@ CALIBRATION is the JSON of `accelcal calibrate` or the report of `accelcal
 discrepancy` (its base model plus the named effects, e.g. a temperature term).
 RECORDING is read with the same readers and options as for calibrate, in the unit
 the calibration was made from. The output CSV keeps the time column as it was and
-writes the calibrated ax, ay, az in m/s^2 (and temp, if present).
+writes the calibrated ax, ay, az in m/s^2, and, when the calibration has a gyroscope
+and the recording a gyro (its columns or --gyro FILE), the calibrated gx, gy, gz in
+rad/s in the accelerometer's frame (and temp, if present).
 """
 
 
@@ -53,20 +55,45 @@ def _apply(args) -> int:
         effects = tuple(e for e in effects if e.id not in drift)
     cal = replace(cal, effects=effects)
     x = cal.apply(rec.acc, t=rec.t, temp=rec.temp, unit=rec.unit)
-    _write_corrected(args.out, rec, x)
+    w, gyro_note = _gyro(cal, rec, args)
+    _write_corrected(args.out, rec, x, w)
     names = ", ".join(e.id for e in effects) or "none"
+    written = "ax, ay, az in m/s^2" + (", gx, gy, gz in rad/s" if w is not None else "")
     print(f"apply: {rec.n} samples of {args.recording} calibrated with {args.calibration} ({cal.CAL_TYPE}; "
-          f"effects applied: {names}); ax, ay, az in m/s^2 written to {args.out}", file=sys.stderr)
+          f"effects applied: {names}); {written} written to {args.out}", file=sys.stderr)
+    if gyro_note:
+        print(f"  {gyro_note}", file=sys.stderr)
     return 0
 
 
-def _write_corrected(path: Path, rec, x) -> None:
+def _gyro(cal, rec, args):
+    """The calibrated rate [rad/s] (or None) and a line on why the gyro was not corrected."""
+    if cal.gyro is None:
+        return None, "" if rec.gyro is None else "gyro not corrected: the calibration has no gyroscope"
+    if rec.gyro is None or args.no_gyro:
+        return None, "the calibration's gyroscope not applied: the recording has no gyro (--gyro FILE)"
+    import numpy as np
+
+    from ..units import ANGULAR_RATE_UNITS
+
+    made = cal.gyro.model.raw_unit
+    have = rec.gyro_unit or "rad/s"
+    if (made == "counts") != (have == "counts"):
+        raise AccelcalError(f"the recording's gyro is read as {have} but {args.calibration}'s gyroscope was made from "
+                            f"{made}: pass --gyro-unit {made}")
+    raw = rec.gyro if made == have else np.asarray(rec.gyro) * (ANGULAR_RATE_UNITS[have] / ANGULAR_RATE_UNITS[made])
+    return cal.apply_gyro(raw, rec.acc, t=rec.t, temp=rec.temp, unit=rec.unit), ""
+
+
+def _write_corrected(path: Path, rec, x, w=None) -> None:
     import pandas as pd
 
     from ..atomic import atomic_output
 
     time_name, time_values = rec.time_column if rec.time_column is not None else ("t", rec.t)
     data = {time_name: time_values, "ax": x[:, 0], "ay": x[:, 1], "az": x[:, 2]}
+    if w is not None:
+        data.update(gx=w[:, 0], gy=w[:, 1], gz=w[:, 2])
     if rec.temp is not None:
         data["temp"] = rec.temp
     with atomic_output(path) as tmp, open(tmp, "w", newline="") as f:

@@ -8,6 +8,7 @@ import time
 from pathlib import Path
 
 from ..registry import estimators
+from . import gyro
 from .common import (STANDARD_GRAVITY, _gravity, _nominal, _provenance, _rate_hint, _read, _reader_options,
                      _static_options, _static_settings, _step)
 
@@ -33,24 +34,35 @@ def add_parser(sub, epilog: str) -> None:
                         "relative to it and b is in m/s^2")
     n.add_argument("--zero", metavar="C[,C,C]", help="the output at zero specific force [counts] (default 0)")
     _static_options(c)
+    gyro.add_gyro_options(c)
     c.set_defaults(func=_calibrate)
 
 
 def _calibrate(args) -> int:
+    from dataclasses import replace
+
     from ..calibration import calibrate_recording
     from ..calibration.summary import STANDARD_GRAVITY_SOURCE
     from ..errors import RecordingError
 
     t0 = time.perf_counter()
     rec = _read(args)
+    rec = replace(rec, notes=rec.notes + (gyro.note_gyro(args, rec),))
     g = STANDARD_GRAVITY if args.g is None else args.g
     static = _static_settings(args, rec)
     method = args.method
+    # the defaults first; too few poses for the method (or the gyro's rests): the candidates' best
+    search = not any(getattr(args, k) is not None for k in ("window", "threshold", "min_duration", "trim"))
     with _step(f"detecting static poses and estimating {method} from {rec.n} samples"):
         try:
-            cal, poses = calibrate_recording(rec, g, method, static=static, conversion=_nominal(args, rec))
+            cal, poses = calibrate_recording(rec, g, method, static=static, conversion=_nominal(args, rec),
+                                             search=search,
+                                             min_poses=gyro.GYRO_MIN_RESTS if gyro.wants_gyro(args, rec) else 0)
         except RecordingError as e:
             raise RecordingError(f"{e}{_rate_hint(rec)}") from None
+    if gyro.wants_gyro(args, rec):
+        with _step("calibrating the gyroscope"):
+            cal = replace(cal, gyro=gyro.calibrate(args, rec, cal, poses))
     prov = {**_provenance(args, t0), "g_source": "--g" if args.g is not None else STANDARD_GRAVITY_SOURCE}
     cal = _with_provenance(cal, prov)
     figures = []
@@ -65,7 +77,11 @@ def _calibrate(args) -> int:
 
         for name, fig in figures:
             save_figure(fig, Path(args.figures) / name)
+    if gyro.search_line(cal):
+        print(gyro.search_line(cal), file=sys.stderr)
     _summary(cal, poses, rec, args)
+    if cal.gyro is not None:
+        print(cal.gyro.summary(), file=sys.stderr)
     return 0
 
 

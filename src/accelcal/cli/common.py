@@ -32,6 +32,8 @@ input: a table with time and three acceleration columns, e.g. a CSV with header
   acc_x, accX, AX, Accel. X, ...) or named with --columns t=...,ax=...,ay=...,az=...;
   comma, semicolon, tab or whitespace separated, decimal comma, # comments, gzip.
   temp      optional temperature column [degC]
+  gyro      optional gyroscope columns (gx, gyr_x, wx, angular_velocity.x ...; rad/s,
+            deg/s or counts), or --gyro FILE: calibrated from the same session
 {formats}
 units: acceleration in m/s^2, g, mg or raw counts (from the header, --unit, or the
   data's magnitude); g and mg are converted to m/s^2. --g is the local gravity in
@@ -81,13 +83,18 @@ def _reader_options(p) -> None:
     names = ", ".join(["auto", *FORMATS])
     r.add_argument("--format", default="auto", metavar="FMT", help=f"file format ({names}; default auto)")
     r.add_argument("--columns", metavar="SPEC",
-                   help="which column is which: t=NAME,ax=NAME,ay=NAME,az=NAME[,temp=NAME] (names or 1-based numbers)")
+                   help="which column is which: t=NAME,ax=NAME,ay=NAME,az=NAME[,gx=..,gy=..,gz=..][,temp=NAME] "
+                        "(names or 1-based numbers)")
     r.add_argument("--unit", metavar="UNIT", help="acceleration unit: m/s2, g, mg or counts (overrides the header)")
     r.add_argument("--time-unit", metavar="UNIT", help="unit of the time column: s, ms, us or ns")
     r.add_argument("--rate", type=_positive, metavar="HZ", help="sampling rate: time from the sample index")
     r.add_argument("--intervals", type=Path, metavar="FILE",
                    help="known static intervals: imucal section list (JSON), JSON [[start, end], ...] in s, "
                         "or CSV with start,end columns (s, or start_index,end_index in samples)")
+    r.add_argument("--gyro", type=Path, metavar="FILE",
+                   help="the gyroscope in a file of its own, sampled with the accelerometer (IMU-TK's t x y z)")
+    r.add_argument("--gyro-unit", metavar="UNIT", help="gyro unit: rad/s, deg/s or counts (overrides the header)")
+    r.add_argument("--no-gyro", action="store_true", help="leave the gyroscope out (the accelerometer alone)")
 
 
 def _static_options(p) -> None:
@@ -121,7 +128,8 @@ def _read(args):
 
     with _step(f"reading {args.recording}"):
         return read(args.recording, format=args.format, columns=args.columns, unit=args.unit,
-                    time_unit=args.time_unit, rate=args.rate, intervals=args.intervals)
+                    time_unit=args.time_unit, rate=args.rate, intervals=args.intervals,
+                    gyro=None if args.no_gyro else args.gyro, gyro_unit=args.gyro_unit)
 
 
 def _static_settings(args, rec) -> dict:

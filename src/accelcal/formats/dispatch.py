@@ -26,15 +26,16 @@ from dataclasses import replace
 from pathlib import Path
 
 from ..errors import RecordingError
-from ..units import acceleration_unit
+from ..units import acceleration_unit, angular_rate_unit
 from ..units import time_unit as time_unit_name
 from .registry import BINARY_HEAD_BYTES, FALLBACK, FORMATS, TEXT_HEAD_CHARS, Format, format_named
 from .text import load_text
 
 
 def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit: str | None = None,
-         time_unit: str | None = None, rate: float | None = None, intervals=None):
-    """Read an accelerometer recording.
+         time_unit: str | None = None, rate: float | None = None, intervals=None, gyro=None,
+         gyro_unit: str | None = None):
+    """Read an accelerometer recording (and its gyroscope, when the file or ``gyro`` has one).
 
     Parameters
     ----------
@@ -60,6 +61,13 @@ def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit
         time column is unusable).
     intervals : str or Path, optional
         A file of known static intervals (:func:`accelcal.formats.intervals.read_intervals`).
+    gyro : str or Path, optional
+        The gyroscope's own file, sampled with the accelerometer (IMU-TK's ``t x y z``
+        layout or a table naming gx, gy, gz: :mod:`accelcal.formats.gyro_file`).
+    gyro_unit : str, optional
+        Unit of the gyro values (``rad/s``, ``deg/s``, ``counts``) of a table or of the
+        ``gyro`` file; overrides the header.  Formats that define their gyro's unit ignore
+        it (with a note).
 
     Returns
     -------
@@ -68,11 +76,11 @@ def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit
         seconds, notes saying what was assumed.
     """
     path = Path(path)
-    options = {"columns": columns, "unit": unit, "time_unit": time_unit, "rate": rate}
+    options = {"columns": columns, "unit": unit, "time_unit": time_unit, "rate": rate, "gyro_unit": gyro_unit}
     if strict:
-        return _read_strict(path, format, {**options, "intervals": intervals})
+        return _read_strict(path, format, {**options, "intervals": intervals, "gyro": gyro})
     fmt = None if format == "auto" else format_named(format)
-    _check_options(unit, time_unit, rate)
+    _check_options(unit, time_unit, rate, gyro_unit)
     notes: list[str] = []
     text = None
     if fmt is None:
@@ -91,6 +99,10 @@ def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit
         from .intervals import read_intervals
 
         rec = read_intervals(intervals, rec)
+    if gyro is not None:
+        from .gyro_file import attach_gyro
+
+        rec = attach_gyro(rec, gyro, gyro_unit=gyro_unit, time_unit=time_unit)
     return rec
 
 
@@ -121,9 +133,11 @@ def _detected(fmt: Format) -> str:
     return f"format: {fmt.name} (detected; pass --format to choose another)"
 
 
-def _check_options(unit, time_unit, rate) -> None:
+def _check_options(unit, time_unit, rate, gyro_unit=None) -> None:
     if unit is not None and acceleration_unit(unit) is None:
         raise RecordingError(f"unknown acceleration unit {unit!r}; use one of g, mg, m/s2, counts")
+    if gyro_unit is not None and angular_rate_unit(gyro_unit) is None:
+        raise RecordingError(f"unknown gyro unit {gyro_unit!r}; use one of rad/s, deg/s, counts")
     if time_unit is not None and time_unit_name(time_unit) is None:
         raise RecordingError(f"unknown time unit {time_unit!r}; use one of s, ms, us, ns")
     if rate is not None and not (math.isfinite(rate) and rate > 0):
@@ -182,6 +196,8 @@ def _read_format(path: Path, fmt: Format, text: str | None, options: dict, notes
         rec = _with_unit(rec, options["unit"], path)
     if options["time_unit"] is not None and "time_unit" not in fmt.options:
         notes.append(f"--time-unit ignored: the {fmt.name} format defines its time")
+    if options["gyro_unit"] is not None and "gyro_unit" not in fmt.options and rec.gyro is not None:
+        notes.append(f"--gyro-unit ignored: the {fmt.name} format defines its gyro's unit")
     return rec
 
 

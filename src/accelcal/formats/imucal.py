@@ -1,4 +1,4 @@
-"""imucal's Ferraris session CSV (``n_samples, gyr_*, acc_*``; acc in m/s², no rate in the file)."""
+"""imucal's Ferraris session CSV (``n_samples, gyr_*, acc_*``; acc in m/s², gyro in deg/s, no rate in the file)."""
 
 from __future__ import annotations
 
@@ -10,8 +10,10 @@ from ..recording import Recording
 from .parsing import check_counter, check_time, drop_trailing_blank, read_delimited, require_columns, to_float
 from .text import content_lines, header_fields
 
-#: Sampling rate of the imucal example sessions (imucal's examples and tests use it).
-IMUCAL_RATE_HZ = 204.8
+#: Sampling rate of imucal's example session: its example script (``examples/basic_ferraris.py``)
+#: says 102.4 Hz since commit 278a2c3 ("Fixed wrong samplingrate in example"), the commit of the
+#: stored data; at the 204.8 Hz it said before, each 360 deg rotation integrates to about 180 deg.
+IMUCAL_RATE_HZ = 102.4
 #: Columns whose presence in the header recognises a session.
 _SIGNATURE = {"n_samples", "acc_x", "acc_y", "acc_z", "gyr_x"}
 
@@ -26,8 +28,8 @@ def read_imucal_session(csv_path, rate: float = IMUCAL_RATE_HZ, text: str | None
     """Read an imucal Ferraris session CSV (``n_samples, gyr_*, acc_*``; acc in m/s²).
 
     ``n_samples`` is the sample counter (0, 1, 2, ... in the example: checked to be
-    integer and strictly increasing), so ``t = n_samples / rate``.  The gyro
-    columns are validated but not returned.
+    integer and strictly increasing), so ``t = n_samples / rate``.  The gyro (deg/s,
+    imucal's unit) is returned in rad/s.
     """
     cols = ("n_samples", "gyr_x", "gyr_y", "gyr_z", "acc_x", "acc_y", "acc_z")
     df = drop_trailing_blank(read_delimited(csv_path, "an imucal session CSV", text))
@@ -37,5 +39,8 @@ def read_imucal_session(csv_path, rate: float = IMUCAL_RATE_HZ, text: str | None
     check_counter(v["n_samples"], "n_samples", csv_path, first_line=2)
     t = v["n_samples"] / rate
     check_time(t, csv_path, first_line=2)
+    gyro = np.deg2rad(np.column_stack([v["gyr_x"], v["gyr_y"], v["gyr_z"]]))
     return Recording(t, np.column_stack([v["acc_x"], v["acc_y"], v["acc_z"]]), None, str(csv_path), unit="m/s^2",
-                     notes=(f"imucal session: t = n_samples / {rate:g} Hz (the file has no rate)",))
+                     gyro=gyro, gyro_unit="rad/s",
+                     notes=(f"imucal session: t = n_samples / {rate:g} Hz (the file has no rate; --rate to change), "
+                            "gyro in deg/s converted to rad/s",))

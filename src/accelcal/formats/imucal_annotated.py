@@ -28,9 +28,11 @@ def read_annotated_session(path, text: str | None = None, rate: float = IMUCAL_R
     rec, parts = read_imucal_annotated(path, rate, text=text)
     static = np.array([p if not p.endswith("_rot") else "" for p in parts])
     iv, labels = intervals_from_labels(static)
-    return replace(rec, intervals=iv, labels=labels,
+    turns, names = intervals_from_labels(np.array([p if p.endswith("_rot") else "" for p in parts]))
+    rotations = None if turns is None else dict(zip(names, map(tuple, turns)))
+    return replace(rec, intervals=iv, labels=labels, rotations=rotations,
                    notes=rec.notes + ("imucal annotated session: its static parts (not *_rot) are the known "
-                                      "static intervals",))
+                                      "static intervals, its *_rot parts rotations",))
 
 
 def read_imucal_annotated(csv_path, rate: float = IMUCAL_RATE_HZ,
@@ -43,7 +45,7 @@ def read_imucal_annotated(csv_path, rate: float = IMUCAL_RATE_HZ,
     Returns
     -------
     rec : Recording
-        Time-ordered acceleration in raw counts (no documented nominal scale).
+        Time-ordered acceleration and gyro in raw counts (no documented nominal scale).
     parts : ndarray of str, shape (n,)
         Section label of each sample (``x_p``, ..., ``z_rot``), in time order.
     """
@@ -58,6 +60,7 @@ def read_imucal_annotated(csv_path, rate: float = IMUCAL_RATE_HZ,
     if (parts == "").any():
         raise RecordingError(f"{csv_path}: empty 'part' label at line {2 + int(np.flatnonzero(parts == '')[0])}")
     acc = np.column_stack([v["acc_x"], v["acc_y"], v["acc_z"]])[order]
+    gyro = np.column_stack([v["gyr_x"], v["gyr_y"], v["gyr_z"]])[order]
     t = s[order] / rate
     check_time(t, csv_path, first_line=2)
-    return Recording(t, acc, None, str(csv_path), unit="counts"), parts
+    return Recording(t, acc, None, str(csv_path), unit="counts", gyro=gyro, gyro_unit="counts"), parts

@@ -1,8 +1,12 @@
-"""What the table reader infers when the file does not say: the acceleration unit and the time.
+"""What the table reader infers when the file does not say: the acceleration and angular-rate units and the time.
 
 Acceleration comes out in m/s² or raw counts (:mod:`accelcal.units`): a unit in the
 header (``acc_x [g]``, ``ax_mg``), ``unit=`` (which wins), or, failing both, the
-magnitude of the data (median ``|a|`` near 1 → g, near 9.8 → m/s², ...).  Time comes out
+magnitude of the data (median ``|a|`` near 1 → g, near 9.8 → m/s², ...).  Angular rate
+comes out in rad/s or raw counts, its unit from the header (``gyr_x [deg/s]``,
+``gx_dps``), ``gyro_unit=``, or the values (integers → counts; a 99th percentile of
+``|ω|`` of :data:`DEG_S_ABOVE` or more → deg/s, hand motions reaching 10 rad/s = 573 deg/s
+being rare; else rad/s).  Time comes out
 in seconds from the first sample: its unit from ``time_unit=``, the header
 (``time_ms``), or the values (epoch magnitudes; integer steps → the unit that makes the
 rate nearest 100 Hz), ISO 8601 date-times parsed, or ``rate=`` (time from the sample
@@ -18,11 +22,13 @@ import numpy as np
 
 from ..errors import RecordingError
 from ..recording import Recording
-from ..units import G0, acceleration_unit, time_unit
+from ..units import ANGULAR_RATE_UNITS, G0, acceleration_unit, angular_rate_unit, time_unit
 from .parsing import DECIMAL_COMMA, NUMBER, norm_name, parse_numbers
 
 #: Canonical sampling rate the time-unit inference aims at [Hz] (typical IMU logging).
 TYPICAL_RATE_HZ = 100.0
+#: 99th percentile of |ω| at and above which gyro values without a unit are taken as deg/s.
+DEG_S_ABOVE = 10.0
 
 
 def convert_acc(acc, u: str, how: str):
@@ -68,6 +74,42 @@ def infer_acceleration_unit(acc, path):
     return acc, "counts" if u == "counts" else "m/s^2", note
 
 
+def convert_gyro(gyro, u: str, how: str):
+    if u == "deg/s":
+        return gyro * ANGULAR_RATE_UNITS["deg/s"], f"gyro unit: deg/s ({how}), converted to rad/s"
+    return gyro, f"gyro unit: {u} ({how})"
+
+
+def resolve_gyro_unit(gyro, units: dict, gyro_unit: str | None, path):
+    """Angular rate in rad/s or counts, its unit name and a note saying where the unit came from."""
+    header = units.get("gyro_units", {})
+    if gyro_unit is not None:
+        u = angular_rate_unit(gyro_unit)
+        if u is None:
+            raise RecordingError(f"unknown gyro unit {gyro_unit!r}; use rad/s, deg/s or counts (--gyro-unit)")
+        how = "--gyro-unit" + (f", overriding the header's {'/'.join(sorted(set(header.values())))}"
+                               if header and set(header.values()) != {u} else "")
+    elif header:
+        if len(set(header.values())) > 1:
+            raise RecordingError(f"{path}: the gyro columns are in different units "
+                                 f"({', '.join(f'{r}: {v}' for r, v in sorted(header.items()))}); "
+                                 "convert them to one unit or pass --gyro-unit")
+        u, how = next(iter(header.values())), "from the header"
+    else:
+        u, how = infer_gyro_unit(gyro)
+    gyro, note = convert_gyro(gyro, u, how)
+    return gyro, "counts" if u == "counts" else "rad/s", note
+
+
+def infer_gyro_unit(gyro) -> tuple[str, str]:
+    """The gyro unit from the values (module docstring) and how it was found."""
+    if np.all(gyro == np.round(gyro)) and np.abs(gyro).max() > 50:
+        return "counts", "inferred: integer values; pass --gyro-unit if wrong"
+    p99 = float(np.percentile(np.linalg.norm(gyro, axis=1), 99))
+    u = "deg/s" if p99 >= DEG_S_ABOVE else "rad/s"
+    return u, f"inferred from the 99th percentile |w| = {p99:.3g}; pass --gyro-unit if wrong"
+
+
 def with_inferred_unit(rec: Recording) -> Recording:
     acc, u, note = infer_acceleration_unit(rec.acc, rec.source)
     return replace(rec, acc=acc, unit=u, notes=rec.notes + (note,))
@@ -89,8 +131,9 @@ def _preamble_rate(preamble) -> tuple[float | None, str]:
     return None, ""
 
 
-def time_seconds(values, rate, tu, header_unit, names, roles, dc, path, lines, preamble):
-    """Time [s] from the first sample, and a note on how it was obtained."""
+def time_seconds(values, rate, tu, header_unit, names, roles, dc, path, lines, preamble, parsed=None):
+    """Time [s] from the first sample, and a note on how it was obtained (``parsed``: the
+    column already converted to floats, when the table reader has it)."""
     n = len(lines)
     if rate is not None:
         ignored = " (time column ignored)" if values is not None else ""
@@ -116,7 +159,7 @@ def time_seconds(values, rate, tu, header_unit, names, roles, dc, path, lines, p
         x = ti.astype(float)
         t0 = float(ti[0])
     else:
-        x = parse_numbers(values, dc, path, "t", names, roles["t"], lines)
+        x = parsed if parsed is not None else parse_numbers(values, dc, path, "t", names, roles["t"], lines)
         t0 = float(x[0])
         rel = x - x[0]
     _check_increasing(rel, path, label, lines)

@@ -20,8 +20,8 @@ def read_intervals(path, rec: Recording) -> Recording:
     Accepted files:
 
     * an imucal section list (JSON ``{name: {"start": i, "end": j}}``, sample indices,
-      end exclusive): every section whose name does not end in ``_rot`` (imucal's
-      rotations);
+      end exclusive): every section whose name does not end in ``_rot``; the ``_rot``
+      sections (imucal's rotations) become :attr:`Recording.rotations`;
     * JSON ``[[start, end], ...]`` or ``{"intervals": [...]}``: times [s] from the
       recording's start;
     * a CSV with columns ``start``, ``end`` (times [s] from the recording's start, or
@@ -33,14 +33,15 @@ def read_intervals(path, rec: Recording) -> Recording:
     path = Path(path)
     text, _ = load_text(path)
     stripped = text.lstrip()
-    spans, labels, kind = [], [], ""
+    spans, labels, kind, rotations = [], [], "", rec.rotations
     if stripped.startswith("{") and '"start"' in stripped:
         sections = read_imucal_section_list(path)
         for name, (a, b) in sections.items():
             if not name.endswith("_rot"):
                 spans.append((a, b))
                 labels.append(name)
-        kind = "imucal section list (samples; *_rot sections left out)"
+        rotations = {k: v for k, v in sections.items() if k.endswith("_rot")} or rotations
+        kind = "imucal section list (samples; the *_rot sections are rotations)"
         idx = spans
     elif stripped.startswith(("[", "{")):
         try:
@@ -68,7 +69,7 @@ def read_intervals(path, rec: Recording) -> Recording:
         if not (0 <= a < b <= rec.n):
             raise RecordingError(f"{path}: interval {a}-{b} (samples) lies outside the recording's {rec.n} samples; "
                                  "are the bounds in seconds from the start of the recording?")
-    rec = replace(rec, intervals=np.array(idx), labels=tuple(labels),
+    rec = replace(rec, intervals=np.array(idx), labels=tuple(labels), rotations=rotations,
                   notes=rec.notes + (f"{len(idx)} known static intervals from {path.name} ({kind})",))
     return rec
 

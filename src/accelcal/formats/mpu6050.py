@@ -24,7 +24,8 @@ def read_mpu6050_csv(path, text: str | None = None) -> Recording:
 
     Layout: four ``key,value`` lines (``Fs,100``, ``Logging Type,0``,
     ``Initialization time,36.5``, ``Waiting time,3``), a header ``ax,ay,az,gx,gy,gz``
-    and raw int16 counts.  ``t = row / Fs``.  See ``nominal_conversion('mpu6050')``.
+    and raw int16 counts (accelerometer and gyro).  ``t = row / Fs``.  See
+    ``nominal_conversion('mpu6050')``.
     """
     path = Path(path)
     meta = read_delimited(path, "an MPU-6050 CSV (Fs line, 3 metadata lines, header ax,ay,az,...)", text,
@@ -44,6 +45,8 @@ def read_mpu6050_csv(path, text: str | None = None) -> Recording:
         raise RecordingError(f"{path}: header but no data rows")
     v = {c: to_float(df, c, path, first_line=6) for c in cols}  # gyro checked: catches truncation
     acc = np.column_stack([v["ax"], v["ay"], v["az"]])
+    gyro = np.column_stack([v["gx"], v["gy"], v["gz"]])
     t = np.arange(len(df)) / fs
     check_time(t, path, first_line=6)
-    return Recording(t, acc, None, str(path), unit="counts", notes=(f"MPU-6050 log: t = row / Fs = {fs:g} Hz",))
+    return Recording(t, acc, None, str(path), unit="counts", gyro=gyro, gyro_unit="counts",
+                     notes=(f"MPU-6050 log: t = row / Fs = {fs:g} Hz",))

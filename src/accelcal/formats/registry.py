@@ -30,9 +30,9 @@ from ..errors import RecordingError
 
 #: The reading options (of :func:`accelcal.formats.read`) a reader may take itself.  One it
 #: does not take is applied by the dispatcher: ``unit`` converts or checks the values,
-#: ``rate`` replaces the time by sample index / rate, ``time_unit`` is ignored with a
-#: note, ``columns`` is refused.
-READING_OPTIONS = ("columns", "unit", "time_unit", "rate")
+#: ``rate`` replaces the time by sample index / rate, ``time_unit`` and ``gyro_unit`` are
+#: ignored with a note, ``columns`` is refused.
+READING_OPTIONS = ("columns", "unit", "time_unit", "rate", "gyro_unit")
 #: Characters of the decoded text that text formats are sniffed on.
 TEXT_HEAD_CHARS = 8192
 #: Bytes of the file that binary formats are sniffed on.
@@ -145,7 +145,7 @@ FORMATS: dict[str, Format] = {f.name: f for f in (
     Format(name="mpu6050", title="tomisuarez2/ImuCalibration's MPU-6050 logger (Fs,100 lines, then ax,ay,az,gx,gy,gz)",
            reader="accelcal.formats.mpu6050:read_mpu6050_csv", sniff="accelcal.formats.mpu6050:sniff"),
     Format(name="imucal", title="imucal session (n_samples, gyr_*, acc_*); no rate in the file: --rate HZ, default "
-                                "imucal's 204.8 Hz",
+                                "imucal's example's 102.4 Hz",
            reader="accelcal.formats.imucal:read_imucal_session", sniff="accelcal.formats.imucal:sniff",
            options=("rate",), defines_time=False),
     Format(name="imucal-annotated", title="imucal annotated session (a part column); its static parts are known "

@@ -32,19 +32,17 @@ import math
 import time
 
 import numpy as np
-from scipy import special
+
+from .. import distributions as dist
 
 from .errors import GyroInputError, NoMotionError, SaturatedGyroError, TooFewMotionsError
-from .fit import MotionSet, evaluate, fit_iterative, fit_one_step, initial_scale, rotation_angles_deg
+from .fit import MIN_MOTIONS, MotionSet, evaluate, initial_scale, rotation_angles_deg
 from .integrate import integrate_intervals, log_so3
 from .model import RAW_UNITS, GyroModel
 from .rests import (bias_series, check_time_base, fit_bias, measuring_range, motion_bias_variance, rest_noise,
                     rest_statistics, sample_interval, saturated_samples)
 from .result import RULES, GyroCalibration, GyroQuality
 
-ESTIMATORS = ("iterative", "one_step")
-#: Fewest motions the 9-parameter fit accepts (2 residuals each: 2 m - 9 >= 1).
-MIN_MOTIONS = 5
 #: Total rotation [deg] about a gyro axis below which its column of C is not determined.
 MIN_AXIS_TURN_DEG = 5.0
 #: Fewest rests for fitting the g-sensitivity (12 unknowns from 3 per rest) in 'auto' mode.
@@ -106,7 +104,7 @@ def _check_motion(ms: MotionSet, u) -> None:
         raise NoMotionError(f"gravity turns by up to {tilt.max():.0f} deg between rests but the gyro shows rotation "
                             f"in only {int(np.sum(moved))} of {len(turn)} motions (integrated rate within "
                             f"{NO_MOTION_SIGMAS:g} noise std of zero): wrong gyro columns, or a gyro not recorded "
-                            "with the accelerometer (--gyro FILE, --columns)")
+                            "with the accelerometer (--gyro FILE, --columns; --no-gyro to leave it out)")
 
 
 def _check_axes(ms: MotionSet, nominal: float, h: float) -> None:
@@ -118,6 +116,35 @@ def _check_axes(ms: MotionSet, nominal: float, h: float) -> None:
         raise TooFewMotionsError("the motions never turn the sensor about " + " or ".join(
             f"its {'xyz'[a]} axis ({turn[a]:.1f} deg in all)" for a in idle) + ": that gyro's scale and "
             "misalignment cannot be determined; turn the sensor about every axis between rests")
+
+
+#: Median ratio of the integrated nominal rate to gravity's turn beyond which the nominal scale is wrong.
+UNIT_RATIO = 5.0
+
+
+def _check_nominal(ms: MotionSet, u, nominal: float, nominal_from: str) -> None:
+    """The nominal scale must turn the sensor about as far as gravity turns between the rests.
+
+    Gravity's turn between two rests is a lower bound of the rotation, and for the
+    mostly single-axis turns of a hand the integrated rate is near it: a unit or
+    sensitivity off by 57.3 (rad vs deg) or more gives a median ratio far outside
+    ``[1/UNIT_RATIO, UNIT_RATIO]``.
+    """
+    if nominal_from.startswith("scalar search"):
+        return
+    h = float(np.mean(np.diff(ms.h))) if np.ndim(ms.h) else ms.h
+    turn = np.array([abs(nominal) * h * np.linalg.norm(ms.y[a:b + 1].sum(axis=0)) for a, b in
+                     zip(ms.starts, ms.stops)])
+    tilt = np.arccos(np.clip(np.sum(u[ms.rest_before] * u[ms.rest_after], axis=1), -1, 1))
+    big = tilt > np.deg2rad(20.0)
+    if big.sum() < 3:
+        return
+    ratio = float(np.median(turn[big] / tilt[big]))
+    if not 1.0 / UNIT_RATIO <= ratio <= UNIT_RATIO:
+        fix = "--gyro-sensitivity" if "sensitivity" in nominal_from else "--gyro-unit (rad/s, deg/s, counts)"
+        raise GyroInputError(f"with the {nominal_from} the gyro turns the sensor {ratio:.3g} times as far as gravity "
+                             f"turns between the rests (median of {int(big.sum())} motions): the gyro's unit or "
+                             f"sensitivity is wrong; pass {fix}")
 
 
 def _nominal(raw_unit: str, nominal_sensitivity, ms: MotionSet, integrator: str) -> tuple[float, str]:
@@ -145,8 +172,21 @@ def _use_g_sensitivity(choice, rs, bias, f_rest, acc) -> tuple[bool, dict]:
     without, with_g = fit_bias(rs, "all"), fit_bias(rs, "all", f_rest)
     d1, d2 = 9, with_g.dof
     F = ((without.chi2 - with_g.chi2) / d1) / (with_g.chi2 / d2)
-    pv = float(special.fdtrc(d1, d2, F))
+    pv = float(dist.f_sf(F, d1, d2))
     return pv < G_SENSITIVITY_P, {"decided": "auto", "F": float(F), "p_value": pv, "dof": [d1, d2]}
+
+
+def motion_estimator(name: str):
+    """The registry's entry of a gyro estimator of motions between rests (``gyro_iterative``,
+    ``gyro_one_step``, or their CLI spellings); one line naming the known ones otherwise."""
+    from ..registry import estimators
+
+    known = {e.name: e for e in estimators("gyroscope", data="motions")}
+    e = known.get(str(name).replace("-", "_"))
+    if e is None:
+        raise GyroInputError(f"unknown gyro estimator {name!r} for motions between rests; known: "
+                             f"{', '.join(known)}")
+    return e
 
 
 def _standard_errors(C, cov, nominal, excess, bias_est) -> dict:
@@ -168,7 +208,7 @@ def _standard_errors(C, cov, nominal, excess, bias_est) -> dict:
 
 
 def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, t_gyro=None,
-                   nominal_sensitivity=None, estimator: str = "iterative", integrator: str = "magnus4",
+                   nominal_sensitivity=None, estimator: str = "gyro_iterative", integrator: str = "magnus4",
                    bias: str = "interpolated", g_sensitivity="auto", gyro_range=None,
                    time_base: str = "auto") -> GyroCalibration:
     """Calibrate the gyro of a multi-position session (module docstring).
@@ -190,7 +230,9 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
         The gyro's own time column, checked against ``t``.
     nominal_sensitivity : float, optional
         Raw units per rad/s (counts); the start and the reference of the scale factors.
-    estimator : {'iterative', 'one_step'}
+    estimator : str
+        A gyroscope estimator of motions of the registry (:mod:`accelcal.registry`):
+        ``'gyro_iterative'`` (default) or ``'gyro_one_step'``; the calibration is of its class.
     integrator : {'magnus4', 'coning'}
     bias : {'interpolated', 'all', 'first'}
         How the bias is taken from the rests (:mod:`accelcal.gyro.rests`).  Default
@@ -218,8 +260,7 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
     if gyro.shape != (t.size, 3) or not np.all(np.isfinite(gyro)):
         raise GyroInputError(f"gyro samples must be finite, shape ({t.size}, 3) like the accelerometer's; got "
                              f"{gyro.shape}")
-    if estimator not in ESTIMATORS:
-        raise GyroInputError(f"unknown gyro estimator {estimator!r}; known: {', '.join(ESTIMATORS)}")
+    est = motion_estimator(estimator)
     tb = sample_interval(t)
     if t_gyro is not None:
         check_time_base(t, t_gyro, tb.h)
@@ -250,8 +291,9 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
                   "suggest")
     ms = all_ms.subset(used)
     nominal, nominal_from = _nominal(raw_unit, nominal_sensitivity, ms, integrator)
+    _check_nominal(ms, u, nominal, nominal_from)
     _check_axes(ms, nominal, tb.h)
-    fitter = fit_iterative if estimator == "iterative" else fit_one_step
+    fitter = est.load()
     if time_base not in ("auto", "index", "timestamps"):
         raise GyroInputError(f"unknown time base {time_base!r}; known: auto, index, timestamps")
     bases = {"index": tb.h, "timestamps": t}
@@ -268,14 +310,14 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
     quality, table = _assess(fit, all_ms, used, notes, t, tb, best, integrator,
                              {k: f.chi2 / max(f.dof, 1) for k, f in fits.items()}, chosen,
                              _range_use(gyro, gyro_range, all_ms.subset(used)))
-    settings = {"estimator": estimator, "integrator": integrator, "bias_mode": bias, "nominal": nominal,
+    settings = {"estimator": est.name, "integrator": integrator, "bias_mode": bias, "nominal": nominal,
                 "nominal_from": nominal_from, "iterations": fit.iterations, "fit_seconds": fit.seconds,
                 "seconds": time.perf_counter() - t0, "n_rests": len(u),
                 "time_base": {"h": tb.h, "rate": tb.rate, "jitter": tb.jitter, "gaps": int(len(tb.gaps)),
                               "used": chosen, "chi2_per_dof": {k: f.chi2 / max(f.dof, 1) for k, f in fits.items()}},
                 "bias_rests": {"chi2": best.chi2, "dof": best.dof, "excess": best.excess},
                 "g_sensitivity": bool(g_sensitivity), "g_sensitivity_test": g_test}
-    return GyroCalibration(model, se, quality, table, settings)
+    return est.load_calibration()(model, se, quality, table, settings)
 
 
 def _range_use(gyro, gyro_range, ms: MotionSet) -> float:
@@ -310,7 +352,7 @@ def _assess(fit, all_ms: MotionSet, used, notes, t, tb, best, integrator, base_c
         table["integration_deg"][i] = float(e)
     turn = np.rad2deg(np.sum(np.abs(log_so3(ev.R)), axis=0))
     dof = fit.dof
-    p = float(special.chdtrc(dof, fit.chi2)) if dof > 0 else float("nan")
+    p = float(dist.chi2_sf(fit.chi2, dof)) if dof > 0 else float("nan")
     warnings, flags = [], []
     if dof > 0 and fit.excess > RULES["excess"] and p < RULES["p_value"]:
         flags.append("excess")
@@ -386,4 +428,4 @@ def evaluate_model(t, gyro, poses, accel, C, bias_vector, *, integrator: str = "
     return evaluate(ms, C, integrator), ms
 
 
-__all__ = ["ESTIMATORS", "MIN_MOTIONS", "accel_directions", "calibrate_gyro", "evaluate_model"]
+__all__ = ["MIN_MOTIONS", "accel_directions", "calibrate_gyro", "evaluate_model", "motion_estimator"]

@@ -7,7 +7,7 @@ reports every other input problem.
 
 from __future__ import annotations
 
-from ..errors import AccelcalError, RecordingError
+from ..errors import AccelcalError, RecordingError, TooFewPosesError
 
 
 class GyroInputError(RecordingError):
@@ -27,8 +27,8 @@ class RotationAngleError(AccelcalError):
     """A rotation of a Ferraris session does not reach the stated angle."""
 
 
-class TooFewMotionsError(AccelcalError):
-    """Fewer usable motions between rests than the gyro model needs."""
+class TooFewMotionsError(TooFewPosesError):
+    """Fewer usable motions between rests (or rotations) than the gyro model needs."""
 
 
 __all__ = ["GyroInputError", "NoMotionError", "RotationAngleError", "SaturatedGyroError", "TooFewMotionsError"]

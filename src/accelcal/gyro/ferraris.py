@@ -34,7 +34,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import RotationAngleError
+from .errors import RotationAngleError, TooFewMotionsError
+
+#: Rotations the nine parameters need: three equations each, exactly determined (registry: ``gyro_ferraris``).
+N_ROTATIONS = 3
 
 
 @dataclass(frozen=True)
@@ -74,14 +77,15 @@ def fit_ferraris(segments, h: float, angles_deg, axes=None, *, nominal: float = 
 
     Parameters
     ----------
-    segments : sequence of 3 arrays (k_j, 3)
+    segments : sequence of arrays (k_j, 3), at least 3
         Gyro samples of each rotation, bias removed, raw unit (rests around it may be
-        included: they add only noise).
+        included: they add only noise).  Three rotations determine ``C`` exactly; more are
+        fitted in least squares.
     h : float
         Sample interval [s].
-    angles_deg : array_like (3,)
+    angles_deg : array_like (r,)
         Stated rotation angles (magnitudes) [deg].
-    axes : array_like (3, 3), optional
+    axes : array_like (r, 3), optional
         Unit rotation axis of each rotation (rows) in the output frame; default identity.
     nominal : float
         Nominal rad/s per raw unit (the stated-angle check).
@@ -96,21 +100,25 @@ def fit_ferraris(segments, h: float, angles_deg, axes=None, *, nominal: float = 
         the rotation is refused (:class:`RotationAngleError`).
     """
     segs = [np.asarray(s, float) for s in segments]
+    if len(segs) < N_ROTATIONS:
+        raise TooFewMotionsError(f"{len(segs)} rotations of known angle; the gyro's 9 parameters need at least "
+                                 f"{N_ROTATIONS}, one about each axis (x_rot, y_rot, z_rot in the section list)")
     theta = np.deg2rad(np.abs(np.asarray(angles_deg, float)))
-    A = np.eye(3) if axes is None else np.asarray(axes, float)
+    A = np.eye(3)[np.arange(len(segs)) % 3] if axes is None else np.asarray(axes, float)
     A = A / np.linalg.norm(A, axis=1, keepdims=True)
-    Y = np.array([h * s.sum(axis=0) for s in segs])  # (3, 3): row j = plain sum of rotation j
+    Y = np.array([h * s.sum(axis=0) for s in segs])  # (r, 3): row j = plain sum of rotation j
     nominal_deg = np.rad2deg(abs(nominal) * np.linalg.norm(Y, axis=1))
-    for j in range(3):
+    for j in range(len(segs)):
         if abs(nominal_deg[j] - np.rad2deg(theta[j])) > angle_tolerance * np.rad2deg(theta[j]):
+            name = names[j] if j < len(names) else f"#{j + 1}"
             raise RotationAngleError(
-                f"the {names[j]} rotation turns {nominal_deg[j]:.1f} deg by the nominal gyro scale, not the stated "
+                f"the {name} rotation turns {nominal_deg[j]:.1f} deg by the nominal gyro scale, not the stated "
                 f"{np.rad2deg(theta[j]):.1f} deg: check the rotation angle (--rotation-angle), the section of that "
                 "rotation in the section list, or the gyro unit/sensitivity")
     senses = np.where(np.sum(Y * A, axis=1) * nominal >= 0, 1.0, -1.0)
     target = (senses * theta)[:, None] * A
-    Yinv = np.linalg.inv(Y.T)  # C Y.T = target.T
-    C = target.T @ Yinv
+    P = Y @ np.linalg.inv(Y.T @ Y)  # C Yᵀ = targetᵀ in least squares; three rotations: P = Y⁻ᵀ, exact
+    C = target.T @ P
     cov = np.zeros((9, 9))
     yv = np.zeros(3) if y_var is None else np.asarray(y_var, float)
     bv = np.zeros(3) if bias_var is None else np.asarray(bias_var, float)
@@ -120,9 +128,16 @@ def fit_ferraris(segments, h: float, angles_deg, axes=None, *, nominal: float = 
         covT = np.deg2rad(angle_std_deg) ** 2 * np.outer(A[j], A[j])
         if axis_cov is not None:
             covT = covT + theta[j] ** 2 * np.asarray(axis_cov, float)[j]
-        Jj = np.kron(np.eye(3), Yinv[j][:, None])  # vec(δC) = Σ_j (δT_j - C δY_j) ⊗ row j of Y⁻ᵀ
+        Jj = np.kron(np.eye(3), P[j][:, None])  # vec(δC) = Σ_j (δT_j - C δY_j) ⊗ row j of P
         cov += Jj @ (C @ covY @ C.T + covT) @ Jj.T
-    return FerrarisFit("sum", C, cov, senses, np.rad2deg(np.linalg.norm(Y @ C.T, axis=1)), nominal_deg, 1)
+    return FerrarisFit("gyro_ferraris", C, cov, senses, np.rad2deg(np.linalg.norm(Y @ C.T, axis=1)), nominal_deg, 1)
+
+
+def rotation_singular_values(segments, h: float) -> np.ndarray:
+    """Singular values of the integrated rates of the rotations (rows ``h Σ y``, raw unit × s):
+    the registry's conditioning of the Ferraris fit (a near-zero one: two rotations about
+    one axis)."""
+    return np.linalg.svd(np.array([h * np.asarray(s, float).sum(axis=0) for s in segments]), compute_uv=False)
 
 
 #: imucal's section names: static holds and rotations.
@@ -160,9 +175,10 @@ def calibrate_ferraris_session(t, gyro, sections: dict, *, raw_unit: str = "deg/
         Exactly determined: no residual, ``dof = 0``; the standard errors come from the
         noise (module docstring).
     """
+    from ..registry import estimator
     from .model import RAW_UNITS, GyroModel
     from .rests import fit_bias, rest_noise, rest_statistics, sample_interval
-    from .result import GyroCalibration, GyroQuality
+    from .result import GyroQuality
 
     missing = [k for k in (*rest_names, *rotation_names) if k not in sections]
     if missing:
@@ -203,17 +219,18 @@ def calibrate_ferraris_session(t, gyro, sections: dict, *, raw_unit: str = "deg/
     warnings = ["three rotations determine the nine parameters exactly: no residual checks the fit; the ± rest on "
                 "the noise alone (and on --rotation-angle's uncertainty)"]
     if axes is None:
-        warnings.append("no accelerometer: the rotation axes are assumed to be the sensor's x, y and z (imucal's "
-                        "assumption); the misalignments are relative to them")
+        warnings.append("the rotation axes are assumed to be the sensor's x, y and z (imucal's assumption; measured "
+                        "ones need a full accelerometer calibration): the misalignments are relative to them")
     quality = GyroQuality(n_motions=3, n_parameters=9, dof=0, chi2=float("nan"), p_value=float("nan"),
                           excess=float("nan"), residual_rms_deg=0.0, predicted_rms_deg=float("nan"),
                           axis_turn_deg=tuple(float(a) for a in fit.angles_deg), warnings=tuple(warnings),
                           flags=("exactly_determined",))
-    settings = {"estimator": "ferraris_sum", "integrator": "sum", "bias_mode": "all", "nominal": nominal,
+    settings = {"estimator": fit.estimator, "integrator": "sum", "bias_mode": "all", "nominal": nominal,
                 "time_base": {"h": tb.h, "rate": tb.rate, "jitter": tb.jitter}, "angles_deg": angles.tolist(),
                 "senses": fit.senses.tolist(), "nominal_angles_deg": fit.nominal_angles_deg.tolist(),
                 "axes": None if axes is None else np.asarray(axes).tolist(), "iterations": 1}
-    return GyroCalibration(model, se, quality, {}, settings)
+    return estimator(fit.estimator).load_calibration()(model, se, quality, {}, settings)
 
 
-__all__ = ["FerrarisFit", "REST_SECTIONS", "ROTATION_SECTIONS", "calibrate_ferraris_session", "fit_ferraris"]
+__all__ = ["FerrarisFit", "N_ROTATIONS", "REST_SECTIONS", "ROTATION_SECTIONS", "calibrate_ferraris_session",
+           "fit_ferraris", "rotation_singular_values"]

@@ -46,9 +46,9 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import solve_triangular
 
 from ..errors import NotConvergedError
+from .errors import TooFewMotionsError
 from .integrate import _increments, _step_index, expm_so3, integrate_intervals, log_so3, skew, total_products
 
 #: Motions (those that turn most) on which the scalar start for raw counts is searched.
@@ -56,6 +56,9 @@ N_SCALE_MOTIONS = 8
 #: Stop when every Gauss-Newton step is below this fraction of its parameter's standard error.
 STEP_TOL = 1e-2
 MAX_ITER = 50
+#: Fewest motions the 9 parameters need: 2 residuals each, one more than the unknowns
+#: (``accelcal.registry``: ``min_poses`` of the motion estimators).
+MIN_MOTIONS = 5
 
 
 @dataclass(frozen=True)
@@ -131,7 +134,7 @@ class Evaluation:
 
     def whiten(self, v) -> np.ndarray:
         """``L⁻¹ v`` for the Cholesky factor ``L`` of the residual covariance."""
-        return solve_triangular(self.chol, v, lower=True, check_finite=False)
+        return np.linalg.solve(self.chol, v)  # numpy's LU on the (2m, 2m) factor: no scipy.linalg import
 
     def whitened(self) -> tuple[np.ndarray, np.ndarray]:
         """``L⁻¹ J`` (2m, 9) and ``L⁻¹ r`` (2m,)."""
@@ -182,7 +185,7 @@ def evaluate(ms: MotionSet, C, method: str = "magnus4") -> Evaluation:
 class GyroFit:
     """One estimate of ``C`` with its covariance (first order, from the rest noise)."""
 
-    method: str  #: 'iterative' or 'one_step'
+    method: str  #: the registry's name: 'gyro_iterative' or 'gyro_one_step'
     integrator: str
     C: np.ndarray
     cov: np.ndarray  #: (9, 9) of vec(C), not scaled by the excess
@@ -204,8 +207,15 @@ def _step(ev: Evaluation) -> tuple[np.ndarray, np.ndarray]:
     return -cov @ (Jw.T @ rw), cov
 
 
+def _require_motions(ms: MotionSet) -> None:
+    if ms.n_motions < MIN_MOTIONS:
+        raise TooFewMotionsError(f"{ms.n_motions} motions between rests; the gyro's 9 parameters need at least "
+                                 f"{MIN_MOTIONS}: record more poses (or shorter still phases: --min-duration)")
+
+
 def fit_one_step(ms: MotionSet, C0, method: str = "magnus4") -> GyroFit:
     """One linearised solve about ``C0``: ``vec(C) = vec(C0) - (Jᵀ Σ⁻¹ J)⁻¹ Jᵀ Σ⁻¹ r`` at ``C0``."""
+    _require_motions(ms)
     t0 = time.perf_counter()
     C0 = np.asarray(C0, float)
     ev0 = evaluate(ms, C0, method)
@@ -213,7 +223,7 @@ def fit_one_step(ms: MotionSet, C0, method: str = "magnus4") -> GyroFit:
     C = C0 + d.reshape(3, 3)
     seconds = time.perf_counter() - t0
     ev = evaluate(ms, C, method)
-    return GyroFit("one_step", method, C, cov, ev.chi2, 2 * ms.n_motions - 9, 1, seconds, ev)
+    return GyroFit("gyro_one_step", method, C, cov, ev.chi2, 2 * ms.n_motions - 9, 1, seconds, ev)
 
 
 def _residuals(ms: MotionSet, C, method: str) -> np.ndarray:
@@ -233,7 +243,10 @@ def fit_iterative(ms: MotionSet, C0, method: str = "magnus4", max_iter: int = MA
     ------
     NotConvergedError
         No convergence in ``max_iter`` iterations.
+    TooFewMotionsError
+        Fewer than :data:`MIN_MOTIONS` motions.
     """
+    _require_motions(ms)
     t0 = time.perf_counter()
     C = np.asarray(C0, float)
     ev = evaluate(ms, C, method)
@@ -250,7 +263,7 @@ def fit_iterative(ms: MotionSet, C0, method: str = "magnus4", max_iter: int = MA
         ev = evaluate(ms, C, method)
         if np.all(np.abs(lam * d) <= STEP_TOL * se):
             _, cov = _step(ev)
-            return GyroFit("iterative", method, C, cov, ev.chi2, 2 * ms.n_motions - 9, it,
+            return GyroFit("gyro_iterative", method, C, cov, ev.chi2, 2 * ms.n_motions - 9, it,
                            time.perf_counter() - t0, ev)
     raise NotConvergedError(f"gyro fit did not converge in {max_iter} Gauss-Newton iterations")
 
@@ -261,6 +274,14 @@ def crlb(ms: MotionSet, C, method: str = "magnus4") -> np.ndarray:
     ev = evaluate(ms, C, method)
     Jw, _ = ev.whitened()
     return np.linalg.inv(Jw.T @ Jw)
+
+
+def motion_singular_values(ms: MotionSet, C, method: str = "magnus4") -> np.ndarray:
+    """Singular values of the whitened Jacobian of the motion residuals at ``C`` (the
+    registry's conditioning of the motion estimators): how well the motions determine the
+    nine entries of ``C`` (a near-zero one: a rotation axis the motions never turn about)."""
+    Jw, _ = evaluate(ms, C, method).whitened()
+    return np.linalg.svd(Jw, compute_uv=False)
 
 
 def initial_scale(ms: MotionSet, method: str = "magnus4", rate_range=(0.05, 60.0), n_grid: int = 31) -> float:
@@ -321,5 +342,5 @@ def rotation_angles_deg(R) -> np.ndarray:
     return np.rad2deg(np.linalg.norm(log_so3(R), axis=-1))
 
 
-__all__ = ["Evaluation", "GyroFit", "MotionSet", "crlb", "evaluate", "fit_iterative", "fit_one_step",
-           "initial_scale", "rotation_angles_deg", "tangent_basis"]
+__all__ = ["Evaluation", "GyroFit", "MIN_MOTIONS", "MotionSet", "crlb", "evaluate", "fit_iterative", "fit_one_step",
+           "initial_scale", "motion_singular_values", "rotation_angles_deg", "tangent_basis"]

@@ -45,15 +45,15 @@ the Jacobians simple and makes every parametrisation above a function of it.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import InputShapeError
+from ..units import ANGULAR_RATE_UNITS
 
 #: Raw gyro units and their nominal factor to rad/s (None: counts, the sensitivity is estimated).
-RAW_UNITS = {"rad/s": 1.0, "deg/s": math.pi / 180.0, "counts": None}
+RAW_UNITS = ANGULAR_RATE_UNITS
 #: Names of the nine entries of ``C`` and of the IMU-TK misalignments, in order.
 C_PARAMETERS = ("Cxx", "Cxy", "Cxz", "Cyx", "Cyy", "Cyz", "Czx", "Czy", "Czz")
 IMUTK_MISALIGNMENTS = ("mis_yz", "mis_zy", "mis_zx", "mis_xz", "mis_xy", "mis_yx")

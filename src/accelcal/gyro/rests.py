@@ -131,7 +131,7 @@ def fit_bias(rs: RestStatistics, mode: str = "all", f_rest=None) -> BiasEstimate
     latter then follows each rest's mean minus ``G f_i`` in time)."""
     if mode not in BIAS_MODES:
         raise GyroInputError(f"unknown gyro bias mode {mode!r}; known: {', '.join(BIAS_MODES)}")
-    m, se = rs.means, np.maximum(rs.mean_std, 1e-300)
+    m, se = rs.means, np.maximum(rs.mean_std, 1e-150)  # squared, still a normal float
     p = len(m)
     if f_rest is not None and mode == "first":
         raise GyroInputError("the g-sensitivity needs the bias from all rests (bias mode 'all' or 'interpolated')")

@@ -1,11 +1,18 @@
-"""A gyro calibration with its uncertainty, its trust lines and its motions, as the lead's
-calibration file (format 2) and summary will carry it: ``to_dict``/``from_dict`` and
-``summary()``."""
+"""A gyro calibration with its uncertainty, its trust lines and its motions, as the
+calibration file (format 2, its ``gyroscope`` object) and the summary carry it:
+``to_dict``/``from_dict`` and ``summary()``.
+
+One class per estimator of the registry (:mod:`accelcal.registry`), found by its
+``CAL_TYPE`` among the subclasses of :class:`GyroCalibration`
+(:func:`accelcal.calibration.calibration_class`), as the accelerometer's are.
+"""
 
 from __future__ import annotations
 
+import json
 import math
 from dataclasses import asdict, dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
@@ -90,6 +97,8 @@ class GyroCalibration:
         ``bias_chi2``...
     """
 
+    CAL_TYPE: ClassVar[str] = ""
+
     model: GyroModel
     standard_errors: dict
     quality: GyroQuality
@@ -104,24 +113,47 @@ class GyroCalibration:
     def scale_factors(self) -> np.ndarray:
         return self.model.scale_factors(self.nominal)
 
+    @property
+    def method(self) -> str:
+        return self.CAL_TYPE
+
     def to_dict(self) -> dict:
-        return _f({"sensor": "gyroscope", "model": self.model.to_dict(),
+        return _f({"sensor": "gyroscope", "cal_type": self.CAL_TYPE or None, "model": self.model.to_dict(),
                    "standard_errors": {k: np.asarray(v) for k, v in self.standard_errors.items()},
                    "quality": self.quality.to_dict(), "motions": self.motions, "settings": self.settings})
 
     @classmethod
     def from_dict(cls, d: dict) -> GyroCalibration:
+        """Rebuild from :meth:`to_dict`'s object, as the class of its ``cal_type``
+        (:func:`accelcal.registry.class_of_type`; without one, this class)."""
+        from ..errors import InputShapeError
+        from ..registry import class_of_type, types_of
+
+        kind = class_of_type(GyroCalibration, d["cal_type"]) if d.get("cal_type") else GyroCalibration
+        if kind is None:
+            raise InputShapeError(f"gyroscope: unknown calibration type {d['cal_type']!r}; known: "
+                                  f"{', '.join(types_of(GyroCalibration))}")
         se = {k: np.array(v, dtype=float) for k, v in d.get("standard_errors", {}).items() if v is not None}
-        return cls(GyroModel.from_dict(d["model"]), se, GyroQuality.from_dict(d["quality"]),
-                   dict(d.get("motions", {})), dict(d.get("settings", {})))
+        return kind(GyroModel.from_dict(d["model"]), se, GyroQuality.from_dict(d["quality"]),
+                    dict(d.get("motions", {})), dict(d.get("settings", {})))
+
+    def __eq__(self, other) -> bool:
+        if type(self) is not type(other):
+            return NotImplemented
+        return json.dumps(self.to_dict(), sort_keys=True) == json.dumps(other.to_dict(), sort_keys=True)
+
+    __hash__ = None
 
     def summary(self) -> str:
         """Lines for the command line: the triad with ±, the fit, the trust lines."""
         m, se, q, s = self.model, self.standard_errors, self.quality, self.settings
         nom = self.nominal
         unit = m.raw_unit
+        exact = "exactly_determined" in q.flags
+        what = (f"{q.n_motions} rotations of known angle ({', '.join(f'{a:g}' for a in s.get('angles_deg', ()))} deg)"
+                if exact else f"{q.n_motions} motions between rests")
         lines = [f"gyroscope: {s.get('estimator', '?')} ({s.get('integrator', '?')} integration), "
-                 f"{q.n_motions} motions between rests, bias from {s.get('bias_mode', '?')} rests"]
+                 f"{what}, bias from {s.get('bias_mode', '?')} rests"]
         sf, sse = self.scale_factors, se.get("scale_factors", np.full(3, np.nan))
         if unit != "counts" or not str(s.get("nominal_from", "")).startswith("scalar search"):
             lines.append("  scale factors [ppm]: " + ", ".join(
@@ -138,13 +170,39 @@ class GyroCalibration:
         be = se.get("bias", np.full(3, np.nan))
         lines.append(f"  bias [{unit}]: " + ", ".join(f"{a} {v:.6g} ± {e:.2g}" for a, v, e in zip("xyz", m.bias, be)))
         if m.g_sensitivity is not None:
-            lines.append(f"  g-sensitivity [{unit} per m/s^2]: " + np.array2string(m.g_sensitivity, precision=3))
-        lines.append(f"  motion residuals: {q.residual_rms_deg:.3g} deg RMS vs {q.predicted_rms_deg:.3g} deg "
-                     f"from the rest noise (chi2/dof = {q.chi2 / max(q.dof, 1):.3g} on {q.dof} dof, "
-                     f"excess {q.excess:.3g})")
-        lines.append(f"  nominal {nom:.6g} rad/s per {unit}")
+            Ge = se.get("g_sensitivity", np.full((3, 3), np.nan))
+            lines.append(f"  g-sensitivity [{unit} per m/s^2]: " + ", ".join(
+                f"{'xyz'[i]}{'xyz'[j]} {m.g_sensitivity[i, j]:+.3g} ± {Ge[i, j]:.2g}"
+                for i in range(3) for j in range(3)))
+        if not exact:
+            lines.append(f"  motion residuals: {q.residual_rms_deg:.3g} deg RMS vs {q.predicted_rms_deg:.3g} deg "
+                         f"from the rest noise (chi2/dof = {q.chi2 / max(q.dof, 1):.3g} on {q.dof} dof, "
+                         f"excess {q.excess:.3g})")
+        lines.append(f"  nominal {nom:.6g} rad/s per {unit} ({s.get('nominal_from', 'unit')})")
         lines += [f"warning: gyroscope: {w}" for w in q.warnings]
         return "\n".join(lines)
 
 
-__all__ = ["GyroCalibration", "GyroQuality", "RULES"]
+@dataclass(frozen=True, eq=False)
+class GyroIterativeCalibration(GyroCalibration):
+    """Weighted Gauss-Newton on the motions between rests (``gyro_iterative``)."""
+
+    CAL_TYPE: ClassVar[str] = "gyro_iterative"
+
+
+@dataclass(frozen=True, eq=False)
+class GyroOneStepCalibration(GyroCalibration):
+    """One linearised solve about the nominal model (``gyro_one_step``)."""
+
+    CAL_TYPE: ClassVar[str] = "gyro_one_step"
+
+
+@dataclass(frozen=True, eq=False)
+class GyroFerrarisCalibration(GyroCalibration):
+    """Three rotations of known angle (``gyro_ferraris``): exactly determined, no residual."""
+
+    CAL_TYPE: ClassVar[str] = "gyro_ferraris"
+
+
+__all__ = ["GyroCalibration", "GyroFerrarisCalibration", "GyroIterativeCalibration", "GyroOneStepCalibration",
+           "GyroQuality", "RULES"]

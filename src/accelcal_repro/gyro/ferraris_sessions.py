@@ -1,16 +1,16 @@
 """The two Ferraris sessions: imucal's example (beside imucal itself) and the CTU rig's rotations.
 
 imucal's session (``../shared/data/imucal_ferraris``): six static holds and three turns of
-360 deg, with its section list.  The sampling rate is 102.4 Hz: imucal's own example says so
-since commit 278a2c3 ("Fixed wrong samplingrate in example", the commit of the stored
-data); at the 204.8 Hz the data README and accelcal's reader assume, each turn integrates
-to about 180 deg.  accelcal's Ferraris fit runs twice: with the nominal axes (imucal's
-assumption, comparable parameter by parameter) and with the axes measured by the
-accelerometer.  Six holds do not determine accelcal's full accelerometer model (it needs
-ten poses; the bias-only model leaves imucal's 2 % scale errors in the directions), so the
-accelerometer here is imucal's own Ferraris fit of the holds, for every gyro calibration
-alike.  Figure of merit: the five motions between the holds (gravity turns by 90 or 180
-deg).
+360 deg, with its section list, read by accelcal's imucal reader at its sampling rate
+(:data:`accelcal.formats.imucal.IMUCAL_RATE_HZ`, 102.4 Hz: imucal's own example says so
+since commit 278a2c3; at the 204.8 Hz the data README states, each turn integrates to
+about 180 deg).  accelcal's Ferraris fit is the command line's (:mod:`.sessions`: six
+holds allow only a bias-only accelerometer, whose scale errors would tilt measured axes,
+so the rotation axes are the nominal ones, imucal's assumption); beside it, the same fit
+with the axes measured by imucal's own accelerometer calibration.  imucal runs as a
+package (:func:`run_imucal`, its example's settings).  Figure of merit: the five motions
+between the holds (gravity turns by 90 or 180 deg), every gyro with imucal's
+accelerometer (one frame for all).
 
 CTU (``../shared/data/ctu_ferraris``): three gyro-only records, one turn each, the offsets
 from samples 1-2000 and the integration windows and reference angles of the repository's
@@ -19,31 +19,50 @@ script (361.338, 367.160, 363.6703 deg): nominal axes only; no peer result is pu
 
 from __future__ import annotations
 
-import json
+import time
 
 import numpy as np
 import pandas as pd
 
-from accelcal.gyro.ferraris import REST_SECTIONS, calibrate_ferraris_session, fit_ferraris
-from accelcal.gyro.model import GyroModel
+from accelcal.gyro.ferraris import calibrate_ferraris_session, fit_ferraris
+from accelcal.gyro.model import RAW_UNITS, GyroModel
 from accelcal.gyro.rests import rest_noise, rest_statistics
 
 from .peers import AffineAccel
-from .sessions import DATA
 
-IMUCAL_RATE_HZ = 102.4
 CTU_WINDOWS = {"x": (2420, 2910), "y": (2565, 3120), "z": (2975, 3500)}  # 1-based, inclusive
 CTU_ANGLES = (361.338, 367.160, 363.6703)
 CTU_RATE_HZ = 100.0
+#: imucal's gravity (its default and example's).
+IMUCAL_GRAV = 9.81
 
 
-def imucal_session():
-    d = DATA / "imucal_ferraris"
-    df = pd.read_csv(d / "example_ferraris_session.csv")
-    raw = json.loads((d / "example_ferraris_session_list.json").read_text())
-    sec = {k: (v["start"], v["end"]) for k, v in raw.items()}
-    t = df.n_samples.to_numpy(float) / IMUCAL_RATE_HZ
-    return t, df[["acc_x", "acc_y", "acc_z"]].to_numpy(), df[["gyr_x", "gyr_y", "gyr_z"]].to_numpy(), sec
+def run_imucal(session_csv, section_list_json) -> dict:
+    """imucal's ``FerrarisCalibration`` of its example session, with its example's settings
+    (at :data:`accelcal.formats.imucal.IMUCAL_RATE_HZ`); its parameters and wall time."""
+    import imucal
+    from imucal import FerrarisCalibration, ferraris_regions_from_section_list
+
+    from accelcal.formats.imucal import IMUCAL_RATE_HZ
+
+    data = pd.read_csv(session_csv, header=0, index_col=0)
+    sections = pd.read_json(section_list_json).T
+    t0 = time.perf_counter()
+    regions = ferraris_regions_from_section_list(data, sections)
+    cal = FerrarisCalibration(grav=IMUCAL_GRAV).compute(regions, sampling_rate_hz=IMUCAL_RATE_HZ,
+                                                        from_acc_unit="m/s^2", from_gyr_unit="deg/s")
+    wall = time.perf_counter() - t0
+    out = {k: np.asarray(getattr(cal, k)).tolist() for k in ("K_a", "R_a", "b_a", "K_g", "R_g", "K_ga", "b_g")}
+    out["meta"] = {"peer": "imucal", "version": imucal.__version__, "sampling_rate_hz": IMUCAL_RATE_HZ,
+                   "grav": IMUCAL_GRAV, "wall_s": wall}
+    return out
+
+
+def in_raw_unit(model: GyroModel, unit: str) -> GyroModel:
+    """The same gyro for raw samples in ``unit`` (rad/s <-> deg/s)."""
+    k = RAW_UNITS[model.raw_unit] / RAW_UNITS[unit]  # new raw units per old raw unit
+    return GyroModel(model.C / k, model.bias * k, None if model.g_sensitivity is None else model.g_sensitivity * k,
+                     unit)
 
 
 def _params(name: str, model: GyroModel, se: dict | None) -> list[dict]:
@@ -60,40 +79,39 @@ def _params(name: str, model: GyroModel, se: dict | None) -> list[dict]:
     return rows
 
 
-def imucal_comparison(peers_json) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """Parameters (ours ± s.e. with nominal and with measured axes, imucal's) and the figure of merit."""
+def imucal_comparison(r: dict, imucal: dict) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """Parameters (ours ± s.e. with nominal axes, the command line's, and with measured axes;
+    imucal's) and the figure of merit; ``r`` is :func:`.sessions.calibrate_session`'s
+    result on imucal's example, ``imucal`` :func:`run_imucal`'s."""
     from accelcal.gyro.calibrate import evaluate_model
-    from accelcal.static import static_poses_from_intervals
 
-    t, acc, gyro, sec = imucal_session()
-    rests = np.array(sorted(sec[k] for k in REST_SECTIONS))
-    poses = static_poses_from_intervals(t, acc, rests)
-    im = json.loads(peers_json.read_text())["calibration"]
-    acc_cal = AffineAccel(np.asarray(im["K_a"]) @ np.asarray(im["R_a"]), im["b_a"])
-    nominal = calibrate_ferraris_session(t, gyro, sec)
-    measured = calibrate_ferraris_session(t, gyro, sec, accel=acc_cal, acc=acc)
-    imucal = GyroModel.from_imucal(im["K_g"], im["R_g"], im["b_g"], None)
-    rows = _params("accelcal_nominal_axes", nominal.model, nominal.standard_errors) + \
-        _params("accelcal_measured_axes", measured.model, measured.standard_errors) + _params("imucal", imucal, None)
+    rec, poses, ours = r["rec"], r["poses"], r["gyro"]
+    acc_cal = AffineAccel(np.asarray(imucal["K_a"]) @ np.asarray(imucal["R_a"]), imucal["b_a"])
+    sections = {**dict(zip(rec.labels, map(tuple, rec.intervals))), **rec.rotations}
+    measured = calibrate_ferraris_session(rec.t, rec.gyro, sections, raw_unit=rec.gyro_unit, accel=acc_cal,
+                                          acc=rec.acc)
+    theirs = in_raw_unit(GyroModel.from_imucal(imucal["K_g"], imucal["R_g"], imucal["b_g"], None), rec.gyro_unit)
+    rows = _params("accelcal", ours.model, ours.standard_errors) + \
+        _params("accelcal_measured_axes", measured.model, measured.standard_errors) + _params("imucal", theirs, None)
     params = pd.DataFrame(rows)
-    ref = params[params.calibration == "accelcal_nominal_axes"].set_index("parameter")
-    params["diff_in_se_vs_nominal_axes"] = [(v - ref.loc[p, "value"]) / ref.loc[p, "se"]
-                                            for p, v in zip(params.parameter, params.value)]
+    ref = params[params.calibration == "accelcal"].set_index("parameter")
+    params["diff_in_se"] = [(v - ref.loc[p, "value"]) / ref.loc[p, "se"] for p, v in zip(params.parameter, params.value)]
     foms = []
-    for name, accel, model in (("accelcal_nominal_axes", acc_cal, nominal.model),
-                               ("accelcal_measured_axes", acc_cal, measured.model), ("imucal", acc_cal, imucal)):
-        ev, _ = evaluate_model(t, gyro, poses, accel, model.C, model.bias)
-        foms.append({"session": "imucal_ferraris", "calibration": name, "motions": len(ev.r),
-                     "rms_deg": float(np.sqrt(np.mean(ev.angles_deg ** 2))), "max_deg": float(ev.angles_deg.max()),
+    for name, model in (("accelcal", ours.model), ("accelcal_measured_axes", measured.model), ("imucal", theirs)):
+        ev, _ = evaluate_model(rec.t, rec.gyro, poses, acc_cal, model.C, model.bias)
+        foms.append({"session": "imucal_ferraris", "calibration": name, "bias": "own_bias", "motions": len(ev.r),
+                     "rms_deg": float(np.sqrt(np.mean(ev.angles_deg ** 2))), "median_deg": float(np.median(
+                         ev.angles_deg)), "max_deg": float(ev.angles_deg.max()),
                      "noise_rms_deg": float(np.sqrt(np.mean(ev.predicted_deg ** 2)))})
     return params, pd.DataFrame(foms)
 
 
-def ctu_calibration() -> pd.DataFrame:
-    """accelcal's Ferraris fit of the CTU rotations: parameters ± s.e. (nominal axes)."""
+def ctu_calibration(rates_mat) -> pd.DataFrame:
+    """accelcal's Ferraris fit of the CTU rotations: parameters ± s.e. (nominal axes), and each
+    rotation's angle by the nominal scale (the reference angles' check)."""
     import scipy.io
 
-    m = scipy.io.loadmat(DATA / "ctu_ferraris" / "measured_angular_rates.mat")
+    m = scipy.io.loadmat(rates_mat)
     segs, yv, bv = [], [], []
     for ax in "xyz":
         d = np.asarray(m[f"{ax}_rotation"], float)
@@ -122,4 +140,4 @@ def ctu_calibration() -> pd.DataFrame:
     return out
 
 
-__all__ = ["CTU_ANGLES", "CTU_WINDOWS", "ctu_calibration", "imucal_comparison", "imucal_session"]
+__all__ = ["CTU_ANGLES", "CTU_WINDOWS", "ctu_calibration", "imucal_comparison", "in_raw_unit", "run_imucal"]

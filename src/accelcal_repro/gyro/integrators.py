@@ -97,7 +97,7 @@ def figure(table: pd.DataFrame):
 
     fss = sorted(table.fs_hz.unique())
     with plt.rc_context(RC):
-        fig, axes = plt.subplots(2, len(fss), figsize=(2.0 * len(fss) + 1.2, 5.2), sharey="row", sharex=True,
+        fig, axes = plt.subplots(2, len(fss), figsize=(2.0 * len(fss) + 1.2, 5.6), sharey="row", sharex=True,
                                  layout="constrained", squeeze=False)
         for col, fs in enumerate(fss):
             sub = table[table.fs_hz == fs]
@@ -111,12 +111,16 @@ def figure(table: pd.DataFrame):
                 ax.axhline(100, color="0.5", lw=0.8, ls=":")
             axes[0, col].set_title(f"{fs:g} Hz")
             axes[1, col].set_xlabel("peak rate [deg/s]")
+            rates = sorted(table.rate_dps.unique())
+            for ax in axes[:, col]:
+                ax.set_xticks(rates, [f"{r:g}" for r in rates], rotation=45 if len(rates) > 4 else 0)
+                ax.minorticks_off()
         axes[0, 0].set_ylabel("|scale-factor bias| [ppm]")
         axes[1, 0].set_ylabel("RMS angle error / angle [ppm]")
-        axes[1, -1].legend(loc="lower right", fontsize=6.5)
+        handles, labels = axes[1, 0].get_legend_handles_labels()
+        fig.legend(handles, labels, loc="outside lower center", ncol=len(labels), fontsize=7)
         fig.suptitle(f"integration error on {int(table.n_motions.iloc[0])} simulated motions of "
-                     f"{table.angle_deg.iloc[0]:g} deg about moving axes (dotted: 100 ppm; "
-                     "bottom: Euler, RK4 and coning "
+                     f"{table.angle_deg.iloc[0]:g} deg about moving axes\n(dotted: 100 ppm; RK4 and coning "
                      "overlap)", fontsize=8.5)
     return fig
 

@@ -24,16 +24,18 @@ import numpy as np
 import pandas as pd
 
 from accelcal.errors import AccelcalError
-from accelcal.gyro.fit import crlb, fit_iterative, fit_one_step
+from accelcal.gyro.fit import crlb
 from accelcal.gyro.model import C_PARAMETERS
 from accelcal.gyro.simulate import random_gyro_matrix, simulate_session
+from accelcal.registry import estimators
 
 BASE = {"n_motions": 20, "angle_deg": 90.0, "rate_dps": 150.0, "fs": 100.0, "gyro_noise": 0.005,
         "direction_noise": 2e-4, "scale_std": 0.02, "misalignment_deg": 1.0}
 #: One factor at a time: name -> values (the base value is one of them).
 FACTORS = {"gyro_noise": (0.0005, 0.005, 0.05), "n_motions": (8, 20, 60), "angle_deg": (30.0, 90.0, 180.0),
            "rate_dps": (50.0, 150.0, 400.0), "scale_std": (0.005, 0.02, 0.06)}
-ESTIMATORS = {"one_step": fit_one_step, "iterative": fit_iterative}
+#: The registry's gyro estimators of motions, by algorithm (the tables' ``estimator`` column).
+ESTIMATORS = {e.algorithm: e for e in estimators("gyroscope", data="motions")}
 AXIS_LABELS = {"gyro_noise": "gyro noise [rad/s per sample]", "n_motions": "motions",
                "angle_deg": "angle per motion [deg]",
                "rate_dps": "peak rate [deg/s]", "scale_std": "scale errors (std) from nominal"}
@@ -63,9 +65,9 @@ def run_config(settings: dict, n_trials: int, seed: int, integrator: str = "magn
                              peak_rate_dps=settings["rate_dps"], fs=settings["fs"], C=C, gyro_noise=noise,
                              direction_noise=settings["direction_noise"], rest_s=0.5)
         bounds.append(crlb(s.clean, C, integrator))
-        for name, fit in ESTIMATORS.items():
+        for name, e in ESTIMATORS.items():
             try:
-                f = fit(s.data, np.eye(3), integrator)
+                f = e.load()(s.data, np.eye(3), integrator)
             except (AccelcalError, np.linalg.LinAlgError):
                 failures[name] += 1
                 continue
@@ -125,7 +127,7 @@ def figure(table: pd.DataFrame):
             ax.set_ylim(bottom=0)
             ax.set_xlabel(AXIS_LABELS.get(f, f))
         axes[0, 0].set_ylabel("RMS error / CRLB")
-        axes[0, -1].legend(fontsize=6.5)
+        axes[0, -1].legend(fontsize=6.5, handlelength=3.0)
         fig.suptitle("gyro: one-step (one linearised solve about C = I) vs iterative, against the Cramér–Rao bound",
                      fontsize=8.5)
     return fig

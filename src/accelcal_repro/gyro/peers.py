@@ -3,12 +3,13 @@ merit none of them optimises.
 
 Peers, per session:
 
-* ``imutk_run`` — IMU-TK built from source and run here (``tools/gyro_peers.py``:
-  ``results/gyro/peers/imutk.json``): its example app on the Xsens files, its calls with the
-  sessions' settings on the others;
+* ``imutk_run`` — IMU-TK built from source and run outside the workflow (``tools/gyro_peers.py``
+  records it: ``imutk.json``; the workflow reads it when ``gyro.imutk_run`` names it): its
+  example app on the Xsens files, its calls with the sessions' settings on the others;
 * ``imutk_published`` — the IMU-TK fork's own ``test_imu_{acc,gyro}.calib`` (data1-4);
 * ``factory`` — the Xsens unit's data-sheet values quoted in the data README;
-* ``imucal`` — imucal's Ferraris calibration of its example session.
+* ``imucal`` — imucal's Ferraris calibration of its example session, run as a package
+  (:mod:`.ferraris_sessions`).
 
 Frames.  Each calibration expresses rates in *its* accelerometer frame: accelcal's makes
 the accelerometer's sensing matrix lower triangular (x along the x accelerometer),
@@ -39,8 +40,6 @@ import pandas as pd
 
 from accelcal.gyro.calibrate import evaluate_model
 from accelcal.gyro.model import GyroModel, frame_rotation
-
-from .sessions import DATA
 
 #: Xsens MTi data-sheet values (data README): raw = S M x + offset.
 XSENS_FACTORY = {
@@ -74,19 +73,18 @@ def _imutk_pair(acc: dict, gyro: dict, raw_unit: str):
     return AffineAccel(A, acc["b"]), GyroModel.from_imutk(gyro["T"], gyro["K"], gyro["b"], raw_unit)
 
 
-def peer_calibrations(session: str, raw_unit: str, peers_dir: Path) -> dict:
-    """``{peer: (accelerometer, GyroModel)}`` available for ``session``, each in its own frame."""
+def peer_calibrations(spec, raw_unit: str, paths: dict, imutk_run: dict | None = None) -> dict:
+    """``{peer: (accelerometer, GyroModel)}`` available for the session ``spec``, each in its own frame.
+
+    ``imutk_run``: the ``runs`` of ``tools/gyro_peers.py``'s ``imutk.json`` (None: not given)."""
     out = {}
-    run = peers_dir / "imutk.json"
-    if run.exists():
-        rec = json.loads(run.read_text())["runs"].get(session)
-        if rec and rec.get("returncode") == 0 and "gyro" in rec:
-            out["imutk_run"] = _imutk_pair(rec["acc"], rec["gyro"], raw_unit)
-    if session.startswith("fork_"):
-        d = DATA / "imutk_fork_sessions" / session[5:]
-        out["imutk_published"] = _imutk_pair(read_calib(d / "test_imu_acc.calib"),
-                                             read_calib(d / "test_imu_gyro.calib"), raw_unit)
-    if session == "xsens":
+    rec = (imutk_run or {}).get(spec.name)
+    if rec and rec.get("returncode") == 0 and "gyro" in rec:
+        out["imutk_run"] = _imutk_pair(rec["acc"], rec["gyro"], raw_unit)
+    if spec.calib:
+        p = paths[spec.dataset]
+        out["imutk_published"] = _imutk_pair(read_calib(p[spec.calib[0]]), read_calib(p[spec.calib[1]]), raw_unit)
+    if spec.name == "xsens":
         f = XSENS_FACTORY
         out["factory"] = (AffineAccel(f["acc_scale"] @ f["acc_misal"], f["acc_offset"]),
                           GyroModel(np.linalg.inv(f["gyro_scale"] @ f["gyro_misal"]), f["gyro_offset"],
@@ -138,21 +136,23 @@ def compare_parameters(session: str, ours, peers: dict) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def figure_of_merit(session: str, s, poses, ours_acc, ours, peers: dict, integrator: str = "magnus4") -> pd.DataFrame:
-    """Per calibration: RMS and median per-motion angle [deg] on the session's rests (module docstring)."""
+def figure_of_merit(session: str, rec, poses, ours_acc, ours, peers: dict,
+                    integrator: str = "magnus4") -> pd.DataFrame:
+    """Per calibration: RMS and median per-motion angle [deg] on the session's rests (module
+    docstring); ``rec`` the session's Recording (its gyro in the peers' raw unit)."""
     from accelcal.gyro.rests import bias_series, fit_bias, rest_statistics
 
-    rs = rest_statistics(s.t, s.gyro, poses.intervals)
-    rest_b = bias_series(fit_bias(rs, "interpolated"), rs, s.t)
+    rs = rest_statistics(rec.t, rec.gyro, poses.intervals)
+    rest_b = bias_series(fit_bias(rs, "interpolated"), rs, rec.t)
     cals = {"accelcal": (ours_acc, ours.model), **peers}
     rows = []
     for name, (accel, model) in cals.items():
         for kind in ("own_bias", "rest_bias"):
             G = model.g_sensitivity if kind == "own_bias" else None
             bias = model.bias if kind == "own_bias" else 0.0
-            gyro = s.gyro if kind == "own_bias" else s.gyro - rest_b
-            ev, ms = evaluate_model(s.t, gyro, poses, accel, model.C, bias, integrator=integrator, g_sensitivity=G,
-                                    acc=s.acc)
+            gyro = rec.gyro if kind == "own_bias" else rec.gyro - rest_b
+            ev, ms = evaluate_model(rec.t, gyro, poses, accel, model.C, bias, integrator=integrator, g_sensitivity=G,
+                                    acc=rec.acc)
             # real motions only (not two rests that overlap); none lost by the integration (> 30 deg)
             used = (ms.stops - ms.starts > 1) & (np.linalg.norm(ev.r, axis=1) < 0.5)
             a = ev.angles_deg[used]

@@ -4,15 +4,17 @@ and the session-to-session stability of the gyro parameters.
 Tables (tidy, written by :func:`run`):
 
 * ``sessions.csv`` — per session: poses, motions, how the rests were found, χ²/dof, RMS
-  motion residual vs the noise, the time base used, g-sensitivity test, warnings, and the
-  accelerometer and gyro times;
+  motion residual vs the noise, the time base used, g-sensitivity test, warnings, or the
+  one-line error of a session that cannot be calibrated; ``sessions_timing.csv`` the
+  accelerometer's and the gyro's times (wall times apart: the other tables are
+  byte-identical on a rerun);
 * ``parameters.csv`` — per session and parameter: ours ± s.e.
   (:func:`accelcal_repro.gyro.peers.compare_parameters` adds the peers and the difference
   in s.e.: ``peer_parameters.csv``);
 * ``figure_of_merit.csv`` — per session and calibration (:func:`accelcal_repro.gyro.peers.figure_of_merit`);
 * ``imucal_parameters.csv``, ``imucal_figure_of_merit.csv``, ``ctu_parameters.csv`` — the
   Ferraris sessions (:mod:`accelcal_repro.gyro.ferraris_sessions`);
-* ``stability.csv`` — per group of sessions of one unit (IMU-TK fork data1-4, SNU good2-3)
+* ``stability.csv`` — per group of sessions of one unit (IMU-TK fork data1-4, SNU good1-3)
   and parameter: mean, scatter between sessions, the median s.e., and the excess
   ``sqrt(χ²/dof)`` of the sessions about their weighted mean (1: the sessions agree within
   their standard errors).
@@ -27,7 +29,7 @@ import numpy as np
 import pandas as pd
 
 from .peers import compare_parameters, figure_of_merit, peer_calibrations
-from .sessions import SESSIONS, calibrate_session, load
+from .sessions import SESSIONS, calibrate_session
 
 GROUPS = {"imutk_fork": ("fork_data1", "fork_data2", "fork_data3", "fork_data4"),
           "snu": ("snu_good1", "snu_good2", "snu_good3")}
@@ -67,44 +69,65 @@ def stability(params: pd.DataFrame, groups=GROUPS) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def run(out: Path, peers_dir: Path, sessions=SESSIONS) -> dict[str, pd.DataFrame]:
-    """Calibrate every session, compare, and write the tables into ``out``."""
+def _session_row(name: str, r: dict) -> dict:
+    g, q = r["gyro"], r["gyro"].quality
+    tb = g.settings.get("time_base", {})
+    return {"session": name, "estimator": g.CAL_TYPE, "poses": len(r["poses"]), "motions": q.n_motions,
+            "rests": r["static_note"], "chi2_per_dof": q.chi2 / q.dof if q.dof > 0 else np.nan, "excess": q.excess,
+            "residual_rms_deg": q.residual_rms_deg if q.dof > 0 else np.nan,
+            "predicted_rms_deg": q.predicted_rms_deg, "time_base": tb.get("used", "index"),
+            "jitter": tb.get("jitter", np.nan), "g_sensitivity": bool(g.settings.get("g_sensitivity", False)),
+            "iterations": g.settings.get("iterations"), "warnings": " | ".join(q.warnings), "error": ""}
+
+
+def run(out: Path, paths: dict, sessions=tuple(SESSIONS), imutk_run: dict | None = None) -> dict[str, pd.DataFrame]:
+    """Calibrate every session, compare with the peers, and write the tables into ``out``.
+
+    ``paths``: ``{dataset: {file: path}}`` (:func:`.sessions.local_paths`, or the workflow's
+    manifests); ``imutk_run``: the ``runs`` of ``tools/gyro_peers.py``'s ``imutk.json``, or None.
+    A session that cannot be calibrated is a row with its one-line error (a finding)."""
+    from accelcal.errors import AccelcalError
+
+    from .ferraris_sessions import ctu_calibration, imucal_comparison, run_imucal
+    from .sessions import CTU
+
+    out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    srows, prows, peer_tabs, foms = [], [], [], []
+    srows, prows, peer_tabs, foms, times = [], [], [], [], []
+    tabs = {"imucal_parameters": pd.DataFrame(), "imucal_figure_of_merit": pd.DataFrame()}
     for name in sessions:
-        s = load(name)
+        spec = SESSIONS[name]
         try:
-            r = calibrate_session(s)
-        except Exception as e:  # noqa: BLE001 - a session that cannot be calibrated is a finding, recorded
+            r = calibrate_session(spec, paths)
+        except AccelcalError as e:  # the command line's one-line refusal, recorded
             srows.append({"session": name, "error": f"{type(e).__name__}: {e}"})
             continue
-        g, q = r["gyro"], r["gyro"].quality
-        srows.append({"session": name, "poses": len(r["poses"]), "motions": q.n_motions, "rests": r["static_note"],
-                      "chi2_per_dof": q.chi2 / q.dof, "excess": q.excess, "residual_rms_deg": q.residual_rms_deg,
-                      "predicted_rms_deg": q.predicted_rms_deg, "time_base": g.settings["time_base"]["used"],
-                      "jitter": g.settings["time_base"]["jitter"], "g_sensitivity": g.settings["g_sensitivity"],
-                      "acc_s": r["acc_seconds"], "gyro_s": r["gyro_seconds"], "iterations": g.settings["iterations"],
-                      "warnings": " | ".join(q.warnings), "error": ""})
-        prows += _our_parameters(name, g)
-        peers = peer_calibrations(name, s.gyro_unit, peers_dir)
+        srows.append(_session_row(name, r))
+        times.append({"session": name, "accelerometer_s": r["acc_seconds"], "gyro_s": r["gyro_seconds"]})
+        prows += _our_parameters(name, r["gyro"])
+        if r["rec"].rotations:  # a Ferraris session: imucal runs on it (its own accelerometer for everyone)
+            p = paths[spec.dataset]
+            imucal = run_imucal(p[spec.acc], p[spec.intervals])
+            tabs["imucal_parameters"], tabs["imucal_figure_of_merit"] = imucal_comparison(r, imucal)
+            continue
+        peers = peer_calibrations(spec, r["gyro"].model.raw_unit, paths, imutk_run)
         if peers:
-            peer_tabs.append(compare_parameters(name, g, peers))
-        foms.append(figure_of_merit(name, s, r["poses"], r["acc"], g, peers))
-    tabs = {"sessions": pd.DataFrame(srows), "parameters": pd.DataFrame(prows),
-            "peer_parameters": pd.concat(peer_tabs, ignore_index=True) if peer_tabs else pd.DataFrame(),
-            "figure_of_merit": pd.concat(foms, ignore_index=True)}
+            peer_tabs.append(compare_parameters(name, r["gyro"], peers))
+        foms.append(figure_of_merit(name, r["rec"], r["poses"], r["acc"], r["gyro"], peers))
+    tabs.update({"sessions": pd.DataFrame(srows), "sessions_timing": pd.DataFrame(times),
+                 "parameters": pd.DataFrame(prows),
+                 "peer_parameters": pd.concat(peer_tabs, ignore_index=True) if peer_tabs else pd.DataFrame(),
+                 "figure_of_merit": pd.concat(foms, ignore_index=True) if foms else pd.DataFrame()})
     tabs["stability"] = stability(tabs["parameters"])
-    from .ferraris_sessions import ctu_calibration, imucal_comparison
-
-    tabs["imucal_parameters"], tabs["imucal_figure_of_merit"] = imucal_comparison(peers_dir / "imucal.json")
-    tabs["ctu_parameters"] = ctu_calibration()
+    tabs["ctu_parameters"] = ctu_calibration(paths[CTU[0]][CTU[1]])
+    tabs = {k: v if len(v.columns) else pd.DataFrame(columns=["none"]) for k, v in tabs.items()}  # a header
     for k, v in tabs.items():
         v.to_csv(out / f"{k}.csv", index=False)
     return tabs
 
 
 COLORS = {"accelcal": "C0", "imutk_run": "C1", "imutk_published": "C3", "factory": "C2", "imucal": "C4",
-          "accelcal_nominal_axes": "C0", "accelcal_measured_axes": "C9"}
+          "accelcal_measured_axes": "C9"}
 
 
 def figure(fom: pd.DataFrame, imucal_fom: pd.DataFrame | None = None):
@@ -113,9 +136,10 @@ def figure(fom: pd.DataFrame, imucal_fom: pd.DataFrame | None = None):
 
     from accelcal.plotting import RC
 
-    sub = fom[fom.bias == "own_bias"]
-    if imucal_fom is not None:
-        sub = pd.concat([sub, imucal_fom.assign(bias="own_bias")], ignore_index=True)
+    frames = [f for f in (fom, imucal_fom) if f is not None and "rms_deg" in f.columns]  # a table may be empty
+    sub = pd.concat([f[f.bias == "own_bias"] if "bias" in f.columns else f.assign(bias="own_bias") for f in frames],
+                    ignore_index=True) if frames else pd.DataFrame(columns=["session", "calibration", "rms_deg",
+                                                                            "noise_rms_deg"])
     sessions = list(dict.fromkeys(sub.session))
     with plt.rc_context(RC):
         fig, ax = plt.subplots(figsize=(8.0, 3.3), layout="constrained")

@@ -1,104 +1,122 @@
-"""The real sessions with gyro data: reading them, calibrating accelerometer and gyro together.
+"""The real sessions with gyro data: read and calibrated as ``accelcal calibrate`` does.
 
-Readers for the gyro columns arrive with the format registry; until then each session is
-read here, as its data README describes it (``../shared/data/README.md``):
+===================  ==========================================  ======  ======  ==========  =================
+session              files (``../shared/data``)                  acc     gyro    g [m/s²]    protocol
+===================  ==========================================  ======  ======  ==========  =================
+``xsens``            imu_tk_xsens/xsens_{acc,gyro}.mat           counts  counts  9.81744     multi-position
+``fork_dataK``       imutk_fork_sessions/dataK/{acc,gyro}_data   m/s²    rad/s   9.81        multi-position
+``snu_goodK``        snu_static3/imu_goodK.txt (``# time tx ..``)  m/s²    rad/s   9.79871     multi-position
+``mpu6050``          mpu6050_suarez/example_data_calibration     counts  counts  9.80665     multi-position
+``imucal_ferraris``  imucal_ferraris/example_ferraris_session    m/s²    deg/s   9.81        Ferraris
+``imucal_annotated``  imucal_ferraris/annotated_session           counts  counts  9.81        Ferraris
+===================  ==========================================  ======  ======  ==========  =================
 
-==============  ==========================================  =========  ========  ==========
-session         files                                       acc        gyro      g [m/s²]
-==============  ==========================================  =========  ========  ==========
-``xsens``       imu_tk_xsens/xsens_{acc,gyro}.mat           counts     counts    9.81744
-``fork_dataK``  imutk_fork_sessions/dataK/{acc,gyro}_data   m/s²       rad/s     9.81
-``snu_goodK``   snu_static3/imu_goodK.txt (``# time tx ..``)  m/s²       rad/s     9.79871
-==============  ==========================================  =========  ========  ==========
+(g of the fork sessions is not recorded; 9.81 is what the fork's configuration uses.  The
+SNU header names the specific force ``tx, ty, tz``, which say nothing of acceleration:
+``--columns ax=tx,ay=ty,az=tz``.  The imucal example is read at its 102.4 Hz and
+calibrated from its section list; its six holds allow only a bias-only accelerometer.)
 
-(g of the fork sessions is not recorded; 9.81 is what the fork's configuration uses.)
-
-:func:`calibrate_session` finds the rests (:func:`accelcal.static_auto.choose_static`: the
-default settings unless they find too few poses, then the candidates), fits the
-accelerometer (full LLS) and the gyro (:func:`accelcal.gyro.calibrate.calibrate_gyro`),
-and times both.
+:func:`calibrate_session` reads a session with :func:`accelcal.formats.read` and
+calibrates it with :func:`accelcal.calibration.calibrate_recording` (the default static
+detection, the candidates' best when it finds too few poses) and
+:func:`accelcal.gyro.recording.calibrate_recording_gyro`: the command line's route, so that
+the workflow's numbers are what a user gets.  The files come from manifests
+(``{dataset: {file: path}}``, :func:`local_paths` for the shared copy).
 """
 
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
-
-import numpy as np
 
 DATA = Path(__file__).resolve().parents[4] / "shared" / "data"
 
-SESSIONS = ("xsens", "fork_data1", "fork_data2", "fork_data3", "fork_data4", "snu_good1", "snu_good2", "snu_good3")
-
 
 @dataclass(frozen=True)
-class Session:
+class SessionSpec:
+    """One session: its dataset, files, gravity, reading options and accelerometer estimator."""
+
     name: str
-    t: np.ndarray
-    acc: np.ndarray
-    gyro: np.ndarray
-    t_gyro: np.ndarray
-    acc_unit: str
-    gyro_unit: str
+    dataset: str
+    acc: str
     g: float
-    source: str
+    gyro: str | None = None  #: a gyro file of its own (IMU-TK's layout), else the gyro columns
+    read: dict = field(default_factory=dict)  #: reading options (accelcal.formats.read)
+    intervals: str | None = None  #: a section list of the dataset (Ferraris sessions)
+    method: str = "full_lls"
+    calib: tuple = ()  #: IMU-TK's published (acc, gyro) .calib files of the dataset
+
+    @property
+    def files(self) -> tuple[str, ...]:
+        return tuple(f for f in (self.acc, self.gyro, self.intervals, *self.calib) if f)
 
 
-def load(name: str, data: Path = DATA) -> Session:
-    """One session of :data:`SESSIONS`."""
-    if name == "xsens":
-        a = np.loadtxt(data / "imu_tk_xsens" / "xsens_acc.mat")
-        g = np.loadtxt(data / "imu_tk_xsens" / "xsens_gyro.mat")
-        return Session(name, a[:, 0], a[:, 1:4], g[:, 1:4], g[:, 0], "counts", "counts", 9.81744, "imu_tk_xsens")
-    if name.startswith("fork_"):
-        d = data / "imutk_fork_sessions" / name[5:]
-        a, g = np.loadtxt(d / "acc_data.txt"), np.loadtxt(d / "gyro_data.txt")
-        return Session(name, a[:, 0], a[:, 1:4], g[:, 1:4], g[:, 0], "m/s^2", "rad/s", 9.81, str(d))
-    if name.startswith("snu_"):
-        path = data / "snu_static3" / f"imu_{name[4:]}.txt"
-        header = path.read_text().splitlines()[0].lstrip("#").split()
-        x = np.loadtxt(path, comments="#")
-        col = {c: i for i, c in enumerate(header)}
-        acc = x[:, [col["tx"], col["ty"], col["tz"]]]
-        gyro = x[:, [col["wx"], col["wy"], col["wz"]]]
-        return Session(name, x[:, col["time"]] - x[0, col["time"]], acc, gyro, x[:, col["time"]] - x[0, col["time"]],
-                       "m/s^2", "rad/s", 9.79871, str(path))
-    raise KeyError(f"unknown session {name!r}; known: {', '.join(SESSIONS)}")
+def _fork(k: int) -> SessionSpec:
+    d = f"data{k}"
+    return SessionSpec(f"fork_{d}", "imutk_fork_sessions", f"{d}/acc_data.txt", 9.81, gyro=f"{d}/gyro_data.txt",
+                       calib=(f"{d}/test_imu_acc.calib", f"{d}/test_imu_gyro.calib"))
 
 
-def calibrate_session(s: Session, *, estimator: str = "iterative", integrator: str = "magnus4",
-                      bias: str = "interpolated", g_sensitivity="auto", static: str = "auto") -> dict:
-    """Accelerometer and gyro of one session; ``static``: 'auto' (defaults, candidates if
-    they find too few poses), 'search' (always the candidates), 'default'."""
-    from accelcal.calibration import calibrate_poses
-    from accelcal.gyro.calibrate import calibrate_gyro
-    from accelcal.static import detect_static
-    from accelcal.static_auto import choose_static
+SESSIONS: dict[str, SessionSpec] = {s.name: s for s in (
+    SessionSpec("xsens", "imu_tk_xsens", "xsens_acc.mat", 9.81744, gyro="xsens_gyro.mat"),
+    *(_fork(k) for k in (1, 2, 3, 4)),
+    *(SessionSpec(f"snu_good{k}", "snu_static3", f"imu_good{k}.txt", 9.79871, read={"columns": "ax=tx,ay=ty,az=tz"})
+      for k in (1, 2, 3)),
+    SessionSpec("mpu6050", "mpu6050_suarez", "example_data_calibration.csv", 9.80665),
+    SessionSpec("imucal_ferraris", "imucal_ferraris", "example_ferraris_session.csv", 9.81,
+                intervals="example_ferraris_session_list.json", method="bias_lls"),
+    SessionSpec("imucal_annotated", "imucal_ferraris", "annotated_session.csv", 9.81, method="bias_lls"),
+)}
+#: The CTU rig's gyro-only rotations (:mod:`.ferraris_sessions`).
+CTU = ("ctu_ferraris", "measured_angular_rates.mat")
 
+
+def files_needed(names) -> dict[str, tuple[str, ...]]:
+    """``{dataset: files}`` of the sessions ``names`` and the CTU rotations."""
+    out: dict[str, list[str]] = {CTU[0]: [CTU[1]]}
+    for n in names:
+        s = SESSIONS[n]
+        out.setdefault(s.dataset, [])
+        out[s.dataset] += [f for f in s.files if f not in out[s.dataset]]
+    return {k: tuple(v) for k, v in out.items()}
+
+
+def local_paths(names, data_dir=DATA, resources_dir="resources") -> dict[str, dict[str, Path]]:
+    """``{dataset: {file: path}}`` of the sessions ``names`` (the shared copy, else a verified download)."""
+    from accelcal_repro.measured.data import fetch_dataset
+
+    return {d: fetch_dataset(d, data_dir, resources_dir, files) for d, files in files_needed(names).items()}
+
+
+def read_session(spec: SessionSpec, paths: dict):
+    """The session as a Recording with its gyro (the CLI's readers and options)."""
+    from accelcal.formats import read
+
+    p = paths[spec.dataset]
+    return read(p[spec.acc], gyro=p[spec.gyro] if spec.gyro else None,
+                intervals=p[spec.intervals] if spec.intervals else None, **spec.read)
+
+
+def calibrate_session(spec: SessionSpec, paths: dict, *, estimator: str = "gyro_iterative") -> dict:
+    """Accelerometer and gyro of one session, as ``accelcal calibrate`` (module docstring), and their times."""
+    from dataclasses import replace
+
+    from accelcal.calibration import calibrate_recording
+    from accelcal.gyro.recording import MIN_RESTS, calibrate_recording_gyro
+
+    rec = read_session(spec, paths)
     t0 = time.perf_counter()
-    note = "default detection settings"
-    if static == "search":
-        choice = choose_static(s.t, s.acc, s.g, unit=s.acc_unit)
-        poses, note = choice.poses, choice.describe()
-    else:
-        try:
-            poses = detect_static(s.t, s.acc)
-            enough = len(poses) >= 12
-        except Exception:  # noqa: BLE001 - any failure of the defaults sends us to the candidates
-            enough = False
-        if not enough:
-            if static == "default":
-                raise
-            choice = choose_static(s.t, s.acc, s.g, unit=s.acc_unit)
-            poses, note = choice.poses, choice.describe()
-    acc_cal = calibrate_poses(poses, s.g, "full_lls", unit=s.acc_unit)
+    acc, poses = calibrate_recording(rec, spec.g, spec.method, search=True, min_poses=MIN_RESTS)
     t1 = time.perf_counter()
-    gcal = calibrate_gyro(s.t, s.gyro, poses, acc_cal, raw_unit=s.gyro_unit, t_gyro=s.t_gyro, estimator=estimator,
-                          integrator=integrator, bias=bias, acc=s.acc, g_sensitivity=g_sensitivity)
+    gyro = calibrate_recording_gyro(rec, acc, poses, estimator=estimator)
     t2 = time.perf_counter()
-    return {"session": s.name, "poses": poses, "acc": acc_cal, "gyro": gcal, "static_note": note,
+    search = acc.provenance.get("static", {}).get("search")
+    return {"session": spec.name, "rec": rec, "poses": poses, "acc": replace(acc, gyro=gyro), "gyro": gyro,
+            "static_note": search["description"] if search else (
+                "known intervals" if rec.intervals is not None else "default detection settings"),
             "acc_seconds": t1 - t0, "gyro_seconds": t2 - t1}
 
 
-__all__ = ["DATA", "SESSIONS", "Session", "calibrate_session", "load"]
+__all__ = ["CTU", "DATA", "SESSIONS", "SessionSpec", "calibrate_session", "files_needed", "local_paths",
+           "read_session"]

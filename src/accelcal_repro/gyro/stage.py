@@ -1,11 +1,21 @@
-"""The gyro stage in one call: integrator study, Monte Carlo, real sessions and peers, claims.
+"""The gyro stage: its pieces (each a workflow job) and its claims, with verdicts computed from its tables.
 
-:func:`run` writes into ``out``: ``integrators.csv/.png``, ``montecarlo.csv``,
-``montecarlo_timing.csv``, ``montecarlo.png``, ``ipopt_check.csv``, ``sessions/*.csv``,
-``sessions/figure_of_merit.png`` and ``claims.csv`` (the ledger's columns, ``paper =
-gyro``), each claim's verdict computed from those tables by the rule stated in its text.
-``config`` keys (all optional): ``seed``, ``mc_trials``, ``integrator_motions``,
-``peers_dir`` (IMU-TK's and imucal's recorded outputs, ``tools/gyro_peers.py``).
+Pieces (``workflow/rules/gyro.smk`` runs each as a job; :func:`run` all in one process, for
+tests): :func:`integrator_table` (:mod:`.integrators`), :func:`monte_carlo_tables`
+(:mod:`.montecarlo`), :func:`ipopt_table` (:mod:`.ipopt_check`), :func:`accelcal_repro.gyro.report.run`
+(the real sessions and the peers) and :func:`claims`.  ``config`` is the workflow config's
+``gyro`` section (``config/config.yaml``).
+
+Claims (paper key ``gyro``: the project's own goals for the gyroscope, judged like the
+papers'), each rule stated in its text:
+
+* the integrator chosen from the measured error, and the scale-factor bias IMU-TK's RK4
+  induces at hand-motion rates;
+* the iterative estimate at the Cramér–Rao bound; where the one-step estimate is enough
+  and where it is not; Gauss-Newton finds IPOPT's minimum;
+* on the real sessions: the figure of merit against IMU-TK (published results, and its run
+  from source when the config names it), the Xsens sensitivities against the data sheet,
+  the imucal session against imucal itself.
 """
 
 from __future__ import annotations
@@ -15,89 +25,148 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-COLUMNS = ("paper", "claim_id", "claim", "paper_value", "reproduced_value", "verdict", "evidence")
+from ..claims import COLUMNS, Claim
 
-
-def _claim(cid: str, text: str, target: str, value: str, passed: bool, evidence: str) -> dict:
-    return dict(zip(COLUMNS, ("gyro", cid, text, target, value, "reproduced" if passed else "not_reproduced",
-                              evidence)))
+INTEGRATOR_CHOICE = Claim("gyro", "integrator_choice", "The Magnus-4 integrator (cubic rate) has the smallest median "
+                          "angle error of the five integrators at hand-motion rates (at most 5 deg per sample)",
+                          "magnus4")
+RK4_BIAS = Claim("gyro", "rk4_scale_bias", "IMU-TK's RK4 integration induces a scale-factor bias below 10 ppm up to "
+                 "250 deg/s at 100 Hz", "< 10 ppm")
+ITERATIVE_EFFICIENT = Claim("gyro", "iterative_efficient", "The iterative gyro estimate reaches the Cramér–Rao bound: "
+                            "the median RMS error / CRLB of scales and of misalignments is within 0.8-1.2 in every "
+                            "Monte Carlo configuration", "0.8-1.2")
+ONE_STEP_BASE = Claim("gyro", "one_step_enough_at_base", "The one-step estimate (one linearised solve about C = I) is "
+                      "within 20 % of the bound for 2 % scale errors, 1 deg misalignments and MEMS noise", "<= 1.2")
+ONE_STEP_NOT = Claim("gyro", "one_step_not_enough", "The one-step estimate exceeds 1.5x the bound somewhere in the "
+                     "grid (large errors from nominal, low noise, long motions)", "> 1.5")
+GN_IPOPT = Claim("gyro", "gauss_newton_equals_ipopt", "Gauss-Newton with the analytic Jacobian finds IPOPT's minimum "
+                 "of the same cost (within 0.1 standard error)", "< 0.1 s.e.")
+FOM_IMUTK = Claim("gyro", "figure_of_merit_vs_imutk", "accelcal's gyro calibration carries gravity from rest to rest "
+                  "at least as well as IMU-TK's (RMS misfit, own bias) on every session both calibrate (IMU-TK's "
+                  "published results; its run from source where given)", "every session")
+XSENS_SHEET = Claim("gyro", "xsens_data_sheet", "The Xsens gyro sensitivities (counts per rad/s) agree with the data "
+                    "sheet's within 0.2 %", "< 0.2 %")
+IMUCAL_AGREES = Claim("gyro", "imucal_agrees", "On imucal's example session accelcal's Ferraris fit (nominal axes, "
+                      "as imucal) agrees with imucal's on every scale and misalignment within 3 standard errors",
+                      "<= 3 s.e.")
 
 
 def claims(integ: pd.DataFrame, mc: pd.DataFrame, ipopt: pd.DataFrame, fom: pd.DataFrame,
-           peer_parameters: pd.DataFrame) -> pd.DataFrame:
-    """The stage's claims with verdicts computed from its tables."""
+           peer_parameters: pd.DataFrame, imucal_parameters: pd.DataFrame | None = None) -> pd.DataFrame:
+    """The stage's claims (module docstring) from its tables."""
     from .integrators import choose
     from .montecarlo import summary
 
     rows = []
     best = choose(integ)
-    hand = integ[(integ.rate_dps <= 250) & (integ.fs_hz == 100)]
-    rk4 = float(hand[hand.method == "rk4"].abs_scale_bias_ppm.max())
-    rows.append(_claim("integrator_choice", "Magnus-4 (cubic rate) has the smallest median angle error of the five "
-                       "integrators at hand-motion rates (<= 5 deg per sample)", "magnus4", best, best == "magnus4",
-                       "integrators.csv: median rel_angle_rms_ppm over rate/fs <= 5 deg"))
-    rows.append(_claim("rk4_scale_bias", "IMU-TK's RK4 induces a scale-factor bias below 10 ppm up to 250 deg/s at "
-                       "100 Hz", "< 10 ppm", f"{rk4:.2g} ppm", rk4 < 10, "integrators.csv: abs_scale_bias_ppm"))
+    rows.append(INTEGRATOR_CHOICE.row("reproduced" if best == "magnus4" else "not_reproduced", best,
+                                      "gyro/integrators.csv: median rel_angle_rms_ppm over rate/fs <= 5 deg"))
+    hand = integ[(integ.rate_dps <= 250) & (integ.fs_hz == 100) & (integ.method == "rk4")]
+    rk4 = float(hand.abs_scale_bias_ppm.max()) if len(hand) else float("nan")
+    rows.append(RK4_BIAS.judge(rk4, rk4 < 10, "gyro/integrators.csv: abs_scale_bias_ppm", "{:.2g} ppm"))
     s = summary(mc)
     it = s["iterative"].to_numpy()
-    rows.append(_claim("iterative_efficient", "the iterative gyro estimate reaches the Cramér–Rao bound: median RMS "
-                       "error / CRLB of scales and misalignments within 0.8-1.2 in every configuration", "0.8-1.2",
-                       f"{np.nanmin(it):.2f}-{np.nanmax(it):.2f}", bool(np.all((it > 0.8) & (it < 1.2))),
-                       "montecarlo.csv: ratio, median per kind"))
-    one = s["one_step"]
-    base = float(one.loc["base"].max())
-    worst = float(one.to_numpy().max())
-    rows.append(_claim("one_step_enough_at_base", "the one-step estimate (one linearised solve about C = I) is within "
-                       "20 % of the bound for 2 % scale errors, 1 deg misalignments and MEMS noise", "<= 1.2",
-                       f"{base:.2f}", base <= 1.2, "montecarlo.csv: config base"))
-    rows.append(_claim("one_step_not_enough", "the one-step estimate exceeds 1.5x the bound somewhere in the grid "
-                       "(large errors from nominal, low noise, long motions)", "> 1.5", f"{worst:.2f}", worst > 1.5,
-                       "montecarlo.csv: max median ratio"))
+    lo, hi = float(np.nanmin(it)), float(np.nanmax(it))
+    rows.append(ITERATIVE_EFFICIENT.row("reproduced" if lo > 0.8 and hi < 1.2 else "not_reproduced",
+                                        f"{lo:.2f}-{hi:.2f}", "gyro/montecarlo.csv: ratio, median per kind"))
+    base = float(s["one_step"].loc["base"].max())
+    rows.append(ONE_STEP_BASE.judge(base, base <= 1.2, "gyro/montecarlo.csv: config base", "{:.2f}"))
+    worst = float(s["one_step"].to_numpy().max())
+    rows.append(ONE_STEP_NOT.judge(worst, worst > 1.5, "gyro/montecarlo.csv: largest median ratio", "{:.2f}"))
     d = float(ipopt.max_diff_in_se.iloc[0])
-    rows.append(_claim("gauss_newton_equals_ipopt", "Gauss-Newton with the analytic Jacobian finds IPOPT's minimum "
-                       "(within 0.1 standard error)", "< 0.1 s.e.", f"{d:.3f} s.e.", d < 0.1, "ipopt_check.csv"))
-    own = fom[fom.bias == "own_bias"].pivot(index="session", columns="calibration", values="rms_deg")
-    if "imutk_run" in own:
-        both = own.dropna(subset=["accelcal", "imutk_run"])
-        wins = int((both.accelcal <= both.imutk_run).sum())
-        rows.append(_claim("figure_of_merit_vs_imutk", "accelcal's gyro calibration carries gravity from rest to rest "
-                           "at least as well as IMU-TK's (RMS misfit) on every session both calibrate", "all",
-                           f"{wins} of {len(both)}", wins == len(both), "sessions/figure_of_merit.csv, own_bias"))
+    rows.append(GN_IPOPT.judge(d, d < 0.1, "gyro/ipopt_check.csv", "{:.3f} s.e."))
+    rows.append(_fom_claim(fom))
     x = peer_parameters[(peer_parameters.session == "xsens") & (peer_parameters.peer == "factory")
-                        & peer_parameters.parameter.str.startswith("K_")]
+                        & peer_parameters.parameter.str.startswith("K_")] if len(peer_parameters) else []
     if len(x):
         rel = float(np.max(np.abs(x.ours / x.peer_value - 1)))
-        rows.append(_claim("xsens_data_sheet", "the Xsens gyro sensitivities (counts per rad/s) agree with the data "
-                           "sheet within 0.2 %", "< 0.2 %", f"{100 * rel:.2f} %", rel < 2e-3,
-                           "sessions/peer_parameters.csv: K_x..K_z, peer factory"))
+        rows.append(XSENS_SHEET.judge(100 * rel, rel < 2e-3, "gyro/sessions/peer_parameters.csv: K_x..K_z, peer "
+                                      "factory", "{:.2f} %"))
+    else:
+        rows.append(XSENS_SHEET.not_reproducible("the Xsens session was not calibrated (see gyro/sessions/sessions.csv)"))
+    if imucal_parameters is not None and len(imucal_parameters):
+        d = imucal_parameters[imucal_parameters.calibration == "imucal"].diff_in_se.abs().max()
+        rows.append(IMUCAL_AGREES.judge(d, d <= 3.0, "gyro/sessions/imucal_parameters.csv: diff_in_se", "{:.2f} s.e."))
+    else:
+        rows.append(IMUCAL_AGREES.not_reproducible("imucal's session was not calibrated (gyro/sessions/sessions.csv)"))
     return pd.DataFrame(rows, columns=COLUMNS)
 
 
-def run(out: Path, config: dict | None = None) -> dict[str, pd.DataFrame]:
+def _fom_claim(fom: pd.DataFrame) -> dict:
+    if not len(fom):
+        return FOM_IMUTK.not_reproducible("no session with an IMU-TK calibration was calibrated")
+    own = fom[fom.bias == "own_bias"].pivot(index="session", columns="calibration", values="rms_deg")
+    pairs = [(s, peer) for peer in ("imutk_published", "imutk_run") if peer in own for s in own.index
+             if np.isfinite(own.loc[s, peer]) and np.isfinite(own.loc[s, "accelcal"])]
+    if not pairs:
+        return FOM_IMUTK.not_reproducible("no session with an IMU-TK calibration was calibrated")
+    worse = [f"{s} ({p}: {own.loc[s, 'accelcal']:.4g} vs {own.loc[s, p]:.4g} deg)" for s, p in pairs
+             if own.loc[s, "accelcal"] > own.loc[s, p]]
+    value = f"{len(pairs) - len(worse)} of {len(pairs)}"
+    evidence = "gyro/sessions/figure_of_merit.csv, own_bias" + (f"; worse: {'; '.join(worse)}" if worse else "")
+    return FOM_IMUTK.row("reproduced" if not worse else "not_reproduced", value, evidence)
+
+
+# ----------------------------------------------------------------------------- pieces
+def integrator_table(config: dict) -> pd.DataFrame:
+    from .integrators import integrator_study
+
+    c = config["integrators"]
+    return integrator_study(tuple(c["rates_dps"]), tuple(c["fs_hz"]), angle_deg=float(c["angle_deg"]),
+                            n_motions=int(c["motions"]), seed=int(config["seed"]))
+
+
+def monte_carlo_tables(config: dict) -> tuple[pd.DataFrame, pd.DataFrame]:
+    from .montecarlo import monte_carlo
+
+    return monte_carlo(n_trials=int(config["monte_carlo"]["trials"]), seed=int(config["seed"]))
+
+
+#: Columns of the IPOPT cross-check that are wall times (its timing table).
+IPOPT_TIMES = ("gauss_newton_s", "ipopt_build_s", "ipopt_solve_s")
+
+
+def ipopt_table(config: dict) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The cross-check's result and, apart, its wall times."""
+    from .ipopt_check import crosscheck
+
+    c = config["ipopt_check"]
+    df = crosscheck(seed=int(config["seed"]), n_motions=int(c["motions"]), fs=float(c["fs_hz"]))
+    return df.drop(columns=list(IPOPT_TIMES)), df[["motions", *IPOPT_TIMES]]
+
+
+def monte_carlo_summary(mc: pd.DataFrame) -> pd.DataFrame:
+    """Median RMS error / CRLB per configuration, estimator and kind of parameter (the report's table)."""
+    from .montecarlo import summary
+
+    s = summary(mc)
+    s.columns = [f"{e}_{k}" for e, k in s.columns]
+    return s.reset_index()
+
+
+def run(out: Path, config: dict, paths: dict, imutk_run: dict | None = None) -> dict[str, pd.DataFrame]:
+    """Every piece in one process (tests; the workflow runs them as jobs): tables, figures, claims into ``out``."""
     from accelcal.plotting import save_figure
 
-    from . import integrators, ipopt_check, montecarlo, report
+    from . import integrators, montecarlo, report
 
-    cfg = dict(config or {})
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    seed = int(cfg.get("seed", 24))
-    integ = integrators.integrator_study(seed=seed, n_motions=int(cfg.get("integrator_motions", 20)))
-    integ.to_csv(out / "integrators.csv", index=False)
+    integ = integrator_table(config)
+    mc, timing = monte_carlo_tables(config)
+    ipopt, ipopt_times = ipopt_table(config)
+    tabs = report.run(out / "sessions", paths, tuple(config["sessions"]), imutk_run)
+    for name, df in (("integrators", integ), ("montecarlo", mc), ("montecarlo_timing", timing),
+                     ("montecarlo_summary", monte_carlo_summary(mc)), ("ipopt_check", ipopt),
+                     ("ipopt_timing", ipopt_times)):
+        df.to_csv(out / f"{name}.csv", index=False)
     save_figure(integrators.figure(integ), out / "integrators")
-    mc, timing = montecarlo.monte_carlo(n_trials=int(cfg.get("mc_trials", 100)), seed=seed)
-    mc.to_csv(out / "montecarlo.csv", index=False)
-    timing.to_csv(out / "montecarlo_timing.csv", index=False)
     save_figure(montecarlo.figure(mc), out / "montecarlo")
-    ipopt = ipopt_check.crosscheck(seed=seed)
-    ipopt.to_csv(out / "ipopt_check.csv", index=False)
-    peers = Path(cfg.get("peers_dir", out / "peers"))
-    tabs = report.run(out / "sessions", peers)
-    save_figure(report.figure(tabs["figure_of_merit"], tabs["imucal_figure_of_merit"]),
-                out / "sessions" / "figure_of_merit")
-    led = claims(integ, mc, ipopt, tabs["figure_of_merit"], tabs["peer_parameters"])
+    save_figure(report.figure(tabs["figure_of_merit"], tabs["imucal_figure_of_merit"]), out / "figure_of_merit")
+    led = claims(integ, mc, ipopt, tabs["figure_of_merit"], tabs["peer_parameters"], tabs["imucal_parameters"])
     led.to_csv(out / "claims.csv", index=False)
     return {"integrators": integ, "montecarlo": mc, "timing": timing, "ipopt": ipopt, "claims": led, **tabs}
 
 
-__all__ = ["claims", "run"]
+__all__ = ["IPOPT_TIMES", "claims", "integrator_table", "ipopt_table", "monte_carlo_summary", "monte_carlo_tables",
+           "run"]

@@ -42,11 +42,10 @@ import pandas as pd
 
 from accelcal import bias_lls, bias_nlls
 from accelcal.errors import AccelcalError
+from accelcal.formats.imucal import IMUCAL_RATE_HZ
 from accelcal.model import params_from_m
 from .sources import FERRARIS_STATIC
 
-#: Sampling rate of imucal's example session (its examples use it).
-IMUCAL_RATE_HZ = 204.8
 AXES = ("x", "y", "z")
 NONORTH = ("xy", "zx", "zy")
 

@@ -26,10 +26,12 @@ from accelcal.recording import Recording
 #: The recording's sampling rate [Hz] (SMAC-Group imudata documentation of ``adis_16405_imu1``).
 ADIS16405_RATE = 100.0
 ACCEL_COLUMNS = ("Accel. X", "Accel. Y", "Accel. Z")
+GYRO_COLUMNS = ("Gyro. X", "Gyro. Y", "Gyro. Z")
 
 
 def read_smac_rda(path, fs: float = ADIS16405_RATE) -> Recording:
-    """The accelerometer of a SMAC ``imudata`` ``.rda`` file as a :class:`Recording` (unit g).
+    """The accelerometer (unit g) and gyro (deg/s, returned in rad/s) of a SMAC ``imudata``
+    ``.rda`` file as a :class:`Recording`.
 
     Parameters
     ----------
@@ -71,7 +73,13 @@ def read_smac_rda(path, fs: float = ADIS16405_RATE) -> Recording:
     acc = values[:, [cols.index(c) for c in ACCEL_COLUMNS]]
     if not np.all(np.isfinite(acc)):
         raise RecordingError(f"{path}: non-finite accelerometer values")
-    return Recording(np.arange(len(acc)) / float(fs), acc, None, f"{path}:{name}")
+    gyro = None
+    if all(c in cols for c in GYRO_COLUMNS):
+        gyro = np.deg2rad(values[:, [cols.index(c) for c in GYRO_COLUMNS]])
+        if not np.all(np.isfinite(gyro)):
+            raise RecordingError(f"{path}: non-finite gyro values")
+    return Recording(np.arange(len(acc)) / float(fs), acc, None, f"{path}:{name}", gyro=gyro,
+                     gyro_unit=None if gyro is None else "rad/s")
 
 
-__all__ = ["ACCEL_COLUMNS", "ADIS16405_RATE", "read_smac_rda"]
+__all__ = ["ACCEL_COLUMNS", "ADIS16405_RATE", "GYRO_COLUMNS", "read_smac_rda"]

@@ -1,0 +1,80 @@
+"""A gyroscope recorded in a file of its own (IMU-TK's ``xsens_gyro.mat``, ``gyro_data.txt``),
+joined to the accelerometer's recording (``read(..., gyro=FILE)``, ``--gyro FILE``).
+
+The file is a table like the accelerometer's: headerless ``t x y z`` (IMU-TK's ASCII
+layout) or ``x y z``, or a header naming the gyro columns (``t,gx,gy,gz``, ``time,x,y,z``
+...).  Its unit comes from the header, ``gyro_unit=`` or the values
+(:func:`accelcal.formats.inference.resolve_gyro_unit`).  The gyro must be sampled with
+the accelerometer: the same number of rows and, when the file has a time column, the same
+times within half a sample (:func:`accelcal.gyro.rests.check_time_base`); a file that
+does not match is refused in one line, never resampled behind the user's back.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import RecordingError
+from .inference import resolve_gyro_unit, time_seconds
+from .parsing import parse_numbers
+from .table import ACC_ROLES, GYRO_ROLES, _map_columns, _numeric_block, _split_table
+from .text import load_text
+
+
+def read_gyro_table(path, *, gyro_unit: str | None = None, time_unit: str | None = None):
+    """``(t or None, gyro (n, 3) in rad/s or counts, unit, notes)`` of a gyro file (module docstring)."""
+    path = Path(path)
+    text, notes = load_text(path)
+    tab = _split_table(text, path)
+    roles, units = _map_columns(tab.names, tab.k, {}, path, required=())
+    triad = GYRO_ROLES if all(r in roles for r in GYRO_ROLES) else ACC_ROLES  # named gx.. or plain x, y, z
+    if not all(r in roles for r in triad):
+        found = ", ".join(n.strip() for n in tab.names)[:150] if tab.names is not None else f"{tab.k} columns"
+        raise RecordingError(f"{path}: no gyro columns (found: {found}); a gyro file is t x y z (IMU-TK's layout) "
+                             "or names its columns gx, gy, gz")
+    def column(role):
+        return tab.column(roles[role])
+
+    block = _numeric_block(tab)
+    if block is not None and np.all(np.isfinite(block[:, [roles[r] for r in triad]])):
+        raw = block[:, [roles[r] for r in triad]]
+    else:  # column by column: names the first bad value and its line
+        raw = np.column_stack([parse_numbers(column(r), tab.dc, path, r, tab.names, roles[r], tab.lines)
+                               for r in triad])
+    gyro, unit, note = resolve_gyro_unit(raw, units, gyro_unit, path)
+    t = None
+    if "t" in roles:
+        tcol = block[:, roles["t"]] if block is not None and np.all(np.isfinite(block[:, roles["t"]])) else None
+        t, _ = time_seconds(column("t"), None, time_unit, units.get("t"), tab.names, roles, tab.dc, path, tab.lines,
+                            tab.preamble, parsed=tcol)
+    return t, gyro, unit, [*notes, f"gyro from {path.name}: {note}"]
+
+
+def attach_gyro(rec, path, *, gyro_unit: str | None = None, time_unit: str | None = None):
+    """``rec`` with the gyro of the file ``path`` (module docstring).
+
+    Raises
+    ------
+    RecordingError
+        The recording has gyro columns of its own, the file has no gyro columns, or its
+        time base does not match the accelerometer's (:class:`accelcal.gyro.errors.GyroInputError`).
+    """
+    from ..gyro.errors import GyroInputError
+    from ..gyro.rests import check_time_base, sample_interval
+
+    if rec.gyro is not None:
+        raise RecordingError(f"{rec.source} has gyro columns of its own and --gyro {path} gives another gyro: "
+                             "drop --gyro, or pass --no-gyro to calibrate the accelerometer alone")
+    t, gyro, unit, notes = read_gyro_table(path, gyro_unit=gyro_unit, time_unit=time_unit)
+    if t is None and len(gyro) != rec.n:
+        raise GyroInputError(f"{path} has {len(gyro)} gyro samples, the accelerometer {rec.n}: their time bases do "
+                             "not match; give a gyro file sampled with the accelerometer (--gyro FILE)")
+    if t is not None:
+        check_time_base(rec.t, t, sample_interval(rec.t).h)
+    return replace(rec, gyro=gyro, gyro_unit=unit, notes=rec.notes + tuple(notes))
+
+
+__all__ = ["attach_gyro", "read_gyro_table"]

@@ -1,0 +1,237 @@
+"""Stage 'gyro': the gyroscope calibrated from the same sessions as the accelerometer.
+
+The integrator study (scale-factor bias vs rotation rate and sample rate), the Monte
+Carlo of the one-step and the iterative estimate against the Cramér–Rao bound (and their
+time per problem, apart: wall times), the Gauss-Newton fit against IPOPT on the same cost,
+and every real session with gyro data calibrated as `accelcal calibrate` does, beside the
+peers: IMU-TK's published .calib files of the fork sessions, imucal run as a package on its
+own example session, the Xsens data-sheet values, and, when `gyro.imutk_run` names it,
+IMU-TK built from source and run outside the workflow (tools/gyro_peers.py records it: no
+download or build at run time).  Claims with computed verdicts (paper key `gyro`).
+Config: the `gyro` mapping (workflow/schemas/gyro.schema.yaml).
+
+The data are fetched by a job per dataset (gyro_fetch: the shared copy, else a verified
+download), as the measured stage's.
+
+Needs from common.smk: declare_stage, results, log_path, bench_path, figure_files,
+figure_outputs, measured_data_dir, SMALL; the `measured` config's resources_dir.
+"""
+
+import os
+
+from accelcal_repro.gyro.sessions import files_needed
+
+GYRO = config["gyro"]
+GYRO_DIR = results("gyro")
+#: {dataset: files} of the configured sessions (and the CTU rotations).
+GYRO_DATASETS = files_needed(GYRO["sessions"])
+GYRO_MANIFEST = results("gyro/data/{dataset}.json")
+GYRO_SESSION_TABLES = ("sessions", "sessions_timing", "parameters", "peer_parameters", "figure_of_merit", "stability",
+                       "imucal_parameters", "imucal_figure_of_merit", "ctu_parameters")
+#: IMU-TK's run from source (tools/gyro_peers.py), if the config names it (relative to the project root).
+GYRO_IMUTK_RUN = ([os.path.normpath(os.path.join(workflow.basedir, GYRO["imutk_run"]))]
+                  if GYRO["imutk_run"] else [])
+GYRO_STAGE = declare_stage(
+    name="gyro",
+    figures=("gyro_integrator_bias", "gyro_crlb", "gyro_figure_of_merit"),
+    tables=(("Real sessions: how the gyro fit the noise, and the refusals",
+             results("gyro/sessions/sessions.csv")),
+            ("Figure of merit: gravity carried from rest to rest by each calibration [deg]",
+             results("gyro/sessions/figure_of_merit.csv")),
+            ("Parameters against the peers, in accelcal's standard errors", results("gyro/sessions/peer_parameters.csv")),
+            ("imucal's session: accelcal's Ferraris fit and imucal's", results("gyro/sessions/imucal_parameters.csv")),
+            ("Session-to-session stability (IMU-TK fork data1-4, SNU good1-3)", results("gyro/sessions/stability.csv")),
+            ("Monte Carlo: median RMS error / CRLB per configuration", results("gyro/montecarlo_summary.csv")),
+            ("Monte Carlo: time per problem (wall times)", results("gyro/montecarlo_timing.csv"))),
+)
+
+
+wildcard_constraints:
+    dataset="|".join(GYRO_DATASETS),
+
+
+rule gyro_fetch:
+    """Locate (shared copy) or download and verify (sha256) the files of one dataset the
+    sessions need, as measured_fetch does; high priority: a failing download stops the run early."""
+    priority: 100
+    localrule: True  # on a cluster: the login node (internet access; a checksum when the data is local)
+    output:
+        GYRO_MANIFEST,
+    params:
+        files=lambda w: list(GYRO_DATASETS[w.dataset]),
+        data_dir=measured_data_dir(),
+        resources_dir=config["measured"]["resources_dir"],
+    log:
+        log_path("gyro/fetch_{dataset}"),
+    benchmark:
+        bench_path("gyro/fetch_{dataset}"),
+    threads: 1
+    resources:
+        mem_mb=500,
+        runtime=10,
+    script:
+        "../scripts/gyro_fetch.py"
+
+
+rule gyro_integrators:
+    """Scale-factor bias and angle error of five integrators on simulated motions."""
+    output:
+        results("gyro/integrators.csv"),
+    params:
+        gyro=GYRO,
+    log:
+        log_path("gyro/integrators"),
+    benchmark:
+        bench_path("gyro/integrators"),
+    threads: 1
+    resources:
+        **SMALL,
+    script:
+        "../scripts/gyro_integrators.py"
+
+
+rule gyro_montecarlo:
+    """One-step and iterative gyro estimates against the Cramér–Rao bound."""
+    output:
+        table=results("gyro/montecarlo.csv"),
+        summary=results("gyro/montecarlo_summary.csv"),
+        timing=results("gyro/montecarlo_timing.csv"),
+    params:
+        gyro=GYRO,
+    log:
+        log_path("gyro/montecarlo"),
+    benchmark:
+        bench_path("gyro/montecarlo"),
+    threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=20,  # default config: about 30 s
+    script:
+        "../scripts/gyro_montecarlo.py"
+
+
+rule gyro_ipopt:
+    """The Gauss-Newton gyro fit against CasADi/IPOPT on the same cost."""
+    output:
+        table=results("gyro/ipopt_check.csv"),
+        timing=results("gyro/ipopt_timing.csv"),
+    params:
+        gyro=GYRO,
+    log:
+        log_path("gyro/ipopt"),
+    benchmark:
+        bench_path("gyro/ipopt"),
+    threads: 1
+    resources:
+        **SMALL,
+    script:
+        "../scripts/gyro_ipopt.py"
+
+
+rule gyro_sessions:
+    """Every configured real session calibrated (accelerometer and gyro, the CLI's route),
+    beside the peers; the figure of merit and the stability of the parameters."""
+    input:
+        manifests=expand(GYRO_MANIFEST, dataset=list(GYRO_DATASETS)),
+        imutk_run=GYRO_IMUTK_RUN,
+    output:
+        **{t: results(f"gyro/sessions/{t}.csv") for t in GYRO_SESSION_TABLES},
+    params:
+        sessions=GYRO["sessions"],
+    log:
+        log_path("gyro/sessions"),
+    benchmark:
+        bench_path("gyro/sessions"),
+    threads: 1
+    resources:
+        mem_mb=1500,
+        runtime=15,
+    script:
+        "../scripts/gyro_sessions.py"
+
+
+rule gyro_claims:
+    """Ledger rows of the gyro stage, each verdict computed from its tables."""
+    input:
+        integrators=results("gyro/integrators.csv"),
+        montecarlo=results("gyro/montecarlo.csv"),
+        ipopt=results("gyro/ipopt_check.csv"),
+        figure_of_merit=results("gyro/sessions/figure_of_merit.csv"),
+        peer_parameters=results("gyro/sessions/peer_parameters.csv"),
+        imucal_parameters=results("gyro/sessions/imucal_parameters.csv"),
+    output:
+        results("claims/gyro.csv"),
+    log:
+        log_path("gyro/claims"),
+    benchmark:
+        bench_path("gyro/claims"),
+    threads: 1
+    resources:
+        **SMALL,
+    script:
+        "../scripts/gyro_claims.py"
+
+
+rule gyro_integrator_bias_figure:
+    input:
+        table=results("gyro/integrators.csv"),
+    output:
+        **figure_outputs("gyro_integrator_bias", "../report/gyro_integrator_bias.rst", "Gyroscope"),
+    params:
+        figure="gyro_integrator_bias",
+    log:
+        log_path("gyro/integrator_bias_figure"),
+    benchmark:
+        bench_path("gyro/integrator_bias_figure"),
+    threads: 1
+    resources:
+        **SMALL,
+    script:
+        "../scripts/gyro_figure.py"
+
+
+rule gyro_crlb_figure:
+    input:
+        table=results("gyro/montecarlo.csv"),
+    output:
+        **figure_outputs("gyro_crlb", "../report/gyro_crlb.rst", "Gyroscope"),
+    params:
+        figure="gyro_crlb",
+    log:
+        log_path("gyro/crlb_figure"),
+    benchmark:
+        bench_path("gyro/crlb_figure"),
+    threads: 1
+    resources:
+        **SMALL,
+    script:
+        "../scripts/gyro_figure.py"
+
+
+rule gyro_figure_of_merit_figure:
+    input:
+        table=results("gyro/sessions/figure_of_merit.csv"),
+        imucal=results("gyro/sessions/imucal_figure_of_merit.csv"),
+    output:
+        **figure_outputs("gyro_figure_of_merit", "../report/gyro_figure_of_merit.rst", "Gyroscope"),
+    params:
+        figure="gyro_figure_of_merit",
+    log:
+        log_path("gyro/figure_of_merit_figure"),
+    benchmark:
+        bench_path("gyro/figure_of_merit_figure"),
+    threads: 1
+    resources:
+        **SMALL,
+    script:
+        "../scripts/gyro_figure.py"
+
+
+rule gyro:
+    """The whole stage: tables, claims and figures."""
+    input:
+        expand(results("gyro/sessions/{t}.csv"), t=GYRO_SESSION_TABLES),
+        results("gyro/montecarlo_summary.csv"),
+        results("gyro/ipopt_check.csv"),
+        results("claims/gyro.csv"),
+        figure_files(*GYRO_STAGE.figures),
