@@ -6,14 +6,14 @@ from accelcal_repro.gyro.report import stability
 from accelcal_repro.gyro.stage import claims
 
 
-def _tables(ours_fom: float):
+def _tables(ours_fom: float, trials: int = 30, iterative: float = 1.0):
     integ = pd.DataFrame([{"method": m, "rate_dps": 250.0, "fs_hz": 100.0, "rel_angle_rms_ppm": v,
                            "abs_scale_bias_ppm": 1.0, "scale_bias": 1e-6, "angle_deg": 120.0, "n_motions": 5}
                           for m, v in (("rk4", 300.0), ("magnus4", 200.0), ("euler_sum", 1e5))])
     mc = pd.DataFrame([{"config": c, "factor": c, "value": "", "estimator": e, "parameter": "Cxx", "kind": k,
-                        "rms_error": 1.0, "crlb_std": 1.0, "ratio": r}
-                       for c, e, r in (("base", "one_step", 1.1), ("base", "iterative", 1.0),
-                                       ("far", "one_step", 2.0), ("far", "iterative", 1.0))
+                        "rms_error": 1.0, "crlb_std": 1.0, "ratio": r, "trials": trials}
+                       for c, e, r in (("base", "one_step", 1.1), ("base", "iterative", iterative),
+                                       ("far", "one_step", 2.0), ("far", "iterative", iterative))
                        for k in ("scale", "misalignment")])
     ipopt = pd.DataFrame([{"max_diff_in_se": 0.01}])
     fom = pd.DataFrame([{"session": "a", "calibration": "accelcal", "bias": "own_bias", "rms_deg": ours_fom},
@@ -38,6 +38,19 @@ def test_verdicts_follow_the_tables():
     from accelcal_repro.claims import validate_rows
 
     validate_rows(claims(*_tables(0.2)))  # the ledger's rules (paper key gyro)
+
+
+def test_monte_carlo_rules_need_the_trials_that_let_them_fail():
+    """Below the trials a rule needs its verdict is not_testable_at_this_scale (the CI's 3
+    trials); from there on it follows the numbers, either way."""
+    from accelcal_repro.gyro.stage import ratio_rule_minimum
+
+    assert ratio_rule_minimum(0.2).needed == 23 and ratio_rule_minimum(0.5).needed == 4
+    few = claims(*_tables(0.2, trials=3)).set_index("claim_id").verdict
+    assert {few[c] for c in ("iterative_efficient", "one_step_enough_at_base", "one_step_not_enough")} == {
+        "not_testable_at_this_scale"}
+    enough = claims(*_tables(0.2, trials=23, iterative=1.3)).set_index("claim_id").verdict
+    assert enough["iterative_efficient"] == "not_reproduced" and enough["one_step_enough_at_base"] == "reproduced"
 
 
 def test_stability_excess_is_one_for_sessions_that_agree_within_their_errors():

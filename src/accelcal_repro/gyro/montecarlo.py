@@ -88,7 +88,7 @@ def monte_carlo(n_trials: int = 100, seed: int = 24, factors=FACTORS, base=BASE,
             for p, r, c in zip(C_PARAMETERS, rms, crlb_std):
                 rows.append({"config": name, "factor": factor, "value": value, "estimator": est, "parameter": p,
                              "kind": "scale" if p[1] == p[2] else "misalignment", "rms_error": r, "crlb_std": c,
-                             "ratio": r / c})
+                             "ratio": r / c, "trials": len(e)})
             t = np.array(seconds[est])
             timing.append({"config": name, "estimator": est, "median_s": float(np.median(t)) if len(t) else np.nan,
                            "p90_s": float(np.percentile(t, 90)) if len(t) else np.nan, "trials": n_trials,

@@ -20,12 +20,29 @@ papers'), each rule stated in its text:
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from ..claims import COLUMNS, Claim
+from ..claims import COLUMNS, Claim, MinimumSample
+
+#: Standard deviation of the median of m independent unit normals (order statistics: m = 3
+#: the middle one, m = 6 the mean of the middle two), relative to one of them.
+_MEDIAN_SD = {3: 0.670, 6: 0.535}
+_Z = 2.0
+
+
+def ratio_rule_minimum(margin: float) -> MinimumSample:
+    """Trials a rule "the median RMS / CRLB of a kind is within ``margin`` of its limit" needs:
+    an RMS over T trials has relative standard deviation 1/sqrt(2T) (chi distribution), the
+    median of the 3 scales sd 0.670 of that; ``_Z`` of them must fit inside ``margin`` (ratio
+    about 1): T >= (z 0.670 / margin)^2 / 2.  Fewer, and the sampling noise alone decides."""
+    needed = math.ceil((_Z * _MEDIAN_SD[3] / margin) ** 2 / 2)
+    return MinimumSample(needed, "Monte Carlo trials per configuration",
+                         f"with fewer, {_Z:g} standard errors of a median RMS / CRLB exceed the rule's margin "
+                         f"{margin:g}")
 
 INTEGRATOR_CHOICE = Claim("gyro", "integrator_choice", "The Magnus-4 integrator (cubic rate) has the smallest median "
                           "angle error of the five integrators at hand-motion rates (at most 5 deg per sample)",
@@ -65,14 +82,17 @@ def claims(integ: pd.DataFrame, mc: pd.DataFrame, ipopt: pd.DataFrame, fom: pd.D
     rk4 = float(hand.abs_scale_bias_ppm.max()) if len(hand) else float("nan")
     rows.append(RK4_BIAS.judge(rk4, rk4 < 10, "gyro/integrators.csv: abs_scale_bias_ppm", "{:.2g} ppm"))
     s = summary(mc)
+    trials = float(mc.trials.min()) if "trials" in mc and len(mc) else float("nan")
+    window, limit = ratio_rule_minimum(0.2).at(trials), ratio_rule_minimum(0.5).at(trials)
     it = s["iterative"].to_numpy()
     lo, hi = float(np.nanmin(it)), float(np.nanmax(it))
-    rows.append(ITERATIVE_EFFICIENT.row("reproduced" if lo > 0.8 and hi < 1.2 else "not_reproduced",
-                                        f"{lo:.2f}-{hi:.2f}", "gyro/montecarlo.csv: ratio, median per kind"))
+    rows.append(ITERATIVE_EFFICIENT.judge(hi, lo > 0.8 and hi < 1.2, "gyro/montecarlo.csv: ratio, median per kind",
+                                          scale=window, shown=f"{lo:.2f}-{hi:.2f}"))
     base = float(s["one_step"].loc["base"].max())
-    rows.append(ONE_STEP_BASE.judge(base, base <= 1.2, "gyro/montecarlo.csv: config base", "{:.2f}"))
+    rows.append(ONE_STEP_BASE.judge(base, base <= 1.2, "gyro/montecarlo.csv: config base", "{:.2f}", scale=window))
     worst = float(s["one_step"].to_numpy().max())
-    rows.append(ONE_STEP_NOT.judge(worst, worst > 1.5, "gyro/montecarlo.csv: largest median ratio", "{:.2f}"))
+    rows.append(ONE_STEP_NOT.judge(worst, worst > 1.5, "gyro/montecarlo.csv: largest median ratio", "{:.2f}",
+                                   scale=limit))
     d = float(ipopt.max_diff_in_se.iloc[0])
     rows.append(GN_IPOPT.judge(d, d < 0.1, "gyro/ipopt_check.csv", "{:.3f} s.e."))
     rows.append(_fom_claim(fom))
