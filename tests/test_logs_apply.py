@@ -12,9 +12,9 @@ import pytest
 import accelcal
 from accelcal.calibration import FullLLSCalibration
 from accelcal.errors import AccelcalError
-from accelcal.formats_logs import ros, px4
+from accelcal.formats import px4, ros
 from accelcal.formats_logs.apply import apply_to_log
-from accelcal.formats_logs.synthetic import write_imu_bag
+from accelcal.formats.ros_synthetic import write_imu_bag
 
 DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
 BAG = DATA / "imutk_fork_sessions" / "data1" / "rosbag2_2023_08_11-21_37_35"

@@ -22,7 +22,7 @@ from hypothesis import strategies as st
 
 from accelcal.errors import AccelcalError
 from accelcal.formats_logs import read_log
-from accelcal.formats_logs.synthetic import write_imu_bag
+from accelcal.formats.ros_synthetic import write_imu_bag
 from accelcal.recording import MIN_ROWS
 from tests.log_fixtures import write_dataflash, write_ulog
 

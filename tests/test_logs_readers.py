@@ -13,8 +13,9 @@ import pytest
 
 import accelcal
 from accelcal.errors import LogFormatError, TopicError
-from accelcal.formats_logs import LOG_FORMATS, detect_log, file_head, ros, px4, ardupilot
-from accelcal.formats_logs.synthetic import write_imu_bag
+from accelcal.formats import ardupilot, px4, ros
+from accelcal.formats_logs import LOG_FORMATS, detect_log, file_head
+from accelcal.formats.ros_synthetic import write_imu_bag
 from tests.log_fixtures import write_dataflash, write_ulog
 
 DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
@@ -105,7 +106,7 @@ def test_frame_ids_of_varying_length_are_decoded_one_by_one(tmp_path):
     from rosbags.rosbag2 import Writer
     from rosbags.typesys import Stores, get_typestore
 
-    from accelcal.formats_logs.synthetic import _message
+    from accelcal.formats.ros_synthetic import _message
 
     store = get_typestore(Stores.LATEST)
     p = tmp_path / "var"
@@ -122,7 +123,7 @@ def test_big_endian_cdr_is_read(tmp_path):
     from rosbags.rosbag2 import Writer
     from rosbags.typesys import Stores, get_typestore
 
-    from accelcal.formats_logs.synthetic import _message
+    from accelcal.formats.ros_synthetic import _message
 
     store = get_typestore(Stores.LATEST)
     p = tmp_path / "be"

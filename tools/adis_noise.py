@@ -3,7 +3,7 @@
 Reads ``shared/data/smac_adis16405/adis_16405_imu1.rda`` with the ``rdata`` package (the
 ``workflow`` extra), as :mod:`accelcal_repro.measured.smac` does, but keeps the gyroscope
 too: columns ``Gyro. X/Y/Z`` [deg/s] → rad/s and ``Accel. X/Y/Z`` [g] → m/s² (× 9.80665).
-Runs :func:`accelcal.noise_report.analyse_noise` and writes to ``--out-dir``: the JSON
+Runs :func:`accelcal.noise.report.analyse_noise` and writes to ``--out-dir``: the JSON
 report, Kalibr's and OpenVINS's YAML, the figure, and ``datasheet.csv``, the fitted
 terms against the datasheet's typical values with their ratio:
 
@@ -93,9 +93,9 @@ def main(argv=None) -> int:
     ap.add_argument("--out-dir", type=Path, default=ROOT / "results" / "noise" / "adis16405")
     args = ap.parse_args(argv)
     from accelcal.atomic import atomic_output, write_json_atomic
-    from accelcal.noise_export import kalibr_yaml, openvins_yaml
-    from accelcal.noise_figure import noise_figure
-    from accelcal.noise_report import analyse_noise
+    from accelcal.noise.export import kalibr_yaml, openvins_yaml
+    from accelcal.noise.figures import noise_figure
+    from accelcal.noise.report import analyse_noise
     from accelcal.plotting import save_figure
 
     report = analyse_noise(read_adis(args.rda))

@@ -35,7 +35,7 @@ def prepare(out: str) -> None:
 
 def run_accelcal(data: str, out: str) -> None:
     from accelcal.atomic import write_json_atomic
-    from accelcal.noise_report import analyse_noise
+    from accelcal.noise.report import analyse_noise
     from accelcal.recording import Recording
 
     x = np.load(data)
@@ -53,7 +53,7 @@ def run_allantools(data: str) -> list:
 
 def inprocess(data: str, repeat: int = 3) -> None:
     from accelcal.noise.allan import allan_variance
-    from accelcal.noise_report import analyse_noise
+    from accelcal.noise.report import analyse_noise
     from accelcal.recording import Recording
 
     x = np.load(data)

@@ -51,7 +51,7 @@ def add_parser(sub, epilog: str) -> None:
 
 def _noise(args) -> int:
     from ..formats_logs import detect_log, read_log
-    from ..noise_report import analyse_noise
+    from ..noise.report import analyse_noise
 
     t0 = time.perf_counter()
     if not args.recording.exists():
@@ -75,7 +75,7 @@ def _noise(args) -> int:
     texts, warnings = _noise_exports(args, rec, report, cal)
     figure = None
     if args.figure is not None:
-        from ..noise_figure import noise_figure
+        from ..noise.figures import noise_figure
 
         with _step("drawing the figure"):
             figure = noise_figure(report, title=f"{args.recording.name}: {report.duration_s / 3600:.3g} h at "
@@ -88,7 +88,7 @@ def _noise(args) -> int:
 def _noise_exports(args, rec, report, cal) -> tuple[dict, list]:
     import re
 
-    from ..noise_export import kalibr_yaml, openvins_yaml
+    from ..noise.export import kalibr_yaml, openvins_yaml
 
     found = next((m.group(1) for n in rec.notes if (m := re.search(r"topic (/\S+) \(sensor_msgs/Imu", n))), None)
     topic = args.topic or found or "/imu0"
@@ -121,7 +121,7 @@ def _noise_write(args, report, texts: dict, figure, t0: float) -> None:
 
 
 def _noise_summary(args, report, warnings: list) -> None:
-    from ..noise_export import exported_values
+    from ..noise.export import exported_values
 
     lines = [f"noise: {report.n} samples, {report.duration_s / 3600:.3g} h at {report.fs:.4g} Hz"]
     lines += [f"  read: {n}" for n in report.notes if n]

@@ -35,7 +35,7 @@ class LogFormat:
     defines_rate: bool = False
 
     def load(self):
-        return importlib.import_module(f".{self.module}", __name__)
+        return importlib.import_module(f"accelcal.formats.{self.module}")
 
     def sniff(self, path, head: bytes) -> bool:
         return self.load().sniff(path, head)

@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import LogFormatError
-from ._common import (ColumnBuffer, Progress, check_finite, check_rows, check_time_source, choose, import_extra,
+from .logs import (ColumnBuffer, Progress, check_finite, check_rows, check_time_source, choose, import_extra,
                       make_recording, stamps_to_time)
 
 #: A DataFlash log starts with the FMT message's header: 0xA3 0x95 0x80 (FMT describes itself).

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import AccelcalError
-from ._common import import_extra
+from .logs import import_extra
 
 KINDS = ("ros1", "ros2-sqlite3", "ros2-mcap", "mcap")
 _CHUNK = 20000

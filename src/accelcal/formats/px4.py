@@ -34,7 +34,7 @@ import numpy as np
 
 from ..errors import LogFormatError, TopicError
 from ..recording import MIN_ROWS
-from ._common import (Progress, check_finite, check_rows, check_time_source, choose, clock_note, import_extra,
+from .logs import (Progress, check_finite, check_rows, check_time_source, choose, clock_note, import_extra,
                       make_recording, stamps_to_time)
 
 ULOG_MAGIC = b"ULog\x01\x12\x35"
@@ -65,7 +65,7 @@ def read(path, *, topic: str | None = None, time_source: str = "header", instanc
     instance : int, optional
         The raw sensor instance (``multi_id``); needed when several are logged.
     progress : None, False or callable
-        See :class:`accelcal.formats_logs._common.Progress`.
+        See :class:`accelcal.formats.logs.Progress`.
 
     Returns
     -------

@@ -2,11 +2,11 @@
 
 For the accelerometer and (when recorded) the gyroscope of one static recording:
 
-1. Overlapping Allan deviation at octave-spaced τ (:func:`accelcal.discrepancy.allan.allan_variance`
+1. Overlapping Allan deviation at octave-spaced τ (:func:`accelcal.noise.allan.allan_variance`
    on the whole record; the grid stops where the white-FM equivalent degrees of freedom
    fall below ``min_edf``, 3 by default: τ_max ≈ a quarter of the record).
 2. The five IEEE Std 952 terms fitted per axis by the stochastic layer's Gamma maximum
-   likelihood (:func:`accelcal.discrepancy.stochastic.fit_avar`, coefficients ≥ 0):
+   likelihood (:func:`accelcal.noise.allan_fit.fit_avar`, coefficients ≥ 0):
    quantization Q, white noise N (the noise density, ``u/√Hz``), bias instability B
    (flicker floor ``0.664 B``), random walk K (``u·s^-½ = u/s/√Hz``) and ramp R.  The fit
    is weighted by the edf of the fitted model itself (a Satterthwaite mix of each term's
@@ -49,10 +49,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .noise.allan import DEFAULT_MIN_EDF, AllanVariance, allan_variance
-from .noise.allan_fit import NoiseFit, fit_avar, fit_avar_batch
-from .noise.terms import TERMS, model_avar
-from .errors import AccelcalError, NotStaticError
+from ..errors import AccelcalError, NotStaticError
+from .allan import DEFAULT_MIN_EDF, AllanVariance, allan_variance
+from .allan_fit import NoiseFit, fit_avar, fit_avar_batch
+from .terms import TERMS, model_avar
 
 #: The IEEE Std 952 terms fitted, in order of the τ where they act (short to long).
 IEEE_TERMS = ("quantization", "white", "bias_instability", "random_walk", "drift_ramp")
@@ -128,7 +128,7 @@ class NoiseReport:
     extra: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
-        from .noise_export import report_dict
+        from .export import report_dict
 
         return report_dict(self)
 
@@ -318,7 +318,7 @@ def bootstrap_terms(fit: NoiseFit, allan: AllanVariance, edf, model_error: float
     """
     from scipy.special import ndtr
 
-    from . import distributions as dist
+    from .. import distributions as dist
 
     taus, fs = allan.taus, allan.fs
     a = fit.avar(taus, fs)
@@ -335,7 +335,7 @@ def bootstrap_terms(fit: NoiseFit, allan: AllanVariance, edf, model_error: float
 
 def octave_correlations(rng, term: str, n: int = 2**16, reps: int = 1000, batch: int = 100) -> np.ndarray:
     """Measure :data:`OCTAVE_CORRELATION` for one term: mean correlation of ``ln Â`` 1…6 octaves apart."""
-    from .noise.simulation import simulate_noise
+    from .simulation import simulate_noise
 
     m = 2 ** np.arange(13)
     la = np.hstack([np.log(allan_variance(simulate_noise(rng, n, 1.0, {term: 1.0}, size=batch), 1.0, m=m).avar)

@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import LogFormatError, TopicError
-from ._common import (ColumnBuffer, Progress, check_finite, check_rows, check_time_source, choose, clock_note,
+from .logs import (ColumnBuffer, Progress, check_finite, check_rows, check_time_source, choose, clock_note,
                       import_extra, make_recording, stamps_to_time)
 
 IMU_TYPE = "sensor_msgs/msg/Imu"

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .noise.terms import TERMS
+from .terms import TERMS
 
 _COLORS = {"quantization": "C4", "white": "C0", "bias_instability": "C2", "random_walk": "C3", "drift_ramp": "C1"}
 _LABELS = {"quantization": "quantization Q", "white": "white noise N", "bias_instability": "bias instability B",
@@ -18,12 +18,12 @@ _LABELS = {"quantization": "quantization Q", "white": "white noise N", "bias_ins
 
 
 def noise_figure(report, title: str | None = None):
-    """The figure (matplotlib ``Figure``) of a :class:`~accelcal.noise_report.NoiseReport`."""
+    """The figure (matplotlib ``Figure``) of a :class:`~accelcal.noise.report.NoiseReport`."""
     import matplotlib
     from matplotlib.figure import Figure
 
-    from .noise_export import exported_values
-    from .plotting import RC
+    from .export import exported_values
+    from ..plotting import RC
 
     sensors = list(report.sensors.values())
     with matplotlib.rc_context(RC):
@@ -72,7 +72,7 @@ def noise_figure(report, title: str | None = None):
 
 def _band(s, j: int, grid, level: float) -> np.ndarray:
     """(2, len(grid)): percentiles of the Allan deviation of the bootstrap's refitted models."""
-    from .noise_report import IEEE_TERMS
+    from .report import IEEE_TERMS
 
     boot = s.boot_fits[j]
     basis = np.array([TERMS[k].basis(grid, s.allan.fs) for k in IEEE_TERMS])
