@@ -8,14 +8,18 @@ from pathlib import Path
 
 from ..effects import TIME, effect
 from ..errors import AccelcalError
-from .common import _read, _reader_options, warn
+from .common import _read, _reader_options, recording_sha256, warn
 
 APPLY_HELP = """\
 CALIBRATION is the JSON of `accelcal calibrate` or the report of `accelcal
 discrepancy` (its base model plus the named effects, e.g. a temperature term).
-RECORDING is read with the same readers and options as for calibrate, in the unit
-the calibration was made from. The output CSV keeps the time column as it was and
-writes the calibrated ax, ay, az in m/s^2 (and temp, if present).
+RECORDING is read with the same readers and options as for calibrate (a table, or
+the IMU topic of a ROS bag, MCAP file, PX4 ULog or DataFlash log), in the unit the
+calibration was made from. The output CSV keeps the time column as it was recorded
+(e.g. header_stamp_ns of a bag, timestamp_sample_us of a ULog) and writes the
+calibrated ax, ay, az in m/s^2, the gyroscope gx, gy, gz in rad/s where the
+recording has one, and temp where present. The gyroscope is written as recorded:
+an accelcal calibration (format version 1) holds the accelerometer only.
 """
 
 
@@ -35,7 +39,6 @@ def add_parser(sub, epilog: str) -> None:
 def _apply(args) -> int:
     from dataclasses import replace
 
-    from ..atomic import sha256_file
     from ..calibration import load_calibration
 
     cal = load_calibration(args.calibration)
@@ -47,7 +50,7 @@ def _apply(args) -> int:
     effects = () if args.no_effects else cal.effects
     # a term in time runs on the calibration session's clock: it describes that session only
     drift = [e.id for e in effects if effect(e.id).covariate == TIME]
-    if drift and cal.provenance.get("recording_sha256") != sha256_file(args.recording):
+    if drift and cal.provenance.get("recording_sha256") != recording_sha256(args.recording):
         warn(f"the calibration's {', '.join(drift)} term describes the drift during its own session; it is not "
               "applied to another recording")
         effects = tuple(e for e in effects if e.id not in drift)
@@ -55,8 +58,9 @@ def _apply(args) -> int:
     x = cal.apply(rec.acc, t=rec.t, temp=rec.temp, unit=rec.unit)
     _write_corrected(args.out, rec, x)
     names = ", ".join(e.id for e in effects) or "none"
+    gyro = "" if rec.gyro is None else "; gx, gy, gz as recorded (the calibration has no gyroscope part)"
     print(f"apply: {rec.n} samples of {args.recording} calibrated with {args.calibration} ({cal.CAL_TYPE}; "
-          f"effects applied: {names}); ax, ay, az in m/s^2 written to {args.out}", file=sys.stderr)
+          f"effects applied: {names}); ax, ay, az in m/s^2 written to {args.out}{gyro}", file=sys.stderr)
     return 0
 
 
@@ -67,6 +71,8 @@ def _write_corrected(path: Path, rec, x) -> None:
 
     time_name, time_values = rec.time_column if rec.time_column is not None else ("t", rec.t)
     data = {time_name: time_values, "ax": x[:, 0], "ay": x[:, 1], "az": x[:, 2]}
+    if rec.gyro is not None:
+        data.update({"gx": rec.gyro[:, 0], "gy": rec.gyro[:, 1], "gz": rec.gyro[:, 2]})
     if rec.temp is not None:
         data["temp"] = rec.temp
     with atomic_output(path) as tmp, open(tmp, "w", newline="") as f:

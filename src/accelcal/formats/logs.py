@@ -1,9 +1,9 @@
-"""What the log readers share: optional imports, topic choice, time stamps, bounded buffers, progress.
+"""What the log formats share (:mod:`.ros`, :mod:`.px4`, :mod:`.ardupilot`): topic choice, time
+stamps, bounded buffers, progress.
 
-A log holds many topics and two clocks.  The readers (:mod:`.ros`, :mod:`.px4`,
-:mod:`.ardupilot`) differ in how they decode messages; they agree on everything here:
+A log holds many topics and two clocks.  The readers differ in how they decode
+messages; they agree on everything here:
 
-* an optional extra that is missing is one line naming the ``pip install`` that fixes it;
 * the IMU topic is chosen automatically only when there is exactly one; several are
   listed in one line with the option that picks one;
 * time: the sensor's own stamp (a ROS header stamp, PX4's ``timestamp_sample``) by
@@ -13,22 +13,24 @@ A log holds many topics and two clocks.  The readers (:mod:`.ros`, :mod:`.px4`,
 * samples are streamed into preallocated arrays (:class:`ColumnBuffer`), never into a
   list of message objects, so memory is the size of the output;
 * a read that lasts longer than a couple of seconds reports its progress on stderr.
+
+Each reader checks its optional extra through its registry entry
+(:meth:`accelcal.formats.registry.Format.check_extra`: one line naming the ``pip install``
+that fixes it) before importing it.
 """
 
 from __future__ import annotations
 
-import importlib
 import sys
 import time
 from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from ..errors import LogFormatError, MissingExtraError, TopicError
+from ..errors import LogFormatError, TopicError
 from ..recording import MIN_ROWS, Recording
+from .registry import TIME_SOURCES, format_named
 
-#: ``time_source`` values of every log reader.
-TIME_SOURCES = ("header", "log")
 #: Largest spread (1st to 99th percentile) of the latency log − sensor stamp, in sample
 #: periods, that is not reported as a disagreement of the two clocks.
 MAX_LATENCY_SPREAD_PERIODS = 2.0
@@ -40,13 +42,9 @@ PROGRESS_AFTER_S = 2.0
 PROGRESS_EVERY_S = 5.0
 
 
-def import_extra(module: str, extra: str, what: str):
-    """Import an optional dependency, or raise :class:`MissingExtraError` naming its extra."""
-    try:
-        return importlib.import_module(module)
-    except ImportError:
-        raise MissingExtraError(f"reading {what} needs the optional package {module.split('.')[0]!r}: "
-                                f"pip install 'accelcal[{extra}]'") from None
+def require_extra(format_name: str, path=None) -> None:
+    """The optional extra of a log format, checked through its registry entry (one line if missing)."""
+    format_named(format_name).check_extra(path)
 
 
 def check_time_source(time_source: str) -> str:
@@ -192,4 +190,4 @@ def make_recording(path, *, t, acc, gyro, notes: Sequence[str], time_name: str, 
 
 
 __all__ = ["ColumnBuffer", "Progress", "TIME_SOURCES", "check_finite", "check_rows", "check_time_source", "choose",
-           "clock_note", "import_extra", "make_recording", "stamps_to_time"]
+           "clock_note", "require_extra", "make_recording", "stamps_to_time"]

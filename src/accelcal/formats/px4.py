@@ -34,12 +34,11 @@ import numpy as np
 
 from ..errors import LogFormatError, TopicError
 from ..recording import MIN_ROWS
-from .logs import (Progress, check_finite, check_rows, check_time_source, choose, clock_note, import_extra,
-                      make_recording, stamps_to_time)
+from .logs import (Progress, check_finite, check_rows, check_time_source, choose, clock_note, make_recording,
+                      require_extra, stamps_to_time)
 
 ULOG_MAGIC = b"ULog\x01\x12\x35"
 TOPICS = ("sensor_accel", "sensor_gyro", "sensor_combined")
-EXTRA = "px4"
 #: File size above which the read announces itself (pyulog parses in one call).
 _ANNOUNCE_BYTES = 64 * 2**20
 
@@ -75,7 +74,9 @@ def read(path, *, topic: str | None = None, time_source: str = "header", instanc
     """
     check_time_source(time_source)
     path = Path(path)
-    pyulog = import_extra("pyulog", EXTRA, "PX4 ULog files")
+    require_extra("px4", path)
+    import pyulog
+
     ulog = _parse(pyulog, path, progress)
     data = {(d.name, d.multi_id): d for d in ulog.data_list}
     for d in data.values():
@@ -243,4 +244,4 @@ def _calibration_parameters(ulog, device: str) -> str:
     return ", ".join(f"{k}={p[k]:.6g}" for k in keys if k in p)
 
 
-__all__ = ["EXTRA", "TOPICS", "read", "sniff"]
+__all__ = ["TOPICS", "read", "sniff"]
