@@ -17,8 +17,8 @@ from accelcal.calibration import FullLLSCalibration
 from accelcal.noise.simulation import simulate_noise
 from accelcal.errors import NotStaticError
 from accelcal.noise.export import ExportError, avr_convention, kalibr_yaml, openvins_yaml
-from accelcal.noise.report import (IEEE_TERMS, NoiseAnalysisError, OCTAVE_CORRELATION, analyse_noise,
-                                   octave_correlations)
+from accelcal.noise.allan_fit import OCTAVE_CORRELATION, octave_correlations
+from accelcal.noise.report import IEEE_TERMS, NoiseAnalysisError, analyse_noise
 from accelcal.recording import Recording
 
 FS = 100.0
