@@ -11,12 +11,12 @@ iteratively reweighted non-negative least squares with weights ``ν_j/A_j²``). 
 
 The same fit with two refinements (:func:`fit_avar_model_error`, the noise analysis of a
 long static record): the weights are the edf of the fitted model itself
-(:func:`model_edf`, the Satterthwaite mix of its terms' NIST edf, which the stochastic
-layer also uses for its error bars), and a model-error variance is added where the terms
-cannot follow the data to within its sampling error.  The stochastic layer keeps the
-white-FM weights and no model error (its outputs are unchanged): its rests are short,
-white noise dominates their Allan variance, and its tests are calibrated by a bootstrap
-of the time series with those weights.
+(:func:`model_edf`: its terms' NIST edf mixed coherently, see there), and a model-error
+variance is added where the terms cannot follow the data to within its sampling error.
+The stochastic layer keeps the white-FM weights and no model error, and its error bars
+the Satterthwaite mix (``model_edf(..., mix='satterthwaite')``): its outputs are
+unchanged.  Its rests are short, white noise dominates their Allan variance, and its tests
+are calibrated by a bootstrap of the time series with those weights.
 
 Intervals (:func:`bootstrap_fits`): the coefficients refitted to correlated draws of the
 fitted model's Allan variances (:func:`log_avar_covariance`, with the correlation of
@@ -184,10 +184,30 @@ def fit_avar(taus, avar, edf, term_ids: Sequence[str], fs: float) -> NoiseFit:
     return fit_avar_batch(taus, np.asarray(avar, dtype=float)[None], edf, term_ids, fs)[0]
 
 
-def model_edf(allan: AllanVariance, fit: NoiseFit) -> np.ndarray:
-    """Edf of each τ for the fitted model: the Satterthwaite mix of its terms' NIST edf
-    (:meth:`AllanVariance.edf_for`), weighted by their Allan variance (``gauss_markov``:
-    random-walk-like below its ``T_c``, white-like above)."""
+#: How the terms' edf combine at one τ (:func:`model_edf`).
+EDF_MIXES = ("coherent", "satterthwaite")
+
+
+def model_edf(allan: AllanVariance, fit: NoiseFit, mix: str = "coherent") -> np.ndarray:
+    """Edf of each τ for the fitted model, from its terms' NIST edf (:meth:`AllanVariance.edf_for`;
+    ``gauss_markov``: random-walk-like below its ``T_c``, white-like above) weighted by their
+    share ``w_t`` of the model's Allan variance.
+
+    ``mix='coherent'`` (default): ``1/√ν = Σ_t w_t/√ν_t``.  The Allan variance of a sum of
+    independent processes is not a weighted mean of independent estimates: the second
+    differences of all the terms enter the same squares, and the cross products, of mean
+    zero, add variance.  When the autocorrelations of the terms' second differences have the
+    same shape (nearly so: the averaging window sets it) the relative standard errors add
+    linearly.  Measured on 120 simulated 2.9 h records of white noise, flicker and random
+    walk of comparable size, the standard deviation of ``ln Â`` at τ = 82 s was 0.107, the
+    coherent mix gives 0.108, the Satterthwaite mix 0.072 (at τ = 164 s: 0.157, 0.162, 0.094).
+
+    ``mix='satterthwaite'``: ``1/ν = Σ_t w_t²/ν_t``, the edf of a weighted mean of
+    independent estimates, which understates the variance where terms overlap; the
+    discrepancy stochastic layer keeps it for its error bars (its outputs unchanged).
+    """
+    if mix not in EDF_MIXES:
+        raise NoiseModelError(f"mix must be one of {', '.join(EDF_MIXES)}, got {mix!r}")
     taus = allan.taus
     parts, nus = [], []
     for k, c in zip(fit.term_ids, fit.c):
@@ -197,7 +217,10 @@ def model_edf(allan: AllanVariance, fit: NoiseFit) -> np.ndarray:
         else:
             nus.append(allan.edf_for(noise_term(k).alpha))
     total = np.sum(parts, axis=0)
-    return total**2 / np.sum([p**2 / np.maximum(nu, 1e-12) for p, nu in zip(parts, nus)], axis=0)
+    if mix == "satterthwaite":
+        return total**2 / np.sum([p**2 / np.maximum(nu, 1e-12) for p, nu in zip(parts, nus)], axis=0)
+    rel = np.sum([p / total * np.sqrt(2.0 / np.maximum(nu, 1e-12)) for p, nu in zip(parts, nus)], axis=0)
+    return 2.0 / rel**2
 
 
 def fit_avar_model_error(allan: AllanVariance, avar, term_ids: Sequence[str],
@@ -272,10 +295,11 @@ def _rho(term: str, d: np.ndarray) -> np.ndarray:
 def log_avar_covariance(allan: AllanVariance, fit: NoiseFit, model_error: float = 0.0) -> np.ndarray:
     """(k, k) covariance of ``ln Â`` at the τ grid under the fitted model, plus the model error on the diagonal.
 
-    Each term ``t`` contributes ``ρ_t(d_ij) s_it s_jt`` with ``s_it = A_it √(2/ν_it) / A_i`` (its
-    share of the Allan variance times its relative standard error, NIST edf) and ``d_ij``
-    the octaves between the two τ; the diagonal is ``2/ν`` of the Satterthwaite mix
-    (:func:`model_edf`) plus ``σ_m²``.
+    Correlations: each term ``t`` contributes ``ρ_t(d_ij) s_it s_jt`` with
+    ``s_it = A_it √(2/ν_it) / A_i`` (its share of the Allan variance times its relative
+    standard error, NIST edf) and ``d_ij`` the octaves between the two τ, normalised to a
+    correlation matrix.  Variances: ``2/ν`` of the coherent mix (:func:`model_edf`), plus
+    ``σ_m²``.
     """
     octave = np.log2(allan.m.astype(float))
     d = np.rint(np.abs(octave[:, None] - octave[None, :])).astype(int)
@@ -286,7 +310,9 @@ def log_avar_covariance(allan: AllanVariance, fit: NoiseFit, model_error: float 
         part = c * TERMS[k].basis(allan.taus, allan.fs)
         s = part / total * np.sqrt(2.0 / np.maximum(allan.edf_for(TERMS[k].alpha), 1e-12))
         cov += rho * np.outer(s, s)
-    return cov + model_error**2 * np.eye(len(d))
+    sd = np.sqrt(np.diag(cov))
+    coherent = np.sqrt(2.0 / model_edf(allan, fit))
+    return cov * np.outer(coherent / sd, coherent / sd) + model_error**2 * np.eye(len(d))
 
 
 def bootstrap_fits(fit: NoiseFit, allan: AllanVariance, edf, model_error: float, n_boot: int, rng) -> np.ndarray:
@@ -323,5 +349,5 @@ def octave_correlations(rng, term: str, n: int = 2**16, reps: int = 1000, batch:
     return np.array([np.mean(np.diag(c, d)[2:12 - d]) for d in range(1, 7)])
 
 
-__all__ = ["OCTAVE_CORRELATION", "NoiseFit", "bootstrap_fits", "fit_avar", "fit_avar_batch", "fit_avar_model_error",
+__all__ = ["EDF_MIXES", "OCTAVE_CORRELATION", "NoiseFit", "bootstrap_fits", "fit_avar", "fit_avar_batch", "fit_avar_model_error",
            "gamma_deviance", "log_avar_covariance", "model_edf", "octave_correlations"]

@@ -45,7 +45,8 @@ white-FM edf of the rests, without the model-error variance that the noise analy
 long static record adds (:func:`accelcal.noise.allan_fit.fit_avar_model_error`): the
 rests are short, white noise dominates their Allan variance, and the tests below are
 calibrated by a bootstrap of the time series with these weights.  The error bars of the
-Allan deviation use the edf of the fitted model (:func:`~accelcal.noise.allan_fit.model_edf`).
+Allan deviation use the edf of the fitted model (:func:`~accelcal.noise.allan_fit.model_edf`,
+its Satterthwaite mix).
 
 Gap (one definition, before and after).  The rests are re-simulated ``n_resim`` times
 with the fitted model (same segment lengths; white-only fit "before", final model
@@ -375,8 +376,10 @@ def _test_step(current: NoiseFit, alts: dict, remaining: list, lr_obs: np.ndarra
 
 def _adev_interval(allan: AllanVariance, fit: NoiseFit, fs: float) -> tuple[np.ndarray, np.ndarray]:
     """68.3 % interval of the measured Allan deviation (every axis) with the edf of the model
-    ``fit`` (:func:`~accelcal.noise.allan_fit.model_edf`: the Satterthwaite mix of its terms' edf)."""
-    nu_mix = model_edf(allan, fit)
+    ``fit`` (:func:`~accelcal.noise.allan_fit.model_edf`, the Satterthwaite mix of its terms'
+    edf: narrower than the coherent mix where terms overlap, kept so that the layer's
+    outputs do not change)."""
+    nu_mix = model_edf(allan, fit, mix="satterthwaite")
     return allan.adev_interval(0.683, np.column_stack([nu_mix] * allan.avar.shape[1]))
 
 
