@@ -31,9 +31,10 @@ import numpy as np
 import pandas as pd
 
 COLUMNS = ("paper", "claim_id", "claim", "paper_value", "reproduced_value", "verdict", "evidence")
-#: Sources of claims: the three papers, and ``discrepancy``, the goals the project's
-#: discrepancy loop states for itself, judged the same way.
-PAPERS = ("burkhard2024", "batista2011", "tereshkov", "discrepancy")
+#: Sources of claims: the three papers, ``discrepancy``, the goals the project's
+#: discrepancy loop states for itself, and ``noise``, the ADIS16405 datasheet's noise
+#: figures and the coverage the noise analysis states for its intervals, judged the same way.
+PAPERS = ("burkhard2024", "batista2011", "tereshkov", "discrepancy", "noise")
 VERDICTS = ("reproduced", "not_reproduced", "not_reproducible")
 
 

@@ -44,6 +44,7 @@ FIGURE_SECTIONS = (
      ("tereshkov_", "bias_convergence_comparison")),
     ("measured", "Measured data: public recordings calibrated without ground truth", ("measured_",)),
     ("discrepancy", "Discrepancy: where simulation and measured data disagree, and the missing effect", ("discrepancy_",)),
+    ("noise", "Noise: a static record's noise terms against the datasheet, and the intervals' coverage", ("noise_",)),
     ("benchmark", "Benchmark: where the compute time goes (estimators, filters, compilation, stages)", ("timing_",)),
 )
 OTHER_SECTION = ("other", "Other figures")
@@ -284,6 +285,14 @@ TABLE_VIEWS = {
     "results/discrepancy/summary.csv": {
         "columns": ["recording", "effect", "metric", "value", "ci_low", "ci_high", "n", "target", "verdict"],
         "group": "section"},
+    "results/noise/adis16405/datasheet.csv": {
+        "columns": ["quantity", "reading", "axis", "fitted", "interval_low", "interval_high", "datasheet",
+                    "datasheet_as_written", "unit", "ratio"],
+        "group": "sensor"},
+    "results/noise/coverage.csv": {
+        "columns": ["term", "true", "axes", "coverage", "coverage_low", "coverage_high", "median_relative_width",
+                    "resolved_share"],
+        "group": "configuration"},
 }
 DEFAULT_VIEW = {"max_columns": 12, "rows": 25}
 

@@ -320,11 +320,24 @@ def _check_benchmark(b, cfg):
         _check_names(b["compile_calls"], FIRST_CALLS, "benchmark.compile_calls", "a first call of a compiled kernel")
 
 
+def _check_noise(n, cfg):
+    names = [c["name"] for c in n["coverage"]["configurations"]]
+    if len(set(names)) != len(names):
+        raise _config_error("noise.coverage.configurations", "configuration names must be distinct")
+    from accelcal_repro.noise.claims import coverage_rule_minimum
+
+    need = coverage_rule_minimum(n["claims"]["coverage_floor"])
+    if 3 * n["coverage"]["records"] < need:
+        raise _config_error("noise.coverage.records",
+                            f"{n['coverage']['records']} records give {3 * n['coverage']['records']} axes per term; the "
+                            f"coverage rule at coverage_floor {n['claims']['coverage_floor']} can fail only from {need}")
+
+
 #: Rules a stage's schema cannot express, run once every section passed its schema:
 #: ``rule(section, config)``, a one-line ConfigError naming the key.
 STAGE_RULES = {"batista2011": _check_batista2011, "tereshkov": _check_tereshkov, "measured": _check_measured,
                "burkhard2024": _check_burkhard2024, "discrepancy": _check_discrepancy,
-               "benchmark": _check_benchmark}
+               "benchmark": _check_benchmark, "noise": _check_noise}
 
 
 def figure_outputs(figure_id, caption, category):

@@ -3,7 +3,8 @@
 One row per sensor, one panel per axis: the measured Allan deviation with its error bars
 (the report's level, the fitted model's edf), the fitted model, each term it holds as
 a thin line, the band the bootstrap fits span (the report's level), and the exported
-noise density (τ = 1 s) and random walk (τ = 3 s) as points on their lines.
+noise density (τ = 1 s) and random walk (τ = 3 s) as points on their lines; optionally
+reference values (a datasheet's white noise and bias stability) as grey dash-dotted lines.
 """
 
 from __future__ import annotations
@@ -17,8 +18,14 @@ _LABELS = {"quantization": "quantization Q", "white": "white noise N", "bias_ins
            "random_walk": "random walk K", "drift_ramp": "ramp R"}
 
 
-def noise_figure(report, title: str | None = None):
-    """The figure (matplotlib ``Figure``) of a :class:`~accelcal.noise.report.NoiseReport`."""
+def noise_figure(report, title: str | None = None, references: dict | None = None,
+                 reference_label: str = "datasheet"):
+    """The figure (matplotlib ``Figure``) of a :class:`~accelcal.noise.report.NoiseReport`.
+
+    ``references``: ``{sensor: {"white": N, "floor": ADEV}}`` in the sensor's unit, drawn as
+    the Allan deviation ``N/√τ`` of a white-noise density and a horizontal level (a bias
+    stability), labelled with ``reference_label``.
+    """
     import matplotlib
     from matplotlib.figure import Figure
 
@@ -47,6 +54,7 @@ def noise_figure(report, title: str | None = None):
                     if c > 0:
                         ax.plot(grid, np.sqrt(c * TERMS[k].basis(grid, a.fs)), ls="--" if s.terms[j][k].resolved
                                 else ":", lw=0.9, color=_COLORS[k], label=_LABELS[k])
+                _references(ax, grid, (references or {}).get(s.sensor, {}), reference_label)
                 ex = exported_values(s, j)
                 n_exp, k_exp = ex["noise_density"]["value"], ex["random_walk"]["value"]
                 ax.plot([1.0], [n_exp], "s", color="C0", ms=5, mfc="none", zorder=6, label="exported N (at τ = 1 s)")
@@ -68,6 +76,13 @@ def noise_figure(report, title: str | None = None):
         fig.legend(list(handles.values()), list(handles.keys()), loc="lower center", ncol=5, fontsize=7,
                    frameon=False)
     return fig
+
+
+def _references(ax, grid, ref: dict, label: str) -> None:
+    if "white" in ref:
+        ax.plot(grid, ref["white"] / np.sqrt(grid), color="0.45", ls="-.", lw=1.0, label=f"{label}: white noise")
+    if "floor" in ref:
+        ax.axhline(ref["floor"], color="0.2", ls=(0, (9, 3)), lw=1.1, label=f"{label}: bias stability")
 
 
 def _band(s, j: int, grid, level: float) -> np.ndarray:
