@@ -5,8 +5,9 @@ serialised in numpy chunks checked byte-for-byte against rosbags' serialiser, se
 :mod:`accelcal.formats.ros_synthetic`), then reads it in fresh subprocesses on one
 core, side by side in one run:
 
-* ``accelcal``: :func:`accelcal.formats.ros.read` (the whole reader: open, decode,
-  checks, Recording);
+* ``accelcal``: :func:`accelcal.formats.read` (what ``accelcal calibrate BAG`` reads with:
+  the format detected by the registry, the whole ros reader: open, decode, checks,
+  Recording);
 * ``rosbags iterate``: rosbags' message iterator alone, every raw message touched, no
   decoding (a floor: the reader cannot be faster than the bag's iteration);
 * ``rosbags deserialise``: the iterator plus rosbags' own deserialisation of every
@@ -43,7 +44,7 @@ ONE_CORE = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREAD
 
 READERS = {
     "imports only": "import accelcal.formats.ros, rosbags.rosbag2, rosbags.rosbag1, numpy\n",
-    "accelcal": "from accelcal.formats import ros\nrec = ros.read(PATH, progress=False)\nN = rec.n\n",
+    "accelcal": "from accelcal.formats import read\nrec = read(PATH)\nN = rec.n\n",
     "rosbags iterate": (
         "from accelcal.formats.ros import _locate, _open\np, kind = _locate(Path(PATH))\nN = 0\n"
         "with _open(p, kind) as r:\n    for c, t, raw in r.messages():\n        N += len(raw) > 0\n"),
