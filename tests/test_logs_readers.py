@@ -370,3 +370,17 @@ def test_log_options_go_through_the_registry(tmp_path):
             read(table, **kw)
     with pytest.raises(RecordingError, match="--time-source must be header or log, got 'gps'"):
         read(p, time_source="gps")
+
+
+def test_time_stamps_that_are_no_time_are_one_line(tmp_path):
+    """A damaged stamp beyond 2^53 us would wrap silently in integer nanoseconds (found by the log fuzzer)."""
+    t_us = 10_000_000 + np.arange(300) * 2500
+    t_us[-1] = 2**60
+    p = write_dataflash(tmp_path / "a.bin", t_us, ACC[:300], GYRO[:300])
+    with pytest.raises(LogFormatError, match=r"IMU instance 0: TimeUS: time stamp .* at message 299 is not a time"):
+        ardupilot.read(p)
+    topics = _ulog_topics()
+    topics[("sensor_accel", 0)]["timestamp_sample"] = topics[("sensor_accel", 0)]["timestamp_sample"].copy()
+    topics[("sensor_accel", 0)]["timestamp_sample"][5] = 2**63 + 7
+    with pytest.raises(LogFormatError, match=r"sensor_accel instance 0: timestamp_sample: time stamp .* at message 5"):
+        px4.read(write_ulog(tmp_path / "a.ulg", topics))

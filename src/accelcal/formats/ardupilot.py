@@ -28,7 +28,7 @@ import numpy as np
 
 from ..errors import LogFormatError
 from .logs import (ColumnBuffer, Progress, check_finite, check_rows, check_time_source, choose, make_recording,
-                      require_extra, stamps_to_time)
+                      microseconds, require_extra, stamps_to_time)
 
 #: A DataFlash log starts with the FMT message's header: 0xA3 0x95 0x80 (FMT describes itself).
 DATAFLASH_MAGIC = b"\xa3\x95\x80"
@@ -153,7 +153,7 @@ def _stream(log, path, name: str, count: int, progress) -> np.ndarray:
 def _recording(path, name: str, inst: int, rows: np.ndarray, time_source: str):
     label = f"{name} instance {inst}"
     check_rows(path, label, len(rows))
-    us = rows[:, 0].astype(np.int64)
+    us = microseconds(rows[:, 0], path, f"{label}: TimeUS")
     t = stamps_to_time(us * 1000, path, f"{label}: TimeUS", "the log's stamps are not in order (a damaged log?)")
     acc, gyro, temp = rows[:, 2:5], rows[:, 5:8], rows[:, 8]
     check_finite(path, label, acc, "AccX/Y/Z")

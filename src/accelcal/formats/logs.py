@@ -142,6 +142,24 @@ class Progress:
         self.last, self.printed = now, True
 
 
+#: Largest time stamp [µs] a log may hold: 2^53 µs (285 years), exact in float64, and in int64
+#: nanoseconds.  A damaged log's stamps can be anything; beyond it they would wrap silently.
+MAX_STAMP_US = 2**53
+
+
+def microseconds(values, path, label: str) -> np.ndarray:
+    """Time stamps [µs] as int64, each checked to lie in ``[0, MAX_STAMP_US]``; else one line."""
+    v = np.asarray(values)
+    bad = (v < 0) | (v > MAX_STAMP_US)
+    if v.dtype.kind == "f":
+        bad |= ~np.isfinite(v)
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise LogFormatError(f"{path}: {label}: time stamp {v[i]!r} at message {i} is not a time ({int(bad.sum())} "
+                             "such): the log is damaged; download or copy it again")
+    return v.astype(np.int64)
+
+
 def stamps_to_time(stamps_ns: np.ndarray, path, label: str, fix: str) -> np.ndarray:
     """Seconds since the first stamp of strictly increasing integer nanosecond stamps; else one line."""
     d = np.diff(stamps_ns)
@@ -189,5 +207,5 @@ def make_recording(path, *, t, acc, gyro, notes: Sequence[str], time_name: str, 
                      gyro=gyro, gyro_unit=None if gyro is None else "rad/s")
 
 
-__all__ = ["ColumnBuffer", "Progress", "TIME_SOURCES", "check_finite", "check_rows", "check_time_source", "choose",
+__all__ = ["MAX_STAMP_US", "ColumnBuffer", "Progress", "microseconds", "TIME_SOURCES", "check_finite", "check_rows", "check_time_source", "choose",
            "clock_note", "require_extra", "make_recording", "stamps_to_time"]

@@ -35,7 +35,7 @@ import numpy as np
 from ..errors import LogFormatError, TopicError
 from ..recording import MIN_ROWS
 from .logs import (Progress, check_finite, check_rows, check_time_source, choose, clock_note, make_recording,
-                      require_extra, stamps_to_time)
+                      microseconds, require_extra, stamps_to_time)
 
 ULOG_MAGIC = b"ULog\x01\x12\x35"
 TOPICS = ("sensor_accel", "sensor_gyro", "sensor_combined")
@@ -149,8 +149,10 @@ def _rate(d) -> float:
 
 def _stamps(path, d, time_source: str, topic: str, notes: list):
     """(sensor stamps, log stamps) in µs, int64; the chosen one first in the notes."""
-    log = d.data["timestamp"].astype(np.int64)
-    sample = d.data["timestamp_sample"].astype(np.int64) if "timestamp_sample" in d.data else None
+    label = f"{d.name} instance {d.multi_id}"
+    log = microseconds(d.data["timestamp"], path, f"{label}: timestamp")
+    sample = microseconds(d.data["timestamp_sample"], path, f"{label}: timestamp_sample") \
+        if "timestamp_sample" in d.data else None
     if sample is None and time_source == "header":
         notes.append(f"{topic} has no timestamp_sample in this PX4 version: its publication time is used")
     return (sample if sample is not None else log), log
@@ -211,7 +213,7 @@ def _gyro(path, data, inst: int, time_source: str, at_us: np.ndarray, notes: lis
 
 def _combined(path, d, time_source: str, notes: list):
     _require(path, d, [f"{k}[{i}]" for k in ("accelerometer_m_s2", "gyro_rad") for i in range(3)])
-    ts = d.data["timestamp"].astype(np.int64)
+    ts = microseconds(d.data["timestamp"], path, "sensor_combined: timestamp")
     t = stamps_to_time(ts * 1000, path, "sensor_combined: timestamp", "the log's stamps are not in order")
     acc = np.column_stack([d.data[f"accelerometer_m_s2[{k}]"].astype(np.float64) for k in range(3)])
     gyro = np.column_stack([d.data[f"gyro_rad[{k}]"].astype(np.float64) for k in range(3)])
