@@ -8,8 +8,10 @@ from accelcal import InputShapeError, NonFiniteError
 from accelcal.batista.filter import (PAPER_XI, covariance_sequence, discretize_van_loan, kalman_filter,
                                      observability_gramian, process_noise, rotation_blocks, system_matrix, transition)
 from accelcal.batista.model import PAPER_FILTER_BIAS, skew
-from accelcal_repro.batista2011.montecarlo import (_blocks_bkt, _measurements, filter_montecarlo, filter_scenario,
-                                         gramian_table, initial_estimate, observability_table, shared_gain_filter)
+from accelcal_repro.batista2011.montecarlo import (filter_montecarlo, filter_scenario, gramian_table, initial_estimate,
+                                                   observability_table, shared_gain_filter)
+from accelcal_repro.batista2011.montecarlo.filter import _measurements
+from accelcal_repro.batista2011.montecarlo.shared_gain import _blocks_bkt
 from accelcal_repro.batista2011.claims import steady_mean, steady_state
 from accelcal_repro.batista2011.trajectory import constant_axis_attitude, euler_sinusoid_attitude
 

@@ -18,9 +18,9 @@ import pytest
 from accelcal import bias_lls_batch, full_lls_batch
 from accelcal_repro.burkhard2024 import checks
 from accelcal_repro.burkhard2024.analysis import limit_onsets, lls_limit, relative_errors
-from accelcal_repro.burkhard2024.claims import burkhard2024_claims
+from accelcal_repro.burkhard2024.claims import MINIMUM, burkhard2024_claims
 from accelcal_repro.burkhard2024.grid import experiments_from_config, grid_points
-from accelcal_repro.claims import validate_rows
+from accelcal_repro.claims import NOT_TESTABLE, validate_rows
 from accelcal_repro.montecarlo import compare_methods, mc_point, summarize
 from accelcal_repro.timing import summarize_timing
 
@@ -254,6 +254,41 @@ def test_ledger_rows_one_per_claim_decided_by_the_checks(tables):
         s_bad.set_index(["data_model", "n_poses", "noise_std", "g_error", "method"]).index)], s_bad])
     wrong = burkhard2024_claims(s_mix, c, timing_summary(40.0, 25.0), None, EXPS, R).set_index("claim_id")
     assert wrong.loc["fig1c_bias_nlls_diverges_lls_flat", "verdict"] == "not_reproduced"
+
+
+def test_rules_need_their_minimum_sample_and_can_fail_at_it(tables):
+    """The rules with a tolerance of z standard errors need two trials (with one the standard
+    error is undefined: Fig. 1(a) could only fail, Fig. 1(b)'s "no rise" never); the others
+    one trial, the speed rules one timing.  At the minimum each rule decides and can fail."""
+    _, s, c = tables
+    t = timing_summary(40.0, 25.0)
+    assert set(MINIMUM) == set(burkhard2024_claims(s, c, t, None, EXPS, R)["claim_id"])
+    se_rules = {"fig1a_full_lls_equals_nlls", "fig1a_bias_lls_better_than_nlls", "fig1b_error_decreases_with_poses"}
+    assert {k for k, (_, m) in MINIMUM.items() if m.needed == 2} == se_rules
+
+    one = burkhard2024_claims(s.assign(n_trials=1), c.assign(n_pairs=1), t, None, EXPS, R).set_index("claim_id")
+    assert set(one.index[one.verdict == NOT_TESTABLE]) == se_rules
+    r = one.loc["fig1b_error_decreases_with_poses"]
+    assert "n 1 (Monte Carlo trials per grid point), needs n >= 2" in r.evidence
+    assert r.evidence.startswith("results/burkhard2024/summary.csv: not testable at this scale")
+    none = burkhard2024_claims(s.assign(n_trials=0), c.assign(n_pairs=0), t.assign(n_timings=0), None, EXPS, R)
+    assert (none["verdict"] == NOT_TESTABLE).all()
+
+    s2, c2 = s.assign(n_trials=2), c.assign(n_pairs=2)
+    assert (burkhard2024_claims(s2, c2, t, None, EXPS, R).set_index("claim_id").loc[sorted(se_rules), "verdict"]
+            == "reproduced").all()
+    a, b = EXPS["fig1a"], EXPS["fig1b"]
+    s_bad, c_bad = s2.copy(), c2.copy()
+    s_bad.loc[(s_bad.method == "full_lls") & (s_bad.data_model == a.data_model), "bias_ratio"] *= 2  # 2x the CRLB
+    c_bad.loc[(c_bad.method == "bias_lls") & (c_bad.data_model == a.data_model), "bias_ratio"] = 1.2
+    at_b = (s_bad.method == "full_lls") & (s_bad.data_model == b.data_model) & (s_bad.noise_std == b.noise_std[0]) \
+        & (s_bad.g_error == b.g_error[0])
+    first = s_bad.loc[at_b & (s_bad.n_poses == min(n for n in b.n_poses if n >= 10)), "bias_rms"].iloc[0]
+    s_bad.loc[at_b & (s_bad.n_poses == max(b.n_poses)), "bias_rms"] = first              # no decrease
+    bad = burkhard2024_claims(s_bad, c_bad, t, None, EXPS, R).set_index("claim_id")
+    assert (bad.loc[sorted(se_rules), "verdict"] == "not_reproduced").all(), bad.loc[sorted(se_rules), "verdict"]
+    slow = burkhard2024_claims(s, c, timing_summary(4.0, 25.0).assign(n_timings=1), None, EXPS, R)
+    assert slow.set_index("claim_id").loc["speed_full", "verdict"] == "not_reproduced"
 
 
 # ------------------------------------------------------------------ beyond the paper

@@ -28,6 +28,30 @@ def rec():
     return Recording(sim["t"], sim["acc"], sim["temp"], "sim", unit="m/s^2"), tr
 
 
+class _StaleToyCalibration(Calibration):
+    """A class of a type tag that a later registry entry names another class for (a script's
+    class defined again, an estimator of that name registered before)."""
+
+    CAL_TYPE = "toy_tagged"
+
+
+class ToyTaggedCalibration(Calibration):
+    CAL_TYPE = "toy_tagged"
+
+
+def test_the_registrys_class_comes_before_another_of_the_same_tag():
+    from accelcal.registry import Estimator, register, unregister
+
+    register(Estimator(name="toy_tagged", model="bias", algorithm="lls", label="toy", family="closed_form",
+                       function="accelcal.lls:bias_lls", calibration=f"{__name__}:ToyTaggedCalibration",
+                       conditioning="accelcal.lls:design_singular_values", description="a test's toy"))
+    try:
+        assert calibration_class("toy_tagged") is ToyTaggedCalibration
+    finally:
+        unregister("toy_tagged")
+    assert calibration_class("toy_tagged") is _StaleToyCalibration  # unregistered: the first subclass found
+
+
 @pytest.mark.parametrize("method", list(ESTIMATORS))
 def test_one_class_per_method_and_exact_round_trip(rec, method, tmp_path):
     r, tr = rec

@@ -6,7 +6,8 @@ from scipy import stats
 
 from accelcal_repro.discrepancy import benchmark as B
 from accelcal.discrepancy.detect import discrepancy
-from accelcal.discrepancy.effects import EFFECT_IDS
+from accelcal.discrepancy.effects import EFFECT_IDS, EFFECTS
+from accelcal.effects import ADDITIVE, TEMPERATURE, TIME
 from accelcal.discrepancy.fit import evaluate, fit, fit_at, forward, lopo, pose_data
 from accelcal.discrepancy.vocabulary import Rules, critical_noncentrality, holm, identifiability
 from accelcal.evaluation import residual_sigma
@@ -59,9 +60,12 @@ def test_fit_recovers_injected_effect_without_noise(eid):
     rng = np.random.default_rng(2)
     u = random_directions(rng, 24)
     M, b, p_true, t, T, ms = _design(rng, u)
-    phi = {"quadratic": [2.5e-4, 1.5e-4, -0.75e-4], "cubic": [2e-5, -1e-5, 1e-5], "bias_drift": [0.01, -0.02, 0.005],
-           "temperature": [0.5, -0.3, 0.2], "temperature_scale": [1e-4, -2e-4, 5e-5]}[eid]
     dt, dT = t - t.mean(), T - T.mean()
+    # sized from the entry: the term moves a pose mean by up to 60 noise units (8.4 counts)
+    e = EFFECTS[eid]
+    c = {None: 1.0, TIME: np.abs(dt).max(), TEMPERATURE: np.abs(dT).max()}[e.covariate]
+    gain = 1.0 if e.kind == ADDITIVE else np.linalg.norm(M, axis=1).mean() * G ** e.power
+    phi = 60 * ms[0, 0] / (gain * c) * np.array([1.0, -0.6, 0.3])
     z = forward(G * u, M, b, {eid: phi}, dt=dt, dtemp=dT)
     d = pose_data(z, G, ms, t, T)
     f = fit(d, (eid,))
@@ -204,7 +208,7 @@ def test_gap_shrinks_to_the_noise_after_the_refit(null):
     rules = NULL_RULES[null]
     rec, _ = B.simulate_case("quadratic", 4.0, 0, seed=20240707, session=SESSION, rules=RULES)
     res = discrepancy(pose_data_from_static(detect_static_recording(rec), SESSION.g), rules)
-    s = res.summary()
+    s = res.statistics()
     assert res.effects[0] == "quadratic"
     # before: far beyond what noise explains (χ² upper tail); after: consistent with it
     assert s["chi2_p_before"] < 1e-6 and s["gap_before"] > 1.5 * s["gap_expected_before"]
@@ -213,7 +217,7 @@ def test_gap_shrinks_to_the_noise_after_the_refit(null):
     assert s["excess_status"] == "explained"
     # effect-free: the base model is already at the noise level
     rec0, _ = B.simulate_case(B.NONE, 0.0, 1, seed=20240707, session=SESSION, rules=RULES)
-    s0 = discrepancy(pose_data_from_static(detect_static_recording(rec0), SESSION.g), rules).summary()
+    s0 = discrepancy(pose_data_from_static(detect_static_recording(rec0), SESSION.g), rules).statistics()
     assert s0["excess_status"] == "no excess" and s0["gap_after"] == s0["gap_before"]
 
 

@@ -32,7 +32,6 @@ EXEMPT = ("_*_kernels.py", "_fast.py")
 #: budget (or no longer exists), so that the list cannot outlive the splits.
 PENDING_SPLIT = {
     "accelcal/discrepancy/fit.py",
-    "accelcal_repro/batista2011/montecarlo.py",
 }
 
 

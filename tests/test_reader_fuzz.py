@@ -182,7 +182,8 @@ def test_cli_exits_0_or_2_in_one_line(data):
         text = err.getvalue()
         assert code in (0, 2), text
         if code == 2:
-            lines = text.strip().splitlines()
+            # a read that outlasts 2 s (a loaded machine) announces itself first: not an error line
+            lines = [ln for ln in text.strip().splitlines() if not (ln.startswith("accelcal: ") and ln.endswith(" ..."))]
             assert len(lines) == 1 and lines[0].startswith("accelcal: error: "), text
             assert not out.exists()
 

@@ -14,7 +14,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import pandas as pd  # noqa: E402
 import pytest  # noqa: E402
 
-from accelcal_repro.claims import COLUMNS  # noqa: E402
+from accelcal_repro.claims import COLUMNS, NOT_TESTABLE  # noqa: E402
 from accelcal.plotting import save_figure  # noqa: E402
 from accelcal_repro.report import (  # noqa: E402
     VERDICT_COLOURS,
@@ -35,13 +35,17 @@ FIGURE_IDS = ["burkhard2024_fig1a", "batista2011_fig4", "tereshkov_fig3", "bias_
 BENCH = "s\th:m:s\tmax_rss\tmax_vms\tmax_uss\tmax_pss\tio_in\tio_out\tmean_load\tcpu_time\n"
 
 
-def _claims(path, verdicts=("reproduced", "not_reproduced", "not_reproducible")):
+VERDICTS_SHOWN = ("reproduced", "not_reproduced", "not_reproducible", NOT_TESTABLE)
+
+
+def _claims(path, verdicts=VERDICTS_SHOWN):
     rows = []
     for i, v in enumerate(verdicts):
         rows.append({"paper": ["burkhard2024", "batista2011", "tereshkov"][i % 3], "claim_id": f"claim_{i}",
                      "claim": f"claim text {i} <b>not markup</b>", "paper_value": "≈35×",
                      "reproduced_value": "" if v == "not_reproducible" else f"{i + 1.5:.1f}",
-                     "verdict": v, "evidence": f"results/x_{i}.csv"})
+                     "verdict": v, "evidence": f"results/x_{i}.csv"
+                     + (": not testable at this scale: n 1 (runs), needs n >= 3" if v == NOT_TESTABLE else "")})
     pd.DataFrame(rows, columns=list(COLUMNS)).to_csv(path, index=False)
 
 
@@ -118,7 +122,7 @@ def test_report_has_every_figure_conclusion_caption_and_table(tree):
 def test_report_colour_codes_every_verdict(tree):
     _, kw = tree
     page = build_report(**kw)
-    for i, verdict in enumerate(("reproduced", "not_reproduced", "not_reproducible")):
+    for i, verdict in enumerate(VERDICTS_SHOWN):
         bg, fg = VERDICT_COLOURS[verdict]
         row = page[page.index(f'id="claim-claim_{i}"'):]
         row = row[:row.index("</tr>")]
@@ -133,6 +137,24 @@ def test_report_colour_codes_every_verdict(tree):
     assert r > g and r > b, "not_reproduced is not red"
     r, g, b = rgb(VERDICT_COLOURS["not_reproducible"][0])
     assert r == g == b, "not_reproducible is not grey"
+    r, g, b = rgb(VERDICT_COLOURS[NOT_TESTABLE][0])
+    assert r > g > b and r - b > 40, f"{NOT_TESTABLE} is not amber"
+
+
+def test_report_counts_not_testable_apart_from_reproduced(tree):
+    """A claim the run's scale cannot decide is counted under its own verdict, not as reproduced."""
+    _, kw = tree
+    page = build_report(**kw)
+    assert f"4 claims, 1 reproduced, 1 not_reproduced, 1 {NOT_TESTABLE}, 1 not_reproducible." in page
+    head = page[page.index("<table><tr><th>paper</th>"):]
+    head = head[:head.index("</tr>")]
+    assert head.index(">not_reproduced<") < head.index(f">{NOT_TESTABLE}<") < head.index(">not_reproducible<")
+    # tereshkov holds claim_2 (not_reproducible) only; batista2011 claim_1 (not_reproduced);
+    # burkhard2024 claim_0 (reproduced) and claim_3 (not testable)
+    row = page[page.index('<a href="#claims-burkhard2024">'):]
+    row = row[:row.index("</tr>")]
+    assert [int(v) for v in re.findall(r'class="num">(\d+)<', row)] == [1, 0, 1, 0]
+    assert "the n it has and the n it needs" in page
 
 
 def test_report_is_self_contained_and_byte_identical(tree):

@@ -119,7 +119,7 @@ def broken_configs():
         "wrong_type": (wrong_type, "burkhard2024.experiments.fig1a.noise_std: '1e-3' is not of type 'array'"),
         "missing_key": (missing, "burkhard2024: 'g' is a required property"),
         "inverted_range": (inverted, "burkhard2024.truth.bias_range_mg: low end 1.3 exceeds high end 0.9"),
-        "unknown_method": (unknown, "burkhard2024.experiments.lls_limit.methods.3: 'magic' is not one of"),
+        "unknown_method": (unknown, "burkhard2024.experiments.lls_limit.methods.3: 'magic' is not a registered estimator; known: full_lls"),
         "missing_stage": (no_stage, "(top level): 'tereshkov' is a required property"),
         "cross_field_rule": (headline, "burkhard2024.timing.headline_n_poses: 33 is not in n_poses"),
     }

@@ -10,7 +10,7 @@ from .errors import DegeneratePosesError, NonFiniteError, NotPositiveDefiniteErr
 from .kernels import compiled
 from .lls import _KERNELS, _NON_FINITE, EIGVEC_TOL, MIN_GAP, _float_or_nan, _scale, design_matrix, theta_to_model
 from .results import BatchResult
-from .validation import check_finite, check_g, pose_array
+from .validation import check_finite, check_g, degenerate_trials, pose_array
 
 
 def full_lls_batch(z, g: float) -> BatchResult:
@@ -26,7 +26,7 @@ def full_lls_batch(z, g: float) -> BatchResult:
     z = pose_array(z, "full", batched=True)
     if K is None:
         check_finite(z)
-        return _full_lls_batch_svd(z, check_g(g))
+        return _refuse_degenerate(_full_lls_batch_svd(z, check_g(g)), z)
     z = np.ascontiguousarray(z)
     T = len(z)
     bias, M, status = np.empty((T, 3)), np.empty((T, 3, 3)), np.empty(T, np.int8)
@@ -39,7 +39,17 @@ def full_lls_batch(z, g: float) -> BatchResult:
     if len(ref):
         r = _full_lls_batch_svd(z[ref], g)
         bias[ref], M[ref], valid[ref] = r.bias, r.M, r.valid
-    return BatchResult(method="full_lls", bias=bias, M=M, valid=valid, status=_status(valid, NotPositiveDefiniteError))
+    return _refuse_degenerate(BatchResult(method="full_lls", bias=bias, M=M, valid=valid,
+                                          status=_status(valid, NotPositiveDefiniteError)), z)
+
+
+def _refuse_degenerate(r: BatchResult, z) -> BatchResult:
+    """The trials whose poses :func:`full_lls` refuses as degenerate: NaN, invalid, ``DegeneratePosesError``."""
+    bad = degenerate_trials(z)
+    if bad.any():
+        r.bias[bad], r.M[bad], r.valid[bad] = np.nan, np.nan, False
+        r.status[bad] = DegeneratePosesError.__name__
+    return r
 
 
 def _full_lls_batch_svd(z, g: float) -> BatchResult:

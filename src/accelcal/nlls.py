@@ -33,10 +33,10 @@ from functools import lru_cache
 
 import numpy as np
 
-from .errors import InputShapeError, NotConvergedError
+from .errors import DegeneratePosesError, InputShapeError, NotConvergedError
 from .model import m_from_params_single
 from .results import BatchResult, NLLSResult
-from .validation import check_g, check_poses
+from .validation import check_g, check_poses, degenerate_trials
 
 #: IPOPT statuses accepted as converged.
 CONVERGED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
@@ -226,7 +226,11 @@ def nlls_batch(z, g: float, model: str, noise_std: float | None = None) -> dict[
     noise_std = _check_noise(noise_std)
     for zi in z[:1]:  # build outside the timed region
         _solver(model, z.shape[1], solver_tol(noise_std, _spread(zi)))
+    degenerate = degenerate_trials(z)
     for i in range(T):
+        if degenerate[i]:  # refused as the single form refuses it, without a solve
+            out["status"][i] = DegeneratePosesError.__name__
+            continue
         t0 = time.perf_counter()
         b, M, status, iters, _ = _solve(z[i], g, model, noise_std)
         out["seconds"][i] = time.perf_counter() - t0

@@ -124,6 +124,23 @@ def scatter_is_clearly_3d(C, sum_sq: float) -> bool:
     return f - c * c / a - e2 * e2 / d2 > 0
 
 
+def degenerate_trials(z: np.ndarray) -> np.ndarray:
+    """(T,) True for the trials of ``z`` (T, n, 3) whose poses :func:`check_poses` refuses
+    as degenerate (identical, along one axis, coplanar): the batched estimators mark them
+    as the single-problem ones raise, ``DegeneratePosesError``.  The moment screen of
+    :func:`geometry_is_clearly_fine` passes almost every trial; the rest get the reference check."""
+    n = z.shape[1]
+    s1, S2 = z.sum(axis=1), np.einsum("tni,tnj->tij", z, z)
+    out = np.zeros(len(z), dtype=bool)
+    for t in range(len(z)):
+        if not geometry_is_clearly_fine(s1[t].tolist(), S2[t].tolist(), n):
+            try:
+                check_geometry(z[t])
+            except DegeneratePosesError:
+                out[t] = True
+    return out
+
+
 def check_geometry(z: np.ndarray) -> None:
     """Reference check: coplanar or single-axis pose sets do not determine the bias
     along their normal (eigenvalues of the centred scatter of the poses)."""

@@ -31,7 +31,7 @@ import pandas as pd
 import yaml
 
 from accelcal.atomic import atomic_output
-from .claims import COLUMNS, PAPERS, VERDICTS
+from .claims import COLUMNS, NOT_TESTABLE, PAPERS, VERDICTS
 
 #: Sections of the page that hold figures: (key, title, figure-id prefixes).  A figure id
 #: matching no prefix goes to "Other figures" (shown, never dropped).
@@ -49,10 +49,12 @@ FIGURE_SECTIONS = (
 )
 OTHER_SECTION = ("other", "Other figures")
 
-#: Verdict colours (background, text) of the ledger.
+#: Verdict colours (background, text) of the ledger: green, red, amber (the rule could not be
+#: decided at this scale: neither a success nor a failure), grey (nothing to compute it from).
 VERDICT_COLOURS = {
     "reproduced": ("#d6f5d6", "#145214"),
     "not_reproduced": ("#f8d4d4", "#7a1010"),
+    NOT_TESTABLE: ("#fbe8c4", "#6b4500"),
     "not_reproducible": ("#e4e4e4", "#444444"),
 }
 
@@ -450,7 +452,9 @@ def build_report(*, claims: str | os.PathLike, figures: Mapping[str, str | os.Pa
     nav.append('<li><a href="#claims">Claims ledger</a></li>')
     body.append('<section><h2 id="claims">Claims ledger</h2><p class="note">Every claim of the three papers with '
                 "the value this workflow computed and the verdict by the rule stated in the claim "
-                "(<code>results/claims.csv</code>).</p>" + ledger_html(ledger) + "</section>")
+                f"(<code>results/claims.csv</code>). <code>{NOT_TESTABLE}</code>: the run's sample is too small for "
+                "the rule to give both verdicts (the evidence gives the n it has and the n it needs); it is neither "
+                "reproduced nor not reproduced.</p>" + ledger_html(ledger) + "</section>")
 
     nav.append('<li><a href="#config">Configuration and seeds</a></li>')
     seeds = pd.DataFrame(seed_paths(config), columns=["key", "seed"])

@@ -20,6 +20,7 @@ rows = batista_claims(
     error_budget=pd.read_csv(inp.error_budget), rules=cfg["claims"],
     sources={"calibration": inp.summary, "filter": inp.filter_summary, "filter_runs": inp.filter_runs,
              "observability": inp.observability, "gramian": inp.gramian},
+    observability_runs=int(cfg["observability"]["runs"]),
 )
 for _, r in rows.iterrows():
     log.info("%s: %s (%s)", r["claim_id"], r["verdict"], r["reproduced_value"])

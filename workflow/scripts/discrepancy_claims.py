@@ -17,7 +17,8 @@ rows = discrepancy_claims(pd.read_csv(snakemake.input.summary, keep_default_na=F
                           alpha=p.rules["alpha"], power=p.rules["power"],
                           nulls=[n for n, rows in p.nulls.items() if rows != "none" and null_available(n)],
                           stability=pd.read_csv(snakemake.input.stability),
-                          excess=pd.read_csv(snakemake.input.excess), gaps=pd.read_csv(snakemake.input.gaps))
+                          excess=pd.read_csv(snakemake.input.excess), gaps=pd.read_csv(snakemake.input.gaps),
+                          layer_n_boot=int(snakemake.config["discrepancy"]["adis"]["n_boot"]))
 for r in rows.itertuples():
     log.info("%s/%s: %s (%s)", r.paper, r.claim_id, r.verdict, r.reproduced_value)
 log.info("verdicts: %s", verdict_counts(rows))

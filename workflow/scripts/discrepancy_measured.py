@@ -31,8 +31,4 @@ if note:
 with atomic_output(snakemake.output[0]) as tmp, open(tmp, "w") as fh:
     json.dump(json_safe(out), fh, indent=1, sort_keys=False)
     fh.write("\n")
-s = analysis.deterministic.summary()
-log.info("%s: %d poses, effect %s (outcome %s), gap %.3g -> %.3g, not identifiable: %s; stochastic: %s", name,
-         s["n_poses"], analysis.deterministic.effect, analysis.deterministic.outcome, s["gap_before"], s["gap_after"],
-         ", ".join(analysis.deterministic.not_identifiable) or "-",
-         analysis.implication.get("named_terms") if analysis.stochastic is not None else analysis.stochastic_error)
+log.info("%s: %s\n%s", name, analysis.deterministic.outcome, analysis.summary(written_to=snakemake.output[0]))

@@ -19,8 +19,8 @@ mc = calibrate_recording(  # the original file, read as `accelcal calibrate` rea
     level=float(b["level"]), min_valid_fraction=float(b["min_valid_fraction"]), static_kw=dict(snakemake.params.static))
 log.info("%s: %d rests detected, %d used", name, len(mc.poses), int(mc.poses.used.sum()))
 for r in mc.summary.itertuples():
-    log.info("%s %s: residual RMS %.3g m/s^2 = %.2fx noise (chi2/dof %.3g on %d), LOPO RMS %.3g%s; "
-             "bootstrap valid %.0f%% -> %s", name, r.estimator, r.residual_rms, r.excess, r.reduced_chi2, r.dof,
-             r.lopo_rms, f" ({r.lopo_note})" if r.lopo_note else "", 100 * r.boot_valid_fraction, r.ci_method)
+    log.info("%s %s:\n%s", name, r.estimator, mc.results[r.estimator].summary())
+    log.info("%s %s: LOPO RMS %.3g%s; bootstrap valid %.0f%% -> %s", name, r.estimator, r.lopo_rms,
+             f" ({r.lopo_note})" if r.lopo_note else "", 100 * r.boot_valid_fraction, r.ci_method)
 for t in TABLES:
     write_csv(getattr(mc, t), getattr(snakemake.output, t))

@@ -13,7 +13,8 @@ log = configure_logging(snakemake)
 i = snakemake.input
 rows = tereshkov_claims(pd.read_csv(i.summary), pd.read_csv(i.observability), pd.read_csv(i.artificial),
                         pd.read_csv(i.sweep), dict(snakemake.params.rules), summary_path=i.summary,
-                        observability_path=i.observability, artificial_path=i.artificial, sweep_path=i.sweep)
+                        observability_path=i.observability, artificial_path=i.artificial, sweep_path=i.sweep,
+                        artificial_runs=int(snakemake.config["tereshkov"]["scenarios"]["artificial"]["runs"]))
 for _, r in rows.iterrows():
     log.info("%s/%s: %s (%s)", r["paper"], r["claim_id"], r["verdict"], r["reproduced_value"])
 log.info("verdicts: %s", verdict_counts(rows))

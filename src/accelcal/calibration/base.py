@@ -16,6 +16,7 @@ from ..extended_model import model_terms
 from ..jsonsafe import json_safe
 from ..registry import ESTIMATORS
 from ..units import G0, acceleration_unit
+from .summary import calibration_summary
 
 FORMAT = "accelcal-calibration"
 #: Version of the JSON layout written by :meth:`Calibration.to_dict` (0: the CLI's output
@@ -174,6 +175,31 @@ class Calibration:
                 "scale_factors": "1 (gain - 1; a scale-factor error only for data in m/s^2)",
                 "nonorthogonality_deg": "deg", "residuals": "m/s^2", "residual_rms": "m/s^2",
                 "poses.mean": z, "poses.mean_std": z, "poses.t_start": "s", "calibrated output": "m/s^2"}
+
+    # ----------------------------------------------------------------- summary
+
+    def summary(self, *, init_rest_s: float | None = None, written_to=None) -> str:
+        """The calibration in a few lines: what ``accelcal calibrate`` prints.
+
+        The method and its poses (with the static detection's noise reference and the
+        reader's notes from :attr:`provenance`), the fit against the pose noise, the
+        parameters with their standard errors, and the quality's warnings.
+
+        Parameters
+        ----------
+        init_rest_s : float, optional
+            Length of the initial rest that set the noise reference [s] (the detection's
+            :attr:`StaticPoses.init_rest <accelcal.static.StaticPoses.init_rest>`), shown
+            beside it.
+        written_to : path, optional
+            Where the calibration file was written (a line says so).
+
+        Returns
+        -------
+        str
+            Lines without a final newline.
+        """
+        return calibration_summary(self, init_rest_s=init_rest_s, written_to=written_to)
 
     # ----------------------------------------------------------------- apply
 
@@ -344,9 +370,11 @@ def _jsonable(v):
 def calibration_class(cal_type: str) -> type[Calibration]:
     """The :class:`Calibration` subclass whose own ``CAL_TYPE`` is ``cal_type``.
 
-    Found by walking the subclasses (as imucal's ``CalibrationInfo``), after importing the
-    class the registry names for that estimator, so that a class defined anywhere (a
-    registered estimator's module, a user's script) loads its files.
+    The class the registry names for that estimator, else found by walking the subclasses
+    (as imucal's ``CalibrationInfo``), so that a class defined anywhere (a registered
+    estimator's module, a user's script) loads its files.  The registry's class comes
+    first: another subclass may declare the same ``CAL_TYPE`` (a script's class defined
+    again, an estimator of that name registered before).
 
     Raises
     ------
@@ -354,7 +382,9 @@ def calibration_class(cal_type: str) -> type[Calibration]:
         No such class (the message lists the known types).
     """
     if cal_type in ESTIMATORS:
-        ESTIMATORS[cal_type].load_calibration()
+        cls = ESTIMATORS[cal_type].load_calibration()
+        if cls.__dict__.get("CAL_TYPE") == cal_type:
+            return cls
     for cls in _subclasses(Calibration):
         if cls.__dict__.get("CAL_TYPE") == cal_type:
             return cls

@@ -7,9 +7,9 @@ import sys
 import time
 from pathlib import Path
 
-from ..registry import ESTIMATORS, estimators
+from ..registry import estimators
 from .common import (STANDARD_GRAVITY, _gravity, _nominal, _provenance, _rate_hint, _read, _reader_options,
-                     _static_options, _static_settings, _step, _fmt, warn)
+                     _static_options, _static_settings, _step)
 
 
 def add_parser(sub, epilog: str) -> None:
@@ -38,6 +38,7 @@ def add_parser(sub, epilog: str) -> None:
 
 def _calibrate(args) -> int:
     from ..calibration import calibrate_recording
+    from ..calibration.summary import STANDARD_GRAVITY_SOURCE
     from ..errors import RecordingError
 
     t0 = time.perf_counter()
@@ -50,7 +51,7 @@ def _calibrate(args) -> int:
             cal, poses = calibrate_recording(rec, g, method, static=static, conversion=_nominal(args, rec))
         except RecordingError as e:
             raise RecordingError(f"{e}{_rate_hint(rec)}") from None
-    prov = {**_provenance(args, t0), "g_source": "--g" if args.g is not None else "standard gravity (no --g)"}
+    prov = {**_provenance(args, t0), "g_source": "--g" if args.g is not None else STANDARD_GRAVITY_SOURCE}
     cal = _with_provenance(cal, prov)
     figures = []
     if args.figures is not None:
@@ -65,8 +66,6 @@ def _calibrate(args) -> int:
         for name, fig in figures:
             save_figure(fig, Path(args.figures) / name)
     _summary(cal, poses, rec, args)
-    for w in cal.quality.warnings:
-        warn(w)
     return 0
 
 
@@ -77,37 +76,6 @@ def _with_provenance(cal, extra: dict):
 
 
 def _summary(cal, poses, rec, args) -> None:
-    import numpy as np
-
-    q = cal.quality
-    est = ESTIMATORS[cal.CAL_TYPE]
-    where = {"initial_rest": f"noise reference: initial rest (0-{rec.t[poses.init_rest[1] - 1] - rec.t[0]:.1f} s)",
-             "quietest_stretch": "noise reference: the quietest 2 s (no initial rest)",
-             "known_intervals": "known static intervals"}[poses.reference]
-    g_note = f"g = {cal.g:g} m/s^2" + ("" if args.g is not None else " (standard gravity: pass --g for the local value)")
-    data = cal.unit if cal.input_unit in (None, cal.unit) else \
-        f"{cal.input_unit}, converted to {cal.unit} by the nominal sensitivity"
-    lines = [f"{est.cli_name}: {cal.n_poses} poses ({where}); data in {data}; {g_note}"]
-    lines += [f"  read: {n}" for n in rec.notes if n]
-    if poses.reference_note:
-        lines.append(f"  {poses.reference_note}")
-    excess = f"{q.excess:.3g}x the pose noise (chi2/dof {q.chi2 / q.dof:.3g} on {q.dof} dof, p = {q.p_value:.2g})" \
-        if q.dof > 0 else "not checkable (no degree of freedom)"
-    lines.append(f"  residual RMS {1e3 * q.residual_rms:.3g} mm/s^2 = {excess}; noise alone predicts "
-                 f"{1e3 * q.predicted_rms:.3g} mm/s^2 per pose")
-    lines.append(f"  poses: {q.distinct_orientations} distinct orientations, sphere coverage {100 * q.coverage:.0f}% "
-                 f"(within 30 deg)")
-    se = cal.standard_errors_noise
-    z = cal.unit
-    lines.append(f"  bias [{z}]".ljust(26) + _fmt(cal.bias, se["bias"]))
-    if cal.model == "full":
-        if cal.unit == "counts":
-            lines.append("  gain [counts/(m/s^2)]".ljust(26) + _fmt(cal.gain, se["scale_factors"]))
-        else:
-            lines.append("  scale [ppm]".ljust(26) + _fmt(cal.scale_factors * 1e6, se["scale_factors"] * 1e6))
-        lines.append("  nonorth [deg]".ljust(26) + _fmt(cal.nonorthogonality_deg, se["nonorthogonality_deg"]))
-    k = max(1.0, q.excess) if np.isfinite(q.excess) else 1.0
-    lines.append("  ±: standard errors from the pose noise measured at the rests"
-                 + (f", x{k:.3g} for the excess" if k > 1 else ""))
-    lines.append(f"  written to {args.out}")
-    print("\n".join(lines), file=sys.stderr)
+    """The calibration's own summary, with the initial rest's length and the output path."""
+    rest_s = rec.t[poses.init_rest[1] - 1] - rec.t[0] if poses.reference == "initial_rest" else None
+    print(cal.summary(init_rest_s=rest_s, written_to=args.out), file=sys.stderr)

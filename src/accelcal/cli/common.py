@@ -226,7 +226,3 @@ def recording_sha256(path) -> str:
     for f in sorted(p for p in path.rglob("*") if p.is_file()):
         h.update(f.relative_to(path).as_posix().encode() + b"\0" + sha256_file(f).encode())
     return h.hexdigest()
-
-
-def _fmt(values, errors) -> str:
-    return "  ".join(f"{v:+.6g} ± {e:.2g}" for v, e in zip(values, errors))

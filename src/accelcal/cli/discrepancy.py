@@ -82,56 +82,6 @@ def _discrepancy(args) -> int:
         for name, fig in figures:
             save_figure(fig, Path(args.figures) / name)
     write_json_atomic(args.out, json_safe(out))
-    _discrepancy_summary(out, args.out)
+    print(analysis.summary(written_to=args.out), file=sys.stderr)
     return 0
 
-
-def _discrepancy_summary(out: dict, path: Path) -> None:
-    det = out
-    lines = [f"discrepancy: {det['n_poses']} poses; effect named: {det['effect']}"
-             + (f" (then {', '.join(det['effects'][1:])})" if len(det["effects"]) > 1 else ""),
-             f"  gap (RMS residual / noise) {det['gap_before']:.3g} -> {det['gap_after']:.3g} "
-             f"(noise alone: {det['gap_expected_after']:.3g}); excess {det['excess_before']:.3g} -> "
-             f"{det['excess_after']:.3g}"]
-    if det["not_identifiable"]:
-        lines.append(f"  not identifiable with these poses: {', '.join(det['not_identifiable'])}")
-    for o in det.get("outliers", []):
-        lines.append(f"  outlier pose {o['pose']} at t = {o['t']:.1f} s: shifted {o['shift_sigma']:+.3g} sigma "
-                     f"(p = {o['p']:.3g}); gap {o['gap_before']:.3g} -> {o['gap_after']:.3g} without it")
-    nm = det.get("noise_model") or {}
-    if nm.get("term") == "bias_wander":
-        def v(x):  # the JSON holds None for inf (a random walk has no finite size)
-            return "inf" if x is None else f"{x:.3g}"
-
-        def ci(x):
-            return "[" + ", ".join(map(v, x)) + "]"
-
-        lines.append(f"  bias wander ({nm['process']}): size {v(nm['size'])} {ci(nm['size_ci'])}, "
-                     f"tau {v(nm['tau_s'])} s {ci(nm['tau_ci'])}, random-walk K {v(nm['random_walk_K'])} "
-                     f"{ci(nm['random_walk_K_ci'])}"
-                     + (f", correlation between the axes {v(nm['axis_correlation'])} {ci(nm['axis_correlation_ci'])}"
-                        if nm.get("axis_correlation") is not None else "") + " (95 % profile likelihood)"
-                     + ("" if nm.get("time_correlation_established") else
-                        "; its time correlation is not established (tau may be below the poses: extra white noise)"))
-    elif nm.get("estimated") is False and det.get("null") == "colored":
-        lines.append(f"  bias wander not estimated: {nm.get('reason', '')}")
-    elif nm.get("term") == "none" and det.get("null") == "colored":
-        lines.append("  bias wander: none detected (REML estimate 0)")
-    if det.get("excess_predicted") is not None and det.get("null") == "colored":
-        lo, hi = det["excess_predicted_interval"]
-        lines.append(f"  residual excess observed {det['excess_observed']:.3g}, predicted by white + wander "
-                     f"{det['excess_predicted']:.3g} (95 % interval {lo:.3g}-{hi:.3g})")
-    for e in det.get("errors", []):
-        lines.append(f"  did not converge: {e}")
-    st = out.get("stochastic")
-    if st:
-        named = {ax: a["named"] for ax, a in st["axes"].items()}
-        lines.append("  noise terms named: " + "; ".join(f"{ax}: {', '.join(v)}" for ax, v in named.items()))
-        imp = out.get("noise_implication") or {}
-        if imp:
-            lines.append(f"  residual excess expected from the noise model {imp['expected_excess']:.3g}, "
-                         f"observed {imp['observed_excess']:.3g} (explained: {'yes' if imp['explains_excess'] else 'no'})")
-    else:
-        lines.append(f"  stochastic layer: {out.get('stochastic_error', 'not run')}")
-    lines.append(f"  written to {path}")
-    print("\n".join(lines), file=sys.stderr)

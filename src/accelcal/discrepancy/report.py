@@ -34,6 +34,7 @@ from .fit import pose_data_from_static
 from .stochastic import StochasticResult
 from .stochastic.implication import centred_pose_variance, pose_difference_variance
 from .stochastic.layer import DEFAULT_CANDIDATES, rest_segments, stochastic_layer
+from .summary import report_summary
 from .vocabulary import DiscrepancyResult, Rules
 
 
@@ -79,6 +80,25 @@ class DiscrepancyReport:
                            "mean": self.poses.means.tolist(), "mean_std": self.poses.mean_std.tolist(),
                            "n_samples": self.poses.n_samples.tolist()})
         return d
+
+    def summary(self, *, written_to=None) -> str:
+        """Both layers in a few lines: what ``accelcal discrepancy`` prints.
+
+        The deterministic layer's lines (:meth:`DiscrepancyResult.summary
+        <accelcal.discrepancy.vocabulary.DiscrepancyResult.summary>`), the noise terms
+        named from the rests and what they imply for the pose residuals.
+
+        Parameters
+        ----------
+        written_to : path, optional
+            Where the report was written (a line says so).
+
+        Returns
+        -------
+        str
+            Lines without a final newline.
+        """
+        return report_summary(self, written_to)
 
 
 def _pose_mean_variance(model: dict, starts, durations) -> np.ndarray:
@@ -248,7 +268,6 @@ def allan_check(noise_model: dict, stoch, level: float = 0.95, min_share: float 
     if noise_model.get("term") != "bias_wander" or K is None or not np.isfinite(K):
         return {"verdict": "no wander named"}
     fs = stoch.fs
-    out = {"axes": {}, "min_share": min_share, "level": level}
 
     def wander_avar(taus, k):
         if tau_c is None or not np.isfinite(tau_c):
@@ -256,44 +275,47 @@ def allan_check(noise_model: dict, stoch, level: float = 0.95, min_share: float 
         s2 = k ** 2 * tau_c / 2.0
         return s2 * TERMS["gauss_markov"].basis(taus, fs, tau_c)
 
-    verdicts = []
-    for a in stoch.axes:
-        taus = np.asarray(a.taus, float)
-        n2 = a.fit_before["white"]["value"] ** 2
-        white = n2 / taus
-        wv = wander_avar(taus, K)
-        lo_w, hi_w = (wander_avar(taus, k) for k in (K_ci[0] if np.isfinite(K_ci[0]) else 0.0,
-                                                      K_ci[1] if np.isfinite(K_ci[1]) else np.inf))
-        share = wv / (white + wv)
-        seen = share >= min_share
-        m = np.round(taus * fs).astype(int)
-        nu_w, nu_r = pooled_edf(stoch.segment_lengths, m, 0), pooled_edf(stoch.segment_lengths, m, -2)
-        nu = (white + wv) ** 2 / (white ** 2 / np.maximum(nu_w, 1e-9) + wv ** 2 / np.maximum(nu_r, 1e-9))
-        k = max(int(seen.sum()), 1)
-        meas = np.asarray(a.adev_measured, float) ** 2
-        lo, hi = avar_interval(meas[:, None], nu[:, None], 1 - (1 - level) / k)
-        lo, hi = lo[:, 0], hi[:, 0]
-        pred_lo, pred_hi = white + lo_w, white + hi_w
-        less = seen & (pred_lo > hi)
-        more = seen & (pred_hi < lo)
-        if not seen.any():
-            v = "not visible in the rests"
-        elif less.any():
-            v = "rests show less"
-        else:
-            v = "consistent"
-        verdicts.append(v)
-        out["axes"][a.axis] = {
-            "verdict": v, "taus": taus.tolist(), "adev_measured": np.sqrt(meas).tolist(),
-            "adev_interval": np.sqrt(np.column_stack([lo, hi])).tolist(),
-            "adev_white": np.sqrt(white).tolist(), "adev_predicted": np.sqrt(white + wv).tolist(),
-            "adev_predicted_band": np.sqrt(np.column_stack([pred_lo, pred_hi])).tolist(),
-            "wander_share": share.tolist(), "compared": seen.tolist(),
-            "less_at": taus[less].tolist(), "more_at": taus[more].tolist(),
-        }
-    out["verdict"] = verdicts[0] if len(set(verdicts)) == 1 else "; ".join(
-        f"{a.axis}: {v}" for a, v in zip(stoch.axes, verdicts))
-    return out
+    band = (K_ci[0] if np.isfinite(K_ci[0]) else 0.0, K_ci[1] if np.isfinite(K_ci[1]) else np.inf)
+    axes = {a.axis: _axis_allan_check(a, stoch, wander_avar, K, band, level, min_share) for a in stoch.axes}
+    verdicts = [c["verdict"] for c in axes.values()]
+    verdict = verdicts[0] if len(set(verdicts)) == 1 else "; ".join(f"{ax}: {c['verdict']}" for ax, c in axes.items())
+    return {"axes": axes, "min_share": min_share, "level": level, "verdict": verdict}
+
+
+def _axis_allan_check(a, stoch, wander_avar, K: float, band: tuple, level: float, min_share: float) -> dict:
+    """:func:`allan_check` on one axis: the measured Allan variance against white + wander
+    (``wander_avar(taus, K)``, its band from the ends of ``K``'s interval) where the wander
+    is at least ``min_share`` of the prediction."""
+    taus = np.asarray(a.taus, float)
+    white = a.fit_before["white"]["value"] ** 2 / taus
+    wv = wander_avar(taus, K)
+    lo_w, hi_w = (wander_avar(taus, k) for k in band)
+    share = wv / (white + wv)
+    seen = share >= min_share
+    m = np.round(taus * stoch.fs).astype(int)
+    nu_w, nu_r = pooled_edf(stoch.segment_lengths, m, 0), pooled_edf(stoch.segment_lengths, m, -2)
+    nu = (white + wv) ** 2 / (white ** 2 / np.maximum(nu_w, 1e-9) + wv ** 2 / np.maximum(nu_r, 1e-9))
+    k = max(int(seen.sum()), 1)
+    meas = np.asarray(a.adev_measured, float) ** 2
+    lo, hi = avar_interval(meas[:, None], nu[:, None], 1 - (1 - level) / k)
+    lo, hi = lo[:, 0], hi[:, 0]
+    pred_lo, pred_hi = white + lo_w, white + hi_w
+    less = seen & (pred_lo > hi)
+    more = seen & (pred_hi < lo)
+    if not seen.any():
+        v = "not visible in the rests"
+    elif less.any():
+        v = "rests show less"
+    else:
+        v = "consistent"
+    return {
+        "verdict": v, "taus": taus.tolist(), "adev_measured": np.sqrt(meas).tolist(),
+        "adev_interval": np.sqrt(np.column_stack([lo, hi])).tolist(),
+        "adev_white": np.sqrt(white).tolist(), "adev_predicted": np.sqrt(white + wv).tolist(),
+        "adev_predicted_band": np.sqrt(np.column_stack([pred_lo, pred_hi])).tolist(),
+        "wander_share": share.tolist(), "compared": seen.tolist(),
+        "less_at": taus[less].tolist(), "more_at": taus[more].tolist(),
+    }
 
 
 def discrepancy_report(rec: Recording, g: float, *, rules: Rules | None = None,

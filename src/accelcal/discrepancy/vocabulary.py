@@ -46,6 +46,7 @@ from .. import distributions as dist
 from ..errors import AccelcalError
 from .effects import EFFECT_IDS, EFFECTS, TEMPERATURE, effect
 from .fit import Fit, PoseData, effect_columns, evaluate, orthonormal_basis, parameter_names
+from .summary import result_lines
 
 CORRECTIONS = ("holm", "bonferroni", "none")
 #: The noise models of the null hypothesis: ``colored`` (white per-pose noise + a bias wander
@@ -449,7 +450,11 @@ class DiscrepancyResult:
         r, _, _ = evaluate(self.final.p, self.data, self.final.effects, jacobian=False)
         return np.full(len(self.data), np.nan) if r is None else r
 
-    def summary(self) -> dict:
+    def summary(self) -> str:
+        """The deterministic layer in a few lines (:func:`accelcal.discrepancy.summary.result_lines`)."""
+        return "\n".join(result_lines(self))
+
+    def statistics(self) -> dict:
         """The gaps and what noise alone predicts, before (base) and after (named effects)."""
         b, f = self.base, self.final
         chi0 = dist.chi2_sf(b.chi2, b.dof)  # NaN without degrees of freedom
@@ -497,7 +502,7 @@ class DiscrepancyResult:
             **self.colored,
             "not_applicable": dict(self.not_applicable),
             "candidates": [c.to_dict() for c in self.candidates],
-            **self.summary(),
+            **self.statistics(),
             "rules": {**asdict(self.rules), "candidates": list(self.rules.candidates)},
             "model_before": {"effects": [], "parameters": params(self.base)},
             "model_after": {"effects": list(self.final.effects), "parameters": params(self.final)},

@@ -1,5 +1,5 @@
 """Compiled block loop of the shared-gain filter Monte Carlo
-(:func:`accelcal_repro.batista2011.montecarlo.shared_gain_filter`).
+(:func:`accelcal_repro.batista2011.montecarlo.shared_gain.shared_gain_filter`).
 
 Many runs share one gain sequence (the covariance does not depend on the data), so each
 run's state is only propagated with its own rates and updated with the shared gain.  The
@@ -33,7 +33,7 @@ rotation_blocks = _FILTER_KERNELS.rotation_blocks
 def shared_gain_block(dt, x, a_prev, w_prev, a, w, y, gains, store, out, row):
     """Runs ``x`` (T, 9) with their last samples ``a_prev``, ``w_prev`` (T, 3) through
     the samples ``a``, ``w``, ``y`` (T, B, 3) with gains ``gains`` (B, 9, 3), as
-    :meth:`accelcal_repro.batista2011.montecarlo._FilterState.run_block`: the state is
+    :meth:`accelcal_repro.batista2011.montecarlo.shared_gain._FilterState.run_block`: the state is
     propagated with each run's own rates and updated with the shared gain.  After
     sample ``b`` with ``store[b]`` the states go to ``out[:, row]`` (then ``row + 1``).
     ``x``, ``a_prev`` and ``w_prev`` are updated in place."""

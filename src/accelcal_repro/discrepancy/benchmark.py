@@ -476,7 +476,7 @@ def rules_with_null(rules: Rules, null: str) -> Rules:
 
 
 def _result_row(res) -> dict:
-    s = res.summary()
+    s = res.statistics()
     row = {"outcome": res.outcome, "effect": res.effect, "effects": "+".join(res.effects),
            "not_identifiable": "+".join(res.not_identifiable), "n_poses_detected": s["n_poses"],
            **{k: s[k] for k in ("gap_before", "gap_after", "gap_expected_before", "gap_expected_after",

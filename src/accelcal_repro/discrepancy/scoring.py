@@ -12,7 +12,10 @@ Tables (tidy, the figures and the claims are computed from them):
 * :func:`rates`: per (null, profile, row, size): outcome counts, detection rate and
   accuracy with exact (Clopper–Pearson) 95 % intervals.
 * :func:`summary`: the findings, one row per (null, profile, row, metric), with verdicts
-  where the issue states a goal (rules in the ``rule`` column).
+  where the issue states a goal (rules in the ``rule`` column): ``pass``, ``fail``, or
+  ``not_testable_at_this_scale`` where the row's sample cannot give both (the exact
+  interval's bound at the extreme count is on the same side of the goal whatever the
+  count: :mod:`accelcal_repro.claims`).
 
 Real-noise profiles reuse windows of one record (:mod:`.profiles`): recordings that share a
 window are correlated, so their intervals use Kish's effective sample size
@@ -31,6 +34,7 @@ from accelcal import distributions as dist
 from accelcal.discrepancy.effects import EFFECT_IDS
 from accelcal.errors import AccelcalError
 
+from ..claims import NOT_TESTABLE, upper_end_with_no_success
 from .benchmark import CONSTANT_TEMPERATURE, ERROR, NONE, NOT_IDENTIFIABLE, OUTLIER
 
 SUMMARY_COLUMNS = ["section", "null", "profile", "effect", "metric", "value", "ci_low", "ci_high", "n", "n_independent",
@@ -186,7 +190,24 @@ def _row(null, prof, effect, metric, value, lo, hi, n, n_ind, target=np.nan, ver
 
 
 FPR_RULE = ("goal: false-positive rate <= alpha; pass iff the exact 95% interval (independent recordings) reaches "
-            "down to alpha and its upper end is <= 2 alpha")
+            "down to alpha and its upper end is <= 2 alpha; not_testable_at_this_scale when the upper end exceeds "
+            "2 alpha even with no false positive")
+ACCURACY_RULE = ("named first at sizes >= 1 oracle MDE (pooled); pass iff the upper end of the exact 95% interval >= "
+                 "power; not_testable_at_this_scale when it reaches the power even with no success")
+
+
+def fpr_verdict(lo: float, hi: float, n_eff: float, alpha: float) -> str:
+    """Verdict of the false-positive goal (:data:`FPR_RULE`) on an interval of ``n_eff`` recordings."""
+    if not upper_end_with_no_success(n_eff) <= 2 * alpha:
+        return NOT_TESTABLE
+    return "pass" if lo <= alpha and hi <= 2 * alpha else "fail"
+
+
+def accuracy_verdict(hi: float, n_eff: float, power: float) -> str:
+    """Verdict of the naming goal (:data:`ACCURACY_RULE`) on an interval of ``n_eff`` recordings."""
+    if not upper_end_with_no_success(n_eff) < power:
+        return NOT_TESTABLE
+    return "pass" if hi >= power else "fail"
 
 
 def _fpr_rows(null, prof, none: pd.DataFrame, alpha: float) -> list[dict]:
@@ -195,7 +216,7 @@ def _fpr_rows(null, prof, none: pd.DataFrame, alpha: float) -> list[dict]:
     fp = none["false_positive"].to_numpy()
     lo, hi, ne = interval(fp, win)
     rows = [_row(null, prof, NONE, "false_positive_rate", fp.mean(), lo, hi, n, round(ne, 1), alpha,
-                 "pass" if lo <= alpha and hi <= 2 * alpha else "fail", FPR_RULE)]
+                 fpr_verdict(lo, hi, ne, alpha), FPR_RULE)]
     for what, sel in (("effect", ~none["outcome"].isin((*NOTHING_NAMED, OUTLIER))),
                       ("outlier", none["outcome"] == OUTLIER)):
         x = (sel & none["false_positive"]).to_numpy()
@@ -219,7 +240,9 @@ def summary(scores: pd.DataFrame, rate_table: pd.DataFrame, *, alpha: float, pow
     upper bound ≤ 2α); the naming accuracy of an effect pooled over sizes ≥ 1 MDE passes
     when its interval's upper end is ≥ the configured power (at 1 oracle MDE a test that
     knew the true noise covariance would detect it with that power, larger sizes more
-    often).  Accuracy and detection rate at every size are reported without verdict.
+    often).  Each is ``not_testable_at_this_scale`` on fewer recordings than can give both
+    verdicts (:func:`fpr_verdict`, :func:`accuracy_verdict`).  Accuracy and detection rate
+    at every size are reported without verdict.
     """
     rows = []
     for (null, prof), sc in scores.groupby(["null", "profile"], sort=True):
@@ -242,9 +265,7 @@ def summary(scores: pd.DataFrame, rate_table: pd.DataFrame, *, alpha: float, pow
                 n = len(big)
                 lo, hi, ne = interval(big["correct"], big["noise_window"].to_numpy())
                 rows.append(_row(null, prof, truth, "accuracy_ge_1mde", big["correct"].mean() if n else np.nan, lo, hi,
-                                 n, round(ne, 1), power, ("pass" if hi >= power else "fail") if n else "",
-                                 "named first at sizes >= 1 oracle MDE (pooled); pass iff the upper end of the exact "
-                                 "95% interval >= power"))
+                                 n, round(ne, 1), power, accuracy_verdict(hi, ne, power) if n else "", ACCURACY_RULE))
                 for target in (0.5, 0.95):
                     v, note = crossing(r.size_mde, r.detection_rate, target)
                     rows.append(_row(null, prof, truth, f"size_at_{int(target * 100)}pct_mde", v, np.nan, np.nan,
@@ -277,5 +298,19 @@ def headline(summ: pd.DataFrame, profiles) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-__all__ = ["FPR_RULE", "effective_n", "headline", "interval", "NOTHING_NAMED", "SUMMARY_COLUMNS", "clopper_pearson", "crossing", "rates", "score_cases",
-           "summary"]
+__all__ = [
+    "ACCURACY_RULE",
+    "FPR_RULE",
+    "NOTHING_NAMED",
+    "SUMMARY_COLUMNS",
+    "accuracy_verdict",
+    "clopper_pearson",
+    "crossing",
+    "effective_n",
+    "fpr_verdict",
+    "headline",
+    "interval",
+    "rates",
+    "score_cases",
+    "summary",
+]

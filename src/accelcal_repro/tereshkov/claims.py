@@ -11,6 +11,11 @@ Inputs are the tables of :mod:`accelcal_repro.tereshkov.montecarlo`:
 Every rule is stated in the claim text; the thresholds come from the ``claims``
 section of the config (:data:`DEFAULT_RULES`).  Convergence time and steady-state
 error are defined in :mod:`accelcal_repro.tereshkov.montecarlo`.
+
+Every rule reads a mean, an RMS or a settling time over simulated runs, which one run
+already gives and which can fall on either side of its threshold: each needs one run
+(:data:`MINIMUM_RUNS`; below it, a table without runs, the row is
+``not_testable_at_this_scale``).
 """
 
 from __future__ import annotations
@@ -19,9 +24,11 @@ import math
 
 import pandas as pd
 
-from ..claims import COLUMNS, Claim, LedgerError, validate_rows
+from ..claims import COLUMNS, Claim, LedgerError, MinimumSample, validate_rows
 
 PAPER = "tereshkov"
+#: The least number of simulated runs every rule needs (module docstring).
+MINIMUM_RUNS = MinimumSample(1, "simulated runs", "a mean or RMS over runs needs one")
 
 #: Rule thresholds (config ``tereshkov.claims``).
 DEFAULT_RULES = {
@@ -53,8 +60,12 @@ def tereshkov_claims(summary: pd.DataFrame, observability: pd.DataFrame, artific
                      summary_path: str = "results/tereshkov/summary.csv",
                      observability_path: str = "results/tereshkov/observability.csv",
                      artificial_path: str = "results/tereshkov/artificial_summary.csv",
-                     sweep_path: str = "results/tereshkov/sweep_summary.csv") -> pd.DataFrame:
-    """All Tereshkov rows of the ledger (columns :data:`accelcal_repro.claims.COLUMNS`)."""
+                     sweep_path: str = "results/tereshkov/sweep_summary.csv",
+                     artificial_runs: float | None = None) -> pd.DataFrame:
+    """All Tereshkov rows of the ledger (columns :data:`accelcal_repro.claims.COLUMNS`).
+
+    ``artificial_runs``: the runs behind ``artificial`` (which does not count them; None: unknown).
+    """
     r = dict(DEFAULT_RULES) | dict(rules or {})
     lo, hi = r["convergence_ratio_range"]
     rows = []
@@ -62,6 +73,7 @@ def tereshkov_claims(summary: pd.DataFrame, observability: pd.DataFrame, artific
     fg, fa = _row(summary, "field", "gyro"), _row(summary, "field", "accel")
     sg, sa = _row(summary, "straight", "gyro"), _row(summary, "straight", "accel")
     runs = int(fg["runs"])
+    field = MINIMUM_RUNS.at(runs)
 
     # --- gyro convergence time
     tg = float(fg["t_conv"])
@@ -73,7 +85,7 @@ def tereshkov_claims(summary: pd.DataFrame, observability: pd.DataFrame, artific
     ev = (f"{summary_path}: field scenario ({runs} runs): 95% settling at {tg:.0f} s elapsed, after "
           f"{fg['update_time_at_conv']:.0f} s of straight-motion updating (the gyro estimate updates "
           f"{100 * fg['update_fraction']:.0f}% of the time); straight-only runs: {sg['t_conv']:.0f} s")
-    rows.append(c.judge(tg, _in_range(tg / r["gyro_convergence_s"], lo, hi), ev, fmt="{:.0f} s"))
+    rows.append(c.judge(tg, _in_range(tg / r["gyro_convergence_s"], lo, hi), ev, fmt="{:.0f} s", scale=field))
 
     # --- accel convergence time
     ta = float(fa["t_conv"])
@@ -85,7 +97,7 @@ def tereshkov_claims(summary: pd.DataFrame, observability: pd.DataFrame, artific
     ev = (f"{summary_path}: field scenario ({runs} runs): 95% settling at {ta:.0f} s elapsed, after "
           f"{fa['update_time_at_conv']:.0f} s of turning updates (the estimate updates "
           f"{100 * fa['update_fraction']:.0f}% of the time, only in settled turns)")
-    rows.append(c.judge(ta, _in_range(ta / r["accel_convergence_s"], lo, hi), ev, fmt="{:.0f} s"))
+    rows.append(c.judge(ta, _in_range(ta / r["accel_convergence_s"], lo, hi), ev, fmt="{:.0f} s", scale=field))
 
     # --- accel slower than gyro
     ratio = ta / tg if (math.isfinite(ta) and math.isfinite(tg) and tg > 0) else float("nan")
@@ -95,7 +107,7 @@ def tereshkov_claims(summary: pd.DataFrame, observability: pd.DataFrame, artific
               f"settling times (field runs) exceeds {r['accel_slower_factor']:g}",
               "> 2 (300 s vs 120 s)")
     ev = f"{summary_path}: accel {ta:.0f} s / gyro {tg:.0f} s"
-    rows.append(c.judge(ratio, ratio > r["accel_slower_factor"], ev, fmt="{:.2f}×"))
+    rows.append(c.judge(ratio, ratio > r["accel_slower_factor"], ev, fmt="{:.2f}×", scale=field))
 
     # --- steady-state RMS errors
     for sensor, key, unit, paper_value, row_ in (
@@ -112,7 +124,7 @@ def tereshkov_claims(summary: pd.DataFrame, observability: pd.DataFrame, artific
         ev = (f"{summary_path}: field scenario ({runs} runs), RMS of estimate - truth over runs, both axes and the "
               f"steady-state window; mean |error| {row_['e_ss']:.4g} {unit}; straight-only runs: "
               f"{_row(summary, 'straight', sensor)['ss_rms']:.4g} {unit}")
-        rows.append(c.judge(v, v <= r[key], ev, fmt="{:.4f} " + unit))
+        rows.append(c.judge(v, v <= r[key], ev, fmt="{:.4f} " + unit, scale=field))
 
     # --- accel unobservable in straight motion
     obs = observability
@@ -134,7 +146,8 @@ def tereshkov_claims(summary: pd.DataFrame, observability: pd.DataFrame, artific
           f"{fr_field:.3f}; {observability_path}: torque change per m/s² of bias shift {st.mean():.4f} °/s "
           f"(straight) vs {tu.mean():.3f} °/s (turns; eq. 13 predicts "
           f"{(obs[obs['mode'] == 'turn']['predicted_rms_dps'] / obs[obs['mode'] == 'turn']['shift_mps2']).mean():.3f})")
-    rows.append(c.judge(frac, passed, ev, fmt="{:.3f} (straight/turn torque sensitivity)"))
+    scale = MINIMUM_RUNS.at(min(runs, int(sa["runs"]), obs["run"].nunique() if "run" in obs else runs))
+    rows.append(c.judge(frac, passed, ev, fmt="{:.3f} (straight/turn torque sensitivity)", scale=scale))
 
     # --- artificial bias test
     a = artificial.set_index("axis")
@@ -149,7 +162,8 @@ def tereshkov_claims(summary: pd.DataFrame, observability: pd.DataFrame, artific
     ev = (f"{artificial_path}: RMS(estimate - artificial) {v:.4f} m/s² (includes the unknown intrinsic bias, as in the "
           f"paper); RMS(with - without - artificial) {a.loc['xy', 'rms_difference']:.4f}; RMS(estimate - total "
           f"true bias) {a.loc['xy', 'rms_vs_truth']:.4f}")
-    rows.append(c.judge(v, v <= r["accel_ss_rms_mps2"], ev, fmt="{:.4f} m/s²"))
+    rows.append(c.judge(v, v <= r["accel_ss_rms_mps2"], ev, fmt="{:.4f} m/s²",
+                        scale=MINIMUM_RUNS.at(artificial_runs if artificial_runs is not None else float("nan"))))
 
     # --- installation angles
     amax = r["installation_max_deg"]
@@ -203,7 +217,8 @@ def _installation_row(sk: pd.DataFrame, kind: str, label: str, amax: float, r: d
     ev = (f"{sweep_path}: steady-state RMS (gyro, accel) vs equivalent biases per angle: {per('equivalent')} "
           f"({bad('equivalent')}); vs sensor-axis biases: {per('sensor_axes')} ({bad('sensor_axes')}); "
           f"AHRS tilt error RMS: {tilt}")
-    return c.judge(worst_acc, passed, ev, fmt="{:.4f} m/s² worst accel RMS up to " + f"{amax:g}°")
+    scale = MINIMUM_RUNS.at(float(sk["runs"].min()) if "runs" in sk else float("nan"))
+    return c.judge(worst_acc, passed, ev, fmt="{:.4f} m/s² worst accel RMS up to " + f"{amax:g}°", scale=scale)
 
 
-__all__ = ["DEFAULT_RULES", "PAPER", "tereshkov_claims"]
+__all__ = ["DEFAULT_RULES", "MINIMUM_RUNS", "PAPER", "tereshkov_claims"]

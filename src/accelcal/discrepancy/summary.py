@@ -1,0 +1,92 @@
+"""The text the discrepancy results render of themselves: the deterministic layer's
+(:meth:`DiscrepancyResult.summary <accelcal.discrepancy.vocabulary.DiscrepancyResult.summary>`)
+and the whole report's (:meth:`DiscrepancyReport.summary
+<accelcal.discrepancy.report.DiscrepancyReport.summary>`), what ``accelcal discrepancy``
+prints and the workflow logs.
+
+Built from the result objects, not from their JSON: non-finite numbers print as ``inf``
+or ``nan`` (the JSON holds None for both), and an interval end the profile likelihood
+leaves open prints as ``inf``.
+"""
+
+from __future__ import annotations
+
+import math
+
+
+def result_lines(det) -> list[str]:
+    """The deterministic layer: effects named, gaps, what was not identifiable, outlier poses,
+    the bias wander of the colored null, and the fits that failed."""
+    s = det.statistics()
+    then = f" (then {', '.join(det.effects[1:])})" if len(det.effects) > 1 else ""
+    lines = [f"discrepancy: {s['n_poses']} poses; effect named: {det.effect}{then}",
+             f"  gap (RMS residual / noise) {det.gap_before:.3g} -> {det.gap_after:.3g} "
+             f"(noise alone: {s['gap_expected_after']:.3g}); excess {s['excess_before']:.3g} -> "
+             f"{s['excess_after']:.3g}"]
+    if det.not_identifiable:
+        lines.append(f"  not identifiable with these poses: {', '.join(det.not_identifiable)}")
+    for o in det.outliers:
+        lines.append(f"  outlier pose {o.pose} at t = {o.t:.1f} s: shifted {o.shift_sigma:+.3g} sigma "
+                     f"(p = {o.p:.3g}); gap {o.gap_before:.3g} -> {o.gap_after:.3g} without it")
+    if det.rules.null == "colored":
+        lines += _wander_lines(det.noise_model or {}, det.colored or {})
+    lines += [f"  did not converge: {e}" for e in det.errors]
+    return lines
+
+
+def _wander_lines(nm: dict, colored: dict) -> list[str]:
+    """The bias wander estimated jointly with the calibration (colored null), and the residual
+    excess it predicts."""
+    lines = []
+    if nm.get("term") == "bias_wander":
+        corr = nm.get("axis_correlation")
+        lines.append(f"  bias wander ({nm['process']}): size {_g(nm['size'])} {_ci(nm['size_ci'])}, "
+                     f"tau {_g(nm['tau_s'])} s {_ci(nm['tau_ci'])}, random-walk K {_g(nm['random_walk_K'])} "
+                     f"{_ci(nm['random_walk_K_ci'])}"
+                     + (f", correlation between the axes {_g(corr)} {_ci(nm['axis_correlation_ci'])}"
+                        if _finite(corr) else "") + " (95 % profile likelihood)"
+                     + ("" if nm.get("time_correlation_established") else
+                        "; its time correlation is not established (tau may be below the poses: extra white noise)"))
+    elif nm.get("estimated") is False:
+        lines.append(f"  bias wander not estimated: {nm.get('reason', '')}")
+    elif nm.get("term") == "none":
+        lines.append("  bias wander: none detected (REML estimate 0)")
+    if _finite(colored.get("excess_predicted")):
+        lo, hi = colored["excess_predicted_interval"]
+        lines.append(f"  residual excess observed {colored['excess_observed']:.3g}, predicted by white + wander "
+                     f"{colored['excess_predicted']:.3g} (95 % interval {lo:.3g}-{hi:.3g})")
+    return lines
+
+
+def report_summary(report, written_to=None) -> str:
+    """The lines of :meth:`DiscrepancyReport.summary <accelcal.discrepancy.report.DiscrepancyReport.summary>`."""
+    lines = result_lines(report.deterministic)
+    st = report.stochastic
+    if st is not None:
+        named = {a.axis: a.named or ("none",) for a in st.axes}
+        lines.append("  noise terms named: " + "; ".join(f"{ax}: {', '.join(v)}" for ax, v in named.items()))
+        imp = report.implication
+        if imp:
+            lines.append(f"  residual excess expected from the noise model {imp['expected_excess']:.3g}, "
+                         f"observed {imp['observed_excess']:.3g} "
+                         f"(explained: {'yes' if imp['explains_excess'] else 'no'})")
+    else:
+        lines.append(f"  stochastic layer: {report.stochastic_error or 'not run'}")
+    if written_to is not None:
+        lines.append(f"  written to {written_to}")
+    return "\n".join(lines)
+
+
+def _finite(x) -> bool:
+    return x is not None and math.isfinite(x)
+
+
+def _g(x) -> str:
+    return f"{x:.3g}"
+
+
+def _ci(interval) -> str:
+    return "[" + ", ".join(map(_g, interval)) + "]"
+
+
+__all__ = ["report_summary", "result_lines"]

@@ -1,0 +1,120 @@
+"""Results render their own summary: what `accelcal calibrate` and `accelcal discrepancy`
+print is the result's ``summary()``, also for a calibration read back from its file."""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from accelcal import cli
+from accelcal.calibration import calibrate_poses, load_calibration
+from accelcal.discrepancy import report
+from accelcal.discrepancy.vocabulary import Rules
+from accelcal.formats import read, write_recording
+from accelcal.simulation import random_directions, sample_truth, simulate_recording
+from accelcal.static import detect_static_recording
+from accelcal_repro.discrepancy import benchmark as B
+
+G = 9.80665
+QUICK = report.StochasticSettings(n_boot=19, n_resim=1)
+
+
+@pytest.fixture(scope="module")
+def session(tmp_path_factory):
+    rng = np.random.default_rng(3)
+    tr = {k: v[0] for k, v in sample_truth(rng, 1).items()}
+    u = np.vstack([[0, 0, 1.0], random_directions(rng, 29)])
+    rec = simulate_recording(rng, u, G, tr["M"], tr["bias"], noise_std=0.01, temperature=(20.0, 25.0))
+    path = tmp_path_factory.mktemp("rec") / "session.csv"
+    pd.DataFrame({"t": rec["t"], "ax": rec["acc"][:, 0], "ay": rec["acc"][:, 1], "az": rec["acc"][:, 2],
+                  "temp": rec["temp"]}).to_csv(path, index=False)
+    return path
+
+
+def _initial_rest_s(path) -> float:
+    rec = read(path)
+    poses = detect_static_recording(rec)
+    assert poses.reference == "initial_rest"
+    return rec.t[poses.init_rest[1] - 1] - rec.t[0]
+
+
+@pytest.mark.parametrize("extra", [["--g", str(G)], ["--method", "bias-lls"], ["--method", "full-als", "--g", "9.81"]])
+def test_calibrate_prints_the_calibrations_summary(session, tmp_path, capsys, extra):
+    out = tmp_path / "cal.json"
+    assert cli.main(["calibrate", str(session), "--out", str(out), *extra]) == 0
+    err = capsys.readouterr().err
+    cal = load_calibration(out)  # the file keeps what the summary needs (notes, noise reference, g source)
+    assert err == cal.summary(init_rest_s=_initial_rest_s(session), written_to=out) + "\n"
+    lines = err.splitlines()
+    assert lines[0].startswith(f"{cal.to_dict()['method']}: 30 poses (noise reference: initial rest (0-")
+    assert ("standard gravity" in lines[0]) == ("--g" not in extra)
+    assert [ln for ln in lines if ln.startswith("  read: ")] == [f"  read: {n}" for n in read(session).notes]
+    assert lines.index(f"  written to {out}") == len(lines) - 1 - len(cal.quality.warnings)
+    assert lines[len(lines) - len(cal.quality.warnings):] == [f"warning: {w}" for w in cal.quality.warnings]
+
+
+def test_a_calibration_made_by_the_library_summarises_itself(session):
+    """No CLI context: no noise reference, no output line; a quality warning still shows."""
+    poses = detect_static_recording(read(session))
+    cal = calibrate_poses(poses, G, "full_lls", unit="m/s^2")
+    text = cal.summary()
+    assert text.splitlines()[0] == f"full-lls: 30 poses; data in m/s^2; g = {G:g} m/s^2"
+    assert "written to" not in text and "  scale [ppm]" in text and "  nonorth [deg]" in text
+    small = calibrate_poses(_subset(poses, 12), G, "full_lls", unit="m/s^2")
+    assert "warning: only 3 degree(s) of freedom" in small.summary()
+
+
+def _subset(poses, n):
+    from dataclasses import replace
+
+    keep = slice(0, n)
+    return replace(poses, means=poses.means[keep], t_start=poses.t_start[keep], t_end=poses.t_end[keep],
+                   t_mid=poses.t_mid[keep], n_samples=poses.n_samples[keep], noise_std=poses.noise_std[keep],
+                   mean_std=poses.mean_std[keep], temp=None if poses.temp is None else poses.temp[keep],
+                   intervals=poses.intervals[keep])
+
+
+@pytest.fixture(scope="module")
+def two_effects(tmp_path_factory):
+    rec, _ = B.simulate_case("quadratic+bias_drift", 8.0, 0, seed=11, session=B.Session(), rules=Rules())
+    path = tmp_path_factory.mktemp("rec") / "pair.csv"
+    write_recording(path, rec)
+    return path
+
+
+def test_discrepancy_prints_the_reports_summary(two_effects, tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(report, "DEFAULT_STOCHASTIC", QUICK)
+    out = tmp_path / "report.json"
+    assert cli.main(["discrepancy", str(two_effects), "--g", str(G), "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    rec = read(two_effects)
+    rep = report.discrepancy_report(rec, G, stochastic=QUICK, unit=rec.unit)
+    assert err == rep.summary(written_to=out) + "\n"
+    lines = err.splitlines()
+    assert lines[0] == "discrepancy: 30 poses; effect named: quadratic (then bias_drift)"
+    assert lines[1].startswith("  gap (RMS residual / noise) ")
+    assert any(ln.startswith("  bias wander (") for ln in lines)
+    assert lines[-3].startswith("  noise terms named: x: ") and lines[-1] == f"  written to {out}"
+    # the deterministic layer's own summary is the report's first lines
+    det = rep.deterministic.summary().splitlines()
+    assert lines[:len(det)] == det and len(det) < len(lines)
+
+
+def test_a_report_without_the_stochastic_layer_says_so(two_effects):
+    rec = read(two_effects)
+    rep = report.discrepancy_report(rec, G, stochastic=None, unit=rec.unit)
+    text = rep.summary()
+    assert text.splitlines()[-1] == "  stochastic layer: not run" and "noise terms named" not in text
+
+
+def test_the_summary_prints_what_json_cannot_hold(two_effects):
+    """Non-finite numbers come from the objects as they are (the JSON has None for NaN and inf)."""
+    from dataclasses import replace
+
+    rec = read(two_effects)
+    rep = report.discrepancy_report(rec, G, stochastic=None, unit=rec.unit)
+    det = rep.deterministic
+    nm = {**det.noise_model, "term": "bias_wander", "process": "random_walk", "size": np.inf, "tau_s": np.inf,
+          "size_ci": [0.0, np.inf], "tau_ci": [np.nan, np.inf], "axis_correlation": np.nan}
+    text = replace(det, noise_model=nm).summary()
+    line = next(ln for ln in text.splitlines() if ln.startswith("  bias wander"))
+    assert "size inf [0, inf], tau inf s [nan, inf]" in line and "correlation between" not in line
