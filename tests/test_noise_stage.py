@@ -73,9 +73,9 @@ def test_a_datasheet_claim_fails_when_an_axis_is_outside_the_factor(tables):
 
 
 def test_the_coverage_rule_and_the_least_sample_at_which_it_can_fail():
-    assert coverage_rule_minimum(0.90) == 2  # 1 - 0.025**(1/2) = 0.84 < 0.90 < 1 - 0.025 = 0.975
+    assert coverage_rule_minimum(0.90).needed == 2  # 1 - 0.025**(1/2) = 0.84 < 0.90 < 1 - 0.025 = 0.975
     assert 1 - 0.025 ** (1 / 1) >= 0.90 > 1 - 0.025 ** (1 / 2)
-    assert coverage_rule_minimum(0.95) == 2 and coverage_rule_minimum(0.99) == 1
+    assert coverage_rule_minimum(0.95).needed == 2 and coverage_rule_minimum(0.99).needed == 1
 
     def table(covered, axes=90):
         return pd.DataFrame({"configuration": ["c"], "term": ["white"], "true": [1.0], "present": [True],
@@ -84,8 +84,9 @@ def test_the_coverage_rule_and_the_least_sample_at_which_it_can_fail():
 
     assert coverage_claim(table(85), 0.90, 0.95)["verdict"] == "reproduced"
     assert coverage_claim(table(70), 0.90, 0.95)["verdict"] == "not_reproduced"
-    with pytest.raises(ValueError, match="can fail only from 2 on"):
-        coverage_claim(table(1, axes=1), 0.90, 0.95)
+    small = coverage_claim(table(0, axes=1), 0.90, 0.95)  # no hit, yet the upper end is 0.975
+    assert small["verdict"] == "not_testable_at_this_scale" and "n 1 (axes per configuration and term), needs n " \
+        ">= 2" in small["evidence"]
 
 
 def _upper(k, n):
