@@ -32,7 +32,10 @@ For the accelerometer and (when recorded) the gyroscope of one static recording:
    0.96–1.00; but a flicker floor under a dominant random walk 0.86, and where the
    flicker floor and the random walk hide each other (neither ever carries the Allan
    variance: the "masked" configuration) 0.88 for the flicker and 0.81 for the random
-   walk (on 120 of these axes, 12 % of its intervals lay wholly below the truth).  The
+   walk (on 120 of these axes, 12 % of its intervals lay wholly below the truth).  On
+   shorter records the random walk also trades with the ramp: on 22 min records
+   (``snakemake noise``, 90 axes) a random walk dominating from τ = 30 s covered 0.78,
+   the ramp taking part of it on most axes.  The
    bootstrap draws from the fitted model, and where the fit trades one term for the other
    the draws inherit the trade: read such terms as a pair (their sum at the τ they
    share is well determined).  A prototype inverting a bootstrap test per term (the
