@@ -1,4 +1,5 @@
-"""accelcal: reproducible workflow for Burkhard et al. (2024), Batista et al. (2011), Tereshkov, and the gyroscope.
+"""accelcal: reproducible workflow for Burkhard et al. (2024), Batista et al. (2011), Tereshkov, and the
+project's own stages (measured data, discrepancy, gyroscope, noise, benchmark).
 
     .venv/bin/snakemake all                               # paper scale (profiles/default)
     .venv/bin/snakemake all --configfile config/ci.yaml   # reduced sizes (tests, CI)
@@ -52,13 +53,14 @@ include: "workflow/rules/tereshkov.smk"
 include: "workflow/rules/measured.smk"
 include: "workflow/rules/discrepancy.smk"
 include: "workflow/rules/gyro.smk"
+include: "workflow/rules/noise.smk"
 include: "workflow/rules/benchmark.smk"
 include: "workflow/rules/claims.smk"
 include: "workflow/rules/report.smk"
 
 
 #: The stages, in the order of the claims ledger and of the tables in each report section.
-STAGES = (BURKHARD_STAGE, BATISTA_STAGE, TERESHKOV_STAGE, MEASURED_STAGE, DISCREPANCY_STAGE, GYRO_STAGE,
+STAGES = (BURKHARD_STAGE, BATISTA_STAGE, TERESHKOV_STAGE, MEASURED_STAGE, DISCREPANCY_STAGE, GYRO_STAGE, NOISE_STAGE,
           BENCHMARK_STAGE)
 
 

@@ -1,7 +1,8 @@
 """A small valid file of every registered format, for the conformance tests and the fuzzer.
 
 ``SAMPLES[name](rng)`` returns the bytes of a file of format ``name`` (a few poses of a
-sensor at rest, in the format's own unit); a format added to the registry needs one here
+sensor at rest, in the format's own unit; the logs are written by rosbags' writer and
+tests/log_fixtures.py); a format added to the registry needs one here
 (tests/test_format_conformance.py fails until it has one).  Every sample holds
 :data:`ROWS` samples, timed from 0 at :data:`RATE_HZ` where the file carries time.
 """
@@ -95,5 +96,48 @@ def imutk(rng) -> bytes:
     return out.getvalue().encode()
 
 
+def _log_bytes(write) -> bytes:
+    """The bytes of a log written by ``write(path)`` into a temporary folder."""
+    import tempfile
+    from pathlib import Path
+
+    with tempfile.TemporaryDirectory() as tmp:
+        return write(Path(tmp) / "sample").read_bytes()
+
+
+def _gyro(rng) -> np.ndarray:
+    return 0.01 * rng.standard_normal((ROWS, 3))
+
+
+def ros(rng) -> bytes:
+    """A ROS 1 bag (rosbags' writer) with one sensor_msgs/Imu topic, absolute header stamps."""
+    from accelcal.formats.ros_synthetic import write_imu_bag
+
+    acc, gyro = specific_force(rng), _gyro(rng)
+    return _log_bytes(lambda p: write_imu_bag(p.with_suffix(".bag"), 1.7e9 + np.arange(ROWS) / RATE_HZ, acc, gyro,
+                                              kind="ros1"))
+
+
+def px4(rng) -> bytes:
+    """A PX4 ULog with the raw sensor_accel and sensor_gyro (timestamps in µs)."""
+    from .log_fixtures import write_ulog
+
+    acc, gyro = specific_force(rng), _gyro(rng)
+    ts = (10**6 + np.arange(ROWS) * 1e6 / RATE_HZ).astype(np.uint64)
+    topics = {(name, 0): {"timestamp": ts + 40, "timestamp_sample": ts, "device_id": np.full(ROWS, k, np.uint32),
+                          **{a: v[:, j].astype(np.float32) for j, a in enumerate("xyz")}}
+              for k, (name, v) in enumerate((("sensor_accel", acc), ("sensor_gyro", gyro)))}
+    return _log_bytes(lambda p: write_ulog(p, topics))
+
+
+def ardupilot(rng) -> bytes:
+    """An ArduPilot DataFlash log of IMU messages."""
+    from .log_fixtures import write_dataflash
+
+    acc, gyro = specific_force(rng), _gyro(rng)
+    return _log_bytes(lambda p: write_dataflash(p, (10**6 + np.arange(ROWS) * 1e6 / RATE_HZ).astype(np.int64), acc,
+                                                gyro))
+
+
 SAMPLES = {"block-log": block_log, "mpu6050": mpu6050, "imucal": imucal, "imucal-annotated": imucal_annotated,
-           "csv": csv, "imutk": imutk}
+           "csv": csv, "imutk": imutk, "ros": ros, "px4": px4, "ardupilot": ardupilot}

@@ -21,7 +21,7 @@ from tests.test_workflow import CI, REPO, snakemake
 
 DEFAULT = REPO / "config" / "config.yaml"
 SCHEMAS = REPO / "workflow" / "schemas"
-STAGES = ("batista2011", "tereshkov", "measured", "gyro")
+STAGES = ("batista2011", "tereshkov", "measured", "gyro", "noise")
 
 
 def schema(stage):
@@ -156,6 +156,17 @@ BROKEN = {
                              "gyro.ipopt_check.motions: 4 is less than the minimum of 5"),
     "gyro_unknown_key": (changed({"gyro.monte_carlo.chunks": 2}),
                          "gyro.monte_carlo: Additional properties are not allowed ('chunks' was unexpected)"),
+    # --------------------------------------------------------------------- noise
+    "noise_duplicate_configuration": (changed({"noise.coverage.configurations": [
+        {"name": "white", "white": 2e-3, "quantization": 0.0, "bias_instability": 0.0, "random_walk": 0.0,
+         "drift_ramp": 0.0}] * 2}), "noise.coverage.configurations: configuration names must be distinct"),
+    "noise_factor_below_one": (changed({"noise.claims.datasheet_factor": 0.5}),
+                               "noise.claims.datasheet_factor: 0.5 is less than or equal to the minimum of 1"),
+    "noise_term_missing": (changed({"noise.coverage.configurations": [
+        {"name": "white", "white": 2e-3, "quantization": 0.0, "bias_instability": 0.0, "random_walk": 0.0}]}),
+        "noise.coverage.configurations.0: 'drift_ramp' is a required property"),
+    "noise_too_few_bootstrap_draws": (changed({"noise.adis.n_boot": 10}),
+                                      "noise.adis.n_boot: 10 is less than the minimum of 50"),
 }
 
 
@@ -174,7 +185,7 @@ def test_broken_stage_config_is_rejected_with_its_key_and_what_is_wrong(tmp_path
 
 #: One broken config per stage through the command line (the rest differ only in the message).
 CLI_CASES = ("batista_window_in_transition", "tereshkov_inverted_range", "measured_full_model_on_six_poses",
-             "discrepancy_confusion_size_not_scored")
+             "discrepancy_confusion_size_not_scored", "noise_duplicate_configuration")
 
 
 @pytest.mark.parametrize("case", CLI_CASES)
@@ -207,6 +218,9 @@ EDGES = {
         "g": 9.81, "estimators": ["full_lls", "bias_lls"], "pose_selection": "all"}}),
     "gyro": changed({"gyro.sessions": ["imucal_ferraris"], "gyro.monte_carlo.trials": 2,
                      "gyro.ipopt_check.motions": 5, "gyro.integrators.angle_deg": 360}),
+    # one record (3 axes: the coverage rule can fail from 2), the least factor above 1, 50 draws
+    "noise": changed({"noise.coverage.records": 1, "noise.claims.datasheet_factor": 1.001, "noise.adis.n_boot": 50,
+                      "noise.coverage.samples": 4096, "noise.claims.coverage_floor": 0.99}),
 }
 
 

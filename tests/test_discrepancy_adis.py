@@ -11,7 +11,7 @@ from accelcal.errors import RecordingError
 from accelcal.noise import simulate_noise
 from accelcal_repro.discrepancy import adis as A
 from accelcal_repro.discrepancy.benchmark import Session
-from accelcal_repro.measured.smac import read_smac_rda
+from accelcal_repro.measured.smac import read_smac_imu, read_smac_rda
 
 REPO = Path(__file__).resolve().parents[1]
 RDA = REPO.parent / "shared" / "data" / "smac_adis16405" / "adis_16405_imu1.rda"
@@ -25,8 +25,9 @@ def test_reads_the_adis_record():
     assert rec.acc[:, 2].mean() == pytest.approx(-1.016, abs=0.01)  # g, the sensor's z axis down
     steps = np.diff(np.unique(rec.acc[:, 0]))
     assert steps.min() == pytest.approx(0.00333, abs=1e-6)  # the ADIS16405's 3.33 mg output step
-    assert rec.gyro.shape == (1_000_000, 3) and rec.gyro_unit == "rad/s"
-    assert np.abs(rec.gyro.mean(axis=0)).max() < np.deg2rad(1.0)  # at rest: bias only, well below 1 deg/s
+    imu = read_smac_imu(RDA)  # both sensors, SI units
+    assert imu.gyro.shape == (1_000_000, 3) and imu.gyro_unit == "rad/s"
+    assert np.abs(imu.gyro.mean(axis=0)).max() < np.deg2rad(1.0)  # at rest: bias only, well below 1 deg/s
 
 
 def test_reader_errors_are_one_line(tmp_path):

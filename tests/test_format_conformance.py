@@ -25,9 +25,9 @@ import pytest
 from accelcal import cli
 from accelcal.errors import RecordingError
 from accelcal.formats import FALLBACK, FORMATS, Format, detect_format, read, write_recording
-from accelcal.formats.registry import READING_OPTIONS, formats_help
+from accelcal.formats.registry import OPTION_FLAGS, READING_OPTIONS, formats_help
 
-from .format_samples import ROWS, SAMPLES, recording
+from .format_samples import RATE_HZ, ROWS, SAMPLES, recording
 
 NAMES = list(FORMATS)
 
@@ -55,7 +55,7 @@ def test_sniff_recognises_its_own_sample_and_no_other(name, sample):
         return
     for other in NAMES:
         path = sample(other)
-        head = path.read_text()[:8192] if fmt.text else path.read_bytes()[:65536]
+        head = path.read_bytes().decode("utf-8", "replace")[:8192] if fmt.text else path.read_bytes()[:65536]
         assert sniff(path, head) == (other == name), f"{name}'s sniff on a {other} sample"
     assert detect_format(sample(name)) == name
 
@@ -112,7 +112,23 @@ def test_options_a_reader_does_not_take_are_applied_or_refused(name, sample):
     if "time_unit" not in fmt.options:
         assert f"--time-unit ignored: the {name} format defines its time" in read(path, format=name,
                                                                                   time_unit="ms").notes
+    for option, value in (("topic", "/imu"), ("instance", 0), ("time_source", "log")):
+        if option not in fmt.options:
+            with pytest.raises(RecordingError, match=f"{OPTION_FLAGS[option]} applies to the .* not to {name}"):
+                read(path, format=name, **{option: value})
     assert set(fmt.options) <= set(READING_OPTIONS)
+
+
+@pytest.mark.parametrize("name", [n for n in NAMES if "time_source" in FORMATS[n].options])
+def test_a_log_reads_its_gyroscope_and_both_clocks(name, sample):
+    """A log format declares the log options: its sample's gyroscope comes along (rad/s), and the
+    log's clock times it on request, with the recorded stamps kept as its time column."""
+    path = sample(name)
+    rec, log = read(path, format=name), read(path, format=name, time_source="log")
+    assert rec.gyro is not None and rec.gyro.shape == (ROWS, 3) and rec.gyro_unit == "rad/s"
+    assert rec.time_column is not None and log.time_column is not None
+    np.testing.assert_allclose(rec.t, np.arange(ROWS) / RATE_HZ, rtol=0, atol=1e-6)
+    np.testing.assert_array_equal(log.acc, rec.acc)
 
 
 @pytest.mark.parametrize("name", [n for n in NAMES if FORMATS[n].writer])

@@ -1,8 +1,10 @@
-"""A calibration applied to a log's IMU topic, written as a table (time as recorded, calibrated
-accelerometer, gyroscope passed through)."""
+"""`accelcal apply` on a log's IMU topic: the table (time as recorded, calibrated accelerometer,
+gyroscope passed through), and nothing written when it fails."""
 
 from __future__ import annotations
 
+import contextlib
+import io
 from pathlib import Path
 
 import numpy as np
@@ -10,16 +12,22 @@ import pandas as pd
 import pytest
 
 import accelcal
+from accelcal import cli
 from accelcal.calibration import FullLLSCalibration
-from accelcal.errors import AccelcalError
-from accelcal.formats_logs import ros, px4
-from accelcal.formats_logs.apply import apply_to_log
-from accelcal.formats_logs.synthetic import write_imu_bag
+from accelcal.formats import px4, ros
+from accelcal.formats.ros_synthetic import write_imu_bag
 
 DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
 BAG = DATA / "imutk_fork_sessions" / "data1" / "rosbag2_2023_08_11-21_37_35"
 ULOG = DATA / "px4_ulog" / "sample_log_small.ulg"
 STATIC = {"window": 0.5, "min_duration": 0.5, "trim": 0.1}
+
+
+def _cli(*args) -> tuple[int, str]:
+    err = io.StringIO()
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
+        code = cli.main([str(a) for a in args])
+    return code, err.getvalue()
 
 
 @pytest.fixture(scope="module")
@@ -34,27 +42,34 @@ def calibration(tmp_path_factory):
 
 def test_the_real_bag_calibrated_with_its_own_calibration(tmp_path, calibration):
     out = tmp_path / "calibrated.csv"
-    summary = apply_to_log(BAG, calibration, out)
+    code, err = _cli("apply", calibration, BAG, "--out", out)
+    assert code == 0, err
+    assert "gx_raw, gy_raw, gz_raw as recorded" in err and "gyro not corrected: the calibration has no gyroscope" in err
     table = pd.read_csv(out)
     rec = ros.read(BAG)
-    assert summary["n"] == len(table) == rec.n
-    assert list(table.columns) == ["header_stamp_ns", "ax", "ay", "az", "gx", "gy", "gz"]
+    assert len(table) == rec.n
+    assert list(table.columns) == ["header_stamp_ns", "ax", "ay", "az", "gx_raw", "gy_raw", "gz_raw"]
     assert np.array_equal(table["header_stamp_ns"].to_numpy(), rec.time_column[1])
     expected = accelcal.load_calibration(calibration).apply(rec.acc)
     assert np.array_equal(table[["ax", "ay", "az"]].to_numpy(), expected)  # round-trip float repr
-    assert np.array_equal(table[["gx", "gy", "gz"]].to_numpy(), rec.gyro)
+    assert np.array_equal(table[["gx_raw", "gy_raw", "gz_raw"]].to_numpy(), rec.gyro)
     # the calibration moves the static norm towards g
     norm = np.linalg.norm(expected, axis=1)
     assert abs(np.median(norm) - 9.80665) < abs(np.median(np.linalg.norm(rec.acc, axis=1)) - 9.80665)
+    # the log's clock on request: its record times as the time column
+    code, err = _cli("apply", calibration, BAG, "--out", tmp_path / "log.csv", "--time-source", "log")
+    assert code == 0 and pd.read_csv(tmp_path / "log.csv").columns[0] == "log_time_ns"
 
 
 def test_a_px4_log_is_applied_with_its_time_column(tmp_path, calibration):
     if not ULOG.is_file():
         pytest.skip("shared data not present")
     out = tmp_path / "px4.csv"
-    apply_to_log(ULOG, calibration, out)
+    code, err = _cli("apply", calibration, ULOG, "--out", out)
+    assert code == 0, err
     table = pd.read_csv(out)
     assert len(table) == px4.read(ULOG).n and table.columns[0] == "timestamp_us"
+    assert list(table.columns[1:]) == ["ax", "ay", "az", "gx_raw", "gy_raw", "gz_raw"]
     assert np.all(np.diff(table["timestamp_us"]) > 0)
 
 
@@ -62,16 +77,17 @@ def test_a_failing_read_writes_nothing(tmp_path, calibration):
     bad = tmp_path / "bad.bag"
     bad.write_bytes(b"#ROSBAG V2.0\n" + b"\0" * 50)
     out = tmp_path / "out.csv"
-    with pytest.raises(AccelcalError):
-        apply_to_log(bad, calibration, out)
+    code, err = _cli("apply", calibration, bad, "--out", out)
+    assert code == 2 and len(err.splitlines()) == 1 and err.startswith(f"accelcal: error: {bad}: cannot open")
     assert not out.exists()
 
 
 def test_a_counts_calibration_on_a_log_in_m_s2_is_refused(tmp_path):
     rng = np.random.default_rng(2)
     cal = FullLLSCalibration(bias=np.zeros(3), M=400 * np.eye(3), g=9.80665, unit="counts", input_unit="counts")
+    cal.save(tmp_path / "c.json")
     p = write_imu_bag(tmp_path / "b", 1.7e9 + np.arange(50) / 100, np.tile([0, 0, 9.8], (50, 1)) +
                       rng.normal(size=(50, 3)) * 0.01, np.zeros((50, 3)))
-    with pytest.raises(AccelcalError, match="m/s\\^2.*counts"):
-        apply_to_log(p, cal, tmp_path / "o.csv")
+    code, err = _cli("apply", tmp_path / "c.json", p, "--out", tmp_path / "o.csv")
+    assert code == 2 and "is read as m/s^2 but" in err and "was made from counts" in err
     assert not (tmp_path / "o.csv").exists()

@@ -1,9 +1,12 @@
-"""Property-based fuzzing of the log readers: a damaged log gives a valid Recording or one
-AccelcalError line, never another exception.
+"""Property-based fuzzing of the log formats of the registry: a damaged log gives a valid Recording
+or one RecordingError line, never another exception.
 
 Inputs: small valid logs of every kind (ROS 1 bag, ROS 2 bag folder with sqlite3 storage,
 its bare .db3, MCAP, ULog, DataFlash; written by rosbags' writers and the test writers)
-damaged by truncation, bit flips, overwritten and deleted byte spans and inserted bytes.
+damaged by truncation, bit flips, overwritten and deleted byte spans and inserted bytes, read
+through :func:`accelcal.formats.read` with the format named (the registry's path: its extra
+check, the reader, the options).  tests/test_reader_fuzz.py also damages each log format's
+sample file (tests/format_samples.py) with the text formats' fuzzer, named and detected.
 The number of examples is ``ACCELCAL_FUZZ_EXAMPLES`` (default 250); the total tried is
 printed (``pytest -s``).
 """
@@ -20,9 +23,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from accelcal.errors import AccelcalError
-from accelcal.formats_logs import read_log
-from accelcal.formats_logs.synthetic import write_imu_bag
+from accelcal.errors import RecordingError
+from accelcal.formats import read
+from accelcal.formats.ros_synthetic import write_imu_bag
 from accelcal.recording import MIN_ROWS
 from tests.log_fixtures import write_dataflash, write_ulog
 
@@ -110,8 +113,8 @@ def test_a_damaged_log_is_read_or_refused_in_one_line(originals, kind, data):
     with tempfile.TemporaryDirectory() as tmp:
         path = _write(Path(tmp), kind, damaged, originals)
         try:
-            rec = read_log(path, format=fmt, progress=False)
-        except AccelcalError as e:
+            rec = read(path, format=fmt)
+        except RecordingError as e:
             assert str(e) and "\n" not in str(e)
             COUNT["refused"] += 1
         else:

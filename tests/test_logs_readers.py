@@ -1,9 +1,13 @@
-"""The log readers: the real ROS 2 bag against its text export, ROS 1 / ROS 2 / MCAP files written by
-rosbags' own writers, the PX4 sample logs, and written ULog and DataFlash files; topic choice,
-time sources and every refusal in one line."""
+"""The log formats: the real ROS 2 bag against its text export (read, and calibrated through the CLI),
+ROS 1 / ROS 2 / MCAP files written by rosbags' own writers, the PX4 sample logs, and written ULog and
+DataFlash files; topic choice, time sources, the log options through the registry, a missing extra,
+and every refusal in one line."""
 
 from __future__ import annotations
 
+import contextlib
+import io
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -12,9 +16,10 @@ import numpy as np
 import pytest
 
 import accelcal
-from accelcal.errors import LogFormatError, TopicError
-from accelcal.formats_logs import LOG_FORMATS, detect_log, file_head, ros, px4, ardupilot
-from accelcal.formats_logs.synthetic import write_imu_bag
+from accelcal import cli
+from accelcal.errors import LogFormatError, RecordingError, TopicError
+from accelcal.formats import FORMATS, ardupilot, detect_format, px4, read, ros
+from accelcal.formats.ros_synthetic import write_imu_bag
 from tests.log_fixtures import write_dataflash, write_ulog
 
 DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
@@ -52,16 +57,34 @@ def test_real_bag_equals_its_text_export_to_rounding():
     assert rec.time_column[0] == "header_stamp_ns"
 
 
+def _cli(*args) -> tuple[int, str]:
+    err = io.StringIO()
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(err):
+        code = cli.main([str(a) for a in args])
+    return code, err.getvalue()
+
+
+#: Settings for the still phases of the data1 session (about 1 s each), given explicitly: the
+#: comparison is at fixed settings, whatever the defaults of the rest detection.
+STILL = ("--window", "0.5", "--min-duration", "0.5", "--trim", "0.1")
+
+
 @needs_data
-def test_real_bag_calibration_equals_the_text_export_calibration():
-    static = {"window": 0.5, "min_duration": 0.5, "trim": 0.1}  # still phases of about 1 s
-    c_text, _ = accelcal.calibrate_recording(accelcal.read(SESSION / "acc_data.txt"), 9.80665, "full_lls",
-                                             static=static)
-    c_bag, _ = accelcal.calibrate_recording(ros.read(BAG), 9.80665, "full_lls", static=static)
-    assert c_bag.n_poses == c_text.n_poses >= 10
-    # to the rounding of the export: far below the standard errors (~1e-3 m/s^2)
-    assert np.max(np.abs(c_bag.bias - c_text.bias)) < 1e-7
-    assert np.max(np.abs(c_bag.M - c_text.M)) < 1e-8
+def test_real_bag_calibration_equals_the_text_export_calibration(tmp_path):
+    """`accelcal calibrate` on the bag folder and on the session's text export, same settings."""
+    out = {}
+    for name, path in (("bag", BAG), ("text", SESSION / "acc_data.txt")):
+        code, err = _cli("calibrate", path, "--out", tmp_path / f"{name}.json", *STILL)
+        assert code == 0, err
+        out[name] = accelcal.load_calibration(tmp_path / f"{name}.json")
+    bag, text = out["bag"], out["text"]
+    assert bag.n_poses == text.n_poses >= 10
+    # to the rounding of the export (8 significant digits): far below the standard errors (~1e-3 m/s^2)
+    assert np.max(np.abs(bag.bias - text.bias)) < 1e-7
+    assert np.max(np.abs(bag.M - text.M)) < 1e-8
+    assert np.max(np.abs(bag.bias - text.bias)) < 1e-3 * np.min(bag.standard_errors_noise["bias"])
+    prov = json.loads((tmp_path / "bag.json").read_text())
+    assert prov["recording"] == str(BAG) and len(prov["recording_sha256"]) == 64  # a folder has a digest too
 
 
 @needs_data
@@ -84,7 +107,7 @@ def test_numpy_decoding_equals_rosbags_deserialisation_on_every_message():
 def test_real_bag_is_sniffed_from_the_folder_its_metadata_and_its_db3():
     db3 = next(BAG.glob("*.db3"))
     for p in (BAG, BAG / "metadata.yaml", db3):
-        assert detect_log(p) == "ros"
+        assert detect_format(p) == "ros"
     assert np.array_equal(ros.read(db3).acc, ros.read(BAG / "metadata.yaml").acc)
 
 
@@ -94,7 +117,7 @@ def test_real_bag_is_sniffed_from_the_folder_its_metadata_and_its_db3():
 @pytest.mark.parametrize("kind", ["ros1", "ros2-sqlite3", "ros2-mcap", "mcap"])
 def test_bags_written_by_rosbags_read_back_exactly(tmp_path, kind):
     p = _bag(tmp_path, kind, extra_topics={"/chatter": "std_msgs/msg/String"})
-    assert detect_log(p) == "ros"
+    assert detect_format(p) == "ros"
     rec = ros.read(p)
     assert np.array_equal(rec.acc, ACC) and np.array_equal(rec.gyro, GYRO)
     assert np.array_equal(rec.time_column[1], np.round(T * 1e9).astype(np.int64))
@@ -105,7 +128,7 @@ def test_frame_ids_of_varying_length_are_decoded_one_by_one(tmp_path):
     from rosbags.rosbag2 import Writer
     from rosbags.typesys import Stores, get_typestore
 
-    from accelcal.formats_logs.synthetic import _message
+    from accelcal.formats.ros_synthetic import _message
 
     store = get_typestore(Stores.LATEST)
     p = tmp_path / "var"
@@ -122,7 +145,7 @@ def test_big_endian_cdr_is_read(tmp_path):
     from rosbags.rosbag2 import Writer
     from rosbags.typesys import Stores, get_typestore
 
-    from accelcal.formats_logs.synthetic import _message
+    from accelcal.formats.ros_synthetic import _message
 
     store = get_typestore(Stores.LATEST)
     p = tmp_path / "be"
@@ -224,7 +247,7 @@ def test_px4_sample_logs_read_sensor_combined_and_say_it_is_calibrated(name, n):
     p = PX4 / name
     if not p.is_file():
         pytest.skip("shared data not present")
-    assert detect_log(p) == "px4"
+    assert detect_format(p) == "px4"
     rec = px4.read(p)
     assert rec.n == n and rec.gyro.shape == (n, 3)
     assert "already calibrated by the autopilot" in rec.notes[0]
@@ -292,7 +315,7 @@ def test_px4_truncated_and_foreign_files_are_one_line(tmp_path):
 def test_dataflash_imu_instances(tmp_path):
     t_us = 10_000_000 + np.arange(300) * 2500
     p = write_dataflash(tmp_path / "a.bin", t_us, ACC[:300], GYRO[:300], instances=(0, 1))
-    assert detect_log(p) == "ardupilot"
+    assert detect_format(p) == "ardupilot"
     with pytest.raises(TopicError, match=r"2 IMU instances: 0 \(300 samples\), 1 \(300 samples\); .*--instance"):
         ardupilot.read(p)
     rec = ardupilot.read(p, instance=1)
@@ -308,21 +331,56 @@ def test_dataflash_imu_instances(tmp_path):
 
 
 @pytest.mark.parametrize("fmt, module", [("ros", "rosbags"), ("px4", "pyulog"), ("ardupilot", "pymavlink")])
-def test_a_missing_extra_is_one_line_naming_the_pip_install(tmp_path, fmt, module):
-    (tmp_path / "x").write_bytes(b"\0" * 64)
-    code = (f"import sys\nclass Block:\n    def find_spec(self, name, path=None, target=None):\n"
-            f"        if name.split('.')[0] == {module!r}:\n"
-            f"            raise ModuleNotFoundError(name)\nsys.meta_path.insert(0, Block())\n"
-            f"from accelcal.formats_logs import read_log\nfrom accelcal.errors import MissingExtraError\n"
-            f"try:\n    read_log({str(tmp_path / 'x')!r}, format={fmt!r})\n"
-            f"except MissingExtraError as e:\n    print(e)\n")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
-    assert out.endswith(f"pip install 'accelcal[{LOG_FORMATS[fmt].extra}]'") and "\n" not in out
+def test_a_missing_extra_is_one_line_naming_the_pip_install_and_exit_2(tmp_path, fmt, module):
+    """The extra's module hidden (None in sys.modules: its import fails and find_spec finds nothing):
+    `accelcal calibrate` on a log of that format names the extra, exits 2 and writes nothing."""
+    log = {"ros": lambda p: _bag(tmp_path, "ros1", name="x"), "px4": lambda p: write_ulog(p, _ulog_topics()),
+           "ardupilot": lambda p: write_dataflash(p, 10**6 + np.arange(N) * 2500, ACC, GYRO)}[fmt](tmp_path / "x")
+    out = tmp_path / "cal.json"
+    code = (f"import sys\nsys.modules[{module!r}] = None\nfrom accelcal.cli import main\n"
+            f"sys.exit(main(['calibrate', {str(log)!r}, '--out', {str(out)!r}]))\n")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert run.returncode == 2 and run.stdout == ""
+    assert run.stderr.splitlines() == [f"accelcal: error: {log}: reading {fmt} files needs {module}, not installed: "
+                                       f"pip install accelcal[{FORMATS[fmt].extra}]"]
+    assert not out.exists()
 
 
 def test_sniffers_claim_only_their_own_files(tmp_path):
     bag = _bag(tmp_path, "ros1")
     text = tmp_path / "t.csv"
     text.write_text("t,ax,ay,az\n0,0,0,9.8\n")
-    assert detect_log(text) is None
-    assert [f.name for f in LOG_FORMATS.values() if f.sniff(bag, file_head(bag))] == ["ros"]
+    assert detect_format(text) == "csv"
+    logs = [f for f in FORMATS.values() if not f.text]
+    assert [f.name for f in logs if f.load_sniff()(bag, bag.read_bytes()[:65536])] == ["ros"]
+
+
+def test_log_options_go_through_the_registry(tmp_path):
+    """read(..., topic, instance, time_source): taken by the formats that declare them, refused in one
+    line by the others."""
+    p = _bag(tmp_path, "ros2-mcap", extra_topics={"/imu_b": "sensor_msgs/msg/Imu"})
+    assert np.array_equal(read(p, topic="/imu").acc, ACC)
+    assert read(p, topic="/imu", time_source="log").time_column[0] == "log_time_ns"
+    with pytest.raises(RecordingError, match=r"--instance applies to the px4 or ardupilot formats, not to ros"):
+        read(p, topic="/imu", instance=1)
+    table = tmp_path / "t.csv"
+    table.write_text("t,ax,ay,az\n" + "".join(f"{i / 100},0,0,9.8\n" for i in range(20)))
+    for kw, flag in (({"topic": "/imu"}, "--topic"), ({"time_source": "log"}, "--time-source")):
+        with pytest.raises(RecordingError, match=f"{flag} applies to the ros, px4 or ardupilot formats, not to csv"):
+            read(table, **kw)
+    with pytest.raises(RecordingError, match="--time-source must be header or log, got 'gps'"):
+        read(p, time_source="gps")
+
+
+def test_time_stamps_that_are_no_time_are_one_line(tmp_path):
+    """A damaged stamp beyond 2^53 us would wrap silently in integer nanoseconds (found by the log fuzzer)."""
+    t_us = 10_000_000 + np.arange(300) * 2500
+    t_us[-1] = 2**60
+    p = write_dataflash(tmp_path / "a.bin", t_us, ACC[:300], GYRO[:300])
+    with pytest.raises(LogFormatError, match=r"IMU instance 0: TimeUS: time stamp .* at message 299 is not a time"):
+        ardupilot.read(p)
+    topics = _ulog_topics()
+    topics[("sensor_accel", 0)]["timestamp_sample"] = topics[("sensor_accel", 0)]["timestamp_sample"].copy()
+    topics[("sensor_accel", 0)]["timestamp_sample"][5] = 2**63 + 7
+    with pytest.raises(LogFormatError, match=r"sensor_accel instance 0: timestamp_sample: time stamp .* at message 5"):
+        px4.read(write_ulog(tmp_path / "a.ulg", topics))

@@ -16,9 +16,9 @@ from accelcal import cli
 from accelcal.calibration import FullLLSCalibration
 from accelcal.noise.simulation import simulate_noise
 from accelcal.errors import NotStaticError
-from accelcal.noise_export import ExportError, avr_convention, kalibr_yaml, openvins_yaml
-from accelcal.noise_report import (IEEE_TERMS, NoiseAnalysisError, OCTAVE_CORRELATION, analyse_noise,
-                                   octave_correlations)
+from accelcal.noise.export import ExportError, avr_convention, kalibr_yaml, openvins_yaml
+from accelcal.noise.allan_fit import OCTAVE_CORRELATION, octave_correlations
+from accelcal.noise.report import IEEE_TERMS, NoiseAnalysisError, analyse_noise
 from accelcal.recording import Recording
 
 FS = 100.0
@@ -243,7 +243,7 @@ def _run(*argv) -> tuple[int, str]:
 def test_accelcal_noise_on_a_bag_writes_every_output(tmp_path):
     pytest.importorskip("rosbags")
     pytest.importorskip("matplotlib")
-    from accelcal.formats_logs.synthetic import write_imu_bag
+    from accelcal.formats.ros_synthetic import write_imu_bag
 
     rec = _record(9, n=2**15)
     bag = write_imu_bag(tmp_path / "static.mcap", 1.7e9 + rec.t, rec.acc, rec.gyro, kind="mcap", topic="/imu0")
@@ -259,7 +259,7 @@ def test_accelcal_noise_on_a_bag_writes_every_output(tmp_path):
 
 def test_accelcal_noise_refuses_a_moving_recording_in_one_line_and_writes_nothing(tmp_path):
     pytest.importorskip("rosbags")
-    from accelcal.formats_logs.synthetic import write_imu_bag
+    from accelcal.formats.ros_synthetic import write_imu_bag
 
     rec = _record(10, n=2**14)
     gyro = rec.gyro.copy()

@@ -24,10 +24,10 @@ LAYERS = {"accelcal": CORE, "accelcal_repro": SRC / "accelcal_repro", "workflow"
 PACKAGES = ("accelcal", "accelcal_repro")
 #: Third-party packages the core may import anywhere, and where matplotlib is allowed.
 CORE_DEPENDENCIES = {"numpy", "scipy", "pandas", "casadi"}
-PLOTTING_MODULES = {"plotting.py", "discrepancy/figures.py", "noise_figure.py"}
+PLOTTING_MODULES = {"plotting.py", "discrepancy/figures.py", "noise/figures.py"}
 #: Optional extras (ros, px4, ardupilot), each imported lazily by its log reader only.
-EXTRA_MODULES = {"formats_logs/ros.py": {"rosbags"}, "formats_logs/synthetic.py": {"rosbags"},
-                 "formats_logs/px4.py": {"pyulog"}, "formats_logs/ardupilot.py": {"pymavlink"}}
+EXTRA_MODULES = {"formats/ros.py": {"rosbags"}, "formats/ros_synthetic.py": {"rosbags"},
+                 "formats/px4.py": {"pyulog"}, "formats/ardupilot.py": {"pymavlink"}}
 #: numba (the optional ``fast`` extra) is imported by the kernel loader only, on first use.
 KERNEL_LOADER = "kernels.py"
 

@@ -8,7 +8,9 @@ has one).  Inputs are generated malformed files: valid files damaged by deletion
 insertion and replacement of characters and lines (tables with odd delimiters, decimal
 marks and headers, and the sample file of the format under test,
 tests/format_samples.py), comments and blank lines, binary garbage, gzip of any of
-these.  The number of examples is ``ACCELCAL_FUZZ_EXAMPLES`` per format (default 250;
+these; the sample of a binary format (a log) is damaged byte by byte instead
+(truncation, bit flips, spans overwritten, deleted or inserted; tests/test_logs_fuzz.py
+does the same to logs of every storage).  The number of examples is ``ACCELCAL_FUZZ_EXAMPLES`` per format (default 250;
 a quarter of it through the CLI), so the suite stays fast; the closing note's count
 comes from a larger run of the same tests.  Every example run is counted, per format,
 and the totals printed (``pytest -s``).
@@ -66,10 +68,28 @@ def _valid_table(draw) -> str:
     return "\n".join(lines) + draw(st.sampled_from(["\n", "", "\r\n", "\n\n\n"]))
 
 
-def _sample(draw, fmt: str) -> str:
-    """The sample file of ``fmt`` (of any format for ``auto``), decoded."""
+def _sample(draw, fmt: str) -> tuple[str, bytes]:
+    """The format and sample file of ``fmt`` (of any format for ``auto``)."""
     name = draw(st.sampled_from(sorted(SAMPLES))) if fmt == "auto" else fmt
-    return SAMPLES[name](np.random.default_rng(draw(st.integers(0, 2 ** 16)))).decode("utf-8")
+    return name, SAMPLES[name](np.random.default_rng(draw(st.integers(0, 2 ** 16))))
+
+
+def _damaged_bytes(draw, data: bytes) -> bytes:
+    """A binary file (a log) damaged: truncated, bits flipped, spans overwritten, deleted or inserted."""
+    b = bytearray(data)
+    for _ in range(draw(st.integers(0, 4))):
+        op = draw(st.sampled_from(["truncate", "flip", "overwrite", "delete", "insert"]))
+        at = draw(st.integers(0, max(len(b) - 1, 0)))
+        if op == "truncate":
+            del b[at:]
+        elif op == "flip" and b:
+            b[at] ^= 1 << draw(st.integers(0, 7))
+        elif op == "delete":
+            del b[at:at + draw(st.integers(1, 64))]
+        else:
+            junk = draw(st.binary(min_size=1, max_size=32))
+            b[at:at + len(junk) * (op == "overwrite")] = junk
+    return bytes(b)
 
 
 @st.composite
@@ -77,12 +97,15 @@ def damaged_files(draw, fmt: str | None = None) -> bytes:
     """A damaged file; with ``fmt``, half of them start from that format's sample."""
     kinds = ["table", "table", "table", "bytes", "lines"] + (["sample"] * 5 if fmt else [])
     kind = draw(st.sampled_from(kinds))
+    sampled = _sample(draw, fmt) if kind == "sample" else None
     if kind == "bytes":
         data = draw(st.binary(max_size=400))
     elif kind == "lines":
         data = "\n".join(draw(st.lists(st.text(max_size=40), max_size=30))).encode("utf-8", "surrogatepass")
+    elif sampled is not None and not FORMATS[sampled[0]].text:
+        data = _damaged_bytes(draw, sampled[1])
     else:
-        text = _valid_table(draw) if kind == "table" else _sample(draw, fmt)
+        text = _valid_table(draw) if sampled is None else sampled[1].decode("utf-8")
         for _ in range(draw(st.integers(0, 6))):
             op = draw(st.sampled_from(["delete", "insert", "replace", "cut", "dupline", "comment", "blank"]))
             lines = text.split("\n")

@@ -2,11 +2,12 @@
 
 Writes a synthetic bag with rosbags' own writer (1,440,000 ``sensor_msgs/Imu`` messages,
 serialised in numpy chunks checked byte-for-byte against rosbags' serialiser, see
-:mod:`accelcal.formats_logs.synthetic`), then reads it in fresh subprocesses on one
+:mod:`accelcal.formats.ros_synthetic`), then reads it in fresh subprocesses on one
 core, side by side in one run:
 
-* ``accelcal``: :func:`accelcal.formats_logs.ros.read` (the whole reader: open, decode,
-  checks, Recording);
+* ``accelcal``: :func:`accelcal.formats.read` (what ``accelcal calibrate BAG`` reads with:
+  the format detected by the registry, the whole ros reader: open, decode, checks,
+  Recording);
 * ``rosbags iterate``: rosbags' message iterator alone, every raw message touched, no
   decoding (a floor: the reader cannot be faster than the bag's iteration);
 * ``rosbags deserialise``: the iterator plus rosbags' own deserialisation of every
@@ -42,13 +43,13 @@ SEED = 20250125
 ONE_CORE = {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "NUMBA_NUM_THREADS": "1"}
 
 READERS = {
-    "imports only": "import accelcal.formats_logs.ros, rosbags.rosbag2, rosbags.rosbag1, numpy\n",
-    "accelcal": "from accelcal.formats_logs import ros\nrec = ros.read(PATH, progress=False)\nN = rec.n\n",
+    "imports only": "import accelcal.formats.ros, rosbags.rosbag2, rosbags.rosbag1, numpy\n",
+    "accelcal": "from accelcal.formats import read\nrec = read(PATH)\nN = rec.n\n",
     "rosbags iterate": (
-        "from accelcal.formats_logs.ros import _locate, _open\np, kind = _locate(Path(PATH))\nN = 0\n"
+        "from accelcal.formats.ros import _locate, _open\np, kind = _locate(Path(PATH))\nN = 0\n"
         "with _open(p, kind) as r:\n    for c, t, raw in r.messages():\n        N += len(raw) > 0\n"),
     "rosbags deserialise": (
-        "import numpy as np\nfrom accelcal.formats_logs.ros import _locate, _open\n"
+        "import numpy as np\nfrom accelcal.formats.ros import _locate, _open\n"
         "from rosbags.typesys import Stores, get_typestore\np, kind = _locate(Path(PATH))\n"
         "store = get_typestore(Stores.ROS1_NOETIC if kind == 'ROS 1 bag' else Stores.LATEST)\n"
         "de = store.deserialize_ros1 if kind == 'ROS 1 bag' else store.deserialize_cdr\nN = 0\n"
@@ -67,7 +68,7 @@ HARNESS = PEAK + ("import sys, time, json\nfrom pathlib import Path\nPATH = sys.
 
 
 def write_bag(path: Path, kind: str, minutes: float, rate: float) -> dict:
-    from accelcal.formats_logs.synthetic import write_imu_bag
+    from accelcal.formats.ros_synthetic import write_imu_bag
 
     n = int(round(minutes * 60 * rate))
     rng = np.random.default_rng(SEED)

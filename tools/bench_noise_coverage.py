@@ -3,7 +3,7 @@
 Simulates static three-axis records with the stochastic layer's simulator
 (:func:`accelcal.discrepancy.stochastic.simulate_noise`: white noise N, flicker B
 (Kasdin–Walter), random walk K, and optionally quantization Q and a ramp R), runs
-:func:`accelcal.noise_report.analyse_noise` on each, and counts for every term how
+:func:`accelcal.noise.report.analyse_noise` on each, and counts for every term how
 often the true coefficient lies inside its interval (the report's level, 95 % by
 default); each axis is an independent replicate.  A term whose true value is zero is
 counted too (its interval must reach down to zero).  Prints per configuration and
@@ -29,7 +29,7 @@ import time
 import numpy as np
 
 from accelcal.noise.simulation import simulate_noise
-from accelcal.noise_report import IEEE_TERMS, analyse_noise
+from accelcal.noise.report import IEEE_TERMS, analyse_noise
 from accelcal.recording import Recording
 
 FS = 100.0

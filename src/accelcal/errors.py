@@ -40,7 +40,7 @@ class RecordingError(AccelcalError):
     """A recording file that cannot be read or used (columns, values, no rest)."""
 
 
-class MissingExtraError(AccelcalError):
+class MissingExtraError(RecordingError):
     """An optional dependency (an extra of the package) that a format or a feature needs is not installed."""
 
 

@@ -46,9 +46,10 @@ import pandas as pd
 
 COLUMNS = ("paper", "claim_id", "claim", "paper_value", "reproduced_value", "verdict", "evidence")
 #: Sources of claims: the three papers, and the goals the project states for itself, judged
-#: the same way: ``discrepancy`` (its discrepancy loop) and ``gyro`` (the gyroscope's
-#: calibration, :mod:`accelcal_repro.gyro.stage`).
-PAPERS = ("burkhard2024", "batista2011", "tereshkov", "discrepancy", "gyro")
+#: the same way: ``discrepancy`` (its discrepancy loop), ``gyro`` (the gyroscope's
+#: calibration, :mod:`accelcal_repro.gyro.stage`) and ``noise`` (the ADIS16405 datasheet's
+#: noise figures and the coverage the noise analysis states for its intervals).
+PAPERS = ("burkhard2024", "batista2011", "tereshkov", "discrepancy", "gyro", "noise")
 #: The verdict of a rule whose sample is too small for the data to decide it.
 NOT_TESTABLE = "not_testable_at_this_scale"
 VERDICTS = ("reproduced", "not_reproduced", NOT_TESTABLE, "not_reproducible")

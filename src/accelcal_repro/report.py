@@ -46,6 +46,7 @@ FIGURE_SECTIONS = (
     ("discrepancy", "Discrepancy: where simulation and measured data disagree, and the missing effect", ("discrepancy_",)),
     ("gyro", "Gyroscope: calibrated from the same session, one-step vs iterative, and the peers side by side",
      ("gyro_",)),
+    ("noise", "Noise: a static record's noise terms against the datasheet, and the intervals' coverage", ("noise_",)),
     ("benchmark", "Benchmark: where the compute time goes (estimators, filters, compilation, stages)", ("timing_",)),
 )
 OTHER_SECTION = ("other", "Other figures")
@@ -288,6 +289,14 @@ TABLE_VIEWS = {
     "results/discrepancy/summary.csv": {
         "columns": ["recording", "effect", "metric", "value", "ci_low", "ci_high", "n", "target", "verdict"],
         "group": "section"},
+    "results/noise/adis16405/datasheet.csv": {
+        "columns": ["quantity", "reading", "axis", "fitted", "interval_low", "interval_high", "datasheet",
+                    "datasheet_as_written", "unit", "ratio"],
+        "group": "sensor"},
+    "results/noise/coverage.csv": {
+        "columns": ["term", "true", "axes", "coverage", "coverage_low", "coverage_high", "median_relative_width",
+                    "resolved_share"],
+        "group": "configuration"},
 }
 TABLE_VIEWS.update({
     "results/gyro/sessions/sessions.csv": {

@@ -330,11 +330,17 @@ def _check_gyro(g, cfg):
     _check_names(g["sessions"], list(SESSIONS), "gyro.sessions", "a gyro session")
 
 
+def _check_noise(n, cfg):
+    names = [c["name"] for c in n["coverage"]["configurations"]]
+    if len(set(names)) != len(names):
+        raise _config_error("noise.coverage.configurations", "configuration names must be distinct")
+
+
 #: Rules a stage's schema cannot express, run once every section passed its schema:
 #: ``rule(section, config)``, a one-line ConfigError naming the key.
 STAGE_RULES = {"batista2011": _check_batista2011, "tereshkov": _check_tereshkov, "measured": _check_measured,
                "burkhard2024": _check_burkhard2024, "discrepancy": _check_discrepancy,
-               "benchmark": _check_benchmark, "gyro": _check_gyro}
+               "benchmark": _check_benchmark, "gyro": _check_gyro, "noise": _check_noise}
 
 
 def figure_outputs(figure_id, caption, category):

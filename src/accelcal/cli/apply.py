@@ -8,16 +8,19 @@ from pathlib import Path
 
 from ..effects import TIME, effect
 from ..errors import AccelcalError
-from .common import _read, _reader_options, warn
+from .common import _read, _reader_options, recording_sha256, warn
 
 APPLY_HELP = """\
 CALIBRATION is the JSON of `accelcal calibrate` or the report of `accelcal
 discrepancy` (its base model plus the named effects, e.g. a temperature term).
-RECORDING is read with the same readers and options as for calibrate, in the unit
-the calibration was made from. The output CSV keeps the time column as it was and
-writes the calibrated ax, ay, az in m/s^2, and, when the calibration has a gyroscope
-and the recording a gyro (its columns or --gyro FILE), the calibrated gx, gy, gz in
-rad/s in the accelerometer's frame (and temp, if present).
+RECORDING is read with the same readers and options as for calibrate (a table, or
+the IMU topic of a ROS bag, MCAP file, PX4 ULog or DataFlash log), in the unit the
+calibration was made from. The output CSV keeps the time column as it was recorded
+(e.g. header_stamp_ns of a bag, timestamp_sample_us of a ULog) and writes the
+calibrated ax, ay, az in m/s^2; when the calibration has a gyroscope and the recording
+a gyro (its columns, its log topic or --gyro FILE), the calibrated gx, gy, gz in rad/s
+in the accelerometer's frame; a gyro the calibration does not correct is written as
+recorded, as gx_raw, gy_raw, gz_raw (and temp, if present).
 """
 
 
@@ -37,7 +40,6 @@ def add_parser(sub, epilog: str) -> None:
 def _apply(args) -> int:
     from dataclasses import replace
 
-    from ..atomic import sha256_file
     from ..calibration import load_calibration
 
     cal = load_calibration(args.calibration)
@@ -49,7 +51,7 @@ def _apply(args) -> int:
     effects = () if args.no_effects else cal.effects
     # a term in time runs on the calibration session's clock: it describes that session only
     drift = [e.id for e in effects if effect(e.id).covariate == TIME]
-    if drift and cal.provenance.get("recording_sha256") != sha256_file(args.recording):
+    if drift and cal.provenance.get("recording_sha256") != recording_sha256(args.recording):
         warn(f"the calibration's {', '.join(drift)} term describes the drift during its own session; it is not "
               "applied to another recording")
         effects = tuple(e for e in effects if e.id not in drift)
@@ -58,7 +60,8 @@ def _apply(args) -> int:
     w, gyro_note = _gyro(cal, rec, args)
     _write_corrected(args.out, rec, x, w)
     names = ", ".join(e.id for e in effects) or "none"
-    written = "ax, ay, az in m/s^2" + (", gx, gy, gz in rad/s" if w is not None else "")
+    written = "ax, ay, az in m/s^2" + (", gx, gy, gz in rad/s" if w is not None else
+                                       ", gx_raw, gy_raw, gz_raw as recorded" if rec.gyro is not None else "")
     print(f"apply: {rec.n} samples of {args.recording} calibrated with {args.calibration} ({cal.CAL_TYPE}; "
           f"effects applied: {names}); {written} written to {args.out}", file=sys.stderr)
     if gyro_note:
@@ -94,6 +97,8 @@ def _write_corrected(path: Path, rec, x, w=None) -> None:
     data = {time_name: time_values, "ax": x[:, 0], "ay": x[:, 1], "az": x[:, 2]}
     if w is not None:
         data.update(gx=w[:, 0], gy=w[:, 1], gz=w[:, 2])
+    elif rec.gyro is not None:  # not corrected: named apart, so that nobody takes it for calibrated
+        data.update(gx_raw=rec.gyro[:, 0], gy_raw=rec.gyro[:, 1], gz_raw=rec.gyro[:, 2])
     if rec.temp is not None:
         data["temp"] = rec.temp
     with atomic_output(path) as tmp, open(tmp, "w", newline="") as f:

@@ -12,7 +12,7 @@ from pathlib import Path
 
 from .. import __version__
 from ..errors import AccelcalError
-from ..formats.registry import FORMATS
+from ..formats.registry import FORMATS, TIME_SOURCES
 from ..registry import estimators
 
 STANDARD_GRAVITY = 9.80665
@@ -41,6 +41,9 @@ units: acceleration in m/s^2, g, mg or raw counts (from the header, --unit, or t
   m/s^2) and b is in counts; the bias-only models need physical units.
   Time in s, ms, us, ns or ISO 8601 date-times (from the header, --time-unit, or
   the values), or --rate HZ when there is none.
+logs: ROS 1/2 bags and MCAP files, PX4 ULog, ArduPilot DataFlash; the IMU topic is
+  found (--topic, --instance when there are several), timed by the sensor's stamps
+  (--time-source log: the log's clock); the gyroscope comes along.
 rests: the recording should start at rest (its noise sets the detection threshold,
   as in IMU-TK); if it does not, the quietest 2 s stretch is used, and said so.
   Known rests can be given with --intervals (imucal section list, CSV start,end).
@@ -95,6 +98,12 @@ def _reader_options(p) -> None:
                    help="the gyroscope in a file of its own, sampled with the accelerometer (IMU-TK's t x y z)")
     r.add_argument("--gyro-unit", metavar="UNIT", help="gyro unit: rad/s, deg/s or counts (overrides the header)")
     r.add_argument("--no-gyro", action="store_true", help="leave the gyroscope out (the accelerometer alone)")
+    # logs hold several sensors and two clocks; None: the reader's default, and refused by a table
+    r.add_argument("--topic", metavar="NAME", help="logs: the IMU topic (ROS), sensor_accel or sensor_combined "
+                                                   "(PX4), the IMU message (DataFlash); default the only one")
+    r.add_argument("--instance", type=int, metavar="I", help="logs: the sensor instance (PX4 multi_id, DataFlash I)")
+    r.add_argument("--time-source", choices=TIME_SOURCES, help="logs: the sensor's stamps (header, the default) or "
+                                                               "the times the log recorded the messages (log)")
 
 
 def _static_options(p) -> None:
@@ -129,7 +138,8 @@ def _read(args):
     with _step(f"reading {args.recording}"):
         return read(args.recording, format=args.format, columns=args.columns, unit=args.unit,
                     time_unit=args.time_unit, rate=args.rate, intervals=args.intervals,
-                    gyro=None if args.no_gyro else args.gyro, gyro_unit=args.gyro_unit)
+                    gyro=None if args.no_gyro else args.gyro, gyro_unit=args.gyro_unit, topic=args.topic,
+                    instance=args.instance, time_source=args.time_source)
 
 
 def _static_settings(args, rec) -> dict:
@@ -206,7 +216,21 @@ def _rate_hint(rec) -> str:
 
 
 def _provenance(args, t0: float) -> dict:
+    return {"accelcal_version": __version__, "recording": str(args.recording),
+            "recording_sha256": recording_sha256(args.recording), "elapsed_s": time.perf_counter() - t0}
+
+
+def recording_sha256(path) -> str:
+    """Hex sha256 of a recording: its file, or for a folder (a ROS 2 bag) its files' relative
+    names and contents in name order."""
+    import hashlib
+
     from ..atomic import sha256_file
 
-    return {"accelcal_version": __version__, "recording": str(args.recording),
-            "recording_sha256": sha256_file(args.recording), "elapsed_s": time.perf_counter() - t0}
+    path = Path(path)
+    if not path.is_dir():
+        return sha256_file(path)
+    h = hashlib.sha256()
+    for f in sorted(p for p in path.rglob("*") if p.is_file()):
+        h.update(f.relative_to(path).as_posix().encode() + b"\0" + sha256_file(f).encode())
+    return h.hexdigest()

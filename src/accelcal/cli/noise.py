@@ -7,15 +7,14 @@ import sys
 import time
 from pathlib import Path
 
-from .. import __version__
 from ..errors import AccelcalError
-from .common import _positive, _provenance, _step, warn
+from .common import _positive, _provenance, _read, _reader_options, _step, warn
 
 NOISE_HELP = """\
 RECORDING: a static recording, the sensor at rest in one orientation for its whole
 length (hours resolve the bias terms): a ROS 1/2 bag or MCAP file (sensor_msgs/Imu:
 accelerometer and gyroscope), a PX4 ULog, an ArduPilot DataFlash log, or a table
-(accelerometer only). Outputs (JSON, YAML, figure) are written only on success.
+(accelerometer only), read with the readers and options of calibrate. Outputs (JSON, YAML, figure) are written only on success.
 The exported values are continuous-time, the worst axis, with every axis and the
 interval in a comment: noise density N [m/s^2/sqrt(Hz), rad/s/sqrt(Hz)] and random
 walk K [m/s^3/sqrt(Hz), rad/s^2/sqrt(Hz)] of the IEEE fit of the Allan deviation.
@@ -40,31 +39,22 @@ def add_parser(sub, epilog: str) -> None:
     n.add_argument("--figure", type=Path, metavar="PNG", help="also draw the Allan deviations (.png and .pdf)")
     n.add_argument("--level", type=float, default=0.95, help="confidence level of the intervals (default 0.95)")
     n.add_argument("--seed", type=int, default=0, help="seed of the bootstrap (default 0)")
-    g = n.add_argument_group("reading a log")
-    g.add_argument("--topic", help="the IMU topic (ROS), sensor_accel or sensor_combined (PX4), IMU message "
-                                   "(DataFlash); default: the only one")
-    g.add_argument("--instance", type=int, help="the sensor instance (PX4 multi_id, DataFlash I)")
-    g.add_argument("--time-source", choices=("header", "log"), default="header",
-                   help="the sensor's stamps (default) or the log's record times")
+    _reader_options(n)
     n.set_defaults(func=_noise)
 
 
 def _noise(args) -> int:
-    from ..formats_logs import detect_log, read_log
-    from ..noise_report import analyse_noise
+    from ..noise.report import analyse_noise
 
     t0 = time.perf_counter()
     if not args.recording.exists():
         raise AccelcalError(f"{args.recording}: no such file or folder")
     if not 0 < args.level < 1:
         raise AccelcalError(f"--level must be between 0 and 1, got {args.level}")
-    with _step(f"reading {args.recording}"):
-        if detect_log(args.recording):
-            rec = read_log(args.recording, topic=args.topic, time_source=args.time_source, instance=args.instance)
-        else:
-            from ..formats import read
-
-            rec = read(args.recording)
+    if args.intervals is not None:
+        raise AccelcalError("--intervals: the noise analysis takes the whole recording as one rest; cut the static "
+                            "part out instead")
+    rec = _read(args)
     cal = None
     if args.calibration is not None:
         from ..calibration import load_calibration
@@ -75,7 +65,7 @@ def _noise(args) -> int:
     texts, warnings = _noise_exports(args, rec, report, cal)
     figure = None
     if args.figure is not None:
-        from ..noise_figure import noise_figure
+        from ..noise.figures import noise_figure
 
         with _step("drawing the figure"):
             figure = noise_figure(report, title=f"{args.recording.name}: {report.duration_s / 3600:.3g} h at "
@@ -88,7 +78,7 @@ def _noise(args) -> int:
 def _noise_exports(args, rec, report, cal) -> tuple[dict, list]:
     import re
 
-    from ..noise_export import kalibr_yaml, openvins_yaml
+    from ..noise.export import kalibr_yaml, openvins_yaml
 
     found = next((m.group(1) for n in rec.notes if (m := re.search(r"topic (/\S+) \(sensor_msgs/Imu", n))), None)
     topic = args.topic or found or "/imu0"
@@ -108,8 +98,7 @@ def _noise_write(args, report, texts: dict, figure, t0: float) -> None:
     from ..atomic import atomic_output, write_json_atomic
 
     out = report.to_dict()
-    out["provenance"] = _provenance(args, t0) if args.recording.is_file() else \
-        {"accelcal_version": __version__, "recording": str(args.recording), "elapsed_s": time.perf_counter() - t0}
+    out["provenance"] = _provenance(args, t0)
     write_json_atomic(args.out, out)
     for path, text in texts.items():
         with atomic_output(path) as tmp:
@@ -121,7 +110,7 @@ def _noise_write(args, report, texts: dict, figure, t0: float) -> None:
 
 
 def _noise_summary(args, report, warnings: list) -> None:
-    from ..noise_export import exported_values
+    from ..noise.export import exported_values
 
     lines = [f"noise: {report.n} samples, {report.duration_s / 3600:.3g} h at {report.fs:.4g} Hz"]
     lines += [f"  read: {n}" for n in report.notes if n]

@@ -7,6 +7,11 @@
 The formats and what each declares (how it is recognised, read and written; whether the
 file times its samples, says where the sensor rests, needs an optional extra) are in
 :data:`~accelcal.formats.registry.FORMATS`; each format's parser is in its own module.
+Robotics logs are formats like the others (ROS 1/2 bags and MCAP files in :mod:`.ros`,
+PX4 ULog in :mod:`.px4`, ArduPilot DataFlash in :mod:`.ardupilot`, what they share in
+:mod:`.logs`), read with the log options ``topic``, ``instance`` and ``time_source``:
+
+>>> rec = read("rosbag2_2023_08_11-21_37_35")  # a ROS 2 bag folder: acc and gyro of its IMU topic
 Importing this package imports no numerical library (``accelcal --help`` lists the
 formats from it).
 """

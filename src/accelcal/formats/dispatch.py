@@ -28,13 +28,15 @@ from pathlib import Path
 from ..errors import RecordingError
 from ..units import acceleration_unit, angular_rate_unit
 from ..units import time_unit as time_unit_name
-from .registry import BINARY_HEAD_BYTES, FALLBACK, FORMATS, TEXT_HEAD_CHARS, Format, format_named
+from .registry import (BINARY_HEAD_BYTES, FALLBACK, FORMATS, LOG_OPTIONS, OPTION_FLAGS, TEXT_HEAD_CHARS, TIME_SOURCES,
+                       Format, format_named)
 from .text import load_text
 
 
 def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit: str | None = None,
          time_unit: str | None = None, rate: float | None = None, intervals=None, gyro=None,
-         gyro_unit: str | None = None):
+         gyro_unit: str | None = None, topic: str | None = None, instance: int | None = None,
+         time_source: str | None = None):
     """Read an accelerometer recording (and its gyroscope, when the file or ``gyro`` has one).
 
     Parameters
@@ -68,6 +70,14 @@ def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit
         Unit of the gyro values (``rad/s``, ``deg/s``, ``counts``) of a table or of the
         ``gyro`` file; overrides the header.  Formats that define their gyro's unit ignore
         it (with a note).
+    topic : str, optional
+        Logs: the IMU topic (ROS), ``sensor_accel`` or ``sensor_combined`` (PX4), the IMU
+        message (DataFlash); default the only one (several: a one-line error listing them).
+    instance : int, optional
+        Logs: the sensor instance (PX4 ``multi_id``, DataFlash ``I``) when several are logged.
+    time_source : {'header', 'log'}, optional
+        Logs: the sensor's own stamps (``'header'``, the default) or the time the log
+        recorded each message.
 
     Returns
     -------
@@ -76,11 +86,12 @@ def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit
         seconds, notes saying what was assumed.
     """
     path = Path(path)
-    options = {"columns": columns, "unit": unit, "time_unit": time_unit, "rate": rate, "gyro_unit": gyro_unit}
+    options = {"columns": columns, "unit": unit, "time_unit": time_unit, "rate": rate, "gyro_unit": gyro_unit,
+               "topic": topic, "instance": instance, "time_source": time_source}
     if strict:
         return _read_strict(path, format, {**options, "intervals": intervals, "gyro": gyro})
     fmt = None if format == "auto" else format_named(format)
-    _check_options(unit, time_unit, rate, gyro_unit)
+    _check_options(unit, time_unit, rate, gyro_unit, time_source)
     notes: list[str] = []
     text = None
     if fmt is None:
@@ -133,7 +144,7 @@ def _detected(fmt: Format) -> str:
     return f"format: {fmt.name} (detected; pass --format to choose another)"
 
 
-def _check_options(unit, time_unit, rate, gyro_unit=None) -> None:
+def _check_options(unit, time_unit, rate, gyro_unit, time_source) -> None:
     if unit is not None and acceleration_unit(unit) is None:
         raise RecordingError(f"unknown acceleration unit {unit!r}; use one of g, mg, m/s2, counts")
     if gyro_unit is not None and angular_rate_unit(gyro_unit) is None:
@@ -142,6 +153,8 @@ def _check_options(unit, time_unit, rate, gyro_unit=None) -> None:
         raise RecordingError(f"unknown time unit {time_unit!r}; use one of s, ms, us, ns")
     if rate is not None and not (math.isfinite(rate) and rate > 0):
         raise RecordingError(f"--rate must be a positive number of Hz, got {rate!r}")
+    if time_source not in (None, *TIME_SOURCES):
+        raise RecordingError(f"--time-source must be {' or '.join(TIME_SOURCES)}, got {time_source!r}")
 
 
 def _read_strict(path: Path, format: str, options: dict):
@@ -180,10 +193,13 @@ def _sniff_text(path: Path, text: str) -> Format:
 def _read_format(path: Path, fmt: Format, text: str | None, options: dict, notes: list[str]):
     """Run ``fmt``'s reader with the options it takes; apply the others (see
     :data:`~accelcal.formats.registry.READING_OPTIONS`); notes on the file go to ``notes``."""
-    if options["columns"] is not None and "columns" not in fmt.options:
-        takers = " or ".join(f.name for f in FORMATS.values() if "columns" in f.options)
-        raise RecordingError(f"{path}: --columns applies to the {takers} format, not to {fmt.name} "
-                             f"(pass --format {FALLBACK} to read it as a plain table)")
+    for option in ("columns", *LOG_OPTIONS):
+        if options[option] is not None and option not in fmt.options:
+            takers = [f.name for f in FORMATS.values() if option in f.options]
+            fix = f"pass --format {FALLBACK} to read it as a plain table" if option == "columns" else \
+                "a file of one sensor and one clock has no choice to make"
+            raise RecordingError(f"{path}: {OPTION_FLAGS[option]} applies to the {_either(takers)} format"
+                                 f"{'s' if len(takers) > 1 else ''}, not to {fmt.name} ({fix})")
     reader = fmt.load_reader(path)
     own = {k: v for k, v in options.items() if k in fmt.options and v is not None}
     rec = reader(path, text=text, **own) if fmt.text else reader(path, **own)
@@ -199,6 +215,11 @@ def _read_format(path: Path, fmt: Format, text: str | None, options: dict, notes
     if options["gyro_unit"] is not None and "gyro_unit" not in fmt.options and rec.gyro is not None:
         notes.append(f"--gyro-unit ignored: the {fmt.name} format defines its gyro's unit")
     return rec
+
+
+def _either(names: list[str]) -> str:
+    """``a``, ``a or b``, ``a, b or c``."""
+    return " or ".join(names) if len(names) < 3 else f"{', '.join(names[:-1])} or {names[-1]}"
 
 
 def _with_unit(rec, unit: str | None, path):

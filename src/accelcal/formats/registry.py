@@ -26,13 +26,23 @@ import importlib
 import importlib.util
 from dataclasses import dataclass
 
-from ..errors import RecordingError
+from ..errors import MissingExtraError, RecordingError
 
 #: The reading options (of :func:`accelcal.formats.read`) a reader may take itself.  One it
 #: does not take is applied by the dispatcher: ``unit`` converts or checks the values,
 #: ``rate`` replaces the time by sample index / rate, ``time_unit`` and ``gyro_unit`` are
-#: ignored with a note, ``columns`` is refused.
-READING_OPTIONS = ("columns", "unit", "time_unit", "rate", "gyro_unit")
+#: ignored with a note, ``columns`` and the log options are refused.
+TABLE_OPTIONS = ("columns", "unit", "time_unit", "rate", "gyro_unit")
+#: The options of logs, which hold several sensors and two clocks: the IMU topic, the
+#: sensor instance, and whose time stamps (``'header'``: the sensor's, ``'log'``: the log's).
+LOG_OPTIONS = ("topic", "instance", "time_source")
+#: The values of ``time_source``.
+TIME_SOURCES = ("header", "log")
+READING_OPTIONS = TABLE_OPTIONS + LOG_OPTIONS
+#: The command-line option of each reading option, for messages.
+OPTION_FLAGS = {"columns": "--columns", "unit": "--unit", "time_unit": "--time-unit", "rate": "--rate",
+                "gyro_unit": "--gyro-unit", "topic": "--topic", "instance": "--instance",
+                "time_source": "--time-source"}
 #: Characters of the decoded text that text formats are sniffed on.
 TEXT_HEAD_CHARS = 8192
 #: Bytes of the file that binary formats are sniffed on.
@@ -123,12 +133,13 @@ class Format:
         return None if self.writer is None else _resolve(self.writer)
 
     def check_extra(self, path=None) -> None:
-        """One-line :class:`RecordingError` if a package of :attr:`extra` is not installed."""
+        """One-line :class:`~accelcal.errors.MissingExtraError` (a :class:`RecordingError`) if
+        a package of :attr:`extra` is not installed."""
         missing = [m for m in self.requires if importlib.util.find_spec(m) is None]
         if missing:
             where = f"{path}: " if path is not None else ""
-            raise RecordingError(f"{where}reading {self.name} files needs {', '.join(missing)}, "
-                                 f"not installed: pip install accelcal[{self.extra}]")
+            raise MissingExtraError(f"{where}reading {self.name} files needs {', '.join(missing)}, "
+                                    f"not installed: pip install accelcal[{self.extra}]")
 
 
 def _resolve(path: str):
@@ -153,11 +164,22 @@ FORMATS: dict[str, Format] = {f.name: f for f in (
            reader="accelcal.formats.imucal_annotated:read_annotated_session",
            sniff="accelcal.formats.imucal_annotated:sniff", options=("rate",), defines_time=False, intervals=True),
     Format(name="csv", title="any delimited table (see 'input' above)",
-           reader="accelcal.formats.table:read_table", options=READING_OPTIONS, intervals=True,
+           reader="accelcal.formats.table:read_table", options=TABLE_OPTIONS, intervals=True,
            strict_reader="accelcal.formats.canonical:read_canonical",
            writer="accelcal.formats.canonical:write_canonical"),
     Format(name="imutk", title="IMU-TK ASCII (t x y z, e.g. xsens_acc.mat), which csv reads too",
            reader="accelcal.formats.imutk:read_imutk_ascii"),
+    Format(name="ros", title="ROS 1 bag, ROS 2 bag (its folder, metadata.yaml, .db3 or .mcap) or bare .mcap file: "
+                             "a sensor_msgs/Imu topic, accelerometer and gyroscope",
+           reader="accelcal.formats.ros:read", sniff="accelcal.formats.ros:sniff", options=("topic", "time_source"),
+           text=False, extra="ros", requires=("rosbags",)),
+    Format(name="px4", title="PX4 ULog: the raw sensor_accel/sensor_gyro when logged, else sensor_combined (already "
+                             "calibrated by the autopilot)",
+           reader="accelcal.formats.px4:read", sniff="accelcal.formats.px4:sniff", options=LOG_OPTIONS, text=False,
+           extra="px4", requires=("pyulog",)),
+    Format(name="ardupilot", title="ArduPilot DataFlash .bin log: its IMU messages (after ArduPilot's calibration)",
+           reader="accelcal.formats.ardupilot:read", sniff="accelcal.formats.ardupilot:sniff", options=LOG_OPTIONS,
+           text=False, extra="ardupilot", requires=("pymavlink",)),
 )}
 
 #: The format of a text file that no format's sniff recognises.
@@ -192,5 +214,5 @@ def formats_help(width: int = 80) -> str:
     return "\n".join(lines)
 
 
-__all__ = ["BINARY_HEAD_BYTES", "FALLBACK", "FORMATS", "Format", "READING_OPTIONS", "TEXT_HEAD_CHARS", "format_named",
-           "formats_help"]
+__all__ = ["BINARY_HEAD_BYTES", "FALLBACK", "FORMATS", "Format", "LOG_OPTIONS", "OPTION_FLAGS", "READING_OPTIONS",
+           "TABLE_OPTIONS", "TEXT_HEAD_CHARS", "TIME_SOURCES", "format_named", "formats_help"]

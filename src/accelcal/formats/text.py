@@ -56,7 +56,9 @@ def binary_kind(raw: bytes) -> str | None:
                         (b"\x89HDF", "an HDF5 file"), (b"MATLAB 5.0", "a MATLAB .mat binary file"),
                         (b"RDX", "an R data file"), (b"\xfd7zXZ", "an xz-compressed file"),
                         (b"BZh", "a bzip2-compressed file"), (b"\xd0\xcf\x11\xe0", "an Excel .xls workbook"),
-                        (b"#ROSBAG", "a ROS bag (export the IMU topic with rostopic echo -p)"),
+                        (b"#ROSBAG", "a ROS bag (read it with --format ros, or auto)"),
+                        (b"\x89MCAP", "an MCAP file (read it with --format ros, or auto)"),
+                        (b"ULog\x01\x12\x35", "a PX4 ULog (read it with --format px4, or auto)"),
                         (b"\x93NUMPY", "a numpy .npy file")):
         if head.startswith(magic):
             return kind

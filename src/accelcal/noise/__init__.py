@@ -14,7 +14,14 @@ the calibration (the discrepancy workflow's stochastic layer,
 * :mod:`.simulation` — sampled noise of a model (:func:`simulate_segments`,
   :func:`simulate_noise`);
 * :mod:`.allan_fit` — the fit of a model's coefficients to a measured Allan variance by
-  Gamma maximum likelihood (:func:`fit_avar` → :class:`NoiseFit`).
+  Gamma maximum likelihood (:func:`fit_avar` → :class:`NoiseFit`), weighted by the
+  model's own edf with a model-error variance (:func:`fit_avar_model_error`), and its
+  intervals from correlated draws of the Allan variances (:func:`bootstrap_fits`);
+* :mod:`.report` — the noise of a static recording (:func:`analyse_noise` →
+  :class:`NoiseReport`: Allan deviations with intervals, the IEEE terms per axis with
+  theirs, the static and resolution checks), :mod:`.export` its JSON and the Kalibr and
+  OpenVINS files, :mod:`.figures` its figure (matplotlib, imported there only): what
+  ``accelcal noise`` runs.
 
 A noise model is a mapping ``{term id: coefficient}``; the two-parameter terms take
 ``(coefficient, shape)`` (``gauss_markov``: correlation time [s], ``sinusoid``:
@@ -47,11 +54,15 @@ from .allan import (
     octave_m,
     pooled_edf,
 )
-from .allan_fit import NoiseFit, fit_avar, fit_avar_batch, gamma_deviance
+from .allan_fit import (OCTAVE_CORRELATION, NoiseFit, bootstrap_fits, fit_avar, fit_avar_batch, fit_avar_model_error,
+                        gamma_deviance, log_avar_covariance, model_edf)
+from .report import NoiseAnalysisError, NoiseReport, analyse_noise
 from .simulation import simulate_noise, simulate_segments
 from .terms import TERM_IDS, TERMS, NoiseModelError, NoiseTerm, model_avar, noise_term, term_parameters
 
-__all__ = ["DEFAULT_MIN_EDF", "NOISE_ALPHAS", "TERMS", "TERM_IDS", "AllanError", "AllanVariance", "NoiseFit",
-           "NoiseModelError", "NoiseTerm", "allan_variance", "avar_interval", "check_segments", "edf_overlapping",
-           "fit_avar", "fit_avar_batch", "gamma_deviance", "model_avar", "noise_term", "octave_m", "pooled_edf",
-           "simulate_noise", "simulate_segments", "term_parameters"]
+__all__ = ["DEFAULT_MIN_EDF", "NOISE_ALPHAS", "OCTAVE_CORRELATION", "TERMS", "TERM_IDS", "AllanError", "AllanVariance",
+           "NoiseAnalysisError", "NoiseFit", "NoiseModelError", "NoiseReport", "NoiseTerm", "allan_variance",
+           "analyse_noise", "avar_interval", "bootstrap_fits", "check_segments", "edf_overlapping", "fit_avar",
+           "fit_avar_batch", "fit_avar_model_error", "gamma_deviance", "log_avar_covariance", "model_avar",
+           "model_edf", "noise_term", "octave_m", "pooled_edf", "simulate_noise", "simulate_segments",
+           "term_parameters"]

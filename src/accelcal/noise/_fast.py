@@ -9,7 +9,8 @@ dozens of array calls; these kernels run the same algorithms in one compiled loo
   the Gamma likelihood, non-negative least squares by enumerating the supports, step
   halving), problem by problem;
 * :func:`allan_sums` — the sums of squared second differences of the running sums that
-  :func:`accelcal.noise.allan.allan_variance` accumulates;
+  :func:`accelcal.noise.allan.allan_variance` accumulates (the running sums formed here
+  too, one column at a time);
 * :func:`ar1` — the Gauss–Markov recursion of the noise simulator (``lfilter``, bit for bit).
 
 Same algorithms, same arithmetic up to the order of floating-point sums (results agree
@@ -179,17 +180,72 @@ def _irls_batch(H, y, edf, subsets, sizes, max_iter, tol):
     return c, dev
 
 
-def _allan_sums(c, m):
-    """``Σ_i (c[i+2m] − 2 c[i+m] + c[i])²`` per averaging factor and column: ``c`` (n+1, d)."""
-    n1, d = c.shape
-    out = np.zeros((m.shape[0], d))
-    for j in range(m.shape[0]):
-        mk = m[j]
-        for i in range(n1 - 2 * mk):
-            for col in range(d):
-                v = c[i + 2 * mk, col] - 2.0 * c[i + mk, col] + c[i, col]
-                out[j, col] += v * v
+def _allan_sums(s, mean, m):
+    """``Σ_i (c[i+2m] − 2 c[i+m] + c[i])²`` per averaging factor and column, ``c`` the running
+    sums of the centred data (``c[0] = 0``, ``c[i+1] = c[i] + (s[i] − mean)``): ``s`` (n, d).
+
+    Per column, the running sums are formed in one contiguous buffer (what numpy's
+    ``cumsum(s - mean)`` gives, bit for bit, without its temporaries), then the factors are
+    taken four at a time in one pass over it, each sum in its own accumulator, so that the
+    additions of four factors overlap instead of waiting for each other (and, for octaves,
+    ``c[i+2m]`` of one factor is ``c[i+m]`` of the next).  Every sum still adds its terms in
+    the order of ``i``: the same bits as one loop per factor.
+    """
+    n, d = s.shape
+    M = m.shape[0]
+    out = np.zeros((M, d))
+    x = np.empty(n + 1)
+    for col in range(d):
+        acc = 0.0
+        x[0] = 0.0
+        mu = mean[col]
+        for i in range(n):
+            acc += s[i, col] - mu
+            x[i + 1] = acc
+        for j in range(0, M, 4):
+            k = min(4, M - j)
+            four = _sums4(x, m[j], m[j + 1] if k > 1 else 0, m[j + 2] if k > 2 else 0, m[j + 3] if k > 3 else 0, k)
+            for a in range(k):
+                out[j + a, col] = four[a]
     return out
+
+
+def _sums4(x, m0, m1, m2, m3, k):
+    """The sums of :func:`_allan_sums` for up to four factors (``k`` of them) of one column."""
+    n1 = x.shape[0]
+    ms = (m0, m1, m2, m3)
+    lim = np.zeros(4, dtype=np.int64)  # last i (exclusive) with a term, per factor; 0 for unused slots
+    for a in range(k):
+        lim[a] = max(n1 - 2 * ms[a], 0)
+    s0 = s1 = s2 = s3 = 0.0
+    common = lim[0]
+    for a in range(1, k):
+        common = min(common, lim[a])
+    if k == 4:
+        for i in range(common):  # every factor has a term at i
+            v0 = x[i + 2 * m0] - 2.0 * x[i + m0] + x[i]
+            v1 = x[i + 2 * m1] - 2.0 * x[i + m1] + x[i]
+            v2 = x[i + 2 * m2] - 2.0 * x[i + m2] + x[i]
+            v3 = x[i + 2 * m3] - 2.0 * x[i + m3] + x[i]
+            s0 += v0 * v0
+            s1 += v1 * v1
+            s2 += v2 * v2
+            s3 += v3 * v3
+    else:  # the last group of fewer: each factor alone
+        common = 0
+    for i in range(common, lim[0]):  # the tails, factor by factor, still in the order of i
+        v0 = x[i + 2 * m0] - 2.0 * x[i + m0] + x[i]
+        s0 += v0 * v0
+    for i in range(common, lim[1]):
+        v1 = x[i + 2 * m1] - 2.0 * x[i + m1] + x[i]
+        s1 += v1 * v1
+    for i in range(common, lim[2]):
+        v2 = x[i + 2 * m2] - 2.0 * x[i + m2] + x[i]
+        s2 += v2 * v2
+    for i in range(common, lim[3]):
+        v3 = x[i + 2 * m3] - 2.0 * x[i + m3] + x[i]
+        s3 += v3 * v3
+    return s0, s1, s2, s3
 
 
 def _ar1(e, rho):
@@ -212,6 +268,7 @@ _deviance = _jit(_deviance)
 _floored_model = _jit(_floored_model)
 _irls_one = _jit(_irls_one)
 _irls_batch = _jit(_irls_batch)
+_sums4 = _jit(_sums4)
 _allan_sums = _jit(_allan_sums)
 _ar1 = _jit(_ar1)
 
@@ -235,9 +292,10 @@ def irls_gamma(H: np.ndarray, y: np.ndarray, edf: np.ndarray, max_iter: int = 20
                        np.ascontiguousarray(edf, dtype=np.float64), subsets, sizes, int(max_iter), float(tol))
 
 
-def allan_sums(c: np.ndarray, m: np.ndarray) -> np.ndarray:
-    """Compiled sums of squared second differences (:func:`_allan_sums`)."""
-    return _allan_sums(np.ascontiguousarray(c, dtype=np.float64), np.ascontiguousarray(m, dtype=np.int64))
+def allan_sums(s: np.ndarray, mean: np.ndarray, m: np.ndarray) -> np.ndarray:
+    """Compiled sums of squared second differences of the running sums of ``s − mean`` (:func:`_allan_sums`)."""
+    return _allan_sums(np.ascontiguousarray(s, dtype=np.float64), np.ascontiguousarray(mean, dtype=np.float64),
+                       np.ascontiguousarray(m, dtype=np.int64))
 
 
 def ar1(e: np.ndarray, rho: float) -> np.ndarray:

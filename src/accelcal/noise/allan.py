@@ -232,16 +232,17 @@ def allan_variance(segments, fs: float, *, m=None, min_edf: float = DEFAULT_MIN_
     for s in segs:
         # Running sums of the centred data: the phase analogue (times fs); centring keeps
         # the digits of raw counts around 32768.
-        c = np.concatenate([np.zeros((1,) + s.shape[1:]), np.cumsum(s - s.mean(axis=0), axis=0)])
-        reach = c.shape[0] - 2 * m >= 1
-        if fast is not None:  # the same sums, compiled (accelcal[fast])
-            sums[reach] += fast.allan_sums(c, m[reach]) / (2.0 * m[reach, None] ** 2)
+        n1 = s.shape[0] + 1
+        reach = n1 - 2 * m >= 1
+        if fast is not None:  # the same sums, running sums included, compiled (accelcal[fast])
+            sums[reach] += fast.allan_sums(s, s.mean(axis=0), m[reach]) / (2.0 * m[reach, None] ** 2)
         else:
+            c = np.concatenate([np.zeros((1,) + s.shape[1:]), np.cumsum(s - s.mean(axis=0), axis=0)])
             for k in np.flatnonzero(reach):
                 mk = m[k]
                 dd = c[2 * mk:] - 2 * c[mk:-mk] + c[: c.shape[0] - 2 * mk]
                 sums[k] += np.einsum("ij,ij->j", dd, dd) / (2.0 * mk * mk)
-        terms[reach] += c.shape[0] - 2 * m[reach]
+        terms[reach] += n1 - 2 * m[reach]
     if np.any(terms == 0):
         raise AllanError(f"averaging factor m={int(m[np.argmax(terms == 0)])} is longer than half of every segment")
     return AllanVariance(taus=m / float(fs), m=m.astype(int), avar=sums / terms[:, None], n_terms=terms,

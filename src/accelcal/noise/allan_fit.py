@@ -1,11 +1,26 @@
-"""Fit of a noise model to a measured Allan variance (the Allan-deviation term fit).
+"""Fit of a noise model to a measured Allan variance (the Allan-deviation term fit), shared by the
+discrepancy stochastic layer and the noise analysis of a static recording (:mod:`.report`).
 
-Fit.  The model AVAR is linear in the squared coefficients ``c = (N², Q², …) ≥ 0`` (for
-a given ``T_c`` or ``f₀``, which are profiled over their grids).  Each pooled AVAR point ``Â_j`` is treated as ``A_j χ²_{ν_j}/ν_j``
-(Gamma, shape ``ν_j/2``) with ``ν_j`` the pooled white-FM edf of :mod:`.allan`; ``c``
-maximises this likelihood subject to ``c ≥ 0`` (Fisher scoring = iteratively
-reweighted non-negative least squares with weights ``ν_j/A_j²``).  Deviance
+Fit (:func:`fit_avar`).  The model AVAR is linear in the squared coefficients
+``c = (N², Q², …) ≥ 0`` (for a given ``T_c`` or ``f₀``, which are profiled over their
+grids).  Each pooled AVAR point ``Â_j`` is treated as ``A_j χ²_{ν_j}/ν_j`` (Gamma, shape
+``ν_j/2``) with ``ν_j`` given weights (the stochastic layer: the pooled white-FM edf of
+:mod:`.allan`); ``c`` maximises this likelihood subject to ``c ≥ 0`` (Fisher scoring =
+iteratively reweighted non-negative least squares with weights ``ν_j/A_j²``).  Deviance
 ``D = Σ ν_j (Â_j/A_j − 1 − ln(Â_j/A_j))``.
+
+The same fit with two refinements (:func:`fit_avar_model_error`, the noise analysis of a
+long static record): the weights are the edf of the fitted model itself
+(:func:`model_edf`: its terms' NIST edf mixed coherently, see there), and a model-error
+variance is added where the terms cannot follow the data to within its sampling error.
+The stochastic layer keeps the white-FM weights and no model error, and its error bars
+the Satterthwaite mix (``model_edf(..., mix='satterthwaite')``): its outputs are
+unchanged.  Its rests are short, white noise dominates their Allan variance, and its tests
+are calibrated by a bootstrap of the time series with those weights.
+
+Intervals (:func:`bootstrap_fits`): the coefficients refitted to correlated draws of the
+fitted model's Allan variances (:func:`log_avar_covariance`, with the correlation of
+``ln Â`` between octaves of :data:`OCTAVE_CORRELATION`).
 """
 
 from __future__ import annotations
@@ -18,6 +33,7 @@ from itertools import combinations
 import numpy as np
 
 from .. import kernels
+from .allan import AllanVariance, allan_variance
 from .terms import TERMS, NoiseModelError, model_avar, noise_term
 
 
@@ -168,4 +184,170 @@ def fit_avar(taus, avar, edf, term_ids: Sequence[str], fs: float) -> NoiseFit:
     return fit_avar_batch(taus, np.asarray(avar, dtype=float)[None], edf, term_ids, fs)[0]
 
 
-__all__ = ["NoiseFit", "fit_avar", "fit_avar_batch", "gamma_deviance"]
+#: How the terms' edf combine at one τ (:func:`model_edf`).
+EDF_MIXES = ("coherent", "satterthwaite")
+
+
+def model_edf(allan: AllanVariance, fit: NoiseFit, mix: str = "coherent") -> np.ndarray:
+    """Edf of each τ for the fitted model, from its terms' NIST edf (:meth:`AllanVariance.edf_for`;
+    ``gauss_markov``: random-walk-like below its ``T_c``, white-like above) weighted by their
+    share ``w_t`` of the model's Allan variance.
+
+    ``mix='coherent'`` (default): ``1/√ν = Σ_t w_t/√ν_t``.  The Allan variance of a sum of
+    independent processes is not a weighted mean of independent estimates: the second
+    differences of all the terms enter the same squares, and the cross products, of mean
+    zero, add variance.  When the autocorrelations of the terms' second differences have the
+    same shape (nearly so: the averaging window sets it) the relative standard errors add
+    linearly.  Measured on 120 simulated 2.9 h records of white noise, flicker and random
+    walk of comparable size, the standard deviation of ``ln Â`` at τ = 82 s was 0.107, the
+    coherent mix gives 0.108, the Satterthwaite mix 0.072 (at τ = 164 s: 0.157, 0.162, 0.094).
+
+    ``mix='satterthwaite'``: ``1/ν = Σ_t w_t²/ν_t``, the edf of a weighted mean of
+    independent estimates, which understates the variance where terms overlap; the
+    discrepancy stochastic layer keeps it for its error bars (its outputs unchanged).
+    """
+    if mix not in EDF_MIXES:
+        raise NoiseModelError(f"mix must be one of {', '.join(EDF_MIXES)}, got {mix!r}")
+    taus = allan.taus
+    parts, nus = [], []
+    for k, c in zip(fit.term_ids, fit.c):
+        parts.append(c * noise_term(k).basis(taus, allan.fs, fit.shape if TERMS[k].shape_key else None))
+        if k == "gauss_markov":
+            nus.append(np.where(taus < fit.shape, allan.edf_for(-2), allan.edf_for(0)))
+        else:
+            nus.append(allan.edf_for(noise_term(k).alpha))
+    total = np.sum(parts, axis=0)
+    if mix == "satterthwaite":
+        return total**2 / np.sum([p**2 / np.maximum(nu, 1e-12) for p, nu in zip(parts, nus)], axis=0)
+    rel = np.sum([p / total * np.sqrt(2.0 / np.maximum(nu, 1e-12)) for p, nu in zip(parts, nus)], axis=0)
+    return 2.0 / rel**2
+
+
+def fit_avar_model_error(allan: AllanVariance, avar, term_ids: Sequence[str],
+                         max_iter: int = 10) -> tuple[NoiseFit, np.ndarray, float]:
+    """:func:`fit_avar` of ``avar`` (one column of ``allan``) weighted by the model's own edf,
+    with the model error the fit leaves.
+
+    Returns (fit, edf of each τ used by the fit, model error σ_m).  ``ln Â_j`` has
+    variance ``2/ν_j`` under the model; a model that misses a feature of the data (a
+    filter, a periodic disturbance) leaves residuals larger than that, and fitted with the
+    statistical weights alone the points of highest edf (the shortest τ, up to 10⁶ on a
+    long record) would pull every other term away from the data.  So the variance is
+    taken as ``2/ν_j + σ_m²`` with ``σ_m²`` solving ``Σ (ln Â_j/A_j)² / (2/ν_j + σ_m²) = k − p``
+    (zero when the statistical variances already explain the residuals: a moment
+    estimator as in random-effects meta-analysis), alternated with the fit until σ_m
+    settles; the fit and the bootstrap use ``ν_eff = 1 / (1/ν + σ_m²/2)``, ``ν`` the
+    model's edf (:func:`model_edf`).  The first fit is weighted by the white-FM edf.
+    """
+    y = np.asarray(avar, dtype=float)
+    fit = fit_avar(allan.taus, y, allan.edf, term_ids, allan.fs)
+    s2 = -1.0
+    for _ in range(max_iter):
+        nu = model_edf(allan, fit)
+        lr2 = np.log(y / fit.avar(allan.taus, allan.fs)) ** 2
+        dof = max(len(y) - int(np.sum(fit.c > 0)), 1)
+        new = _model_error_variance(lr2, nu, dof)
+        edf = 1.0 / (1.0 / nu + new / 2.0)
+        fit = fit_avar(allan.taus, y, edf, term_ids, allan.fs)
+        if abs(new - s2) <= 1e-3 * max(new, 1e-12):
+            break
+        s2 = new
+    return fit, edf, math.sqrt(new)
+
+
+def _model_error_variance(lr2: np.ndarray, nu: np.ndarray, dof: int) -> float:
+    """σ² ≥ 0 with ``Σ lr2 / (2/ν + σ²) = dof`` (bisection on a decreasing function), 0 if none needed."""
+    def q(s2):
+        return float(np.sum(lr2 / (2.0 / nu + s2)))
+
+    if q(0.0) <= dof:
+        return 0.0
+    lo, hi = 0.0, max(float(lr2.max()), 1e-12) * len(lr2)
+    for _ in range(80):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if q(mid) > dof else (lo, mid)
+    return 0.5 * (lo + hi)
+
+
+#: Correlation of ln AVAR between octaves 1…6 apart, per noise type, for the overlapping estimator
+#: on a long record (measured: 1000 simulated records of 2^16 samples per type, averaged over
+#: m = 4 … 1024; :func:`octave_correlations` recomputes them).  Beyond 6 octaves: 0, except
+#: the random walk (decaying by 0.7 per octave) and quantization (0.28).
+OCTAVE_CORRELATION = {
+    "white": (0.52, 0.18, 0.06, 0.03, 0.03, 0.03),
+    "quantization": (0.12, 0.31, 0.30, 0.30, 0.31, 0.28),
+    "bias_instability": (0.69, 0.32, 0.14, 0.07, 0.04, 0.0),
+    "random_walk": (0.89, 0.67, 0.48, 0.34, 0.23, 0.16),
+}
+OCTAVE_CORRELATION["drift_ramp"] = OCTAVE_CORRELATION["random_walk"]  # both α = −2 in the library
+
+
+def _rho(term: str, d: np.ndarray) -> np.ndarray:
+    if term not in OCTAVE_CORRELATION:
+        raise NoiseModelError(f"the correlated bootstrap knows the octave correlations of {', '.join(OCTAVE_CORRELATION)}"
+                              f", not of {term}")
+    table = np.array((1.0,) + OCTAVE_CORRELATION[term])
+    tail = {"random_walk": 0.16, "drift_ramp": 0.16, "quantization": 0.28}.get(term, 0.0)
+    far = tail * (0.7 ** (d - 6) if term in ("random_walk", "drift_ramp") else 1.0)
+    return np.where(d <= 6, table[np.minimum(d, 6)], far)
+
+
+def log_avar_covariance(allan: AllanVariance, fit: NoiseFit, model_error: float = 0.0) -> np.ndarray:
+    """(k, k) covariance of ``ln Â`` at the τ grid under the fitted model, plus the model error on the diagonal.
+
+    Correlations: each term ``t`` contributes ``ρ_t(d_ij) s_it s_jt`` with
+    ``s_it = A_it √(2/ν_it) / A_i`` (its share of the Allan variance times its relative
+    standard error, NIST edf) and ``d_ij`` the octaves between the two τ, normalised to a
+    correlation matrix.  Variances: ``2/ν`` of the coherent mix (:func:`model_edf`), plus
+    ``σ_m²``.
+    """
+    octave = np.log2(allan.m.astype(float))
+    d = np.rint(np.abs(octave[:, None] - octave[None, :])).astype(int)
+    total = fit.avar(allan.taus, allan.fs)
+    cov = np.zeros(d.shape)
+    for k, c in zip(fit.term_ids, fit.c):
+        rho = _rho(k, d)
+        part = c * TERMS[k].basis(allan.taus, allan.fs)
+        s = part / total * np.sqrt(2.0 / np.maximum(allan.edf_for(TERMS[k].alpha), 1e-12))
+        cov += rho * np.outer(s, s)
+    sd = np.sqrt(np.diag(cov))
+    coherent = np.sqrt(2.0 / model_edf(allan, fit))
+    return cov * np.outer(coherent / sd, coherent / sd) + model_error**2 * np.eye(len(d))
+
+
+def bootstrap_fits(fit: NoiseFit, allan: AllanVariance, edf, model_error: float, n_boot: int, rng) -> np.ndarray:
+    """(n_boot, p) coefficients of ``fit``'s terms refitted to correlated draws of its Allan variances.
+
+    Draws: a Gaussian copula with the correlation of :func:`log_avar_covariance` and Gamma
+    marginals ``A_j χ²_ν/ν`` with ``ν = 2 / var(ln Â_j)``; refitted with the fit's weights ``edf``.
+    """
+    from scipy.special import ndtr
+
+    from .. import distributions as dist
+
+    taus, fs = allan.taus, allan.fs
+    a = fit.avar(taus, fs)
+    cov = log_avar_covariance(allan, fit, model_error)
+    sd = np.sqrt(np.diag(cov))
+    corr = cov / np.outer(sd, sd)
+    chol = np.linalg.cholesky(corr + 1e-10 * np.eye(len(sd)))
+    u = ndtr(rng.standard_normal((n_boot, len(sd))) @ chol.T)
+    nu = 2.0 / sd**2
+    draws = a * dist.gamma_ppf(np.clip(u, 1e-300, 1 - 1e-16), nu / 2.0, 2.0 / nu)
+    refits = fit_avar_batch(taus, draws, edf, fit.term_ids, fs)
+    return np.sqrt(np.maximum(np.array([f.c for f in refits]), 0.0))
+
+
+def octave_correlations(rng, term: str, n: int = 2**16, reps: int = 1000, batch: int = 100) -> np.ndarray:
+    """Measure :data:`OCTAVE_CORRELATION` for one term: mean correlation of ``ln Â`` 1…6 octaves apart."""
+    from .simulation import simulate_noise
+
+    m = 2 ** np.arange(13)
+    la = np.hstack([np.log(allan_variance(simulate_noise(rng, n, 1.0, {term: 1.0}, size=batch), 1.0, m=m).avar)
+                    for _ in range(reps // batch)])
+    c = np.corrcoef(la)
+    return np.array([np.mean(np.diag(c, d)[2:12 - d]) for d in range(1, 7)])
+
+
+__all__ = ["EDF_MIXES", "OCTAVE_CORRELATION", "NoiseFit", "bootstrap_fits", "fit_avar", "fit_avar_batch", "fit_avar_model_error",
+           "gamma_deviance", "log_avar_covariance", "model_edf", "octave_correlations"]

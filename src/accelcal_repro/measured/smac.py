@@ -10,7 +10,8 @@ Read with the ``rdata`` package (the ``workflow`` extra; the core library does n
 depend on it).  It is a recording of one orientation, so it is not a calibration source
 of the measured stage (:mod:`accelcal_repro.measured.sources`, which calibrates poses):
 the discrepancy stage uses it as the reference for slow bias wander
-(:mod:`accelcal_repro.discrepancy.adis`).
+(:mod:`accelcal_repro.discrepancy.adis`), the noise stage for its noise terms against the
+datasheet (:func:`read_smac_imu`: both sensors, SI units).
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ import numpy as np
 
 from accelcal.errors import RecordingError
 from accelcal.recording import Recording
+from accelcal.units import G0
 
 #: The recording's sampling rate [Hz] (SMAC-Group imudata documentation of ``adis_16405_imu1``).
 ADIS16405_RATE = 100.0
@@ -30,8 +32,7 @@ GYRO_COLUMNS = ("Gyro. X", "Gyro. Y", "Gyro. Z")
 
 
 def read_smac_rda(path, fs: float = ADIS16405_RATE) -> Recording:
-    """The accelerometer (unit g) and gyro (deg/s, returned in rad/s) of a SMAC ``imudata``
-    ``.rda`` file as a :class:`Recording`.
+    """The accelerometer of a SMAC ``imudata`` ``.rda`` file as a :class:`Recording` (unit g).
 
     Parameters
     ----------
@@ -46,6 +47,25 @@ def read_smac_rda(path, fs: float = ADIS16405_RATE) -> Recording:
         One line naming the file: not readable as R data, no matrix, no accelerometer
         columns, non-finite values.
     """
+    path, name, cols, values = _read_matrix(path, ACCEL_COLUMNS)
+    acc = _columns(path, name, cols, values, ACCEL_COLUMNS, "accelerometer")
+    return Recording(np.arange(len(acc)) / float(fs), acc, None, f"{path}:{name}")
+
+
+def read_smac_imu(path, fs: float = ADIS16405_RATE) -> Recording:
+    """Accelerometer and gyroscope of a SMAC ``imudata`` ``.rda`` file in SI units: ``Accel.``
+    [g] × 9.80665 → m/s², ``Gyro.`` [deg/s] → rad/s; ``t = i / fs``.  Errors as :func:`read_smac_rda`."""
+    path, name, cols, values = _read_matrix(path, ACCEL_COLUMNS + GYRO_COLUMNS)
+    acc = _columns(path, name, cols, values, ACCEL_COLUMNS, "accelerometer") * G0
+    gyro = np.radians(_columns(path, name, cols, values, GYRO_COLUMNS, "gyroscope"))
+    notes = (f"SMAC-Group imudata {name}: Accel. X/Y/Z in g (x {G0}), Gyro. X/Y/Z in deg/s (to rad/s), "
+             f"t = i / {fs:g} Hz",)
+    return Recording(np.arange(len(acc)) / float(fs), acc, None, f"{path}:{name}", notes=notes, unit="m/s^2",
+                     gyro=gyro, gyro_unit="rad/s")
+
+
+def _read_matrix(path, needed):
+    """(path, object name, column names, values) of the one matrix of an R data file."""
     path = Path(path)
     if not path.is_file():
         raise RecordingError(f"{path}: no such file")
@@ -67,19 +87,19 @@ def read_smac_rda(path, fs: float = ADIS16405_RATE) -> Recording:
         cols = [str(c) for c in obj.coords[obj.dims[1]].values]
     except (AttributeError, IndexError, KeyError):
         raise RecordingError(f"{path}: object {name!r} is not a matrix with column names") from None
-    missing = [c for c in ACCEL_COLUMNS if c not in cols]
-    if values.ndim != 2 or missing:
-        raise RecordingError(f"{path}: object {name!r} lacks accelerometer columns {missing} (has {cols})")
-    acc = values[:, [cols.index(c) for c in ACCEL_COLUMNS]]
-    if not np.all(np.isfinite(acc)):
-        raise RecordingError(f"{path}: non-finite accelerometer values")
-    gyro = None
-    if all(c in cols for c in GYRO_COLUMNS):
-        gyro = np.deg2rad(values[:, [cols.index(c) for c in GYRO_COLUMNS]])
-        if not np.all(np.isfinite(gyro)):
-            raise RecordingError(f"{path}: non-finite gyro values")
-    return Recording(np.arange(len(acc)) / float(fs), acc, None, f"{path}:{name}", gyro=gyro,
-                     gyro_unit=None if gyro is None else "rad/s")
+    if values.ndim != 2:
+        raise RecordingError(f"{path}: object {name!r} is not a matrix (shape {values.shape})")
+    return path, name, cols, values
 
 
-__all__ = ["ACCEL_COLUMNS", "ADIS16405_RATE", "GYRO_COLUMNS", "read_smac_rda"]
+def _columns(path, name, cols, values, names, what):
+    missing = [c for c in names if c not in cols]
+    if missing:
+        raise RecordingError(f"{path}: object {name!r} lacks {what} columns {missing} (has {cols})")
+    x = values[:, [cols.index(c) for c in names]]
+    if not np.all(np.isfinite(x)):
+        raise RecordingError(f"{path}: non-finite {what} values")
+    return x
+
+
+__all__ = ["ACCEL_COLUMNS", "ADIS16405_RATE", "GYRO_COLUMNS", "read_smac_imu", "read_smac_rda"]

@@ -39,6 +39,15 @@ statistics (deviances, LR, ΔBIC) are scale-free, so one bootstrap at ``N = 1`` 
 axes (its coefficients times each axis's ``N`` give the standard errors): exact, and a
 third of the cost of a bootstrap per axis.
 
+Fit.  Every model is fitted by :func:`accelcal.noise.allan_fit.fit_avar` (the Gamma
+likelihood of the Allan variance points, coefficients ≥ 0), weighted by the pooled
+white-FM edf of the rests, without the model-error variance that the noise analysis of a
+long static record adds (:func:`accelcal.noise.allan_fit.fit_avar_model_error`): the
+rests are short, white noise dominates their Allan variance, and the tests below are
+calibrated by a bootstrap of the time series with these weights.  The error bars of the
+Allan deviation use the edf of the fitted model (:func:`~accelcal.noise.allan_fit.model_edf`,
+its Satterthwaite mix).
+
 Gap (one definition, before and after).  The rests are re-simulated ``n_resim`` times
 with the fitted model (same segment lengths; white-only fit "before", final model
 "after", common random numbers) and the simulated Allan variance is the mean over the
@@ -68,7 +77,7 @@ import numpy as np
 
 from ... import distributions as dist
 from ...noise.allan import AllanVariance, allan_variance, check_segments
-from ...noise.allan_fit import NoiseFit, fit_avar, fit_avar_batch
+from ...noise.allan_fit import NoiseFit, fit_avar, fit_avar_batch, model_edf
 from ...noise.simulation import simulate_segments
 from ...noise.terms import TERMS, noise_term
 from .implication import pose_residual_implication
@@ -367,17 +376,10 @@ def _test_step(current: NoiseFit, alts: dict, remaining: list, lr_obs: np.ndarra
 
 def _adev_interval(allan: AllanVariance, fit: NoiseFit, fs: float) -> tuple[np.ndarray, np.ndarray]:
     """68.3 % interval of the measured Allan deviation (every axis) with the edf of the model
-    ``fit``: the Satterthwaite mix of its terms' edf at each τ."""
-    taus = allan.taus
-    parts, nus = [], []
-    for k, c in zip(fit.term_ids, fit.c):
-        parts.append(c * noise_term(k).basis(taus, fs, fit.shape if TERMS[k].shape_key else None))
-        if k == "gauss_markov":  # random-walk-like below T_c, white-like above
-            nus.append(np.where(taus < fit.shape, allan.edf_for(-2), allan.edf_for(0)))
-        else:
-            nus.append(allan.edf_for(noise_term(k).alpha))
-    total = np.sum(parts, axis=0)
-    nu_mix = total**2 / np.sum([p**2 / np.maximum(nu, 1e-12) for p, nu in zip(parts, nus)], axis=0)
+    ``fit`` (:func:`~accelcal.noise.allan_fit.model_edf`, the Satterthwaite mix of its terms'
+    edf: narrower than the coherent mix where terms overlap, kept so that the layer's
+    outputs do not change)."""
+    nu_mix = model_edf(allan, fit, mix="satterthwaite")
     return allan.adev_interval(0.683, np.column_stack([nu_mix] * allan.avar.shape[1]))
 
 

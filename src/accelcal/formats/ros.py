@@ -35,8 +35,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import LogFormatError, TopicError
-from ._common import (ColumnBuffer, Progress, check_finite, check_rows, check_time_source, choose, clock_note,
-                      import_extra, make_recording, stamps_to_time)
+from .logs import (ColumnBuffer, Progress, check_finite, check_rows, check_time_source, choose, clock_note,
+                      make_recording, require_extra, stamps_to_time)
 
 IMU_TYPE = "sensor_msgs/msg/Imu"
 ROS1_MAGIC = b"#ROSBAG V2.0\n"
@@ -48,7 +48,6 @@ CHUNK = 8192
 #: angular_velocity (3), covariance (9), linear_acceleration (3), covariance (9).
 _BODY = 37 * 8
 _GYRO_AT, _ACC_AT = (4 + 9) * 8, (4 + 9 + 3 + 9) * 8
-EXTRA = "ros"
 
 
 def sniff(path, head: bytes) -> bool:
@@ -62,7 +61,7 @@ def sniff(path, head: bytes) -> bool:
         (head.startswith(SQLITE_MAGIC) and path.suffix == ".db3")
 
 
-def read(path, *, topic: str | None = None, time_source: str = "header", instance=None, progress=None):
+def read(path, *, topic: str | None = None, time_source: str = "header", progress=None):
     """Read the ``sensor_msgs/Imu`` topic of a ROS bag or MCAP file.
 
     Parameters
@@ -75,8 +74,6 @@ def read(path, *, topic: str | None = None, time_source: str = "header", instanc
         that lists them).
     time_source : {'header', 'log'}
         ``header.stamp`` (default) or the bag's record time.
-    instance : None
-        Not used by ROS logs (a PX4 option); must be None.
     progress : None, False or callable
         Progress on stderr after 2 s (None), silent (False), or ``f(done, total)``.
 
@@ -91,10 +88,8 @@ def read(path, *, topic: str | None = None, time_source: str = "header", instanc
         One line naming the cause and the fix.
     """
     check_time_source(time_source)
-    if instance is not None:
-        raise TopicError(f"{path}: --instance chooses a PX4 sensor instance; a ROS bag has topics (--topic)")
     path = Path(path)
-    import_extra("rosbags", EXTRA, "ROS bags and MCAP files")
+    require_extra("ros", path)
     bag_path, kind = _locate(path)
     from rosbags.typesys import Stores, get_typestore
 
@@ -340,4 +335,4 @@ def _recording(path, topic, kind, decoded, time_source):
     return make_recording(path, t=t, acc=acc, gyro=gyro, notes=notes, time_name=time_col[0], time_values=time_col[1])
 
 
-__all__ = ["EXTRA", "IMU_TYPE", "read", "sniff"]
+__all__ = ["IMU_TYPE", "read", "sniff"]

@@ -1,9 +1,9 @@
-"""What the log readers share: optional imports, topic choice, time stamps, bounded buffers, progress.
+"""What the log formats share (:mod:`.ros`, :mod:`.px4`, :mod:`.ardupilot`): topic choice, time
+stamps, bounded buffers, progress.
 
-A log holds many topics and two clocks.  The readers (:mod:`.ros`, :mod:`.px4`,
-:mod:`.ardupilot`) differ in how they decode messages; they agree on everything here:
+A log holds many topics and two clocks.  The readers differ in how they decode
+messages; they agree on everything here:
 
-* an optional extra that is missing is one line naming the ``pip install`` that fixes it;
 * the IMU topic is chosen automatically only when there is exactly one; several are
   listed in one line with the option that picks one;
 * time: the sensor's own stamp (a ROS header stamp, PX4's ``timestamp_sample``) by
@@ -13,22 +13,24 @@ A log holds many topics and two clocks.  The readers (:mod:`.ros`, :mod:`.px4`,
 * samples are streamed into preallocated arrays (:class:`ColumnBuffer`), never into a
   list of message objects, so memory is the size of the output;
 * a read that lasts longer than a couple of seconds reports its progress on stderr.
+
+Each reader checks its optional extra through its registry entry
+(:meth:`accelcal.formats.registry.Format.check_extra`: one line naming the ``pip install``
+that fixes it) before importing it.
 """
 
 from __future__ import annotations
 
-import importlib
 import sys
 import time
 from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from ..errors import LogFormatError, MissingExtraError, TopicError
+from ..errors import LogFormatError, TopicError
 from ..recording import MIN_ROWS, Recording
+from .registry import TIME_SOURCES, format_named
 
-#: ``time_source`` values of every log reader.
-TIME_SOURCES = ("header", "log")
 #: Largest spread (1st to 99th percentile) of the latency log − sensor stamp, in sample
 #: periods, that is not reported as a disagreement of the two clocks.
 MAX_LATENCY_SPREAD_PERIODS = 2.0
@@ -40,13 +42,9 @@ PROGRESS_AFTER_S = 2.0
 PROGRESS_EVERY_S = 5.0
 
 
-def import_extra(module: str, extra: str, what: str):
-    """Import an optional dependency, or raise :class:`MissingExtraError` naming its extra."""
-    try:
-        return importlib.import_module(module)
-    except ImportError:
-        raise MissingExtraError(f"reading {what} needs the optional package {module.split('.')[0]!r}: "
-                                f"pip install 'accelcal[{extra}]'") from None
+def require_extra(format_name: str, path=None) -> None:
+    """The optional extra of a log format, checked through its registry entry (one line if missing)."""
+    format_named(format_name).check_extra(path)
 
 
 def check_time_source(time_source: str) -> str:
@@ -144,6 +142,24 @@ class Progress:
         self.last, self.printed = now, True
 
 
+#: Largest time stamp [µs] a log may hold: 2^53 µs (285 years), exact in float64, and in int64
+#: nanoseconds.  A damaged log's stamps can be anything; beyond it they would wrap silently.
+MAX_STAMP_US = 2**53
+
+
+def microseconds(values, path, label: str) -> np.ndarray:
+    """Time stamps [µs] as int64, each checked to lie in ``[0, MAX_STAMP_US]``; else one line."""
+    v = np.asarray(values)
+    bad = (v < 0) | (v > MAX_STAMP_US)
+    if v.dtype.kind == "f":
+        bad |= ~np.isfinite(v)
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise LogFormatError(f"{path}: {label}: time stamp {v[i]!r} at message {i} is not a time ({int(bad.sum())} "
+                             "such): the log is damaged; download or copy it again")
+    return v.astype(np.int64)
+
+
 def stamps_to_time(stamps_ns: np.ndarray, path, label: str, fix: str) -> np.ndarray:
     """Seconds since the first stamp of strictly increasing integer nanosecond stamps; else one line."""
     d = np.diff(stamps_ns)
@@ -191,5 +207,5 @@ def make_recording(path, *, t, acc, gyro, notes: Sequence[str], time_name: str, 
                      gyro=gyro, gyro_unit=None if gyro is None else "rad/s")
 
 
-__all__ = ["ColumnBuffer", "Progress", "TIME_SOURCES", "check_finite", "check_rows", "check_time_source", "choose",
-           "clock_note", "import_extra", "make_recording", "stamps_to_time"]
+__all__ = ["MAX_STAMP_US", "ColumnBuffer", "Progress", "microseconds", "TIME_SOURCES", "check_finite", "check_rows", "check_time_source", "choose",
+           "clock_note", "require_extra", "make_recording", "stamps_to_time"]

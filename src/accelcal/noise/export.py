@@ -14,7 +14,7 @@ gyroscope_random_walk         rad/s²/√Hz (= rad/s/√s)     random walk K
 
 The files hold one number per key: the worst (largest) axis, with every axis and the
 interval in a comment beside it.  A random walk the record does not resolve
-(:mod:`accelcal.noise_report`) is exported as the upper end of its interval, and the
+(:mod:`accelcal.noise.report`) is exported as the upper end of its interval, and the
 comment says so.  ``inflate`` multiplies the exported noise densities and random walks
 (OpenVINS's documentation advises 10–20× for unmodelled effects); the measured values
 stay in the comments.
@@ -46,7 +46,7 @@ import math
 
 import numpy as np
 
-from .errors import AccelcalError
+from ..errors import AccelcalError
 
 FORMAT = "accelcal-noise"
 FORMAT_VERSION = 1

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import AccelcalError
-from ._common import import_extra
+from .logs import require_extra
 
 KINDS = ("ros1", "ros2-sqlite3", "ros2-mcap", "mcap")
 _CHUNK = 20000
@@ -45,7 +45,7 @@ def write_imu_bag(path, t, acc, gyro, *, kind: str = "ros2-sqlite3", topic: str 
     serialize : {'rosbags', 'fast'}
         See the module docstring.
     """
-    import_extra("rosbags", "ros", "ROS bags")
+    require_extra("ros")
     from rosbags.typesys import Stores, get_typestore
 
     if kind not in KINDS:

@@ -34,12 +34,11 @@ import numpy as np
 
 from ..errors import LogFormatError, TopicError
 from ..recording import MIN_ROWS
-from ._common import (Progress, check_finite, check_rows, check_time_source, choose, clock_note, import_extra,
-                      make_recording, stamps_to_time)
+from .logs import (Progress, check_finite, check_rows, check_time_source, choose, clock_note, make_recording,
+                      microseconds, require_extra, stamps_to_time)
 
 ULOG_MAGIC = b"ULog\x01\x12\x35"
 TOPICS = ("sensor_accel", "sensor_gyro", "sensor_combined")
-EXTRA = "px4"
 #: File size above which the read announces itself (pyulog parses in one call).
 _ANNOUNCE_BYTES = 64 * 2**20
 
@@ -65,7 +64,7 @@ def read(path, *, topic: str | None = None, time_source: str = "header", instanc
     instance : int, optional
         The raw sensor instance (``multi_id``); needed when several are logged.
     progress : None, False or callable
-        See :class:`accelcal.formats_logs._common.Progress`.
+        See :class:`accelcal.formats.logs.Progress`.
 
     Returns
     -------
@@ -75,7 +74,9 @@ def read(path, *, topic: str | None = None, time_source: str = "header", instanc
     """
     check_time_source(time_source)
     path = Path(path)
-    pyulog = import_extra("pyulog", EXTRA, "PX4 ULog files")
+    require_extra("px4", path)
+    import pyulog
+
     ulog = _parse(pyulog, path, progress)
     data = {(d.name, d.multi_id): d for d in ulog.data_list}
     for d in data.values():
@@ -148,8 +149,10 @@ def _rate(d) -> float:
 
 def _stamps(path, d, time_source: str, topic: str, notes: list):
     """(sensor stamps, log stamps) in µs, int64; the chosen one first in the notes."""
-    log = d.data["timestamp"].astype(np.int64)
-    sample = d.data["timestamp_sample"].astype(np.int64) if "timestamp_sample" in d.data else None
+    label = f"{d.name} instance {d.multi_id}"
+    log = microseconds(d.data["timestamp"], path, f"{label}: timestamp")
+    sample = microseconds(d.data["timestamp_sample"], path, f"{label}: timestamp_sample") \
+        if "timestamp_sample" in d.data else None
     if sample is None and time_source == "header":
         notes.append(f"{topic} has no timestamp_sample in this PX4 version: its publication time is used")
     return (sample if sample is not None else log), log
@@ -210,7 +213,7 @@ def _gyro(path, data, inst: int, time_source: str, at_us: np.ndarray, notes: lis
 
 def _combined(path, d, time_source: str, notes: list):
     _require(path, d, [f"{k}[{i}]" for k in ("accelerometer_m_s2", "gyro_rad") for i in range(3)])
-    ts = d.data["timestamp"].astype(np.int64)
+    ts = microseconds(d.data["timestamp"], path, "sensor_combined: timestamp")
     t = stamps_to_time(ts * 1000, path, "sensor_combined: timestamp", "the log's stamps are not in order")
     acc = np.column_stack([d.data[f"accelerometer_m_s2[{k}]"].astype(np.float64) for k in range(3)])
     gyro = np.column_stack([d.data[f"gyro_rad[{k}]"].astype(np.float64) for k in range(3)])
@@ -243,4 +246,4 @@ def _calibration_parameters(ulog, device: str) -> str:
     return ", ".join(f"{k}={p[k]:.6g}" for k in keys if k in p)
 
 
-__all__ = ["EXTRA", "TOPICS", "read", "sniff"]
+__all__ = ["TOPICS", "read", "sniff"]

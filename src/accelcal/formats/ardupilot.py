@@ -27,12 +27,11 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import LogFormatError
-from ._common import (ColumnBuffer, Progress, check_finite, check_rows, check_time_source, choose, import_extra,
-                      make_recording, stamps_to_time)
+from .logs import (ColumnBuffer, Progress, check_finite, check_rows, check_time_source, choose, make_recording,
+                      microseconds, require_extra, stamps_to_time)
 
 #: A DataFlash log starts with the FMT message's header: 0xA3 0x95 0x80 (FMT describes itself).
 DATAFLASH_MAGIC = b"\xa3\x95\x80"
-EXTRA = "ardupilot"
 _NAMES = ("IMU", "IMU2", "IMU3")
 _CHUNK = 8192
 
@@ -63,7 +62,7 @@ def read(path, *, topic: str | None = None, time_source: str = "header", instanc
     """
     check_time_source(time_source)
     path = Path(path)
-    import_extra("pymavlink", EXTRA, "ArduPilot DataFlash logs")
+    require_extra("ardupilot", path)
     from pymavlink import DFReader
 
     if not path.is_file():
@@ -154,7 +153,7 @@ def _stream(log, path, name: str, count: int, progress) -> np.ndarray:
 def _recording(path, name: str, inst: int, rows: np.ndarray, time_source: str):
     label = f"{name} instance {inst}"
     check_rows(path, label, len(rows))
-    us = rows[:, 0].astype(np.int64)
+    us = microseconds(rows[:, 0], path, f"{label}: TimeUS")
     t = stamps_to_time(us * 1000, path, f"{label}: TimeUS", "the log's stamps are not in order (a damaged log?)")
     acc, gyro, temp = rows[:, 2:5], rows[:, 5:8], rows[:, 8]
     check_finite(path, label, acc, "AccX/Y/Z")
@@ -169,4 +168,4 @@ def _recording(path, name: str, inst: int, rows: np.ndarray, time_source: str):
                           temp=temp if np.all(np.isfinite(temp)) else None)
 
 
-__all__ = ["EXTRA", "read", "sniff"]
+__all__ = ["read", "sniff"]

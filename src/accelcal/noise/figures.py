@@ -3,27 +3,34 @@
 One row per sensor, one panel per axis: the measured Allan deviation with its error bars
 (the report's level, the fitted model's edf), the fitted model, each term it holds as
 a thin line, the band the bootstrap fits span (the report's level), and the exported
-noise density (τ = 1 s) and random walk (τ = 3 s) as points on their lines.
+noise density (τ = 1 s) and random walk (τ = 3 s) as points on their lines; optionally
+reference values (a datasheet's white noise and bias stability) as grey dash-dotted lines.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .noise.terms import TERMS
+from .terms import TERMS
 
 _COLORS = {"quantization": "C4", "white": "C0", "bias_instability": "C2", "random_walk": "C3", "drift_ramp": "C1"}
 _LABELS = {"quantization": "quantization Q", "white": "white noise N", "bias_instability": "bias instability B",
            "random_walk": "random walk K", "drift_ramp": "ramp R"}
 
 
-def noise_figure(report, title: str | None = None):
-    """The figure (matplotlib ``Figure``) of a :class:`~accelcal.noise_report.NoiseReport`."""
+def noise_figure(report, title: str | None = None, references: dict | None = None,
+                 reference_label: str = "datasheet"):
+    """The figure (matplotlib ``Figure``) of a :class:`~accelcal.noise.report.NoiseReport`.
+
+    ``references``: ``{sensor: {"white": N, "floor": ADEV}}`` in the sensor's unit, drawn as
+    the Allan deviation ``N/√τ`` of a white-noise density and a horizontal level (a bias
+    stability), labelled with ``reference_label``.
+    """
     import matplotlib
     from matplotlib.figure import Figure
 
-    from .noise_export import exported_values
-    from .plotting import RC
+    from .export import exported_values
+    from ..plotting import RC
 
     sensors = list(report.sensors.values())
     with matplotlib.rc_context(RC):
@@ -47,6 +54,7 @@ def noise_figure(report, title: str | None = None):
                     if c > 0:
                         ax.plot(grid, np.sqrt(c * TERMS[k].basis(grid, a.fs)), ls="--" if s.terms[j][k].resolved
                                 else ":", lw=0.9, color=_COLORS[k], label=_LABELS[k])
+                _references(ax, grid, (references or {}).get(s.sensor, {}), reference_label)
                 ex = exported_values(s, j)
                 n_exp, k_exp = ex["noise_density"]["value"], ex["random_walk"]["value"]
                 ax.plot([1.0], [n_exp], "s", color="C0", ms=5, mfc="none", zorder=6, label="exported N (at τ = 1 s)")
@@ -70,9 +78,16 @@ def noise_figure(report, title: str | None = None):
     return fig
 
 
+def _references(ax, grid, ref: dict, label: str) -> None:
+    if "white" in ref:
+        ax.plot(grid, ref["white"] / np.sqrt(grid), color="0.45", ls="-.", lw=1.0, label=f"{label}: white noise")
+    if "floor" in ref:
+        ax.axhline(ref["floor"], color="0.2", ls=(0, (9, 3)), lw=1.1, label=f"{label}: bias stability")
+
+
 def _band(s, j: int, grid, level: float) -> np.ndarray:
     """(2, len(grid)): percentiles of the Allan deviation of the bootstrap's refitted models."""
-    from .noise_report import IEEE_TERMS
+    from .report import IEEE_TERMS
 
     boot = s.boot_fits[j]
     basis = np.array([TERMS[k].basis(grid, s.allan.fs) for k in IEEE_TERMS])
