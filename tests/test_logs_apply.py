@@ -91,3 +91,23 @@ def test_a_counts_calibration_on_a_log_in_m_s2_is_refused(tmp_path):
     code, err = _cli("apply", tmp_path / "c.json", p, "--out", tmp_path / "o.csv")
     assert code == 2 and "is read as m/s^2 but" in err and "was made from counts" in err
     assert not (tmp_path / "o.csv").exists()
+
+
+def test_the_real_bag_with_an_imu_calibration_gives_calibrated_gyro(tmp_path):
+    """calibrate on the bag (accelerometer and gyroscope), then apply on the same bag: the
+    table carries the calibrated gx, gy, gz, the calibration's own correction of the recorded rates."""
+    if not BAG.is_dir():
+        pytest.skip("shared data not present")
+    cal_path, out = tmp_path / "imu.json", tmp_path / "imu.csv"
+    code, err = _cli("calibrate", BAG, "--out", cal_path)
+    assert code == 0, err
+    cal = accelcal.load_calibration(cal_path)
+    assert cal.gyro is not None, err
+    code, err = _cli("apply", cal_path, BAG, "--out", out)
+    assert code == 0 and "gx, gy, gz in rad/s" in err, err
+    table = pd.read_csv(out)
+    rec = ros.read(BAG)
+    assert list(table.columns) == ["header_stamp_ns", "ax", "ay", "az", "gx", "gy", "gz"]
+    w = table[["gx", "gy", "gz"]].to_numpy()
+    np.testing.assert_array_equal(w, cal.apply_gyro(rec.gyro, rec.acc, t=rec.t, temp=rec.temp, unit=rec.unit))
+    assert not np.allclose(w, rec.gyro)  # corrected, not passed through
