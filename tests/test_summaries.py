@@ -47,7 +47,9 @@ def test_calibrate_prints_the_calibrations_summary(session, tmp_path, capsys, ex
     lines = err.splitlines()
     assert lines[0].startswith(f"{cal.to_dict()['method']}: 30 poses (noise reference: initial rest (0-")
     assert ("standard gravity" in lines[0]) == ("--g" not in extra)
-    assert [ln for ln in lines if ln.startswith("  read: ")] == [f"  read: {n}" for n in read(session).notes]
+    # the reader's notes, then the command's own on the gyro (this session has none)
+    assert [ln for ln in lines if ln.startswith("  read: ")] == [f"  read: {n}" for n in read(session).notes] + [
+        "  read: no gyro columns: the accelerometer alone (a gyro in a file of its own: --gyro FILE)"]
     assert lines.index(f"  written to {out}") == len(lines) - 1 - len(cal.quality.warnings)
     assert lines[len(lines) - len(cal.quality.warnings):] == [f"warning: {w}" for w in cal.quality.warnings]
 

@@ -77,36 +77,36 @@ def claims(integ: pd.DataFrame, mc: pd.DataFrame, ipopt: pd.DataFrame, fom: pd.D
     rows = []
     best = choose(integ)
     rows.append(INTEGRATOR_CHOICE.row("reproduced" if best == "magnus4" else "not_reproduced", best,
-                                      "gyro/integrators.csv: median rel_angle_rms_ppm over rate/fs <= 5 deg"))
+                                      "results/gyro/integrators.csv: median rel_angle_rms_ppm over rate/fs <= 5 deg"))
     hand = integ[(integ.rate_dps <= 250) & (integ.fs_hz == 100) & (integ.method == "rk4")]
     rk4 = float(hand.abs_scale_bias_ppm.max()) if len(hand) else float("nan")
-    rows.append(RK4_BIAS.judge(rk4, rk4 < 10, "gyro/integrators.csv: abs_scale_bias_ppm", "{:.2g} ppm"))
+    rows.append(RK4_BIAS.judge(rk4, rk4 < 10, "results/gyro/integrators.csv: abs_scale_bias_ppm", "{:.2g} ppm"))
     s = summary(mc)
     trials = float(mc.trials.min()) if "trials" in mc and len(mc) else float("nan")
     window, limit = ratio_rule_minimum(0.2).at(trials), ratio_rule_minimum(0.5).at(trials)
     it = s["iterative"].to_numpy()
     lo, hi = float(np.nanmin(it)), float(np.nanmax(it))
-    rows.append(ITERATIVE_EFFICIENT.judge(hi, lo > 0.8 and hi < 1.2, "gyro/montecarlo.csv: ratio, median per kind",
+    rows.append(ITERATIVE_EFFICIENT.judge(hi, lo > 0.8 and hi < 1.2, "results/gyro/montecarlo.csv: ratio, median per kind",
                                           scale=window, shown=f"{lo:.2f}-{hi:.2f}"))
     base = float(s["one_step"].loc["base"].max())
-    rows.append(ONE_STEP_BASE.judge(base, base <= 1.2, "gyro/montecarlo.csv: config base", "{:.2f}", scale=window))
+    rows.append(ONE_STEP_BASE.judge(base, base <= 1.2, "results/gyro/montecarlo.csv: config base", "{:.2f}", scale=window))
     worst = float(s["one_step"].to_numpy().max())
-    rows.append(ONE_STEP_NOT.judge(worst, worst > 1.5, "gyro/montecarlo.csv: largest median ratio", "{:.2f}",
+    rows.append(ONE_STEP_NOT.judge(worst, worst > 1.5, "results/gyro/montecarlo.csv: largest median ratio", "{:.2f}",
                                    scale=limit))
     d = float(ipopt.max_diff_in_se.iloc[0])
-    rows.append(GN_IPOPT.judge(d, d < 0.1, "gyro/ipopt_check.csv", "{:.3f} s.e."))
+    rows.append(GN_IPOPT.judge(d, d < 0.1, "results/gyro/ipopt_check.csv", "{:.3f} s.e."))
     rows.append(_fom_claim(fom))
     x = peer_parameters[(peer_parameters.session == "xsens") & (peer_parameters.peer == "factory")
                         & peer_parameters.parameter.str.startswith("K_")] if len(peer_parameters) else []
     if len(x):
         rel = float(np.max(np.abs(x.ours / x.peer_value - 1)))
-        rows.append(XSENS_SHEET.judge(100 * rel, rel < 2e-3, "gyro/sessions/peer_parameters.csv: K_x..K_z, peer "
+        rows.append(XSENS_SHEET.judge(100 * rel, rel < 2e-3, "results/gyro/sessions/peer_parameters.csv: K_x..K_z, peer "
                                       "factory", "{:.2f} %"))
     else:
         rows.append(XSENS_SHEET.not_reproducible("the Xsens session was not calibrated (see gyro/sessions/sessions.csv)"))
     if imucal_parameters is not None and len(imucal_parameters):
         d = imucal_parameters[imucal_parameters.calibration == "imucal"].diff_in_se.abs().max()
-        rows.append(IMUCAL_AGREES.judge(d, d <= 3.0, "gyro/sessions/imucal_parameters.csv: diff_in_se", "{:.2f} s.e."))
+        rows.append(IMUCAL_AGREES.judge(d, d <= 3.0, "results/gyro/sessions/imucal_parameters.csv: diff_in_se", "{:.2f} s.e."))
     else:
         rows.append(IMUCAL_AGREES.not_reproducible("imucal's session was not calibrated (gyro/sessions/sessions.csv)"))
     return pd.DataFrame(rows, columns=COLUMNS)
@@ -123,7 +123,7 @@ def _fom_claim(fom: pd.DataFrame) -> dict:
     worse = [f"{s} ({p}: {own.loc[s, 'accelcal']:.4g} vs {own.loc[s, p]:.4g} deg)" for s, p in pairs
              if own.loc[s, "accelcal"] > own.loc[s, p]]
     value = f"{len(pairs) - len(worse)} of {len(pairs)}"
-    evidence = "gyro/sessions/figure_of_merit.csv, own_bias" + (f"; worse: {'; '.join(worse)}" if worse else "")
+    evidence = "results/gyro/sessions/figure_of_merit.csv: own_bias" + (f"; worse: {'; '.join(worse)}" if worse else "")
     return FOM_IMUTK.row("reproduced" if not worse else "not_reproduced", value, evidence)
 
 
