@@ -31,7 +31,6 @@ EXEMPT = ("_*_kernels.py", "_fast.py")
 #: must be emptied: the test fails for a module listed here that is no longer over the
 #: budget (or no longer exists), so that the list cannot outlive the splits.
 PENDING_SPLIT = {
-    "accelcal/discrepancy/fit.py",
     "accelcal_repro/batista2011/montecarlo.py",
 }
 

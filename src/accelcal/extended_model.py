@@ -12,9 +12,9 @@ parameters and gives the model's terms at them (:class:`ModelTerms`: the additiv
 offset and the polynomial coefficients).  :func:`model_terms` does both at once.
 Everything that evaluates the model consumes them:
 
-* the forward model :func:`forward` (simulations, :func:`accelcal.discrepancy.fit.forward`);
+* the forward model :func:`forward` (simulations, :func:`accelcal.discrepancy.residuals.forward`);
 * its inverse, ``P(x) = y`` per axis by Newton (:meth:`ModelTerms.solve`): the pose
-  residuals of the fits (:func:`accelcal.discrepancy.fit.evaluate_batch`) and
+  residuals of the fits (:func:`accelcal.discrepancy.residuals.evaluate_batch`) and
   :meth:`accelcal.calibration.Calibration.apply`;
 * the Jacobian of the residual ``||x|| - g`` with respect to the effect parameters
   (:meth:`EffectTerms.jacobian_columns`);

@@ -5,7 +5,7 @@ recording: every Levenberg–Marquardt iteration of every candidate fit, and eve
 Gauss–Newton iteration of the leave-one-pose-out refits (a stack of ``n`` parameter
 vectors on ``n`` poses).  Each evaluation is a few thousand floating-point operations;
 in numpy it costs dozens of array calls.  :func:`evaluate_batch` is
-:func:`accelcal.discrepancy.fit.evaluate_batch` written as one compiled loop: same
+:func:`accelcal.discrepancy.residuals.evaluate_batch` written as one compiled loop: same
 algorithm (the same Newton iterations, stopped by the same batch-wide test), same
 arithmetic up to the order of floating-point sums.
 
@@ -58,7 +58,7 @@ def _model(p, M, dM, A):
 
 def _evaluate_batch(P, z, cov, power, additive, g, jacobian, rtol):
     """Residuals ``r`` (B, n), Jacobian ``J`` (B, n, q) (empty if not ``jacobian``) and
-    implied specific force ``x`` (B, n, 3): :func:`accelcal.discrepancy.fit.evaluate_batch`."""
+    implied specific force ``x`` (B, n, 3): :func:`accelcal.discrepancy.residuals.evaluate_batch`."""
     B, q = P.shape
     n = z.shape[0]
     k = power.shape[0]
@@ -191,7 +191,7 @@ def _newton(x, y, C, dP, ok, g, rtol):
 
 
 def _jacobian(J, x, y, norm, dP, As, dMs, cov, power, additive):
-    """Analytic Jacobian of the residuals (module docstring of :mod:`accelcal.discrepancy.fit`).
+    """Analytic Jacobian of the residuals (module docstring of :mod:`accelcal.discrepancy.residuals`).
 
     ``∂r/∂p_k = -w (∂M/∂p_k) y``: each ``∂M/∂(s, θ)_k`` has one non-zero row with one to
     three non-zero entries (:func:`_model`), and only those are summed.  The effects'

@@ -1,6 +1,6 @@
 """The deterministic layer under the white null: the F-test naming loop.
 
-Given :class:`~accelcal.discrepancy.fit.PoseData`, the loop fits the base model (bias,
+Given :class:`~accelcal.discrepancy.poses.PoseData`, the loop fits the base model (bias,
 scale, non-orthogonality: 9 parameters), treats it as the simulation of the experiment,
 and tests every candidate effect of the library as a nested extension of it.  The noise
 model is white per-pose noise times a common scale; it is the benchmark's negative

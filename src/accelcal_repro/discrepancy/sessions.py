@@ -66,7 +66,7 @@ def with_disjoint_rests(rec: Recording) -> tuple[Recording, str]:
     WORKAROUND (remove when :func:`accelcal.static.detect_static` returns disjoint spans):
     two quiet runs separated by a blip shorter than one window minus twice the trim give
     spans that overlap (IMU-TK fork data2: samples 35-585 and 548-809), which the colored
-    null's :func:`accelcal.discrepancy.fit.pose_data` refuses.  The overlap is split at its
+    null's :func:`accelcal.discrepancy.poses.pose_data` refuses.  The overlap is split at its
     middle; the recording then carries the rests as known intervals, so that every later
     step (both layers, the re-simulations) uses the same poses.  Returns the recording and
     a note ('' when nothing was changed).
@@ -101,7 +101,7 @@ def _params(report: dict, which: str) -> tuple[np.ndarray, tuple[str, ...]]:
 
 
 def pose_data_of(report: dict):
-    """The report's pose set as :class:`~accelcal.discrepancy.fit.PoseData` (same σ as the loop used)."""
+    """The report's pose set as :class:`~accelcal.discrepancy.poses.PoseData` (same σ as the loop used)."""
     p = report["poses"]
     temp = p.get("temp")
     return pose_data(np.array(p["mean"], float), report["g"], np.array(p["mean_std"], float), np.array(p["t"], float),
