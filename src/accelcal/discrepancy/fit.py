@@ -39,6 +39,7 @@ from .residuals import (
     _evaluate_batch_numpy,
     _model,
     effect_columns,
+    effect_slices,
     evaluate,
     evaluate_batch,
     forward,
@@ -111,8 +112,7 @@ class Fit:
         return self.p[:3]
 
     def block(self, effect_id: str) -> np.ndarray:
-        i = self.effects.index(effect_id)
-        return self.p[N_BASE + 3 * i: N_BASE + 3 * i + 3]
+        return self.p[effect_slices(self.effects)[effect_id]]
 
     @cached_property
     def _information_inverse(self) -> np.ndarray:
@@ -324,5 +324,5 @@ def lopo(f: Fit, data: PoseData, max_iter: int = MAX_ITER_LOPO) -> np.ndarray:
     return out
 
 
-__all__ = ["CHI2_TOL", "Fit", "PoseData", "effect_columns", "evaluate", "evaluate_batch", "fit", "fit_at", "forward",
-           "lopo", "n_parameters", "orthonormal_basis", "parameter_names", "pose_data", "pose_data_from_static"]
+__all__ = ["CHI2_TOL", "N_BASE", "Fit", "PoseData", "effect_columns", "effect_slices", "evaluate", "evaluate_batch",
+           "fit", "fit_at", "forward", "lopo", "n_parameters", "orthonormal_basis", "parameter_names", "pose_data", "pose_data_from_static"]

@@ -34,7 +34,17 @@ _KERNELS = "discrepancy._fit_kernels"
 
 
 def n_parameters(effects) -> int:
-    return N_BASE + 3 * len(effects)
+    return N_BASE + sum(effect(e).size for e in effects)
+
+
+def effect_slices(effects) -> dict[str, slice]:
+    """Where each effect's block lies in the parameter vector of the model with ``effects``."""
+    out, start = {}, N_BASE
+    for e in effects:
+        size = effect(e).size
+        out[e] = slice(start, start + size)
+        start += size
+    return out
 
 
 def parameter_names(effects) -> list[str]:
@@ -92,8 +102,9 @@ def evaluate_batch(P, data: PoseData, effects, jacobian: bool = True):
 def _model(data: PoseData, effects) -> tuple[object, EffectTerms]:
     """``(K, terms)``: the compiled kernel module (None: numpy runs) and the effects on the
     poses (:meth:`PoseData.effect_terms`; an effect whose covariate the recording lacks
-    fails here, on both paths alike)."""
-    return kernels.compiled(_KERNELS), data.effect_terms(effects)
+    fails here, on both paths alike).  A harmonic effect runs in numpy."""
+    terms = data.effect_terms(effects)
+    return (None if terms.has_harmonic else kernels.compiled(_KERNELS)), terms
 
 
 def _evaluate_batch_numpy(P, data: PoseData, terms: EffectTerms, jacobian: bool):
@@ -102,19 +113,27 @@ def _evaluate_batch_numpy(P, data: PoseData, terms: EffectTerms, jacobian: bool)
     n = len(data)
     M, dM, ok = _m_and_derivatives(P[:, 3:6], P[:, 6:9])
     A = np.linalg.inv(np.where(ok[:, None, None], M, np.eye(3)))
-    model = terms.at(P[:, N_BASE:].reshape(Bn, -1, 3))
+    model = terms.at(P[:, N_BASE:])
     y = (data.z[None] - P[:, None, :3] - model.offset) @ A.transpose(0, 2, 1)
     x, dP = y, 1.0
-    if model.polynomial:
+    coupled = model.harmonic is not None
+    if model.nonlinear:
         x, dP, converged = model.solve(y, max(float(np.max(np.abs(y))), data.g), NEWTON_RTOL)
-        ok = ok & converged & np.all(dP > 0, axis=(1, 2))
+        valid = np.all(np.isfinite(dP), axis=(1, 2, 3)) if coupled else np.all(dP > 0, axis=(1, 2))
+        ok = ok & converged & valid
     norm = np.linalg.norm(x, axis=2)
     r = norm - data.g
     ok = ok & np.all(np.isfinite(r), axis=1)
     r[~ok] = np.nan
     if not jacobian:
         return r, None, x
-    v = (x / norm[..., None]) / dP
+    xhat = x / norm[..., None]
+    if coupled:  # v = x̂ᵀ (∂P/∂x)⁻¹ (NaN rows stay NaN)
+        good = np.isfinite(dP).all(axis=(-2, -1))
+        v = np.linalg.solve(np.where(good[..., None, None], np.swapaxes(dP, -1, -2), np.eye(3)), xhat[..., None])[..., 0]
+        v = np.where(good[..., None], v, np.nan)
+    else:
+        v = xhat / dP
     w = v @ A
     # ∂r/∂p_k = -w (∂M/∂p_k) y for the six (s, θ): all at once as one batched matmul
     dMy = (y @ dM.reshape(Bn, 18, 3).transpose(0, 2, 1)).reshape(Bn, n, 6, 3)
@@ -127,8 +146,9 @@ def evaluate(p, data: PoseData, effects, jacobian: bool = True):
 
     Parameters
     ----------
-    p : array_like, shape (9 + 3 len(effects),)
-        ``(b, s, θ, φ_1, φ_2, ...)``, one block per effect in the order of ``effects``.
+    p : array_like, shape (:func:`n_parameters`,)
+        ``(b, s, θ, φ_1, φ_2, ...)``, one block per effect in the order of ``effects``
+        (:func:`effect_slices`).
     data : PoseData
     effects : sequence of str
         Effect ids.
@@ -159,16 +179,18 @@ def forward(x, M, bias, params: dict, dt=None, dtemp=None) -> np.ndarray:
     M, bias : array_like
         Base model (``M`` in data unit per unit of g).
     params : dict
-        ``{effect_id: (3,) parameters}`` (:mod:`accelcal.effects`).
+        ``{effect_id: (size,) parameters}`` (:mod:`accelcal.effects`).
     dt, dtemp : array_like, shape (n,), optional
         Centred time and temperature of each row (needed by the effects that use them).
     """
     return extended_model.forward(x, M, bias, params, {TIME: dt, TEMPERATURE: dtemp})
 
+
 def effect_columns(p, data: PoseData, base_effects, new_effect: str) -> np.ndarray:
-    """Jacobian columns (n, 3), unweighted, of ``new_effect`` at ``p`` with its parameters zero."""
-    _, J, _ = evaluate(np.concatenate([p, np.zeros(3)]), data, [*base_effects, new_effect])
-    return J[:, -3:]
+    """Jacobian columns (n, size), unweighted, of ``new_effect`` at ``p`` with its parameters zero."""
+    k = effect(new_effect).size
+    _, J, _ = evaluate(np.concatenate([p, np.zeros(k)]), data, [*base_effects, new_effect])
+    return J[:, -k:]
 
 
 def orthonormal_basis(J: np.ndarray) -> tuple[np.ndarray, int]:
@@ -180,5 +202,5 @@ def orthonormal_basis(J: np.ndarray) -> tuple[np.ndarray, int]:
     return U[:, :rank], rank
 
 
-__all__ = ["N_BASE", "effect_columns", "evaluate", "evaluate_batch", "forward", "n_parameters", "orthonormal_basis",
-           "parameter_names"]
+__all__ = ["N_BASE", "effect_columns", "effect_slices", "evaluate", "evaluate_batch", "forward", "n_parameters",
+           "orthonormal_basis", "parameter_names"]

@@ -20,7 +20,8 @@ effect:
      power, from the augmented Fisher information profiled over the current model,
      ``I_φ = J₁ᵀ (I - P₀) J₁`` (noise model = the per-pose standard errors): the
      non-centrality ``λ = φᵀ I_φ φ`` must reach ``λ*`` with
-     ``P(F(3, n - q - 3; λ*) > F_crit) = power``; axis j alone: ``φ_j = sqrt(λ*/I_φ,jj)``.
+     ``P(F(k, n - q - k; λ*) > F_crit) = power`` (``k`` the effect's parameters: 3, one per
+     axis, or 7 for ``second_order``); parameter j alone: ``φ_j = sqrt(λ*/I_φ,jj)``.
      It is also given in the data unit: the largest change of a pose mean that effect
      causes at that size.
 
@@ -44,7 +45,10 @@ import numpy as np
 
 from .. import distributions as dist
 from ..errors import AccelcalError
+from ..effects import ADDITIVE, HARMONIC
+from ..extended_model import harmonic_basis
 from .effects import EFFECT_IDS, EFFECTS, TEMPERATURE, effect
+from .colored.problem import MIN_WANDER_DOF
 from .fit import Fit, PoseData, effect_columns, evaluate, orthonormal_basis, parameter_names
 
 CORRECTIONS = ("holm", "bonferroni", "none")
@@ -169,8 +173,8 @@ def holm(p_values, correction: str = "holm") -> np.ndarray:
 class Identifiability:
     """Can an effect be tested against the current model on this pose set?
 
-    ``mde`` in the effect's parameter unit (per axis), ``mde_data`` the largest change of
-    a pose mean it causes at that size (data unit); ``info`` = ``I_φ`` (3, 3), the
+    ``mde`` in the effect's parameter unit (per parameter), ``mde_data`` the largest change
+    of a pose mean it causes at that size (data unit); ``info`` = ``I_φ`` (k, k), the
     profiled Fisher information in noise units; ``lambda_crit`` = ``λ*``.
     """
 
@@ -194,12 +198,15 @@ class Identifiability:
 
 
 def _perturbation(eid: str, data: PoseData, base: Fit) -> np.ndarray:
-    """(n, 3) largest change of pose mean i (over the three axes of z, data unit) per unit
-    of each of the effect's three parameters."""
+    """(n, k) change of pose mean i (its length in the data unit) per unit of each of the
+    effect's ``k`` parameters."""
     e = EFFECTS[eid]
     n = len(data)
-    if e.kind == "additive":
+    if e.kind == ADDITIVE:
         return np.repeat(np.abs(data.covariate(e.covariate))[:, None], 3, axis=1)
+    if e.kind == HARMONIC:  # z moves by M T_m(x, x)
+        moves = np.einsum("mjkl,nk,nl->nmj", harmonic_basis(e.power), base.x, base.x) @ base.M.T
+        return np.linalg.norm(moves, axis=2)
     col = np.linalg.norm(base.M, axis=0)  # |M[:, j]|: how much P_j moves z
     x = np.abs(base.x)
     per = x if e.power == 1 else x ** e.power
@@ -224,35 +231,39 @@ def identifiability(data: PoseData, base: Fit, eid: str, rules: Rules, n_tests: 
     """
     e = effect(eid)
     reasons = []
-    n, q = len(data), base.q
-    dof = n - q - 3
+    n, q, k = len(data), base.q, e.size
+    dof = n - q - k
+    # the colored null re-estimates the wander under the alternative too: it needs its dof
+    min_dof = MIN_WANDER_DOF if rules.null == "colored" else 1
     if e.covariate == TEMPERATURE:
         if data.temp is None:
             raise AccelcalError(f"{eid}: the recording has no temperature column (not applicable)")
         rng = float(np.ptp(data.temp))
         if rng < rules.min_temp_range:
             reasons.append(f"temperature varies by {rng:.3g} degC over the poses (< {rules.min_temp_range:g})")
-    if dof < 1:
-        reasons.append(f"{n} poses leave {dof} residual degrees of freedom for {q} + 3 parameters")
+    if dof < min_dof:
+        reasons.append(f"{n} poses leave {dof} residual degrees of freedom for {q} + {k} parameters (the test needs "
+                       f"{min_dof}: at least {q + k + min_dof} poses)")
     J1 = effect_columns(base.p, data, base.effects, eid) / data.sigma[:, None]
     U0, _ = base.column_basis
     U1, rank1 = orthonormal_basis(J1)
     rho = np.linalg.svd(U0.T @ U1, compute_uv=False) if rank1 else np.zeros(0)
-    absorbed = 1.0 if rank1 < 3 else float(min(1.0, rho.max() ** 2))
+    absorbed = 1.0 if rank1 < k else float(min(1.0, rho.max() ** 2))
     proj = U0 @ (U0.T @ J1)
     norms = np.sum(J1 * J1, axis=0)
     absorbed_axis = np.where(norms > 0, np.sum(proj * proj, axis=0) / np.where(norms > 0, norms, 1), 1.0)
     Jp = J1 - proj
     info = Jp.T @ Jp
-    lam = critical_noncentrality(3, dof, rules.alpha / max(n_tests, 1), rules.power)
+    lam = critical_noncentrality(k, dof, rules.alpha / max(n_tests, 1), rules.power)
     diag = np.diag(info)
     mde = np.where(diag > 0, np.sqrt(lam / np.where(diag > 0, diag, 1)), np.inf)
     with np.errstate(invalid="ignore"):
         mde_data = np.max(_perturbation(eid, data, base), axis=0) * mde
     mde_data = np.where(np.isnan(mde_data), np.inf, mde_data)
     g_data = float(np.median(np.linalg.norm(data.z - base.bias, axis=1)))
-    if rank1 < 3:
-        reasons.append(f"the effect's residual signature has rank {rank1} < 3 on this pose set")
+    if rank1 < k:
+        reasons.append(f"the effect's residual signature has rank {rank1} < {k} on this pose set"
+                       + (" (it needs poses with three non-zero components, e.g. corners)" if e.kind == HARMONIC else ""))
     elif absorbed > rules.max_absorbed:
         reasons.append(f"the base model absorbs {absorbed:.6f} of its worst direction (> {rules.max_absorbed:g})")
     worst = float(np.max(mde_data))
@@ -303,9 +314,11 @@ class Candidate:
     @classmethod
     def from_identifiability(cls, ident: Identifiability, rnd: int) -> Candidate:
         """The row of a candidate in round ``rnd`` before its test: its identifiability only."""
+        nan = [float("nan")] * len(ident.mde)
         return cls(round=rnd, effect=ident.effect, identifiable=ident.identifiable, reasons=ident.reasons,
                    absorbed=ident.absorbed, absorbed_axis=ident.absorbed_axis.tolist(), mde=ident.mde.tolist(),
-                   mde_data=ident.mde_data.tolist())
+                   mde_data=ident.mde_data.tolist(), dof=(len(ident.mde), ident.dof), estimate=nan, se=nan,
+                   se_noise=nan, mde_white=nan)
 
     @property
     def passed(self) -> bool:

@@ -49,7 +49,7 @@ import numpy as np
 import pandas as pd
 
 from accelcal.discrepancy.detect import discrepancy
-from accelcal.discrepancy.effects import EFFECT_IDS
+from accelcal.discrepancy.effects import EFFECT_IDS, effect
 from accelcal.discrepancy.fit import Fit, PoseData, evaluate, fit_at, forward, pose_data, pose_data_from_static
 from accelcal.discrepancy.vocabulary import Identifiability, Rules, applicable, critical_noncentrality, identifiability
 from accelcal.errors import AccelcalError
@@ -129,6 +129,12 @@ class Session:
 
 
 # --------------------------------------------------------------------------- rows
+
+
+def suffixes(eid: str) -> tuple[str, ...]:
+    """The effect's parameters as the key and detection columns name them: the axis (``x``,
+    ``y``, ``z``) of a per-axis effect, the order ``m`` of a harmonic one."""
+    return tuple(name.split("_", 1)[1] for name in effect(eid).parameters)
 
 
 def effects_of(truth: str) -> tuple[str, ...]:
@@ -238,9 +244,10 @@ class Oracle:
 
     def effect_mde(self, data, p_true, eid: str, direction, rules: Rules, n_tests: int) -> float:
         """Size ``a`` along unit ``direction`` at which the nested F-test at ``α/n_tests`` has the configured power."""
-        _, J, _ = evaluate(np.concatenate([p_true, np.zeros(3)]), data, (eid,))
-        info = self._info(J[:, -3:])
-        lam = critical_noncentrality(3, self.n - 12, rules.alpha / max(n_tests, 1), rules.power)
+        k = effect(eid).size
+        _, J, _ = evaluate(np.concatenate([p_true, np.zeros(k)]), data, (eid,))
+        info = self._info(J[:, -k:])
+        lam = critical_noncentrality(k, self.n - 9 - k, rules.alpha / max(n_tests, 1), rules.power)
         d = np.asarray(direction, float)
         v = float(d @ info @ d)
         return float(np.sqrt(lam / v)) if v > 0 else float("inf")
@@ -306,7 +313,7 @@ def simulate_case(truth: str, size_mde: float, replicate: int, *, seed: int, ses
     sensor = _draw_sensor(rng, ss)
     phase = rng.uniform(0, 2 * np.pi)
     effs = effects_of(truth)
-    dirs = {e: rng.standard_normal(3) for e in effs}
+    dirs = {e: rng.standard_normal(effect(e).size) for e in effs}
     dirs = {e: d / np.linalg.norm(d) for e, d in dirs.items()}
     noise_rng = np.random.default_rng(rng.integers(2 ** 63))
     design = _draw_design(rng, ss, profile, rules, sensor, phase, truth)
@@ -432,13 +439,13 @@ def _effect_sizes(design: _Design, oracle: Oracle, dirs: dict, size_mde: float, 
         a_white = identifiability(design.data, design.base, e, rules, family).mde_along(d)
         params[e] = size_mde * a * d
         key_eff.update({f"mde_along_{e}": a, f"mde_along_white_{e}": a_white,
-                        **{f"param_{e}_{ax}": float(v) for ax, v in zip("xyz", params[e])},
-                        **{f"direction_{e}_{ax}": float(v) for ax, v in zip("xyz", d)}})
+                        **{f"param_{e}_{ax}": float(v) for ax, v in zip(suffixes(e), params[e])},
+                        **{f"direction_{e}_{ax}": float(v) for ax, v in zip(suffixes(e), d)}})
     if dirs:  # the first (or only) effect also under generic names
         e = next(iter(dirs))
         key_eff.update({"mde_along": key_eff[f"mde_along_{e}"],
-                        **{f"param_{ax}": key_eff[f"param_{e}_{ax}"] for ax in "xyz"},
-                        **{f"direction_{ax}": key_eff[f"direction_{e}_{ax}"] for ax in "xyz"}})
+                        **{f"param_{ax}": key_eff[f"param_{e}_{ax}"] for ax in suffixes(e)},
+                        **{f"direction_{ax}": key_eff[f"direction_{e}_{ax}"] for ax in suffixes(e)}})
     return params, key_eff
 
 
@@ -490,8 +497,8 @@ def _result_row(res) -> dict:
             row[f"passed_{c.effect}"] = c.passed
     first = [c for c in res.candidates if c.named and c.round == 1]
     if first:
-        row.update({f"estimate_{a}": v for a, v in zip("xyz", first[0].estimate)})
-        row.update({f"se_{a}": v for a, v in zip("xyz", first[0].se)})
+        row.update({f"estimate_{a}": v for a, v in zip(suffixes(first[0].effect), first[0].estimate)})
+        row.update({f"se_{a}": v for a, v in zip(suffixes(first[0].effect), first[0].se)})
     return row
 
 
