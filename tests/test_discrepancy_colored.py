@@ -14,6 +14,7 @@ from scipy import stats
 
 from accelcal.discrepancy import colored as C
 from accelcal.discrepancy import wander_loop as W
+from accelcal.discrepancy.joint_noise import linearise
 from accelcal.discrepancy.detect import discrepancy
 from accelcal.discrepancy.fit import effect_columns, evaluate, fit_at, forward, pose_data
 from accelcal.discrepancy.vocabulary import Rules, critical_noncentrality
@@ -77,7 +78,7 @@ def true_mde_direction(truth, eid, wander, rules, n_tests, direction):
     d0 = pose_data(z0, G, np.repeat(se[:, None], 3, axis=1), truth["tmid"], truth["temp"], sigma=truth["sigma"],
                    t_start=a, t_end=a + T)
     f0 = fit_at(d0, (), truth["p"])
-    prob = W.linearise(d0, f0)
+    prob = linearise(d0, f0)
     Xe = prob.columns(effect_columns(truth["p"], d0, (), eid))
     S = C.contrast_covariance(prob, wander or {})
     info = C.effect_information(prob, prob.X0, Xe, sigma_c=S).colored
@@ -104,7 +105,7 @@ def test_contrast_covariance_matches_simulated_time_series():
     tmid = a + T / 2
     d0 = pose_data(z0, G, se, tmid, t_start=a, t_end=a + T, sigma=residual_sigma(z0, se, M, b))
     f0 = fit_at(d0, (), p)
-    prob = W.linearise(d0, f0)
+    prob = linearise(d0, f0)
     gm = (0.4, 40.0)
     S = C.contrast_covariance(prob, {"gauss_markov": gm})
     nt = int(np.ceil((a[-1] + T[-1]) * fs)) + 1
