@@ -210,10 +210,12 @@ def test_common_mode_wander_keeps_false_positives_at_alpha(monkeypatch):
 
 def test_axis_correlation_estimate_follows_the_planted_one():
     """A Gauss-Markov wander (10 pose sigmas, τ = 100 s) correlated 0, 0.5 or 0.95 between
-    the axes, 12 sessions each: the median estimate is within one step of the grid of φ of
+    the axes, 24 sessions each: the median estimate is within one step of the grid of φ of
     the planted correlation, the medians are ordered, and the 95 % grid interval (widened
-    by a step where the truth is between grid values) holds the truth on at least 9 of 12
-    (measured medians 0.17, 0.33, 1.0: from one session the estimate is rough)."""
+    by a step where the truth is between grid values) holds the truth on at least 18 of 24
+    (measured medians 0, 0.33, 1.0: from one session the estimate is rough; with 12 sessions
+    the median of the uncorrelated wander sat on the boundary between 0 and 1/3, 0.17 or
+    0.33 depending on one session)."""
     wander = COMMON_WANDERS[0]
     step = float(np.max(np.diff(C.COMMON_GRID)))
     med = []
@@ -221,14 +223,14 @@ def test_axis_correlation_estimate_follows_the_planted_one():
         rng = np.random.default_rng(60 + k)
         est, cover = [], 0
         on_grid = bool(np.any(np.isclose(C.COMMON_GRID, rho)))
-        for _ in range(12):
+        for _ in range(24):
             d, _ = session(rng, wander, axis_corr=_equicorrelated(rho))
             nm = discrepancy(d, FAST).noise_model
             est.append(nm["axis_correlation"])
             lo, hi = nm["axis_correlation_ci"]
             cover += lo <= rho <= hi if on_grid else lo - step < rho < hi + step
         med.append(float(np.median(est)))
-        assert abs(med[-1] - rho) <= step + 1e-12 and cover >= 9, (rho, est, cover)
+        assert abs(med[-1] - rho) <= step + 1e-12 and cover >= 18, (rho, est, cover)
     assert med[0] < med[1] < med[2], med
 
 

@@ -22,6 +22,11 @@ discrepancy report (JSON):
                delta_bic, leave-one-pose-out gap, estimate and standard error
   gap_before, gap_after   RMS pose residual in units of its noise, base model and
                base + named effects (noise alone: gap_expected_*)
+  excess_status          the residual excess under the model the loop used (named
+               effects and noise terms); excess_status_white: against the rests'
+               white noise alone (values: accelcal.discrepancy.schema.STATUS)
+  noise_model  the noise between poses (bias wander or per-placement offset); reading:
+               what its numbers mean, in words
   stochastic   Allan deviation of the rests vs a white-noise simulator, named noise
                terms, Allan gap before/after; noise_implication: what they mean for
                the pose residuals
@@ -99,28 +104,15 @@ def _discrepancy_summary(out: dict, path: Path) -> None:
         lines.append(f"  outlier pose {o['pose']} at t = {o['t']:.1f} s: shifted {o['shift_sigma']:+.3g} sigma "
                      f"(p = {o['p']:.3g}); gap {o['gap_before']:.3g} -> {o['gap_after']:.3g} without it")
     nm = det.get("noise_model") or {}
-    if nm.get("term") == "bias_wander":
-        def v(x):  # the JSON holds None for inf (a random walk has no finite size)
-            return "inf" if x is None else f"{x:.3g}"
-
-        def ci(x):
-            return "[" + ", ".join(map(v, x)) + "]"
-
-        lines.append(f"  bias wander ({nm['process']}): size {v(nm['size'])} {ci(nm['size_ci'])}, "
-                     f"tau {v(nm['tau_s'])} s {ci(nm['tau_ci'])}, random-walk K {v(nm['random_walk_K'])} "
-                     f"{ci(nm['random_walk_K_ci'])}"
-                     + (f", correlation between the axes {v(nm['axis_correlation'])} {ci(nm['axis_correlation_ci'])}"
-                        if nm.get("axis_correlation") is not None else "") + " (95 % profile likelihood)"
-                     + ("" if nm.get("time_correlation_established") else
-                        "; its time correlation is not established (tau may be below the poses: extra white noise)"))
-    elif nm.get("estimated") is False and det.get("null") == "colored":
-        lines.append(f"  bias wander not estimated: {nm.get('reason', '')}")
-    elif nm.get("term") == "none" and det.get("null") == "colored":
-        lines.append("  bias wander: none detected (REML estimate 0)")
+    if det.get("null") == "colored" and nm.get("reading"):
+        lines.append(f"  noise between poses: {nm['reading']}")
     if det.get("excess_predicted") is not None and det.get("null") == "colored":
         lo, hi = det["excess_predicted_interval"]
-        lines.append(f"  residual excess observed {det['excess_observed']:.3g}, predicted by white + wander "
+        lines.append(f"  residual excess observed {det['excess_observed']:.3g}, predicted by the noise model "
                      f"{det['excess_predicted']:.3g} (95 % interval {lo:.3g}-{hi:.3g})")
+    lines.append(f"  excess: {det['excess_status']} with the named effects and noise terms"
+                 + (f" ({', '.join(det['excess_explained_by'])})" if det.get("excess_explained_by") else "")
+                 + f"; {det['excess_status_white']} against the rests' white noise alone")
     for e in det.get("errors", []):
         lines.append(f"  did not converge: {e}")
     st = out.get("stochastic")

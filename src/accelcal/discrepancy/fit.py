@@ -325,4 +325,5 @@ def lopo(f: Fit, data: PoseData, max_iter: int = MAX_ITER_LOPO) -> np.ndarray:
 
 
 __all__ = ["CHI2_TOL", "N_BASE", "Fit", "PoseData", "effect_columns", "effect_slices", "evaluate", "evaluate_batch",
-           "fit", "fit_at", "forward", "lopo", "n_parameters", "orthonormal_basis", "parameter_names", "pose_data", "pose_data_from_static"]
+           "fit", "fit_at", "forward", "lopo", "n_parameters", "orthonormal_basis", "parameter_names", "pose_data",
+           "pose_data_from_static"]

@@ -130,7 +130,8 @@ def _evaluate_batch_numpy(P, data: PoseData, terms: EffectTerms, jacobian: bool)
     xhat = x / norm[..., None]
     if coupled:  # v = x̂ᵀ (∂P/∂x)⁻¹ (NaN rows stay NaN)
         good = np.isfinite(dP).all(axis=(-2, -1))
-        v = np.linalg.solve(np.where(good[..., None, None], np.swapaxes(dP, -1, -2), np.eye(3)), xhat[..., None])[..., 0]
+        jac_t = np.where(good[..., None, None], np.swapaxes(dP, -1, -2), np.eye(3))
+        v = np.linalg.solve(jac_t, xhat[..., None])[..., 0]
         v = np.where(good[..., None], v, np.nan)
     else:
         v = xhat / dP

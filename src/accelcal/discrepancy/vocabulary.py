@@ -263,7 +263,8 @@ def identifiability(data: PoseData, base: Fit, eid: str, rules: Rules, n_tests: 
     g_data = float(np.median(np.linalg.norm(data.z - base.bias, axis=1)))
     if rank1 < k:
         reasons.append(f"the effect's residual signature has rank {rank1} < {k} on this pose set"
-                       + (" (it needs poses with three non-zero components, e.g. corners)" if e.kind == HARMONIC else ""))
+                       + (" (it needs poses with three non-zero components, e.g. corners)"
+                          if e.kind == HARMONIC else ""))
     elif absorbed > rules.max_absorbed:
         reasons.append(f"the base model absorbs {absorbed:.6f} of its worst direction (> {rules.max_absorbed:g})")
     worst = float(np.max(mde_data))
@@ -339,10 +340,12 @@ class Candidate:
 class OutlierTest:
     """The outlier family of one round (colored null): its most outlying pose and the test.
 
-    ``pose`` is the pose's index in the recording, ``t`` its mid time [s]; ``statistic``
-    the largest mean-shift likelihood ratio over the poses, ``studentised`` that pose's
-    GLS studentised residual; ``p_value`` the bootstrap p-value of the family,
-    ``p_adjusted`` after Holm over the round; ``delta_bic`` = ``−LR + 2 ln n``.
+    ``pose`` is the pose's index in the recording, ``t`` its mid time [s]: the pose of the
+    largest studentised residual, ``studentised`` (GLS, at the round's wander); ``p_value``
+    the family's p-value against the exact null of that maximum (``draws`` Monte Carlo
+    draws, :mod:`accelcal.discrepancy.colored.outliers`), ``p_adjusted`` after Holm over
+    the round; ``statistic`` the pose's mean-shift likelihood ratio (the wander
+    re-estimated), ``delta_bic`` = ``−LR + 2 ln n``.
     """
 
     round: int
@@ -355,6 +358,7 @@ class OutlierTest:
     delta_bic: float
     passed_test: bool
     named: bool = False
+    draws: int = 0
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -482,11 +486,44 @@ class DiscrepancyResult:
             "chi2_after": f.chi2, "dof_after": f.dof, "chi2_p_after": float(chi1),
             # share of the χ² in excess of its expectation that the named effects remove
             "excess_explained_fraction": float((b.chi2 - f.chi2) / excess_var) if excess_var > 0 else float("nan"),
-            # 'no excess' (the base model's residuals are consistent with the pose noise at
-            # level α), 'explained' (they were not, after the named effects they are),
-            # 'not explained' (still not), or 'untestable' (no degree of freedom)
-            "excess_status": _excess_status(chi0, chi1, self.rules.alpha),
+            **self.excess_readings(chi0, chi1),
         }
+
+    def excess_readings(self, p_before: float, p_after: float) -> dict:
+        """``excess_status`` under the model the loop used, and ``excess_status_white``.
+
+        Both start from the base model's residuals against the rests' white noise alone
+        (``no excess`` at level α: nothing to explain).  ``excess_status_white`` then asks
+        the same of the final residuals: the named effects alone must bring them to the
+        rests' noise.  ``excess_status`` asks it of the model the loop used: under the
+        colored null the named effects (and outlier poses) *with* the named noise terms
+        (white scale, bias wander or per-placement offset: ``excess_explained``, the final
+        χ² inside the central 95 % of its predicted distribution); under the white null the
+        two are the same.  Values: :data:`accelcal.discrepancy.schema.STATUS`.
+        """
+        white = _excess_status(p_before, p_after, self.rules.alpha)
+        out = {"excess_status_white": white, "excess_status": white,
+               "excess_status_model": "white per-pose noise of the rests"}
+        if self.rules.null != "colored":
+            return out
+        nm = self.noise_model or {}
+        if not nm.get("estimated") or not self.colored or not self.colored.get("dof", 0) > 0:
+            return {**out, "excess_status": "untestable",
+                    "excess_status_model": "the colored null's noise model was not estimated"}
+        term = nm.get("term", "none")
+        model = "white per-pose noise of the rests x white scale" + ("" if term == "none" else f" + {term}")
+        status = white if white in ("no excess", "untestable") else (
+            "explained" if self.colored.get("excess_explained") else "not explained")
+        by = [e for e in self.effects if e != "outlier_pose"]
+        if self.outliers:
+            by.append(f"{len(self.outliers)} outlier pose(s) left out")
+        if term != "none":
+            by.append(term)
+        ws_lo = (nm.get("white_scale_ci") or [float("nan")])[0]
+        if ws_lo is not None and np.isfinite(ws_lo) and ws_lo > 1:
+            by.append(f"white scale {nm.get('white_scale', float('nan')):.3g}")
+        return {**out, "excess_status": status, "excess_status_model": model,
+                "excess_explained_by": by if status == "explained" else []}
 
     def to_dict(self) -> dict:
         def params(f: Fit):

@@ -15,11 +15,13 @@ Each round (module :mod:`accelcal.discrepancy.colored` for the statistics):
    effect's parameters): large for effects whose signature is slow in time
    (``bias_drift``; ``temperature`` when the temperature changes slowly), about 1 for
    those that vary from pose to pose with the orientation.
-3. Tests: the bootstrap likelihood-ratio test of every identifiable candidate and the
-   outlier family (the largest mean-shift likelihood ratio over the poses), calibrated
-   together on the same replicates of the
-   fitted null; Holm's step-down over the round's family (the candidates and, if
-   enabled, the outlier family).  The bootstrap has ``n_boot`` replicates; a test stops
+3. Tests: the bootstrap likelihood-ratio test of every identifiable candidate, calibrated
+   on the same replicates of the fitted null, and the outlier family (the largest
+   studentised residual among the poses, against its exact null under the round's
+   wander, :mod:`.colored.outliers`: thousands of draws where the decision needs them,
+   not the bootstrap's floor of 0.005); Holm's step-down over the round's family (the
+   candidates and, if enabled, the outlier family: one family, level α).
+   The bootstrap has ``n_boot`` replicates; a test stops
    at its ``h``-th exceedance (Besag & Clifford's sequential p-value ``h/ℓ``, ``h`` the
    smallest count with ``h/n_boot > α``: such a test cannot pass with all replicates
    either: stopping changes no decision at ``n_boot``, and a stopped test is not grown).  Tests that do not pass but
@@ -43,6 +45,14 @@ Each round (module :mod:`accelcal.discrepancy.colored` for the statistics):
    fitted).  The loop repeats until nothing passes, or ``max_rounds`` effects and
    ``max_outliers`` outliers are named.
 
+How α is shared across rounds.  Every round tests its family (the remaining candidates
+and the outlier family) at level α with Holm; a round is reached only when the previous
+one named something.  On a recording with nothing to name, whatever is named is named in
+round 1 or after a round-1 mistake, so the family-wise rate over all rounds, effects and
+outliers together, is round 1's: at most α (up to the Monte Carlo error of the tests and
+the plug-in of the wander).  After a correct round, the next tests what remains, again
+at α (a step-down: the named items are no longer hypotheses).
+
 A candidate that was tested, did not pass, and whose ``wander_inflation`` exceeds
 ``max_wander_inflation`` cannot be ruled out: it is reported ``not_identifiable`` with
 the reason (the wander can produce what the effect would), never as absent.
@@ -61,7 +71,7 @@ from .. import distributions as dist
 from ..errors import AccelcalError
 from . import colored as C
 from .fit import Fit, PoseData, effect_columns, effect_slices, evaluate, fit, lopo
-from .joint_noise import colored_summary, linearise_noise, noise_model_dict
+from .joint_noise import colored_summary, linearise_noise, noise_model_dict, repeated_placements
 from .vocabulary import (
     Candidate,
     DiscrepancyResult,
@@ -244,7 +254,7 @@ def _round(st: _LoopState, prob: C.Problem, noise: tuple, remaining, test_outlie
         out_test = OutlierTest(round=rnd, pose=int(st.data.pose_index[i]), t=float(st.data.t[i]),
                                statistic=rt.outlier_lr, studentised=float(rt.outlier_t[i]), p_value=rt.outlier_p,
                                p_adjusted=float(padj[-1]), delta_bic=-rt.outlier_lr + 2.0 * math.log(n),
-                               passed_test=bool(padj[-1] <= rules.alpha))
+                               passed_test=bool(padj[-1] <= rules.alpha), draws=rt.outlier_draws)
     return tested, out_test, rt
 
 
@@ -486,8 +496,9 @@ def _result(data: PoseData, rules: Rules, base: Fit, lopo_base: np.ndarray, st: 
     if wander is not None:
         colored = colored_summary(data, base, prob, wander, cur_data, current)
     _, skipped = applicable(data, rules.candidates)
+    placement = repeated_placements(cur_data, current, wander, alpha=rules.alpha) if wander is not None else None
     return DiscrepancyResult(tuple(st.named), tuple(st.rows), skipped, base, current, lopo_base, lopo_final, data,
-                             rules, noise_model=noise_model_dict(wander, prob, wander_error),
+                             rules, noise_model=noise_model_dict(wander, prob, wander_error, placement),
                              outliers=tuple(st.outliers), outlier_tests=tuple(st.outlier_tests),
                              errors=tuple(st.errors), final_data=cur_data, colored=colored)
 
