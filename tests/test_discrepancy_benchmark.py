@@ -29,8 +29,9 @@ WHITE = PROFILES["white"]
 def test_plan_chunks_partition_the_plan():
     plan = B.plan(["white", "gm"], EFFECT_IDS, [1.0, 3.0], 3, 5, 2, pairs=[("quadratic", "temperature")],
                   extra_sizes={"white": [0.5]})
-    per_profile = 5 + 5 * 2 * 3 + 2 * 3 + 2 * 3 + 2
-    assert len(plan) == 2 * per_profile + 5 * 3 and plan.recording.is_unique
+    k = len(EFFECT_IDS)
+    per_profile = 5 + k * 2 * 3 + 2 * 3 + 2 * 3 + 2
+    assert len(plan) == 2 * per_profile + k * 3 and plan.recording.is_unique
     assert set(plan.truth) == {B.NONE, *EFFECT_IDS, "quadratic+temperature", B.OUTLIER, B.CONSTANT_TEMPERATURE}
     parts = [B.chunk(plan, 4, k) for k in range(4)]
     assert sorted(pd.concat(parts).recording) == sorted(plan.recording)

@@ -165,7 +165,7 @@ def test_the_outlier_null_is_the_exact_distribution_of_the_largest_residual():
     # a p-value far above alpha stops early; one far below its Holm level too
     _, n_hi = C.max_null_pvalue(bhat, 1.0, np.random.default_rng(2), alpha=0.05, family=7, studentised=False)
     _, n_lo = C.max_null_pvalue(bhat, 6.0, np.random.default_rng(2), alpha=0.05, family=7, studentised=False)
-    assert n_hi == C.outliers.DRAW_BATCH and n_lo <= 3 * C.outliers.DRAW_BATCH
+    assert n_hi == C.outliers.FIRST_BATCH and n_lo <= C.outliers.FIRST_BATCH + 2 * C.outliers.DRAW_BATCH
 
 
 def test_the_outlier_family_is_calibrated_under_a_wander():

@@ -23,8 +23,8 @@ Everything that evaluates the model consumes them:
   (:meth:`EffectTerms.jacobian_columns`);
 * the compiled kernels of the fits (:mod:`accelcal.discrepancy._fit_kernels`), which take
   the same rows as arrays (:attr:`EffectTerms.kernel_arrays`: covariate columns, powers,
-  additive or not) and evaluate the same sums in the same order (a model with a harmonic
-  effect runs in numpy: :attr:`EffectTerms.has_harmonic`).
+  additive or not, harmonic or not with its tensors) and evaluate the same sums in the
+  same order.
 
 The parameters of the effects are one flat vector, each effect's block of
 :attr:`accelcal.effects.Effect.size` after the other, in the order of the effects.
@@ -178,11 +178,10 @@ class ModelTerms:
         tol = rtol * scale
         x = y
         for _ in range(max_iter):
-            jac = self.jacobian_of(x, C)
-            ok = np.linalg.det(jac) > 0
-            res = _value(C, x) + quadratic_form(self.harmonic, x) - y
-            step = np.linalg.solve(np.where(ok[..., None, None], jac, np.eye(3)), res[..., None])[..., 0]
-            step = np.where(ok[..., None], step, np.nan)
+            Kx = _contract(self.harmonic, x)                       # K(·, ·, x): (..., n, 3, 3)
+            inv, det = inverse3(_diag_slope(C, x) + 2.0 * Kx)
+            res = _value(C, x) + np.einsum("...njk,...nk->...nj", Kx, x) - y
+            step = np.where((det > 0)[..., None], np.einsum("...jk,...k->...j", inv, res), np.nan)
             x = x - step
             if not np.max(np.abs(step), where=~np.isnan(step), initial=-np.inf) > tol:
                 converged = np.ones(y.shape[:-2], bool)
@@ -190,15 +189,12 @@ class ModelTerms:
         else:
             converged = np.all(np.abs(step) <= tol, axis=(-2, -1))
         jac = self.jacobian_of(x, C)
-        return x, np.where((np.linalg.det(jac) > 0)[..., None, None], jac, np.nan), converged
+        return x, np.where((inverse3(jac)[1] > 0)[..., None, None], jac, np.nan), converged
 
     def jacobian_of(self, x: np.ndarray, C: dict | None = None) -> np.ndarray:
         """``∂P/∂x`` (..., n, 3, 3): the per-axis slopes on the diagonal plus ``2 K(x, ·)``."""
-        slope = np.broadcast_to(_slope(self.coefficients() if C is None else C, x), x.shape)
-        jac = slope[..., :, None] * np.eye(3)
-        if self.harmonic is not None:
-            jac = jac + 2.0 * np.einsum("...jkl,...nl->...njk", self.harmonic, x)
-        return jac
+        jac = _diag_slope(self.coefficients() if C is None else C, x)
+        return jac if self.harmonic is None else jac + 2.0 * _contract(self.harmonic, x)
 
     def invertible(self, slope: np.ndarray) -> bool:
         """Whether :meth:`solve`'s ``slope`` says ``P`` was invertible at every row: the
@@ -207,9 +203,35 @@ class ModelTerms:
         return bool(np.all(np.isfinite(slope)) and (self.harmonic is not None or np.all(slope > 0)))
 
 
+def inverse3(J: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Inverses and determinants of a stack of 3 × 3 matrices (..., 3, 3) by their cofactors
+    (many small systems: numpy's batched LAPACK calls cost more than the arithmetic)."""
+    a, b, c = J[..., 0, 0], J[..., 0, 1], J[..., 0, 2]
+    d, e, f = J[..., 1, 0], J[..., 1, 1], J[..., 1, 2]
+    g, h, i = J[..., 2, 0], J[..., 2, 1], J[..., 2, 2]
+    A, B, C = e * i - f * h, f * g - d * i, d * h - e * g
+    det = a * A + b * B + c * C
+    adj = np.stack([np.stack([A, c * h - b * i, b * f - c * e], -1),
+                    np.stack([B, a * i - c * g, c * d - a * f], -1),
+                    np.stack([C, b * g - a * h, a * e - b * d], -1)], -2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return adj / det[..., None, None], det
+
+
+def _contract(K: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``Σ_l K_jkl x_l`` (..., n, 3, 3) for rows ``x`` (..., n, 3) and tensors ``K`` (..., 3, 3, 3)."""
+    K9 = K.reshape(*K.shape[:-3], 9, 3)
+    return (x @ np.swapaxes(K9, -1, -2)).reshape(*x.shape[:-1], 3, 3)
+
+
+def _diag_slope(C: dict, x: np.ndarray) -> np.ndarray:
+    """The per-axis slopes ``P_j'(x)`` as diagonal matrices (..., n, 3, 3)."""
+    return np.broadcast_to(_slope(C, x), x.shape)[..., :, None] * np.eye(3)
+
+
 def quadratic_form(K: np.ndarray, x: np.ndarray) -> np.ndarray:
     """``K(x, x)_j = Σ_kl K_jkl x_k x_l`` for rows ``x`` (..., n, 3) and tensors ``K`` (..., 3, 3, 3)."""
-    return np.einsum("...jkl,...nk,...nl->...nj", K, x, x)
+    return np.einsum("...njk,...nk->...nj", _contract(K, x), x)
 
 
 def _value(C: dict, x: np.ndarray) -> np.ndarray:
@@ -256,7 +278,7 @@ class EffectTerms:
 
     @property
     def has_harmonic(self) -> bool:
-        """Whether a harmonic effect couples the axes (the compiled kernels do not model it)."""
+        """Whether a harmonic effect couples the axes (Newton on the three at once)."""
         return any(e.kind == HARMONIC for e in self.effects)
 
     @property
@@ -295,27 +317,35 @@ class EffectTerms:
         """
         cols = []
         for e, col in zip(self.effects, self.columns):
-            if e.kind == HARMONIC:
-                cols.append(-np.einsum("...nj,mjkl,...nk,...nl->...nm", v, harmonic_basis(e.power), x, x))
+            if e.kind == HARMONIC:  # -v · T_m(x, x): through the outer products x_k x_l
+                T = harmonic_basis(e.power)
+                xx = (x[..., :, None] * x[..., None, :]).reshape(*x.shape[:-1], 9)
+                Txx = (xx @ T.reshape(-1, 9).T).reshape(*x.shape[:-1], T.shape[0], 3)   # (..., n, m, j)
+                cols.append(-np.sum(Txx * v[..., None, :], axis=-1))
                 continue
             d = -w if e.kind == ADDITIVE else -v * _power(x, e.power)
             cols.append(d if col is None else d * col[:, None])
         return cols
 
     @cached_property
-    def kernel_arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def kernel_arrays(self) -> tuple[np.ndarray, ...]:
         """The effects as the compiled kernels take them: covariate columns (k, n) (ones
-        where ``c = 1``), powers (k,) int64 (0 for additive effects), additive (k,) bool
-        (the per-axis kinds only: :attr:`has_harmonic`)."""
-        if self.has_harmonic:
-            raise AccelcalError("the compiled kernels do not model harmonic effects: evaluate them in numpy")
+        where ``c = 1``), powers (k,) int64 (0 for additive effects), additive (k,) bool,
+        harmonic (k,) bool and the harmonic effects' tensors (k, m, 3, 3, 3) (zeros for the
+        others; ``m`` their parameters, 1 without one)."""
         cols = np.ones((len(self.effects), self.n))
         for i, col in enumerate(self.columns):
             if col is not None:
                 cols[i] = col
         power = np.array([e.power for e in self.effects], np.int64)
         additive = np.array([e.kind == ADDITIVE for e in self.effects], np.bool_)
-        return cols, power, additive
+        harmonic = np.array([e.kind == HARMONIC for e in self.effects], np.bool_)
+        m = max([e.size for e in self.effects if e.kind == HARMONIC], default=1)
+        basis = np.zeros((len(self.effects), m, 3, 3, 3))
+        for i, e in enumerate(self.effects):
+            if e.kind == HARMONIC:
+                basis[i] = harmonic_basis(e.power)
+        return cols, power, additive, harmonic, basis
 
 
 def effect_terms(effects: Sequence, covariates: Mapping[str, np.ndarray | None], n: int,
@@ -377,5 +407,5 @@ def forward(x, M, bias, params: Mapping, covariates: Mapping[str, np.ndarray | N
     return terms.polynomial_of(x) @ np.asarray(M, float).T + np.asarray(bias, float) + terms.offset
 
 
-__all__ = ["NEWTON_MAX_ITER", "NEWTON_RTOL", "EffectTerms", "ModelTerms", "effect_terms", "forward", "harmonic_basis",
+__all__ = ["NEWTON_MAX_ITER", "NEWTON_RTOL", "EffectTerms", "ModelTerms", "effect_terms", "forward", "harmonic_basis", "inverse3",
            "model_terms", "quadratic_form"]

@@ -70,8 +70,10 @@ DISCREPANCY_STAGE = declare_stage(
         ("Real sessions: pose-residual excess observed and predicted by the joint model", SESSIONS_EXCESS),
         ("Real sessions re-simulated before and after what the loop names: gap to the measured residuals",
          SESSIONS_GAPS),
-        ("Discrepancy benchmark per noise profile: false-positive rate (colored and white null), "
+        ("Discrepancy benchmark per noise profile: false-positive rate (colored and white null, and the oracle), "
          "naming accuracy, outliers and pairs", f"{BENCH_DIR}/headline.csv"),
+        ("Discrepancy benchmark: the loop against the oracle (the same tests with the true noise covariance), "
+         "per profile and row", f"{BENCH_DIR}/oracle.csv"),
         ("ADIS16405: observed and predicted pose-mean wander on session-shaped pieces", ADIS_CHECK_SUMMARY),
         ("Discrepancy summary", DISCREPANCY_SUMMARY),
     ),
@@ -211,7 +213,8 @@ rule discrepancy_chunk:
 
 
 rule discrepancy_score:
-    """Join detections and key: one row per recording and null, rates, summary, headline."""
+    """Join detections and key: one row per recording and null (the oracle a null of its own), rates, summary,
+    headline, and where the loop and the oracle differ."""
     input:
         key=expand(BENCH_KEY, chunk=DISCREPANCY_CHUNKS),
         detections=expand(BENCH_DETECTIONS, chunk=DISCREPANCY_CHUNKS),
@@ -220,6 +223,7 @@ rule discrepancy_score:
         rates=BENCH_RATES,
         summary=BENCH_SUMMARY,
         headline=f"{BENCH_DIR}/headline.csv",
+        oracle=f"{BENCH_DIR}/oracle.csv",
     params:
         rules=DISCREPANCY["rules"],
         confusion_size=DISCREPANCY_BENCH["confusion_size_mde"],
@@ -453,6 +457,7 @@ rule discrepancy_benchmark:
     input:
         BENCH_SUMMARY,
         f"{BENCH_DIR}/headline.csv",
+        f"{BENCH_DIR}/oracle.csv",
         f"{BENCH_DIR}/timing.csv",
         figure_files("discrepancy_fpr", "discrepancy_confusion", "discrepancy_power", "discrepancy_rows"),
 

@@ -24,7 +24,7 @@ import numpy as np
 
 from .. import extended_model, kernels
 from ..effects import TEMPERATURE, TIME, effect
-from ..extended_model import NEWTON_RTOL, EffectTerms
+from ..extended_model import NEWTON_RTOL, EffectTerms, inverse3
 from .poses import PoseData
 
 N_BASE = 9
@@ -102,9 +102,8 @@ def evaluate_batch(P, data: PoseData, effects, jacobian: bool = True):
 def _model(data: PoseData, effects) -> tuple[object, EffectTerms]:
     """``(K, terms)``: the compiled kernel module (None: numpy runs) and the effects on the
     poses (:meth:`PoseData.effect_terms`; an effect whose covariate the recording lacks
-    fails here, on both paths alike).  A harmonic effect runs in numpy."""
-    terms = data.effect_terms(effects)
-    return (None if terms.has_harmonic else kernels.compiled(_KERNELS)), terms
+    fails here, on both paths alike)."""
+    return kernels.compiled(_KERNELS), data.effect_terms(effects)
 
 
 def _evaluate_batch_numpy(P, data: PoseData, terms: EffectTerms, jacobian: bool):
@@ -130,8 +129,8 @@ def _evaluate_batch_numpy(P, data: PoseData, terms: EffectTerms, jacobian: bool)
     xhat = x / norm[..., None]
     if coupled:  # v = x̂ᵀ (∂P/∂x)⁻¹ (NaN rows stay NaN)
         good = np.isfinite(dP).all(axis=(-2, -1))
-        jac_t = np.where(good[..., None, None], np.swapaxes(dP, -1, -2), np.eye(3))
-        v = np.linalg.solve(jac_t, xhat[..., None])[..., 0]
+        inv, _ = inverse3(np.where(good[..., None, None], dP, np.eye(3)))
+        v = np.einsum("...k,...kj->...j", xhat, inv)
         v = np.where(good[..., None], v, np.nan)
     else:
         v = xhat / dP

@@ -123,8 +123,13 @@ def _gls_estimate(prob: C.Problem, X1: np.ndarray, w1: C.WanderFit, aug: Fit, sl
     return est.tolist(), np.sqrt(np.clip(np.diag(cov)[-k:], 0.0, None)).tolist()
 
 
-def discrepancy_colored(data: PoseData, rules: Rules) -> DiscrepancyResult:
-    """The loop of the module docstring on one pose set (``rules.null == 'colored'``)."""
+def discrepancy_colored(data: PoseData, rules: Rules, report: bool = True) -> DiscrepancyResult:
+    """The loop of the module docstring on one pose set (``rules.null == 'colored'``).
+
+    ``report``: also the final noise model with its profile-likelihood intervals and the
+    gaps and excess under it (the report's; False: the noise model of the last round on the
+    tests' grid, without intervals, and no excess reading: what a benchmark of the
+    decisions needs)."""
     cands, _ = applicable(data, rules.candidates)
     base = fit(data)
     lopo_base = lopo(base, data)
@@ -162,7 +167,7 @@ def discrepancy_colored(data: PoseData, rules: Rules) -> DiscrepancyResult:
             st.named.append(best.candidate.effect)
             st.n_effects += 1
             st.current = best.fit
-    return _result(data, rules, base, lopo_base, st)
+    return _result(data, rules, base, lopo_base, st, report)
 
 
 @dataclass
@@ -356,7 +361,7 @@ def _drop_outlier(st: _LoopState, i: int, test: OutlierTest) -> bool:
 NESTED_SHARE = 0.99
 
 
-def _nested(X0: np.ndarray, Xi: np.ndarray, Xj: np.ndarray) -> bool:
+def nested(X0: np.ndarray, Xi: np.ndarray, Xj: np.ndarray) -> bool:
     """Whether candidate ``Xi`` lies inside the larger ``Xj`` (:data:`NESTED_SHARE`); two of
     the same size that reproduce each other are ambiguous, not nested."""
     if Xi.shape[1] >= Xj.shape[1]:
@@ -376,7 +381,7 @@ def _resolve_ambiguous(prob: C.Problem, tested: list[_Tested], alpha: float) -> 
     α).  Neither significant given the other: the pair is ambiguous, neither is named,
     both are reported ``not_identifiable`` (``ambiguous_with``).  Only one significant given
     the other: the other is explained by it and cannot be named this round (it is tested
-    again after the refit).  A pair of which one lies inside the other (:func:`_nested`) is
+    again after the refit).  A pair of which one lies inside the other (:func:`nested`) is
     never ambiguous: :func:`_nested_loser` waits."""
     passing = [(i, r.candidate, r.columns) for i, r in enumerate(tested) if r.candidate.passed]
     if len(passing) < 2:
@@ -395,7 +400,7 @@ def _resolve_ambiguous(prob: C.Problem, tested: list[_Tested], alpha: float) -> 
     for a in range(len(passing)):
         for b in range(a + 1, len(passing)):
             (i, ci, Xi), (j, cj, Xj) = passing[a], passing[b]
-            nest = (i, j) if _nested(X0, Xi, Xj) else ((j, i) if _nested(X0, Xj, Xi) else None)
+            nest = (i, j) if nested(X0, Xi, Xj) else ((j, i) if nested(X0, Xj, Xi) else None)
             if nest is not None:
                 drop.add(_nested_loser(nest, single, tested, alpha / max(len(tested), 1)))
                 continue
@@ -476,11 +481,20 @@ def _untested_from(r: _Prepared) -> Candidate:
     return replace(r.row, test="not tested", mde_white=r.mde_white)
 
 
-def _result(data: PoseData, rules: Rules, base: Fit, lopo_base: np.ndarray, st: _LoopState) -> DiscrepancyResult:
+def _result(data: PoseData, rules: Rules, base: Fit, lopo_base: np.ndarray, st: _LoopState,
+            report: bool = True) -> DiscrepancyResult:
     cur_data, current = st.data, st.current
     lopo_final = lopo(current, cur_data) if not st.outliers else _lopo_full(current, cur_data, data)
     wander, prob, colored = None, None, {}
     wander_error = st.wander_error
+    _, skipped = applicable(data, rules.candidates)
+    if not report:
+        last = st.noise
+        prob, wander = (last.problem, last.wander) if last is not None else (None, None)
+        return DiscrepancyResult(tuple(st.named), tuple(st.rows), skipped, base, current, lopo_base, lopo_final, data,
+                                 rules, noise_model=noise_model_dict(wander, prob, wander_error),
+                                 outliers=tuple(st.outliers), outlier_tests=tuple(st.outlier_tests),
+                                 errors=tuple(st.errors), final_data=cur_data)
     try:
         last = st.noise
         if last is not None and last.data is cur_data and last.fit is current:
@@ -495,7 +509,6 @@ def _result(data: PoseData, rules: Rules, base: Fit, lopo_base: np.ndarray, st: 
         st.errors.append(f"noise model fit failed: {err}")
     if wander is not None:
         colored = colored_summary(data, base, prob, wander, cur_data, current)
-    _, skipped = applicable(data, rules.candidates)
     placement = repeated_placements(cur_data, current, wander, alpha=rules.alpha) if wander is not None else None
     return DiscrepancyResult(tuple(st.named), tuple(st.rows), skipped, base, current, lopo_base, lopo_final, data,
                              rules, noise_model=noise_model_dict(wander, prob, wander_error, placement),

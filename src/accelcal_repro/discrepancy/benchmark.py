@@ -60,7 +60,8 @@ from accelcal.simulation import random_directions, simulate_recording
 from accelcal.static import detect_static_recording
 
 from ..montecarlo import grid_seed
-from .profiles import NoiseProfile, pose_mean_covariance, residual_covariance, simulate_profile, window_of
+from .oracle import named_set
+from .profiles import NoiseProfile, placement_offsets, pose_residual_covariance, simulate_profile, window_of
 
 NONE = "none"
 NOT_IDENTIFIABLE = "not_identifiable"
@@ -320,9 +321,9 @@ def simulate_case(truth: str, size_mde: float, replicate: int, *, seed: int, ses
     t, win, n_eff = design.t, design.windows, design.n_eff
 
     # Oracle: the covariance of the pose residuals the profile implies (unit of g²).
-    C = pose_mean_covariance(profile, t[win[:, 0]], n_eff / ss.rate, n_eff, ss.rate)
     w = -design.base.J[:, :3] * design.base.sigma[:, None]  # ∂r/∂z = -∂r/∂b (unweighted)
-    oracle = Oracle.build(design.data, design.p_true, residual_covariance(C, w))
+    oracle = Oracle.build(design.data, design.p_true,
+                          pose_residual_covariance(profile, t[win[:, 0]], n_eff / ss.rate, n_eff, ss.rate, w))
     # the loop's first round tests the candidates and the outlier family together (Holm)
     family = len(design.candidates) + bool(rules.outlier_pose)
     params, key_eff = _effect_sizes(design, oracle, dirs, size_mde, rules, family)
@@ -337,6 +338,7 @@ def simulate_case(truth: str, size_mde: float, replicate: int, *, seed: int, ses
     dtemp = temp - (design.temp_pose.mean() if truth != CONSTANT_TEMPERATURE else ss.temp_mean)
     z = forward(design.x, sensor.M, sensor.bias, params, dt=dt, dtemp=dtemp)
     z = z + simulate_profile(profile, noise_rng, len(t), ss.rate, replicate=int(replicate), records=records)
+    z = z + placement_offsets(profile, noise_rng, ss.rest_windows(len(t))[:, 0], len(t))
 
     outlier = {"outlier_pose": -1, "outlier_t": np.nan, "outlier_shift_mde": np.nan, "outlier_shift": np.nan}
     if truth == OUTLIER:
@@ -489,6 +491,8 @@ def _result_row(res) -> dict:
            **{k: s[k] for k in ("gap_before", "gap_after", "gap_expected_before", "gap_expected_after",
                                 "gap_lopo_before", "gap_lopo_after", "excess_before", "excess_after")}}
     row["outlier_t_detected"] = ";".join(f"{o.t:.3f}" for o in res.outliers)
+    row["outlier_poses_detected"] = ";".join(str(o.pose) for o in res.outliers)
+    row["named_set"] = named_set(res.effects, [o.pose for o in res.outliers])
     for c in res.candidates:
         if c.round == 1:
             row[f"p_{c.effect}"] = c.p_value
@@ -509,7 +513,7 @@ def _null_of(rules: Rules) -> str:
 def _detect(data, rules: Rules) -> dict:
     row = {"null": _null_of(rules), "outcome": ERROR, "effect": "", "effects": "", "error": ""}
     try:
-        res = discrepancy(data, rules)
+        res = discrepancy(data, rules, report=False)  # the decisions: no interval of the final noise model
     except AccelcalError as err:  # includes a model that does not converge: an error, never 'none'
         row["error"] = str(err).splitlines()[0]
     else:
@@ -517,20 +521,23 @@ def _detect(data, rules: Rules) -> dict:
     return row
 
 
-def detect_nulls(rec: Recording, g: float, rules: Rules, nulls=("white",)) -> list[dict]:
+def detect_nulls(rec: Recording, g: float, rules: Rules, nulls=("white",), oracle=None) -> list[dict]:
     """The loop on one recording under each null hypothesis (same static poses): one row per null.
 
     What ``accelcal discrepancy`` does before its stochastic layer.  A recording the
     pipeline cannot handle gives rows with ``outcome='error'`` and the message.  No
     timings: the table must be byte-identical on a rerun (wall times are in the job's
-    benchmark file).
+    benchmark file).  ``oracle`` (optional): ``(data, rows) -> row`` on the same poses, given
+    the loop's rows (:func:`accelcal_repro.discrepancy.oracle.oracle_detection`), one row more.
     """
     try:
         data = pose_data_from_static(detect_static_recording(rec), g)
     except AccelcalError as err:
+        names = [*nulls, *(["oracle"] if oracle is not None else [])]
         return [{"null": n, "outcome": ERROR, "effect": "", "effects": "", "error": str(err).splitlines()[0]}
-                for n in nulls]
-    return [_detect(data, rules_with_null(rules, n)) for n in nulls]
+                for n in names]
+    rows = [_detect(data, rules_with_null(rules, n)) for n in nulls]
+    return rows + ([oracle(data, rows)] if oracle is not None else [])
 
 
 def detect_case(rec: Recording, g: float, rules: Rules) -> dict:

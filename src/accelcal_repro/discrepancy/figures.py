@@ -30,7 +30,8 @@ LABELS = {NONE: "none", NOT_IDENTIFIABLE: "not identif.", CONSTANT_TEMPERATURE: 
           ERROR: "error", OUTLIER: "outlier pose", **{e.id: e.label for e in EFFECTS.values()}}
 COLORS = {e: f"C{i}" for i, e in enumerate(EFFECT_IDS)}
 NULL_STYLE = {"colored": {"color": "C0", "marker": "o", "label": "colored null (time-correlated noise)"},
-              "white": {"color": "C3", "marker": "s", "label": "white null (negative control)"}}
+              "white": {"color": "C3", "marker": "s", "label": "white null (negative control)"},
+              "oracle": {"color": "C2", "marker": "^", "label": "oracle (the same tests, true noise covariance)"}}
 
 
 def _label(x: str) -> str:
@@ -128,7 +129,7 @@ def plot_confusion(scores: pd.DataFrame, size_mde: float, profiles, null: str | 
 
 def plot_power(rates: pd.DataFrame, power: float, profiles, curve_profiles, sizes):
     """Top: detection rate vs size for the power-curve profiles (colored null solid, white
-    dashed); bottom: naming accuracy (effect named first) per profile at the main ``sizes``
+    dashed where it ran, the oracle dotted); bottom: naming accuracy (effect named first) per profile at the main ``sizes``
     (every profile has them), colored null."""
     effects = [e for e in EFFECT_IDS if e in set(rates.truth)]
     main = _main_null(rates.null)
@@ -138,7 +139,7 @@ def plot_power(rates: pd.DataFrame, power: float, profiles, curve_profiles, size
         for j, e in enumerate(effects):
             ax = axs[0, j]
             for k, prof in enumerate(curve_profiles):
-                for null, ls in (("colored", "-"), ("white", "--")):
+                for null, ls in (("colored", "-"), ("white", "--"), ("oracle", ":")):
                     r = rates[(rates.truth == e) & (rates.profile == prof) & (rates.null == null)].sort_values(
                         "size_mde")
                     if not len(r):
@@ -183,7 +184,7 @@ def plot_power(rates: pd.DataFrame, power: float, profiles, curve_profiles, size
 
 def plot_rows(rates: pd.DataFrame, profiles):
     """Accuracy of the outlier-pose rows (named and located) and of the two-effect rows (both
-    named, nothing else) per profile, each size, both nulls."""
+    named, nothing else) per profile, each size, every null that ran on them and the oracle."""
     kinds = [(OUTLIER, "outlier pose: named, at the right pose (the white null has no outlier test: 0 by design)")]
     kinds += [(t, f"{_label(t)}: both named, nothing else") for t in sorted(set(rates.truth)) if "+" in t]
     with plt.rc_context(RC):

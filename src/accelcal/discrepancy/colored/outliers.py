@@ -35,7 +35,10 @@ from ... import distributions as dist
 from .gls import Basis
 from .problem import Problem
 
-#: Monte Carlo draws of the null: batches of this size, at most this many in all.
+#: Monte Carlo draws of the null: a first batch (enough to stop a clearly insignificant
+#: test: 500 draws put a p-value of 0.1 at 0.07-0.14, 99.9 %), then batches of
+#: :data:`DRAW_BATCH`, at most :data:`MAX_DRAWS` in all.
+FIRST_BATCH = 500
 DRAW_BATCH = 2000
 MAX_DRAWS = 40000
 #: The draws stop once the 99.9 % Clopper–Pearson interval of the p-value lies wholly above
@@ -70,9 +73,10 @@ def max_null_pvalue(bhat: np.ndarray, statistic: float, rng: np.random.Generator
     """Monte Carlo p-value of ``max_i |t_i| >= statistic`` under the null (module docstring).
 
     ``studentised``: ``t_i = sqrt(r) b̂_iᵀ u`` with ``u`` uniform on the unit sphere of
-    ``R^r``; otherwise ``t_i = b̂_iᵀ z``, ``z ~ N(0, I_r)``.  Draws in batches of
-    :data:`DRAW_BATCH` until the decision at level ``α`` over a Holm family of ``family``
-    tests is resolved (:data:`DECISION_LEVEL`; ``stop_early=False``: never) or ``max_draws`` are used.
+    ``R^r``; otherwise ``t_i = b̂_iᵀ z``, ``z ~ N(0, I_r)``.  Draws in batches
+    (:data:`FIRST_BATCH`, then :data:`DRAW_BATCH`) until the decision at level ``α`` over a
+    Holm family of ``family`` tests is resolved (:data:`DECISION_LEVEL`; ``stop_early=False``:
+    never) or ``max_draws`` are used.
 
     Returns
     -------
@@ -86,7 +90,7 @@ def max_null_pvalue(bhat: np.ndarray, statistic: float, rng: np.random.Generator
     tol = 1e-9 * max(1.0, abs(statistic))
     edge = (1.0 - DECISION_LEVEL) / 2
     while n < max_draws:
-        z = rng.standard_normal((min(DRAW_BATCH, max_draws - n), r))
+        z = rng.standard_normal((min(DRAW_BATCH if n else FIRST_BATCH, max_draws - n), r))
         if studentised:
             z *= np.sqrt(r) / np.linalg.norm(z, axis=1, keepdims=True)
         count += int(np.sum(np.max(np.abs(z @ bhat.T), axis=1) >= statistic - tol))
@@ -98,4 +102,4 @@ def max_null_pvalue(bhat: np.ndarray, statistic: float, rng: np.random.Generator
     return (1 + count) / (n + 1), n
 
 
-__all__ = ["DECISION_LEVEL", "DRAW_BATCH", "MAX_DRAWS", "directions", "max_null_pvalue", "studentised_max"]
+__all__ = ["DECISION_LEVEL", "DRAW_BATCH", "FIRST_BATCH", "MAX_DRAWS", "directions", "max_null_pvalue", "studentised_max"]
