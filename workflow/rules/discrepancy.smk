@@ -64,7 +64,8 @@ def per_recording(pattern, recordings=DISCREPANCY_RECORDINGS):
 DISCREPANCY_STAGE = declare_stage(
     name="discrepancy",
     figures=["discrepancy_fpr", "discrepancy_confusion", "discrepancy_power", "discrepancy_rows",
-             "discrepancy_adis_allan", "discrepancy_measured_before_after", "discrepancy_allan", "discrepancy_sessions"]
+             "discrepancy_adis_allan", "discrepancy_measured_before_after", "discrepancy_allan", "discrepancy_sessions",
+             "discrepancy_evidence"]
     + (["discrepancy_stability"] if DISCREPANCY_SESSIONS["same_imu"] else []),
     tables=(
         ("Real sessions: pose-residual excess observed and predicted by the joint model", SESSIONS_EXCESS),
@@ -421,6 +422,7 @@ DISCREPANCY_FIGURE_INPUTS = {
     "discrepancy_sessions": {"reports": per_recording(RECORDING_REPORT), "sims": per_recording(SESSION_RESIM),
                              "gaps": SESSIONS_GAPS},
     "discrepancy_stability": {"stability": SESSIONS_STABILITY, "estimates": SESSIONS_ESTIMATES},
+    "discrepancy_evidence": {"reports": per_recording(RECORDING_REPORT), "evidence": f"{SESSIONS_DIR}/evidence.csv"},
 }
 
 
@@ -476,7 +478,7 @@ rule discrepancy_measured:
         SESSIONS_STABILITY,
         figure_files(*[f for f in DISCREPANCY_STAGE.figures if f in ("discrepancy_measured_before_after",
                                                                       "discrepancy_allan", "discrepancy_sessions",
-                                                                      "discrepancy_stability")]),
+                                                                      "discrepancy_evidence", "discrepancy_stability")]),
 
 
 rule discrepancy:

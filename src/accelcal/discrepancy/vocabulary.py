@@ -507,13 +507,14 @@ class DiscrepancyResult:
         if self.rules.null != "colored":
             return out
         nm = self.noise_model or {}
+        if white in ("no excess", "untestable"):
+            return out  # nothing to explain, or nothing to test it with: the same under any noise model
         if not nm.get("estimated") or not self.colored or not self.colored.get("dof", 0) > 0:
             return {**out, "excess_status": "untestable",
                     "excess_status_model": "the colored null's noise model was not estimated"}
         term = nm.get("term", "none")
         model = "white per-pose noise of the rests x white scale" + ("" if term == "none" else f" + {term}")
-        status = white if white in ("no excess", "untestable") else (
-            "explained" if self.colored.get("excess_explained") else "not explained")
+        status = "explained" if self.colored.get("excess_explained") else "not explained"
         by = [e for e in self.effects if e != "outlier_pose"]
         if self.outliers:
             by.append(f"{len(self.outliers)} outlier pose(s) left out")

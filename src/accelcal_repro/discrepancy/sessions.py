@@ -28,7 +28,7 @@ are computed from them):
   two-sample Kolmogorov–Smirnov distance, and where the measured excess falls in the
   simulated distribution of the excess.  The gap shrinks if the named items were what was
   missing.
-* :func:`evidence_rows`: for a session whose excess stays unexplained, the evidence
+* :func:`accelcal_repro.discrepancy.evidence.evidence_rows`: for a session whose excess stays unexplained, the evidence
   against each candidate: its test, its estimate, and the share of the excess χ² it
   would remove.
 * :func:`stability_rows`: the sessions of one IMU: each parameter per session with its
@@ -159,11 +159,15 @@ def named_rows(name: str, report: dict) -> list[dict]:
                             f"size [{', '.join(map(_g, nm.get('size_ci') or [None, None]))}]"))
         else:
             proc = nm.get("process", "")
-            value = (f"K {_g(nm.get('random_walk_K'))}/sqrt(s)" if proc == "random_walk"
-                     else f"size {_g(nm.get('size'))}, tau {_g(nm.get('tau_s'))} s")
-            ci = (f"K [{', '.join(map(_g, nm.get('random_walk_K_ci') or [None, None]))}]" if proc == "random_walk"
-                  else f"size [{', '.join(map(_g, nm.get('size_ci') or [None, None]))}], "
-                       f"tau [{', '.join(map(_g, nm.get('tau_ci') or [None, None]))}] s")
+            size_ci = f"size [{', '.join(map(_g, nm.get('size_ci') or [None, None]))}]"
+            if proc == "random_walk":
+                value = f"K {_g(nm.get('random_walk_K'))}/sqrt(s)"
+                ci = f"K [{', '.join(map(_g, nm.get('random_walk_K_ci') or [None, None]))}]"
+            elif proc == "per_placement":
+                value, ci = f"size {_g(nm.get('size'))} per axis, no time correlation", size_ci
+            else:
+                value = f"size {_g(nm.get('size'))}, tau {_g(nm.get('tau_s'))} s"
+                ci = f"{size_ci}, tau [{', '.join(map(_g, nm.get('tau_ci') or [None, None]))}] s"
             if nm.get("axis_correlation") is not None:
                 value += f", axis correlation {_g(nm['axis_correlation'])}"
                 ci += f", axis correlation [{', '.join(map(_g, nm.get('axis_correlation_ci') or [None, None]))}]"
@@ -200,35 +204,9 @@ def excess_rows(name: str, report: dict) -> dict:
             "excess_predicted_ci_low": ci[0], "excess_predicted_ci_high": ci[1],
             "explained": share(pred), "explained_ci_low": share(ci[0]), "explained_ci_high": share(ci[1]),
             "excess_status": report.get("excess_status", ""),
+            "excess_status_white": report.get("excess_status_white", report.get("excess_status", "")),
+            "excess_explained_by": "+".join(report.get("excess_explained_by") or []),
             "verdict": (report.get("noise_implication") or {}).get("verdict", "")}
-
-
-def evidence_rows(name: str, report: dict) -> list[dict]:
-    """Per candidate of round 1: its test (as the loop ran it), its estimate in standard errors,
-    and the share of the base model's excess χ² (``χ²₀ − dof₀``, white weights) that fitting it
-    removes, ``(χ²₀ − χ²₁)/(χ²₀ − dof₀)``: what the effect could explain if it were real."""
-    data = pose_data_of(report)
-    try:
-        base = fit(data)
-    except AccelcalError:
-        return []
-    rows = []
-    for c in report.get("candidates", []):
-        if c.get("round") != 1:
-            continue
-        est, se = np.array(c["estimate"], float), np.array(c["se"], float)
-        share = float("nan")
-        if base.chi2 > base.dof:
-            try:
-                share = (base.chi2 - fit(data, (c["effect"],), p0=base.p).chi2) / (base.chi2 - base.dof)
-            except AccelcalError:
-                pass
-        rows.append({"recording": name, "candidate": c["effect"], "identifiable": c["identifiable"],
-                     "reasons": "; ".join(c.get("reasons", [])), "p_value": c.get("p_value"),
-                     "p_adjusted": c.get("p_adjusted"), "passed": c.get("passed"), "named": c.get("named"),
-                     "max_abs_z": float(np.nanmax(np.abs(est / se))) if np.all(se > 0) else float("nan"),
-                     "share_of_excess_chi2": share})
-    return rows
 
 
 #: What a session of few orientations cannot test, and why (the loop's own limits).
@@ -531,5 +509,7 @@ def estimates_of(name: str, report: dict, which: str = "before") -> list[dict]:
              "se_scaled": v["se"], "se_noise": v["se_noise"]} for k, v in m.items()]
 
 
-__all__ = ["BASE_PARAMETERS", "FEW_POSES_LIMITS", "GAP_COLUMNS", "diagnostics_row", "few_poses_rows", "poses_of", "with_disjoint_rests", "base_residuals", "estimates_of", "evidence_rows", "excess_rows", "gap_rows",
-           "named_rows", "pose_data_of", "resimulate", "simulate_session", "stability_rows", "wander_components"]
+__all__ = ["BASE_PARAMETERS", "FEW_POSES_LIMITS", "GAP_COLUMNS", "diagnostics_row", "few_poses_rows", "poses_of",
+           "with_disjoint_rests", "base_residuals", "estimates_of", "excess_rows", "gap_rows", "named_rows",
+           "placement_of", "pose_data_of", "resimulate", "simulate_session", "stability_rows", "wander_components",
+           "white_scale_of"]
