@@ -402,7 +402,13 @@ def _resolve_ambiguous(prob: C.Problem, tested: list[_Tested], alpha: float) -> 
             (i, ci, Xi), (j, cj, Xj) = passing[a], passing[b]
             nest = (i, j) if nested(X0, Xi, Xj) else ((j, i) if nested(X0, Xj, Xi) else None)
             if nest is not None:
-                drop.add(_nested_loser(nest, single, tested, alpha / max(len(tested), 1)))
+                small, large = nest
+                cols = {k: Xe for k, _, Xe in passing}
+                # given the other passing candidates: what the larger adds may be theirs
+                others = [Xe for k, Xe in cols.items() if k not in nest and not nested(X0, Xe, cols[large])]
+                Xo = np.hstack([X0, *others])
+                lr = ml(np.hstack([Xo, cols[small]])) - ml(np.hstack([Xo, cols[large]]))
+                drop.add(_nested_loser(nest, lr, tested, alpha / max(len(tested), 1)))
                 continue
             both = ml(np.hstack([X0, Xi, Xj]))
             if np.isnan(both):
@@ -430,19 +436,20 @@ def _resolve_ambiguous(prob: C.Problem, tested: list[_Tested], alpha: float) -> 
     return out
 
 
-def _nested_loser(pair: tuple[int, int], single: dict, tested: list[_Tested], level: float) -> int:
+def _nested_loser(pair: tuple[int, int], lr: float, tested: list[_Tested], level: float) -> int:
     """Of a passing pair ``(small, large)`` whose ``small`` lies inside ``large``, the one that
-    waits: the larger unless it adds to the smaller, the likelihood ratio ``large | small``
-    (``single[small] − single[large]``: the pair's model is the larger one) on ``k_large −
-    k_small`` degrees of freedom, shrunk by the larger's ``bartlett`` factor (the stretch of
-    its likelihood ratio under the round's bootstrap: the noise is re-estimated), at
-    ``level``: α over the round's candidates (one more hypothesis of the round's family,
-    Bonferroni: naming the larger claims more than the smaller)."""
+    waits: the larger unless it adds to the smaller, ``lr`` the likelihood ratio ``large |
+    small`` given the round's other passing candidates (the pair's model is the larger
+    one: what the larger adds may be another candidate's signal) on ``k_large − k_small``
+    degrees of freedom, shrunk by the larger's ``bartlett`` factor (the stretch of its
+    likelihood ratio under the round's bootstrap: the noise is re-estimated), at ``level``:
+    α over the round's candidates (one more hypothesis of the round's family, Bonferroni:
+    naming the larger claims more than the smaller)."""
     small, large = pair
-    c_small, c_large = tested[small].candidate, tested[large].candidate
+    c_large = tested[large].candidate
     extra = tested[large].columns.shape[1] - tested[small].columns.shape[1]
     stretch = c_large.bartlett if np.isfinite(c_large.bartlett) and c_large.bartlett > 1 else 1.0
-    lr = max(single[small] - single[large], 0.0) / stretch
+    lr = max(lr, 0.0) / stretch if np.isfinite(lr) else 0.0
     return small if extra > 0 and dist.chi2_sf(lr, extra) <= level else large
 
 

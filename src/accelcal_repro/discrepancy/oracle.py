@@ -99,7 +99,12 @@ def _resolve(gls: _Gls, X: np.ndarray, passing: list, cols: dict, alpha: float, 
             if pair is not None:
                 small, large = pair
                 extra = cols[large].shape[1] - cols[small].shape[1]
-                adds = dist.chi2_sf(max(chi0[small] - chi0[large], 0.0), extra) <= level
+                # given the other passing candidates (the loop's rule): what the larger adds may be theirs
+                others = [cols[k] for k in passing if k not in pair
+                          and not nested(Xw, gls.W @ cols[k], gls.W @ cols[large])]
+                Xo = np.hstack([X, *others])
+                lr = gls.chi2(np.hstack([Xo, cols[small]])) - gls.chi2(np.hstack([Xo, cols[large]]))
+                adds = dist.chi2_sf(max(lr, 0.0), extra) <= level
                 out.discard(small if adds else large)
                 continue
             both = gls.chi2(np.hstack([X, cols[i], cols[j]]))
@@ -135,7 +140,8 @@ def oracle_loop(data: PoseData, cov_r: np.ndarray, rules: Rules, rng: np.random.
     -------
     dict
         ``effects`` (named, in order, '+'-joined, ``outlier_pose`` for an outlier as the
-        loop writes it), ``outlier_poses_detected`` (';'-joined pose indices),
+        loop writes it), ``outlier_poses_detected`` (';'-joined pose indices) and
+        ``outlier_t_detected`` (their mid times, as the loop's rows),
         ``named_set`` (effects and ``outlier_pose@i``, sorted, '+'-joined), ``outcome``.
     """
     base = fit(data)
@@ -184,6 +190,7 @@ def oracle_loop(data: PoseData, cov_r: np.ndarray, rules: Rules, rng: np.random.
     effects = [e for e in named if e != OUTLIER]
     return {"effects": "+".join(named), "outcome": named[0] if named else _nothing(gate),
             "outlier_poses_detected": ";".join(map(str, idx)),
+            "outlier_t_detected": ";".join(f"{data.t[i]:.3f}" for i in outliers),
             "named_set": named_set(effects, idx)}
 
 
