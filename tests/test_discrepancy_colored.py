@@ -14,6 +14,7 @@ from scipy import stats
 
 from accelcal.discrepancy import colored as C
 from accelcal.discrepancy import wander_loop as W
+from accelcal.discrepancy.joint_noise import linearise
 from accelcal.discrepancy.detect import discrepancy
 from accelcal.discrepancy.fit import effect_columns, evaluate, fit_at, forward, pose_data
 from accelcal.discrepancy.vocabulary import Rules, critical_noncentrality
@@ -77,7 +78,7 @@ def true_mde_direction(truth, eid, wander, rules, n_tests, direction):
     d0 = pose_data(z0, G, np.repeat(se[:, None], 3, axis=1), truth["tmid"], truth["temp"], sigma=truth["sigma"],
                    t_start=a, t_end=a + T)
     f0 = fit_at(d0, (), truth["p"])
-    prob = W.linearise(d0, f0)
+    prob = linearise(d0, f0)
     Xe = prob.columns(effect_columns(truth["p"], d0, (), eid))
     S = C.contrast_covariance(prob, wander or {})
     info = C.effect_information(prob, prob.X0, Xe, sigma_c=S).colored
@@ -104,7 +105,7 @@ def test_contrast_covariance_matches_simulated_time_series():
     tmid = a + T / 2
     d0 = pose_data(z0, G, se, tmid, t_start=a, t_end=a + T, sigma=residual_sigma(z0, se, M, b))
     f0 = fit_at(d0, (), p)
-    prob = W.linearise(d0, f0)
+    prob = linearise(d0, f0)
     gm = (0.4, 40.0)
     S = C.contrast_covariance(prob, {"gauss_markov": gm})
     nt = int(np.ceil((a[-1] + T[-1]) * fs)) + 1
@@ -209,10 +210,12 @@ def test_common_mode_wander_keeps_false_positives_at_alpha(monkeypatch):
 
 def test_axis_correlation_estimate_follows_the_planted_one():
     """A Gauss-Markov wander (10 pose sigmas, τ = 100 s) correlated 0, 0.5 or 0.95 between
-    the axes, 12 sessions each: the median estimate is within one step of the grid of φ of
+    the axes, 24 sessions each: the median estimate is within one step of the grid of φ of
     the planted correlation, the medians are ordered, and the 95 % grid interval (widened
-    by a step where the truth is between grid values) holds the truth on at least 9 of 12
-    (measured medians 0.17, 0.33, 1.0: from one session the estimate is rough)."""
+    by a step where the truth is between grid values) holds the truth on at least 18 of 24
+    (measured medians 0, 0.33, 1.0: from one session the estimate is rough; with 12 sessions
+    the median of the uncorrelated wander sat on the boundary between 0 and 1/3, 0.17 or
+    0.33 depending on one session)."""
     wander = COMMON_WANDERS[0]
     step = float(np.max(np.diff(C.COMMON_GRID)))
     med = []
@@ -220,14 +223,14 @@ def test_axis_correlation_estimate_follows_the_planted_one():
         rng = np.random.default_rng(60 + k)
         est, cover = [], 0
         on_grid = bool(np.any(np.isclose(C.COMMON_GRID, rho)))
-        for _ in range(12):
+        for _ in range(24):
             d, _ = session(rng, wander, axis_corr=_equicorrelated(rho))
             nm = discrepancy(d, FAST).noise_model
             est.append(nm["axis_correlation"])
             lo, hi = nm["axis_correlation_ci"]
             cover += lo <= rho <= hi if on_grid else lo - step < rho < hi + step
         med.append(float(np.median(est)))
-        assert abs(med[-1] - rho) <= step + 1e-12 and cover >= 9, (rho, est, cover)
+        assert abs(med[-1] - rho) <= step + 1e-12 and cover >= 18, (rho, est, cover)
     assert med[0] < med[1] < med[2], med
 
 

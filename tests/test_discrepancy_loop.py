@@ -65,7 +65,7 @@ def test_fit_recovers_injected_effect_without_noise(eid):
     e = EFFECTS[eid]
     c = {None: 1.0, TIME: np.abs(dt).max(), TEMPERATURE: np.abs(dT).max()}[e.covariate]
     gain = 1.0 if e.kind == ADDITIVE else np.linalg.norm(M, axis=1).mean() * G ** e.power
-    phi = 60 * ms[0, 0] / (gain * c) * np.array([1.0, -0.6, 0.3])
+    phi = 60 * ms[0, 0] / (gain * c) * np.resize([1.0, -0.6, 0.3, -0.8, 0.5], e.size)
     z = forward(G * u, M, b, {eid: phi}, dt=dt, dtemp=dT)
     d = pose_data(z, G, ms, t, T)
     f = fit(d, (eid,))
@@ -179,9 +179,9 @@ def test_names_each_injected_effect(eid, null):
         row, key = _run(eid, 4.0, rep, rules=NULL_RULES[null])
         assert row["outcome"] == eid, (rep, row)
         # the estimate is the injected parameter within a few standard errors
-        est = np.array([row[f"estimate_{a}"] for a in "xyz"])
-        se = np.array([row[f"se_{a}"] for a in "xyz"])
-        true = np.array([key[f"param_{a}"] for a in "xyz"])
+        est = np.array([row[f"estimate_{a}"] for a in B.suffixes(eid)])
+        se = np.array([row[f"se_{a}"] for a in B.suffixes(eid)])
+        true = np.array([key[f"param_{a}"] for a in B.suffixes(eid)])
         assert np.all(np.abs(est - true) < 5 * se), (est, true, se)
 
 
@@ -223,12 +223,15 @@ def test_gap_shrinks_to_the_noise_after_the_refit(null):
 
 @pytest.mark.parametrize("null", sorted(NULL_RULES))
 def test_refit_rounds_name_two_effects(null):
-    """Two hidden effects: the loop names both, one per round, and stops."""
+    """Two hidden effects: the loop names both, one per round, and stops.  The quadratic is
+    0.45 % of g (50 noise units): at 1.5 % its second-order residual (the tangential shift's
+    |δ|²/2g, about 1e-3 m/s²) is four times the pose noise, beyond the first-order
+    linearisation the round's tests stand on, and second_order and cubic then share it."""
     rng = np.random.default_rng(8)
     u = random_directions(rng, 40)
     M, b, _, t, T, ms = _design(rng, u, noise=0.1)
     dt, dT = t - t.mean(), T - T.mean()
-    z = forward(G * u, M, b, {"bias_drift": [0.004, -0.003, 0.002], "quadratic": [1.5e-3, -1e-3, 1e-3]},
+    z = forward(G * u, M, b, {"bias_drift": [0.004, -0.003, 0.002], "quadratic": [4.5e-4, -3e-4, 3e-4]},
                 dt=dt, dtemp=dT) + 0.1 * rng.standard_normal((40, 3))
     res = discrepancy(pose_data(z, G, ms, t, T), NULL_RULES[null])
     assert set(res.effects) == {"bias_drift", "quadratic"}

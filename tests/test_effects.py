@@ -64,7 +64,8 @@ def _size(eid: str, rel: float = 1e-3) -> float:
 
 
 def _params(rng, effects):
-    return {e: _size(e) * rng.uniform(0.5, 1.5, 3) * rng.choice([-1, 1], 3) for e in effects}
+    return {e: _size(e) * rng.uniform(0.5, 1.5, EFFECTS[e].size) * rng.choice([-1, 1], EFFECTS[e].size)
+            for e in effects}
 
 
 def _session(rng, n, at_rest: bool):
@@ -210,7 +211,9 @@ def test_the_table_refuses_what_the_model_cannot_represent():
     Effect(**ok)
     for bad, why in [({"kind": "multiplicative"}, "kind"), ({"covariate": "humidity"}, "covariate"),
                      ({"kind": "additive"}, "additive"), ({"kind": "additive", "power": 0}, "additive"),
-                     ({"power": 1}, "scale factor"), ({"power": 0, "covariate": TIME}, "polynomial")]:
+                     ({"power": 1}, "scale factor"), ({"power": 0, "covariate": TIME}, "polynomial"),
+                     ({"kind": "harmonic", "power": 3}, "harmonic"),
+                     ({"kind": "harmonic", "covariate": TEMPERATURE}, "harmonic")]:
         with pytest.raises(AccelcalError, match=why):
             Effect(**{**ok, **bad})
 
@@ -256,12 +259,13 @@ def test_the_detectable_size_in_the_data_unit_is_the_model_s_own_sensitivity(eid
     data, p, x = _poses(rng, [], n=30)
     base = fit(data)
     dt, dtemp = data.t - data.t.mean(), data.temp - data.temp.mean()
-    zero = {eid: np.zeros(3)}
+    k = EFFECTS[eid].size
+    zero = {eid: np.zeros(k)}
     z0 = forward(base.x, base.M, base.bias, zero, dt=dt, dtemp=dtemp)
     h = _size(eid, 1e-6)
-    expected = np.empty((len(data), 3))
-    for j in range(3):
-        step = np.zeros(3)
+    expected = np.empty((len(data), k))
+    for j in range(k):
+        step = np.zeros(k)
         step[j] = h
         dz = forward(base.x, base.M, base.bias, {eid: step}, dt=dt, dtemp=dtemp) - z0
         expected[:, j] = np.linalg.norm(dz, axis=1) / h

@@ -94,10 +94,11 @@ def test_discrepancy_prints_the_reports_summary(two_effects, tmp_path, monkeypat
     lines = err.splitlines()
     assert lines[0] == "discrepancy: 30 poses; effect named: quadratic (then bias_drift)"
     assert lines[1].startswith("  gap (RMS residual / noise) ")
-    assert any(ln.startswith("  bias wander (") for ln in lines)
+    assert any(ln.startswith("  noise between poses: ") for ln in lines)
+    assert any(ln.startswith("  excess: ") and "against the rests' white noise alone" in ln for ln in lines)
     assert lines[-3].startswith("  noise terms named: x: ") and lines[-1] == f"  written to {out}"
     # the deterministic layer's own summary is the report's first lines
-    det = rep.deterministic.summary().splitlines()
+    det = rep.deterministic.summary(rep.unit).splitlines()
     assert lines[:len(det)] == det and len(det) < len(lines)
 
 
@@ -115,8 +116,11 @@ def test_the_summary_prints_what_json_cannot_hold(two_effects):
     rec = read(two_effects)
     rep = report.discrepancy_report(rec, G, stochastic=None, unit=rec.unit)
     det = rep.deterministic
-    nm = {**det.noise_model, "term": "bias_wander", "process": "random_walk", "size": np.inf, "tau_s": np.inf,
-          "size_ci": [0.0, np.inf], "tau_ci": [np.nan, np.inf], "axis_correlation": np.nan}
+    nm = {**det.noise_model, "estimated": True, "term": "bias_wander", "process": "random_walk", "size": np.inf,
+          "tau_s": np.inf, "size_ci": [0.0, np.inf], "tau_ci": [np.nan, np.inf], "axis_correlation": np.nan,
+          "random_walk_K": 2e-4, "random_walk_K_ci": [1e-4, 4e-4], "change_over_session": 0.004, "session_s": 400.0}
     text = replace(det, noise_model=nm).summary()
-    line = next(ln for ln in text.splitlines() if ln.startswith("  bias wander"))
-    assert "size inf [0, inf], tau inf s [nan, inf]" in line and "correlation between" not in line
+    line = next(ln for ln in text.splitlines() if ln.startswith("  noise between poses: "))
+    # a random walk is said as such: its coefficient and its change over the session, no infinite size or tau
+    assert "a random walk" in line and "K 0.0002" in line and "over the 400 s session" in line
+    assert "inf" not in line and "correlation between" not in line

@@ -1,4 +1,4 @@
-"""One benchmark chunk: simulate each recording (key row apart) and run the loop on it under every null."""
+"""One benchmark chunk: simulate each recording (key row apart), run the loop on it under every null and the oracle."""
 
 import json
 
@@ -9,7 +9,9 @@ from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 from accelcal.discrepancy.vocabulary import Rules
 from accelcal_repro.discrepancy.benchmark import (Session, chunk, detect_nulls, null_available, nulls_for, plan,
                                                   simulate_case)
+from accelcal_repro.discrepancy.oracle import oracle_detection
 from accelcal_repro.discrepancy.profiles import NoiseProfile
+from accelcal_repro.montecarlo import grid_seed
 
 if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
     snakemake = mock_snakemake_from_argv("discrepancy_chunk", chunk="0")
@@ -35,7 +37,11 @@ for spec in todo.itertuples():
                              profile=profiles[spec.profile], records=records)
     keys.append({"recording": spec.recording, **key})
     nulls = nulls_for(spec.truth, bench["nulls"])
-    dets += [{"recording": spec.recording, **row} for row in detect_nulls(rec, session.g, rules, nulls)]
+    orng = np.random.default_rng(grid_seed(p.seed, f"discrepancy-oracle/{spec.profile}/{spec.truth}",
+                                           float(spec.size_mde), int(spec.replicate)))
+    oracle = ((lambda data, rows, prof=profiles[spec.profile], r=orng:
+               oracle_detection(data, prof, session.rate, rules, r, rows)) if bench["oracle"] else None)
+    dets += [{"recording": spec.recording, **row} for row in detect_nulls(rec, session.g, rules, nulls, oracle)]
 write_csv(pd.DataFrame(keys), snakemake.output.key)
 det = pd.DataFrame(dets)
 write_csv(det, snakemake.output.detections)

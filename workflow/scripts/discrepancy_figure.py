@@ -43,6 +43,8 @@ elif fid == "discrepancy_adis_allan":
 elif fid == "discrepancy_sessions":
     sims = {n: pd.read_csv(f) for n, f in zip(p.recordings, inp.sims)}
     fig = BF.plot_sessions(reports(), sims, table(inp.gaps))
+elif fid == "discrepancy_evidence":
+    fig = BF.plot_evidence(table(inp.evidence), reports())
 elif fid == "discrepancy_stability":
     fig = BF.plot_stability(table(inp.stability), table(inp.estimates))
 elif fid == "discrepancy_measured_before_after":

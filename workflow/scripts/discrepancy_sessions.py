@@ -7,6 +7,7 @@ from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 
 from accelcal.formats import read
 from accelcal_repro.discrepancy import sessions as SS
+from accelcal_repro.discrepancy.evidence import evidence_rows
 
 if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
     snakemake = mock_snakemake_from_argv("discrepancy_sessions_tables")
@@ -28,7 +29,7 @@ diagnostics = []
 for name, path in zip(p.recordings, snakemake.input.csv):
     rec, _ = SS.with_disjoint_rests(read(path, strict=True))
     diagnostics.append(SS.diagnostics_row(name, rec, reports[name]))
-evidence = [r for n, rep in reports.items() for r in SS.evidence_rows(n, rep)]
+evidence = [r for n, rep in reports.items() for r in evidence_rows(n, rep)]
 estimates = pd.DataFrame([r for n, rep in reports.items() for r in SS.estimates_of(n, rep)])
 # the yardstick: the rests' noise inflated by any excess (se), and for comparison the
 # residual scatter alone (se_scaled, smaller where the residuals scatter less than the rests say)

@@ -34,18 +34,19 @@ class CalibrationFileError(AccelcalError):
 
 @dataclass(frozen=True)
 class EffectTerm:
-    """One fitted effect: a block of three parameters (x, y, z) of a discrepancy effect.
+    """One fitted effect: the block of parameters of a discrepancy effect (three, x, y, z, or
+    the size of a harmonic effect: :attr:`accelcal.effects.Effect.size`).
 
     Attributes
     ----------
     id : str
         An id of :data:`accelcal.effects.EFFECTS`.
-    values : ndarray, shape (3,)
-        The parameters per axis (``k``, ``c``, ``β``, ``γ``, ``κ``, ...), units of
+    values : ndarray, shape (size,)
+        The parameters (per axis: ``k``, ``c``, ``β``, ``γ``, ``κ``, ...; ``h_m``), units of
         :mod:`accelcal.effects` (data unit Z, unit of g G).
     reference : float or None
         Centre of the covariate (session mean time [s] or temperature [°C]).
-    standard_errors : ndarray, shape (3,), or None
+    standard_errors : ndarray, shape (size,), or None
     """
 
     id: str
@@ -238,13 +239,13 @@ class Calibration:
         terms = self.effects if effects else ()
         n = len(z)
         cov = {TIME: _covariate(t, n, "t", terms, TIME), TEMPERATURE: _covariate(temp, n, "temp", terms, TEMPERATURE)}
-        model = model_terms([tm.id for tm in terms], np.array([tm.values for tm in terms]).reshape(-1, 3), cov, n,
-                            references=[tm.reference for tm in terms])
+        params = np.concatenate([np.ravel(tm.values) for tm in terms]) if terms else np.zeros(0)
+        model = model_terms([tm.id for tm in terms], params, cov, n, references=[tm.reference for tm in terms])
         y = np.linalg.solve(self.M, (z - self.bias - model.offset).T).T
-        if not model.polynomial:
+        if not model.nonlinear:
             return y
         x, slope, converged = model.solve(y, max(float(np.max(np.abs(y))), self.g))
-        if not np.all(slope > 0):
+        if not model.invertible(slope):
             raise CalibrationFileError("the calibration's polynomial effects are not monotonic over these "
                                        "samples (they lie outside the calibrated range): cannot invert them")
         if not converged:

@@ -22,6 +22,11 @@ discrepancy report (JSON):
                delta_bic, leave-one-pose-out gap, estimate and standard error
   gap_before, gap_after   RMS pose residual in units of its noise, base model and
                base + named effects (noise alone: gap_expected_*)
+  excess_status          the residual excess under the model the loop used (named
+               effects and noise terms); excess_status_white: against the rests'
+               white noise alone (values: accelcal.discrepancy.schema.STATUS)
+  noise_model  the noise between poses (bias wander or per-placement offset); reading:
+               what its numbers mean, in words
   stochastic   Allan deviation of the rests vs a white-noise simulator, named noise
                terms, Allan gap before/after; noise_implication: what they mean for
                the pose residuals

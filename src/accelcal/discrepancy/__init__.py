@@ -2,12 +2,15 @@
 
 Deterministic layer (pose residuals): :func:`discrepancy` fits the base model of Burkhard
 et al. (2024) and tests a library of candidate effects (:mod:`.effects`) as nested
-extensions (:mod:`.fit`), by default under the colored null: white per-pose noise plus
-a bias wander estimated jointly with the calibration, tests calibrated by a parametric
-bootstrap, outlier poses.  :mod:`.detect` chooses the loop of the null: :mod:`.wander_loop`
-(colored, its statistics in the subpackage :mod:`.colored`) or :mod:`.white_loop`
-(white); :mod:`.vocabulary` holds what both share (rules, identifiability, candidate
-rows, the result).
+extensions (:mod:`.fit`, on the pose data of :mod:`.poses` and the model's residuals of
+:mod:`.residuals`), by default under the colored null: white per-pose noise plus a bias
+wander or a per-placement offset estimated jointly with the calibration (:mod:`.joint_noise`),
+tests calibrated by a parametric bootstrap, outlier poses against the exact null of the
+largest studentised residual.  :mod:`.detect` chooses the loop of the null:
+:mod:`.wander_loop` (colored, its statistics in the subpackage :mod:`.colored`) or
+:mod:`.white_loop` (white); :mod:`.vocabulary` holds what both share (rules,
+identifiability, candidate rows, the result); :mod:`.schema` defines every status value
+of the report.
 
 Stochastic layer (rest data): :func:`stochastic_layer` compares the Allan deviation of
 the measured rests with the simulator's noise model, names the missing noise term and

@@ -5,14 +5,16 @@ recording: every Levenberg–Marquardt iteration of every candidate fit, and eve
 Gauss–Newton iteration of the leave-one-pose-out refits (a stack of ``n`` parameter
 vectors on ``n`` poses).  Each evaluation is a few thousand floating-point operations;
 in numpy it costs dozens of array calls.  :func:`evaluate_batch` is
-:func:`accelcal.discrepancy.fit.evaluate_batch` written as one compiled loop: same
+:func:`accelcal.discrepancy.residuals.evaluate_batch` written as one compiled loop: same
 algorithm (the same Newton iterations, stopped by the same batch-wide test), same
 arithmetic up to the order of floating-point sums.
 
 Effects are passed as the arrays of :attr:`accelcal.extended_model.EffectTerms.kernel_arrays`
-(per effect: its covariate column, the power of ``x``, whether it is additive): every
-effect of :mod:`accelcal.effects` runs through the same loops, in the sums and products
-of :mod:`accelcal.extended_model`.  Imported only through :func:`accelcal.kernels.compiled`
+(per effect: its covariate column, the power of ``x``, whether it is additive, whether it
+is harmonic and then its basis tensors): every effect of :mod:`accelcal.effects` runs
+through the same loops, in the sums and products of :mod:`accelcal.extended_model`
+(a harmonic effect couples the axes: Newton on the three at once, 3 × 3 systems by their
+cofactors, as :meth:`accelcal.extended_model.ModelTerms.solve`).  Imported only through :func:`accelcal.kernels.compiled`
 (it imports numba).
 """
 
@@ -56,18 +58,39 @@ def _model(p, M, dM, A):
     return ok
 
 
-def _evaluate_batch(P, z, cov, power, additive, g, jacobian, rtol):
+def _offsets(harmonic, basis):
+    """Where each effect's parameters start in the parameter vector (after the nine of the base)."""
+    k = harmonic.shape[0]
+    off = np.empty(k, np.int64)
+    o = 9
+    for e in range(k):
+        off[e] = o
+        o += basis.shape[1] if harmonic[e] else 3
+    return off
+
+
+def _evaluate_batch(P, z, cov, power, additive, harmonic, basis, g, jacobian, rtol):
     """Residuals ``r`` (B, n), Jacobian ``J`` (B, n, q) (empty if not ``jacobian``) and
-    implied specific force ``x`` (B, n, 3): :func:`accelcal.discrepancy.fit.evaluate_batch`."""
+    implied specific force ``x`` (B, n, 3): :func:`accelcal.discrepancy.residuals.evaluate_batch`."""
     B, q = P.shape
     n = z.shape[0]
     k = power.shape[0]
+    off = _offsets(harmonic, basis)
     top = 1  # the highest power of P(x)
     poly = False  # P(x) = y needs solving (a power-1 term too)
+    coupled = False  # a harmonic effect: the three axes at once
     for e in range(k):
-        if not additive[e]:
+        if harmonic[e]:
+            coupled = True
+        elif not additive[e]:
             poly = True
             top = max(top, power[e])
+    K = np.zeros((B, 3, 3, 3))  # the harmonic effects' second-order tensor
+    for b in range(B):
+        for e in range(k):
+            if harmonic[e]:
+                for m in range(basis.shape[1]):
+                    K[b] += P[b, off[e] + m] * basis[e, m]
     Ms = np.empty((B, 3, 3))
     dMs = np.empty((B, 6, 3, 3))
     As = np.empty((B, 3, 3))
@@ -82,7 +105,9 @@ def _evaluate_batch(P, z, cov, power, additive, g, jacobian, rtol):
             for j in range(3):
                 C[b, i, j, 1] = 1.0
             for e in range(k):
-                o = 9 + 3 * e
+                o = off[e]
+                if harmonic[e]:
+                    continue
                 if additive[e]:
                     a0 += cov[e, i] * P[b, o]
                     a1 += cov[e, i] * P[b, o + 1]
@@ -95,7 +120,10 @@ def _evaluate_batch(P, z, cov, power, additive, g, jacobian, rtol):
                 y[b, i, j] = d0 * As[b, j, 0] + d1 * As[b, j, 1] + d2 * As[b, j, 2]
     x = y.copy()
     dP = np.ones((B, n, 3))
-    if poly:
+    jac = np.empty((B, n, 3, 3))
+    if coupled:
+        _newton_coupled(x, y, C, K, jac, ok, g, rtol)
+    elif poly:
         _newton(x, y, C, dP, ok, g, rtol)
     r = np.empty((B, n))
     norm = np.empty((B, n))
@@ -110,7 +138,7 @@ def _evaluate_batch(P, z, cov, power, additive, g, jacobian, rtol):
             r[b, :] = np.nan
     J = np.empty((B, n, q if jacobian else 0))
     if jacobian:
-        _jacobian(J, x, y, norm, dP, As, dMs, cov, power, additive)
+        _jacobian(J, x, y, norm, dP, jac, coupled, As, dMs, cov, power, additive, harmonic, basis, off)
     return r, J, x
 
 
@@ -190,22 +218,105 @@ def _newton(x, y, C, dP, ok, g, rtol):
                     ok[b] = False
 
 
-def _jacobian(J, x, y, norm, dP, As, dMs, cov, power, additive):
-    """Analytic Jacobian of the residuals (module docstring of :mod:`accelcal.discrepancy.fit`).
+def _inverse3(a, inv):
+    """Inverse of the 3 × 3 ``a`` into ``inv`` by its cofactors; returns the determinant
+    (:func:`accelcal.extended_model.inverse3`)."""
+    A0 = a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1]
+    B0 = a[1, 2] * a[2, 0] - a[1, 0] * a[2, 2]
+    C0 = a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0]
+    det = a[0, 0] * A0 + a[0, 1] * B0 + a[0, 2] * C0
+    inv[0, 0], inv[0, 1], inv[0, 2] = A0, a[0, 2] * a[2, 1] - a[0, 1] * a[2, 2], a[0, 1] * a[1, 2] - a[0, 2] * a[1, 1]
+    inv[1, 0], inv[1, 1], inv[1, 2] = B0, a[0, 0] * a[2, 2] - a[0, 2] * a[2, 0], a[0, 2] * a[1, 0] - a[0, 0] * a[1, 2]
+    inv[2, 0], inv[2, 1], inv[2, 2] = C0, a[0, 1] * a[2, 0] - a[0, 0] * a[2, 1], a[0, 0] * a[1, 1] - a[0, 1] * a[1, 0]
+    for r in range(3):
+        for c in range(3):
+            inv[r, c] /= det
+    return det
+
+
+def _coupled_at(C, K, b, i, xi, yi, jac, res):
+    """``∂P/∂x`` into ``jac`` (3, 3) and ``P(x) − y`` into ``res`` (3,) at ``xi`` (pose ``i``,
+    member ``b``): the per-axis slopes plus ``2 K(·, ·, x)``, the values plus ``K(x, x)``."""
+    for j in range(3):
+        value, slope = _value_and_slope(C, b, i, j, xi[j])
+        acc = 0.0
+        for kk in range(3):
+            kx = 0.0
+            for ll in range(3):
+                kx += K[b, j, kk, ll] * xi[ll]
+            jac[j, kk] = 2.0 * kx + (slope if kk == j else 0.0)
+            acc += kx * xi[kk]
+        res[j] = value + acc - yi[j]
+
+
+def _newton_coupled(x, y, C, K, jac_out, ok, g, rtol):
+    """Solve ``P(x) = y`` with a harmonic effect, the three axes at once (Newton, one stopping
+    test for the whole batch, as the numpy reference), then ``jac_out = ∂P/∂x``; clears
+    ``ok`` where it fails (``det ∂P/∂x <= 0`` or no convergence)."""
+    B, n, _ = x.shape
+    scale = g
+    for b in range(B):
+        for i in range(n):
+            for j in range(3):
+                scale = max(scale, abs(y[b, i, j]))
+    tol = rtol * scale
+    step = np.empty_like(x)
+    jac = np.empty((3, 3))
+    inv = np.empty((3, 3))
+    res = np.empty(3)
+    converged = False
+    for _ in range(60):  # accelcal.extended_model.NEWTON_MAX_ITER
+        big = -np.inf
+        for b in range(B):
+            for i in range(n):
+                _coupled_at(C, K, b, i, x[b, i], y[b, i], jac, res)
+                det = _inverse3(jac, inv)
+                for j in range(3):
+                    s = inv[j, 0] * res[0] + inv[j, 1] * res[1] + inv[j, 2] * res[2] if det > 0 else np.nan
+                    step[b, i, j] = s
+                for j in range(3):
+                    x[b, i, j] -= step[b, i, j]
+                    if abs(step[b, i, j]) > big:  # noqa: PLR1730 (NaN never compares greater: nanmax)
+                        big = abs(step[b, i, j])
+        if not big > tol:
+            converged = True
+            break
+    for b in range(B):
+        for i in range(n):
+            for j in range(3):
+                if not converged and not abs(step[b, i, j]) <= tol:
+                    ok[b] = False
+            _coupled_at(C, K, b, i, x[b, i], y[b, i], jac_out[b, i], res)
+            if not _inverse3(jac_out[b, i], inv) > 0:
+                ok[b] = False
+
+
+def _jacobian(J, x, y, norm, dP, jac, coupled, As, dMs, cov, power, additive, harmonic, basis, off):
+    """Analytic Jacobian of the residuals (module docstring of :mod:`accelcal.discrepancy.residuals`).
 
     ``∂r/∂p_k = -w (∂M/∂p_k) y``: each ``∂M/∂(s, θ)_k`` has one non-zero row with one to
     three non-zero entries (:func:`_model`), and only those are summed.  The effects'
-    columns are :meth:`accelcal.extended_model.EffectTerms.jacobian_columns`."""
+    columns are :meth:`accelcal.extended_model.EffectTerms.jacobian_columns` (with a harmonic
+    effect ``v = x̂ᵀ (∂P/∂x)⁻¹``)."""
     B, n, _ = x.shape
     v = np.empty(3)
     w = np.empty(3)
+    inv = np.empty((3, 3))
+    xh = np.empty(3)
     for b in range(B):
         A = As[b]
         dM = dMs[b]
         for i in range(n):
             y0, y1, y2 = y[b, i, 0], y[b, i, 1], y[b, i, 2]
-            for j in range(3):
-                v[j] = (x[b, i, j] / norm[b, i]) / dP[b, i, j]
+            if coupled:
+                _inverse3(jac[b, i], inv)
+                for j in range(3):
+                    xh[j] = x[b, i, j] / norm[b, i]
+                for j in range(3):
+                    v[j] = xh[0] * inv[0, j] + xh[1] * inv[1, j] + xh[2] * inv[2, j]
+            else:
+                for j in range(3):
+                    v[j] = (x[b, i, j] / norm[b, i]) / dP[b, i, j]
             for j in range(3):
                 w[j] = v[0] * A[0, j] + v[1] * A[1, j] + v[2] * A[2, j]
                 J[b, i, j] = -w[j]
@@ -216,7 +327,16 @@ def _jacobian(J, x, y, norm, dP, As, dMs, cov, power, additive):
             J[b, i, 7] = -(w[2] * (dM[4, 2, 0] * y0 + dM[4, 2, 2] * y2))
             J[b, i, 8] = -(w[2] * (dM[5, 2, 1] * y1 + dM[5, 2, 2] * y2))
             for e in range(power.shape[0]):
-                o = 9 + 3 * e
+                o = off[e]
+                if harmonic[e]:  # -v · T_m(x, x)
+                    for m in range(basis.shape[1]):
+                        acc = 0.0
+                        for j in range(3):
+                            for kk in range(3):
+                                for ll in range(3):
+                                    acc += v[j] * basis[e, m, j, kk, ll] * x[b, i, kk] * x[b, i, ll]
+                        J[b, i, o + m] = -acc
+                    continue
                 for j in range(3):
                     if additive[e]:
                         J[b, i, o + j] = -w[j] * cov[e, i]
@@ -224,12 +344,12 @@ def _jacobian(J, x, y, norm, dP, As, dMs, cov, power, additive):
                         J[b, i, o + j] = -v[j] * _ipow(x[b, i, j], power[e]) * cov[e, i]
 
 
-def _lopo_system(P, z, cov, power, additive, g, rtol, sig, normal):
+def _lopo_system(P, z, cov, power, additive, harmonic, basis, g, rtol, sig, normal):
     """One Gauss–Newton system per leave-one-pose-out refit (row ``b`` of ``P`` leaves out
     pose ``b``): residuals ``r`` (B, n), the reduced χ² ``cost`` (B,), and if ``normal``
     the column scales ``d`` (B, q) and the scaled normal equations ``H`` (B, q, q),
     ``grad`` (B, q), as :func:`accelcal.discrepancy.fit.lopo` forms them (else empty)."""
-    r, J, _ = _evaluate_batch(P, z, cov, power, additive, g, normal, rtol)
+    r, J, _ = _evaluate_batch(P, z, cov, power, additive, harmonic, basis, g, normal, rtol)
     B, n = r.shape
     q = J.shape[2]
     cost = np.empty(B)
@@ -297,11 +417,11 @@ def _lu_solve(H, g, x):
     return True
 
 
-def _lopo_step(P, z, cov, power, additive, g, rtol, sig, normal):
+def _lopo_step(P, z, cov, power, additive, harmonic, basis, g, rtol, sig, normal):
     """:func:`_lopo_system` and its Gauss–Newton step: ``(r, cost, step / d, pred, d, H, grad,
     solved)`` with ``step = -H⁻¹ grad`` and ``pred = -grad · step`` per row; ``solved`` false if
     some ``H`` is singular (then the caller takes the pseudo-inverse of every row, as numpy)."""
-    r, cost, d, H, grad = _lopo_system(P, z, cov, power, additive, g, rtol, sig, normal)
+    r, cost, d, H, grad = _lopo_system(P, z, cov, power, additive, harmonic, basis, g, rtol, sig, normal)
     B, q = d.shape
     step = np.empty((B, q))
     pred = np.empty(B)
@@ -317,10 +437,10 @@ def _lopo_step(P, z, cov, power, additive, g, rtol, sig, normal):
     return r, cost, step, pred, d, H, grad, solved
 
 
-def _weighted(p, z, cov, power, additive, g, rtol, sig):
+def _weighted(p, z, cov, power, additive, harmonic, basis, g, rtol, sig):
     """Residuals, weighted Jacobian ``J / σ`` and ``x`` at one parameter vector; ``ok`` false
     where the model cannot be inverted (the numpy fit's ``fun`` returning None)."""
-    r, J, x = _evaluate_batch(p.reshape(1, -1), z, cov, power, additive, g, True, rtol)
+    r, J, x = _evaluate_batch(p.reshape(1, -1), z, cov, power, additive, harmonic, basis, g, True, rtol)
     n, q = J.shape[1], J.shape[2]
     ok = True
     for i in range(n):
@@ -409,10 +529,10 @@ def _least_squares(A, b):
     return x
 
 
-def _lm_fit(p, z, cov, power, additive, g, rtol, sig, max_iter, chi2_tol):
+def _lm_fit(p, z, cov, power, additive, harmonic, basis, g, rtol, sig, max_iter, chi2_tol):
     """:func:`accelcal.discrepancy.fit.fit` from the start ``p``: returns ``(p, r, J / σ, x,
     iterations, status)``, status 0 converged, 1 start not invertible, 2 not converged."""
-    r, J, x, ok = _weighted(p, z, cov, power, additive, g, rtol, sig)
+    r, J, x, ok = _weighted(p, z, cov, power, additive, harmonic, basis, g, rtol, sig)
     if not ok:
         return p, r, J, x, 0, 1
     cost = _chi2(r, sig)
@@ -420,7 +540,7 @@ def _lm_fit(p, z, cov, power, additive, g, rtol, sig, max_iter, chi2_tol):
     for it in range(1, max_iter + 1):
         step, pred = _lm_step(r, J, sig, cost, lam)
         p_new = p + step
-        r_new, J_new, x_new, ok = _weighted(p_new, z, cov, power, additive, g, rtol, sig)
+        r_new, J_new, x_new, ok = _weighted(p_new, z, cov, power, additive, harmonic, basis, g, rtol, sig)
         cost_new = _chi2(r_new, sig) if ok else np.inf
         if ok and cost_new <= cost:
             p, r, J, x = p_new, r_new, J_new, x_new
@@ -440,6 +560,10 @@ def _lm_fit(p, z, cov, power, additive, g, rtol, sig, max_iter, chi2_tol):
 
 _model = jit(_model)
 _newton = jit(_newton)
+_offsets = jit(_offsets)
+_inverse3 = jit(_inverse3, inline="always")
+_coupled_at = jit(_coupled_at)
+_newton_coupled = jit(_newton_coupled)
 _ipow = jit(_ipow, inline="always")
 _value_and_slope = jit(_value_and_slope, inline="always")
 _jacobian = jit(_jacobian)
@@ -454,32 +578,34 @@ _lm_step = jit(_lm_step)
 _lm_fit = jit(_lm_fit)
 
 
-def _arrays(cov, power, additive):
+def _arrays(cov, power, additive, harmonic, basis):
     return (np.ascontiguousarray(cov, dtype=np.float64), np.ascontiguousarray(power, dtype=np.int64),
-            np.ascontiguousarray(additive, dtype=np.bool_))
+            np.ascontiguousarray(additive, dtype=np.bool_), np.ascontiguousarray(harmonic, dtype=np.bool_),
+            np.ascontiguousarray(basis, dtype=np.float64))
 
 
-def evaluate_batch(P, z, cov, power, additive, g: float, jacobian: bool, rtol: float):
+def evaluate_batch(P, z, cov, power, additive, harmonic, basis, g: float, jacobian: bool, rtol: float):
     """Residuals, Jacobian (None if not ``jacobian``) and implied specific force of the
     parameter stack ``P`` (B, q) on the pose means ``z`` (n, 3); ``cov`` (k, n) the centred
     covariate of each effect (ones where it has none), ``power`` (k,) the power of ``x``,
-    ``additive`` (k,) whether it is added to ``z`` (:attr:`accelcal.extended_model.EffectTerms.kernel_arrays`)."""
+    ``additive`` (k,) whether it is added to ``z``, ``harmonic`` (k,) whether it is a harmonic
+    effect and ``basis`` (k, m, 3, 3, 3) its tensors (:attr:`accelcal.extended_model.EffectTerms.kernel_arrays`)."""
     r, J, x = _evaluate_batch(np.ascontiguousarray(P, dtype=np.float64), np.ascontiguousarray(z, dtype=np.float64),
-                              *_arrays(cov, power, additive), float(g), bool(jacobian), float(rtol))
+                              *_arrays(cov, power, additive, harmonic, basis), float(g), bool(jacobian), float(rtol))
     return r, (J if jacobian else None), x
 
 
-def lopo_step(P, z, cov, power, additive, g: float, rtol: float, sig, normal: bool = True):
+def lopo_step(P, z, cov, power, additive, harmonic, basis, g: float, rtol: float, sig, normal: bool = True):
     """:func:`_lopo_step` on contiguous float arrays."""
     return _lopo_step(np.ascontiguousarray(P, dtype=np.float64), np.ascontiguousarray(z, dtype=np.float64),
-                      *_arrays(cov, power, additive), float(g), float(rtol),
+                      *_arrays(cov, power, additive, harmonic, basis), float(g), float(rtol),
                       np.ascontiguousarray(sig, dtype=np.float64), bool(normal))
 
 
-def lm_fit(p, z, cov, power, additive, g: float, rtol: float, sig, max_iter: int, chi2_tol: float):
+def lm_fit(p, z, cov, power, additive, harmonic, basis, g: float, rtol: float, sig, max_iter: int, chi2_tol: float):
     """:func:`_lm_fit` on contiguous float arrays."""
     return _lm_fit(np.array(p, dtype=np.float64), np.ascontiguousarray(z, dtype=np.float64),
-                   *_arrays(cov, power, additive), float(g), float(rtol),
+                   *_arrays(cov, power, additive, harmonic, basis), float(g), float(rtol),
                    np.ascontiguousarray(sig, dtype=np.float64), int(max_iter), float(chi2_tol))
 
 

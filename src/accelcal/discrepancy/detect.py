@@ -20,8 +20,12 @@ from .wander_loop import discrepancy_colored
 from .white_loop import discrepancy_white
 
 
-def discrepancy(data: PoseData, rules: Rules | None = None) -> DiscrepancyResult:
+def discrepancy(data: PoseData, rules: Rules | None = None, report: bool = True) -> DiscrepancyResult:
     """Run the deterministic layer (module docstring) on one pose set.
+
+    ``report=False`` (colored null): the decisions without the final noise model's
+    intervals and excess reading (:func:`~.wander_loop.discrepancy_colored`: a benchmark's
+    detection).
 
     Raises
     ------
@@ -31,7 +35,7 @@ def discrepancy(data: PoseData, rules: Rules | None = None) -> DiscrepancyResult
     """
     rules = rules or Rules()
     if rules.null == "colored":
-        return discrepancy_colored(data, rules)
+        return discrepancy_colored(data, rules, report)
     return discrepancy_white(data, rules)
 
 

@@ -107,8 +107,8 @@ def _residual_panel(ax, det: dict, implication: dict | None, title: str):
     ax.axhspan(-1, 1, color="0.85", lw=0)
     top = max(4.0, 1.3 * float(np.nanmax(np.abs(np.concatenate([rb, ra])))))
     if implication and implication.get("extra_residual_std"):
-        ws = float(implication.get("white_scale") or 1.0)
-        infl = np.sqrt(ws + (np.asarray(implication["extra_residual_std"], float) / s) ** 2)
+        # the extra std is the whole noise model's beyond the rests' pose noise (white scale included)
+        infl = np.sqrt(1.0 + (np.asarray(implication["extra_residual_std"], float) / s) ** 2)
         if np.any(infl > 1 + 1e-9):
             ax.plot(np.repeat(t, 2), np.ravel(np.column_stack([2 * infl, -2 * infl])), ls="none", marker="_",
                     ms=7, color="C2", label="±2σ of the named noise model (per pose)")

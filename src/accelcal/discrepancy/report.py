@@ -31,6 +31,7 @@ from ..recording import Recording
 from ..static import StaticPoses, detect_static_recording
 from .detect import discrepancy
 from .fit import pose_data_from_static
+from .joint_noise import describe_noise_model
 from .stochastic import StochasticResult
 from .stochastic.implication import centred_pose_variance, pose_difference_variance
 from .stochastic.layer import DEFAULT_CANDIDATES, rest_segments, stochastic_layer
@@ -69,9 +70,11 @@ class DiscrepancyReport:
     stochastic_error: str
     implication: dict
     fs: float
+    unit: str | None = None
 
     def to_dict(self) -> dict:
         d = self.deterministic.to_dict()
+        d["noise_model"]["reading"] = describe_noise_model(d["noise_model"], self.unit)
         d["stochastic"] = self.stochastic.to_dict() if self.stochastic is not None else None
         if self.stochastic is None:
             d["stochastic_error"] = self.stochastic_error
@@ -237,7 +240,9 @@ def noise_implication(det: DiscrepancyResult, stoch, starts, durations, alpha: f
         "gap_with_noise_terms": c["gap_colored_after"],
         "verdict": verdict,
         "explains_excess": bool(np.isfinite(p) and p >= alpha),
-        "extra_residual_std": c["wander_residual_std"],
+        # beyond the rests' pose noise: the white scale's share and the wander's (or offset's)
+        "extra_residual_std": np.sqrt(np.clip(np.square(c["noise_residual_std"])
+                                              - np.square(det.data.sigma), 0.0, None)).tolist(),
         "white_scale": nm.get("white_scale"),
         "allan_check": allan_check(nm, stoch) if stoch is not None else {"verdict": "no rests analysed"},
         "rests_only": rests,
@@ -265,6 +270,10 @@ def allan_check(noise_model: dict, stoch, level: float = 0.95, min_share: float 
     """
     tau_c = noise_model.get("tau_s")
     K, K_ci = noise_model.get("random_walk_K"), noise_model.get("random_walk_K_ci") or [np.nan, np.nan]
+    if noise_model.get("term") == "per_placement_offset":
+        return {"verdict": "not visible in the rests",
+                "reason": "a per-placement offset is constant within each rest: the rests' Allan deviation "
+                          "cannot see it"}
     if noise_model.get("term") != "bias_wander" or K is None or not np.isfinite(K):
         return {"verdict": "no wander named"}
     fs = stoch.fs
@@ -351,7 +360,7 @@ def discrepancy_report(rec: Recording, g: float, *, rules: Rules | None = None,
                                      (rules or Rules()).alpha)
     else:
         err = "not run"
-    return DiscrepancyReport(poses, det, stoch, err, impl, rec.rate)
+    return DiscrepancyReport(poses, det, stoch, err, impl, rec.rate, unit)
 
 
 __all__ = ["DEFAULT_STOCHASTIC", "DiscrepancyReport", "StochasticSettings", "allan_check", "discrepancy_report",

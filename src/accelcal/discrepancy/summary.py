@@ -14,9 +14,10 @@ from __future__ import annotations
 import math
 
 
-def result_lines(det) -> list[str]:
+def result_lines(det, unit: str | None = None) -> list[str]:
     """The deterministic layer: effects named, gaps, what was not identifiable, outlier poses,
-    the bias wander of the colored null, and the fits that failed."""
+    the noise between poses of the colored null in words, the two readings of the excess,
+    and the fits that failed (``unit``: of the data, for the noise term's sizes)."""
     s = det.statistics()
     then = f" (then {', '.join(det.effects[1:])})" if len(det.effects) > 1 else ""
     lines = [f"discrepancy: {s['n_poses']} poses; effect named: {det.effect}{then}",
@@ -29,38 +30,33 @@ def result_lines(det) -> list[str]:
         lines.append(f"  outlier pose {o.pose} at t = {o.t:.1f} s: shifted {o.shift_sigma:+.3g} sigma "
                      f"(p = {o.p:.3g}); gap {o.gap_before:.3g} -> {o.gap_after:.3g} without it")
     if det.rules.null == "colored":
-        lines += _wander_lines(det.noise_model or {}, det.colored or {})
+        lines += _noise_lines(det.noise_model or {}, det.colored or {}, unit)
+    by = s.get("excess_explained_by") or []
+    lines.append(f"  excess: {s['excess_status']} with the named effects and noise terms"
+                 + (f" ({', '.join(by)})" if by else "")
+                 + f"; {s['excess_status_white']} against the rests' white noise alone")
     lines += [f"  did not converge: {e}" for e in det.errors]
     return lines
 
 
-def _wander_lines(nm: dict, colored: dict) -> list[str]:
-    """The bias wander estimated jointly with the calibration (colored null), and the residual
-    excess it predicts."""
+def _noise_lines(nm: dict, colored: dict, unit: str | None) -> list[str]:
+    """The noise between poses estimated jointly with the calibration (colored null), in
+    words, and the residual excess it predicts."""
+    from .joint_noise import describe_noise_model
+
     lines = []
-    if nm.get("term") == "bias_wander":
-        corr = nm.get("axis_correlation")
-        lines.append(f"  bias wander ({nm['process']}): size {_g(nm['size'])} {_ci(nm['size_ci'])}, "
-                     f"tau {_g(nm['tau_s'])} s {_ci(nm['tau_ci'])}, random-walk K {_g(nm['random_walk_K'])} "
-                     f"{_ci(nm['random_walk_K_ci'])}"
-                     + (f", correlation between the axes {_g(corr)} {_ci(nm['axis_correlation_ci'])}"
-                        if _finite(corr) else "") + " (95 % profile likelihood)"
-                     + ("" if nm.get("time_correlation_established") else
-                        "; its time correlation is not established (tau may be below the poses: extra white noise)"))
-    elif nm.get("estimated") is False:
-        lines.append(f"  bias wander not estimated: {nm.get('reason', '')}")
-    elif nm.get("term") == "none":
-        lines.append("  bias wander: none detected (REML estimate 0)")
+    if nm:
+        lines.append(f"  noise between poses: {describe_noise_model(nm, unit)}")
     if _finite(colored.get("excess_predicted")):
         lo, hi = colored["excess_predicted_interval"]
-        lines.append(f"  residual excess observed {colored['excess_observed']:.3g}, predicted by white + wander "
+        lines.append(f"  residual excess observed {colored['excess_observed']:.3g}, predicted by the noise model "
                      f"{colored['excess_predicted']:.3g} (95 % interval {lo:.3g}-{hi:.3g})")
     return lines
 
 
 def report_summary(report, written_to=None) -> str:
     """The lines of :meth:`DiscrepancyReport.summary <accelcal.discrepancy.report.DiscrepancyReport.summary>`."""
-    lines = result_lines(report.deterministic)
+    lines = result_lines(report.deterministic, report.unit)
     st = report.stochastic
     if st is not None:
         named = {a.axis: a.named or ("none",) for a in st.axes}
@@ -79,14 +75,6 @@ def report_summary(report, written_to=None) -> str:
 
 def _finite(x) -> bool:
     return x is not None and math.isfinite(x)
-
-
-def _g(x) -> str:
-    return f"{x:.3g}"
-
-
-def _ci(interval) -> str:
-    return "[" + ", ".join(map(_g, interval)) + "]"
 
 
 __all__ = ["report_summary", "result_lines"]

@@ -20,7 +20,8 @@ effect:
      power, from the augmented Fisher information profiled over the current model,
      ``I_φ = J₁ᵀ (I - P₀) J₁`` (noise model = the per-pose standard errors): the
      non-centrality ``λ = φᵀ I_φ φ`` must reach ``λ*`` with
-     ``P(F(3, n - q - 3; λ*) > F_crit) = power``; axis j alone: ``φ_j = sqrt(λ*/I_φ,jj)``.
+     ``P(F(k, n - q - k; λ*) > F_crit) = power`` (``k`` the effect's parameters: 3, one per
+     axis, or 7 for ``second_order``); parameter j alone: ``φ_j = sqrt(λ*/I_φ,jj)``.
      It is also given in the data unit: the largest change of a pose mean that effect
      causes at that size.
 
@@ -44,8 +45,12 @@ import numpy as np
 
 from .. import distributions as dist
 from ..errors import AccelcalError
+from ..effects import ADDITIVE, HARMONIC
+from ..extended_model import harmonic_basis
 from .effects import EFFECT_IDS, EFFECTS, TEMPERATURE, effect
+from .colored.problem import MIN_WANDER_DOF
 from .fit import Fit, PoseData, effect_columns, evaluate, orthonormal_basis, parameter_names
+from .schema import white_excess_status
 from .summary import result_lines
 
 CORRECTIONS = ("holm", "bonferroni", "none")
@@ -170,8 +175,8 @@ def holm(p_values, correction: str = "holm") -> np.ndarray:
 class Identifiability:
     """Can an effect be tested against the current model on this pose set?
 
-    ``mde`` in the effect's parameter unit (per axis), ``mde_data`` the largest change of
-    a pose mean it causes at that size (data unit); ``info`` = ``I_φ`` (3, 3), the
+    ``mde`` in the effect's parameter unit (per parameter), ``mde_data`` the largest change
+    of a pose mean it causes at that size (data unit); ``info`` = ``I_φ`` (k, k), the
     profiled Fisher information in noise units; ``lambda_crit`` = ``λ*``.
     """
 
@@ -195,12 +200,15 @@ class Identifiability:
 
 
 def _perturbation(eid: str, data: PoseData, base: Fit) -> np.ndarray:
-    """(n, 3) largest change of pose mean i (over the three axes of z, data unit) per unit
-    of each of the effect's three parameters."""
+    """(n, k) change of pose mean i (its length in the data unit) per unit of each of the
+    effect's ``k`` parameters."""
     e = EFFECTS[eid]
     n = len(data)
-    if e.kind == "additive":
+    if e.kind == ADDITIVE:
         return np.repeat(np.abs(data.covariate(e.covariate))[:, None], 3, axis=1)
+    if e.kind == HARMONIC:  # z moves by M T_m(x, x)
+        moves = np.einsum("mjkl,nk,nl->nmj", harmonic_basis(e.power), base.x, base.x) @ base.M.T
+        return np.linalg.norm(moves, axis=2)
     col = np.linalg.norm(base.M, axis=0)  # |M[:, j]|: how much P_j moves z
     x = np.abs(base.x)
     per = x if e.power == 1 else x ** e.power
@@ -225,35 +233,40 @@ def identifiability(data: PoseData, base: Fit, eid: str, rules: Rules, n_tests: 
     """
     e = effect(eid)
     reasons = []
-    n, q = len(data), base.q
-    dof = n - q - 3
+    n, q, k = len(data), base.q, e.size
+    dof = n - q - k
+    # the colored null re-estimates the wander under the alternative too: it needs its dof
+    min_dof = MIN_WANDER_DOF if rules.null == "colored" else 1
     if e.covariate == TEMPERATURE:
         if data.temp is None:
             raise AccelcalError(f"{eid}: the recording has no temperature column (not applicable)")
         rng = float(np.ptp(data.temp))
         if rng < rules.min_temp_range:
             reasons.append(f"temperature varies by {rng:.3g} degC over the poses (< {rules.min_temp_range:g})")
-    if dof < 1:
-        reasons.append(f"{n} poses leave {dof} residual degrees of freedom for {q} + 3 parameters")
+    if dof < min_dof:
+        reasons.append(f"{n} poses leave {dof} residual degrees of freedom for {q} + {k} parameters (the test needs "
+                       f"{min_dof}: at least {q + k + min_dof} poses)")
     J1 = effect_columns(base.p, data, base.effects, eid) / data.sigma[:, None]
     U0, _ = base.column_basis
     U1, rank1 = orthonormal_basis(J1)
     rho = np.linalg.svd(U0.T @ U1, compute_uv=False) if rank1 else np.zeros(0)
-    absorbed = 1.0 if rank1 < 3 else float(min(1.0, rho.max() ** 2))
+    absorbed = 1.0 if rank1 < k else float(min(1.0, rho.max() ** 2))
     proj = U0 @ (U0.T @ J1)
     norms = np.sum(J1 * J1, axis=0)
     absorbed_axis = np.where(norms > 0, np.sum(proj * proj, axis=0) / np.where(norms > 0, norms, 1), 1.0)
     Jp = J1 - proj
     info = Jp.T @ Jp
-    lam = critical_noncentrality(3, dof, rules.alpha / max(n_tests, 1), rules.power)
+    lam = critical_noncentrality(k, dof, rules.alpha / max(n_tests, 1), rules.power)
     diag = np.diag(info)
     mde = np.where(diag > 0, np.sqrt(lam / np.where(diag > 0, diag, 1)), np.inf)
     with np.errstate(invalid="ignore"):
         mde_data = np.max(_perturbation(eid, data, base), axis=0) * mde
     mde_data = np.where(np.isnan(mde_data), np.inf, mde_data)
     g_data = float(np.median(np.linalg.norm(data.z - base.bias, axis=1)))
-    if rank1 < 3:
-        reasons.append(f"the effect's residual signature has rank {rank1} < 3 on this pose set")
+    if rank1 < k:
+        reasons.append(f"the effect's residual signature has rank {rank1} < {k} on this pose set"
+                       + (" (it needs poses with three non-zero components, e.g. corners)"
+                          if e.kind == HARMONIC else ""))
     elif absorbed > rules.max_absorbed:
         reasons.append(f"the base model absorbs {absorbed:.6f} of its worst direction (> {rules.max_absorbed:g})")
     worst = float(np.max(mde_data))
@@ -304,9 +317,11 @@ class Candidate:
     @classmethod
     def from_identifiability(cls, ident: Identifiability, rnd: int) -> Candidate:
         """The row of a candidate in round ``rnd`` before its test: its identifiability only."""
+        nan = [float("nan")] * len(ident.mde)
         return cls(round=rnd, effect=ident.effect, identifiable=ident.identifiable, reasons=ident.reasons,
                    absorbed=ident.absorbed, absorbed_axis=ident.absorbed_axis.tolist(), mde=ident.mde.tolist(),
-                   mde_data=ident.mde_data.tolist())
+                   mde_data=ident.mde_data.tolist(), dof=(len(ident.mde), ident.dof), estimate=nan, se=nan,
+                   se_noise=nan, mde_white=nan)
 
     @property
     def passed(self) -> bool:
@@ -327,10 +342,12 @@ class Candidate:
 class OutlierTest:
     """The outlier family of one round (colored null): its most outlying pose and the test.
 
-    ``pose`` is the pose's index in the recording, ``t`` its mid time [s]; ``statistic``
-    the largest mean-shift likelihood ratio over the poses, ``studentised`` that pose's
-    GLS studentised residual; ``p_value`` the bootstrap p-value of the family,
-    ``p_adjusted`` after Holm over the round; ``delta_bic`` = ``−LR + 2 ln n``.
+    ``pose`` is the pose's index in the recording, ``t`` its mid time [s]: the pose of the
+    largest studentised residual, ``studentised`` (GLS, at the round's wander); ``p_value``
+    the family's p-value against the exact null of that maximum (``draws`` Monte Carlo
+    draws, :mod:`accelcal.discrepancy.colored.outliers`), ``p_adjusted`` after Holm over
+    the round; ``statistic`` the pose's mean-shift likelihood ratio (the wander
+    re-estimated), ``delta_bic`` = ``−LR + 2 ln n``.
     """
 
     round: int
@@ -343,6 +360,7 @@ class OutlierTest:
     delta_bic: float
     passed_test: bool
     named: bool = False
+    draws: int = 0
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -450,9 +468,9 @@ class DiscrepancyResult:
         r, _, _ = evaluate(self.final.p, self.data, self.final.effects, jacobian=False)
         return np.full(len(self.data), np.nan) if r is None else r
 
-    def summary(self) -> str:
-        """The deterministic layer in a few lines (:func:`accelcal.discrepancy.summary.result_lines`)."""
-        return "\n".join(result_lines(self))
+    def summary(self, unit: str | None = None) -> str:
+        """The deterministic layer in a few lines (:func:`~accelcal.discrepancy.summary.result_lines`; ``unit``: the data's)."""
+        return "\n".join(result_lines(self, unit))
 
     def statistics(self) -> dict:
         """The gaps and what noise alone predicts, before (base) and after (named effects)."""
@@ -474,11 +492,45 @@ class DiscrepancyResult:
             "chi2_after": f.chi2, "dof_after": f.dof, "chi2_p_after": float(chi1),
             # share of the χ² in excess of its expectation that the named effects remove
             "excess_explained_fraction": float((b.chi2 - f.chi2) / excess_var) if excess_var > 0 else float("nan"),
-            # 'no excess' (the base model's residuals are consistent with the pose noise at
-            # level α), 'explained' (they were not, after the named effects they are),
-            # 'not explained' (still not), or 'untestable' (no degree of freedom)
-            "excess_status": _excess_status(chi0, chi1, self.rules.alpha),
+            **self.excess_readings(chi0, chi1),
         }
+
+    def excess_readings(self, p_before: float, p_after: float) -> dict:
+        """``excess_status`` under the model the loop used, and ``excess_status_white``.
+
+        Both start from the base model's residuals against the rests' white noise alone
+        (``no excess`` at level α: nothing to explain).  ``excess_status_white`` then asks
+        the same of the final residuals: the named effects alone must bring them to the
+        rests' noise.  ``excess_status`` asks it of the model the loop used: under the
+        colored null the named effects (and outlier poses) *with* the named noise terms
+        (white scale, bias wander or per-placement offset: ``excess_explained``, the final
+        χ² inside the central 95 % of its predicted distribution); under the white null the
+        two are the same.  Values: :data:`accelcal.discrepancy.schema.STATUS`.
+        """
+        white = white_excess_status(p_before, p_after, self.rules.alpha)
+        out = {"excess_status_white": white, "excess_status": white,
+               "excess_status_model": "white per-pose noise of the rests"}
+        if self.rules.null != "colored":
+            return out
+        nm = self.noise_model or {}
+        if white in ("no excess", "untestable"):
+            return out  # nothing to explain, or nothing to test it with: the same under any noise model
+        if not nm.get("estimated") or not self.colored or not self.colored.get("dof", 0) > 0:
+            return {**out, "excess_status": "untestable",
+                    "excess_status_model": "the colored null's noise model was not estimated"}
+        term = nm.get("term", "none")
+        model = "white per-pose noise of the rests x white scale" + ("" if term == "none" else f" + {term}")
+        status = "explained" if self.colored.get("excess_explained") else "not explained"
+        by = [e for e in self.effects if e != "outlier_pose"]
+        if self.outliers:
+            by.append(f"{len(self.outliers)} outlier pose(s) left out")
+        if term != "none":
+            by.append(term)
+        ws_lo = (nm.get("white_scale_ci") or [float("nan")])[0]
+        if ws_lo is not None and np.isfinite(ws_lo) and ws_lo > 1:
+            by.append(f"white scale {nm.get('white_scale', float('nan')):.3g}")
+        return {**out, "excess_status": status, "excess_status_model": model,
+                "excess_explained_by": by if status == "explained" else []}
 
     def to_dict(self) -> dict:
         def params(f: Fit):
@@ -527,12 +579,6 @@ def _white_noise_model(res: DiscrepancyResult) -> dict:
             "reason": "null 'white': the tests estimate a common scale of the per-pose noise; no bias wander"}
 
 
-def _excess_status(p_before: float, p_after: float, alpha: float) -> str:
-    if not (np.isfinite(p_before) and np.isfinite(p_after)):
-        return "untestable"
-    if p_before >= alpha:
-        return "no excess"
-    return "explained" if p_after >= alpha else "not explained"
 
 def applicable(data: PoseData, candidates) -> tuple[list[str], dict]:
     """Candidates whose covariate exists in the recording, and why the others are not applicable."""

@@ -15,11 +15,13 @@ Each round (module :mod:`accelcal.discrepancy.colored` for the statistics):
    effect's parameters): large for effects whose signature is slow in time
    (``bias_drift``; ``temperature`` when the temperature changes slowly), about 1 for
    those that vary from pose to pose with the orientation.
-3. Tests: the bootstrap likelihood-ratio test of every identifiable candidate and the
-   outlier family (the largest mean-shift likelihood ratio over the poses), calibrated
-   together on the same replicates of the
-   fitted null; Holm's step-down over the round's family (the candidates and, if
-   enabled, the outlier family).  The bootstrap has ``n_boot`` replicates; a test stops
+3. Tests: the bootstrap likelihood-ratio test of every identifiable candidate, calibrated
+   on the same replicates of the fitted null, and the outlier family (the largest
+   studentised residual among the poses, against its exact null under the round's
+   wander, :mod:`.colored.outliers`: thousands of draws where the decision needs them,
+   not the bootstrap's floor of 0.005); Holm's step-down over the round's family (the
+   candidates and, if enabled, the outlier family: one family, level α).
+   The bootstrap has ``n_boot`` replicates; a test stops
    at its ``h``-th exceedance (Besag & Clifford's sequential p-value ``h/ℓ``, ``h`` the
    smallest count with ``h/n_boot > α``: such a test cannot pass with all replicates
    either: stopping changes no decision at ``n_boot``, and a stopped test is not grown).  Tests that do not pass but
@@ -29,7 +31,7 @@ Each round (module :mod:`accelcal.discrepancy.colored` for the statistics):
    a strong effect with one replicate above it (p = 0.01, adjusted 0.06) was missed.  Only
    the power changes: a test that passes at ``n_boot`` keeps its p-value, and the first
    ``n_boot`` replicates are the same either way.  An effect passes when its adjusted p-value is ≤ α,
-   ``ΔBIC = −LR + 3 ln n < −bic_threshold`` and the colored leave-one-pose-out PRESS
+   ``ΔBIC = −LR + k ln n < −bic_threshold`` (``k`` its parameters) and the colored leave-one-pose-out PRESS
    (GLS prediction of each pose from the others, both models under the alternative's
    REML wander) falls; the outlier family when its adjusted p-value is ≤ α.
 4. Passing candidates the data cannot tell apart (neither adds to the other: the
@@ -42,6 +44,14 @@ Each round (module :mod:`accelcal.discrepancy.colored` for the statistics):
    the model; an outlier pose leaves the pose set (its residual is then predicted, not
    fitted).  The loop repeats until nothing passes, or ``max_rounds`` effects and
    ``max_outliers`` outliers are named.
+
+How α is shared across rounds.  Every round tests its family (the remaining candidates
+and the outlier family) at level α with Holm; a round is reached only when the previous
+one named something.  On a recording with nothing to name, whatever is named is named in
+round 1 or after a round-1 mistake, so the family-wise rate over all rounds, effects and
+outliers together, is round 1's: at most α (up to the Monte Carlo error of the tests and
+the plug-in of the wander).  After a correct round, the next tests what remains, again
+at α (a step-down: the named items are no longer hypotheses).
 
 A candidate that was tested, did not pass, and whose ``wander_inflation`` exceeds
 ``max_wander_inflation`` cannot be ruled out: it is reported ``not_identifiable`` with
@@ -60,8 +70,8 @@ import numpy as np
 from .. import distributions as dist
 from ..errors import AccelcalError
 from . import colored as C
-from .fit import Fit, PoseData, effect_columns, evaluate, fit, lopo
-from .stochastic.implication import centred_pose_variance, pose_difference_variance
+from .fit import Fit, PoseData, effect_columns, effect_slices, evaluate, fit, lopo
+from .joint_noise import colored_summary, linearise_noise, noise_model_dict, repeated_placements
 from .vocabulary import (
     Candidate,
     DiscrepancyResult,
@@ -76,32 +86,6 @@ from .vocabulary import (
 )
 
 OUTLIER = "outlier_pose"
-
-
-def intervals(data: PoseData) -> tuple[np.ndarray, np.ndarray, tuple]:
-    """Start and duration [s] of each pose (instantaneous poses if the data have no intervals)."""
-    if data.has_intervals:
-        return data.t_start, np.maximum(data.t_end - data.t_start, C.POINT_DURATION), ()
-    return data.t, np.full(len(data), C.POINT_DURATION), (
-        "pose intervals not given: the pose means are treated as instantaneous samples of the wander",)
-
-
-def linearise(data: PoseData, f: Fit, taus=None, common: float | None = 0.0) -> C.Problem:
-    """The colored problem of the fit ``f`` on ``data`` (raises :class:`~.colored.WanderError`),
-    with the wander's axis correlation ``common`` (:func:`~.colored.axis_gram`; None: not yet
-    diagonalised, see :func:`~.colored.problem`)."""
-    J = f.J * f.sigma[:, None]  # unweighted
-    grad = -J[:, :3]            # ∂r/∂z = −∂r/∂b
-    starts, durations, notes = intervals(data)
-    return C.problem(f.residuals, J, f.sigma, grad, starts, durations, taus=taus, notes=notes, common=common)
-
-
-def linearise_noise(data: PoseData, f: Fit) -> tuple[C.Problem, C.Basis, C.WanderFit]:
-    """:func:`linearise` at the REML estimate of the wander's axis correlation under the
-    fit's own model (:func:`~.colored.fit_common`): the problem, the :class:`~.colored.Basis`
-    of its columns and the REML noise (test grid)."""
-    prob = linearise(data, f, common=None)
-    return C.fit_common(prob, prob.X0)
 
 
 def _mde(info: np.ndarray, lam: float) -> np.ndarray:
@@ -125,44 +109,6 @@ def _wander_dict(w: C.WanderFit) -> dict:
     return {"q_rel": w.q_rel, "tau_s": w.tau, "size": w.size, "K": w.K, "axis_correlation": w.common}
 
 
-def noise_model_dict(w: C.WanderFit | None, prob: C.Problem | None, reason: str = "") -> dict:
-    """The ``noise_model`` key: the named stochastic term of the joint fit."""
-    base = {"method": "REML of the pose residuals' noise s (white + Gauss-Markov bias wander, tau -> inf: random "
-                      "walk; the same wander size on every axis, correlated between the axes by axis_correlation, "
-                      "a common-mode share), jointly with the calibration; 95 % profile-likelihood intervals",
-            "white": "per-pose standard errors of the rests (static detection) times the white scale"}
-    if w is None:
-        return {**base, "term": "not_estimated", "estimated": False, "reason": reason}
-    shortest = float(np.min(prob.durations)) if prob is not None else float("nan")
-    white_like = bool(w.present and np.isfinite(w.tau) and w.tau < 0.5 * shortest)
-    if not w.present:
-        process = "none"
-    elif np.isinf(w.tau):
-        process = "random_walk"
-    else:
-        process = "gauss_markov"
-    # the wander is time-correlated beyond doubt when its τ interval stays above the poses
-    lo = w.tau_ci[0] if w.tau_ci else float("nan")
-    correlated = bool(w.present and np.isfinite(lo) and lo >= 0.5 * shortest)
-    return {**base, "term": "bias_wander" if w.present else "none", "process": process, "estimated": True,
-            "white_like": white_like, "time_correlation_established": correlated,
-            "white_excess_N": math.sqrt(2 * w.q_abs * w.tau) if white_like else float("nan"),
-            "size": w.size, "size_ci": list(w.size_ci), "tau_s": w.tau if w.present else float("nan"),
-            "tau_ci": list(w.tau_ci),
-            "white_scale": w.white_scale, "white_scale_ci": list(w.white_scale_ci),
-            "random_walk_K": w.K, "random_walk_K_ci": list(w.K_ci), "q_rel": w.q_rel,
-            "excess_ci": list(w.excess_ci), "at_bound": list(w.at_bound),
-            "axis_correlation": w.common, "axis_correlation_ci": list(w.common_ci),
-            "axis_correlation_profile": {f"{phi:g}": v for phi, v in zip(C.COMMON_GRID, w.common_profile)},
-            "notes": list(prob.notes) if prob is not None else [],
-            "unit": "size: data unit (std of the wander); tau_s: s; random_walk_K: data unit / sqrt(s); "
-                    "white_scale: variance of the white part over the rests' prediction; "
-                    "axis_correlation: correlation of the wander between any two sensor axes (its common-mode share; "
-                    "interval and -2 log REML likelihood on the grid of the tests); "
-                    "white_excess_N: data unit * sqrt(s) (when tau is below the poses, white_like: the wander "
-                    "acts as white noise the rests' standard errors miss)"}
-
-
 def _gls_estimate(prob: C.Problem, X1: np.ndarray, w1: C.WanderFit, aug: Fit, sl: slice) -> tuple[list, list]:
     """GLS estimate and standard error of the candidate's block (the last three columns of
     ``X1``) at the alternative's REML wander: the weighted nonlinear estimate of ``aug``
@@ -172,12 +118,18 @@ def _gls_estimate(prob: C.Problem, X1: np.ndarray, w1: C.WanderFit, aug: Fit, sl
         beta_w, _ = C.gls_step(prob, X1, w1.t, 0.0)
     except np.linalg.LinAlgError:
         return [float("nan")] * 3, [float("nan")] * 3
-    est = aug.p[sl] + beta_g[-3:] - beta_w[-3:]
-    return est.tolist(), np.sqrt(np.clip(np.diag(cov)[-3:], 0.0, None)).tolist()
+    k = sl.stop - sl.start
+    est = aug.p[sl] + beta_g[-k:] - beta_w[-k:]
+    return est.tolist(), np.sqrt(np.clip(np.diag(cov)[-k:], 0.0, None)).tolist()
 
 
-def discrepancy_colored(data: PoseData, rules: Rules) -> DiscrepancyResult:
-    """The loop of the module docstring on one pose set (``rules.null == 'colored'``)."""
+def discrepancy_colored(data: PoseData, rules: Rules, report: bool = True) -> DiscrepancyResult:
+    """The loop of the module docstring on one pose set (``rules.null == 'colored'``).
+
+    ``report``: also the final noise model with its profile-likelihood intervals and the
+    gaps and excess under it (the report's; False: the noise model of the last round on the
+    tests' grid, without intervals, and no excess reading: what a benchmark of the
+    decisions needs)."""
     cands, _ = applicable(data, rules.candidates)
     base = fit(data)
     lopo_base = lopo(base, data)
@@ -215,7 +167,7 @@ def discrepancy_colored(data: PoseData, rules: Rules) -> DiscrepancyResult:
             st.named.append(best.candidate.effect)
             st.n_effects += 1
             st.current = best.fit
-    return _result(data, rules, base, lopo_base, st)
+    return _result(data, rules, base, lopo_base, st, report)
 
 
 @dataclass
@@ -307,7 +259,7 @@ def _round(st: _LoopState, prob: C.Problem, noise: tuple, remaining, test_outlie
         out_test = OutlierTest(round=rnd, pose=int(st.data.pose_index[i]), t=float(st.data.t[i]),
                                statistic=rt.outlier_lr, studentised=float(rt.outlier_t[i]), p_value=rt.outlier_p,
                                p_adjusted=float(padj[-1]), delta_bic=-rt.outlier_lr + 2.0 * math.log(n),
-                               passed_test=bool(padj[-1] <= rules.alpha))
+                               passed_test=bool(padj[-1] <= rules.alpha), draws=rt.outlier_draws)
     return tested, out_test, rt
 
 
@@ -331,31 +283,33 @@ def _more_replicates_could_pass(rules: Rules):
     return extend
 
 
-def _tested_candidate(st: _LoopState, prob: C.Problem, r: _Prepared, rt: C.RoundTests, k: int, p_adj: float,
+def _tested_candidate(st: _LoopState, prob: C.Problem, r: _Prepared, rt: C.RoundTests, k_test: int, p_adj: float,
                       lo0: np.ndarray, rules: Rules) -> _Tested:
     """The :class:`Candidate` row of a tested effect, with its augmented weighted fit."""
     X1 = np.hstack([prob.X0, r.columns])
-    w1 = C.fit_wander(prob, X1, fine=False, bas=rt.bases[k + 1])
+    w1 = C.fit_wander(prob, X1, fine=False, bas=rt.bases[k_test + 1])
     # leave-one-pose-out under one covariance for both models (the alternative's REML noise):
     # the comparison then measures what the effect adds out of sample, not a change of the
     # wander's kriging
     lo1 = C.studentised(prob, X1, w1.t, w1.q_rel)[1][0]
     lo0c = C.studentised(prob, prob.X0, w1.t, w1.q_rel)[1][0]
     n = len(st.data)
-    lr = float(rt.lr[k])
-    dbic = -lr + 3.0 * math.log(n)
-    est, se, se_noise, aug, err = [float("nan")] * 3, [float("nan")] * 3, [float("nan")] * 3, None, ""
+    lr = float(rt.lr[k_test])
+    size = r.columns.shape[1]  # the effect's parameters
+    dbic = -lr + size * math.log(n)
+    nan = [float("nan")] * size
+    est, se, se_noise, aug, err = nan, nan, nan, None, ""
     try:
         aug = fit(st.data, (*st.current.effects, r.row.effect), p0=st.current.p)
     except AccelcalError as e:
         err = f"{r.row.effect}: fit failed: {e}"
         st.errors.append(err)
     if aug is not None:
-        sl = slice(9 + 3 * len(st.current.effects), 12 + 3 * len(st.current.effects))
+        sl = effect_slices(aug.effects)[r.row.effect]
         est, se = _gls_estimate(prob, X1, w1, aug, sl)
         se_noise = aug.standard_errors(False)[sl].tolist()
-    c = replace(r.row, statistic=lr, dof=(3, n - st.current.q - 3), p_value=float(rt.p_values[k]),
-                bartlett=float(rt.bartlett[k]), p_adjusted=float(p_adj), delta_bic=dbic,
+    c = replace(r.row, statistic=lr, dof=(size, n - st.current.q - size), p_value=float(rt.p_values[k_test]),
+                bartlett=float(rt.bartlett[k_test]), p_adjusted=float(p_adj), delta_bic=dbic,
                 lopo_gap_current=gap(lo0), lopo_gap=gap(lo1), estimate=est, se=se, se_noise=se_noise,
                 passed_test=bool(np.isfinite(p_adj) and p_adj <= rules.alpha and aug is not None),
                 passed_bic=bool(dbic < -rules.bic_threshold),
@@ -398,16 +352,37 @@ def _drop_outlier(st: _LoopState, i: int, test: OutlierTest) -> bool:
     return True
 
 
+#: A candidate lies inside a larger one when the current model with the larger reproduces at
+#: least this share of every direction of the smaller's columns.  Exact nestings (``quadratic``
+#: in ``second_order``: the degree-3 harmonics hold its radial signature but for the part the
+#: bias absorbs) hold for the columns at ``|x| = g``; at the current fit ``|x|`` differs from g
+#: by the residuals, up to a percent with strong effects, which leaves up to ~1e-4 of a
+#: direction out (2e-4 measured with a 1.5 % quadratic); unrelated effects leave O(1).
+NESTED_SHARE = 0.99
+
+
+def nested(X0: np.ndarray, Xi: np.ndarray, Xj: np.ndarray) -> bool:
+    """Whether candidate ``Xi`` lies inside the larger ``Xj`` (:data:`NESTED_SHARE`); two of
+    the same size that reproduce each other are ambiguous, not nested."""
+    if Xi.shape[1] >= Xj.shape[1]:
+        return False
+    Q, _ = np.linalg.qr(np.hstack([X0, Xj]))
+    Ui, _ = np.linalg.qr(Xi)
+    left = np.linalg.svd(Ui - Q @ (Q.T @ Ui), compute_uv=False)
+    return bool(left.max() ** 2 <= 1.0 - NESTED_SHARE)
+
+
 def _resolve_ambiguous(prob: C.Problem, tested: list[_Tested], alpha: float) -> list[_Tested]:
     """Pairs of passing candidates the data cannot tell apart (e.g. ``temperature`` and
     ``bias_drift`` when the temperature follows time).
 
     For passing candidates ``b`` and ``c``: ``b | c`` is the likelihood ratio of
-    current + c + b against current + c (wander re-estimated, χ²₃ approximation at level
+    current + c + b against current + c (wander re-estimated, χ²_k approximation at level
     α).  Neither significant given the other: the pair is ambiguous, neither is named,
-    both are reported ``not_identifiable`` (``ambiguous_with``).  Only one significant
-    given the other: the other is explained by it and cannot be named this round (it is
-    tested again after the refit)."""
+    both are reported ``not_identifiable`` (``ambiguous_with``).  Only one significant given
+    the other: the other is explained by it and cannot be named this round (it is tested
+    again after the refit).  A pair of which one lies inside the other (:func:`nested`) is
+    never ambiguous: :func:`_nested_loser` waits."""
     passing = [(i, r.candidate, r.columns) for i, r in enumerate(tested) if r.candidate.passed]
     if len(passing) < 2:
         return tested
@@ -425,6 +400,16 @@ def _resolve_ambiguous(prob: C.Problem, tested: list[_Tested], alpha: float) -> 
     for a in range(len(passing)):
         for b in range(a + 1, len(passing)):
             (i, ci, Xi), (j, cj, Xj) = passing[a], passing[b]
+            nest = (i, j) if nested(X0, Xi, Xj) else ((j, i) if nested(X0, Xj, Xi) else None)
+            if nest is not None:
+                small, large = nest
+                cols = {k: Xe for k, _, Xe in passing}
+                # given the other passing candidates: what the larger adds may be theirs
+                others = [Xe for k, Xe in cols.items() if k not in nest and not nested(X0, Xe, cols[large])]
+                Xo = np.hstack([X0, *others])
+                lr = ml(np.hstack([Xo, cols[small]])) - ml(np.hstack([Xo, cols[large]]))
+                drop.add(_nested_loser(nest, lr, tested, alpha / max(len(tested), 1)))
+                continue
             both = ml(np.hstack([X0, Xi, Xj]))
             if np.isnan(both):
                 i_given_j = j_given_i = False
@@ -451,6 +436,23 @@ def _resolve_ambiguous(prob: C.Problem, tested: list[_Tested], alpha: float) -> 
     return out
 
 
+def _nested_loser(pair: tuple[int, int], lr: float, tested: list[_Tested], level: float) -> int:
+    """Of a passing pair ``(small, large)`` whose ``small`` lies inside ``large``, the one that
+    waits: the larger unless it adds to the smaller, ``lr`` the likelihood ratio ``large |
+    small`` given the round's other passing candidates (the pair's model is the larger
+    one: what the larger adds may be another candidate's signal) on ``k_large − k_small``
+    degrees of freedom, shrunk by the larger's ``bartlett`` factor (the stretch of its
+    likelihood ratio under the round's bootstrap: the noise is re-estimated), at ``level``:
+    α over the round's candidates (one more hypothesis of the round's family, Bonferroni:
+    naming the larger claims more than the smaller)."""
+    small, large = pair
+    c_large = tested[large].candidate
+    extra = tested[large].columns.shape[1] - tested[small].columns.shape[1]
+    stretch = c_large.bartlett if np.isfinite(c_large.bartlett) and c_large.bartlett > 1 else 1.0
+    lr = max(lr, 0.0) / stretch if np.isfinite(lr) else 0.0
+    return small if extra > 0 and dist.chi2_sf(lr, extra) <= level else large
+
+
 def _predict(one: PoseData, f: Fit) -> float:
     """Residual of a left-out pose under the fit ``f`` (unit of g)."""
     r, _, _ = evaluate(f.p, one, f.effects, jacobian=False)
@@ -465,7 +467,7 @@ def _prepare(data: PoseData, current: Fit, prob: C.Problem, null: C.WanderFit, e
         return _Prepared(row, ident.mde.tolist())
     Xe = prob.columns(effect_columns(current.p, data, current.effects, eid))
     info = C.effect_information(prob, prob.X0, Xe, null.t, null.q_rel)
-    lam = critical_noncentrality(3, ident.dof, rules.alpha / max(n_tests, 1), rules.power)
+    lam = critical_noncentrality(Xe.shape[1], ident.dof, rules.alpha / max(n_tests, 1), rules.power)
     mde = _mde(info.colored, lam) * math.sqrt(null.white_scale)
     with np.errstate(invalid="ignore"):
         ratio = np.where(np.asarray(ident.mde) > 0, mde / np.asarray(ident.mde), np.inf)
@@ -486,11 +488,20 @@ def _untested_from(r: _Prepared) -> Candidate:
     return replace(r.row, test="not tested", mde_white=r.mde_white)
 
 
-def _result(data: PoseData, rules: Rules, base: Fit, lopo_base: np.ndarray, st: _LoopState) -> DiscrepancyResult:
+def _result(data: PoseData, rules: Rules, base: Fit, lopo_base: np.ndarray, st: _LoopState,
+            report: bool = True) -> DiscrepancyResult:
     cur_data, current = st.data, st.current
     lopo_final = lopo(current, cur_data) if not st.outliers else _lopo_full(current, cur_data, data)
     wander, prob, colored = None, None, {}
     wander_error = st.wander_error
+    _, skipped = applicable(data, rules.candidates)
+    if not report:
+        last = st.noise
+        prob, wander = (last.problem, last.wander) if last is not None else (None, None)
+        return DiscrepancyResult(tuple(st.named), tuple(st.rows), skipped, base, current, lopo_base, lopo_final, data,
+                                 rules, noise_model=noise_model_dict(wander, prob, wander_error),
+                                 outliers=tuple(st.outliers), outlier_tests=tuple(st.outlier_tests),
+                                 errors=tuple(st.errors), final_data=cur_data)
     try:
         last = st.noise
         if last is not None and last.data is cur_data and last.fit is current:
@@ -504,10 +515,10 @@ def _result(data: PoseData, rules: Rules, base: Fit, lopo_base: np.ndarray, st: 
     except (AccelcalError, np.linalg.LinAlgError, ValueError) as err:
         st.errors.append(f"noise model fit failed: {err}")
     if wander is not None:
-        colored = _colored_summary(data, base, prob, wander, cur_data, current)
-    _, skipped = applicable(data, rules.candidates)
+        colored = colored_summary(data, base, prob, wander, cur_data, current)
+    placement = repeated_placements(cur_data, current, wander, alpha=rules.alpha) if wander is not None else None
     return DiscrepancyResult(tuple(st.named), tuple(st.rows), skipped, base, current, lopo_base, lopo_final, data,
-                             rules, noise_model=noise_model_dict(wander, prob, wander_error),
+                             rules, noise_model=noise_model_dict(wander, prob, wander_error, placement),
                              outliers=tuple(st.outliers), outlier_tests=tuple(st.outlier_tests),
                              errors=tuple(st.errors), final_data=cur_data, colored=colored)
 
@@ -521,51 +532,3 @@ def _lopo_full(current: Fit, cur_data: PoseData, data: PoseData) -> np.ndarray:
     for i in np.flatnonzero(~kept):
         out[i] = _predict(data.subset(np.array([i])), current) / data.sigma[i]
     return out
-
-
-def _colored_summary(data, base, prob, wander, cur_data, current) -> dict:
-    """Gaps and excess under the named noise model (white + bias wander of the final model)."""
-    Xf = prob.X0
-    # before: the base model on all poses under the final noise model
-    s_w = wander.white_scale
-    try:
-        pb = linearise(data, base, taus=[wander.tau], common=prob.common)
-        quad_b = _quad(*C.at(pb, wander), pb.X0) / s_w
-        gap_before = math.sqrt(quad_b / len(data))
-    except AccelcalError:
-        gap_before = float("nan")
-    p1, q1 = C.at(prob, wander)
-    quad_a = _quad(p1, q1, Xf) / s_w
-    mu_rel = C.excess_distribution(p1, Xf, 0, q1, s_w)
-    dof = prob.m - Xf.shape[1]
-    chi2_obs = float(np.sum(current.weighted ** 2))
-    mean, var = float(mu_rel.sum()), float(2 * np.sum(mu_rel ** 2))
-    lo, hi = (dist.gamma_ppf([0.025, 0.975], mean ** 2 / var, scale=var / mean) if var > 0 else (mean, mean))
-    # per pose (every pose, outliers too): std of the wander's share of the residual about the
-    # session's common mean, through the final model's gradient
-    starts, durations, _ = intervals(data)
-    _, J_all, _ = evaluate(current.p, data, current.effects)
-    if wander.present and J_all is not None:
-        tau = wander.tau
-        D = (pose_difference_variance("random_walk", math.sqrt(wander.q_abs), starts, durations) if np.isinf(tau)
-             else pose_difference_variance("gauss_markov", (math.sqrt(wander.q_abs), tau), starts, durations))
-        v = centred_pose_variance(D)
-        extra = np.sqrt(np.clip(v, 0, None) * C.axis_weight(J_all[:, :3], prob.common))
-    else:
-        extra = np.zeros(len(data))
-    return {
-        "gap_colored_before": gap_before,
-        "gap_colored_after": math.sqrt(quad_a / len(cur_data)),
-        "excess_predicted": math.sqrt(mean / dof) if dof > 0 else float("nan"),
-        "excess_predicted_interval": [math.sqrt(lo / dof), math.sqrt(hi / dof)] if dof > 0 else [float("nan")] * 2,
-        "excess_observed": math.sqrt(chi2_obs / dof) if dof > 0 else float("nan"),
-        "excess_explained": bool(dof > 0 and lo <= chi2_obs <= hi),
-        "chi2_mean": mean, "chi2_var": var,
-        "wander_residual_std": extra.tolist(),
-        "dof": int(dof),
-    }
-
-
-def _quad(prob: C.Problem, q: float, X) -> float:
-    """``yᵀ P y`` of a one-τ problem at relative variance ``q`` (unit white scale)."""
-    return float(C.profile(prob, X, prob.y[None], np.array([q])).quad[0, 0, 0])

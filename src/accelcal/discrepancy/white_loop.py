@@ -1,6 +1,6 @@
 """The deterministic layer under the white null: the F-test naming loop.
 
-Given :class:`~accelcal.discrepancy.fit.PoseData`, the loop fits the base model (bias,
+Given :class:`~accelcal.discrepancy.poses.PoseData`, the loop fits the base model (bias,
 scale, non-orthogonality: 9 parameters), treats it as the simulation of the experiment,
 and tests every candidate effect of the library as a nested extension of it.  The noise
 model is white per-pose noise times a common scale; it is the benchmark's negative
@@ -9,7 +9,8 @@ control (on sessions whose bias wanders it names ``bias_drift`` far more often t
 1. **Identifiability** (:func:`~accelcal.discrepancy.vocabulary.identifiability`), before
    any test: a candidate that is not identifiable is refused, never named.
 2. **Nested test** of current vs current + effect: the F-test on the weighted
-   residuals, ``F = ((χ²₀ - χ²₁)/3) / (χ²₁/(n - q - 3))`` against ``F(3, n - q - 3)``.
+   residuals, ``F = ((χ²₀ - χ²₁)/k) / (χ²₁/(n - q - k))`` against ``F(k, n - q - k)`` (``k``
+   the effect's parameters: 3, or 7 for ``second_order``).
    Not the likelihood-ratio χ² test with the per-pose noise as known variance: the
    residuals of real recordings exceed that noise (Xsens: ≈ 3×, results/measured), and
    a test that takes the noise model as exact would call every candidate significant.
@@ -18,7 +19,7 @@ control (on sessions whose bias wanders it names ``bias_drift`` far more often t
    factor.  Holm's step-down procedure controls the family-wise error across the
    identifiable candidates of a round (``correction='bonferroni'`` is available;
    ``'none'`` exists only as the negative control of the benchmark).
-3. **ΔBIC** = ``n ln(χ²₁/χ²₀) + 3 ln n`` (Gaussian likelihood with the scale profiled
+3. **ΔBIC** = ``n ln(χ²₁/χ²₀) + k ln n`` (Gaussian likelihood with the scale profiled
    out, as the F-test) must be below ``-bic_threshold``.
 4. **Leave-one-pose-out** prediction error (PRESS, in noise units, each reduced fit
    warm-started from the full one) must fall below ``(1 - lopo_min_improvement)`` × that
@@ -39,7 +40,7 @@ import numpy as np
 
 from .. import distributions as dist
 from ..errors import AccelcalError
-from .fit import Fit, PoseData, fit, lopo
+from .fit import Fit, PoseData, effect_slices, fit, lopo
 from .vocabulary import Candidate, DiscrepancyResult, Identifiability, Rules, applicable, gap, holm, identifiability
 
 
@@ -61,18 +62,18 @@ def _test_candidate(data: PoseData, current: Fit, lopo_cur: np.ndarray, ident: I
     except AccelcalError as err:
         return replace(row, identifiable=False, reasons=(*ident.reasons, f"fit failed: {err}")), None, None
     n = data.z.shape[0]
+    k = len(ident.mde)  # the effect's parameters
     dof1 = aug.dof
     chi0, chi1 = current.chi2, aug.chi2
-    stat = ((chi0 - chi1) / 3) / (chi1 / dof1) if chi1 > 0 else float("inf")
+    stat = ((chi0 - chi1) / k) / (chi1 / dof1) if chi1 > 0 else float("inf")
     stat = max(stat, 0.0)
-    p = _f_sf(stat, 3, dof1)
-    dbic = float(n * np.log(chi1 / chi0) + 3 * np.log(n)) if chi0 > 0 and chi1 > 0 else float("nan")
+    p = _f_sf(stat, k, dof1)
+    dbic = float(n * np.log(chi1 / chi0) + k * np.log(n)) if chi0 > 0 and chi1 > 0 else float("nan")
     lo = lopo(aug, data)
     both = np.isfinite(lo) & np.isfinite(lopo_cur)
     press0, press1 = (float(np.sum(lopo_cur[both] ** 2)), float(np.sum(lo[both] ** 2))) if both.any() else (np.nan,) * 2
-    i = len(current.effects)
-    sl = slice(9 + 3 * i, 12 + 3 * i)
-    cand = replace(row, statistic=float(stat), dof=(3, dof1), p_value=p, delta_bic=dbic,
+    sl = effect_slices(aug.effects)[eid]
+    cand = replace(row, statistic=float(stat), dof=(k, dof1), p_value=p, delta_bic=dbic,
                    lopo_gap_current=gap(lopo_cur[both]) if both.any() else float("nan"),
                    lopo_gap=gap(lo[both]) if both.any() else float("nan"),
                    estimate=aug.p[sl].tolist(), se=aug.standard_errors(True)[sl].tolist(),

@@ -49,7 +49,7 @@ import numpy as np
 import pandas as pd
 
 from accelcal.discrepancy.detect import discrepancy
-from accelcal.discrepancy.effects import EFFECT_IDS
+from accelcal.discrepancy.effects import EFFECT_IDS, effect
 from accelcal.discrepancy.fit import Fit, PoseData, evaluate, fit_at, forward, pose_data, pose_data_from_static
 from accelcal.discrepancy.vocabulary import Identifiability, Rules, applicable, critical_noncentrality, identifiability
 from accelcal.errors import AccelcalError
@@ -60,7 +60,8 @@ from accelcal.simulation import random_directions, simulate_recording
 from accelcal.static import detect_static_recording
 
 from ..montecarlo import grid_seed
-from .profiles import NoiseProfile, pose_mean_covariance, residual_covariance, simulate_profile, window_of
+from .oracle import named_set
+from .profiles import NoiseProfile, placement_offsets, pose_residual_covariance, simulate_profile, window_of
 
 NONE = "none"
 NOT_IDENTIFIABLE = "not_identifiable"
@@ -129,6 +130,12 @@ class Session:
 
 
 # --------------------------------------------------------------------------- rows
+
+
+def suffixes(eid: str) -> tuple[str, ...]:
+    """The effect's parameters as the key and detection columns name them: the axis (``x``,
+    ``y``, ``z``) of a per-axis effect, the order ``m`` of a harmonic one."""
+    return tuple(name.split("_", 1)[1] for name in effect(eid).parameters)
 
 
 def effects_of(truth: str) -> tuple[str, ...]:
@@ -238,9 +245,10 @@ class Oracle:
 
     def effect_mde(self, data, p_true, eid: str, direction, rules: Rules, n_tests: int) -> float:
         """Size ``a`` along unit ``direction`` at which the nested F-test at ``α/n_tests`` has the configured power."""
-        _, J, _ = evaluate(np.concatenate([p_true, np.zeros(3)]), data, (eid,))
-        info = self._info(J[:, -3:])
-        lam = critical_noncentrality(3, self.n - 12, rules.alpha / max(n_tests, 1), rules.power)
+        k = effect(eid).size
+        _, J, _ = evaluate(np.concatenate([p_true, np.zeros(k)]), data, (eid,))
+        info = self._info(J[:, -k:])
+        lam = critical_noncentrality(k, self.n - 9 - k, rules.alpha / max(n_tests, 1), rules.power)
         d = np.asarray(direction, float)
         v = float(d @ info @ d)
         return float(np.sqrt(lam / v)) if v > 0 else float("inf")
@@ -306,16 +314,16 @@ def simulate_case(truth: str, size_mde: float, replicate: int, *, seed: int, ses
     sensor = _draw_sensor(rng, ss)
     phase = rng.uniform(0, 2 * np.pi)
     effs = effects_of(truth)
-    dirs = {e: rng.standard_normal(3) for e in effs}
+    dirs = {e: rng.standard_normal(effect(e).size) for e in effs}
     dirs = {e: d / np.linalg.norm(d) for e, d in dirs.items()}
     noise_rng = np.random.default_rng(rng.integers(2 ** 63))
     design = _draw_design(rng, ss, profile, rules, sensor, phase, truth)
     t, win, n_eff = design.t, design.windows, design.n_eff
 
     # Oracle: the covariance of the pose residuals the profile implies (unit of g²).
-    C = pose_mean_covariance(profile, t[win[:, 0]], n_eff / ss.rate, n_eff, ss.rate)
     w = -design.base.J[:, :3] * design.base.sigma[:, None]  # ∂r/∂z = -∂r/∂b (unweighted)
-    oracle = Oracle.build(design.data, design.p_true, residual_covariance(C, w))
+    oracle = Oracle.build(design.data, design.p_true,
+                          pose_residual_covariance(profile, t[win[:, 0]], n_eff / ss.rate, n_eff, ss.rate, w))
     # the loop's first round tests the candidates and the outlier family together (Holm)
     family = len(design.candidates) + bool(rules.outlier_pose)
     params, key_eff = _effect_sizes(design, oracle, dirs, size_mde, rules, family)
@@ -330,6 +338,7 @@ def simulate_case(truth: str, size_mde: float, replicate: int, *, seed: int, ses
     dtemp = temp - (design.temp_pose.mean() if truth != CONSTANT_TEMPERATURE else ss.temp_mean)
     z = forward(design.x, sensor.M, sensor.bias, params, dt=dt, dtemp=dtemp)
     z = z + simulate_profile(profile, noise_rng, len(t), ss.rate, replicate=int(replicate), records=records)
+    z = z + placement_offsets(profile, noise_rng, ss.rest_windows(len(t))[:, 0], len(t))
 
     outlier = {"outlier_pose": -1, "outlier_t": np.nan, "outlier_shift_mde": np.nan, "outlier_shift": np.nan}
     if truth == OUTLIER:
@@ -432,13 +441,13 @@ def _effect_sizes(design: _Design, oracle: Oracle, dirs: dict, size_mde: float, 
         a_white = identifiability(design.data, design.base, e, rules, family).mde_along(d)
         params[e] = size_mde * a * d
         key_eff.update({f"mde_along_{e}": a, f"mde_along_white_{e}": a_white,
-                        **{f"param_{e}_{ax}": float(v) for ax, v in zip("xyz", params[e])},
-                        **{f"direction_{e}_{ax}": float(v) for ax, v in zip("xyz", d)}})
+                        **{f"param_{e}_{ax}": float(v) for ax, v in zip(suffixes(e), params[e])},
+                        **{f"direction_{e}_{ax}": float(v) for ax, v in zip(suffixes(e), d)}})
     if dirs:  # the first (or only) effect also under generic names
         e = next(iter(dirs))
         key_eff.update({"mde_along": key_eff[f"mde_along_{e}"],
-                        **{f"param_{ax}": key_eff[f"param_{e}_{ax}"] for ax in "xyz"},
-                        **{f"direction_{ax}": key_eff[f"direction_{e}_{ax}"] for ax in "xyz"}})
+                        **{f"param_{ax}": key_eff[f"param_{e}_{ax}"] for ax in suffixes(e)},
+                        **{f"direction_{ax}": key_eff[f"direction_{e}_{ax}"] for ax in suffixes(e)}})
     return params, key_eff
 
 
@@ -482,6 +491,8 @@ def _result_row(res) -> dict:
            **{k: s[k] for k in ("gap_before", "gap_after", "gap_expected_before", "gap_expected_after",
                                 "gap_lopo_before", "gap_lopo_after", "excess_before", "excess_after")}}
     row["outlier_t_detected"] = ";".join(f"{o.t:.3f}" for o in res.outliers)
+    row["outlier_poses_detected"] = ";".join(str(o.pose) for o in res.outliers)
+    row["named_set"] = named_set(res.effects, [o.pose for o in res.outliers])
     for c in res.candidates:
         if c.round == 1:
             row[f"p_{c.effect}"] = c.p_value
@@ -490,8 +501,8 @@ def _result_row(res) -> dict:
             row[f"passed_{c.effect}"] = c.passed
     first = [c for c in res.candidates if c.named and c.round == 1]
     if first:
-        row.update({f"estimate_{a}": v for a, v in zip("xyz", first[0].estimate)})
-        row.update({f"se_{a}": v for a, v in zip("xyz", first[0].se)})
+        row.update({f"estimate_{a}": v for a, v in zip(suffixes(first[0].effect), first[0].estimate)})
+        row.update({f"se_{a}": v for a, v in zip(suffixes(first[0].effect), first[0].se)})
     return row
 
 
@@ -502,7 +513,7 @@ def _null_of(rules: Rules) -> str:
 def _detect(data, rules: Rules) -> dict:
     row = {"null": _null_of(rules), "outcome": ERROR, "effect": "", "effects": "", "error": ""}
     try:
-        res = discrepancy(data, rules)
+        res = discrepancy(data, rules, report=False)  # the decisions: no interval of the final noise model
     except AccelcalError as err:  # includes a model that does not converge: an error, never 'none'
         row["error"] = str(err).splitlines()[0]
     else:
@@ -510,20 +521,23 @@ def _detect(data, rules: Rules) -> dict:
     return row
 
 
-def detect_nulls(rec: Recording, g: float, rules: Rules, nulls=("white",)) -> list[dict]:
+def detect_nulls(rec: Recording, g: float, rules: Rules, nulls=("white",), oracle=None) -> list[dict]:
     """The loop on one recording under each null hypothesis (same static poses): one row per null.
 
     What ``accelcal discrepancy`` does before its stochastic layer.  A recording the
     pipeline cannot handle gives rows with ``outcome='error'`` and the message.  No
     timings: the table must be byte-identical on a rerun (wall times are in the job's
-    benchmark file).
+    benchmark file).  ``oracle`` (optional): ``(data, rows) -> row`` on the same poses, given
+    the loop's rows (:func:`accelcal_repro.discrepancy.oracle.oracle_detection`), one row more.
     """
     try:
         data = pose_data_from_static(detect_static_recording(rec), g)
     except AccelcalError as err:
+        names = [*nulls, *(["oracle"] if oracle is not None else [])]
         return [{"null": n, "outcome": ERROR, "effect": "", "effects": "", "error": str(err).splitlines()[0]}
-                for n in nulls]
-    return [_detect(data, rules_with_null(rules, n)) for n in nulls]
+                for n in names]
+    rows = [_detect(data, rules_with_null(rules, n)) for n in nulls]
+    return rows + ([oracle(data, rows)] if oracle is not None else [])
 
 
 def detect_case(rec: Recording, g: float, rules: Rules) -> dict:

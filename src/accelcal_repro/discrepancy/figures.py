@@ -6,6 +6,8 @@ stage's tidy tables only.
 * :func:`plot_confusion`: one confusion matrix (row of the benchmark × outcome) per profile.
 * :func:`plot_power`: detection rate vs size (power curves) and naming accuracy per profile.
 * :func:`plot_rows`: the outlier-pose and two-effect rows per profile, both nulls.
+* :func:`plot_evidence`: per real session whose excess the effects leave, each candidate's
+  minimum detectable effect against its estimate, or the poses it needs.
 * :func:`plot_adis_allan`: the ADIS16405 Allan deviation to ~1000 s, its fitted model, and the
   pose-mean wander predicted vs observed on session-shaped pieces.
 
@@ -30,7 +32,8 @@ LABELS = {NONE: "none", NOT_IDENTIFIABLE: "not identif.", CONSTANT_TEMPERATURE: 
           ERROR: "error", OUTLIER: "outlier pose", **{e.id: e.label for e in EFFECTS.values()}}
 COLORS = {e: f"C{i}" for i, e in enumerate(EFFECT_IDS)}
 NULL_STYLE = {"colored": {"color": "C0", "marker": "o", "label": "colored null (time-correlated noise)"},
-              "white": {"color": "C3", "marker": "s", "label": "white null (negative control)"}}
+              "white": {"color": "C3", "marker": "s", "label": "white null (negative control)"},
+              "oracle": {"color": "C2", "marker": "^", "label": "oracle (the same tests, true noise covariance)"}}
 
 
 def _label(x: str) -> str:
@@ -128,7 +131,7 @@ def plot_confusion(scores: pd.DataFrame, size_mde: float, profiles, null: str | 
 
 def plot_power(rates: pd.DataFrame, power: float, profiles, curve_profiles, sizes):
     """Top: detection rate vs size for the power-curve profiles (colored null solid, white
-    dashed); bottom: naming accuracy (effect named first) per profile at the main ``sizes``
+    dashed where it ran, the oracle dotted); bottom: naming accuracy (effect named first) per profile at the main ``sizes``
     (every profile has them), colored null."""
     effects = [e for e in EFFECT_IDS if e in set(rates.truth)]
     main = _main_null(rates.null)
@@ -138,7 +141,7 @@ def plot_power(rates: pd.DataFrame, power: float, profiles, curve_profiles, size
         for j, e in enumerate(effects):
             ax = axs[0, j]
             for k, prof in enumerate(curve_profiles):
-                for null, ls in (("colored", "-"), ("white", "--")):
+                for null, ls in (("colored", "-"), ("white", "--"), ("oracle", ":")):
                     r = rates[(rates.truth == e) & (rates.profile == prof) & (rates.null == null)].sort_values(
                         "size_mde")
                     if not len(r):
@@ -183,7 +186,7 @@ def plot_power(rates: pd.DataFrame, power: float, profiles, curve_profiles, size
 
 def plot_rows(rates: pd.DataFrame, profiles):
     """Accuracy of the outlier-pose rows (named and located) and of the two-effect rows (both
-    named, nothing else) per profile, each size, both nulls."""
+    named, nothing else) per profile, each size, every null that ran on them and the oracle."""
     kinds = [(OUTLIER, "outlier pose: named, at the right pose (the white null has no outlier test: 0 by design)")]
     kinds += [(t, f"{_label(t)}: both named, nothing else") for t in sorted(set(rates.truth)) if "+" in t]
     with plt.rc_context(RC):
@@ -312,6 +315,81 @@ def plot_sessions(reports: dict, sims: dict, gaps: pd.DataFrame):
         fig.suptitle("Real sessions re-simulated before / after what the loop names: gap to the measured residuals",
                      fontsize=8.5)
     return fig
+
+
+def evidence_sessions(evidence: pd.DataFrame, reports: dict) -> list[str]:
+    """The sessions :func:`plot_evidence` shows: those whose excess the named effects leave
+    (``excess_status_white`` neither ``no excess`` nor ``explained``) and that have tested candidates."""
+    out = []
+    for name, rep in reports.items():
+        white = rep.get("excess_status_white", rep.get("excess_status"))
+        if white not in ("no excess", "explained", "untestable") and (evidence.recording == name).any():
+            out.append(name)
+    return out
+
+
+def plot_evidence(evidence: pd.DataFrame, reports: dict):
+    """Per session whose excess the named effects leave: each candidate's minimum detectable
+    effect (circle: a larger one would have been named with the design power) and its
+    estimate with the upper end of its 95 % interval (bar), as the largest change of a pose
+    mean, with its adjusted p-value; a candidate the poses cannot test is written out with
+    the poses it needs.  The band: the named per-placement offset (or wander) with its 95 %
+    interval; dotted: the median white noise of a pose residual."""
+    names = evidence_sessions(evidence, reports)
+    if not names:
+        names = list(dict.fromkeys(evidence.recording))[:1]
+    with plt.rc_context(RC):
+        fig, axs = plt.subplots(len(names), 1, figsize=(7.6, 1.0 + 0.42 * max(len(evidence[evidence.recording == n])
+                                                                            for n in names) * len(names) + 0.6),
+                                layout="constrained", squeeze=False)
+        for ax, name in zip(axs[:, 0], names):
+            _evidence_panel(ax, evidence[evidence.recording == name], reports[name], name)
+        fig.suptitle("What rules each candidate out, or what it needs: minimum detectable effect vs estimate "
+                     "(largest change of a pose mean)", fontsize=8.5)
+    return fig
+
+
+def _evidence_panel(ax, ev: pd.DataFrame, rep: dict, name: str):
+    mg = rep.get("unit") == "m/s^2"
+    scale = 1e3 / 9.80665 if mg else 1.0
+    unit = "mg" if mg else (rep.get("unit") or "data unit")
+    cands = ev[ev["item"] == "effect"].reset_index(drop=True)
+    noise = ev[ev["item"] == "noise"]
+    # σ_i is in the unit of g (the residual's); the data unit per unit of g is the gain 1 + s
+    gain = np.mean([1.0 + rep["model_before"]["parameters"][f"s_{a}"]["value"] for a in "xyz"])
+    sigma = float(np.median(rep["poses"]["sigma"])) * gain * scale
+    ax.axvline(sigma, color="0.5", ls=":", lw=0.9, label=f"pose noise (median σ_i) {sigma:.3g} {unit}")
+    if len(noise) and np.isfinite(noise.estimate_data.iloc[0]):
+        n0 = noise.iloc[0]
+        lo = n0.estimate_low_data if np.isfinite(n0.estimate_low_data) else n0.estimate_data
+        hi = n0.estimate_high_data if np.isfinite(n0.estimate_high_data) else 10 * n0.estimate_data
+        ax.axvspan(lo * scale, hi * scale, color="C2", alpha=0.15, lw=0)
+        ax.axvline(n0.estimate_data * scale, color="C2", lw=1.2,
+                   label=f"{n0.candidate}: {n0.estimate_data * scale:.3g} {unit} per axis (95 % band)")
+    ymax = len(cands)
+    for y, c in cands.iterrows():
+        if c.identifiable and np.isfinite(c.mde_data):
+            ax.plot(c.mde_data * scale, y, "o", mfc="none", color="C0", ms=6,
+                    label="minimum detectable effect (design power)" if y == 0 else None)
+            if np.isfinite(c.estimate_data):
+                ax.plot([c.estimate_data * scale, c.estimate_high_data * scale], [y, y], color="C3", lw=2,
+                        solid_capstyle="butt", label="estimate .. upper 95 %" if y == 0 else None)
+            ax.text(1.01, y, f"p_adj {c.p_adjusted:.2g}" + (" named" if c.named else ""), transform=ax.get_yaxis_transform(),
+                    va="center", fontsize=6)
+        else:
+            need = f"needs ≥ {int(c.poses_needed)} poses (has {int(c.n_poses)})" if pd.notna(c.poses_needed) else \
+                (c.reasons[:70] + "…" if len(str(c.reasons)) > 70 else c.reasons)
+            ax.text(0.02, y, f"not testable here: {need}", transform=ax.get_yaxis_transform(), va="center",
+                    fontsize=6, color="0.3")
+    ax.set_yticks(range(ymax), [LABELS.get(c, c) for c in cands.candidate])
+    ax.set_ylim(ymax - 0.5, -0.5)
+    ax.set_xscale("log")
+    ax.set_xlabel(f"largest change of a pose mean [{unit}] (at the minimum detectable effect, at the estimate)")
+    nm = rep.get("noise_model") or {}
+    ax.set_title(f"{name}: {rep['n_poses']} poses, excess {rep.get('excess_before', float('nan')):.3g}; "
+                 f"named: {'+'.join(rep.get('effects') or []) or 'no effect'}, {nm.get('term', '')}; "
+                 f"excess {rep.get('excess_status', '')} with it", fontsize=7.5)
+    ax.legend(fontsize=5.5, loc="lower right")
 
 
 def plot_stability(stability: pd.DataFrame, estimates: pd.DataFrame):

@@ -17,6 +17,10 @@ moved) before the samples are rounded to integer counts.  Three kinds:
   - ``bias_instability: k``: flicker bias whose Allan floor ``0.664 B`` is ``k σ_pm``;
   - ``random_walk: k``: rate random walk whose Allan deviation at the session length,
     ``K sqrt(T_s/3)``, is ``k σ_pm``;
+  - ``placement: k``: a per-placement offset, ``k σ_pm`` per axis, drawn anew for every
+    pose and constant over it (from the start of its rest to the start of the next: a
+    sensor set down by hand, a mount that settles differently each time), independent
+    between the axes: what the FXOS8700 sessions carry (20-35 ``σ_pm`` there);
   - ``noise_counts: s``: white noise of ``s`` counts per sample instead of the session's.
     Below about half a count the rounding to integer counts no longer averages out: a
     pose mean keeps a bias that depends on where the true value falls between two
@@ -113,6 +117,9 @@ class NoiseProfile:
         Correlation ``φ`` between the axes of every component (a common-mode share, as the
         colored null's joint model estimates it: :func:`accelcal.discrepancy.colored.axis_gram`);
         it needs the same component on every axis.  0: independent axes.
+    placement : tuple of 3 float
+        Standard deviation of the per-placement offset per axis [counts] (0: none); the
+        simulation needs the poses' windows (:func:`placement_offsets`).
     """
 
     name: str
@@ -124,6 +131,7 @@ class NoiseProfile:
     description: str = ""
     real_windows: tuple = ()
     axis_correlation: float = 0.0
+    placement: tuple = (0.0, 0.0, 0.0)
 
     def model(self, axis: int, fs: float) -> dict:
         """The axis's noise model as :func:`accelcal.noise.model_avar` takes it
@@ -147,7 +155,8 @@ class NoiseProfile:
         return cls(d["name"], tuple(float(v) for v in d["white"]), comps, d.get("real", ""),
                    tuple(float(v) for v in d.get("real_scale", (1.0, 1.0, 1.0))), d.get("kind", "parametric"),
                    d.get("description", ""), tuple(int(k) for k in d.get("real_windows", ())),
-                   float(d.get("axis_correlation", 0.0)))
+                   float(d.get("axis_correlation", 0.0)),
+                   tuple(float(v) for v in d.get("placement", (0.0, 0.0, 0.0))))
 
 
 # --------------------------------------------------------------------------- building profiles
@@ -165,7 +174,7 @@ def session_length(session) -> float:
 
 
 def _parametric(name: str, spec: dict, session) -> NoiseProfile:
-    known = {"noise_counts", "gauss_markov", "bias_instability", "random_walk", "description"}
+    known = {"noise_counts", "gauss_markov", "bias_instability", "random_walk", "placement", "description"}
     bad = sorted(set(spec) - known)
     if bad:
         raise ProfileError(f"profile {name}: unknown keys {bad} (known: {', '.join(sorted(known))})")
@@ -180,7 +189,8 @@ def _parametric(name: str, spec: dict, session) -> NoiseProfile:
         comps.append(("bias_instability", (spec["bias_instability"] * spm / FLICKER_FLOOR,) * 3))
     if "random_walk" in spec:
         comps.append(("random_walk", (spec["random_walk"] * spm * math.sqrt(3.0 / ts),) * 3))
-    return NoiseProfile(name, (white,) * 3, tuple(comps), kind="parametric", description=spec.get("description", ""))
+    return NoiseProfile(name, (white,) * 3, tuple(comps), kind="parametric", description=spec.get("description", ""),
+                        placement=(float(spec.get("placement", 0.0)) * spm,) * 3)
 
 
 def _from_model(name: str, models: list[dict], fs: float, scale, kind: str, real: str, description: str):
@@ -242,7 +252,8 @@ def build_profiles(specs, session, *, fitted: dict | None = None, records: dict 
         kind = "real" if spec.get("real") else "fitted"
         prof = _from_model(name, f["models"], fs, scale, kind, src if kind == "real" else "",
                            spec.get("description", f.get("description", "")))
-        prof = replace(prof, axis_correlation=float(f.get("axis_correlation", 0.0)))
+        prof = replace(prof, axis_correlation=float(f.get("axis_correlation", 0.0)),
+                       placement=tuple(float(f.get("placement", 0.0)) * scale))
         if kind == "real" and screen is not None:
             prof = replace(prof, real_windows=screened_windows(src, records, fs, session.n_samples, screen))
         out[name] = prof
@@ -290,12 +301,32 @@ def independent_recordings(profile: NoiseProfile, n_recordings: int, n_record: i
     return min(n_recordings, len(usable_windows(profile, n_record, n)))
 
 
+def placement_offsets(profile: NoiseProfile, rng: np.random.Generator, starts, n: int) -> np.ndarray:
+    """The per-placement offsets of ``profile`` on a session of ``n`` samples whose poses start
+    at samples ``starts`` (n_poses,): each pose's offset from its start to the next pose's
+    (the motion between them included), shape (n, 3) [counts]; zeros without one.  Axes
+    correlated by :attr:`NoiseProfile.axis_correlation`, like the other components."""
+    sd = np.asarray(profile.placement, float)
+    out = np.zeros((n, 3))
+    if not np.any(sd > 0):
+        return out
+    k = len(starts)
+    draws = rng.standard_normal((k, 4))
+    phi = float(profile.axis_correlation)
+    offsets = (math.sqrt(1.0 - phi) * draws[:, :3] + math.sqrt(phi) * draws[:, 3:]) * sd[None, :]
+    edges = np.append(np.asarray(starts, int), n)
+    for i in range(k):
+        out[edges[i]:edges[i + 1]] = offsets[i]
+    return out
+
+
 def simulate_profile(profile: NoiseProfile, rng: np.random.Generator, n: int, fs: float, *, replicate: int = 0,
                      records: dict | None = None) -> np.ndarray:
     """Noise of ``profile`` for a session of ``n`` samples, shape (n, 3) [counts], not rounded.
 
     Parametric and fitted profiles: white noise plus every component, each component and
-    axis on its own stream spawned from ``rng``.  Real profiles: the ``replicate mod W``-th
+    axis on its own stream spawned from ``rng`` (the per-placement offset apart: it needs
+    the poses, :func:`placement_offsets`).  Real profiles: the ``replicate mod W``-th
     usable window of the record, axes permuted by ``⌊replicate / W⌋`` (:func:`window_of`),
     demeaned over the record, times :attr:`NoiseProfile.real_scale`.
     """
@@ -346,14 +377,17 @@ def pose_mean_covariance(profile: NoiseProfile, starts, durations, n_samples, fs
     """Covariance of the pose-mean errors per axis, shape (3, n, n) [counts²].
 
     White (and rounding, 1/12 count² per sample) on the diagonal, the rounding bias of
-    low-noise profiles (:func:`rounding_bias_variance`) too, and every time-correlated
-    component as ``−½ P D P`` over the pose intervals ``[starts, starts + durations)`` [s].
+    low-noise profiles (:func:`rounding_bias_variance`) and the per-placement offset too,
+    and every time-correlated component as ``−½ P D P`` over the pose intervals
+    ``[starts, starts + durations)`` [s].  The axes are independent here: with an
+    :attr:`NoiseProfile.axis_correlation`, :func:`pose_residual_covariance` adds the
+    cross-axis terms.
     """
     n_samples = np.asarray(n_samples, float)
     C = np.zeros((3, len(n_samples), len(n_samples)))
     for a in range(3):
         s = profile.white[a]
-        C[a] += np.diag((s ** 2 + 1.0 / 12.0) / n_samples + rounding_bias_variance(s))
+        C[a] += np.diag((s ** 2 + 1.0 / 12.0) / n_samples + rounding_bias_variance(s) + profile.placement[a] ** 2)
         for term, values in profile.components:
             C[a] += centred(pose_difference_variance(term, values[a], starts, durations))
     return C
@@ -362,6 +396,24 @@ def pose_mean_covariance(profile: NoiseProfile, starts, durations, n_samples, fs
 def residual_covariance(C: np.ndarray, w: np.ndarray) -> np.ndarray:
     """Covariance of the scalar pose residuals, ``Σ_ij = Σ_a w_ia w_ja C_a,ij``, with ``w = ∂r/∂z`` (n, 3)."""
     return np.einsum("ia,ja,aij->ij", w, w, C)
+
+
+def pose_residual_covariance(profile: NoiseProfile, starts, durations, n_samples, fs: float,
+                             w: np.ndarray) -> np.ndarray:
+    """The true covariance of the scalar pose residuals under ``profile`` (unit of ``w``²):
+    :func:`residual_covariance` of :func:`pose_mean_covariance`, plus, for a profile whose
+    components and offset are correlated between the axes by ``φ``, the cross-axis terms
+    ``φ Σ_{a≠b} w_ia w_jb C_c,ij`` (``C_c`` the correlated part, the same on every axis)."""
+    S = residual_covariance(pose_mean_covariance(profile, starts, durations, n_samples, fs), w)
+    phi = float(profile.axis_correlation)
+    if not phi:
+        return S
+    corr = np.diag(np.full(len(n_samples), profile.placement[0] ** 2))
+    for term, values in profile.components:
+        corr = corr + centred(pose_difference_variance(term, values[0], starts, durations))
+    s = w.sum(axis=1)
+    cross = np.outer(s, s) - w @ w.T      # Σ_{a≠b} w_ia w_jb
+    return S + phi * cross * corr
 
 
 def xsens_source(report: dict) -> dict:
@@ -412,13 +464,14 @@ def joint_source(report: dict, name: str) -> dict:
     models = []
     for a in range(3):
         m = {"white": float(white[a]) / math.sqrt(fs)}
-        if nm.get("term") not in (None, "none"):
+        if nm.get("term") not in (None, "none") and nm.get("process") != "per_placement":
             if nm.get("process") == "random_walk":
                 m["random_walk"] = float(nm["random_walk_K"])
             else:
                 m["gauss_markov"] = (float(nm["size"]), float(nm["tau_s"]))
         models.append(m)
-    return {"models": models, "fs": fs, "unit_to_counts": 1.0, "white_match": False,
+    placement = float(nm["size"]) if nm.get("process") == "per_placement" else 0.0
+    return {"models": models, "fs": fs, "unit_to_counts": 1.0, "white_match": False, "placement": placement,
             "axis_correlation": wander_axis_correlation(report),
             "description": f"{name}: the joint model's bias wander ({nm.get('process', 'none')}) and the rests' white "
                            f"noise"}
@@ -437,23 +490,25 @@ def profile_table(profiles: dict, session) -> list[dict]:
         C = pose_mean_covariance(p, starts, durations, n_s, session.rate)
         for a, ax in enumerate("xyz"):
             # white = the samples' own noise and their rounding (what the pose SE shows); the
-            # rest (rounding bias of sub-count noise, time-correlated terms) is the wander
+            # rest (rounding bias of sub-count noise, a per-placement offset, time-correlated
+            # terms) is the wander
             vw = float(np.mean((p.white[a] ** 2 + 1.0 / 12.0) / n_s))
             vx = float(np.mean(np.diag(C[a]))) - vw
-            terms = "+".join(["white"] + [t for t, _ in p.components])
+            terms = "+".join(["white"] + [t for t, _ in p.components] + (["placement"] if p.placement[a] else []))
             rows.append({"profile": name, "kind": p.kind, "axis": ax, "terms": terms, "real": p.real,
                          "white_counts": p.white[a], "pose_mean_white_counts": math.sqrt(vw),
                          "wander_pose_mean_counts": math.sqrt(max(vx, 0.0)),
                          "wander_over_white": math.sqrt(max(vx, 0.0) / vw),
-                         "components": "; ".join(f"{t}=" + (f"({float(v[a][0]):.4g}, {float(v[a][1]):.4g} s)"
-                                                           if isinstance(v[a], tuple) else f"{float(v[a]):.4g}")
-                                                 for t, v in p.components),
+                         "components": "; ".join([f"{t}=" + (f"({float(v[a][0]):.4g}, {float(v[a][1]):.4g} s)"
+                                                            if isinstance(v[a], tuple) else f"{float(v[a]):.4g}")
+                                                  for t, v in p.components]
+                                                 + ([f"placement={p.placement[a]:.4g}"] if p.placement[a] else [])),
                          "description": p.description})
     return rows
 
 
 __all__ = ["AXIS_PERMUTATIONS", "FITTED_SOURCES", "FLICKER_FLOOR", "NoiseProfile", "ProfileError", "REAL_RECORDS",
-           "build_profiles", "centred", "independent_recordings", "joint_source", "pose_mean_covariance",
-           "pose_mean_white", "profile_table", "residual_covariance", "rounding_bias_variance", "screened_windows",
+           "build_profiles", "centred", "independent_recordings", "joint_source", "placement_offsets",
+           "pose_mean_covariance", "pose_mean_white", "pose_residual_covariance", "profile_table", "residual_covariance", "rounding_bias_variance", "screened_windows",
            "session_length", "simulate_profile", "usable_windows", "wander_axis_correlation", "window_of",
            "xsens_source"]

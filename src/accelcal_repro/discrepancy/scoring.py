@@ -8,9 +8,15 @@ Tables (tidy, the figures and the claims are computed from them):
   else; the disturbed pose named as ``outlier_pose`` at its time; ``none``;
   ``not_identifiable`` for the constant temperature), ``detected`` (the injected effect, or
   one of the pair, among the named ones), ``false_positive`` (anything named on an
-  effect-free recording).
+  effect-free recording: effects and outliers, every round: the loop's family-wise error),
+  ``outlier_false`` (an outlier pose named that is not the disturbed one), ``outliers_named``,
+  and, beside the oracle's row of the same recording (null ``oracle``: the same tests
+  with the true noise covariance, :mod:`.oracle`), ``oracle_named_set`` and
+  ``agrees_with_oracle`` (the same effects and the same outlier poses).
 * :func:`rates`: per (null, profile, row, size): outcome counts, detection rate and
   accuracy with exact (Clopper–Pearson) 95 % intervals.
+* :func:`oracle_differences`: per (null, profile, row): how often the loop's named set is the
+  oracle's, and what each names that the other does not.
 * :func:`summary`: the findings, one row per (null, profile, row, metric), with verdicts
   where the issue states a goal (rules in the ``rule`` column): ``pass``, ``fail``, or
   ``not_testable_at_this_scale`` where the row's sample cannot give both (the exact
@@ -36,6 +42,9 @@ from accelcal.errors import AccelcalError
 
 from ..claims import NOT_TESTABLE, upper_end_with_no_success
 from .benchmark import CONSTANT_TEMPERATURE, ERROR, NONE, NOT_IDENTIFIABLE, OUTLIER
+
+#: The detection rows of the oracle (:mod:`.oracle`).
+ORACLE = "oracle"
 
 SUMMARY_COLUMNS = ["section", "null", "profile", "effect", "metric", "value", "ci_low", "ci_high", "n", "n_independent",
                    "target", "verdict", "rule"]
@@ -133,6 +142,20 @@ def score_cases(key: pd.DataFrame, detections: pd.DataFrame, *, outlier_tol_s: f
     df["correct"] = correct.astype(bool)
     df["detected"] = np.array([bool(i & s) for i, s in zip(injected, named_set)]) & (single | pair).to_numpy()
     df["false_positive"] = (df["truth"] == NONE) & df["named"]
+    df["outliers_named"] = effects.map(lambda s: sum(x == OUTLIER for x in s.split("+")))
+    df["outlier_false"] = (df["outliers_named"] - df["outlier_located"].astype(int)) > 0
+    return _with_oracle(df)
+
+
+def _with_oracle(df: pd.DataFrame) -> pd.DataFrame:
+    """``oracle_named_set`` and ``agrees_with_oracle`` of every row (module docstring); NaN
+    (and False) where the recording has no oracle row."""
+    if "named_set" not in df:
+        df["named_set"] = ""
+    df["named_set"] = df["named_set"].fillna("").astype(str)
+    orc = df[df["null"] == ORACLE].set_index("recording")["named_set"]
+    df["oracle_named_set"] = df["recording"].map(orc)
+    df["agrees_with_oracle"] = df["oracle_named_set"].notna() & (df["named_set"] == df["oracle_named_set"])
     return df
 
 
@@ -189,9 +212,15 @@ def _row(null, prof, effect, metric, value, lo, hi, n, n_ind, target=np.nan, ver
             "verdict": verdict, "rule": rule}
 
 
-FPR_RULE = ("goal: false-positive rate <= alpha; pass iff the exact 95% interval (independent recordings) reaches "
+FPR_RULE = ("goal: false-positive rate (effects and outliers, every round together: the family-wise error) <= alpha; "
+            "pass iff the exact 95% interval (independent recordings) reaches "
             "down to alpha and its upper end is <= 2 alpha; not_testable_at_this_scale when the upper end exceeds "
             "2 alpha even with no false positive")
+ORACLE_RULE = ("goal: the loop's named set (effects and outlier poses) equals the oracle's (the same tests with "
+               "the true noise covariance) on >= 95% of the recordings; pass iff the upper end of the exact 95% "
+               "interval >= 0.95; not_testable_at_this_scale when it reaches 0.95 even with no agreement")
+#: The agreement the loop must reach with the oracle.
+ORACLE_TARGET = 0.95
 ACCURACY_RULE = ("named first at sizes >= 1 oracle MDE (pooled); pass iff the upper end of the exact 95% interval >= "
                  "power; not_testable_at_this_scale when it reaches the power even with no success")
 
@@ -217,19 +246,67 @@ def _fpr_rows(null, prof, none: pd.DataFrame, alpha: float) -> list[dict]:
     lo, hi, ne = interval(fp, win)
     rows = [_row(null, prof, NONE, "false_positive_rate", fp.mean(), lo, hi, n, round(ne, 1), alpha,
                  fpr_verdict(lo, hi, ne, alpha), FPR_RULE)]
-    for what, sel in (("effect", ~none["outcome"].isin((*NOTHING_NAMED, OUTLIER))),
-                      ("outlier", none["outcome"] == OUTLIER)):
+    effects_named = none["effects"].fillna("").astype(str).map(lambda v: any(x and x != OUTLIER for x in v.split("+")))
+    for what, sel in (("effect", effects_named), ("outlier", none["outliers_named"] > 0)):
         x = (sel & none["false_positive"]).to_numpy()
         lo, hi, ne = interval(x, win)
         rows.append(_row(null, prof, NONE, f"false_positive_rate_{what}", x.mean(), lo, hi, n, round(ne, 1),
                          rule="share of effect-free recordings where the loop names "
-                              + ("an effect" if what == "effect" else "an outlier pose")))
+                              + ("an effect" if what == "effect" else "an outlier pose") + " (in any round)"))
     for o in (NOT_IDENTIFIABLE, ERROR):
         x = (none["outcome"] == o).to_numpy()
         lo, hi, ne = interval(x, win)
         rows.append(_row(null, prof, NONE, f"rate_{o}", x.mean(), lo, hi, n, round(ne, 1),
                          rule=f"share of effect-free recordings with outcome {o}"))
     return rows
+
+
+def _oracle_and_outlier_rows(null, prof, sc: pd.DataFrame) -> list[dict]:
+    """Agreement with the oracle (every recording of the profile the null ran on), the false
+    outlier rate (an outlier pose named that is not the disturbed one, every row) and the
+    outlier power (the disturbed pose named, per size)."""
+    rows = []
+    win = sc["noise_window"].to_numpy()
+    if null != ORACLE and sc["oracle_named_set"].notna().any():
+        d = sc[sc["oracle_named_set"].notna()]
+        lo, hi, ne = interval(d["agrees_with_oracle"], d["noise_window"].to_numpy())
+        rows.append(_row(null, prof, "all", "oracle_agreement", float(d["agrees_with_oracle"].mean()), lo, hi, len(d),
+                         round(ne, 1), ORACLE_TARGET, accuracy_verdict(hi, ne, ORACLE_TARGET), ORACLE_RULE))
+    lo, hi, ne = interval(sc["outlier_false"], win)
+    rows.append(_row(null, prof, "all", "false_outlier_rate", float(sc["outlier_false"].mean()), lo, hi, len(sc),
+                     round(ne, 1), rule="share of the recordings (every row) where an outlier pose is named that is not "
+                                        "the disturbed one"))
+    out = sc[sc.truth == OUTLIER]
+    for size, d in out.groupby("size_mde", sort=True):
+        lo, hi, ne = interval(d["outlier_located"], d["noise_window"].to_numpy())
+        rows.append(_row(null, prof, OUTLIER, f"outlier_power_at_{size:g}mde", float(d["outlier_located"].mean()), lo,
+                         hi, len(d), round(ne, 1),
+                         rule="the disturbed pose named an outlier (in any round), shift at this size x its MDE"))
+    return rows
+
+
+def oracle_differences(scores: pd.DataFrame) -> pd.DataFrame:
+    """Per (null, profile, row, size): recordings, how many the loop and the oracle name the
+    same set on, and what the loop names that the oracle does not (``loop_only``) and the
+    reverse (``oracle_only``), as ``item: count`` over those recordings."""
+    d = scores[(scores["null"] != ORACLE) & scores["oracle_named_set"].notna()]
+    out = []
+    for (null, prof, truth, size), g in d.groupby(["null", "profile", "truth", "size_mde"], sort=True):
+        loop_only, oracle_only = {}, {}
+        for a, b in zip(g["named_set"], g["oracle_named_set"]):
+            sa, sb = {x for x in a.split("+") if x}, {x for x in str(b).split("+") if x}
+            for x in sa - sb:
+                key = x.split("@")[0]
+                loop_only[key] = loop_only.get(key, 0) + 1
+            for x in sb - sa:
+                key = x.split("@")[0]
+                oracle_only[key] = oracle_only.get(key, 0) + 1
+        out.append({"null": null, "profile": prof, "truth": truth, "size_mde": size, "n": len(g),
+                    "agree": int(g["agrees_with_oracle"].sum()), "agreement": float(g["agrees_with_oracle"].mean()),
+                    "loop_only": "; ".join(f"{k}: {v}" for k, v in sorted(loop_only.items())),
+                    "oracle_only": "; ".join(f"{k}: {v}" for k, v in sorted(oracle_only.items()))})
+    return pd.DataFrame(out, columns=["null", "profile", "truth", "size_mde", "n", "agree", "agreement", "loop_only",
+                                      "oracle_only"])
 
 
 def summary(scores: pd.DataFrame, rate_table: pd.DataFrame, *, alpha: float, power: float) -> pd.DataFrame:
@@ -249,6 +326,7 @@ def summary(scores: pd.DataFrame, rate_table: pd.DataFrame, *, alpha: float, pow
         none = sc[sc.truth == NONE]
         if len(none):
             rows += _fpr_rows(null, prof, none, alpha)
+        rows += _oracle_and_outlier_rows(null, prof, sc)
         rt = rate_table[(rate_table.null == null) & (rate_table.profile == prof)]
         for truth, d in sc[sc.truth != NONE].groupby("truth", sort=False):
             r = rt[rt.truth == truth].sort_values("size_mde")
@@ -277,7 +355,8 @@ def summary(scores: pd.DataFrame, rate_table: pd.DataFrame, *, alpha: float, pow
 def headline(summ: pd.DataFrame, profiles) -> pd.DataFrame:
     """One row per profile (config order): the false-positive rate under each null with its
     interval and verdict, the naming accuracy at each size averaged over the single
-    effects, and the accuracy of the pair and outlier rows, under each null."""
+    effects, and the accuracy of the pair and outlier rows, under each null (the oracle's
+    too); the loop's agreement with the oracle, its false outlier rate and outlier power."""
     rows = []
     for prof in profiles:
         d = summ[summ.profile == prof]
@@ -294,6 +373,12 @@ def headline(summ: pd.DataFrame, profiles) -> pd.DataFrame:
             for what, sel in (("pair", dn.effect.str.contains("+", regex=False)), ("outlier", dn.effect == OUTLIER)):
                 for r in dn[sel & dn.metric.str.startswith("accuracy_at_")].itertuples():
                     row[f"{what}_{r.metric}_{null}"] = r.value
+            for r in dn[dn.metric.isin(["oracle_agreement", "false_outlier_rate"])
+                        | dn.metric.str.startswith("outlier_power_at_")].itertuples():
+                row.update({f"{r.metric}_{null}": r.value, f"{r.metric}_{null}_ci_low": r.ci_low,
+                            f"{r.metric}_{null}_ci_high": r.ci_high})
+                if r.metric == "oracle_agreement":
+                    row[f"oracle_agreement_{null}_verdict"] = r.verdict
         rows.append(row)
     return pd.DataFrame(rows)
 
@@ -302,6 +387,9 @@ __all__ = [
     "ACCURACY_RULE",
     "FPR_RULE",
     "NOTHING_NAMED",
+    "ORACLE",
+    "ORACLE_RULE",
+    "ORACLE_TARGET",
     "SUMMARY_COLUMNS",
     "accuracy_verdict",
     "clopper_pearson",
@@ -310,6 +398,7 @@ __all__ = [
     "fpr_verdict",
     "headline",
     "interval",
+    "oracle_differences",
     "rates",
     "score_cases",
     "summary",

@@ -21,13 +21,14 @@ are computed from them):
   motions and temperature; in every pose the calibrated model's prediction plus the rest's
   own short-term noise plus a pose-mean error of its standard error, and a wander simulated
   over the whole time base — under the model *before* (base calibration, white noise of
-  the rests) and *after* (the named effects, outliers and wander added), and fitted by
+  the rests) and *after* (the named effects and outliers, and the joint noise model: its
+  white scale, its wander or per-placement offset), and fitted by
   the same base model as the measured data.  :func:`gap_rows` compares the distribution of the
   measured normalised pose residuals with the simulated ones: the ratio of their RMS, the
   two-sample Kolmogorov–Smirnov distance, and where the measured excess falls in the
   simulated distribution of the excess.  The gap shrinks if the named items were what was
   missing.
-* :func:`evidence_rows`: for a session whose excess stays unexplained, the evidence
+* :func:`accelcal_repro.discrepancy.evidence.evidence_rows`: for a session whose excess stays unexplained, the evidence
   against each candidate: its test, its estimate, and the share of the excess χ² it
   would remove.
 * :func:`stability_rows`: the sessions of one IMU: each parameter per session with its
@@ -52,7 +53,7 @@ from accelcal.model import m_from_params
 from accelcal.recording import Recording
 from accelcal.static import detect_static_recording
 
-from .profiles import NoiseProfile, simulate_profile, wander_axis_correlation
+from .profiles import NoiseProfile, placement_offsets, simulate_profile, wander_axis_correlation
 
 BASE_PARAMETERS = ("b_x", "b_y", "b_z", "s_x", "s_y", "s_z", "theta_xy", "theta_zx", "theta_zy")
 
@@ -66,7 +67,7 @@ def with_disjoint_rests(rec: Recording) -> tuple[Recording, str]:
     WORKAROUND (remove when :func:`accelcal.static.detect_static` returns disjoint spans):
     two quiet runs separated by a blip shorter than one window minus twice the trim give
     spans that overlap (IMU-TK fork data2: samples 35-585 and 548-809), which the colored
-    null's :func:`accelcal.discrepancy.fit.pose_data` refuses.  The overlap is split at its
+    null's :func:`accelcal.discrepancy.poses.pose_data` refuses.  The overlap is split at its
     middle; the recording then carries the rests as known intervals, so that every later
     step (both layers, the re-simulations) uses the same poses.  Returns the recording and
     a note ('' when nothing was changed).
@@ -101,7 +102,7 @@ def _params(report: dict, which: str) -> tuple[np.ndarray, tuple[str, ...]]:
 
 
 def pose_data_of(report: dict):
-    """The report's pose set as :class:`~accelcal.discrepancy.fit.PoseData` (same σ as the loop used)."""
+    """The report's pose set as :class:`~accelcal.discrepancy.poses.PoseData` (same σ as the loop used)."""
     p = report["poses"]
     temp = p.get("temp")
     return pose_data(np.array(p["mean"], float), report["g"], np.array(p["mean_std"], float), np.array(p["t"], float),
@@ -109,13 +110,28 @@ def pose_data_of(report: dict):
 
 
 def wander_components(report: dict) -> tuple[tuple[str, tuple], ...]:
-    """The joint model's named bias wander as profile components (same on every axis, data unit)."""
+    """The joint model's named bias wander as profile components (same on every axis, data
+    unit; a per-placement offset is not a component of the time series: :func:`placement_of`)."""
     nm = report.get("noise_model") or {}
-    if not nm.get("estimated") or nm.get("term") in (None, "none"):
+    if not nm.get("estimated") or nm.get("term") in (None, "none") or nm.get("process") == "per_placement":
         return ()
     if nm.get("process") == "random_walk":
         return (("random_walk", (float(nm["random_walk_K"]),) * 3),)
     return (("gauss_markov", ((float(nm["size"]), float(nm["tau_s"])),) * 3),)
+
+
+def placement_of(report: dict) -> tuple[float, float, float]:
+    """The joint model's named per-placement offset per axis (data unit; zeros without one)."""
+    nm = report.get("noise_model") or {}
+    size = float(nm["size"]) if nm.get("estimated") and nm.get("process") == "per_placement" else 0.0
+    return (size,) * 3
+
+
+def white_scale_of(report: dict) -> float:
+    """The joint model's white scale (the rests' pose-mean variance times it; 1 without one)."""
+    nm = report.get("noise_model") or {}
+    v = nm.get("white_scale") if nm.get("estimated") else None
+    return float(v) if v is not None and np.isfinite(v) else 1.0
 
 
 # --------------------------------------------------------------------------- named, excess, evidence
@@ -143,11 +159,15 @@ def named_rows(name: str, report: dict) -> list[dict]:
                             f"size [{', '.join(map(_g, nm.get('size_ci') or [None, None]))}]"))
         else:
             proc = nm.get("process", "")
-            value = (f"K {_g(nm.get('random_walk_K'))}/sqrt(s)" if proc == "random_walk"
-                     else f"size {_g(nm.get('size'))}, tau {_g(nm.get('tau_s'))} s")
-            ci = (f"K [{', '.join(map(_g, nm.get('random_walk_K_ci') or [None, None]))}]" if proc == "random_walk"
-                  else f"size [{', '.join(map(_g, nm.get('size_ci') or [None, None]))}], "
-                       f"tau [{', '.join(map(_g, nm.get('tau_ci') or [None, None]))}] s")
+            size_ci = f"size [{', '.join(map(_g, nm.get('size_ci') or [None, None]))}]"
+            if proc == "random_walk":
+                value = f"K {_g(nm.get('random_walk_K'))}/sqrt(s)"
+                ci = f"K [{', '.join(map(_g, nm.get('random_walk_K_ci') or [None, None]))}]"
+            elif proc == "per_placement":
+                value, ci = f"size {_g(nm.get('size'))} per axis, no time correlation", size_ci
+            else:
+                value = f"size {_g(nm.get('size'))}, tau {_g(nm.get('tau_s'))} s"
+                ci = f"{size_ci}, tau [{', '.join(map(_g, nm.get('tau_ci') or [None, None]))}] s"
             if nm.get("axis_correlation") is not None:
                 value += f", axis correlation {_g(nm['axis_correlation'])}"
                 ci += f", axis correlation [{', '.join(map(_g, nm.get('axis_correlation_ci') or [None, None]))}]"
@@ -184,35 +204,9 @@ def excess_rows(name: str, report: dict) -> dict:
             "excess_predicted_ci_low": ci[0], "excess_predicted_ci_high": ci[1],
             "explained": share(pred), "explained_ci_low": share(ci[0]), "explained_ci_high": share(ci[1]),
             "excess_status": report.get("excess_status", ""),
+            "excess_status_white": report.get("excess_status_white", report.get("excess_status", "")),
+            "excess_explained_by": "+".join(report.get("excess_explained_by") or []),
             "verdict": (report.get("noise_implication") or {}).get("verdict", "")}
-
-
-def evidence_rows(name: str, report: dict) -> list[dict]:
-    """Per candidate of round 1: its test (as the loop ran it), its estimate in standard errors,
-    and the share of the base model's excess χ² (``χ²₀ − dof₀``, white weights) that fitting it
-    removes, ``(χ²₀ − χ²₁)/(χ²₀ − dof₀)``: what the effect could explain if it were real."""
-    data = pose_data_of(report)
-    try:
-        base = fit(data)
-    except AccelcalError:
-        return []
-    rows = []
-    for c in report.get("candidates", []):
-        if c.get("round") != 1:
-            continue
-        est, se = np.array(c["estimate"], float), np.array(c["se"], float)
-        share = float("nan")
-        if base.chi2 > base.dof:
-            try:
-                share = (base.chi2 - fit(data, (c["effect"],), p0=base.p).chi2) / (base.chi2 - base.dof)
-            except AccelcalError:
-                pass
-        rows.append({"recording": name, "candidate": c["effect"], "identifiable": c["identifiable"],
-                     "reasons": "; ".join(c.get("reasons", [])), "p_value": c.get("p_value"),
-                     "p_adjusted": c.get("p_adjusted"), "passed": c.get("passed"), "named": c.get("named"),
-                     "max_abs_z": float(np.nanmax(np.abs(est / se))) if np.all(se > 0) else float("nan"),
-                     "share_of_excess_chi2": share})
-    return rows
 
 
 #: What a session of few orientations cannot test, and why (the loop's own limits).
@@ -336,7 +330,8 @@ def _outlier_shifts(report: dict, data, p, effects) -> np.ndarray:
     return out
 
 
-def simulate_session(rec: Recording, report: dict, which: str, profile: NoiseProfile, rng) -> Recording:
+def simulate_session(rec: Recording, report: dict, which: str, profile: NoiseProfile, rng,
+                     white_scale: float = 1.0) -> Recording:
     """The session again under the model ``which`` ('before' or 'after'): every pose of the report
     (its samples, as the loop averaged them) replaced by
 
@@ -346,7 +341,8 @@ def simulate_session(rec: Recording, report: dict, which: str, profile: NoisePro
       shifted by a random lag (zero mean, the rest's own scatter and autocorrelation, hence
       its own standard error),
     * a pose-mean error drawn from the rest's standard error (what white noise leaves in a
-      mean: the rests' noise model),
+      mean: the rests' noise model), times ``sqrt(white_scale)`` (the joint model's),
+    * the per-placement offset of ``profile`` (one draw per pose, constant over it),
     * the time-correlated components of ``profile`` (its white term is not used), simulated
       over the whole time base so that a wander runs on through the motions,
     * for 'after', the named outlier poses' estimated shifts;
@@ -369,12 +365,13 @@ def simulate_session(rec: Recording, report: dict, which: str, profile: NoisePro
     se = np.array(report["poses"]["mean_std"], float)
     measured = np.asarray(rec.acc, float)
     shifts = _outlier_shifts(report, data, p, effects) if which == "after" else np.zeros((len(ranges), 3))
+    shifts = shifts + placement_offsets(profile, rng, np.arange(len(ranges)), len(ranges))  # one draw per pose
     for i, (a, b) in enumerate(ranges):
         dt = rec.t[a:b] - data.t_ref
         dtemp = None if rec.temp is None or data.temp is None else rec.temp[a:b] - data.temp_ref
         short = np.roll(measured[a:b] - measured[a:b].mean(axis=0), int(rng.integers(b - a)), axis=0)
         z = forward(np.repeat(x[i][None], b - a, axis=0), M, p[:3], params, dt=dt, dtemp=dtemp) + short \
-            + se[i] * rng.standard_normal(3) + noise[a:b] + shifts[i]
+            + math.sqrt(white_scale) * se[i] * rng.standard_normal(3) + noise[a:b] + shifts[i]
         # not rounded: the rest's own noise is already quantised, and rounding it again after
         # adding a constant would shift every sample of the pose alike (up to half a count)
         acc[a:b] = z
@@ -398,14 +395,16 @@ def resimulate(rec: Recording, report: dict, *, n_rep: int, seed: int, white_onl
     """
     before = NoiseProfile("before", (0.0, 0.0, 0.0))  # the rests' own noise (simulate_session)
     after = NoiseProfile("after", (0.0, 0.0, 0.0), () if white_only_after else wander_components(report),
-                         axis_correlation=0.0 if white_only_after else wander_axis_correlation(report))
+                         axis_correlation=0.0 if white_only_after else wander_axis_correlation(report),
+                         placement=(0.0,) * 3 if white_only_after else placement_of(report))
+    scales = {"before": 1.0, "after": 1.0 if white_only_after else white_scale_of(report)}
     rows = []
     for which, prof in (("before", before), ("after", after)):
         failed = 0
         for k in range(n_rep):
             rng = np.random.default_rng([seed, k])  # common random numbers across the two models
             try:
-                sim = simulate_session(rec, report, which, prof, rng)
+                sim = simulate_session(rec, report, which, prof, rng, scales[which])
                 z = base_residuals(sim, report["g"])
                 hc = half_consistency(sim, sim.intervals, pose_data_of(report))
             except AccelcalError:
@@ -510,5 +509,7 @@ def estimates_of(name: str, report: dict, which: str = "before") -> list[dict]:
              "se_scaled": v["se"], "se_noise": v["se_noise"]} for k, v in m.items()]
 
 
-__all__ = ["BASE_PARAMETERS", "FEW_POSES_LIMITS", "GAP_COLUMNS", "diagnostics_row", "few_poses_rows", "poses_of", "with_disjoint_rests", "base_residuals", "estimates_of", "evidence_rows", "excess_rows", "gap_rows",
-           "named_rows", "pose_data_of", "resimulate", "simulate_session", "stability_rows", "wander_components"]
+__all__ = ["BASE_PARAMETERS", "FEW_POSES_LIMITS", "GAP_COLUMNS", "diagnostics_row", "few_poses_rows", "poses_of",
+           "with_disjoint_rests", "base_residuals", "estimates_of", "excess_rows", "gap_rows", "named_rows",
+           "placement_of", "pose_data_of", "resimulate", "simulate_session", "stability_rows", "wander_components",
+           "white_scale_of"]

@@ -14,7 +14,7 @@ its mean error on axis ``k`` is ``ē_ik = w̄_ik + β̄_ik`` with
 * ``w̄_ik`` the short-term (white, quantization, …) part, independent between poses, of
   variance ``s · se_ik²``: ``se_ik`` the standard error the static detection computed
   from the pose's own samples (Geyer's autocorrelation time, :mod:`accelcal.static`),
-  ``s`` a common white scale (≥ :data:`MIN_WHITE_SCALE`), estimated;
+  ``s`` a common white scale (between :data:`MIN_WHITE_SCALE` and :data:`MAX_WHITE_SCALE`), estimated;
 * ``β̄_ik`` the interval mean of a slow bias process ``β_k(t)``, the same process
   (``bias_wander``) on every axis, of size ``σ_w`` (data unit) per axis, correlated
   between the axes by ``φ`` (below): a first-order Gauss–Markov process (variance
@@ -49,6 +49,19 @@ the current model; the round's tests, MDEs and LOPO then stand at ``φ̂``.  Per
 sizes that differ, or correlations of other signs or strengths between different pairs
 of axes, are approximated by the nearest member.
 
+A per-placement offset.  A sensor placed by hand, or on a fixture that is not quite
+repeatable, can carry an offset that is constant while it rests and independent from
+one placement to the next (contact stress, a strain the mount relaxes, a board that
+settles differently each time): the rests' own samples cannot see it (it is constant
+within each), and a smooth effect of the orientation cannot express it.  It is the first
+member of the grid of ``τ`` (``τ = 0``, :data:`PLACEMENT`): ``β̄_ik`` independent between
+poses, of size ``σ_w`` per axis, ``D_ij = 2 σ_w²`` for ``i ≠ j``, so ``Cov = σ_w²
+(∇_iᵀ C_φ ∇_i) δ_ij`` up to the terms the bias absorbs.  It differs from a white scale in
+that it does not follow each pose's own noise (a pose with a long, quiet rest carries the
+same offset as a short, noisy one), and from a deterministic effect of the orientation
+only through repeated placements of one orientation (pure-error degrees of freedom:
+:mod:`accelcal.discrepancy.joint_noise`).
+
 ``s`` absorbs a white excess (pose-to-pose disturbances, noise faster than the poses that
 the standard errors miss); small ``τ`` (below the pose durations) makes the wander extra
 white noise too (``Var ≈ 2 σ_w² τ / T_i``); ``τ`` of the order of the spacing of the poses
@@ -65,8 +78,8 @@ the bias and, with it, the ambiguity of the generalised covariance), the data ar
 misalignment parameters, the named effects, the candidate) and ``q`` the wander
 variance relative to the white one, the whole times the white scale ``s``.  ``K_τ`` is
 diagonalised once per ``τ`` of a grid
-(five per decade from a tenth of the shortest pose to ten session lengths, then the
-random walk); each model's columns are projected out once per ``τ`` (:class:`Basis`: the
+(the per-placement offset, five per decade from a tenth of the shortest pose to ten
+session lengths, then the random walk); each model's columns are projected out once per ``τ`` (:class:`Basis`: the
 contrasts the model leaves free, in which its GLS residual projector is diagonal), so
 every likelihood on the grid costs ``O(n)``.
 
@@ -108,22 +121,23 @@ however large the wander.  A wander outside the family (several Gauss–Markov c
 flicker) is approximated by the nearest member; the tests check the false-positive rate
 on such sessions.
 
-Outliers.  Pose ``i`` is an outlier when its residual is shifted: the mean-shift model
-adds a free shift to that pose alone (equivalent to leaving it out).  Its likelihood
-ratio against the current model, with the wander re-estimated under both (so that an
-outlier cannot hide by inflating the wander estimate), is ``(P r)_i² / P_ii``
-minimised over the grid (a rank-one update of the GLS fit; ``P`` the GLS residual
-projector, ``(P r)_i / sqrt(P_ii)`` the studentised residual).  The family of the ``n``
-poses is tested with the largest of these ratios against the same statistic on the
-bootstrap replicates, which accounts for the multiplicity and the correlation between
-poses exactly.
+Outliers (:mod:`.outliers`).  Pose ``i`` is an outlier when its residual is shifted: the
+mean-shift model adds a free shift to that pose alone (equivalent to leaving it out).
+The family of the ``n`` poses is tested with the largest internally studentised GLS
+residual ``max_i |t_i|``, ``t_i = (P r)_i / sqrt(P_ii ŝ)`` at the round's fitted wander
+(``P`` the GLS residual projector), against its exact null: a function of the projector
+alone (the multiplicity and the correlation the wander implies between the poses), drawn
+by Monte Carlo until the decision is resolved (up to 40 000 draws; a bootstrap of 199
+replicates resolved nothing below 0.005).  The mean-shift likelihood ratio with the wander
+re-estimated under both models (``(P r)_i² / P_ii`` minimised over the grid, a rank-one
+update of the GLS fit) ranks the chosen pose against the candidate effects (ΔBIC).
 
 Leave-one-pose-out.  ``(P r)_i / P_ii`` is the error of predicting pose ``i`` from the
 others under the GLS model, including the wander's conditional mean given the
 neighbouring poses (kriging); its RMS in units of ``σ`` is the colored LOPO gap.
 
 Assumptions.  Gaussian errors; the per-pose standard errors of the rests are right for
-the short-term noise up to the common factor ``s ≥ 0.5``; one wander process, of the
+the short-term noise up to the common factor ``0.5 ≤ s ≤ 4``; one wander process (or per-placement offset), of the
 same size on the three axes (data unit), equicorrelated between the axes by ``φ ≥ 0`` (a
 common-mode share), of the Gauss–Markov / random-walk family (a sum of components or a
 flicker floor is approximated by its nearest member: the tests measure what that
@@ -139,7 +153,9 @@ of interval means, the covariance a simulation implies).
 """
 
 from .bootstrap import BATCHES, RoundTests, round_tests, stop_count
+from .outliers import directions, max_null_pvalue, studentised_max
 from .gls import (
+    MAX_WHITE_SCALE,
     MIN_WHITE_SCALE,
     Q_REL_GRID,
     Basis,
@@ -155,6 +171,7 @@ from .gls import (
 )
 from .problem import (
     MIN_WANDER_DOF,
+    PLACEMENT,
     POINT_DURATION,
     TAU_PER_DECADE,
     TAU_PER_DECADE_FINE,
@@ -171,9 +188,10 @@ from .problem import (
 from .reml import CHI2_95, COMMON_GRID, Q_REL_FINE, S_FACTORS, WanderFit, at, fit_common, fit_wander
 from .simulation import contrast_covariance, simulate_interval_means
 
-__all__ = ["BATCHES", "CHI2_95", "COMMON_GRID", "MIN_WANDER_DOF", "MIN_WHITE_SCALE", "POINT_DURATION", "Q_REL_FINE",
-           "Q_REL_GRID", "S_FACTORS", "TAU_PER_DECADE", "TAU_PER_DECADE_FINE", "Basis", "EffectInformation", "Problem",
-           "RoundTests", "Surface", "WanderError", "WanderFit", "at", "axis_gram", "axis_weight", "basis",
-           "contrast_covariance", "effect_information", "excess_distribution", "fit_common", "fit_wander",
-           "gls_projector", "gls_step", "gm_variance", "problem", "profile", "round_tests", "simulate_interval_means",
-           "stop_count", "studentised", "tau_grid", "wander_kernel", "wander_kernels"]
+__all__ = ["BATCHES", "Basis", "CHI2_95", "COMMON_GRID", "EffectInformation", "MAX_WHITE_SCALE", "MIN_WANDER_DOF",
+           "MIN_WHITE_SCALE", "PLACEMENT", "POINT_DURATION", "Problem", "Q_REL_FINE", "Q_REL_GRID", "RoundTests",
+           "S_FACTORS", "Surface", "TAU_PER_DECADE", "TAU_PER_DECADE_FINE", "WanderError", "WanderFit", "at",
+           "axis_gram", "axis_weight", "basis", "contrast_covariance", "directions", "effect_information",
+           "excess_distribution", "fit_common", "fit_wander", "gls_projector", "gls_step", "gm_variance",
+           "max_null_pvalue", "problem", "profile", "round_tests", "simulate_interval_means", "stop_count",
+           "studentised", "studentised_max", "tau_grid", "wander_kernel", "wander_kernels"]

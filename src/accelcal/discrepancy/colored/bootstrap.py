@@ -1,4 +1,5 @@
-"""The round's tests: likelihood ratios calibrated by a parametric bootstrap under the fitted null.
+"""The round's tests: likelihood ratios calibrated by a parametric bootstrap under the fitted null,
+and the outlier family calibrated by its exact null (:mod:`.outliers`).
 
 Package docstring, "Tests (likelihood ratio, parametric bootstrap)" and "Outliers".
 """
@@ -11,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .gls import Q_REL_GRID, Basis, basis, profile, studentised
+from .outliers import directions, max_null_pvalue, studentised_max
 from .problem import Problem
 from .reml import WanderFit, fit_wander
 
@@ -23,12 +25,13 @@ class RoundTests:
     p_values: np.ndarray        # (k,) bootstrap p-values (1 + #{LR* ≥ LR})/(n_boot + 1)
     bartlett: np.ndarray        # (k,) mean(LR*)/3: how much estimating the noise stretches LR
     outlier_t: np.ndarray       # (n,) studentised residuals of the data (current model, null noise)
-    outlier_p: float            # bootstrap p-value of the largest mean-shift LR
-    outlier_pose: int           # index (into the current pose set) of the largest mean-shift LR
-    outlier_lr: float           # that likelihood ratio
+    outlier_p: float            # p-value of the largest |studentised residual| under its exact null
+    outlier_pose: int           # index (into the current pose set) of that pose
+    outlier_lr: float           # its mean-shift likelihood ratio (the wander re-estimated)
     null_wander: WanderFit      # the noise the bootstrap simulates (current model, REML)
     n_boot: int
     bases: tuple = ()           # Basis of the current model, then of each alternative
+    outlier_draws: int = 0      # Monte Carlo draws of the outlier family's null
 
 
 #: Bootstrap replicates are drawn in batches of these sizes (then repeating the last), so
@@ -46,10 +49,15 @@ def stop_count(alpha: float, n: int) -> int:
 
 def round_tests(prob: Problem, X_alts: list, rng: np.random.Generator, n_boot: int,
                 outliers: bool = True, extend=None, n_boot_max: int | None = None,
-                alpha: float = 0.05, null: WanderFit | None = None, bas0: Basis | None = None) -> RoundTests:
+                alpha: float = 0.05, null: WanderFit | None = None, bas0: Basis | None = None,
+                outlier_rng: np.random.Generator | None = None) -> RoundTests:
     """Likelihood-ratio tests current (``prob.X0``) vs current + each ``X_alts[k]``
-    (contrast columns, appended to X0) and the outlier family, all calibrated on the same
-    replicates simulated under the current model with its REML noise.
+    (contrast columns, appended to X0), calibrated on the same replicates simulated under
+    the current model with its REML noise, and the outlier family: the largest
+    studentised residual at that noise against its exact null (:mod:`.outliers`, drawn
+    from ``outlier_rng``, default ``rng`` after the bootstrap), as many draws as its
+    decision at level ``alpha`` over the round's Holm family needs (default stream: spawned
+    from ``rng``, so the bootstrap's replicates do not depend on it).
 
     Sequential Monte Carlo p-values (Besag & Clifford 1991): a test stops at its
     :func:`stop_count`-th exceedance, with ``p = h/ℓ`` (``ℓ`` replicates used); one that
@@ -58,9 +66,10 @@ def round_tests(prob: Problem, X_alts: list, rng: np.random.Generator, n_boot: i
     saves is the replicates of tests that are clearly not significant.
 
     ``extend(counts, n, final)`` (optional): given the exceedance counts of the tests (the
-    outlier family last) and the p-values of those that stopped (``final``, NaN while
-    running) after ``n`` replicates, the mask of the tests for which more replicates could
-    change a decision.  If any, those tests grow to ``n_boot_max`` replicates (their first
+    outlier family last, its p-value in ``final``: it is not bootstrapped) and the p-values
+    of those that stopped (``final``, NaN while running) after ``n`` replicates, the mask
+    of the tests for which more replicates could change a decision.  If any, those tests grow to
+    ``n_boot_max`` replicates (their first
     ``n_boot`` are the same draws either way) and every other test keeps its p-value.
     ``null``, ``bas0``: the current model's REML noise (``fit_wander(prob, prob.X0,
     fine=False)``) and :class:`Basis`, if the caller has them."""
@@ -76,19 +85,47 @@ def round_tests(prob: Problem, X_alts: list, rng: np.random.Generator, n_boot: i
     null = fit_wander(prob, X0, fine=False) if null is None else null
     lr = np.array([max(m0 - float(profile(prob, X1, prob.y[None], Q_REL_GRID, bas=b).ml_min()[0]), 0.0)
                    for X1, b in zip(Xs, bases[1:])])
-    lr_pose = np.maximum(m0 - sf0.shift_ml_min()[0], 0.0) if outliers else np.zeros(0)
-    o_i = int(np.argmax(lr_pose)) if outliers else -1
-    o_lr = float(lr_pose[o_i]) if outliers else float("nan")
-    observed = np.concatenate([lr, [o_lr] if outliers else []])
+    o_i, o_lr, o_p, o_draws = -1, float("nan"), float("nan"), 0
+    if outliers:  # first: the bootstrap's extension needs its p-value (its own stream: the replicates stay)
+        tt, t_max = studentised_max(prob, bases[0], null.t, null.q_rel)
+        o_i = int(np.argmax(np.abs(tt)))
+        o_lr = float(max(m0 - float(sf0.shift_ml_min()[0, o_i]), 0.0))
+        bhat, _ = directions(prob, bases[0], null.t, null.q_rel)
+        o_p, o_draws = max_null_pvalue(bhat, t_max, rng.spawn(1)[0] if outlier_rng is None else outlier_rng,
+                                       alpha=alpha, family=len(X_alts) + 1)
+    seq = _Sequential(len(X_alts), stop_count(alpha, n_boot))
+    if X_alts:
+        _bootstrap(prob, bases, Xs, lr, rng, null, seq, n_boot, n_boot_max, alpha,
+                   None if extend is None else _with_fixed(extend, outliers, o_p))
+    t_obs, _ = studentised(prob, X0, null.t, null.q_rel, scale=null.white_scale)
+    return RoundTests(lr=lr, p_values=seq.p_values(), bartlett=seq.mean_lr(X_alts),
+                      outlier_t=t_obs[0], outlier_p=float(o_p), outlier_pose=o_i, outlier_lr=o_lr,
+                      null_wander=null, n_boot=int(seq.n), bases=tuple(bases), outlier_draws=int(o_draws))
+
+
+def _with_fixed(extend, outliers: bool, p_outlier: float):
+    """``extend`` of :func:`round_tests` seeing the outlier family last, as a test that has
+    stopped at its p-value ``p_outlier``."""
+    if not outliers:
+        return extend
+
+    def wrapped(counts, n, final):
+        return extend(np.append(counts, 0), n, np.append(final, p_outlier))[:-1]
+
+    return wrapped
+
+
+def _bootstrap(prob: Problem, bases: list, Xs: list, observed: np.ndarray, rng, null: WanderFit, seq, n_boot: int,
+               n_boot_max: int | None, alpha: float, extend) -> None:
+    """The sequential bootstrap of the candidates' likelihood ratios (:func:`round_tests`)."""
     # replicates drawn through the Cholesky factor of the null covariance: unique, unlike the
     # eigenvectors (whose signs depend on the LAPACK routine), so the replicates are too
     root = np.linalg.cholesky(null.white_scale * prob.sigma_c(null.t, null.q_rel))
-    seq = _Sequential(len(X_alts) + outliers, stop_count(alpha, n_boot))
     cap, k = n_boot, 0
     while True:
         batch = min(BATCHES[min(k, len(BATCHES) - 1)], cap - seq.n)
         Ystar = rng.standard_normal((batch, prob.m)) @ root.T
-        seq.add(_bootstrap_batch(prob, bases, Xs, Ystar, seq.running, outliers), observed)
+        seq.add(_bootstrap_batch(prob, bases, Xs, Ystar, seq.running), observed)
         k += 1
         if not seq.running.any():
             break
@@ -100,11 +137,6 @@ def round_tests(prob: Problem, X_alts: list, rng: np.random.Generator, n_boot: i
             seq.freeze(~np.asarray(grow, bool))   # the others keep their p-value at n_boot
             cap = n_boot_max
             seq.h = stop_count(alpha, n_boot_max)   # the running tests have fewer exceedances than that
-    p_all = seq.p_values()
-    t_obs, _ = studentised(prob, X0, null.t, null.q_rel, scale=null.white_scale)
-    return RoundTests(lr=lr, p_values=p_all[: len(X_alts)], bartlett=seq.mean_lr(X_alts),
-                      outlier_t=t_obs[0], outlier_p=float(p_all[-1]) if outliers else float("nan"),
-                      outlier_pose=o_i, outlier_lr=o_lr, null_wander=null, n_boot=int(seq.n), bases=tuple(bases))
 
 
 class _Sequential:
@@ -151,20 +183,14 @@ class _Sequential:
         return self.sums[:k] / np.maximum(self.used[:k], 1) / np.array([Xa.shape[1] for Xa in X_alts])
 
 
-def _bootstrap_batch(prob: Problem, bases: list, Xs: list, Ystar: np.ndarray,
-                     running: np.ndarray, outliers: bool) -> np.ndarray:
-    """Replicates ``Ystar`` (B, m) drawn under the null, refitted as the data: per replicate the LR of each candidate and, last, the largest mean-shift LR over the
-    poses (the noise re-estimated with the shift, so an outlier cannot hide by inflating
-    it), NaN for the tests no longer ``running``."""
+def _bootstrap_batch(prob: Problem, bases: list, Xs: list, Ystar: np.ndarray, running: np.ndarray) -> np.ndarray:
+    """Replicates ``Ystar`` (B, m) drawn under the null, refitted as the data: per replicate
+    the LR of each candidate, NaN for the tests no longer ``running``."""
     out = np.full((Ystar.shape[0], len(running)), np.nan)
-    best = outliers and bool(running[-1])
-    sfs = profile(prob, prob.X0, Ystar, Q_REL_GRID, best_shift=best, bas=bases[0])
-    m0s = sfs.ml_min()
+    m0s = profile(prob, prob.X0, Ystar, Q_REL_GRID, bas=bases[0]).ml_min()
     for k, (X1, b) in enumerate(zip(Xs, bases[1:])):
         if running[k]:
             out[:, k] = np.maximum(m0s - profile(prob, X1, Ystar, Q_REL_GRID, bas=b).ml_min(), 0.0)
-    if best:
-        out[:, -1] = np.maximum(m0s - sfs.best_shift_ml_min(), 0.0)
     return out
 
 

@@ -31,13 +31,20 @@ Q_REL_GRID = np.concatenate([[0.0], np.logspace(-2.0, 3.0, 16)])
 #: could explain a deterministic trend as a large random walk with almost no white noise,
 #: which the rests contradict.
 MIN_WHITE_SCALE = 0.5
+#: Largest white scale: the rests' standard errors off by a factor of two.  They come from
+#: the pose's own samples, so what they miss is noise that is constant within a pose and
+#: changes between poses (a per-placement offset, a wander): the noise model's second term,
+#: which must carry it (a white scale of 24-230 once stood for the FXOS8700 sessions'
+#: per-placement offsets, whose rests agree with their standard errors within 0.8-1.0).
+MAX_WHITE_SCALE = 4.0
 
 
 def _neg2ll(quad, nu, logdet):
-    """``−2 log`` likelihood with the white scale at its optimum ``max(quad/nu, MIN_WHITE_SCALE)``
-    (``nu log s + quad/s + logdet``, constants dropped)."""
+    """``−2 log`` likelihood with the white scale at its optimum ``quad/nu`` clipped to
+    [:data:`MIN_WHITE_SCALE`, :data:`MAX_WHITE_SCALE`] (``nu log s + quad/s + logdet``,
+    constants dropped)."""
     quad = np.clip(quad, 1e-300, None)
-    s = np.maximum(quad / nu, MIN_WHITE_SCALE)
+    s = np.clip(quad / nu, MIN_WHITE_SCALE, MAX_WHITE_SCALE)
     return nu * np.log(s) + quad / s + logdet
 
 
@@ -45,19 +52,21 @@ def _neg2ll_min(quad, nu, logdet):
     """Minimum over the grid of :func:`_neg2ll` per data set: ``quad`` (B, T, Q), ``logdet`` (T, Q).
 
     The same number with one logarithm per data set instead of one per grid point: where
-    the white scale is above its floor, ``−2ℓ = ν (log(x e^{logdet/ν}) + 1)`` (``x = quad/ν``)
-    is smallest where the product is; below it, ``−2ℓ`` is linear in ``quad``.
+    the white scale is inside its range, ``−2ℓ = ν (log(x e^{logdet/ν}) + 1)`` (``x = quad/ν``)
+    is smallest where the product is; at either end of the range ``−2ℓ`` is linear in ``quad``.
     """
     quad = np.clip(quad.reshape(quad.shape[0], -1), 1e-300, None)
     ld = logdet.reshape(-1)
     floored = quad < MIN_WHITE_SCALE * nu
-    prod = np.where(floored, np.inf, quad * np.exp(ld / nu)[None]).min(axis=1)
+    capped = quad > MAX_WHITE_SCALE * nu
+    prod = np.where(floored | capped, np.inf, quad * np.exp(ld / nu)[None]).min(axis=1)
     with np.errstate(divide="ignore"):
-        free = nu * (np.log(prod / nu) + 1.0)
-    if not floored.any():
-        return free
-    lin = np.where(floored, quad / MIN_WHITE_SCALE + ld[None], np.inf).min(axis=1) + nu * math.log(MIN_WHITE_SCALE)
-    return np.minimum(free, lin)
+        out = nu * (np.log(prod / nu) + 1.0)
+    for end, mask in ((MIN_WHITE_SCALE, floored), (MAX_WHITE_SCALE, capped)):
+        if mask.any():
+            lin = np.where(mask, quad / end + ld[None], np.inf).min(axis=1) + nu * math.log(end)
+            out = np.minimum(out, lin)
+    return out
 
 
 @dataclass(frozen=True)
@@ -69,7 +78,7 @@ class Surface:
     ``m`` contrasts, ``p`` columns; ``shift_quad`` (B, T, Q, n) or None: ``quad`` of the
     model with a free shift of each pose; ``best_shift_quad`` (B, T, Q) or None: the
     smallest of those over the poses.  With ``Σ = s (I + q K_τ)``, ``s`` at its optimum
-    ``ŝ = max(quad/ν, MIN_WHITE_SCALE)``, ``ν = m`` (ML) or ``m − p`` (REML)::
+    ``ŝ = quad/ν`` clipped to [MIN_WHITE_SCALE, MAX_WHITE_SCALE], ``ν = m`` (ML) or ``m − p`` (REML)::
 
         −2ℓ   = m log ŝ + quad/ŝ + logdet                  (+ constants)
         −2ℓ_R = (m − p) log ŝ + quad/ŝ + logdet + logdet_a
@@ -93,7 +102,7 @@ class Surface:
 
     def white_scale(self, reml: bool = True) -> np.ndarray:
         """``ŝ`` at every grid point (B, T, Q)."""
-        return np.maximum(self.quad / (self.m - self.p if reml else self.m), MIN_WHITE_SCALE)
+        return np.clip(self.quad / (self.m - self.p if reml else self.m), MIN_WHITE_SCALE, MAX_WHITE_SCALE)
 
     def ml_min(self) -> np.ndarray:
         """Grid minimum of ``−2ℓ`` per data set (B,)."""
@@ -280,5 +289,5 @@ def excess_distribution(prob: Problem, X: np.ndarray, t: int, q: float, scale: f
     return np.clip(mu, 0.0, None)
 
 
-__all__ = ["MIN_WHITE_SCALE", "Q_REL_GRID", "Basis", "EffectInformation", "Surface", "basis", "effect_information", "excess_distribution",
-           "gls_projector", "gls_step", "profile", "studentised"]
+__all__ = ["MAX_WHITE_SCALE", "MIN_WHITE_SCALE", "Q_REL_GRID", "Basis", "EffectInformation", "Surface", "basis",
+           "effect_information", "excess_distribution", "gls_projector", "gls_step", "profile", "studentised"]

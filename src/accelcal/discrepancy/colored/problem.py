@@ -33,13 +33,19 @@ class WanderError(AccelcalError):
 # --------------------------------------------------------------------------- kernels
 
 
+#: The member of the grid of correlation times that stands for the per-placement offset: an
+#: offset independent from pose to pose and constant within each (``τ = 0`` on the grid).
+PLACEMENT = 0.0
+
+
 def tau_grid(durations, span: float, per_decade: int = TAU_PER_DECADE) -> np.ndarray:
-    """Correlation times [s]: ``per_decade`` per decade from a tenth of the shortest pose
-    to ten session lengths, then ``inf`` (the random walk)."""
+    """The wander's members: the per-placement offset (:data:`PLACEMENT`), then correlation
+    times [s], ``per_decade`` per decade from a tenth of the shortest pose to ten session
+    lengths, then ``inf`` (the random walk)."""
     lo = 0.1 * max(float(np.min(durations)), POINT_DURATION)
     hi = 10.0 * max(span, 10 * lo)
     k = int(math.ceil(math.log10(hi / lo) * per_decade))
-    return np.concatenate([np.geomspace(lo, hi, k + 1), [np.inf]])
+    return np.concatenate([[PLACEMENT], np.geomspace(lo, hi, k + 1), [np.inf]])
 
 
 def axis_gram(grad, common: float = 0.0) -> np.ndarray:
@@ -85,7 +91,9 @@ def wander_kernels(taus, starts, durations, grad, common: float = 0.0) -> np.nda
 
 
 def _variograms(taus, starts, durations) -> np.ndarray:
-    """``D_ij = Var(β̄_i − β̄_j)`` of a unit wander for every ``τ`` of ``taus`` (T, n, n)."""
+    """``D_ij = Var(β̄_i − β̄_j)`` of a unit wander for every ``τ`` of ``taus`` (T, n, n);
+    ``τ = 0`` (:data:`PLACEMENT`): unit offsets independent between poses, ``D = 2`` off the
+    diagonal."""
     taus = np.asarray(taus, float)
     a, T = np.asarray(starts, float), np.asarray(durations, float)
     first_end = np.where(a[:, None] <= a[None, :], (a + T)[:, None], (a + T)[None, :])
@@ -93,11 +101,13 @@ def _variograms(taus, starts, durations) -> np.ndarray:
     D = np.empty((taus.size,) + gap.shape)
     rw = np.isinf(taus)
     D[rw] = gap + (T[:, None] + T[None, :]) / 3
-    tc = taus[~rw][:, None]                                                      # (T', 1)
+    pl = taus == PLACEMENT
+    D[pl] = 2.0
+    tc = taus[~rw & ~pl][:, None]                                                # (T', 1)
     W = 2 * (tc * T + tc**2 * np.expm1(-T / tc)) / T**2                          # (T', n)
     E = -np.expm1(-T / tc) / T                                                   # (T', n)
     cov = tc[:, :, None] ** 2 * E[:, :, None] * E[:, None, :] * np.exp(-gap / tc[:, :, None])
-    D[~rw] = W[:, :, None] + W[:, None, :] - 2 * cov
+    D[~rw & ~pl] = W[:, :, None] + W[:, None, :] - 2 * cov
     idx = np.arange(gap.shape[0])
     D[:, idx, idx] = 0.0
     return D
@@ -105,7 +115,10 @@ def _variograms(taus, starts, durations) -> np.ndarray:
 
 def gm_variance(q_abs: float, tau: float) -> tuple[float, float]:
     """``(s, K)`` of a wander: Gauss–Markov std ``s`` and its short-lag random-walk
-    coefficient ``K = sqrt(2 s²/τ)``; for ``tau = inf``, ``q_abs`` is ``K²`` and ``s = inf``."""
+    coefficient ``K = sqrt(2 s²/τ)``; for ``tau = inf``, ``q_abs`` is ``K²`` and ``s = inf``;
+    for the per-placement offset (``tau = 0``) ``s`` its std and ``K`` NaN (no time scale)."""
+    if tau == PLACEMENT:
+        return math.sqrt(max(q_abs, 0.0)), float("nan")
     if np.isinf(tau):
         return float("inf") if q_abs > 0 else 0.0, math.sqrt(max(q_abs, 0.0))
     return math.sqrt(max(q_abs, 0.0)), math.sqrt(2.0 * max(q_abs, 0.0) / tau)
@@ -244,6 +257,7 @@ def problem(r, J, sigma, grad, starts, durations, taus=None, notes=(), common: f
 
 
 
-__all__ = ["MIN_WANDER_DOF", "POINT_DURATION", "TAU_PER_DECADE", "TAU_PER_DECADE_FINE", "Problem", "WanderError",
-           "axis_gram", "axis_weight", "gm_variance", "kernel_eigensystems", "problem", "tau_grid", "wander_kernel",
+__all__ = ["MIN_WANDER_DOF", "PLACEMENT", "POINT_DURATION", "TAU_PER_DECADE", "TAU_PER_DECADE_FINE", "Problem",
+           "WanderError", "axis_gram", "axis_weight", "gm_variance", "kernel_eigensystems", "problem", "tau_grid",
+           "wander_kernel",
            "wander_kernels"]

@@ -10,8 +10,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ... import distributions as dist
-from .gls import MIN_WHITE_SCALE, Q_REL_GRID, Basis, basis, profile
-from .problem import TAU_PER_DECADE_FINE, Problem, gm_variance, kernel_eigensystems, tau_grid
+from .gls import MAX_WHITE_SCALE, MIN_WHITE_SCALE, Q_REL_GRID, Basis, basis, profile
+from .problem import PLACEMENT, TAU_PER_DECADE_FINE, Problem, gm_variance, kernel_eigensystems, tau_grid
 
 #: ``χ²₁`` quantile of the 95 % profile-likelihood intervals.
 CHI2_95 = float(dist.chi2_isf(0.05, 1))
@@ -57,6 +57,11 @@ class WanderFit:
     def present(self) -> bool:
         return self.q_rel > 0
 
+    @property
+    def placement(self) -> bool:
+        """Whether the estimate is the per-placement offset (``τ = 0``: :data:`~.problem.PLACEMENT`)."""
+        return self.present and self.tau == PLACEMENT
+
 
 #: Relative variances of the report's grid: 0, then ten per decade.
 Q_REL_FINE = np.concatenate([[0.0], np.logspace(-3.0, 4.0, 71)])
@@ -90,35 +95,42 @@ def fit_wander(prob: Problem, X: np.ndarray, fine: bool = True, bas: Basis | Non
     ct, cq = np.nonzero(dev <= best + CHI2_95 + 1e-9)
     s_full = s_hat[ct, cq][:, None] * S_FACTORS[None, :]                     # (N, S)
     dev_full = nu * np.log(s_full) + quad[ct, cq][:, None] / s_full + (sf.logdet + sf.logdet_a)[ct, cq][:, None]
-    inside = (dev_full <= best + CHI2_95) & (s_full >= MIN_WHITE_SCALE * (1 - 1e-12))
+    inside = ((dev_full <= best + CHI2_95) & (s_full >= MIN_WHITE_SCALE * (1 - 1e-12))
+              & (s_full <= MAX_WHITE_SCALE * (1 + 1e-12)))
     taus, T = fp.taus, fp.taus.size
     tv, qv = taus[ct][:, None], Q_REL_FINE[cq][:, None]
     q_abs = s_full * qv / fp.scale[ct][:, None]
-    rw = np.isinf(tv)
+    rw, pl = np.isinf(tv), tv == PLACEMENT
     with np.errstate(divide="ignore", invalid="ignore"):
         size = np.where(rw, np.inf, np.sqrt(q_abs))
-        K = np.where(rw, np.sqrt(q_abs), np.sqrt(2 * q_abs / np.where(rw, 1.0, tv)))
+        K = np.where(rw, np.sqrt(q_abs), np.sqrt(2 * q_abs / np.where(rw | pl, 1.0, tv)))
     # the residual excess the model predicts on average: sqrt(s (1 + q)) (mean eigenvalue 1)
     excess = np.sqrt(s_full * (1.0 + qv))
     wander = inside & (qv > 0)
+    # the per-placement member has no time scale: the intervals of τ and K are the wanders'
+    timed = wander & ~pl
     bound = []
     if inside[cq == Q_REL_FINE.size - 1].any():
         bound.append("size: upper end of the grid (q_rel 1e4)")
     if wander[ct >= T - 2].any():
         bound.append("tau: the interval reaches the random walk (no upper bound)")
-    if wander[ct == 0].any():
+    if timed[ct == 1].any():
         bound.append("tau: lower end of the grid")
+    if (wander & pl).any():
+        bound.append("tau: the interval holds the per-placement offset (no time correlation between the poses)")
     if inside[:, 0].any() or inside[:, -1].any():
         bound.append("white scale: end of the scanned range (x0.1 - x10 of its estimate)")
     if np.isclose(s_hat[tf, kf], MIN_WHITE_SCALE):
         bound.append(f"white scale: at its floor {MIN_WHITE_SCALE:g}")
+    if np.isclose(s_hat[tf, kf], MAX_WHITE_SCALE):
+        bound.append(f"white scale: at its ceiling {MAX_WHITE_SCALE:g}")
 
     def rng(a, mask):
         v = a[mask]
         return (float(np.min(v)), float(np.max(v))) if v.size else (float("nan"), float("nan"))
 
     tau_ci = rng(np.broadcast_to(tv, inside.shape), wander)
-    size_ci, K_ci = rng(size, inside), rng(K, inside)
+    size_ci, K_ci = rng(size, inside), rng(K, inside & ~(pl & (qv > 0)))
     if inside[cq == 0].any():  # q = 0 inside the region: the lower ends are 0
         size_ci, K_ci = (0.0, size_ci[1]), (0.0, K_ci[1])
     out = _wander_at(fp, int(tf), float(Q_REL_FINE[kf]), float(s_hat[tf, kf]), best)

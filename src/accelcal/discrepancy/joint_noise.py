@@ -1,0 +1,267 @@
+"""The noise model the colored null estimates jointly with the calibration, as the loop and the report use it.
+
+The linearised colored problem of a fit (:func:`linearise`, :func:`linearise_noise`: the
+pose residuals, their Jacobian and the wander's kernels, :mod:`.colored`), the named noise
+term as the report's ``noise_model`` (:func:`noise_model_dict`) and the gaps and excess
+under it (:func:`colored_summary`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .. import distributions as dist
+from ..errors import AccelcalError
+from . import colored as C
+from .fit import Fit, PoseData, evaluate
+from .stochastic.implication import centred_pose_variance, pose_difference_variance
+
+
+def intervals(data: PoseData) -> tuple[np.ndarray, np.ndarray, tuple]:
+    """Start and duration [s] of each pose (instantaneous poses if the data have no intervals)."""
+    if data.has_intervals:
+        return data.t_start, np.maximum(data.t_end - data.t_start, C.POINT_DURATION), ()
+    return data.t, np.full(len(data), C.POINT_DURATION), (
+        "pose intervals not given: the pose means are treated as instantaneous samples of the wander",)
+
+
+def linearise(data: PoseData, f: Fit, taus=None, common: float | None = 0.0) -> C.Problem:
+    """The colored problem of the fit ``f`` on ``data`` (raises :class:`~.colored.WanderError`),
+    with the wander's axis correlation ``common`` (:func:`~.colored.axis_gram`; None: not yet
+    diagonalised, see :func:`~.colored.problem`)."""
+    J = f.J * f.sigma[:, None]  # unweighted
+    grad = -J[:, :3]            # ∂r/∂z = −∂r/∂b
+    starts, durations, notes = intervals(data)
+    return C.problem(f.residuals, J, f.sigma, grad, starts, durations, taus=taus, notes=notes, common=common)
+
+
+def linearise_noise(data: PoseData, f: Fit) -> tuple[C.Problem, C.Basis, C.WanderFit]:
+    """:func:`linearise` at the REML estimate of the wander's axis correlation under the
+    fit's own model (:func:`~.colored.fit_common`): the problem, the :class:`~.colored.Basis`
+    of its columns and the REML noise (test grid)."""
+    prob = linearise(data, f, common=None)
+    return C.fit_common(prob, prob.X0)
+
+
+def noise_model_dict(w: C.WanderFit | None, prob: C.Problem | None, reason: str = "",
+                     placement: dict | None = None) -> dict:
+    """The ``noise_model`` key: the named stochastic term of the joint fit, with ``reading``
+    (:func:`describe_noise_model`) and ``placement`` (:func:`repeated_placements`)."""
+    base = {"method": "REML of the pose residuals' noise s (white + one of: a per-placement offset, a Gauss-Markov "
+                      "bias wander, tau -> inf: a random walk; the same size on every axis, correlated between the "
+                      "axes by axis_correlation, a common-mode share), jointly with the calibration; 95 % "
+                      "profile-likelihood intervals",
+            "white": "per-pose standard errors of the rests (static detection) times the white scale"}
+    if w is None:
+        out = {**base, "term": "not_estimated", "process": "none", "estimated": False, "reason": reason}
+        return {**out, "reading": describe_noise_model(out)}
+    shortest = float(np.min(prob.durations)) if prob is not None else float("nan")
+    span = prob.span if prob is not None else float("nan")
+    white_like = bool(w.present and np.isfinite(w.tau) and w.tau < 0.5 * shortest)
+    process = "none" if not w.present else (
+        "per_placement" if w.placement else ("random_walk" if np.isinf(w.tau) else "gauss_markov"))
+    # the wander is time-correlated beyond doubt when its τ interval stays above the poses
+    lo = w.tau_ci[0] if w.tau_ci else float("nan")
+    correlated = bool(w.present and not w.placement and np.isfinite(lo) and lo >= 0.5 * shortest)
+    term = "none" if not w.present else ("per_placement_offset" if w.placement else "bias_wander")
+    out = {**base, "term": term, "process": process, "estimated": True,
+           "white_like": white_like, "time_correlation_established": correlated,
+           "white_excess_N": math.sqrt(2 * w.q_abs * w.tau) if white_like and not w.placement else float("nan"),
+           "size": w.size, "size_ci": list(w.size_ci), "tau_s": w.tau if w.present else float("nan"),
+           "tau_ci": list(w.tau_ci),
+           "white_scale": w.white_scale, "white_scale_ci": list(w.white_scale_ci),
+           "random_walk_K": w.K, "random_walk_K_ci": list(w.K_ci), "q_rel": w.q_rel,
+           "change_over_session": w.K * math.sqrt(span) if process == "random_walk" else float("nan"),
+           "session_s": span,
+           "excess_ci": list(w.excess_ci), "at_bound": list(w.at_bound),
+           "axis_correlation": w.common, "axis_correlation_ci": list(w.common_ci),
+           "axis_correlation_profile": {f"{phi:g}": v for phi, v in zip(C.COMMON_GRID, w.common_profile)},
+           "notes": list(prob.notes) if prob is not None else [],
+           "placement": placement or {},
+           "unit": "size: data unit (std of the wander or of the per-placement offset, per axis; null for a random "
+                   "walk, which has no stationary size); tau_s: s (0: the per-placement offset, null: a random "
+                   "walk); random_walk_K: data unit / sqrt(s) (change_over_session = K sqrt(session_s)); "
+                   "white_scale: variance of the white part over the rests' prediction; "
+                   "axis_correlation: correlation of the wander between any two sensor axes (its common-mode share; "
+                   "interval and -2 log REML likelihood on the grid of the tests); "
+                   "white_excess_N: data unit * sqrt(s) (when tau is below the poses, white_like: the wander "
+                   "acts as white noise the rests' standard errors miss)"}
+    return {**out, "reading": describe_noise_model(out)}
+
+
+def _g(v) -> str:
+    return "open" if v is None or not np.isfinite(v) else f"{v:.3g}"
+
+
+def _interval(ci, what: str = "") -> str:
+    lo, hi = (list(ci) + [float("nan")] * 2)[:2] if ci else (float("nan"),) * 2
+    return f"[{_g(lo)}, {_g(hi)}{(' ' + what) if what else ''}]"
+
+
+def _finite(x) -> bool:
+    return x is not None and bool(np.isfinite(x))
+
+
+def describe_noise_model(nm: dict, unit: str | None = None) -> str:
+    """The named noise term in words, with what its numbers mean (``reading`` of the JSON and
+    the command line's line): a random walk as its coefficient and its change over the
+    session (it has no stationary size, no correlation time), a Gauss–Markov wander as its
+    size and correlation time (an interval open at the top: a random walk is not ruled out;
+    reaching 0: a per-placement offset is not), a per-placement offset as its size with what
+    separates it from an effect of the orientation.  ``unit``: the data unit, if known (in
+    m/s² the sizes are also given in mg)."""
+    u = unit or "data unit"
+
+    def size(v):
+        if v is None or not np.isfinite(v):
+            return "open"
+        return f"{v:.3g} {u}" + (f" ({1e3 * v / 9.80665:.3g} mg)" if unit == "m/s^2" else "")
+
+    if not nm.get("estimated"):
+        return f"bias wander not estimated (nor a per-placement offset): {nm.get('reason', '')}".rstrip(": ")
+    proc = nm.get("process")
+    ws = nm.get("white_scale")
+    white = (f"; white scale {_g(ws)} {_interval(nm.get('white_scale_ci'))} (the rests' pose noise variance times "
+             f"this)" if ws is not None else "")
+    axes = (f"; correlation between the axes {_g(nm.get('axis_correlation'))} "
+            f"{_interval(nm.get('axis_correlation_ci'))}" if _finite(nm.get("axis_correlation")) else "")
+    if proc == "none":
+        return f"no pose-to-pose noise beyond the rests' white noise (REML estimate 0){white}"
+    if proc == "random_walk":
+        K, (klo, khi) = nm.get("random_walk_K"), (list(nm.get("random_walk_K_ci") or []) + [None, None])[:2]
+        return (f"bias wander: a random walk (no stationary size, no correlation time: it drifts without bound), "
+                f"K {_g(K)} {u}/sqrt(s) {_interval([klo, khi])}: its change over t seconds has standard deviation "
+                f"K sqrt(t), {size(nm.get('change_over_session'))} over the {_g(nm.get('session_s'))} s session"
+                f"{axes}{white}")
+    if proc == "per_placement":
+        pl = nm.get("placement") or {}
+        return (f"per-placement offset: {size(nm.get('size'))} per axis {_interval(nm.get('size_ci'))}, independent "
+                f"from pose to pose, constant within each (no time correlation between the poses){axes}{white}"
+                + (f"; {pl['reading']}" if pl.get("reading") else ""))
+    tlo, thi = (list(nm.get("tau_ci") or []) + [None, None])[:2]
+    low = "0: a per-placement offset is not ruled out" if tlo == 0 else _g(tlo)
+    high = "no upper bound: a random walk is not ruled out" if thi is None or not np.isfinite(thi) else _g(thi)
+    tau = f"correlation time {_g(nm.get('tau_s'))} s [{low}, {high}]"
+    slow = ("" if nm.get("time_correlation_established") else
+            "; its time correlation is not established (it may be extra noise of each pose rather than a wander)")
+    return (f"bias wander: Gauss-Markov, size {size(nm.get('size'))} per axis {_interval(nm.get('size_ci'))}, "
+            f"{tau}{axes}{white}{slow}")
+
+
+def repeated_placements(data: PoseData, f: Fit, w: C.WanderFit | None, max_angle_deg: float = 5.0,
+                        alpha: float = 0.05) -> dict:
+    """What separates a per-placement offset from a deterministic effect of the orientation:
+    orientations placed more than once, not in consecutive poses (a rest split in two may be
+    one placement).  Poses whose gravity directions (the fit's ``x``) lie within
+    ``max_angle_deg`` of each other form a group; ``pure_error_dof`` = Σ (size − 1).  With
+    independent offsets of the fitted size (``w``), the residuals of a group scatter about
+    their mean with ``χ² = Σ_groups rᵀ(Σ⁻¹ − Σ⁻¹11ᵀΣ⁻¹/1ᵀΣ⁻¹1)r ~ χ²(pure_error_dof)``
+    (``Σ`` the poses' white and offset variances); a small χ² (``p_lower`` ≤ α) says the
+    offsets repeat with the orientation: part of the excess belongs to the orientation."""
+    u = f.x / np.linalg.norm(f.x, axis=1, keepdims=True)
+    idx = data.pose_index
+    n = len(u)
+    parent = list(range(n))
+
+    def root(i):
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    cos = math.cos(math.radians(max_angle_deg))
+    for i in range(n):
+        for j in range(i + 1, n):
+            if abs(int(idx[j]) - int(idx[i])) > 1 and float(u[i] @ u[j]) >= cos:
+                parent[root(j)] = root(i)
+    groups = {}
+    for i in range(n):
+        groups.setdefault(root(i), []).append(i)
+    groups = [g for g in groups.values() if len(g) > 1]
+    dof = sum(len(g) - 1 for g in groups)
+    out = {"max_angle_deg": max_angle_deg, "groups": [[int(idx[i]) for i in g] for g in groups],
+           "pure_error_dof": int(dof)}
+    if not dof:
+        return {**out, "reading": "no orientation was placed twice (non-consecutively): a per-placement offset cannot "
+                                  "be told apart from a deterministic effect of the orientation here (place at least "
+                                  "three orientations twice, not in a row)"}
+    grad = -(f.J[:, :3] * f.sigma[:, None])
+    v = (w.white_scale if w is not None else 1.0) * f.sigma ** 2
+    if w is not None and w.placement:
+        v = v + w.q_abs * C.axis_weight(grad, w.common)
+    chi2 = 0.0
+    for g in groups:
+        r, wi = f.residuals[g], 1.0 / v[g]
+        chi2 += float(np.sum(wi * r * r) - np.sum(wi * r) ** 2 / np.sum(wi))
+    p_lower = float(1.0 - dist.chi2_sf(chi2, dof))
+    verdict = ("the repeated placements agree better than independent offsets would: part of the excess belongs to "
+               "the orientation" if p_lower <= alpha else "the repeated placements scatter as independent offsets do")
+    return {**out, "chi2": chi2, "p_lower": p_lower,
+            "reading": f"{len(groups)} orientation(s) placed again ({dof} pure-error dof): chi2 {chi2:.3g} on {dof} "
+                       f"(P(lower) {p_lower:.3g}): {verdict}"}
+
+
+def colored_summary(data, base, prob, wander, cur_data, current) -> dict:
+    """Gaps and excess under the named noise model (white + bias wander or per-placement offset
+    of the final model).  Per pose: ``wander_residual_std``, the wander's (or offset's) share
+    of the residual's std (unit of g); ``noise_residual_std``, the whole model's,
+    ``sqrt(s σ_i² + share²)`` (what the excess is predicted from)."""
+    Xf = prob.X0
+    # before: the base model on all poses under the final noise model
+    s_w = wander.white_scale
+    try:
+        pb = linearise(data, base, taus=[wander.tau], common=prob.common)
+        quad_b = _quad(*C.at(pb, wander), pb.X0) / s_w
+        gap_before = math.sqrt(quad_b / len(data))
+    except AccelcalError:
+        gap_before = float("nan")
+    p1, q1 = C.at(prob, wander)
+    quad_a = _quad(p1, q1, Xf) / s_w
+    mu_rel = C.excess_distribution(p1, Xf, 0, q1, s_w)
+    dof = prob.m - Xf.shape[1]
+    chi2_obs = float(np.sum(current.weighted ** 2))
+    mean, var = float(mu_rel.sum()), float(2 * np.sum(mu_rel ** 2))
+    lo, hi = (dist.gamma_ppf([0.025, 0.975], mean ** 2 / var, scale=var / mean) if var > 0 else (mean, mean))
+    # per pose (every pose, outliers too): std of the wander's (or offset's) share of the residual
+    # about the session's common mean, through the final model's gradient, and of the whole
+    # noise model (white part times the white scale, and that share)
+    starts, durations, _ = intervals(data)
+    _, J_all, _ = evaluate(current.p, data, current.effects)
+    if wander.present and J_all is not None:
+        v = centred_pose_variance(_difference_variance(wander, starts, durations))
+        extra = np.sqrt(np.clip(v, 0, None) * C.axis_weight(J_all[:, :3], prob.common))
+    else:
+        extra = np.zeros(len(data))
+    total = np.sqrt(s_w * data.sigma ** 2 + extra ** 2)
+    return {
+        "gap_colored_before": gap_before,
+        "gap_colored_after": math.sqrt(quad_a / len(cur_data)),
+        "excess_predicted": math.sqrt(mean / dof) if dof > 0 else float("nan"),
+        "excess_predicted_interval": [math.sqrt(lo / dof), math.sqrt(hi / dof)] if dof > 0 else [float("nan")] * 2,
+        "excess_observed": math.sqrt(chi2_obs / dof) if dof > 0 else float("nan"),
+        "excess_explained": bool(dof > 0 and lo <= chi2_obs <= hi),
+        "chi2_mean": mean, "chi2_var": var,
+        "wander_residual_std": extra.tolist(),
+        "noise_residual_std": total.tolist(),
+        "dof": int(dof),
+    }
+
+
+def _difference_variance(w: C.WanderFit, starts, durations) -> np.ndarray:
+    """``D_ij = Var(β̄_i − β̄_j)`` of the fitted wander or per-placement offset (data unit²)."""
+    if w.placement:
+        return 2.0 * w.q_abs * (1.0 - np.eye(len(starts)))
+    if np.isinf(w.tau):
+        return pose_difference_variance("random_walk", math.sqrt(w.q_abs), starts, durations)
+    return pose_difference_variance("gauss_markov", (math.sqrt(w.q_abs), w.tau), starts, durations)
+
+
+def _quad(prob: C.Problem, q: float, X) -> float:
+    """``yᵀ P y`` of a one-τ problem at relative variance ``q`` (unit white scale)."""
+    return float(C.profile(prob, X, prob.y[None], np.array([q])).quad[0, 0, 0])
+
+
+__all__ = ["colored_summary", "describe_noise_model", "intervals", "linearise", "linearise_noise", "noise_model_dict",
+           "repeated_placements"]
