@@ -40,12 +40,19 @@ def test_stage_outputs_of_the_ci_run(ci_workflow):
     # per profile: the effect-free recordings, five effects, the pair, the outlier, the
     # constant temperature (one seed, one size at CI scale); the power-curve profile adds
     # its five effects at its extra size; one row per recording and null
-    per_profile = 5 + 1 + 1 + bench["seeds_constant"]
+    n_effects = len(ci_config()["discrepancy"]["rules"]["candidates"])
+    per_profile = n_effects + 1 + 1 + bench["seeds_constant"]
     effect_free = sum(bench["seeds_none_real"] if "real" in pr else bench["seeds_none"] for pr in bench["profiles"])
-    extra = 5 * len(bench["power_curve"]["sizes_mde"]) * len(bench["power_curve"]["profiles"])
+    extra = n_effects * len(bench["power_curve"]["sizes_mde"]) * len(bench["power_curve"]["profiles"])
     assert (bench["seeds"], len(bench["sizes_mde"])) == (1, 1)  # the count above assumes them
     assert scores.recording.nunique() == len(bench["profiles"]) * per_profile + effect_free + extra
-    assert set(scores.groupby("recording").size()) == {scores.null.nunique()} == {len(bench["nulls"])}
+    # one row per recording and null, and the oracle's beside the loop's: the nulls marked
+    # effect_free on the effect-free recordings only (the false-positive control)
+    nulls = {r: set(g) for r, g in scores.groupby("recording").null}
+    free = set(scores[scores.truth == "none"].recording)
+    every = {n for n, where in bench["nulls"].items() if where == "all"} | {"oracle"}
+    assert all(nulls[r] == every | (set(bench["nulls"]) if r in free else set()) for r in nulls)
+    assert scores.groupby(["recording", "null"]).size().max() == 1
     for f in FIGURES:
         for ext in ("png", "pdf"):
             assert (w / "results" / "figures" / f"{f}.{ext}").stat().st_size > 0
