@@ -44,7 +44,8 @@ def full_lls_batch(z, g: float) -> BatchResult:
 
 
 def _refuse_degenerate(r: BatchResult, z) -> BatchResult:
-    """The trials whose poses :func:`full_lls` refuses as degenerate: NaN, invalid, ``DegeneratePosesError``."""
+    """The trials whose poses the single-problem estimators refuse as degenerate (nearly
+    coplanar, along one axis, identical): NaN, invalid, ``DegeneratePosesError``."""
     bad = degenerate_trials(z)
     if bad.any():
         r.bias[bad], r.M[bad], r.valid[bad] = np.nan, np.nan, False
@@ -81,7 +82,7 @@ def bias_lls_batch(z, g: float) -> BatchResult:
     if K is None:
         check_finite(z)
         check_g(g)
-        return _bias_lls_batch_normal(z)
+        return _refuse_degenerate(_bias_lls_batch_normal(z), z)
     z = np.ascontiguousarray(z)
     T = len(z)
     bias, M, status = np.empty((T, 3)), np.empty((T, 3, 3)), np.empty(T, np.int8)
@@ -94,7 +95,8 @@ def bias_lls_batch(z, g: float) -> BatchResult:
     if len(ref):
         r = _bias_lls_batch_normal(z[ref])
         bias[ref], valid[ref] = r.bias, r.valid
-    return BatchResult(method="bias_lls", bias=bias, M=M, valid=valid, status=_status(valid, DegeneratePosesError))
+    return _refuse_degenerate(BatchResult(method="bias_lls", bias=bias, M=M, valid=valid,
+                                          status=_status(valid, DegeneratePosesError)), z)
 
 
 def _bias_lls_batch_normal(z) -> BatchResult:
