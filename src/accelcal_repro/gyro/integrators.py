@@ -118,7 +118,7 @@ def figure(table: pd.DataFrame):
         axes[0, 0].set_ylabel("|scale-factor bias| [ppm]")
         axes[1, 0].set_ylabel("RMS angle error / angle [ppm]")
         handles, labels = axes[1, 0].get_legend_handles_labels()
-        fig.legend(handles, labels, loc="outside lower center", ncol=len(labels), fontsize=7)
+        fig.legend(handles, labels, loc="outside lower center", ncol=min(3, len(labels)), fontsize=7)  # fits 2 columns of panels
         fig.suptitle(f"integration error on {int(table.n_motions.iloc[0])} simulated motions of "
                      f"{table.angle_deg.iloc[0]:g} deg about moving axes\n(dotted: 100 ppm; RK4 and coning "
                      "overlap)", fontsize=8.5)
