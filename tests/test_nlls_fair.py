@@ -1,7 +1,7 @@
 """The NLLS baseline is fair: as fast as a plain build-once CasADi/IPOPT solver of the same
 problem, written here independently (physical units, IPOPT's defaults, start b = 0, M = I),
 so that the speed claim of Burkhard et al. (2024) measures the closed form, not a slow
-baseline (issue 15).
+baseline.
 
 The comparison is a ratio of CPU times measured in this process, interleaved problem by
 problem (plain, ours, plain, ours, ...), medians over many solves: machine load affects

@@ -1,4 +1,4 @@
-"""The cluster path run for real (issue 16): the SLURM profile (profiles/slurm/, as the
+"""The cluster path run for real: the SLURM profile (profiles/slurm/, as the
 README's "On a cluster" runs it) against a single-node SLURM 22.05 from Debian's packages,
 brought up for this module by tools/slurm/ (no accounting storage: sacct does not work,
 as on many small clusters).  Selected by ``pytest -k real_slurm``.

@@ -1,5 +1,5 @@
 """An interrupted run (hard kill or Ctrl-C) leaves only whole files behind and resumes
-without redoing finished jobs (issue 8; the helpers are tests/test_resilience.py's).
+without redoing finished jobs (the helpers are tests/test_resilience.py's).
 
 A module of its own, dispatched after the CI run is made (tests/conftest.py): its
 reference is the session's CI run, and the other resilience tests need none.

@@ -1,4 +1,4 @@
-"""Wall time of ``accelcal discrepancy`` on a 40-pose, 10-minute recording at 100 Hz (issue 13, point 7).
+"""Wall time of ``accelcal discrepancy`` on a 40-pose, 10-minute recording at 100 Hz (its goal: under 10 s on one core).
 
 Generates the recording deterministically (seed below): raw 16-bit counts like the Xsens
 session (415 counts per m/s², 3.3 counts white noise, rounded), a 30 s initial rest, then
