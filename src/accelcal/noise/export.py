@@ -47,6 +47,7 @@ import math
 import numpy as np
 
 from ..errors import AccelcalError
+from ..jsonsafe import json_safe
 
 FORMAT = "accelcal-noise"
 FORMAT_VERSION = 1
@@ -75,7 +76,7 @@ def report_dict(report) -> dict:
            "seed": report.seed, "static": {k: v for k, v in report.static.items() if k != "warnings"},
            "warnings": list(report.warnings), "notes": list(report.notes), **report.extra,
            "sensors": {name: _sensor_dict(s) for name, s in report.sensors.items()}}
-    return _plain(out)
+    return json_safe(out)
 
 
 def _sensor_dict(s) -> dict:
@@ -128,22 +129,6 @@ def conversions(sensor: str, unit: str, terms: dict) -> dict:
         return {"angle_random_walk_deg_sqrt_h": 60.0 * math.degrees(n), "bias_instability_floor_deg_h":
                 3600.0 * math.degrees(b), "bias_instability_floor_deg_s": math.degrees(b)}
     return {}
-
-
-def _plain(obj):
-    if isinstance(obj, dict):
-        return {str(k): _plain(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_plain(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _plain(obj.tolist())
-    if isinstance(obj, (bool, np.bool_)):
-        return bool(obj)
-    if isinstance(obj, (int, np.integer)):
-        return int(obj)
-    if isinstance(obj, (float, np.floating)):
-        return float(obj) if np.isfinite(obj) else None
-    return obj
 
 
 # --------------------------------------------------------------------------- Kalibr and OpenVINS

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...errors import AccelcalError
+from ...jsonsafe import json_safe
 from ...noise.terms import TERMS
 
 
@@ -50,7 +51,7 @@ class AxisStochastic:
         d = {k: getattr(self, k) for k in self.__dataclass_fields__}
         d["named"] = list(self.named) if self.named else ["none"]
         d["tests"] = list(self.tests)
-        return _json(d)
+        return json_safe(d)
 
 
 @dataclass(frozen=True)
@@ -82,24 +83,7 @@ class StochasticResult:
         out["terms"] = {k: {"parameter": t.symbol, "unit": t.unit.replace("u", self.unit, 1), "meaning": t.meaning}
                         for k, t in TERMS.items()}
         out["axes"] = {a.axis: a.to_dict() for a in self.axes}
-        return _json(out)
-
-
-def _json(obj):
-    """Numpy to plain Python; NaN/inf to None."""
-    if isinstance(obj, dict):
-        return {str(k): _json(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_json(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _json(obj.tolist())
-    if isinstance(obj, (bool, np.bool_)):
-        return bool(obj)
-    if isinstance(obj, np.integer):
-        return int(obj)
-    if isinstance(obj, (float, np.floating)):
-        return float(obj) if np.isfinite(obj) else None
-    return obj
+        return json_safe(out)
 
 
 __all__ = ["AxisStochastic", "StochasticError", "StochasticResult"]
