@@ -89,12 +89,7 @@ def test_rate_times_the_samples_by_their_index(name, sample):
     np.testing.assert_allclose(rec.t, np.arange(ROWS) / 50.0, rtol=0, atol=1e-12)
 
 
-_SILENT_ABOUT_ITS_RATE = pytest.mark.xfail(strict=True, reason="the imucal-annotated reader does not say which rate "
-                                           "timed its samples (left as it is: the readers' notes are unchanged)")
-
-
-@pytest.mark.parametrize("name", [pytest.param(n, marks=_SILENT_ABOUT_ITS_RATE) if n == "imucal-annotated" else n
-                                  for n in NAMES])
+@pytest.mark.parametrize("name", NAMES)
 def test_where_the_time_came_from_is_said(name, sample):
     """With --rate a note gives it; a file that does not time its samples says what timed them."""
     assert any("50 Hz" in n for n in read(sample(name), format=name, rate=50.0).notes)

@@ -63,4 +63,6 @@ def read_imucal_annotated(csv_path, rate: float = IMUCAL_RATE_HZ,
     gyro = np.column_stack([v["gyr_x"], v["gyr_y"], v["gyr_z"]])[order]
     t = s[order] / rate
     check_time(t, csv_path, first_line=2)
-    return Recording(t, acc, None, str(csv_path), unit="counts", gyro=gyro, gyro_unit="counts"), parts
+    return Recording(t, acc, None, str(csv_path), unit="counts", gyro=gyro, gyro_unit="counts",
+                     notes=(f"imucal annotated session: t = samples / {rate:g} Hz (the file has no rate; --rate "
+                            "to change)",)), parts
