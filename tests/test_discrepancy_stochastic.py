@@ -182,12 +182,11 @@ def test_a_broken_fitter_does_not_pass(monkeypatch):
     truth = INJECTED["random_walk"]
     segs = _segments(20 + sorted(INJECTED).index("random_walk"), {"white": N_WHITE, "random_walk": truth})
 
-    class WrongBasis(noise.NoiseTerm):
-        def basis(self, tau, fs, shape=None):
+    class WrongBasis(type(noise.TERMS["random_walk"])):
+        def _basis(self, tau, fs, shape):
             return np.asarray(tau, dtype=float) / 30.0
 
-    rw = noise.TERMS["random_walk"]
-    monkeypatch.setitem(noise.TERMS, "random_walk", WrongBasis(rw.id, rw.symbol, rw.unit, rw.alpha, rw.meaning))
+    monkeypatch.setitem(noise.TERMS, "random_walk", WrongBasis())
     r = st.stochastic_layer(segs, FS, seed=6, n_boot=99)
     assert all(a.named[0] == "random_walk" for a in r.axes)  # the shape is right, the scale is not
     assert not _estimate_check(r.axes, "random_walk", truth)
@@ -218,28 +217,7 @@ def test_result_is_json_ready_and_deterministic(white_result):
 # --------------------------------------------------------------------------- simulation and models
 
 
-@pytest.mark.parametrize("terms", [
-    {"quantization": 0.01}, {"bias_instability": 0.1}, {"random_walk": 0.1}, {"drift_ramp": 0.01},
-    {"gauss_markov": (0.2, 0.5)}, {"sinusoid": (0.2, 0.3)},
-])
-def test_simulated_terms_have_their_allan_variance(terms):
-    a = al.allan_variance(_segments(30, terms, lengths=[4000] + [600] * 10, d=200), FS)
-    theory = noise.model_avar(terms, a.taus, FS)
-    mean, se = a.avar.mean(axis=1), a.avar.std(axis=1, ddof=1) / np.sqrt(a.avar.shape[1])
-    # from m = 8 on: the Kasdin flicker (+5 % at m = 4) and the discrete walk (+3 % at m = 4)
-    # have converged to the continuous forms
-    ok = np.abs(mean - theory) < 4 * se + 0.02 * theory
-    assert np.all(ok[3:]), mean / theory
-
-
-@pytest.mark.parametrize("term, value", [
-    ("white", 1.0), ("quantization", 1.0), ("random_walk", 1.0), ("drift_ramp", 1.0),
-    ("bias_instability", 1.0), ("gauss_markov", (1.0, 0.7)), ("sinusoid", (1.0, 0.3)),
-])
-def test_pose_difference_variance_reduces_to_allan_for_adjacent_poses(term, value):
-    T = 1.3
-    D = st.pose_difference_variance(term, value, [0.0, T], [T, T])
-    assert D[0, 1] == pytest.approx(2 * noise.model_avar({term: value}, [T], 1e9)[0], rel=1e-6)
+# Each term's simulation, Allan variance and pose-difference variance: tests/test_noise_term_conformance.py
 
 
 @pytest.mark.parametrize("terms", [{"white": 0.1, "random_walk": 0.05}, {"bias_instability": 0.2},

@@ -19,7 +19,10 @@ import pytest
 
 from accelcal.registry import ESTIMATORS, register, unregister
 
+from accelcal.noise.terms import TERMS, unregister_term
+
 from .test_estimator_conformance import CHECKS, run_check
+from .test_noise_term_conformance import CHECKS as TERM_CHECKS
 
 REPO = Path(__file__).resolve().parents[1]
 EXAMPLES = REPO / "examples"
@@ -96,3 +99,23 @@ def example_estimator():
 @pytest.mark.parametrize("check", CHECKS, ids=lambda c: c.__name__.removeprefix("check_"))
 def test_the_example_estimator_passes_every_conformance_check(example_estimator, check, tmp_path):
     run_check(check, example_estimator, tmp_path)
+
+
+def test_the_noise_term_example_fits_its_term(tmp_path):
+    p = _run("custom_noise_term.py", tmp_path)
+    assert p.returncode == 0, p.stderr
+    m = re.match(r"telegraph: A = (\S+) \(true 0.05\), dwell time (\S+) s \(true 4 s\)", p.stdout)
+    assert m and abs(float(m[1]) / 0.05 - 1) < 0.15 and abs(float(m[2]) / 4 - 1) < 0.3, p.stdout
+
+
+@pytest.fixture(scope="module")
+def example_term():
+    module = _example_module("custom_noise_term")  # registers the term on import
+    yield TERMS["telegraph"]
+    unregister_term("telegraph")
+    sys.modules.pop("custom_noise_term", None)
+
+
+@pytest.mark.parametrize("check", TERM_CHECKS, ids=lambda c: c.__name__.removeprefix("check_"))
+def test_the_example_noise_term_passes_every_conformance_check(example_term, check):
+    check(example_term)

@@ -17,11 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..noise.terms import TERMS
 from .stochastic.results import StochasticError, StochasticResult
-
-#: Short labels of the terms in figures.
-TERM_LABELS = {"white": "white", "quantization": "quantization", "bias_instability": "bias instability (flicker)",
-               "random_walk": "random walk", "drift_ramp": "drift ramp", "gauss_markov": "Gauss-Markov", "sinusoid": "sinusoid"}
 
 
 def plot_allan(fig_or_axes, result: StochasticResult, title: str = "", wander_check: dict | None = None):
@@ -73,7 +70,7 @@ def plot_allan(fig_or_axes, result: StochasticResult, title: str = "", wander_ch
             ax.plot(t, a.adev_model_before, ls="--", color="C0", lw=1.2, label="white only (fit)")
             ax.plot(t, a.adev_resim_before, ls="none", marker="s", mfc="none", color="C0", ms=4,
                     label="white only, re-simulated")
-            named = " + ".join(TERM_LABELS.get(k, k) for k in a.named) or "none"
+            named = " + ".join((TERMS[k].name if k in TERMS else k) for k in a.named) or "none"
             if a.named:
                 ax.plot(t, a.adev_model_after, ls="-", color="C3", lw=1.4, label="white + named (fit)")
                 ax.plot(t, a.adev_resim_after, ls="none", marker="^", mfc="none", color="C3", ms=4,
@@ -213,6 +210,6 @@ def recording_figures(analysis, title: str) -> list[tuple[str, object]]:
     return out
 
 
-__all__ = ["TERM_LABELS", "allan_figure", "plot_allan", "plot_before_after", "recording_figures",
+__all__ = ["allan_figure", "plot_allan", "plot_before_after", "recording_figures",
            "stochastic_from_report"]
 

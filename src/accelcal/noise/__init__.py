@@ -58,11 +58,11 @@ from .allan_fit import (OCTAVE_CORRELATION, NoiseFit, bootstrap_fits, fit_avar, 
                         gamma_deviance, log_avar_covariance, model_edf)
 from .report import NoiseAnalysisError, NoiseReport, analyse_noise
 from .simulation import simulate_noise, simulate_segments
-from .terms import TERM_IDS, TERMS, NoiseModelError, NoiseTerm, model_avar, noise_term, term_parameters
+from .terms import TERMS, NoiseModelError, NoiseTerm, model_avar, noise_term, register_term, term_ids, term_parameters
 
-__all__ = ["DEFAULT_MIN_EDF", "NOISE_ALPHAS", "OCTAVE_CORRELATION", "TERMS", "TERM_IDS", "AllanError", "AllanVariance",
+__all__ = ["DEFAULT_MIN_EDF", "NOISE_ALPHAS", "OCTAVE_CORRELATION", "TERMS", "AllanError", "AllanVariance",
            "NoiseAnalysisError", "NoiseFit", "NoiseModelError", "NoiseReport", "NoiseTerm", "allan_variance",
            "analyse_noise", "avar_interval", "bootstrap_fits", "check_segments", "edf_overlapping", "fit_avar",
            "fit_avar_batch", "fit_avar_model_error", "gamma_deviance", "log_avar_covariance", "model_avar",
-           "model_edf", "noise_term", "octave_m", "pooled_edf", "simulate_noise", "simulate_segments",
-           "term_parameters"]
+           "model_edf", "noise_term", "octave_m", "pooled_edf", "register_term", "simulate_noise",
+           "simulate_segments", "term_ids", "term_parameters"]

@@ -212,10 +212,7 @@ def model_edf(allan: AllanVariance, fit: NoiseFit, mix: str = "coherent") -> np.
     parts, nus = [], []
     for k, c in zip(fit.term_ids, fit.c):
         parts.append(c * noise_term(k).basis(taus, allan.fs, fit.shape if TERMS[k].shape_key else None))
-        if k == "gauss_markov":
-            nus.append(np.where(taus < fit.shape, allan.edf_for(-2), allan.edf_for(0)))
-        else:
-            nus.append(allan.edf_for(noise_term(k).alpha))
+        nus.append(noise_term(k).edf(allan, fit.shape))
     total = np.sum(parts, axis=0)
     if mix == "satterthwaite":
         return total**2 / np.sum([p**2 / np.maximum(nu, 1e-12) for p, nu in zip(parts, nus)], axis=0)

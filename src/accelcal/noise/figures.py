@@ -13,9 +13,6 @@ import numpy as np
 
 from .terms import TERMS
 
-_COLORS = {"quantization": "C4", "white": "C0", "bias_instability": "C2", "random_walk": "C3", "drift_ramp": "C1"}
-_LABELS = {"quantization": "quantization Q", "white": "white noise N", "bias_instability": "bias instability B",
-           "random_walk": "random walk K", "drift_ramp": "ramp R"}
 
 
 def noise_figure(report, title: str | None = None, references: dict | None = None,
@@ -53,7 +50,7 @@ def noise_figure(report, title: str | None = None, references: dict | None = Non
                 for k, c in zip(fit.term_ids, fit.c):
                     if c > 0:
                         ax.plot(grid, np.sqrt(c * TERMS[k].basis(grid, a.fs)), ls="--" if s.terms[j][k].resolved
-                                else ":", lw=0.9, color=_COLORS[k], label=_LABELS[k])
+                                else ":", lw=0.9, color=TERMS[k].colour, label=TERMS[k].label)
                 _references(ax, grid, (references or {}).get(s.sensor, {}), reference_label)
                 ex = exported_values(s, j)
                 n_exp, k_exp = ex["noise_density"]["value"], ex["random_walk"]["value"]

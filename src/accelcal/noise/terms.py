@@ -76,6 +76,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import kernels
 from ..errors import AccelcalError
 
 LN2 = math.log(2.0)
@@ -85,12 +86,15 @@ class NoiseModelError(AccelcalError):
     """A noise model, or an Allan variance to fit one to, that the term library cannot use."""
 
 
-@dataclass(frozen=True)
 class NoiseTerm:
-    """One noise term of the library.
+    """One noise term of the library: its parameters and all its behaviour.
 
-    ``shape_key`` names the second, nonlinear parameter of the two-parameter terms
-    (``gauss_markov``: correlation time, ``sinusoid``: frequency), None otherwise.
+    A term is one subclass with one instance in :data:`TERMS` (:func:`register_term`); what
+    the library does with a term (its Allan variance, the profile grid of its nonlinear
+    parameter, its simulation, the variance of the difference of two interval means, its
+    label and colour in figures) is a method or attribute here, never a branch on its id
+    elsewhere.  ``shape_key`` names the second, nonlinear parameter of the two-parameter
+    terms (``gauss_markov``: correlation time, ``sinusoid``: frequency), None otherwise.
     """
 
     id: str
@@ -98,7 +102,16 @@ class NoiseTerm:
     unit: str
     alpha: int
     meaning: str
+    name: str      # what figures and summaries call it
+    colour: str    # matplotlib colour of the term in every figure
     shape_key: str | None = None
+    #: A model entry of the term for the conformance suite (``(coefficient, shape)`` for two parameters).
+    example: object = 1.0
+
+    @property
+    def label(self) -> str:
+        """Figure label: the name and the coefficient's symbol."""
+        return f"{self.name} {self.symbol}"
 
     @property
     def n_parameters(self) -> int:
@@ -108,31 +121,247 @@ class NoiseTerm:
     def basis(self, tau, fs: float, shape: float | None = None) -> np.ndarray:
         """AVAR(τ) per unit squared coefficient (two-parameter terms need ``shape``)."""
         tau = np.asarray(tau, dtype=float)
-        if self.id == "white":
-            return 1.0 / tau
-        if self.id == "quantization":
-            return 3.0 / tau**2
-        if self.id == "bias_instability":
-            return np.full_like(tau, 2.0 * LN2 / math.pi)
-        if self.id == "random_walk":
-            return tau / 3.0
-        if self.id == "drift_ramp":
-            return tau**2 / 2.0
-        if self.shape_key is None or shape is None or not shape > 0:
+        if self.shape_key is not None and (shape is None or not shape > 0):
             raise NoiseModelError(f"{self.id} needs a positive {self.shape_key}")
-        if self.id == "gauss_markov":
-            return _gm_basis(tau, fs, shape)
-        return _sine_basis(tau, fs, shape)
+        return self._basis(tau, fs, shape)
+
+    def _basis(self, tau: np.ndarray, fs: float, shape: float | None) -> np.ndarray:
+        raise NotImplementedError
 
     def shape_grid(self, fs: float, tau_max: float) -> np.ndarray:
         """Values of the nonlinear parameter the fit profiles over (module docstring)."""
-        if self.id == "gauss_markov":  # 3 per octave, 1/(2 fs) … 2 τ_max
-            lo, hi, per = math.log2(0.5 / fs), math.log2(2.0 * tau_max), 3
-        elif self.id == "sinusoid":     # 4 per octave, 1/(4 τ_max) … fs/4
-            lo, hi, per = math.log2(0.25 / tau_max), math.log2(fs / 4.0), 4
-        else:
-            raise NoiseModelError(f"{self.id} has no nonlinear parameter")
-        return 2.0 ** np.arange(lo, hi + 1e-9, 1.0 / per)
+        raise NoiseModelError(f"{self.id} has no nonlinear parameter")
+
+    def edf(self, allan, shape: float | None = None) -> np.ndarray:
+        """Degrees of freedom of ``allan``'s Allan variances where this term dominates (by its α)."""
+        return allan.edf_for(self.alpha)
+
+    def simulate(self, v: float, shape: float | None, rng: np.random.Generator, n: int, fs: float,
+                 cols: int) -> np.ndarray:
+        """``(n, cols)`` samples of the term with coefficient ``v`` for one segment (module docstring)."""
+        raise NotImplementedError
+
+    def interval_difference_variance(self, v2: float, shape: float | None, iv: "IntervalPairs") -> np.ndarray:
+        """``Var(ē_i − ē_j)`` of the term's means over the interval pairs ``iv`` (coefficient² ``v2``)."""
+        raise NotImplementedError
+
+
+@dataclass(frozen=True)
+class IntervalPairs:
+    """Disjoint intervals (start ``a``, duration ``T``) as broadcast pairs ``i`` (rows), ``j`` (columns)."""
+
+    a: np.ndarray
+    T: np.ndarray
+
+    @property
+    def ai(self):
+        return self.a[:, None]
+
+    @property
+    def aj(self):
+        return self.a[None, :]
+
+    @property
+    def Ti(self):
+        return self.T[:, None]
+
+    @property
+    def Tj(self):
+        return self.T[None, :]
+
+    @property
+    def gap(self) -> np.ndarray:
+        """Time between the end of the earlier interval and the start of the later one."""
+        first_end = np.where(self.ai <= self.aj, self.ai + self.Ti, self.aj + self.Tj)
+        return np.maximum(np.maximum(self.ai, self.aj) - first_end, 0.0)
+
+    @property
+    def mid_difference(self) -> np.ndarray:
+        return (self.ai + self.Ti / 2) - (self.aj + self.Tj / 2)
+
+
+#: The noise-term library, in the fixed order used for drawing random numbers.
+TERMS: dict[str, NoiseTerm] = {}
+
+
+def register_term(cls: type[NoiseTerm]) -> type[NoiseTerm]:
+    """Class decorator: one instance of ``cls`` becomes the entry ``TERMS[cls.id]`` (appended:
+    the order of :data:`TERMS` is the order of the random streams, so new terms go last)."""
+    if cls.id in TERMS:
+        raise NoiseModelError(f"noise term {cls.id!r} is already registered")
+    TERMS[cls.id] = cls()
+    return cls
+
+
+def unregister_term(term_id: str) -> None:
+    """Remove a term added at run time (tests and examples)."""
+    TERMS.pop(term_id, None)
+
+
+@register_term
+class White(NoiseTerm):
+    example = 1.0
+    name = "white noise"
+    id, symbol, unit, alpha = "white", "N", "u*s^0.5", 0
+    meaning = "white noise of the rate (velocity random walk)"
+    colour = "C0"
+
+    def _basis(self, tau, fs, shape):
+        return 1.0 / tau
+
+    def simulate(self, v, shape, rng, n, fs, cols):
+        return v * math.sqrt(fs) * rng.standard_normal((n, cols))
+
+    def interval_difference_variance(self, v2, shape, iv):
+        return v2 * (1 / iv.Ti + 1 / iv.Tj)
+
+
+@register_term
+class Quantization(NoiseTerm):
+    example = 1.0
+    name = "quantization"
+    id, symbol, unit, alpha = "quantization", "Q", "u*s", 2
+    meaning = "rounding of the integrated output (white PM)"
+    colour = "C4"
+
+    def _basis(self, tau, fs, shape):
+        return 3.0 / tau**2
+
+    def simulate(self, v, shape, rng, n, fs, cols):
+        half_step = math.sqrt(3.0) * v  # δ/2 with δ = √12 Q
+        e = rng.uniform(-half_step, half_step, (n + 1, cols))
+        return np.diff(e, axis=0) * fs
+
+    def interval_difference_variance(self, v2, shape, iv):
+        touch = np.isclose(iv.gap, 0.0, atol=1e-9 * iv.T.max())  # adjacent means share a rounding error
+        return 2 * v2 * (1 / iv.Ti**2 + 1 / iv.Tj**2 + np.where(touch, 1 / (iv.Ti * iv.Tj), 0.0))
+
+
+@register_term
+class BiasInstability(NoiseTerm):
+    example = 1.0
+    name = "bias instability (flicker)"
+    id, symbol, unit, alpha = "bias_instability", "B", "u", -1
+    meaning = "flicker (1/f) bias: flat Allan floor 0.664 B"
+    colour = "C2"
+
+    def _basis(self, tau, fs, shape):
+        return np.full_like(tau, 2.0 * LN2 / math.pi)
+
+    def simulate(self, v, shape, rng, n, fs, cols):
+        return v * _kasdin_flicker(rng, n, cols)
+
+    def interval_difference_variance(self, v2, shape, iv):
+        # flicker's generalised covariance is −h₋₁ ln|t|: F = ln T − 3/2 and the mean of
+        # ln|s' − s| over s in the earlier interval, s' in the later one
+        F = np.log(iv.T) - 1.5
+        ai, aj, Ti, Tj = iv.ai, iv.aj, iv.Ti, iv.Tj
+        lo, hi = np.where(ai <= aj, ai, aj), np.where(ai <= aj, aj, ai)
+        Tl, Th = np.where(ai <= aj, Ti, Tj), np.where(ai <= aj, Tj, Ti)
+        Gm = (_phi(hi + Th - lo) - _phi(hi - lo) - _phi(hi + Th - lo - Tl) + _phi(hi - lo - Tl)) / (Tl * Th)
+        return -(v2 / math.pi) * (F[:, None] + F[None, :] - 2 * Gm)
+
+
+@register_term
+class RandomWalk(NoiseTerm):
+    example = 1.0
+    name = "random walk"
+    id, symbol, unit, alpha = "random_walk", "K", "u/s^0.5", -2
+    meaning = "rate random walk of the bias"
+    colour = "C3"
+
+    def _basis(self, tau, fs, shape):
+        return tau / 3.0
+
+    def simulate(self, v, shape, rng, n, fs, cols):
+        return np.cumsum(v / math.sqrt(fs) * rng.standard_normal((n, cols)), axis=0)
+
+    def interval_difference_variance(self, v2, shape, iv):
+        return v2 * (iv.gap + (iv.Ti + iv.Tj) / 3)
+
+
+@register_term
+class DriftRamp(NoiseTerm):
+    example = 1.0
+    name = "drift ramp"
+    id, symbol, unit, alpha = "drift_ramp", "R", "u/s", -2
+    meaning = "linear drift within each rest"
+    colour = "C1"
+
+    def _basis(self, tau, fs, shape):
+        return tau**2 / 2.0
+
+    def simulate(self, v, shape, rng, n, fs, cols):
+        t = np.arange(n, dtype=float)[:, None] / fs
+        return np.broadcast_to(v * t, (n, cols)).copy()
+
+    def interval_difference_variance(self, v2, shape, iv):
+        return v2 * iv.mid_difference ** 2
+
+
+@register_term
+class GaussMarkov(NoiseTerm):
+    example = (1.0, 0.7)
+    name = "Gauss-Markov"
+    id, symbol, unit, alpha = "gauss_markov", "sigma", "u", -2
+    meaning = "first-order Gauss-Markov bias (or low-passed white noise)"
+    colour, shape_key = "C5", "correlation_time_s"
+
+    def _basis(self, tau, fs, shape):
+        return _gm_basis(tau, fs, shape)
+
+    def shape_grid(self, fs, tau_max):  # 3 per octave, 1/(2 fs) … 2 τ_max
+        return _octave_grid(math.log2(0.5 / fs), math.log2(2.0 * tau_max), 3)
+
+    def edf(self, allan, shape=None):  # random-walk-like below T_c, white-like above
+        return np.where(allan.taus < shape, allan.edf_for(-2), allan.edf_for(0))
+
+    def simulate(self, v, shape, rng, n, fs, cols):
+        rho = math.exp(-1.0 / (fs * shape))  # stationary AR(1)
+        e = rng.standard_normal((n, cols)) * v * math.sqrt(1.0 - rho * rho)
+        e[0] = rng.standard_normal(cols) * v  # start in the stationary distribution
+        fast = kernels.compiled("noise._fast")
+        if fast is not None:  # the same recursion, compiled (and no scipy.signal import: ~1 s of CPU)
+            return fast.ar1(e, rho)
+        from scipy.signal import lfilter
+
+        return lfilter([1.0], [1.0, -rho], e, axis=0)
+
+    def interval_difference_variance(self, v2, shape, iv):
+        tc, T = shape, iv.T
+        W = 2 * v2 * (tc * T + tc**2 * np.expm1(-T / tc))
+        E = -np.expm1(-T / tc)
+        cov = v2 * tc**2 * E[:, None] * E[None, :] * np.exp(-iv.gap / tc) / (iv.Ti * iv.Tj)
+        return (W / T**2)[:, None] + (W / T**2)[None, :] - 2 * cov
+
+
+@register_term
+class Sinusoid(NoiseTerm):
+    example = (1.0, 0.3)
+    name = "sinusoid"
+    id, symbol, unit, alpha = "sinusoid", "A", "u", -2
+    meaning = "periodic disturbance of amplitude A"
+    colour, shape_key = "C6", "frequency_hz"
+
+    def _basis(self, tau, fs, shape):
+        return _sine_basis(tau, fs, shape)
+
+    def shape_grid(self, fs, tau_max):  # 4 per octave, 1/(4 τ_max) … fs/4
+        return _octave_grid(math.log2(0.25 / tau_max), math.log2(fs / 4.0), 4)
+
+    def simulate(self, v, shape, rng, n, fs, cols):  # a random phase per segment and column
+        phase = rng.uniform(0.0, 2 * math.pi, cols)
+        t = np.arange(n, dtype=float)[:, None] / fs
+        return v * np.sin(2 * math.pi * shape * t + phase)
+
+    def interval_difference_variance(self, v2, shape, iv):  # one coherent oscillation, random phase
+        sinc = np.sinc(shape * iv.T)  # numpy's sinc is sin(πx)/(πx)
+        return 0.5 * v2 * (sinc[:, None] ** 2 + sinc[None, :] ** 2 - 2 * sinc[:, None] * sinc[None, :]
+                           * np.cos(2 * math.pi * shape * iv.mid_difference))
+
+
+def _octave_grid(lo: float, hi: float, per: int) -> np.ndarray:
+    return 2.0 ** np.arange(lo, hi + 1e-9, 1.0 / per)
 
 
 def _gm_basis(tau, fs, tc):
@@ -157,18 +386,31 @@ def _sine_basis(tau, fs, f0):
     return h**2 * np.sin(math.pi * f0 * tau) ** 2
 
 
-#: The noise-term library, in the fixed order used for drawing random numbers.
-TERMS = {t.id: t for t in (
-    NoiseTerm("white", "N", "u*s^0.5", 0, "white noise of the rate (velocity random walk)"),
-    NoiseTerm("quantization", "Q", "u*s", 2, "rounding of the integrated output (white PM)"),
-    NoiseTerm("bias_instability", "B", "u", -1, "flicker (1/f) bias: flat Allan floor 0.664 B"),
-    NoiseTerm("random_walk", "K", "u/s^0.5", -2, "rate random walk of the bias"),
-    NoiseTerm("drift_ramp", "R", "u/s", -2, "linear drift within each rest"),
-    NoiseTerm("gauss_markov", "sigma", "u", -2, "first-order Gauss-Markov bias (or low-passed white noise)",
-              "correlation_time_s"),
-    NoiseTerm("sinusoid", "A", "u", -2, "periodic disturbance of amplitude A", "frequency_hz"),
-)}
-TERM_IDS = tuple(TERMS)
+def _kasdin_flicker(rng: np.random.Generator, n: int, cols: int) -> np.ndarray:
+    """Flicker (1/f) noise: the Kasdin–Walter filter ``h_k = h_{k-1} (k − 1/2)/k`` on unit white noise."""
+    from scipy.fft import next_fast_len  # scipy.fft only where flicker is drawn (import cost)
+
+    k = np.arange(1, n)
+    h = np.concatenate([[1.0], np.cumprod((k - 0.5) / k)])
+    w = rng.standard_normal((n, cols))
+    # zero padding to at least 2n - 1: linear, not circular, convolution; a length with
+    # small prime factors (2n itself can have a large one, e.g. 2 x 1741, and FFT slowly)
+    nfft = next_fast_len(2 * n, real=True)
+    spec = np.fft.rfft(w, nfft, axis=0) * np.fft.rfft(h, nfft)[:, None]
+    return np.fft.irfft(spec, nfft, axis=0)[:n]
+
+
+def _phi(x):
+    """Second antiderivative of ln|x| (zero at 0): ``x²/2 ln|x| − 3x²/4``."""
+    x = np.asarray(x, dtype=float)
+    ax = np.abs(x)
+    return np.where(ax > 0, 0.5 * x**2 * np.log(np.where(ax > 0, ax, 1.0)) - 0.75 * x**2, 0.0)
+
+
+def term_ids() -> tuple[str, ...]:
+    """The registered terms' ids in registry order (the order of the random streams)."""
+    return tuple(TERMS)
+
 
 
 def noise_term(term_id: str) -> NoiseTerm:
@@ -176,7 +418,7 @@ def noise_term(term_id: str) -> NoiseTerm:
     try:
         return TERMS[term_id]
     except KeyError:
-        raise NoiseModelError(f"unknown noise term {term_id!r}; known: {', '.join(TERM_IDS)}") from None
+        raise NoiseModelError(f"unknown noise term {term_id!r}; known: {', '.join(TERMS)}") from None
 
 
 def term_parameters(term_id: str, v) -> tuple[float, float | None]:
@@ -213,4 +455,5 @@ def model_avar(terms: Mapping[str, object], taus, fs: float) -> np.ndarray:
     return out
 
 
-__all__ = ["LN2", "NoiseModelError", "NoiseTerm", "TERMS", "TERM_IDS", "model_avar", "noise_term", "term_parameters"]
+__all__ = ["LN2", "IntervalPairs", "NoiseModelError", "NoiseTerm", "TERMS", "model_avar", "noise_term",
+           "register_term", "term_ids", "term_parameters", "unregister_term"]

@@ -28,20 +28,12 @@ overestimates the residual.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 
 import numpy as np
 
-from ...noise.terms import model_avar, term_parameters
+from ...noise.terms import IntervalPairs, model_avar, noise_term, term_parameters
 from .results import StochasticError, StochasticResult
-
-
-def _phi(x):
-    """Second antiderivative of ln|x| (zero at 0): ``x²/2 ln|x| − 3x²/4``."""
-    x = np.asarray(x, dtype=float)
-    ax = np.abs(x)
-    return np.where(ax > 0, 0.5 * x**2 * np.log(np.where(ax > 0, ax, 1.0)) - 0.75 * x**2, 0.0)
 
 
 def pose_difference_variance(term_id: str, value, starts, durations) -> np.ndarray:
@@ -67,37 +59,7 @@ def pose_difference_variance(term_id: str, value, starts, durations) -> np.ndarr
     order = np.argsort(a)
     if np.any(a[order][1:] < (a + T)[order][:-1] - 1e-9 * T.max()):
         raise StochasticError("pose intervals overlap")
-    v2 = s**2
-    ai, aj = a[:, None], a[None, :]
-    Ti, Tj = T[:, None], T[None, :]
-    first_end = np.where(ai <= aj, ai + Ti, aj + Tj)
-    gap = np.maximum(np.maximum(ai, aj) - first_end, 0.0)
-    if term_id == "white":
-        D = v2 * (1 / Ti + 1 / Tj)
-    elif term_id == "quantization":
-        touch = np.isclose(gap, 0.0, atol=1e-9 * T.max())
-        D = 2 * v2 * (1 / Ti**2 + 1 / Tj**2 + np.where(touch, 1 / (Ti * Tj), 0.0))
-    elif term_id == "random_walk":
-        D = v2 * (gap + (Ti + Tj) / 3)
-    elif term_id == "drift_ramp":
-        D = v2 * ((ai + Ti / 2) - (aj + Tj / 2)) ** 2
-    elif term_id == "bias_instability":
-        F = np.log(T) - 1.5
-        # mean of ln|s' − s| over s in the earlier interval, s' in the later one
-        lo, hi = np.where(ai <= aj, ai, aj), np.where(ai <= aj, aj, ai)
-        Tl, Th = np.where(ai <= aj, Ti, Tj), np.where(ai <= aj, Tj, Ti)
-        Gm = (_phi(hi + Th - lo) - _phi(hi - lo) - _phi(hi + Th - lo - Tl) + _phi(hi - lo - Tl)) / (Tl * Th)
-        D = -(v2 / math.pi) * (F[:, None] + F[None, :] - 2 * Gm)
-    elif term_id == "sinusoid":  # one coherent oscillation over the session, random phase
-        sinc = np.sinc(shape * T)  # numpy's sinc is sin(πx)/(πx)
-        D = 0.5 * v2 * (sinc[:, None] ** 2 + sinc[None, :] ** 2 - 2 * sinc[:, None] * sinc[None, :]
-                        * np.cos(2 * math.pi * shape * ((ai + Ti / 2) - (aj + Tj / 2))))
-    else:  # gauss_markov
-        tc = shape
-        W = 2 * v2 * (tc * T + tc**2 * np.expm1(-T / tc))
-        E = -np.expm1(-T / tc)
-        cov = v2 * tc**2 * E[:, None] * E[None, :] * np.exp(-gap / tc) / (Ti * Tj)
-        D = (W / T**2)[:, None] + (W / T**2)[None, :] - 2 * cov
+    D = noise_term(term_id).interval_difference_variance(s**2, shape, IntervalPairs(a, T))
     D = np.array(D, dtype=float)
     np.fill_diagonal(D, 0.0)
     return D
