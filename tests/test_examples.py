@@ -119,3 +119,31 @@ def example_term():
 @pytest.mark.parametrize("check", TERM_CHECKS, ids=lambda c: c.__name__.removeprefix("check_"))
 def test_the_example_noise_term_passes_every_conformance_check(example_term, check):
     check(example_term)
+
+
+@pytest.fixture()
+def example_format():
+    module = _example_module("custom_format")
+    from accelcal.formats import FORMATS
+
+    FORMATS[module.ENTRY.name] = module.ENTRY
+    yield module
+    FORMATS.pop(module.ENTRY.name, None)
+    sys.modules.pop("custom_format", None)
+
+
+@pytest.mark.parametrize("body, cause", [
+    ("0 0 1\n", "only 1 samples"),
+    ("0 0 1\n" * 11 + "nan 0 1\n", "not a finite number"),
+])
+def test_the_example_reader_needs_no_checks_of_its_own(example_format, tmp_path, body, cause):
+    """The recording's invariants are checked where every reader's output passes (formats.read): the
+    guide's reader, which checks neither row count nor finiteness, still gives one line."""
+    from accelcal.errors import RecordingError
+    from accelcal.formats import read
+
+    path = tmp_path / "short.txt"
+    path.write_text(f"{example_format.MAGIC} 100 Hz\n{body}")
+    with pytest.raises(RecordingError, match=cause) as e:
+        read(path)
+    assert "\n" not in str(e.value)

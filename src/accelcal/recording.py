@@ -8,7 +8,7 @@ intervals, notes on what a reader assumed, the units.  Readers of the file forma
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -107,6 +107,32 @@ class Recording:
     def rate(self) -> float:
         """Sampling rate [Hz] from the median time step."""
         return 1.0 / float(np.median(np.diff(self.t)))
+
+
+def checked_recording(rec: Recording) -> Recording:
+    """``rec`` if it holds what every reader's output must (else one :class:`RecordingError` line).
+
+    The invariants of a recording that the estimators rely on, checked once where every
+    reader's output passes (:func:`accelcal.formats.read`), not in each reader: at least
+    :data:`MIN_ROWS` samples, finite time, specific force and angular rate, time strictly
+    increasing.  A temperature column with non-finite values is dropped, with a note.
+    """
+    where = rec.source
+    if rec.n < MIN_ROWS:
+        raise RecordingError(f"{where}: only {rec.n} samples; need at least {MIN_ROWS} (an empty or truncated file?)")
+    for name, values in (("time", rec.t), ("specific force", rec.acc), ("angular rate", rec.gyro)):
+        if values is not None and not np.all(np.isfinite(values)):
+            k = int(np.flatnonzero((~np.isfinite(values.reshape(rec.n, -1))).any(axis=1))[0])
+            raise RecordingError(f"{where}: {name} of sample {k} is not a finite number (nan or inf); "
+                                 "remove or repair that row")
+    steps = np.diff(rec.t)
+    if np.any(steps <= 0):
+        k = int(np.flatnonzero(steps <= 0)[0]) + 1
+        raise RecordingError(f"{where}: time not strictly increasing at sample {k} ({rec.t[k - 1]:.9g} then "
+                             f"{rec.t[k]:.9g} s); sort the file or give --rate to time it by the sample index")
+    if rec.temp is not None and not np.all(np.isfinite(rec.temp)):
+        return replace(rec, temp=None, notes=rec.notes + ("temperature column has non-finite values: not used",))
+    return rec
 
 
 def _check_gyro(gyro, unit: str | None, n: int, source: str):

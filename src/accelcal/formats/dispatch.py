@@ -85,11 +85,13 @@ def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit
         In m/s² or counts (``unit`` set; strict: as in the file, ``unit`` None), time in
         seconds, notes saying what was assumed.
     """
+    from ..recording import checked_recording  # numpy: not loaded for the CLI's help (formats list)
+
     path = Path(path)
     options = {"columns": columns, "unit": unit, "time_unit": time_unit, "rate": rate, "gyro_unit": gyro_unit,
                "topic": topic, "instance": instance, "time_source": time_source}
     if strict:
-        return _read_strict(path, format, {**options, "intervals": intervals, "gyro": gyro})
+        return checked_recording(_read_strict(path, format, {**options, "intervals": intervals, "gyro": gyro}))
     fmt = None if format == "auto" else format_named(format)
     _check_options(unit, time_unit, rate, gyro_unit, time_source)
     notes: list[str] = []
@@ -114,7 +116,7 @@ def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit
         from .gyro_file import attach_gyro
 
         rec = attach_gyro(rec, gyro, gyro_unit=gyro_unit, time_unit=time_unit)
-    return rec
+    return checked_recording(rec)
 
 
 def write_recording(path, rec, *, format: str = FALLBACK) -> None:
