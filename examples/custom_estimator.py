@@ -21,7 +21,7 @@ import numpy as np
 
 from accelcal import cli
 from accelcal.calibration import Calibration, load_calibration
-from accelcal.registry import Estimator, register
+from accelcal.registry import PoseEstimator, register
 from accelcal.results import NLLSResult
 from accelcal.simulation import random_directions, simulate_recording
 from accelcal.validation import check_g, check_poses
@@ -62,10 +62,10 @@ class BiasGNCalibration(Calibration):
     cost: float = float("nan")
 
 
-ENTRY = Estimator(name="bias_gn", model="bias", algorithm="gn", label="bias-only Gauss-Newton", family="iterative",
-                  function=f"{__name__}:bias_gn", calibration=f"{__name__}:BiasGNCalibration",
-                  baseline="bias_nlls", conditioning="accelcal.lls:design_singular_values",
-                  description="Gauss-Newton from the algebraic fit, M = I")
+ENTRY = PoseEstimator(name="bias_gn", model="bias", algorithm="gn", label="bias-only Gauss-Newton",
+                      family="iterative", function=f"{__name__}:bias_gn", calibration=f"{__name__}:BiasGNCalibration",
+                      baseline="bias_nlls", conditioning="accelcal.lls:design_singular_values",
+                      description="Gauss-Newton from the algebraic fit, M = I")
 
 
 def main(folder: Path) -> int:

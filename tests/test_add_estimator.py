@@ -17,7 +17,7 @@ import pytest
 
 from accelcal import cli
 from accelcal.calibration import Calibration, load_calibration
-from accelcal.registry import ESTIMATORS, Estimator, register, unregister
+from accelcal.registry import ESTIMATORS, PoseEstimator, register, unregister
 from accelcal.results import NLLSResult
 from accelcal.simulation import random_directions, sample_truth, simulate_recording
 from accelcal.validation import check_g, check_poses
@@ -54,7 +54,7 @@ class BiasGNCalibration(Calibration):
     cost: float = float("nan")
 
 
-TOY = Estimator(name="bias_gn", model="bias", algorithm="gn", label="bias-only Gauss-Newton", family="iterative",
+TOY = PoseEstimator(name="bias_gn", model="bias", algorithm="gn", label="bias-only Gauss-Newton", family="iterative",
                 function=f"{__name__}:bias_gn", calibration=f"{__name__}:BiasGNCalibration", baseline="bias_nlls",
                 conditioning="accelcal.lls:design_singular_values",
                 description="Gauss-Newton from the algebraic fit, M = I (a test's toy)")

@@ -40,9 +40,9 @@ class ToyTaggedCalibration(Calibration):
 
 
 def test_the_registrys_class_comes_before_another_of_the_same_tag():
-    from accelcal.registry import Estimator, register, unregister
+    from accelcal.registry import PoseEstimator, register, unregister
 
-    register(Estimator(name="toy_tagged", model="bias", algorithm="lls", label="toy", family="closed_form",
+    register(PoseEstimator(name="toy_tagged", model="bias", algorithm="lls", label="toy", family="closed_form",
                        function="accelcal.lls:bias_lls", calibration=f"{__name__}:ToyTaggedCalibration",
                        conditioning="accelcal.lls:design_singular_values", description="a test's toy"))
     try:

@@ -174,8 +174,12 @@ def test_a_ferraris_session_and_rotations_short_of_the_stated_angle(tmp_path, ca
     out = tmp_path / "f.json"
     code, err = run(capsys, "calibrate", rec, "--g", G, "--method", "bias-lls", "--intervals",
                     tmp_path / "sections.json", "--out", out)
-    assert code == 0 and "gyroscope: gyro_ferraris" in err, err
+    assert code == 0 and "gyroscope: gyro_ferraris (chosen by the data: rotations of known angle" in err, err
     np.testing.assert_allclose(load_calibration(out).gyro.model.C, np.eye(3), atol=2e-3)
+    # an estimator of other data is refused in one line, never silently replaced
+    msg = _refused(capsys, tmp_path / "i.json", "calibrate", rec, "--g", G, "--method", "bias-lls", "--intervals",
+                   tmp_path / "sections.json", "--gyro-method", "gyro-iterative")
+    assert "marks rotations of known angle" in msg and "gyro-iterative fits motions" in msg
     short = _ferraris_session(tmp_path / "g.csv", angles_deg=(360.0, 300.0, 360.0))
     msg = _refused(capsys, tmp_path / "g.json", "calibrate", short, "--g", G, "--method", "bias-lls",
                    "--intervals", tmp_path / "sections.json")

@@ -35,14 +35,14 @@ import pytest
 from accelcal import kernels
 from accelcal.calibration import Calibration, calibrate_poses, calibration_class, load_calibration
 from accelcal.errors import AccelcalError, TooFewPosesError
-from accelcal.registry import ESTIMATORS, Estimator, estimators
+from accelcal.registry import ESTIMATORS, PoseEstimator, estimators
 from accelcal.simulation import random_directions, sample_truth, simulate_poses
 
 G = 9.8055
 HAVE_NUMBA = kernels._resolve("auto") == "numba"
 
 
-def problem(e: Estimator, rng, n: int, noise: float):
+def problem(e: PoseEstimator, rng, n: int, noise: float):
     """Poses of the estimator's model (``M = I`` for a bias-only one) and the truth."""
     tr = {k: v[0] for k, v in sample_truth(rng, 1).items()}
     M = np.eye(3) if e.model == "bias" else tr["M"]
@@ -56,7 +56,7 @@ def no_ellipsoid(rng, n: int) -> np.ndarray:
     return np.column_stack([r * np.cos(a), r * np.sin(a), h])
 
 
-def outcome(e: Estimator, z, g=G, **kw):
+def outcome(e: PoseEstimator, z, g=G, **kw):
     """The result, or the name of the AccelcalError it raised."""
     try:
         return e.fit(z, g, **kw)
@@ -65,7 +65,7 @@ def outcome(e: Estimator, z, g=G, **kw):
 
 
 # ----------------------------------------------------------------------------- checks
-def check_entry(e: Estimator, rng):
+def check_entry(e: PoseEstimator, rng):
     assert callable(e.load()) and callable(e.load_conditioning())
     assert e.batch is None or callable(e.load_batch())
     cls = e.load_calibration()
@@ -84,7 +84,7 @@ def check_entry(e: Estimator, rng):
     assert np.all(np.isfinite(sv))
 
 
-def check_min_poses(e: Estimator, rng):
+def check_min_poses(e: PoseEstimator, rng):
     z, M, b = problem(e, rng, e.min_poses, 0.0)
     with pytest.raises(TooFewPosesError, match=str(e.min_poses)):
         e.fit(z[:-1], G)
@@ -95,7 +95,7 @@ def check_min_poses(e: Estimator, rng):
     np.testing.assert_allclose(r.M, M, atol=1e-7)
 
 
-def check_batch_equals_single(e: Estimator, rng):
+def check_batch_equals_single(e: PoseEstimator, rng):
     trials = [problem(e, rng, n, noise)[0] for n, noise in ((24, 1e-3), (24, 1e-2), (24, 1e-5))]
     trials.append(no_ellipsoid(rng, 24))
     Z = np.stack(trials)
@@ -116,7 +116,7 @@ def check_batch_equals_single(e: Estimator, rng):
 _ERROR_NAMES = {c.__name__ for c in (AccelcalError, *AccelcalError.__subclasses__())}
 
 
-def check_compiled_equals_reference(e: Estimator, rng):
+def check_compiled_equals_reference(e: PoseEstimator, rng):
     singles = [problem(e, rng, n, noise)[0] for n, noise in ((e.min_poses + 2, 1e-3), (24, 1e-2), (100, 1e-5))]
     Z = np.stack([problem(e, rng, 24, 1e-3)[0] for _ in range(3)])
     previous = kernels.choice()
@@ -144,7 +144,7 @@ def _poses(z, noise):
                            t_end=np.arange(n) * 10.0 + 5.0, n_samples=np.full(n, 500), temp=None, labels=None)
 
 
-def check_json_round_trip(e: Estimator, rng, tmp_path):
+def check_json_round_trip(e: PoseEstimator, rng, tmp_path):
     z, _, _ = problem(e, rng, 24, 1e-3)
     cal = calibrate_poses(_poses(z, 1e-3), G, e.name, unit="m/s^2")
     assert type(cal) is e.load_calibration() and cal.method == e.name and cal.model == e.model
@@ -160,7 +160,7 @@ def check_json_round_trip(e: Estimator, rng, tmp_path):
         assert name in d, name
 
 
-def check_apply_inverts(e: Estimator, rng):
+def check_apply_inverts(e: PoseEstimator, rng):
     z, _, _ = problem(e, rng, 24, 1e-3)
     cal = calibrate_poses(_poses(z, 1e-3), G, e.name, unit="m/s^2")
     x = rng.normal(size=(50, 3)) * G
@@ -170,7 +170,7 @@ def check_apply_inverts(e: Estimator, rng):
     np.testing.assert_allclose(np.linalg.norm(cal.apply(z), axis=1) - G, cal.residuals, rtol=0, atol=1e-12 * G)
 
 
-def check_noise_level(e: Estimator, rng):
+def check_noise_level(e: PoseEstimator, rng):
     takes_noise = "noise_std" in inspect.signature(e.load()).parameters
     assert takes_noise == e.needs_noise, (e.name, e.noise_use)
     z, _, _ = problem(e, rng, 24, 1e-2)
@@ -192,7 +192,7 @@ def check_noise_level(e: Estimator, rng):
         assert np.abs(told.bias - plain.bias).max() < 1e-2
 
 
-def check_needs_g(e: Estimator, rng):
+def check_needs_g(e: PoseEstimator, rng):
     z, _, _ = problem(e, rng, 24, 1e-3)
     a, b = e.fit(z, G), e.fit(z, 1.1 * G)
     moved = max(np.abs(a.bias - b.bias).max() / G, np.abs(a.M - b.M).max())
@@ -206,7 +206,7 @@ CHECKS = (check_entry, check_min_poses, check_batch_equals_single, check_compile
           check_json_round_trip, check_apply_inverts, check_noise_level, check_needs_g)
 
 
-def run_check(check, e: Estimator, tmp_path):
+def run_check(check, e: PoseEstimator, tmp_path):
     """Run ``check`` on ``e`` with its own random stream (and a folder if it needs one)."""
     rng = np.random.default_rng([20240601, CHECKS.index(check)])
     if "tmp_path" in inspect.signature(check).parameters:
@@ -225,7 +225,7 @@ def test_every_registered_estimator_has_a_conformance_suite():
     from .test_gyro_conformance import GYRO_CHECKS
 
     assert {e.sensor for e in ESTIMATORS.values()} <= {"accelerometer", *GYRO_CHECKS}
-    assert all(e.data == "poses" for e in estimators("accelerometer"))
+    assert all(isinstance(e, PoseEstimator) and e.data == "poses" for e in estimators("accelerometer"))
 
 
 def test_the_checks_can_fail(tmp_path):

@@ -36,6 +36,11 @@ no separate noise level) or rotations of known angle, through their own function
 :class:`accelcal.gyro.result.GyroCalibration` subclasses.  An estimator of another sensor
 or model is one more entry, with its own ``sensor`` and a model of :data:`N_PARAMETERS`.
 
+One protocol per kind of data: an entry is a :class:`PoseEstimator`, a
+:class:`MotionEstimator` or a :class:`RotationEstimator`, each with the fields that mean
+something for its data and a ``fit`` that takes that data, so that no entry raises when
+called through its kind's API (:func:`estimators` ``(data=...)`` lists one kind).
+
 Adding an estimator is one entry (a line of :data:`ESTIMATORS`, or :func:`register` at
 run time) naming its function and its calibration class; the CLI, the calibration
 files, the Monte Carlo, the timing benchmark, its cost table and the workflow's config
@@ -47,6 +52,7 @@ from __future__ import annotations
 
 import importlib
 from dataclasses import dataclass
+from typing import ClassVar
 
 from .errors import AccelcalError
 
@@ -65,7 +71,11 @@ FAMILIES = ("closed_form", "iterative")
 
 @dataclass(frozen=True, kw_only=True)
 class Estimator:
-    """One estimator of a sensor model from static pose means.
+    """What every estimator is, whatever data it fits: the common part of the registry's entries.
+
+    An entry is of the class of its data (:class:`PoseEstimator`, :class:`MotionEstimator`,
+    :class:`RotationEstimator`: :attr:`data`), and only that class's ``fit`` takes that data,
+    so no entry raises through the API of its kind.  The fields every kind has:
 
     Attributes
     ----------
@@ -75,50 +85,35 @@ class Estimator:
     sensor : str
         The sensor it calibrates (``'accelerometer'``, ``'gyroscope'``).
     model : str
-        A key of :data:`N_PARAMETERS`: ``'full'`` (``z = M x + b``) or ``'bias'``
-        (``M = I``, only ``b`` is estimated).
+        A key of :data:`N_PARAMETERS`: ``'full'`` (``z = M x + b``), ``'bias'`` (``M = I``,
+        only ``b`` is estimated), ``'scale_misalignment'`` (the gyro's ``C``).
     algorithm : str
         The algorithm whatever the model (``'lls'``, ``'als'``, ``'nlls'``): column names
         of the comparisons (``lls_vs_nlls``).
     label : str
         Short name in tables and figures (``'full LLS'``).
     function : str
-        ``'module:function'`` of ``f(z, g, **kw) -> CalibrationResult``.
+        ``'module:function'`` of the estimator (its signature is its kind's: ``fit``).
     calibration : str
-        ``'module:Class'`` of its :class:`accelcal.calibration.Calibration` subclass
-        (whose ``CAL_TYPE`` is :attr:`name`).
+        ``'module:Class'`` of its calibration class (whose ``CAL_TYPE`` is :attr:`name`).
     family : {'closed_form', 'iterative'}
     conditioning : str
-        ``'module:function'`` giving the singular values that describe how well the poses
-        determine the estimate (:attr:`accelcal.results.LLSResult.singular_values`):
-        ``f(model, poses)``, or ``f(poses, noise_var)`` when ``conditioning_uses_noise``.
+        ``'module:function'`` giving the singular values that describe how well the data
+        determine the estimate.
     description : str
-    batch : str or None
-        ``'module:function'`` of the batched form ``f(z (T, n, 3), g[, noise_std]) ->
-        BatchResult`` (``status`` per trial); None: :meth:`fit_batch` calls the
-        estimator trial by trial.
     baseline : str or None
         The estimator this one is compared with (accuracy and speed).
-    corrects : str or None
-        The estimator whose estimate this one corrects (compared trial by trial with it).
-    compiled : bool
-        Whether it has a compiled kernel (:mod:`accelcal.kernels`): timed under every
-        backend, and checked against the numpy reference.
-    needs_g : bool
-        Whether the estimate depends on g.
-    noise_use : {'correction', 'stopping'} or None
-        What it uses the noise level of the pose means for (``noise_std``), if anything.
-    conditioning_uses_noise : bool
-    data : str
-        A key of :data:`DATA`: what it fits (``'poses'``, ``'motions'``, ``'rotations'``).
     redundancy : int
         Equations beyond the unknowns that the fewest data must leave: 1, so that a
         residual checks the fit; 0 for an estimate that is exactly determined by design
         (the Ferraris protocol's three rotations).
     """
 
+    #: What the entries of the class fit: a key of :data:`DATA`.
+    data: ClassVar[str] = ""
+
     name: str
-    sensor: str = "accelerometer"
+    sensor: str
     model: str
     algorithm: str
     label: str
@@ -127,25 +122,16 @@ class Estimator:
     family: str
     conditioning: str
     description: str
-    batch: str | None = None
     baseline: str | None = None
-    corrects: str | None = None
-    compiled: bool = False
-    needs_g: bool = True
-    noise_use: str | None = None
-    conditioning_uses_noise: bool = False
-    data: str = "poses"
     redundancy: int = 1
 
     def __post_init__(self):
+        if self.data not in DATA:
+            raise ValueError(f"{self.name}: an entry is a PoseEstimator, MotionEstimator or RotationEstimator")
         if self.model not in N_PARAMETERS:
             raise ValueError(f"{self.name}: model {self.model!r} is not one of {', '.join(N_PARAMETERS)}")
         if self.family not in FAMILIES:
             raise ValueError(f"{self.name}: family {self.family!r} is not one of {', '.join(FAMILIES)}")
-        if self.noise_use not in (None, *NOISE_USES):
-            raise ValueError(f"{self.name}: noise_use {self.noise_use!r} is not one of {', '.join(NOISE_USES)}")
-        if self.data not in DATA:
-            raise ValueError(f"{self.name}: data {self.data!r} is not one of {', '.join(DATA)}")
 
     @property
     def n_parameters(self) -> int:
@@ -162,6 +148,58 @@ class Estimator:
     def cli_name(self) -> str:
         return self.name.replace("_", "-")
 
+    def load(self):
+        """The estimator function (imported now)."""
+        return resolve(self.function)
+
+    def load_conditioning(self):
+        """The function giving the singular values of the problem (:attr:`conditioning`)."""
+        return resolve(self.conditioning)
+
+    def load_calibration(self) -> type:
+        """Its calibration class (imported now)."""
+        return resolve(self.calibration)
+
+
+@dataclass(frozen=True, kw_only=True)
+class PoseEstimator(Estimator):
+    """An estimator of static pose means ``z`` (n, 3) and the gravity magnitude: ``f(z, g, **kw)
+    -> CalibrationResult``, its calibration an :class:`accelcal.calibration.Calibration`.
+
+    Attributes (beyond :class:`Estimator`'s)
+    ----------------------------------------
+    batch : str or None
+        ``'module:function'`` of the batched form ``f(z (T, n, 3), g[, noise_std]) ->
+        BatchResult`` (``status`` per trial); None: :meth:`fit_batch` calls the
+        estimator trial by trial.
+    corrects : str or None
+        The estimator whose estimate this one corrects (compared trial by trial with it).
+    compiled : bool
+        Whether it has a compiled kernel (:mod:`accelcal.kernels`): timed under every
+        backend, and checked against the numpy reference.
+    needs_g : bool
+        Whether the estimate depends on g.
+    noise_use : {'correction', 'stopping'} or None
+        What it uses the noise level of the pose means for (``noise_std``), if anything.
+    conditioning_uses_noise : bool
+        Its conditioning function is ``f(poses, noise_var)`` instead of ``f(model, poses)``.
+    """
+
+    data: ClassVar[str] = "poses"
+
+    sensor: str = "accelerometer"
+    batch: str | None = None
+    corrects: str | None = None
+    compiled: bool = False
+    needs_g: bool = True
+    noise_use: str | None = None
+    conditioning_uses_noise: bool = False
+
+    def __post_init__(self):
+        super().__post_init__()
+        if self.noise_use not in (None, *NOISE_USES):
+            raise ValueError(f"{self.name}: noise_use {self.noise_use!r} is not one of {', '.join(NOISE_USES)}")
+
     @property
     def needs_noise(self) -> bool:
         """Whether it uses the noise level of the pose means (:attr:`noise_use`)."""
@@ -172,30 +210,16 @@ class Estimator:
         """Name of its batched form in tables (``'full_lls_batch'``)."""
         return f"{self.name}_batch"
 
-    def load(self):
-        """The estimator function (imported now)."""
-        return _resolve(self.function)
-
-    def load_conditioning(self):
-        """The function giving the singular values of the problem (:attr:`conditioning`)."""
-        return _resolve(self.conditioning)
-
     def load_batch(self):
         """The batched function, or None."""
-        return None if self.batch is None else _resolve(self.batch)
-
-    def load_calibration(self) -> type:
-        """Its calibration class (imported now)."""
-        return _resolve(self.calibration)
+        return None if self.batch is None else resolve(self.batch)
 
     def fit(self, z, g: float, noise_std: float | None = None):
         """Run the estimator on pose means ``z`` (n, 3) with gravity ``g``.
 
         ``noise_std`` (the standard error of one pose-mean coordinate, same unit as
         ``z``) is passed to the estimators that use it and ignored by the others.
-        Estimators of other data (:attr:`data`) are called through :meth:`load`.
         """
-        self._check_poses()
         f = self.load()
         if self.needs_noise and noise_std is not None:
             return f(z, g, noise_std=noise_std)
@@ -208,74 +232,102 @@ class Estimator:
         trial that fails is NaN, ``valid=False``, with the name of its error in
         ``status`` (``'ok'`` otherwise).  ``noise_std`` as for :meth:`fit`.
         """
-        self._check_poses()
         f = self.load_batch()
         if f is None:
             # by name, as every function here: the batched loop builds results, which read the registry
-            return _resolve("accelcal.batching:batch_of_single")(self, z, g, noise_std)
+            return resolve("accelcal.batching:batch_of_single")(self, z, g, noise_std)
         if self.needs_noise and noise_std is not None:
             return f(z, g, noise_std=noise_std)
         return f(z, g)
 
 
-    def _check_poses(self) -> None:
-        if self.data != "poses":
-            raise AccelcalError(f"{self.name} fits {self.data}, not pose means: call its function "
-                                f"({self.function}, Estimator.load)")
+@dataclass(frozen=True, kw_only=True)
+class MotionEstimator(Estimator):
+    """An estimator of the motions between rests (:class:`accelcal.gyro.fit.MotionSet`, whose rest
+    noise weights them): ``f(motions, C0, integrator) -> GyroFit``, its calibration an
+    :class:`accelcal.gyro.result.GyroCalibration`."""
+
+    data: ClassVar[str] = "motions"
+
+    sensor: str = "gyroscope"
+
+    def fit(self, motions, C0, integrator: str = "magnus4"):
+        """Fit the motions from the start ``C0`` (3, 3) with the rotation ``integrator``."""
+        return self.load()(motions, C0, integrator)
 
 
-def _resolve(path: str):
+@dataclass(frozen=True, kw_only=True)
+class RotationEstimator(Estimator):
+    """An estimator of rotations of known angle (a Ferraris session): ``f(segments, h, angles_deg,
+    **kw) -> FerrarisFit`` (:func:`accelcal.gyro.ferraris.fit_ferraris`)."""
+
+    data: ClassVar[str] = "rotations"
+
+    sensor: str = "gyroscope"
+    redundancy: int = 0
+
+    def fit(self, segments, h: float, angles_deg, **kw):
+        """Fit the rotations' samples ``segments`` (bias removed) of interval ``h`` [s] and known angles."""
+        return self.load()(segments, h, angles_deg, **kw)
+
+
+def resolve(path: str):
+    """The object a ``'module:attribute'`` string names (imported now): how every registry of
+    this package names its functions and classes, so that reading a registry imports nothing."""
     module, _, name = path.partition(":")
     return getattr(importlib.import_module(module), name)
 
 
 _CAL = "accelcal.calibration"
+_MISSING = object()  # a field another kind of entry does not have
 
 #: The estimators, by name, in the order tables and help list them.
 ESTIMATORS: dict[str, Estimator] = {e.name: e for e in (
-    Estimator(name="full_lls", model="full", algorithm="lls", label="full LLS", family="closed_form",
-              function="accelcal.lls:full_lls", batch="accelcal.lls_batch:full_lls_batch",
-              calibration=f"{_CAL}:FullLLSCalibration", baseline="full_nlls", compiled=True,
-              conditioning="accelcal.lls:design_singular_values",
-              description="closed form (SVD), bias + scale + non-orthogonality (Burkhard et al. 2024)"),
-    Estimator(name="full_als", model="full", algorithm="als", label="full ALS", family="closed_form",
-              function="accelcal.als:full_als", batch="accelcal.als:full_als_batch",
-              calibration=f"{_CAL}:FullALSCalibration", baseline="full_nlls", corrects="full_lls", compiled=True,
-              noise_use="correction", conditioning="accelcal.als:moment_singular_values",
-              conditioning_uses_noise=True,
-              description="full LLS with its O(noise^2) bias removed (adjusted least squares)"),
-    Estimator(name="full_nlls", model="full", algorithm="nlls", label="full NLLS", family="iterative",
-              function="accelcal.nlls:full_nlls", batch="accelcal.nlls:full_nlls_batch",
-              calibration=f"{_CAL}:FullNLLSCalibration", noise_use="stopping",
-              conditioning="accelcal.lls:design_singular_values",
-              description="iterative (CasADi/IPOPT) from b = 0, M = I"),
-    Estimator(name="bias_lls", model="bias", algorithm="lls", label="bias-only LLS", family="closed_form",
-              function="accelcal.lls:bias_lls", batch="accelcal.lls_batch:bias_lls_batch",
-              calibration=f"{_CAL}:BiasLLSCalibration", baseline="bias_nlls", compiled=True, needs_g=False,
-              conditioning="accelcal.lls:design_singular_values",
-              description="closed form with M = I; the bias does not depend on g"),
-    Estimator(name="bias_nlls", model="bias", algorithm="nlls", label="bias-only NLLS", family="iterative",
-              function="accelcal.nlls:bias_nlls", batch="accelcal.nlls:bias_nlls_batch",
-              calibration=f"{_CAL}:BiasNLLSCalibration", noise_use="stopping",
-              conditioning="accelcal.lls:design_singular_values",
-              description="iterative with M = I"),
-    Estimator(name="gyro_iterative", sensor="gyroscope", model="scale_misalignment", algorithm="iterative",
-              label="gyro iterative", family="iterative", data="motions",
-              function="accelcal.gyro.fit:fit_iterative", calibration="accelcal.gyro.result:GyroIterativeCalibration",
-              conditioning="accelcal.gyro.fit:motion_singular_values", needs_g=False,
-              description="weighted Gauss-Newton on the gravity directions carried between rests (IMU-TK's "
-                          "protocol)"),
-    Estimator(name="gyro_one_step", sensor="gyroscope", model="scale_misalignment", algorithm="one_step",
-              label="gyro one-step", family="closed_form", data="motions", baseline="gyro_iterative",
-              function="accelcal.gyro.fit:fit_one_step", calibration="accelcal.gyro.result:GyroOneStepCalibration",
-              conditioning="accelcal.gyro.fit:motion_singular_values", needs_g=False,
-              description="one linearised solve about the nominal gyro model"),
-    Estimator(name="gyro_ferraris", sensor="gyroscope", model="scale_misalignment", algorithm="sum",
-              label="gyro Ferraris", family="closed_form", data="rotations", redundancy=0,
-              function="accelcal.gyro.ferraris:fit_ferraris",
-              calibration="accelcal.gyro.result:GyroFerrarisCalibration",
-              conditioning="accelcal.gyro.ferraris:rotation_singular_values", needs_g=False,
-              description="three rotations of known angle, the rate summed (Ferraris, imucal's protocol)"),
+    PoseEstimator(name="full_lls", model="full", algorithm="lls", label="full LLS", family="closed_form",
+                  function="accelcal.lls:full_lls", batch="accelcal.lls_batch:full_lls_batch",
+                  calibration=f"{_CAL}:FullLLSCalibration", baseline="full_nlls", compiled=True,
+                  conditioning="accelcal.lls:design_singular_values",
+                  description="closed form (SVD), bias + scale + non-orthogonality (Burkhard et al. 2024)"),
+    PoseEstimator(name="full_als", model="full", algorithm="als", label="full ALS", family="closed_form",
+                  function="accelcal.als:full_als", batch="accelcal.als:full_als_batch",
+                  calibration=f"{_CAL}:FullALSCalibration", baseline="full_nlls", corrects="full_lls", compiled=True,
+                  noise_use="correction", conditioning="accelcal.als:moment_singular_values",
+                  conditioning_uses_noise=True,
+                  description="full LLS with its O(noise^2) bias removed (adjusted least squares)"),
+    PoseEstimator(name="full_nlls", model="full", algorithm="nlls", label="full NLLS", family="iterative",
+                  function="accelcal.nlls:full_nlls", batch="accelcal.nlls:full_nlls_batch",
+                  calibration=f"{_CAL}:FullNLLSCalibration", noise_use="stopping",
+                  conditioning="accelcal.lls:design_singular_values",
+                  description="iterative (CasADi/IPOPT) from b = 0, M = I"),
+    PoseEstimator(name="bias_lls", model="bias", algorithm="lls", label="bias-only LLS", family="closed_form",
+                  function="accelcal.lls:bias_lls", batch="accelcal.lls_batch:bias_lls_batch",
+                  calibration=f"{_CAL}:BiasLLSCalibration", baseline="bias_nlls", compiled=True, needs_g=False,
+                  conditioning="accelcal.lls:design_singular_values",
+                  description="closed form with M = I; the bias does not depend on g"),
+    PoseEstimator(name="bias_nlls", model="bias", algorithm="nlls", label="bias-only NLLS", family="iterative",
+                  function="accelcal.nlls:bias_nlls", batch="accelcal.nlls:bias_nlls_batch",
+                  calibration=f"{_CAL}:BiasNLLSCalibration", noise_use="stopping",
+                  conditioning="accelcal.lls:design_singular_values",
+                  description="iterative with M = I"),
+    MotionEstimator(name="gyro_iterative", model="scale_misalignment", algorithm="iterative",
+                    label="gyro iterative", family="iterative",
+                    function="accelcal.gyro.fit:fit_iterative",
+                    calibration="accelcal.gyro.result:GyroIterativeCalibration",
+                    conditioning="accelcal.gyro.fit:motion_singular_values",
+                    description="weighted Gauss-Newton on the gravity directions carried between rests "
+                                "(IMU-TK's protocol)"),
+    MotionEstimator(name="gyro_one_step", model="scale_misalignment", algorithm="one_step",
+                    label="gyro one-step", family="closed_form", baseline="gyro_iterative",
+                    function="accelcal.gyro.fit:fit_one_step",
+                    calibration="accelcal.gyro.result:GyroOneStepCalibration",
+                    conditioning="accelcal.gyro.fit:motion_singular_values",
+                    description="one linearised solve about the nominal gyro model"),
+    RotationEstimator(name="gyro_ferraris", model="scale_misalignment", algorithm="sum",
+                      label="gyro Ferraris", family="closed_form",
+                      function="accelcal.gyro.ferraris:fit_ferraris",
+                      calibration="accelcal.gyro.result:GyroFerrarisCalibration",
+                      conditioning="accelcal.gyro.ferraris:rotation_singular_values",
+                      description="three rotations of known angle, the rate summed (Ferraris, imucal's protocol)"),
 )}
 
 
@@ -309,7 +361,7 @@ def estimators(sensor: str | None = None, **where) -> tuple[Estimator, ...]:
     """The registered estimators (in order) of ``sensor`` (all if None) whose attributes
     equal ``where`` (``estimators('accelerometer', model='full')``)."""
     return tuple(e for e in ESTIMATORS.values()
-                 if (sensor is None or e.sensor == sensor) and all(getattr(e, k) == v for k, v in where.items()))
+                 if (sensor is None or e.sensor == sensor) and all(getattr(e, k, _MISSING) == v for k, v in where.items()))
 
 
 def class_of_type(root: type, cal_type: str) -> type | None:
@@ -346,5 +398,6 @@ def model_of(name: str) -> str:
     return estimator(name).model
 
 
-__all__ = ["DATA", "ESTIMATORS", "Estimator", "FAMILIES", "NOISE_USES", "N_PARAMETERS", "class_of_type", "estimator",
-           "estimators", "model_of", "register", "subclasses", "types_of", "unregister"]
+__all__ = ["DATA", "ESTIMATORS", "Estimator", "FAMILIES", "MotionEstimator", "NOISE_USES", "N_PARAMETERS", "PoseEstimator",
+           "RotationEstimator", "class_of_type", "estimator", "estimators", "model_of", "register", "resolve", "subclasses",
+           "types_of", "unregister"]

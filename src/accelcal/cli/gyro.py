@@ -20,10 +20,12 @@ from ..registry import estimators
 
 def add_gyro_options(c) -> None:
     """The calibrate subcommand's gyro options (reading the gyro: :func:`.common._reader_options`)."""
-    motion = [e.cli_name for e in estimators("gyroscope", data="motions")]
+    names = [e.cli_name for e in estimators("gyroscope")]
     g = c.add_argument_group("gyroscope (calibrated whenever the recording has a gyro: its own columns or --gyro FILE)")
-    g.add_argument("--gyro-method", choices=motion, default=motion[0],
-                   help=f"estimator from the motions between rests (default {motion[0]})")
+    g.add_argument("--gyro-method", choices=names, default=None,
+                   help="gyro estimator (default: by the data: gyro-ferraris where the file marks rotations of known "
+                        "angle, else gyro-iterative from the motions between rests; an estimator of other data is "
+                        "refused)")
     g.add_argument("--gyro-sensitivity", metavar="S[/dps|/rad/s]",
                    help="nominal sensitivity of raw gyro counts, counts per deg/s (default) or per rad/s: the start "
                         "and the reference of the scale factors (without it, a scalar search)")

@@ -22,11 +22,11 @@ reading without them is one line: ``... pip install accelcal[ros]``.
 
 from __future__ import annotations
 
-import importlib
 import importlib.util
 from dataclasses import dataclass
 
 from ..errors import MissingExtraError, RecordingError
+from ..registry import resolve
 
 #: The reading options (of :func:`accelcal.formats.read`) a reader may take itself.  One it
 #: does not take is applied by the dispatcher: ``unit`` converts or checks the values,
@@ -118,19 +118,19 @@ class Format:
         """The reader, its optional packages checked first (:meth:`check_extra`; ``path``
         names the file in the message)."""
         self.check_extra(path)
-        return _resolve(self.reader)
+        return resolve(self.reader)
 
     def load_sniff(self):
         """The sniffing function, or None if the format is never detected."""
-        return None if self.sniff is None else _resolve(self.sniff)
+        return None if self.sniff is None else resolve(self.sniff)
 
     def load_strict_reader(self):
         """The strict reader, or None."""
-        return None if self.strict_reader is None else _resolve(self.strict_reader)
+        return None if self.strict_reader is None else resolve(self.strict_reader)
 
     def load_writer(self):
         """The writer, or None."""
-        return None if self.writer is None else _resolve(self.writer)
+        return None if self.writer is None else resolve(self.writer)
 
     def check_extra(self, path=None) -> None:
         """One-line :class:`~accelcal.errors.MissingExtraError` (a :class:`RecordingError`) if
@@ -140,11 +140,6 @@ class Format:
             where = f"{path}: " if path is not None else ""
             raise MissingExtraError(f"{where}reading {self.name} files needs {', '.join(missing)}, "
                                     f"not installed: pip install accelcal[{self.extra}]")
-
-
-def _resolve(path: str):
-    module, _, name = path.partition(":")
-    return getattr(importlib.import_module(module), name)
 
 
 #: The formats, by name, in the order they are sniffed and listed.

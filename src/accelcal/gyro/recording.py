@@ -7,23 +7,27 @@ what ``accelcal calibrate`` does, for Python.
 >>> cal, poses = calibrate_recording(rec, 9.81, "full_lls", search=True, min_poses=6)
 >>> cal = dataclasses.replace(cal, gyro=calibrate_recording_gyro(rec, cal, poses))
 
-The data decide the protocol, not a name: a recording that marks rotations of known angle
-(:attr:`Recording.rotations`, imucal's ``*_rot`` sections) is a Ferraris session
-(:func:`accelcal.gyro.ferraris.calibrate_ferraris_session`); any other is a multi-position
-session, calibrated from the motions between the accelerometer's rests
-(:func:`accelcal.gyro.calibrate.calibrate_gyro`).
+The data decide the protocol, and the choice is said: a recording that marks rotations of
+known angle (:attr:`Recording.rotations`, imucal's ``*_rot`` sections) is a Ferraris session
+(:func:`accelcal.gyro.ferraris.calibrate_ferraris_session`, the ``gyro_ferraris`` entry of the
+registry's rotation estimators); any other is a multi-position session, calibrated from the
+motions between the accelerometer's rests (:func:`accelcal.gyro.calibrate.calibrate_gyro`, a
+motion estimator).  An estimator asked for that does not fit the session's data is refused in
+one line, never replaced; the calibration's ``settings["estimator_chosen_by"]`` says who chose.
 """
 
 from __future__ import annotations
 
-from ..registry import estimators
+import dataclasses
+
+from ..registry import estimator, estimators
 from .errors import GyroInputError, RotationAngleError
 
 #: Rests a calibration from motions needs: one more than the fewest motions of the registry's estimators.
 MIN_RESTS = 1 + max(e.min_poses for e in estimators("gyroscope", data="motions"))
 
 
-def calibrate_recording_gyro(rec, acc_cal, poses, *, estimator: str = "gyro_iterative", nominal_sensitivity=None,
+def calibrate_recording_gyro(rec, acc_cal, poses, *, estimator: str | None = None, nominal_sensitivity=None,
                              gyro_range=None, g_sensitivity="auto", rotation_angles=None):
     """The gyro of ``rec`` (module docstring).
 
@@ -35,8 +39,9 @@ def calibrate_recording_gyro(rec, acc_cal, poses, *, estimator: str = "gyro_iter
         The accelerometer's calibration of ``rec`` (its frame is the gyro's).
     poses : StaticPoses
         The rests it was fitted to.
-    estimator : str
-        A registered gyro estimator of motions (``gyro_iterative``, ``gyro_one_step``).
+    estimator : str, optional
+        A registered gyro estimator of the session's data; default: by the data
+        (``gyro_ferraris`` for marked rotations, else ``gyro_iterative``).
     nominal_sensitivity : float, optional
         Raw counts per rad/s.
     gyro_range : (lo, hi), optional
@@ -53,6 +58,34 @@ def calibrate_recording_gyro(rec, acc_cal, poses, *, estimator: str = "gyro_iter
     if rec.gyro is None:
         raise GyroInputError(f"{rec.source}: no gyro samples (gyro columns, or a file of its own: --gyro FILE)")
     unit = rec.gyro_unit or "rad/s"
+    entry, chosen_by = _estimator_for(rec, estimator)
+    cal = _calibrate(rec, acc_cal, poses, entry.name, unit, nominal_sensitivity, gyro_range, g_sensitivity,
+                     rotation_angles)
+    return dataclasses.replace(cal, settings={**cal.settings, "estimator_chosen_by": chosen_by})
+
+
+def _estimator_for(rec, name: str | None):
+    """The registry entry that calibrates ``rec``'s gyro and who chose it; one line if ``name`` cannot."""
+    data = "rotations" if rec.rotations else "motions"
+    if name is None:
+        entry = estimators("gyroscope", data=data)[0]
+        why = ("the data: rotations of known angle are marked" if rec.rotations else
+               "the data: motions between rests")
+        return entry, why
+    entry = estimator(name)
+    if entry.sensor != "gyroscope":
+        raise GyroInputError(f"{entry.cli_name} is not a gyro estimator; gyro estimators: "
+                             f"{', '.join(e.cli_name for e in estimators('gyroscope'))}")
+    if entry.data != data:
+        fits = ", ".join(e.cli_name for e in estimators("gyroscope", data=data))
+        marked = ("marks rotations of known angle (a Ferraris session)" if rec.rotations else
+                  "marks no rotations of known angle (imucal's *_rot sections: --intervals SECTION_LIST)")
+        raise GyroInputError(f"{rec.source} {marked}: {entry.cli_name} fits {entry.data}; its estimators: {fits} "
+                             "(or leave --gyro-method out to let the data choose)")
+    return entry, "--gyro-method"
+
+
+def _calibrate(rec, acc_cal, poses, estimator, unit, nominal_sensitivity, gyro_range, g_sensitivity, rotation_angles):
     if rec.rotations:
         from .ferraris import calibrate_ferraris_session
 

@@ -152,7 +152,8 @@ class GyroCalibration:
         exact = "exactly_determined" in q.flags
         what = (f"{q.n_motions} rotations of known angle ({', '.join(f'{a:g}' for a in s.get('angles_deg', ()))} deg)"
                 if exact else f"{q.n_motions} motions between rests")
-        lines = [f"gyroscope: {s.get('estimator', '?')} ({s.get('integrator', '?')} integration), "
+        chosen = f" (chosen by {s['estimator_chosen_by']})" if s.get("estimator_chosen_by") else ""
+        lines = [f"gyroscope: {s.get('estimator', '?')}{chosen} ({s.get('integrator', '?')} integration), "
                  f"{what}, bias from {s.get('bias_mode', '?')} rests"]
         sf, sse = self.scale_factors, se.get("scale_factors", np.full(3, np.nan))
         if unit != "counts" or not str(s.get("nominal_from", "")).startswith("scalar search"):

@@ -98,7 +98,7 @@ def read_session(spec: SessionSpec, paths: dict):
                 intervals=p[spec.intervals] if spec.intervals else None, **spec.read)
 
 
-def calibrate_session(spec: SessionSpec, paths: dict, *, estimator: str = "gyro_iterative") -> dict:
+def calibrate_session(spec: SessionSpec, paths: dict, *, estimator: str | None = None) -> dict:
     """Accelerometer and gyro of one session, as ``accelcal calibrate`` (module docstring), and their times."""
     from dataclasses import replace
 
