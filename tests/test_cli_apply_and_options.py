@@ -211,7 +211,7 @@ def test_discrepancy_report_applies_its_named_effect(effect, tmp_path, monkeypat
     the pose magnitudes come closer to g than with the base model alone."""
     from accelcal.calibration import load_calibration
     from accelcal.discrepancy import report
-    from accelcal.discrepancy.vocabulary import Rules
+    from accelcal.discrepancy.rules import Rules
     from accelcal.formats import write_recording
     from accelcal.static import detect_static_recording
     from accelcal_repro.discrepancy import benchmark as B

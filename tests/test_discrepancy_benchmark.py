@@ -7,9 +7,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from accelcal.discrepancy import vocabulary as D
+from accelcal.discrepancy import rules as D
 from accelcal.discrepancy import white_loop
-from accelcal.discrepancy.effects import EFFECT_IDS
+from accelcal.effects import EFFECT_IDS
 from accelcal.formats import read, write_recording
 from accelcal_repro.discrepancy import benchmark as B
 from accelcal_repro.discrepancy import profiles as P

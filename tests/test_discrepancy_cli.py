@@ -13,7 +13,7 @@ import yaml
 from accelcal import cli
 from accelcal_repro.discrepancy import benchmark as B
 from accelcal.discrepancy import report
-from accelcal.discrepancy.vocabulary import Rules
+from accelcal.discrepancy.rules import Rules
 from accelcal.formats import write_recording
 from accelcal.recording import Recording
 from accelcal.simulation import random_directions, simulate_recording

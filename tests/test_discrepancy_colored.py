@@ -17,7 +17,8 @@ from accelcal.discrepancy import wander_loop as W
 from accelcal.discrepancy.joint_noise import linearise
 from accelcal.discrepancy.detect import discrepancy
 from accelcal.discrepancy.fit import effect_columns, evaluate, fit_at, forward, pose_data
-from accelcal.discrepancy.vocabulary import Rules, critical_noncentrality
+from accelcal.discrepancy.rules import Rules
+from accelcal.discrepancy.statistics import critical_noncentrality
 from accelcal.errors import NotConvergedError
 from accelcal.evaluation import residual_sigma
 from accelcal.model import m_from_params

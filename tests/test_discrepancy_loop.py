@@ -6,10 +6,12 @@ from scipy import stats
 
 from accelcal_repro.discrepancy import benchmark as B
 from accelcal.discrepancy.detect import discrepancy
-from accelcal.discrepancy.effects import EFFECT_IDS, EFFECTS
+from accelcal.effects import EFFECT_IDS, EFFECTS
 from accelcal.effects import ADDITIVE, TEMPERATURE, TIME
 from accelcal.discrepancy.fit import evaluate, fit, fit_at, forward, lopo, pose_data
-from accelcal.discrepancy.vocabulary import Rules, critical_noncentrality, holm, identifiability
+from accelcal.discrepancy.identifiability import identifiability
+from accelcal.discrepancy.rules import Rules
+from accelcal.discrepancy.statistics import critical_noncentrality, holm
 from accelcal.evaluation import residual_sigma
 from accelcal.model import m_from_params
 from accelcal.simulation import classic_directions, random_directions

@@ -6,7 +6,7 @@ import pandas as pd
 import pytest
 from scipy import stats
 
-from accelcal.discrepancy import vocabulary as D
+from accelcal.discrepancy import rules as D
 from accelcal.discrepancy.fit import fit, pose_data_from_static
 from accelcal.static import detect_static_recording
 from accelcal_repro.discrepancy import benchmark as B

@@ -8,7 +8,7 @@ import pytest
 from accelcal.discrepancy.detect import discrepancy
 from accelcal.discrepancy.fit import forward, pose_data
 from accelcal.discrepancy.report import allan_check, noise_implication, rests_implication
-from accelcal.discrepancy.vocabulary import Rules
+from accelcal.discrepancy.rules import Rules
 from accelcal.model import m_from_params
 from accelcal.simulation import random_directions
 

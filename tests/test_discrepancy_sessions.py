@@ -5,7 +5,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from accelcal.discrepancy.vocabulary import Rules
+from accelcal.discrepancy.rules import Rules
 from accelcal.discrepancy.report import discrepancy_report
 from accelcal_repro.discrepancy import benchmark as B
 from accelcal_repro.discrepancy import profiles as P

@@ -16,7 +16,7 @@ from accelcal.discrepancy.detect import discrepancy
 from accelcal.discrepancy.fit import forward, pose_data
 from accelcal.discrepancy.joint_noise import describe_noise_model
 from accelcal.discrepancy.schema import REPORT_SCHEMA, STATUS, check_statuses
-from accelcal.discrepancy.vocabulary import Rules
+from accelcal.discrepancy.rules import Rules
 from accelcal.errors import AccelcalError
 from accelcal.jsonsafe import json_safe
 from accelcal.model import m_from_params

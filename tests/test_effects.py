@@ -253,7 +253,7 @@ def test_the_figures_label_every_effect_of_the_table():
 def test_the_detectable_size_in_the_data_unit_is_the_model_s_own_sensitivity(eid):
     """The identifiability check's data-unit size per unit parameter (the MDE's scale) is
     the change of the pose means the forward model makes: ``|∂z_i/∂c_j|``, covariate included."""
-    from accelcal.discrepancy.vocabulary import _perturbation
+    from accelcal.discrepancy.identifiability import pose_mean_change
 
     rng = np.random.default_rng(100 + ALL.index(eid))
     data, p, x = _poses(rng, [], n=30)
@@ -269,4 +269,4 @@ def test_the_detectable_size_in_the_data_unit_is_the_model_s_own_sensitivity(eid
         step[j] = h
         dz = forward(base.x, base.M, base.bias, {eid: step}, dt=dt, dtemp=dtemp) - z0
         expected[:, j] = np.linalg.norm(dz, axis=1) / h
-    np.testing.assert_allclose(_perturbation(eid, data, base), expected, rtol=1e-5, atol=1e-8 * expected.max())
+    np.testing.assert_allclose(pose_mean_change(eid, data, base), expected, rtol=1e-5, atol=1e-8 * expected.max())

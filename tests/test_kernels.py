@@ -520,7 +520,7 @@ def test_discrepancy_fits_agree(effects):
 
 def test_discrepancy_white_loop_agrees():
     from accelcal.discrepancy.detect import discrepancy
-    from accelcal.discrepancy.vocabulary import Rules
+    from accelcal.discrepancy.rules import Rules
 
     rules = Rules(null="white")
     for seed in range(3):

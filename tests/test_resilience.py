@@ -246,7 +246,7 @@ def writer_inputs(tmp_path_factory):
     recording and parameters of workflow/scripts/discrepancy_measured.py (a quick
     stochastic layer: its bootstrap is the cost)."""
     from accelcal_repro.discrepancy import benchmark as B
-    from accelcal.discrepancy.vocabulary import Rules
+    from accelcal.discrepancy.rules import Rules
     from accelcal.formats import write_recording
 
     inputs = tmp_path_factory.mktemp("inputs")

@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 
-from accelcal.discrepancy.vocabulary import Rules
+from accelcal.discrepancy.rules import Rules
 from accelcal_repro.discrepancy.benchmark import (Session, chunk, detect_nulls, null_available, nulls_for, plan,
                                                   simulate_case)
 from accelcal_repro.discrepancy.oracle import oracle_detection

@@ -5,7 +5,7 @@ import json
 from _helpers import configure_logging, mock_snakemake_from_argv
 
 from accelcal.atomic import atomic_output
-from accelcal.discrepancy.vocabulary import Rules
+from accelcal.discrepancy.rules import Rules
 from accelcal.discrepancy.report import StochasticSettings, discrepancy_report
 from accelcal_repro.measured.sources import source
 from accelcal.formats import read

@@ -8,9 +8,10 @@ wander or a per-placement offset estimated jointly with the calibration (:mod:`.
 tests calibrated by a parametric bootstrap, outlier poses against the exact null of the
 largest studentised residual.  :mod:`.detect` chooses the loop of the null:
 :mod:`.wander_loop` (colored, its statistics in the subpackage :mod:`.colored`) or
-:mod:`.white_loop` (white); :mod:`.vocabulary` holds what both share (rules,
-identifiability, candidate rows, the result); :mod:`.schema` defines every status value
-of the report.
+:mod:`.white_loop` (white); what both share is one module per job: the decision
+:mod:`.rules`, the :mod:`.statistics` (gap, Holm, the MDE's non-centrality), the
+:mod:`.identifiability` checks before any test and the :mod:`.results` (candidate rows,
+outliers, the result and its JSON); :mod:`.schema` defines every status value of the report.
 
 Stochastic layer (rest data): :func:`stochastic_layer` compares the Allan deviation of
 the measured rests with the simulator's noise model, names the missing noise term and
@@ -22,13 +23,15 @@ re-simulates (the subpackage :mod:`.stochastic`, on the noise analysis of
 benchmark is ``accelcal_repro.discrepancy``.
 """
 
-from ..noise import TERMS, AllanError, AllanVariance, allan_variance, simulate_segments
+from ..effects import EFFECT_IDS, EFFECTS
 from .colored import WanderError, WanderFit
 from .detect import discrepancy
-from .effects import EFFECT_IDS, EFFECTS
 from .figures import plot_allan
 from .fit import PoseData, fit, pose_data, pose_data_from_static
+from .identifiability import identifiability
 from .report import DiscrepancyReport, discrepancy_report
+from .results import DiscrepancyResult
+from .rules import NULLS, Rules
 from .stochastic import (
     DEFAULT_CANDIDATES,
     StochasticError,
@@ -37,10 +40,6 @@ from .stochastic import (
     rest_segments,
     stochastic_layer,
 )
-from .vocabulary import NULLS, DiscrepancyResult, Rules, identifiability
-
-#: Short names of :func:`discrepancy_report` and :class:`DiscrepancyReport` (the same objects; public API).
-analyse, Analysis = discrepancy_report, DiscrepancyReport
 
 __all__ = [
     "EFFECTS",
@@ -48,12 +47,10 @@ __all__ = [
     "NULLS",
     "WanderError",
     "WanderFit",
-    "Analysis",
     "DiscrepancyReport",
     "DiscrepancyResult",
     "PoseData",
     "Rules",
-    "analyse",
     "discrepancy_report",
     "discrepancy",
     "fit",
@@ -61,15 +58,10 @@ __all__ = [
     "pose_data",
     "pose_data_from_static",
     "DEFAULT_CANDIDATES",
-    "TERMS",
-    "AllanError",
-    "AllanVariance",
     "StochasticError",
     "StochasticResult",
-    "allan_variance",
     "expected_residual_std",
     "plot_allan",
     "rest_segments",
-    "simulate_segments",
     "stochastic_layer",
 ]

@@ -7,7 +7,7 @@ ambiguity between candidates and with the wander (:mod:`.colored`, :mod:`.wander
 ``white``: white per-pose noise times a common scale and F-tests (:mod:`.white_loop`,
 the benchmark's negative control: on sessions whose bias wanders it names
 ``bias_drift`` far more often than α).  Both share the identifiability checks, the
-result class and its JSON (:mod:`.vocabulary`).
+result class and its JSON (:mod:`.rules`, :mod:`.results`).
 
 :func:`discrepancy` runs the loop of the null ``rules.null`` chooses.
 """
@@ -15,7 +15,8 @@ result class and its JSON (:mod:`.vocabulary`).
 from __future__ import annotations
 
 from .fit import PoseData
-from .vocabulary import DiscrepancyResult, Rules
+from .results import DiscrepancyResult
+from .rules import Rules
 from .wander_loop import discrepancy_colored
 from .white_loop import discrepancy_white
 

@@ -36,7 +36,8 @@ from .stochastic import StochasticResult
 from .stochastic.implication import centred_pose_variance, pose_difference_variance
 from .stochastic.layer import DEFAULT_CANDIDATES, rest_segments, stochastic_layer
 from .summary import report_summary
-from .vocabulary import DiscrepancyResult, Rules
+from .results import DiscrepancyResult
+from .rules import Rules
 
 
 @dataclass(frozen=True)
@@ -88,7 +89,7 @@ class DiscrepancyReport:
         """Both layers in a few lines: what ``accelcal discrepancy`` prints.
 
         The deterministic layer's lines (:meth:`DiscrepancyResult.summary
-        <accelcal.discrepancy.vocabulary.DiscrepancyResult.summary>`), the noise terms
+        <accelcal.discrepancy.results.DiscrepancyResult.summary>`), the noise terms
         named from the rests and what they imply for the pose residuals.
 
         Parameters

@@ -1,5 +1,5 @@
 """The text the discrepancy results render of themselves: the deterministic layer's
-(:meth:`DiscrepancyResult.summary <accelcal.discrepancy.vocabulary.DiscrepancyResult.summary>`)
+(:meth:`DiscrepancyResult.summary <accelcal.discrepancy.results.DiscrepancyResult.summary>`)
 and the whole report's (:meth:`DiscrepancyReport.summary
 <accelcal.discrepancy.report.DiscrepancyReport.summary>`), what ``accelcal discrepancy``
 prints and the workflow logs.

@@ -72,18 +72,10 @@ from ..errors import AccelcalError
 from . import colored as C
 from .fit import Fit, PoseData, effect_columns, effect_slices, evaluate, fit, lopo
 from .joint_noise import colored_summary, linearise_noise, noise_model_dict, repeated_placements
-from .vocabulary import (
-    Candidate,
-    DiscrepancyResult,
-    OutlierPose,
-    OutlierTest,
-    Rules,
-    applicable,
-    critical_noncentrality,
-    gap,
-    holm,
-    identifiability,
-)
+from .identifiability import applicable, identifiability
+from .results import Candidate, DiscrepancyResult, OutlierPose, OutlierTest
+from .rules import Rules
+from .statistics import critical_noncentrality, gap, holm
 
 OUTLIER = "outlier_pose"
 

@@ -6,7 +6,7 @@ and tests every candidate effect of the library as a nested extension of it.  Th
 model is white per-pose noise times a common scale; it is the benchmark's negative
 control (on sessions whose bias wanders it names ``bias_drift`` far more often than α).
 
-1. **Identifiability** (:func:`~accelcal.discrepancy.vocabulary.identifiability`), before
+1. **Identifiability** (:func:`~accelcal.discrepancy.identifiability.identifiability`), before
    any test: a candidate that is not identifiable is refused, never named.
 2. **Nested test** of current vs current + effect: the F-test on the weighted
    residuals, ``F = ((χ²₀ - χ²₁)/k) / (χ²₁/(n - q - k))`` against ``F(k, n - q - k)`` (``k``
@@ -41,7 +41,10 @@ import numpy as np
 from .. import distributions as dist
 from ..errors import AccelcalError
 from .fit import Fit, PoseData, effect_slices, fit, lopo
-from .vocabulary import Candidate, DiscrepancyResult, Identifiability, Rules, applicable, gap, holm, identifiability
+from .identifiability import Identifiability, applicable, identifiability
+from .results import Candidate, DiscrepancyResult
+from .rules import Rules
+from .statistics import gap, holm
 
 
 def _f_sf(stat: float, dfn: int, dfd: int) -> float:

@@ -18,7 +18,7 @@ power) would detect the effect along its random direction ``d`` if it knew
 the true covariance of the pose residuals under the profile (generalised least squares
 with :func:`accelcal_repro.discrepancy.profiles.pose_mean_covariance`), computed on the
 true pose design (:func:`oracle_mde`).  For the white profile it is the loop's own MDE
-(:meth:`accelcal.discrepancy.vocabulary.Identifiability.mde_along`); under wander it is
+(:meth:`accelcal.discrepancy.identifiability.Identifiability.mde_along`); under wander it is
 larger, because a wandering bias hides part of any slow effect.  Rows (``truth``):
 
 * ``none``: no effect (false-positive rate);
@@ -49,9 +49,11 @@ import numpy as np
 import pandas as pd
 
 from accelcal.discrepancy.detect import discrepancy
-from accelcal.discrepancy.effects import EFFECT_IDS, effect
+from accelcal.effects import EFFECT_IDS, effect
 from accelcal.discrepancy.fit import Fit, PoseData, evaluate, fit_at, forward, pose_data, pose_data_from_static
-from accelcal.discrepancy.vocabulary import Identifiability, Rules, applicable, critical_noncentrality, identifiability
+from accelcal.discrepancy.identifiability import Identifiability, applicable, identifiability
+from accelcal.discrepancy.rules import Rules
+from accelcal.discrepancy.statistics import critical_noncentrality
 from accelcal.errors import AccelcalError
 from accelcal.evaluation import residual_sigma
 from accelcal.model import m_from_params
@@ -456,7 +458,7 @@ def _effect_sizes(design: _Design, oracle: Oracle, dirs: dict, size_mde: float, 
 
 def null_available(null: str) -> bool:
     """Can this library's loop test under ``null``?  ``white`` always (the white-noise loop); ``colored``
-    once :class:`~accelcal.discrepancy.vocabulary.Rules` has the ``null`` setting."""
+    once :class:`~accelcal.discrepancy.rules.Rules` has the ``null`` setting."""
     if null not in NULLS:
         raise AccelcalError(f"unknown null hypothesis {null!r}; known: {', '.join(NULLS)}")
     return null == "white" or "null" in {f.name for f in dataclasses.fields(Rules)}

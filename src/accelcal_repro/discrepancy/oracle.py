@@ -36,7 +36,9 @@ import numpy as np
 from accelcal import distributions as dist
 from accelcal.discrepancy.colored import max_null_pvalue
 from accelcal.discrepancy.fit import PoseData, effect_columns, fit
-from accelcal.discrepancy.vocabulary import Rules, applicable, holm, identifiability
+from accelcal.discrepancy.identifiability import applicable, identifiability
+from accelcal.discrepancy.rules import Rules
+from accelcal.discrepancy.statistics import holm
 from accelcal.discrepancy.wander_loop import OUTLIER, nested
 from accelcal.errors import AccelcalError
 

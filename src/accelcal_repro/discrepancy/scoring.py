@@ -37,7 +37,7 @@ import numpy as np
 import pandas as pd
 
 from accelcal import distributions as dist
-from accelcal.discrepancy.effects import EFFECT_IDS
+from accelcal.effects import EFFECT_IDS
 from accelcal.errors import AccelcalError
 
 from ..claims import NOT_TESTABLE, upper_end_with_no_success

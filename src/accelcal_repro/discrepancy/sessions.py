@@ -47,7 +47,7 @@ import pandas as pd
 
 from accelcal import distributions as dist
 from accelcal.discrepancy.fit import evaluate, fit, forward, pose_data, pose_data_from_static
-from accelcal.discrepancy.vocabulary import holm
+from accelcal.discrepancy.statistics import holm
 from accelcal.errors import AccelcalError
 from accelcal.model import m_from_params
 from accelcal.recording import Recording
