@@ -19,19 +19,10 @@ comment says so.  ``inflate`` multiplies the exported noise densities and random
 (OpenVINS's documentation advises 10–20× for unmodelled effects); the measured values
 stay in the comments.
 
-OpenVINS's model (``docs/propagation.dox``, ``VioManagerOptions.h``)::
-
-    ω_m = T_w R_IMUtoGYRO ω + T_g a + b_g + n_g,    a_m = T_a R_IMUtoACC a + b_a + n_a
-
-and it estimates ``D = T⁻¹``; its ``kalibr`` model keeps the lower triangle of ``D_a``,
-``D_w`` (the inverse of a lower-triangular ``T`` is lower triangular) and a gyroscope
-rotation, with ``R_IMUtoACC`` the identity.  accelcal's model is ``z = M x + b`` with ``M``
-lower triangular, so ``T_a = M``, ``R_IMUtoACC = I`` and the model is ``kalibr``; the
-bias ``b`` is not a field of the file (OpenVINS estimates ``b_a`` online: it is written
-as a comment).  accelcal does not calibrate the gyroscope yet: ``T_w = I``,
-``R_IMUtoGYRO = I``, ``T_g = 0``.  A calibration is exported only when it is in m/s²,
-without a nominal conversion of counts; its fitted effects (temperature, ...) have no
-place in the file and are left out with a warning.
+With a calibration (``accelcal noise --calibration``), both files also carry its IMU
+intrinsics, accelerometer and gyroscope, as :mod:`accelcal.export.kalibr` and
+:mod:`accelcal.export.openvins` write them (each consumer's own equations); without one,
+OpenVINS's intrinsics are the identity.
 
 ``allan_variance_ros`` convention (optional): a line of slope −½ fitted in log–log to
 the Allan deviations at τ < 10 s and read at τ = 1 s, a line of slope +½ fitted to all
@@ -46,7 +37,7 @@ import math
 
 import numpy as np
 
-from ..errors import AccelcalError
+from ..export.base import ExportError, ExportInputs
 from ..jsonsafe import json_safe
 
 FORMAT = "accelcal-noise"
@@ -60,10 +51,6 @@ KALIBR_KEYS = (("accelerometer_noise_density", "accelerometer", "noise_density",
                ("gyroscope_noise_density", "gyroscope", "noise_density", "rad/s/sqrt(Hz)"),
                ("gyroscope_random_walk", "gyroscope", "random_walk", "rad/s^2/sqrt(Hz)"))
 AVR_WHITE_TAU_MAX = 10.0
-
-
-class ExportError(AccelcalError):
-    """A noise report or a calibration that cannot be written in an estimator's format."""
 
 
 # --------------------------------------------------------------------------- JSON
@@ -178,54 +165,29 @@ def kalibr_yaml(report, *, rostopic: str = "/imu0", inflate: float = 1.0) -> str
     return "\n".join(lines) + "\n"
 
 
-def openvins_yaml(report, *, rostopic: str = "/imu0", inflate: float = 1.0, calibration=None) -> tuple[str, list]:
-    """OpenVINS's ``kalibr_imu_chain.yaml``; returns (text, warnings).  See the module docstring."""
-    vals, missing = _values(report, inflate)
-    if missing:
-        raise ExportError(f"OpenVINS needs both sensors; this recording has no {missing[0].split('_')[0]} "
-                          "(a log with the gyroscope gives both)")
-    Ta, bias, warnings, source = np.eye(3), None, [], "identity (no calibration given)"
-    if calibration is not None:
-        Ta, bias, warnings = _accelerometer_intrinsics(calibration)
-        source = "accelcal calibration: Ta = M"
-    lines = ["%YAML:1.0", f"# OpenVINS IMU chain from accelcal noise ({report.source}); noise values as Kalibr's "
-             "(continuous time, worst axis)", "# model: a_m = Ta R_IMUtoACC a + b_a + n_a,  w_m = Tw R_IMUtoGYRO w + "
-             "Tg a + b_g + n_g  (OpenVINS estimates D = T^-1)", "imu0:", "  T_i_b:"]
-    lines += [f"    - [{', '.join('1.0' if i == j else '0.0' for j in range(4))}]" for i in range(4)]
-    for key, (v, note) in vals.items():
-        lines.append(f"  {key}: {v:.6e}  # {note}")
-    lines += [f"  rostopic: {rostopic}", "  time_offset: 0.0", f"  update_rate: {_rate(report.fs)}  # [ Hz ]",
-              '  model: "kalibr"  # lower-triangular D (accelcal\'s M is lower triangular), R_IMUtoACC = I',
-              "  # gyroscope: not calibrated by accelcal: Tw = I, R_IMUtoGYRO = I, Tg = 0"]
-    lines += _matrix("Tw", np.eye(3)) + _matrix("R_IMUtoGYRO", np.eye(3))
-    lines += [f"  # Ta: {source}"] + _matrix("Ta", Ta) + _matrix("R_IMUtoACC", np.eye(3))
-    lines += _matrix("Tg", np.zeros((3, 3)))
-    if bias is not None:
-        lines.append("  # accelerometer bias b_a of the calibration (not a field: OpenVINS estimates it online) "
-                     f"[ m/s^2 ]: [{', '.join(f'{b:.6g}' for b in bias)}]")
-    return "\n".join(lines) + "\n", warnings
+def openvins_yaml(report, *, rostopic: str = "/imu0", inflate: float = 1.0, calibration=None,
+                 model: str = "kalibr") -> tuple[str, list]:
+    """OpenVINS's ``kalibr_imu_chain.yaml`` (:mod:`accelcal.export.openvins`); returns (text, warnings):
+    the terms the file leaves out."""
+    from ..export import export
+    from ..export.openvins import write
+
+    inputs = ExportInputs(calibration, report_dict(report), {"rostopic": rostopic, "inflate": inflate, "model": model})
+    out = write(inputs) if calibration is None else export("openvins", inputs)
+    return out.files[""], [x.line() for x in out.left_out]
+
+
+def calibrated_kalibr_yaml(report, calibration, *, rostopic: str = "/imu0", inflate: float = 1.0) -> tuple[str, list]:
+    """Kalibr's ``imu.yaml`` with the calibration's intrinsics (:mod:`accelcal.export.kalibr`); (text, warnings)."""
+    from ..export import export
+
+    out = export("kalibr", ExportInputs(calibration, report_dict(report), {"rostopic": rostopic, "inflate": inflate}))
+    return out.files[""], [x.line() for x in out.left_out]
 
 
 def _rate(fs: float) -> str:
     return repr(float(f"{fs:.6g}"))
 
 
-def _matrix(name: str, m: np.ndarray) -> list[str]:
-    return [f"  {name}:"] + [f"    - [ {', '.join(repr(float(v)) for v in row)} ]" for row in np.asarray(m, float)]
-
-
-def _accelerometer_intrinsics(cal) -> tuple[np.ndarray, np.ndarray, list[str]]:
-    if cal.unit != "m/s^2":
-        raise ExportError(f"the calibration is in {cal.unit}; OpenVINS's Ta is dimensionless: calibrate data in m/s^2")
-    if np.any(cal.input_offset != 0) or np.any(cal.input_sensitivity != 1):
-        raise ExportError("the calibration converts raw counts nominally; OpenVINS's Ta needs a calibration of m/s^2 "
-                          "data")
-    warnings = []
-    if cal.effects:
-        warnings.append(f"the calibration's effects ({', '.join(e.id for e in cal.effects)}) have no place in "
-                        "OpenVINS's file: only M (as Ta) is exported")
-    return np.asarray(cal.M, float), np.asarray(cal.bias, float), warnings
-
-
-__all__ = ["ExportError", "FORMAT", "FORMAT_VERSION", "KALIBR_KEYS", "avr_convention", "conversions",
+__all__ = ["ExportError", "calibrated_kalibr_yaml", "FORMAT", "FORMAT_VERSION", "KALIBR_KEYS", "avr_convention", "conversions",
            "exported_values", "kalibr_yaml", "openvins_yaml", "report_dict", "walk_unit"]
