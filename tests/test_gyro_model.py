@@ -60,11 +60,12 @@ def test_kalibr_round_trip():
     np.testing.assert_allclose(Q @ Q.T, np.eye(3), atol=1e-14)
     assert np.linalg.det(Q) == pytest.approx(1.0)
     w, f = np.random.default_rng(4).standard_normal((5, 3)), np.random.default_rng(5).standard_normal((5, 3))
-    # Kalibr's sensor model y = M C_gyro_i w + A a + b
-    y = (M @ Q @ w.T).T + f @ d["A"].T + d["b"]
+    # Kalibr's sensor model (IccSensors.py l. 1049): y = M C_gyro_i w + A C_gyro_i a + b
+    y = (M @ Q @ w.T).T + f @ (d["A"] @ Q).T + d["b"]
     np.testing.assert_allclose(m.measure(w, f), y, atol=1e-13)
     back = GyroModel.from_kalibr(M, Q, d["b"], d["A"])
     np.testing.assert_allclose(back.C, m.C, atol=1e-13)
+    np.testing.assert_allclose(back.g_sensitivity, m.g_sensitivity, atol=1e-15)
 
 
 def test_lq_and_frame_rotation():

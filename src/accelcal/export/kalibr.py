@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..gyro.model import lq
+from ..gyro.model import GyroModel
 from .base import (Export, accelerometer_si, effects_left_out, gyro_si, matrix_lines, noise_rate, noise_value,
                    rate_text)
 
@@ -39,9 +39,9 @@ def kalibr_intrinsics(cal) -> dict:
     g = gyro_si(cal, "Kalibr")
     if g is None:
         return {"M_a": M, "M_g": None, "A": None, "C_gyro_i": None}
-    C, _, G = g
-    L, Q = lq(np.linalg.inv(C))
-    return {"M_a": M, "M_g": L, "A": G @ Q.T, "C_gyro_i": Q}
+    C, b, G = g
+    k = GyroModel(C, b, G).to_kalibr()
+    return {"M_a": M, "M_g": k["M"], "A": k["A"], "C_gyro_i": k["C_gyro_i"]}
 
 
 def noise_lines(noise: dict, inflate: float, consumer: str, indent: str = "") -> tuple[list[str], list[str]]:
