@@ -273,3 +273,17 @@ def test_accelcal_noise_refuses_a_moving_recording_in_one_line_and_writes_nothin
     assert not out.exists() and not y.exists()
     code, err = _run("noise", tmp_path / "missing.bag", "--out", out)
     assert code == 2 and "no such file" in err
+
+
+def test_a_calibration_with_a_gyroscope_reaches_both_files(report):
+    from accelcal.noise.export import calibrated_kalibr_yaml
+
+    from .export_fixtures import full_calibration
+
+    cal = full_calibration()
+    text, warnings = openvins_yaml(report, calibration=cal)
+    y = _yaml(text)["imu0"]
+    assert not np.allclose(y["Tw"], np.eye(3)) and not np.allclose(y["Tg"], 0) and warnings == []
+    assert "not calibrated" not in text and "no gyroscope" not in text
+    k = _yaml(calibrated_kalibr_yaml(report, cal)[0])
+    assert k["model"] == "scale-misalignment" and np.allclose(k["gyroscopes"]["M"], y["Tw"])

@@ -39,7 +39,7 @@ def write(inputs) -> Export:
     source = inputs.option("source")
     text = imucal_json(M, b, cal.gyro.model, acc_raw_unit=cal.input_unit or cal.unit or "m/s^2",
                        comment=f"exported by accelcal from {source}" if source else "exported by accelcal")
-    return Export({"": text}, effects_left_out(cal, "imucal"), ["imucal's calibrate() outputs m/s^2 and deg/s"])
+    return Export({"": text + "\n"}, effects_left_out(cal, "imucal"), ["imucal's calibrate() outputs m/s^2 and deg/s"])
 
 
 __all__ = ["IMUCAL_FORMAT_VERSION", "imucal_json", "write"]

@@ -114,7 +114,7 @@ def _vec(v) -> str:
 
 
 def _mat(m) -> str:
-    return "[" + "; ".join(", ".join(f"{x:.9g}" for x in row) for row in np.asarray(m)) + "]"
+    return "[" + "; ".join(", ".join(f"{x:.17g}" for x in row) for row in np.asarray(m)) + "]"
 
 
 __all__ = ["MODELS", "openvins_intrinsics", "write"]
