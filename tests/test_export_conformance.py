@@ -140,3 +140,13 @@ def test_the_docs_page_lists_every_consumer_and_its_source():
     text = (Path(__file__).resolve().parents[1] / "docs" / "export.md").read_text()
     for c in CONSUMERS.values():
         assert f"`{c.name}`" in text, c.name
+
+
+def test_px4_writes_the_device_ids_the_ulog_reader_noted():
+    cal = full_calibration()
+    notes = ["PX4 ULog, sensor_accel instance 0 (device id 3014666): 1000 samples at 200 Hz",
+             "sensor_gyro instance 0 (device id 3014658), rad/s, sampled with the accelerometer"]
+    text = export("px4", _inputs(replace(cal, provenance={"notes": notes}))).files[""]
+    assert "1\t1\tCAL_ACC0_ID\t3014666\t6" in text and "1\t1\tCAL_GYRO0_ID\t3014658\t6" in text
+    r = export("px4", _inputs(cal, device_id=77, instance=2))
+    assert "CAL_ACC2_ID\t77\t6" in r.files[""] and "CAL_GYRO2_ID" not in r.files[""]

@@ -32,11 +32,12 @@ def _instance(inputs) -> int:
 
 
 def _device_id(inputs, sensor: str):
-    given = inputs.option("device_id")
+    """The device id: ``--device-id`` (the accelerometer's), else the ULog reader's note."""
+    given = inputs.option("device_id") if sensor == "accel" else None
     if given is not None:
         return int(given)
     notes = " ".join(inputs.calibration.provenance.get("notes") or ())
-    m = re.search(rf"sensor_{sensor} instance \d+ \(device id (\d+)\)", notes)
+    m = re.search(rf"sensor_{sensor} instance \d+ \(device id (\d+)[,)]", notes)
     return int(m.group(1)) if m else None
 
 
@@ -59,7 +60,10 @@ def gyroscope_section(inputs):
     off = per_axis_gyroscope(cal, "PX4")
     if off is None:
         return [], [], ["no gyroscope in the calibration: CAL_GYRO parameters not written"]
-    return [(f"CAL_GYRO{n}_{ax}OFF", o) for ax, o in zip("XYZ", off)], autopilot_left_out(cal, "PX4", "gyroscope"), []
+    dev = _device_id(inputs, "gyro")
+    params = ([] if dev is None else [(f"CAL_GYRO{n}_ID", dev)]) + [(f"CAL_GYRO{n}_{ax}OFF", o)
+                                                                      for ax, o in zip("XYZ", off)]
+    return params, autopilot_left_out(cal, "PX4", "gyroscope"), []
 
 
 def write(inputs) -> Export:
