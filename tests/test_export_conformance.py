@@ -148,5 +148,7 @@ def test_px4_writes_the_device_ids_the_ulog_reader_noted():
              "sensor_gyro instance 0 (device id 3014658), rad/s, sampled with the accelerometer"]
     text = export("px4", _inputs(replace(cal, provenance={"notes": notes}))).files[""]
     assert "1\t1\tCAL_ACC0_ID\t3014666\t6" in text and "1\t1\tCAL_GYRO0_ID\t3014658\t6" in text
+    combined = replace(cal, provenance={"notes": ["PX4 ULog, sensor_combined: 900 samples at 200 Hz; already ..."]})
+    assert any("compose with the vehicle's present ones" in n for n in export("px4", _inputs(combined)).notes)
     r = export("px4", _inputs(cal, device_id=77, instance=2))
     assert "CAL_ACC2_ID\t77\t6" in r.files[""] and "CAL_GYRO2_ID" not in r.files[""]

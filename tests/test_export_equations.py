@@ -312,9 +312,11 @@ def test_orbslam3_noise_is_what_its_preintegration_needs():
     y = yaml.safe_load(r.files[""].split("\n", 1)[1])
     freq = y["IMU.Frequency"]
     dt = 1.0 / freq
-    # UZ-SLAMLab/ORB_SLAM3 src/Tracking.cc (newParameterLoader): sf = sqrt(freq);
-    # IMU::Calib(Tbc, Ng*sf, Na*sf, Ngw/sf, Naw/sf); src/ImuTypes.cc Calib::Set: Cov = diag(ng^2, na^2),
-    # CovWalk = diag(ngw^2, naw^2); IntegrateNewMeasurement: velocity noise B Cov B^T with B = dR dt, C += CovWalk
+    # UZ-SLAMLab/ORB_SLAM3 src/Tracking.cc (Tracking::newParameterLoader): sf = sqrt(mImuFreq);
+    # mpImuCalib = new IMU::Calib(Tbc, Ng*sf, Na*sf, Ngw/sf, Naw/sf); src/ImuTypes.cc (commit c85e0ea)
+    # Calib::Set: Cov = diag(ng^2 x3, na^2 x3), CovWalk = diag(ngw^2 x3, naw^2 x3);
+    # Preintegrated::IntegrateNewMeasurement: B.rowRange(3,6).colRange(3,6) = dR*dt,
+    # C(0:9) = A C A^T + B Nga B^T, C(9:15) += NgaWalk (once per sample)
     sf = math.sqrt(freq)
     var_v = dt ** 2 * (y["IMU.NoiseAcc"] * sf) ** 2
     var_bg = (y["IMU.GyroWalk"] / sf) ** 2

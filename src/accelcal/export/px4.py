@@ -52,6 +52,9 @@ def accelerometer_section(inputs):
         params += [(f"CAL_ACC{n}_{ax}OFF", o), (f"CAL_ACC{n}_{ax}SCALE", s)]
     notes = [] if dev is not None else [f"CAL_ACC{n}_ID not written (unknown device id): PX4 applies slot {n} only to "
                                         "the device whose id it holds (--device-id)"]
+    if "PX4 ULog, sensor_combined" in " ".join(cal.provenance.get("notes") or ()):
+        notes.append("the calibration was made from sensor_combined, which PX4 had already calibrated: these offsets "
+                     "and scales compose with the vehicle's present ones, they do not replace them")
     return params, autopilot_left_out(cal, "PX4", "accelerometer"), notes
 
 
