@@ -145,7 +145,7 @@ def noise_value(noise: dict, sensor: str, what: str, consumer: str, inflate: flo
                           "(read the data in physical units: --unit, --gyro-unit)")
     try:
         per = [s["axes"][ax][what] for ax in "xyz"]
-        vals = [float(p["value"]) for p in per]
+        vals = [float("nan") if p["value"] is None else float(p["value"]) for p in per]
     except (KeyError, TypeError, ValueError):
         raise ExportError(f"the noise report has no {sensor} {what.replace('_', ' ')} (not accelcal noise's JSON?)") \
             from None

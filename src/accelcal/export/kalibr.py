@@ -57,33 +57,43 @@ def noise_lines(noise: dict, inflate: float, consumer: str, indent: str = "") ->
 
 
 def write(inputs) -> Export:
+    """Kalibr's ``imu.yaml``: the noise, and with a calibration its intrinsics (``inputs.calibration``
+    None: the noise alone, as ``accelcal noise --kalibr`` writes it)."""
     cal, noise = inputs.calibration, inputs.noise
     inflate = float(inputs.option("inflate", 1.0))
     values, missing = noise_lines(noise, inflate, "Kalibr")
-    k = kalibr_intrinsics(cal)
-    lines = [f"# Kalibr IMU model from accelcal: noise from {noise.get('source')}, intrinsics from "
-             f"{inputs.option('source', 'the calibration')}",
-             "# noise: continuous time, IEEE Std 952 fit of the Allan deviation, worst axis (all axes in the comment)",
-             "# intrinsics: Kalibr's scale-misalignment model (IccSensors.py): alpha = M_a a + b_a,",
-             "#   omega = M_g C_gyro_i w + A C_gyro_i a + b_g, in the frame of accelcal's accelerometer"]
+    lines = [f"# Kalibr IMU model from accelcal: noise from {noise.get('source')}"
+             + (f", intrinsics from {inputs.option('source', 'the calibration')}" if cal is not None else ""),
+             "# noise: continuous time, IEEE Std 952 fit of the Allan deviation, worst axis (all axes in the comment)"]
+    if noise.get("duration_s") is not None:
+        lines.append(f"# the noise recording: {noise['duration_s'] / 3600:.3g} h at {noise_rate(noise):.6g} Hz")
     if inflate != 1:
         lines.append(f"# inflated x{inflate:g} (OpenVINS advises 10-20x for effects the model lacks)")
     lines += [f"# {key}: no {key.split('_')[0]} in the noise report: not written" for key in missing]
     lines += values
     lines += [f"rostopic: {inputs.option('rostopic', '/imu0')}",
-              f"update_rate: {rate_text(noise_rate(noise))}  # [ Hz ] the noise recording's median rate",
-              "model: scale-misalignment", "accelerometers:"] + matrix_lines("M", k["M_a"])
-    _, b = accelerometer_si(cal, "Kalibr")
-    lines.append(f"  # bias b_a [ m/s^2 ] (a state of Kalibr's spline, not a field): {_vec(b)}")
+              f"update_rate: {rate_text(noise_rate(noise))}  # [ Hz ] the noise recording's median rate"]
+    if cal is None:
+        return Export({"": "\n".join(lines) + "\n"}, [], [])
+    lines += _intrinsics_lines(cal)
     notes = ["the biases are in comments: Kalibr estimates them as states"]
-    if k["M_g"] is None:
-        lines += ["# gyroscopes: the calibration has no gyroscope: not written"]
+    if cal.gyro is None:
         notes.append("no gyroscope in the calibration: Kalibr's gyroscopes block is not written")
-    else:
-        lines += ["gyroscopes:"] + matrix_lines("M", k["M_g"]) + matrix_lines("A", k["A"]) \
-            + matrix_lines("C_gyro_i", k["C_gyro_i"])
-        lines.append(f"  # bias b_g [ rad/s ] (a state of Kalibr's spline, not a field): {_vec(gyro_si(cal, 'Kalibr')[1])}")
     return Export({"": "\n".join(lines) + "\n"}, effects_left_out(cal, "Kalibr"), notes)
+
+
+def _intrinsics_lines(cal) -> list[str]:
+    k = kalibr_intrinsics(cal)
+    _, b = accelerometer_si(cal, "Kalibr")
+    lines = ["# intrinsics: Kalibr's scale-misalignment model (IccSensors.py): alpha = M_a a + b_a,",
+             "#   omega = M_g C_gyro_i w + A C_gyro_i a + b_g, in the frame of accelcal's accelerometer",
+             "model: scale-misalignment", "accelerometers:"] + matrix_lines("M", k["M_a"])
+    lines.append(f"  # bias b_a [ m/s^2 ] (a state of Kalibr's spline, not a field): {_vec(b)}")
+    if k["M_g"] is None:
+        return lines + ["# gyroscopes: the calibration has no gyroscope: not written"]
+    lines += ["gyroscopes:"] + matrix_lines("M", k["M_g"]) + matrix_lines("A", k["A"]) \
+        + matrix_lines("C_gyro_i", k["C_gyro_i"])
+    return lines + [f"  # bias b_g [ rad/s ] (a state of Kalibr's spline, not a field): {_vec(gyro_si(cal, 'Kalibr')[1])}"]
 
 
 def _vec(v) -> str:

@@ -45,11 +45,6 @@ FORMAT_VERSION = 1
 #: Unit of each term's coefficient, for data unit ``u``.
 TERM_UNITS = {"quantization": "{u}*s", "white": "{u}/sqrt(Hz)", "bias_instability": "{u}",
               "random_walk": "{w}", "drift_ramp": "{u}/s"}
-#: (yaml key, sensor, report key, unit) of the exported values.
-KALIBR_KEYS = (("accelerometer_noise_density", "accelerometer", "noise_density", "m/s^2/sqrt(Hz)"),
-               ("accelerometer_random_walk", "accelerometer", "random_walk", "m/s^3/sqrt(Hz)"),
-               ("gyroscope_noise_density", "gyroscope", "noise_density", "rad/s/sqrt(Hz)"),
-               ("gyroscope_random_walk", "gyroscope", "random_walk", "rad/s^2/sqrt(Hz)"))
 AVR_WHITE_TAU_MAX = 10.0
 
 
@@ -121,48 +116,11 @@ def conversions(sensor: str, unit: str, terms: dict) -> dict:
 # --------------------------------------------------------------------------- Kalibr and OpenVINS
 
 
-def _values(report, inflate: float) -> tuple[dict, list[str]]:
-    """{yaml key: (value, comment)} of the four exported numbers, worst axis, inflated."""
-    if not (inflate >= 1 and math.isfinite(inflate)):
-        raise ExportError(f"the inflation factor must be a finite number >= 1, got {inflate}")
-    want = {"accelerometer": "m/s^2", "gyroscope": "rad/s"}
-    out, missing = {}, []
-    for key, sensor, what, unit in KALIBR_KEYS:
-        s = report.sensors.get(sensor)
-        if s is None:
-            missing.append(key)
-            continue
-        if s.unit != want[sensor]:
-            raise ExportError(f"the {sensor} is in {s.unit}; Kalibr and OpenVINS need {want[sensor]} (read the data in "
-                              "physical units: --unit, or calibrate the counts first)")
-        per = [exported_values(s, j)[what] for j in range(3)]
-        worst = int(np.argmax([p["value"] for p in per]))
-        bits = ", ".join(f"{ax} {p['value']:.4g}" + (" (upper bound)" if p.get("upper_bound") else "")
-                         for ax, p in zip("xyz", per))
-        note = f"[ {unit} ] worst axis {'xyz'[worst]}; per axis {bits}; {int(100 * report.level)} % interval of " \
-               f"{'xyz'[worst]} [{per[worst]['interval'][0]:.3g}, {per[worst]['interval'][1]:.3g}]"
-        if per[worst].get("upper_bound"):
-            note += "; not resolved by the record: the upper end of its interval"
-        if inflate != 1:
-            note += f"; inflated x{inflate:g} from {per[worst]['value']:.4g}"
-        out[key] = (per[worst]["value"] * inflate, note)
-    return out, missing
-
-
 def kalibr_yaml(report, *, rostopic: str = "/imu0", inflate: float = 1.0) -> str:
-    """Kalibr's ``imu.yaml`` (continuous-time noise densities and random walks, update rate, topic)."""
-    vals, missing = _values(report, inflate)
-    lines = [f"# Kalibr IMU noise model from accelcal noise ({report.source}, {report.duration_s / 3600:.3g} h at "
-             f"{report.fs:.6g} Hz)", "# continuous-time values from the IEEE Std 952 fit of the Allan deviation;",
-             "# each number is the worst axis, the comment gives every axis and the interval"]
-    if inflate != 1:
-        lines.append(f"# inflated x{inflate:g} (OpenVINS advises 10-20x for effects the model lacks)")
-    lines += [f"# {k}: no {k.split('_')[0]} in the recording: not written" for k in missing]
-    for key, (v, note) in vals.items():
-        lines.append(f"{key}: {v:.6e}  # {note}")
-    lines.append(f"rostopic: {rostopic}")
-    lines.append(f"update_rate: {_rate(report.fs)}  # [ Hz ] the recording's median rate")
-    return "\n".join(lines) + "\n"
+    """Kalibr's ``imu.yaml`` of the noise alone (:mod:`accelcal.export.kalibr`)."""
+    from ..export.kalibr import write
+
+    return write(ExportInputs(None, report_dict(report), {"rostopic": rostopic, "inflate": inflate})).files[""]
 
 
 def openvins_yaml(report, *, rostopic: str = "/imu0", inflate: float = 1.0, calibration=None,
@@ -185,9 +143,5 @@ def calibrated_kalibr_yaml(report, calibration, *, rostopic: str = "/imu0", infl
     return out.files[""], [x.line() for x in out.left_out]
 
 
-def _rate(fs: float) -> str:
-    return repr(float(f"{fs:.6g}"))
-
-
-__all__ = ["ExportError", "calibrated_kalibr_yaml", "FORMAT", "FORMAT_VERSION", "KALIBR_KEYS", "avr_convention", "conversions",
+__all__ = ["ExportError", "calibrated_kalibr_yaml", "FORMAT", "FORMAT_VERSION", "avr_convention", "conversions",
            "exported_values", "kalibr_yaml", "openvins_yaml", "report_dict", "walk_unit"]
