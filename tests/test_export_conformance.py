@@ -69,7 +69,8 @@ def _implausible():
     flipped[2, 2] = -1.0
     gyro = replace(cal.gyro, model=replace(cal.gyro.model, bias=np.array([0.0, 40.0, 0.0])))
     return {"scale 1.3": (replace(cal, M=scale), "scale is y 1.3"),
-            "offset 200 m/s^2": (replace(cal, bias=np.array([0.0, 0.0, 200.0])), "offset is z 200 m/s^2, beyond the sensor's range of 16 g"),
+            "offset 200 m/s^2": (replace(cal, bias=np.array([0.0, 0.0, 200.0])),
+                                 "offset is z 200 m/s^2, beyond the sensor's range of 16 g"),
             "axis flipped": (replace(cal, M=flipped), "not positive definite"),
             "gyro offset 40 rad/s": (replace(cal, gyro=gyro), "gyroscope's offset is y 2292 deg/s")}
 

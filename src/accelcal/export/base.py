@@ -22,6 +22,9 @@ import numpy as np
 from ..errors import AccelcalError
 from ..units import ANGULAR_RATE_UNITS, G0
 
+#: What a consumer without IMU intrinsics needs: data the calibration was applied to.
+APPLY_FIRST = ("feed it data the calibration was applied to (accelcal apply): then nothing above is lost, and the "
+               "noise values still hold")
 #: The rate at which a gyroscope's scale and misalignment left out are costed [deg/s].
 REFERENCE_RATE_DPS = 100.0
 
@@ -77,11 +80,11 @@ class ExportInputs:
 def accelerometer_si(cal, consumer: str) -> tuple[np.ndarray, np.ndarray]:
     """``(M, b)`` of ``raw = M f + b`` with raw data in m/s² (what the estimators and autopilots take)."""
     if cal.unit != "m/s^2":
-        raise ExportError(f"{consumer} takes the accelerometer in m/s^2; this calibration is of {cal.unit or 'an unknown'} "
-                          "data: calibrate data read in m/s^2 (--unit m/s2, g or mg)")
+        raise ExportError(f"{consumer} takes the accelerometer in m/s^2; this calibration is of "
+                          f"{cal.unit or 'an unknown'} data: calibrate data read in m/s^2 (--unit m/s2, g or mg)")
     if np.any(cal.input_offset != 0) or np.any(cal.input_sensitivity != 1):
-        raise ExportError(f"{consumer} takes the accelerometer in m/s^2; this calibration converts raw counts nominally: "
-                          "calibrate data read in m/s^2")
+        raise ExportError(f"{consumer} takes the accelerometer in m/s^2; this calibration converts raw counts "
+                          "nominally: calibrate data read in m/s^2")
     return np.asarray(cal.M, float), np.asarray(cal.bias, float)
 
 
@@ -150,8 +153,8 @@ def noise_value(noise: dict, sensor: str, what: str, consumer: str, inflate: flo
         raise ExportError(f"the noise report has no {sensor} {what.replace('_', ' ')} (not accelcal noise's JSON?)") \
             from None
     if not all(math.isfinite(v) and v > 0 for v in vals):
-        raise ExportError(f"the noise report's {sensor} {what.replace('_', ' ')} is not a positive number on every axis "
-                          f"({', '.join(f'{v:.3g}' for v in vals)}): rerun accelcal noise on a longer static recording")
+        raise ExportError(f"the noise report's {sensor} {what.replace('_', ' ')} is not a positive number on every "
+                          f"axis ({', '.join(f'{v:.3g}' for v in vals)}): rerun accelcal noise on a longer static recording")
     j = int(np.argmax(vals))
     unit = NOISE_UNITS[(sensor, what)]
     bits = ", ".join(f"{ax} {v:.4g}" + (" (upper bound)" if p.get("upper_bound") else "")
@@ -236,14 +239,14 @@ def intrinsics_left_out(cal, consumer: str) -> list[LeftOut]:
     """What a consumer without IMU intrinsics (it estimates the biases online) leaves out: the
     accelerometer's scale and non-orthogonality, the gyroscope's scale, misalignment and g-sensitivity."""
     M, _ = accelerometer_si(cal, consumer)
-    out = [LeftOut("the accelerometer's scale and non-orthogonality M (no intrinsics in its model; apply the "
-                   "calibration to the data first: accelcal apply)",
+    out = [LeftOut(f"the accelerometer's scale and non-orthogonality M ({consumer} has no IMU intrinsics)",
                    f"up to {accel_cost_mg(M - np.eye(3)):.3g} mg at the worst orientation on raw data")]
     g = gyro_si(cal, consumer)
     if g is not None:
         C, _, G = g
-        out.append(LeftOut("the gyroscope's scale and misalignment C", f"up to {rate_cost_dps(np.linalg.inv(C) - np.eye(3)):.3g} "
-                           f"deg/s at {REFERENCE_RATE_DPS:g} deg/s on raw data"))
+        cost = rate_cost_dps(np.linalg.inv(C) - np.eye(3))
+        out.append(LeftOut("the gyroscope's scale and misalignment C",
+                           f"up to {cost:.3g} deg/s at {REFERENCE_RATE_DPS:g} deg/s on raw data"))
         if np.any(G != 0):
             out.append(LeftOut("the gyroscope's g-sensitivity G", f"up to {g_sensitivity_cost_dps(G):.3g} deg/s at the "
                                "worst orientation on raw data"))
@@ -256,6 +259,6 @@ def matrix_lines(name: str, m, indent: str = "  ") -> list[str]:
                                    for row in np.asarray(m, float)]
 
 
-__all__ = ["Export", "ExportError", "ExportInputs", "LeftOut", "NoiseValue", "REFERENCE_RATE_DPS", "accel_cost_mg",
-           "accelerometer_si", "diagonal_left_out", "effects_left_out", "g_sensitivity_cost_dps", "gyro_si", "intrinsics_left_out",
-           "matrix_lines", "noise_rate", "noise_value", "rate_cost_dps", "rate_text", "require_gyro", "require_noise"]
+__all__ = ["APPLY_FIRST", "Export", "ExportError", "ExportInputs", "LeftOut", "NoiseValue", "REFERENCE_RATE_DPS",
+           "accel_cost_mg", "accelerometer_si", "diagonal_left_out", "effects_left_out", "g_sensitivity_cost_dps",
+           "gyro_si", "intrinsics_left_out", "matrix_lines", "noise_rate", "noise_value", "rate_cost_dps", "rate_text", "require_gyro", "require_noise"]

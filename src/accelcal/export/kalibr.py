@@ -93,7 +93,8 @@ def _intrinsics_lines(cal) -> list[str]:
         return lines + ["# gyroscopes: the calibration has no gyroscope: not written"]
     lines += ["gyroscopes:"] + matrix_lines("M", k["M_g"]) + matrix_lines("A", k["A"]) \
         + matrix_lines("C_gyro_i", k["C_gyro_i"])
-    return lines + [f"  # bias b_g [ rad/s ] (a state of Kalibr's spline, not a field): {_vec(gyro_si(cal, 'Kalibr')[1])}"]
+    bg = gyro_si(cal, "Kalibr")[1]
+    return lines + [f"  # bias b_g [ rad/s ] (a state of Kalibr's spline, not a field): {_vec(bg)}"]
 
 
 def _vec(v) -> str:

@@ -72,8 +72,8 @@ def write(inputs) -> Export:
     inflate = float(inputs.option("inflate", 1.0))
     values, missing = noise_lines(noise, inflate, "OpenVINS", indent="  ")
     if missing:
-        raise ExportError(f"OpenVINS needs the noise of both sensors; the noise report has no {missing[0].split('_')[0]}"
-                          " (a log with the gyroscope gives both)")
+        raise ExportError("OpenVINS needs the noise of both sensors; the noise report has no "
+                          f"{missing[0].split('_')[0]} (a log with the gyroscope gives both)")
     if cal is None:  # the noise alone (accelcal noise --openvins without --calibration)
         k = {"Tw": np.eye(3), "R_IMUtoGYRO": np.eye(3), "Ta": np.eye(3), "R_IMUtoACC": np.eye(3),
              "Tg": np.zeros((3, 3)), "P": np.eye(3)}

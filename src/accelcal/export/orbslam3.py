@@ -13,7 +13,7 @@ no IMU intrinsics: the summary says what feeding it raw data costs.
 
 from __future__ import annotations
 
-from .base import Export, ExportError, intrinsics_left_out, noise_rate, noise_value
+from .base import APPLY_FIRST, Export, ExportError, intrinsics_left_out, noise_rate, noise_value
 
 KEYS = (("IMU.NoiseGyro", "gyroscope", "noise_density"), ("IMU.NoiseAcc", "accelerometer", "noise_density"),
         ("IMU.GyroWalk", "gyroscope", "random_walk"), ("IMU.AccWalk", "accelerometer", "random_walk"))
@@ -23,14 +23,15 @@ def write(inputs) -> Export:
     cal, noise = inputs.calibration, inputs.noise
     inflate = float(inputs.option("inflate", 1.0))
     lines = ["%YAML:1.0", f"# ORB-SLAM3 IMU settings from accelcal (noise: {noise.get('source')}); paste into your "
-             "settings file", "# continuous-time densities and random walks (ORB-SLAM3 scales them by sqrt(IMU.Frequency))"]
+             "settings file",
+             "# continuous-time densities and random walks (ORB-SLAM3 scales them by sqrt(IMU.Frequency))"]
     for key, sensor, what in KEYS:
         v = noise_value(noise, sensor, what, "ORB-SLAM3", inflate)
         if v is None:
             raise ExportError(f"ORB-SLAM3 needs the noise of both sensors; the noise report has no {sensor}")
         lines.append(f"{key}: {v.value:.6e}  # {v.comment}")
     lines.append(f"IMU.Frequency: {noise_rate(noise):.6g}  # [ Hz ] the noise recording's rate: use your IMU's")
-    return Export({"": "\n".join(lines) + "\n"}, intrinsics_left_out(cal, "ORB-SLAM3"), [])
+    return Export({"": "\n".join(lines) + "\n"}, intrinsics_left_out(cal, "ORB-SLAM3"), [APPLY_FIRST])
 
 
 __all__ = ["KEYS", "write"]

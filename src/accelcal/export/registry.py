@@ -79,7 +79,8 @@ CONSUMERS: dict[str, Consumer] = {c.name: c for c in (
     Consumer(name="kalibr", title="Kalibr imu.yaml: noise densities and random walks, and the IMU intrinsics of its "
                                   "scale-misalignment model (accelerometers M, gyroscopes M, A, C_gyro_i)",
              writer=f"{_E}.kalibr:write", needs=("noise",), options=("rostopic", "inflate"),
-             source="ethz-asl/kalibr aslam_offline_calibration/kalibr/python/kalibr_imu_camera_calibration/IccSensors.py"),
+             source="ethz-asl/kalibr aslam_offline_calibration/kalibr/python/kalibr_imu_camera_calibration/"
+                    "IccSensors.py"),
     Consumer(name="openvins", title="OpenVINS kalibr_imu_chain.yaml: noise, Tw, R_IMUtoGYRO, Ta, R_IMUtoACC, Tg "
                                     "(--model kalibr or rpng)",
              writer=f"{_E}.openvins:write", needs=("noise",), options=("rostopic", "inflate", "model"),

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 
-from .base import Export, ExportError, intrinsics_left_out, noise_rate, noise_value
+from .base import APPLY_FIRST, Export, ExportError, intrinsics_left_out, noise_rate, noise_value
 
 KEYS = (("acc_n", "accelerometer", "noise_density"), ("gyr_n", "gyroscope", "noise_density"),
         ("acc_w", "accelerometer", "random_walk"), ("gyr_w", "gyroscope", "random_walk"))
@@ -40,11 +40,12 @@ def write(inputs) -> Export:
             raise ExportError(f"VINS needs the noise of both sensors; the noise report has no {sensor}")
         unit = {("accelerometer", "noise_density"): "m/s^2", ("gyroscope", "noise_density"): "rad/s",
                 ("accelerometer", "random_walk"): "m/s^3", ("gyroscope", "random_walk"): "rad/s^2"}[sensor, what]
-        lines.append(f"{key}: {v.value * math.sqrt(fs):.6e}  # [ {unit} ] = {v.value:.6e} {v.unit} x sqrt({fs:.6g} Hz); "
+        lines.append(f"{key}: {v.value * math.sqrt(fs):.6e}  # [ {unit} ] = {v.value:.6e} {v.unit} "
+                     f"x sqrt({fs:.6g} Hz); "
                      + v.comment.split("] ", 1)[1])
     lines.append(f"g_norm: {cal.g:.6f}  # [ m/s^2 ] the gravity the calibration was fitted with")
     return Export({"": "\n".join(lines) + "\n"}, intrinsics_left_out(cal, "VINS"),
-                  [f"VINS's values are per sample: they hold for data at {fs:.6g} Hz only"])
+                  [f"VINS's values are per sample: they hold for data at {fs:.6g} Hz only", APPLY_FIRST])
 
 
 __all__ = ["KEYS", "write"]

@@ -6,7 +6,8 @@
 >>> gcal.model.correct(gyro)                   # angular rate [rad/s], accelerometer frame
 
 Modules: :mod:`~accelcal.gyro.model` (``ω = C (y - b - G f)`` and the peers'
-parametrisations; their files: :mod:`accelcal.export`), :mod:`~accelcal.gyro.integrate` (five integrators, the exact Jacobian),
+parametrisations; their files: :mod:`accelcal.export`), :mod:`~accelcal.gyro.integrate`
+(five integrators, the exact Jacobian),
 :mod:`~accelcal.gyro.fit` (the iterative and the one-step estimate, the Cramér–Rao bound),
 :mod:`~accelcal.gyro.rests` (bias, noise, time base, saturation),
 :mod:`~accelcal.gyro.calibrate` (the whole session, its trust lines and typed errors,
