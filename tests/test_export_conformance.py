@@ -153,3 +153,14 @@ def test_px4_writes_the_device_ids_the_ulog_reader_noted():
     assert any("compose with the vehicle's present ones" in n for n in export("px4", _inputs(combined)).notes)
     r = export("px4", _inputs(cal, device_id=77, instance=2))
     assert "CAL_ACC2_ID\t77\t6" in r.files[""] and "CAL_GYRO2_ID" not in r.files[""]
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_a_fitted_effect_is_named_as_left_out_by_every_consumer(name):
+    from accelcal.calibration.base import EffectTerm
+
+    cal = replace(full_calibration(), effects=(EffectTerm("temperature", np.array([1e-3, -2e-3, 5e-4]), 25.0),))
+    r = export(name, _inputs(cal))
+    assert any(x.term == "the fitted effect temperature" for x in r.left_out)
+    with pytest.raises(ExportError, match="--exact"):
+        export(name, _inputs(cal), exact=True)
