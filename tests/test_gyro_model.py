@@ -60,11 +60,12 @@ def test_kalibr_round_trip():
     np.testing.assert_allclose(Q @ Q.T, np.eye(3), atol=1e-14)
     assert np.linalg.det(Q) == pytest.approx(1.0)
     w, f = np.random.default_rng(4).standard_normal((5, 3)), np.random.default_rng(5).standard_normal((5, 3))
-    # Kalibr's sensor model y = M C_gyro_i w + A a + b
-    y = (M @ Q @ w.T).T + f @ d["A"].T + d["b"]
+    # Kalibr's sensor model (IccSensors.py l. 1049): y = M C_gyro_i w + A C_gyro_i a + b
+    y = (M @ Q @ w.T).T + f @ (d["A"] @ Q).T + d["b"]
     np.testing.assert_allclose(m.measure(w, f), y, atol=1e-13)
     back = GyroModel.from_kalibr(M, Q, d["b"], d["A"])
     np.testing.assert_allclose(back.C, m.C, atol=1e-13)
+    np.testing.assert_allclose(back.g_sensitivity, m.g_sensitivity, atol=1e-15)
 
 
 def test_lq_and_frame_rotation():
@@ -90,8 +91,13 @@ def test_dict_round_trip_and_bad_input():
         _random_model(g_sens=True).correct(np.zeros((2, 3)))  # g-sensitivity needs the specific force
 
 
+def _without_g(m):
+    return GyroModel(m.C, m.bias, None, m.raw_unit)
+
+
 def test_exports_are_read_by_the_peers_as_the_same_calibration(tmp_path):
-    from accelcal.gyro.export import imucal_json, imutk_files
+    from accelcal.export.imucal import imucal_json
+    from accelcal.export.imutk import imutk_files
 
     rng = np.random.default_rng(7)
     M = np.tril(np.eye(3) + 0.02 * rng.standard_normal((3, 3)))  # accelcal's lower-triangular accelerometer
@@ -112,5 +118,5 @@ def test_exports_are_read_by_the_peers_as_the_same_calibration(tmp_path):
     acc_out, gyr_out = info.calibrate(raw_a, raw_g, "m/s^2", "deg/s")
     np.testing.assert_allclose(acc_out, f, atol=1e-10)
     np.testing.assert_allclose(np.deg2rad(gyr_out), gs.correct(raw_g, f), atol=1e-10)
-    with pytest.raises(InputShapeError, match="g-sensitivity"):
-        imutk_files(M, ab, gs)
+    # IMU-TK has no g-sensitivity: its file holds the rest (the export says what G costs)
+    assert imutk_files(M, ab, gs)["gyro"] == imutk_files(M, ab, _without_g(gs))["gyro"]

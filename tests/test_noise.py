@@ -195,10 +195,11 @@ def test_openvins_chain_carries_the_calibration_as_ta(report):
     y = _yaml(text)["imu0"]
     assert np.allclose(y["Ta"], M) and np.allclose(y["Tw"], np.eye(3)) and np.allclose(y["Tg"], 0)
     assert np.allclose(y["R_IMUtoACC"], np.eye(3)) and y["model"] == "kalibr" and warnings == []
-    assert "b_a of the calibration" in text and "0.01, -0.02, 0.03" in text
+    assert "accelerometer bias b_a" in text and "0.01, -0.02, 0.03" in text
+    assert "the calibration has no gyroscope: Tw = I" in text
     assert np.allclose(_yaml(openvins_yaml(report)[0])["imu0"]["Ta"], np.eye(3))
     counts = FullLLSCalibration(bias=np.zeros(3), M=400 * np.eye(3), g=9.80665, unit="counts")
-    with pytest.raises(ExportError, match="calibration is in counts"):
+    with pytest.raises(ExportError, match="in m/s\\^2; this calibration is of counts"):
         openvins_yaml(report, calibration=counts)
 
 
@@ -207,7 +208,7 @@ def test_exports_need_physical_units_and_openvins_needs_the_gyro():
     r = analyse_noise(Recording(rec.t, rec.acc, None, "c", unit="counts"))
     with pytest.raises(ExportError, match="accelerometer is in counts"):
         kalibr_yaml(r)
-    with pytest.raises(ExportError, match="OpenVINS needs both sensors"):
+    with pytest.raises(ExportError, match="OpenVINS needs the noise of both sensors"):
         openvins_yaml(analyse_noise(rec))
 
 
@@ -272,3 +273,17 @@ def test_accelcal_noise_refuses_a_moving_recording_in_one_line_and_writes_nothin
     assert not out.exists() and not y.exists()
     code, err = _run("noise", tmp_path / "missing.bag", "--out", out)
     assert code == 2 and "no such file" in err
+
+
+def test_a_calibration_with_a_gyroscope_reaches_both_files(report):
+    from accelcal.noise.export import calibrated_kalibr_yaml
+
+    from .export_fixtures import full_calibration
+
+    cal = full_calibration()
+    text, warnings = openvins_yaml(report, calibration=cal)
+    y = _yaml(text)["imu0"]
+    assert not np.allclose(y["Tw"], np.eye(3)) and not np.allclose(y["Tg"], 0) and warnings == []
+    assert "not calibrated" not in text and "no gyroscope" not in text
+    k = _yaml(calibrated_kalibr_yaml(report, cal)[0])
+    assert k["model"] == "scale-misalignment" and np.allclose(k["gyroscopes"]["M"], y["Tw"])

@@ -1,6 +1,6 @@
 """Property-based fuzzing of the readers: any file gives a valid Recording or one
 RecordingError line, never another exception; through the CLI, exit 0 or 2 with one line
-and no output on failure, never an internal error (exit 3).
+and no output on failure, never an internal error (exit 4).
 
 The reader property runs over every registered format (``format=`` each name of
 :data:`accelcal.formats.FORMATS`, ``auto``, and the strict reading of each format that

@@ -7,7 +7,9 @@ One module per subcommand (``add_parser`` and its handler), the shared options i
 Nothing numerical is imported at module level: ``accelcal --help`` must start at once.
 Every failure the user can fix is one ``accelcal: error:`` line on stderr naming the
 cause and the option that fixes it, exit status 2, and no output file; warnings about a
-result that was written are ``warning:`` lines (a clean fit prints none).
+result that was written are ``warning:`` lines (a clean fit prints none).  Exit status 3
+is kept for ``--strict`` (``calibrate``, ``export``): the calibration's fit is untrustworthy;
+an internal error (a bug) is 4.
 """
 
 from __future__ import annotations
@@ -48,7 +50,7 @@ def main(argv: list[str] | None = None) -> int:
     except Exception as exc:  # never a traceback for the user; ACCELCAL_DEBUG=1 shows it
         if os.environ.get("ACCELCAL_DEBUG"):
             raise
-        return fail(f"internal error ({type(exc).__name__}: {exc}); rerun with ACCELCAL_DEBUG=1 and report it", code=3)
+        return fail(f"internal error ({type(exc).__name__}: {exc}); rerun with ACCELCAL_DEBUG=1 and report it", code=4)
 
 
 def _parser() -> argparse.ArgumentParser:

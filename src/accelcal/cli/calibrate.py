@@ -10,7 +10,7 @@ from pathlib import Path
 from ..registry import estimators
 from . import gyro
 from .common import (STANDARD_GRAVITY, _gravity, _nominal, _provenance, _rate_hint, _read, _reader_options,
-                     _static_options, _static_settings, _step)
+                     _static_options, _static_settings, _step, fail)
 
 
 def add_parser(sub, epilog: str) -> None:
@@ -35,6 +35,9 @@ def add_parser(sub, epilog: str) -> None:
     n.add_argument("--zero", metavar="C[,C,C]", help="the output at zero specific force [counts] (default 0)")
     _static_options(c)
     gyro.add_gyro_options(c)
+    c.add_argument("--strict", action="store_true",
+                   help="exit 3 when the fit is untrustworthy (its quality warnings; the file is still written), so "
+                        "that a script can tell")
     c.set_defaults(func=_calibrate)
 
 
@@ -82,7 +85,19 @@ def _calibrate(args) -> int:
     _summary(cal, poses, rec, args)
     if cal.gyro is not None:
         print(cal.gyro.summary(), file=sys.stderr)
-    return 0
+    return _strict_status(cal, args)
+
+
+def _strict_status(cal, args) -> int:
+    """0, or 3 with --strict when the calibration's fit is untrustworthy (one line saying why)."""
+    from ..export import trust_problems
+
+    problems = trust_problems(cal) if args.strict else []
+    if not problems:
+        return 0
+    return fail(f"--strict: the calibration is untrustworthy ({problems[0]}" +
+                (f"; {len(problems) - 1} more" if len(problems) > 1 else "") + f"); it is written to {args.out}",
+                code=3)
 
 
 def _with_provenance(cal, extra: dict):

@@ -44,6 +44,9 @@ units: acceleration in m/s^2, g, mg or raw counts (from the header, --unit, or t
 logs: ROS 1/2 bags and MCAP files, PX4 ULog, ArduPilot DataFlash; the IMU topic is
   found (--topic, --instance when there are several), timed by the sensor's stamps
   (--time-source log: the log's clock); the gyroscope comes along.
+exit status: 0 done; 2 bad input, refused (one line, nothing written); 3 with
+  --strict (calibrate, export), the calibration's fit is untrustworthy (its quality
+  warnings; calibrate still writes it, export writes nothing); 4 an internal error.
 rests: the recording should start at rest (its noise sets the detection threshold,
   as in IMU-TK); if it does not, the quietest 2 s stretch is used, and said so.
   Known rests can be given with --intervals (imucal section list, CSV start,end).

@@ -33,7 +33,8 @@ def add_parser(sub, epilog: str) -> None:
     n.add_argument("--kalibr", type=Path, metavar="YAML", help="also write Kalibr's imu.yaml")
     n.add_argument("--openvins", type=Path, metavar="YAML", help="also write OpenVINS's kalibr_imu_chain.yaml")
     n.add_argument("--calibration", type=Path, metavar="JSON",
-                   help="accelcal calibration whose M becomes OpenVINS's Ta (default: identity)")
+                   help="accelcal calibration whose intrinsics (accelerometer and gyroscope) go into the Kalibr and "
+                        "OpenVINS files (default: none; OpenVINS's are then the identity)")
     n.add_argument("--inflate", type=_positive, default=1.0, metavar="F",
                    help="multiply the exported densities and random walks by F (OpenVINS advises 10-20)")
     n.add_argument("--figure", type=Path, metavar="PNG", help="also draw the Allan deviations (.png and .pdf)")
@@ -78,17 +79,22 @@ def _noise(args) -> int:
 def _noise_exports(args, rec, report, cal) -> tuple[dict, list]:
     import re
 
-    from ..noise.export import kalibr_yaml, openvins_yaml
+    from ..noise.export import calibrated_kalibr_yaml, kalibr_yaml, openvins_yaml
 
     found = next((m.group(1) for n in rec.notes if (m := re.search(r"topic (/\S+) \(sensor_msgs/Imu", n))), None)
     topic = args.topic or found or "/imu0"
     texts, warnings = {}, []
     if args.kalibr is not None:
-        texts[args.kalibr] = kalibr_yaml(report, rostopic=topic, inflate=args.inflate)
+        if cal is None:
+            texts[args.kalibr] = kalibr_yaml(report, rostopic=topic, inflate=args.inflate)
+        else:
+            texts[args.kalibr], w = calibrated_kalibr_yaml(report, cal, rostopic=topic, inflate=args.inflate)
+            warnings += w
     if args.openvins is not None:
-        texts[args.openvins], warnings = openvins_yaml(report, rostopic=topic, inflate=args.inflate, calibration=cal)
-    elif cal is not None:
-        warnings.append("--calibration is used by --openvins only; nothing was exported from it")
+        texts[args.openvins], w = openvins_yaml(report, rostopic=topic, inflate=args.inflate, calibration=cal)
+        warnings += [x for x in w if x not in warnings]
+    elif cal is not None and args.kalibr is None:
+        warnings.append("--calibration is used by --kalibr and --openvins only; nothing was exported from it")
     if texts and found is None:
         warnings.append(f"rostopic in the YAML is {topic} (the recording is not a ROS log): set it to your topic")
     return texts, warnings

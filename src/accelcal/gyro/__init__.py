@@ -6,13 +6,13 @@
 >>> gcal.model.correct(gyro)                   # angular rate [rad/s], accelerometer frame
 
 Modules: :mod:`~accelcal.gyro.model` (``ω = C (y - b - G f)`` and the peers'
-parametrisations), :mod:`~accelcal.gyro.integrate` (five integrators, the exact Jacobian),
+parametrisations; their files: :mod:`accelcal.export`), :mod:`~accelcal.gyro.integrate`
+(five integrators, the exact Jacobian),
 :mod:`~accelcal.gyro.fit` (the iterative and the one-step estimate, the Cramér–Rao bound),
 :mod:`~accelcal.gyro.rests` (bias, noise, time base, saturation),
 :mod:`~accelcal.gyro.calibrate` (the whole session, its trust lines and typed errors,
 :mod:`~accelcal.gyro.errors`), :mod:`~accelcal.gyro.result` (``to_dict``/``from_dict``,
 ``summary()``), :mod:`~accelcal.gyro.ferraris` (rotations of known angle),
-:mod:`~accelcal.gyro.export` (IMU-TK's ``.calib`` and imucal's JSON),
 :mod:`~accelcal.gyro.recording` (a recording's gyro after its accelerometer, as the CLI),
 :mod:`~accelcal.gyro.simulate` (sessions with an exactly known rotation).  The static
 detection settings for sessions with short still phases: :mod:`accelcal.static_auto`.
@@ -29,7 +29,6 @@ _LAZY = {
     "fit_iterative": "fit", "fit_one_step": "fit", "crlb": "fit", "MotionSet": "fit",
     "fit_ferraris": "ferraris", "FerrarisFit": "ferraris", "calibrate_ferraris_session": "ferraris",
     "integrate_intervals": "integrate", "integrate_sequential": "integrate",
-    "imutk_files": "export", "imucal_json": "export", "calibration_imutk": "export", "calibration_imucal": "export",
     "calibrate_recording_gyro": "recording",
 }
 

@@ -33,10 +33,10 @@ imucal  ``y = K_g R_g ω + K_ga a + b_g`` (sensor model,           ``K_g R_g = C
         ``ferraris_calibration_info.py``): ``K_g`` diagonal        for its deg/s output):
         (row norms), ``R_g`` rows = unit sensing axes,             ``K_g`` = row norms of
         ``K_ga`` g-sensitivity                                      ``C⁻¹``; ``K_ga = G``
-Kalibr  ``y = M C_gyro_i ω + A a + b`` (``scale-misalignment``,  ``M C_gyro_i = C⁻¹``: an LQ
-        ``IccSensors.py``): ``M`` lower triangular (6),            decomposition (``M``
-        ``C_gyro_i`` a rotation (3), ``A`` g-sensitivity;          positive diagonal); ``A =
-        ``y`` in rad/s                                              G``
+Kalibr  ``y = M C_gyro_i ω + A C_gyro_i a + b``               ``M C_gyro_i = C⁻¹``: an LQ
+        (``scale-misalignment``, ``IccSensors.py`` l. 1049):       decomposition (``M``
+        ``M`` lower triangular (6), ``C_gyro_i`` a rotation (3),   positive diagonal); ``A =
+        ``A`` g-sensitivity of the force in the gyro frame         G C_gyro_iᵀ``
 ======  ========================================================  ===========================
 
 ``C`` is what the estimators fit: it enters the integrated rotation linearly, which keeps
@@ -184,15 +184,16 @@ class GyroModel:
 
     def to_kalibr(self) -> dict:
         """Kalibr's ``M`` (lower triangular, positive diagonal), ``C_gyro_i`` (rotation), ``A``, ``b``
-        with ``y = M C_gyro_i ω + A a + b`` (Kalibr expects rad/s raw data)."""
+        with ``y = M C_gyro_i ω + A C_gyro_i a + b`` (Kalibr expects rad/s raw data; its ``A``
+        multiplies the specific force in the gyro frame, ``IccSensors.py`` l. 1049)."""
         L, Q = lq(np.linalg.inv(self.C))
         G = np.zeros((3, 3)) if self.g_sensitivity is None else self.g_sensitivity
-        return {"M": L, "C_gyro_i": Q, "A": G.copy(), "b": self.bias.copy()}
+        return {"M": L, "C_gyro_i": Q, "A": G @ Q.T, "b": self.bias.copy()}
 
     @classmethod
     def from_kalibr(cls, M, C_gyro_i, b, A=None, raw_unit: str = "rad/s") -> GyroModel:
-        """From Kalibr's ``y = M C_gyro_i ω + A a + b``."""
-        G = None if A is None else _mat(A, "A")
+        """From Kalibr's ``y = M C_gyro_i ω + A C_gyro_i a + b``."""
+        G = None if A is None else _mat(A, "A") @ _mat(C_gyro_i, "C_gyro_i")
         return cls(C=np.linalg.inv(_mat(M, "M") @ _mat(C_gyro_i, "C_gyro_i")), bias=b, g_sensitivity=G,
                    raw_unit=raw_unit)
 

@@ -19,19 +19,10 @@ comment says so.  ``inflate`` multiplies the exported noise densities and random
 (OpenVINS's documentation advises 10–20× for unmodelled effects); the measured values
 stay in the comments.
 
-OpenVINS's model (``docs/propagation.dox``, ``VioManagerOptions.h``)::
-
-    ω_m = T_w R_IMUtoGYRO ω + T_g a + b_g + n_g,    a_m = T_a R_IMUtoACC a + b_a + n_a
-
-and it estimates ``D = T⁻¹``; its ``kalibr`` model keeps the lower triangle of ``D_a``,
-``D_w`` (the inverse of a lower-triangular ``T`` is lower triangular) and a gyroscope
-rotation, with ``R_IMUtoACC`` the identity.  accelcal's model is ``z = M x + b`` with ``M``
-lower triangular, so ``T_a = M``, ``R_IMUtoACC = I`` and the model is ``kalibr``; the
-bias ``b`` is not a field of the file (OpenVINS estimates ``b_a`` online: it is written
-as a comment).  accelcal does not calibrate the gyroscope yet: ``T_w = I``,
-``R_IMUtoGYRO = I``, ``T_g = 0``.  A calibration is exported only when it is in m/s²,
-without a nominal conversion of counts; its fitted effects (temperature, ...) have no
-place in the file and are left out with a warning.
+With a calibration (``accelcal noise --calibration``), both files also carry its IMU
+intrinsics, accelerometer and gyroscope, as :mod:`accelcal.export.kalibr` and
+:mod:`accelcal.export.openvins` write them (each consumer's own equations); without one,
+OpenVINS's intrinsics are the identity.
 
 ``allan_variance_ros`` convention (optional): a line of slope −½ fitted in log–log to
 the Allan deviations at τ < 10 s and read at τ = 1 s, a line of slope +½ fitted to all
@@ -46,7 +37,7 @@ import math
 
 import numpy as np
 
-from ..errors import AccelcalError
+from ..export.base import ExportError, ExportInputs
 from ..jsonsafe import json_safe
 
 FORMAT = "accelcal-noise"
@@ -54,16 +45,7 @@ FORMAT_VERSION = 1
 #: Unit of each term's coefficient, for data unit ``u``.
 TERM_UNITS = {"quantization": "{u}*s", "white": "{u}/sqrt(Hz)", "bias_instability": "{u}",
               "random_walk": "{w}", "drift_ramp": "{u}/s"}
-#: (yaml key, sensor, report key, unit) of the exported values.
-KALIBR_KEYS = (("accelerometer_noise_density", "accelerometer", "noise_density", "m/s^2/sqrt(Hz)"),
-               ("accelerometer_random_walk", "accelerometer", "random_walk", "m/s^3/sqrt(Hz)"),
-               ("gyroscope_noise_density", "gyroscope", "noise_density", "rad/s/sqrt(Hz)"),
-               ("gyroscope_random_walk", "gyroscope", "random_walk", "rad/s^2/sqrt(Hz)"))
 AVR_WHITE_TAU_MAX = 10.0
-
-
-class ExportError(AccelcalError):
-    """A noise report or a calibration that cannot be written in an estimator's format."""
 
 
 # --------------------------------------------------------------------------- JSON
@@ -134,98 +116,32 @@ def conversions(sensor: str, unit: str, terms: dict) -> dict:
 # --------------------------------------------------------------------------- Kalibr and OpenVINS
 
 
-def _values(report, inflate: float) -> tuple[dict, list[str]]:
-    """{yaml key: (value, comment)} of the four exported numbers, worst axis, inflated."""
-    if not (inflate >= 1 and math.isfinite(inflate)):
-        raise ExportError(f"the inflation factor must be a finite number >= 1, got {inflate}")
-    want = {"accelerometer": "m/s^2", "gyroscope": "rad/s"}
-    out, missing = {}, []
-    for key, sensor, what, unit in KALIBR_KEYS:
-        s = report.sensors.get(sensor)
-        if s is None:
-            missing.append(key)
-            continue
-        if s.unit != want[sensor]:
-            raise ExportError(f"the {sensor} is in {s.unit}; Kalibr and OpenVINS need {want[sensor]} (read the data in "
-                              "physical units: --unit, or calibrate the counts first)")
-        per = [exported_values(s, j)[what] for j in range(3)]
-        worst = int(np.argmax([p["value"] for p in per]))
-        bits = ", ".join(f"{ax} {p['value']:.4g}" + (" (upper bound)" if p.get("upper_bound") else "")
-                         for ax, p in zip("xyz", per))
-        note = f"[ {unit} ] worst axis {'xyz'[worst]}; per axis {bits}; {int(100 * report.level)} % interval of " \
-               f"{'xyz'[worst]} [{per[worst]['interval'][0]:.3g}, {per[worst]['interval'][1]:.3g}]"
-        if per[worst].get("upper_bound"):
-            note += "; not resolved by the record: the upper end of its interval"
-        if inflate != 1:
-            note += f"; inflated x{inflate:g} from {per[worst]['value']:.4g}"
-        out[key] = (per[worst]["value"] * inflate, note)
-    return out, missing
-
-
 def kalibr_yaml(report, *, rostopic: str = "/imu0", inflate: float = 1.0) -> str:
-    """Kalibr's ``imu.yaml`` (continuous-time noise densities and random walks, update rate, topic)."""
-    vals, missing = _values(report, inflate)
-    lines = [f"# Kalibr IMU noise model from accelcal noise ({report.source}, {report.duration_s / 3600:.3g} h at "
-             f"{report.fs:.6g} Hz)", "# continuous-time values from the IEEE Std 952 fit of the Allan deviation;",
-             "# each number is the worst axis, the comment gives every axis and the interval"]
-    if inflate != 1:
-        lines.append(f"# inflated x{inflate:g} (OpenVINS advises 10-20x for effects the model lacks)")
-    lines += [f"# {k}: no {k.split('_')[0]} in the recording: not written" for k in missing]
-    for key, (v, note) in vals.items():
-        lines.append(f"{key}: {v:.6e}  # {note}")
-    lines.append(f"rostopic: {rostopic}")
-    lines.append(f"update_rate: {_rate(report.fs)}  # [ Hz ] the recording's median rate")
-    return "\n".join(lines) + "\n"
+    """Kalibr's ``imu.yaml`` of the noise alone (:mod:`accelcal.export.kalibr`)."""
+    from ..export.kalibr import write
+
+    return write(ExportInputs(None, report_dict(report), {"rostopic": rostopic, "inflate": inflate})).files[""]
 
 
-def openvins_yaml(report, *, rostopic: str = "/imu0", inflate: float = 1.0, calibration=None) -> tuple[str, list]:
-    """OpenVINS's ``kalibr_imu_chain.yaml``; returns (text, warnings).  See the module docstring."""
-    vals, missing = _values(report, inflate)
-    if missing:
-        raise ExportError(f"OpenVINS needs both sensors; this recording has no {missing[0].split('_')[0]} "
-                          "(a log with the gyroscope gives both)")
-    Ta, bias, warnings, source = np.eye(3), None, [], "identity (no calibration given)"
-    if calibration is not None:
-        Ta, bias, warnings = _accelerometer_intrinsics(calibration)
-        source = "accelcal calibration: Ta = M"
-    lines = ["%YAML:1.0", f"# OpenVINS IMU chain from accelcal noise ({report.source}); noise values as Kalibr's "
-             "(continuous time, worst axis)", "# model: a_m = Ta R_IMUtoACC a + b_a + n_a,  w_m = Tw R_IMUtoGYRO w + "
-             "Tg a + b_g + n_g  (OpenVINS estimates D = T^-1)", "imu0:", "  T_i_b:"]
-    lines += [f"    - [{', '.join('1.0' if i == j else '0.0' for j in range(4))}]" for i in range(4)]
-    for key, (v, note) in vals.items():
-        lines.append(f"  {key}: {v:.6e}  # {note}")
-    lines += [f"  rostopic: {rostopic}", "  time_offset: 0.0", f"  update_rate: {_rate(report.fs)}  # [ Hz ]",
-              '  model: "kalibr"  # lower-triangular D (accelcal\'s M is lower triangular), R_IMUtoACC = I',
-              "  # gyroscope: not calibrated by accelcal: Tw = I, R_IMUtoGYRO = I, Tg = 0"]
-    lines += _matrix("Tw", np.eye(3)) + _matrix("R_IMUtoGYRO", np.eye(3))
-    lines += [f"  # Ta: {source}"] + _matrix("Ta", Ta) + _matrix("R_IMUtoACC", np.eye(3))
-    lines += _matrix("Tg", np.zeros((3, 3)))
-    if bias is not None:
-        lines.append("  # accelerometer bias b_a of the calibration (not a field: OpenVINS estimates it online) "
-                     f"[ m/s^2 ]: [{', '.join(f'{b:.6g}' for b in bias)}]")
-    return "\n".join(lines) + "\n", warnings
+def openvins_yaml(report, *, rostopic: str = "/imu0", inflate: float = 1.0, calibration=None,
+                 model: str = "kalibr") -> tuple[str, list]:
+    """OpenVINS's ``kalibr_imu_chain.yaml`` (:mod:`accelcal.export.openvins`); returns (text, warnings):
+    the terms the file leaves out."""
+    from ..export import export
+    from ..export.openvins import write
+
+    inputs = ExportInputs(calibration, report_dict(report), {"rostopic": rostopic, "inflate": inflate, "model": model})
+    out = write(inputs) if calibration is None else export("openvins", inputs)
+    return out.files[""], [x.line() for x in out.left_out]
 
 
-def _rate(fs: float) -> str:
-    return repr(float(f"{fs:.6g}"))
+def calibrated_kalibr_yaml(report, calibration, *, rostopic: str = "/imu0", inflate: float = 1.0) -> tuple[str, list]:
+    """Kalibr's ``imu.yaml`` with the calibration's intrinsics (:mod:`accelcal.export.kalibr`); (text, warnings)."""
+    from ..export import export
+
+    out = export("kalibr", ExportInputs(calibration, report_dict(report), {"rostopic": rostopic, "inflate": inflate}))
+    return out.files[""], [x.line() for x in out.left_out]
 
 
-def _matrix(name: str, m: np.ndarray) -> list[str]:
-    return [f"  {name}:"] + [f"    - [ {', '.join(repr(float(v)) for v in row)} ]" for row in np.asarray(m, float)]
-
-
-def _accelerometer_intrinsics(cal) -> tuple[np.ndarray, np.ndarray, list[str]]:
-    if cal.unit != "m/s^2":
-        raise ExportError(f"the calibration is in {cal.unit}; OpenVINS's Ta is dimensionless: calibrate data in m/s^2")
-    if np.any(cal.input_offset != 0) or np.any(cal.input_sensitivity != 1):
-        raise ExportError("the calibration converts raw counts nominally; OpenVINS's Ta needs a calibration of m/s^2 "
-                          "data")
-    warnings = []
-    if cal.effects:
-        warnings.append(f"the calibration's effects ({', '.join(e.id for e in cal.effects)}) have no place in "
-                        "OpenVINS's file: only M (as Ta) is exported")
-    return np.asarray(cal.M, float), np.asarray(cal.bias, float), warnings
-
-
-__all__ = ["ExportError", "FORMAT", "FORMAT_VERSION", "KALIBR_KEYS", "avr_convention", "conversions",
+__all__ = ["ExportError", "calibrated_kalibr_yaml", "FORMAT", "FORMAT_VERSION", "avr_convention", "conversions",
            "exported_values", "kalibr_yaml", "openvins_yaml", "report_dict", "walk_unit"]
