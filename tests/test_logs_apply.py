@@ -116,6 +116,12 @@ def test_the_real_bag_with_an_imu_calibration_gives_calibrated_gyro(tmp_path):
     w = table[["gx", "gy", "gz"]].to_numpy()
     np.testing.assert_array_equal(w, cal.apply_gyro(rec.gyro, rec.acc, t=rec.t, temp=rec.temp, unit=rec.unit))
     assert not np.allclose(w, rec.gyro)  # corrected, not passed through
+    # the calibrated bag carries the same rates in angular_velocity
+    code, err = _cli("apply", cal_path, BAG, "--out", tmp_path / "imu_bag")
+    assert code == 0 and "linear_acceleration and angular_velocity replaced" in err, err
+    back = ros.read(tmp_path / "imu_bag")
+    np.testing.assert_array_equal(back.gyro, w)
+    np.testing.assert_array_equal(back.acc, table[["ax", "ay", "az"]].to_numpy())
 
 
 def test_calibrate_on_a_px4_flight_log_says_it_read_sensor_combined(tmp_path):

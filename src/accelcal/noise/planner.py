@@ -82,9 +82,20 @@ def plan(s, duration_s: float, width: float = DEFAULT_WIDTH, level: float = 0.95
 
 
 def _shortest(coef, term, fs, level, width) -> float:
-    grid = np.logspace(1, math.log10(MAX_RECORD_S), 220)  # 10 s to 10^8 s, 1 % apart
+    """The shortest record (1 s to 10^8 s, to 1 %) whose h(T) is within ``width``: a coarse log grid, then bisection
+    (the information only grows with the record)."""
+    grid = np.logspace(0, math.log10(MAX_RECORD_S), 33)  # four per decade
     ok = [half_width(coef, term, fs, t, level) <= width for t in grid]
-    return float(grid[ok.index(True)]) if any(ok) else math.inf
+    if not any(ok):
+        return math.inf
+    i = ok.index(True)
+    if i == 0:
+        return float(grid[0])
+    lo, hi = float(grid[i - 1]), float(grid[i])
+    while hi / lo > 1.01:
+        mid = math.sqrt(lo * hi)
+        lo, hi = (lo, mid) if half_width(coef, term, fs, mid, level) <= width else (mid, hi)
+    return hi
 
 
 def duration_text(seconds: float) -> str:
