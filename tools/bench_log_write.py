@@ -10,6 +10,9 @@ report, then times in fresh subprocesses, side by side and alternating, ``--repe
   floor of a rewrite through the same library);
 * ``file copy``: ``shutil.copytree`` of the bag (the floor of any copy).
 
+Wall and CPU times (user + system of each subprocess) are both recorded: on a shared
+machine the CPU times move less with the load.
+
 Usage::
 
     nice .venv/bin/python tools/bench_log_write.py [--kind ros2-sqlite3|ros2-mcap|mcap|ros1] [--minutes 60]
@@ -20,7 +23,9 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import platform
+import resource
 import shutil
 import subprocess
 import sys
@@ -51,10 +56,15 @@ with Reader(src) as r:
 """
 
 
-def _run(cmd: list[str]) -> float:
+def _run(cmd: list[str], cpu: list) -> float:
+    """Wall time of a subprocess; its CPU time (user + system, less sensitive to a loaded machine) to ``cpu``."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     subprocess.run(cmd, check=True, capture_output=True)
-    return time.perf_counter() - t0
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu.append(after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime)
+    return wall
 
 
 def main() -> int:
@@ -86,13 +96,14 @@ def main() -> int:
             "accelerometer": {"unit": "m/s^2", "axes": axes}, "gyroscope": {"unit": "rad/s", "axes": axes}}}))
         storage = "mcap" if "mcap" in args.kind else "sqlite3"
         times = {"apply": [], "rosbags copy": [], "file copy": []}
+        cpu = {"apply": [], "rosbags copy": []}
         for k in range(args.repeat):
             out = work / f"apply{k}{suffix}"
             times["apply"].append(_run([sys.executable, "-m", "accelcal.cli", "apply", str(work / "cal.json"), str(bag),
-                                        "--out", str(out), "--noise", str(work / "noise.json")]))
+                                        "--out", str(out), "--noise", str(work / "noise.json")], cpu["apply"]))
             copy = work / f"copy{k}{suffix}"
             times["rosbags copy"].append(_run([sys.executable, "-c", ROSBAGS_COPY, str(bag), str(copy),
-                                               "1" if args.kind == "ros1" else "0", storage]))
+                                               "1" if args.kind == "ros1" else "0", storage], cpu["rosbags copy"]))
             t1 = time.perf_counter()
             (shutil.copytree if bag.is_dir() else shutil.copy)(bag, work / f"plain{k}{suffix}")
             times["file copy"].append(time.perf_counter() - t1)
@@ -101,7 +112,9 @@ def main() -> int:
         best = {k: min(v) for k, v in times.items()}
         result = {"kind": args.kind, "messages": n, "rate_hz": args.rate, "bag_written_s": made, "times_s": times,
                   "best_s": best, "apply_over_rosbags_copy": best["apply"] / best["rosbags copy"],
-                  "apply_over_file_copy": best["apply"] / best["file copy"], "machine": platform.platform()}
+                  "apply_over_file_copy": best["apply"] / best["file copy"], "cpu_s": cpu,
+                  "cpu_apply_over_rosbags_copy": min(cpu["apply"]) / min(cpu["rosbags copy"]),
+                  "machine": platform.platform(), "load_average": list(os.getloadavg())}
     finally:
         shutil.rmtree(work, ignore_errors=True)
     text = json.dumps(result, indent=2)

@@ -120,8 +120,9 @@ def read_topic(path, *, topic: str | None = None, time_source: str = "header", p
             raise
         try:
             reader = ros_recover.recover(storage)
-        except LogFormatError as e:  # damaged beyond its header: the first error, and why nothing is left
-            raise LogFormatError(f"{damaged}; {str(e).split(': ', 1)[-1]}") from None
+        except Exception as e:  # damaged beyond its header: the first error, and why nothing is left
+            why = str(e).split(": ", 1)[-1] if isinstance(e, LogFormatError) else f"recovery failed: {_why(e)}"
+            raise LogFormatError(f"{damaged}; {why}") from None
         try:
             got = _read_open(reader, path, bag_path, kind, topic, time_source, progress)
         except RecordingError as e:  # nothing usable before the damage
