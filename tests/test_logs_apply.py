@@ -62,10 +62,15 @@ def test_the_real_bag_calibrated_with_its_own_calibration(tmp_path, calibration)
 
 
 def test_a_px4_log_is_applied_with_its_time_column(tmp_path, calibration):
+    """sensor_combined is calibrated by the autopilot already: refused in one line, nothing written,
+    unless --already-calibrated says the calibration was fitted to such values."""
     if not ULOG.is_file():
         pytest.skip("shared data not present")
     out = tmp_path / "px4.csv"
     code, err = _cli("apply", calibration, ULOG, "--out", out)
+    assert code == 2 and len(err.splitlines()) == 1 and "sensor_combined" in err and "second time" in err, err
+    assert not out.exists()
+    code, err = _cli("apply", calibration, ULOG, "--out", out, "--already-calibrated")
     assert code == 0, err
     table = pd.read_csv(out)
     assert len(table) == px4.read(ULOG).n and table.columns[0] == "timestamp_us"
@@ -111,3 +116,22 @@ def test_the_real_bag_with_an_imu_calibration_gives_calibrated_gyro(tmp_path):
     w = table[["gx", "gy", "gz"]].to_numpy()
     np.testing.assert_array_equal(w, cal.apply_gyro(rec.gyro, rec.acc, t=rec.t, temp=rec.temp, unit=rec.unit))
     assert not np.allclose(w, rec.gyro)  # corrected, not passed through
+    # the calibrated bag carries the same rates in angular_velocity
+    code, err = _cli("apply", cal_path, BAG, "--out", tmp_path / "imu_bag")
+    assert code == 0 and "linear_acceleration and angular_velocity replaced" in err, err
+    back = ros.read(tmp_path / "imu_bag")
+    np.testing.assert_array_equal(back.gyro, w)
+    np.testing.assert_array_equal(back.acc, table[["ax", "ay", "az"]].to_numpy())
+
+
+def test_calibrate_on_a_px4_flight_log_says_it_read_sensor_combined(tmp_path):
+    """The one line names what was read (calibrated by the autopilot) and what to log instead; a
+    bias-only method is never told to use a bias-only method."""
+    if not ULOG.is_file():
+        pytest.skip("shared data not present")
+    for method in ("full-lls", "bias-lls"):
+        code, err = _cli("calibrate", ULOG, "--out", tmp_path / "c.json", "--method", method)
+        assert code == 2 and len(err.splitlines()) == 1, err
+        assert "PX4 sensor_combined (already calibrated by the autopilot" in err and "raw sensor_accel" in err
+        assert "bias-only method" not in err  # 1 orientation: no method fits, and bias-lls is bias-only
+    assert not (tmp_path / "c.json").exists()

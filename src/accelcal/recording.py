@@ -58,6 +58,12 @@ class Recording:
         sections): ``{label: (start, stop)}``, sample ranges; None when the file does not
         mark them.  The gyro's Ferraris calibration (:mod:`accelcal.gyro.ferraris`) uses them
         with the known static intervals.
+    device_id : str or None
+        The sensor's identity as the log names it (PX4's ``device_id``), so that a calibration
+        applied to another unit can be warned; None when the file names none.
+    precalibrated : str or None
+        What these values are, when the file says someone calibrated them already (a PX4
+        ``sensor_combined``); ``accelcal apply`` refuses to correct them a second time unless told.
     """
 
     t: np.ndarray
@@ -72,6 +78,8 @@ class Recording:
     gyro: np.ndarray | None = None
     gyro_unit: str | None = None
     rotations: dict | None = None
+    device_id: str | None = None
+    precalibrated: str | None = None
 
     def __post_init__(self):
         t = np.array(self.t, dtype=float)

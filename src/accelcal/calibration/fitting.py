@@ -9,7 +9,7 @@ import numpy as np
 
 from ..errors import (AccelcalError, DegeneratePosesError, NotConvergedError, NotPositiveDefiniteError,
                       TooFewPosesError)
-from ..registry import estimator
+from ..registry import estimator, estimators
 
 from .base import Calibration
 
@@ -107,8 +107,16 @@ def _orientation_cause(err: AccelcalError, z, est) -> AccelcalError:
     if k >= est.min_poses:
         return err
     return DegeneratePosesError(f"{len(z)} poses but only {k} distinct orientations (10 deg apart): {est.cli_name} "
-                                f"needs at least {est.min_poses}; turn the sensor to new orientations between rests "
-                                f"(or use a bias-only method, >= 4) [{err}]")
+                                f"needs at least {est.min_poses}; turn the sensor to new orientations between rests"
+                                f"{_bias_only_hint(est, k)} [{err}]")
+
+
+def _bias_only_hint(est, k: int) -> str:
+    """The bias-only fallback, offered only to a method that is not bias-only already and where it would fit."""
+    need = min(e.min_poses for e in estimators("accelerometer") if e.model == "bias")
+    if est.model == "bias" or k < need:
+        return ""
+    return f" (or use a bias-only method, >= {need})"
 
 
 def calibrate_recording(rec, g: float, method: str = "full_lls", *, static: dict | None = None,
@@ -223,5 +231,6 @@ def _too_few_hint(rec, poses, est) -> str:
                 "--time-unit (ms, us, ns)")
     if rec.intervals is not None:
         return f"the file gives {len(rec.intervals)} known static intervals; record more poses"
-    return (f"{k} distinct orientations; record more rests in new orientations (at least {est.min_poses}), "
-            "loosen the detection (--threshold, --window, --min-duration) or use a bias-only method (>= 4 poses)")
+    fallback = _bias_only_hint(est, k).replace(" (or", ", or").rstrip(")")
+    return (f"{k} distinct orientations; record more rests in new orientations (at least {est.min_poses}) or "
+            f"loosen the detection (--threshold, --window, --min-duration){fallback}")

@@ -6,9 +6,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from ..effects import TIME, effect
-from ..errors import AccelcalError
-from .common import _read, _reader_options, recording_sha256, warn
+from .common import _read, _reader_options, warn
+from .correct import check_source, corrected
 
 APPLY_HELP = """\
 CALIBRATION is the JSON of `accelcal calibrate` or the report of `accelcal
@@ -21,6 +20,16 @@ calibrated ax, ay, az in m/s^2; when the calibration has a gyroscope and the rec
 a gyro (its columns, its log topic or --gyro FILE), the calibrated gx, gy, gz in rad/s
 in the accelerometer's frame; a gyro the calibration does not correct is written as
 recorded, as gx_raw, gy_raw, gz_raw (and temp, if present).
+
+Calibrated logs: a ROS 1 bag, ROS 2 bag (folder, or its .db3 file) or MCAP file is
+written back as a log of the same kind when --out is not a .csv (OUT.bag, a new folder,
+OUT.db3, OUT.mcap): its sensor_msgs/Imu topic calibrated, every other topic copied
+verbatim, and with --noise NOISE.json (accelcal noise) the linear_acceleration and
+angular_velocity covariances filled with the per-sample white-noise variance N^2 f_s.
+Other logs (PX4 ULog, DataFlash) are written as tables only.
+Data already calibrated by an autopilot (PX4 sensor_combined) are refused unless
+--already-calibrated says that the calibration was fitted to them; a calibration made
+on another unit (its device id differs from the log's) is warned.
 """
 
 
@@ -31,33 +40,31 @@ def add_parser(sub, epilog: str) -> None:
                        formatter_class=argparse.RawDescriptionHelpFormatter, epilog=APPLY_HELP)
     a.add_argument("calibration", type=Path, help="calibration JSON (accelcal calibrate, or a discrepancy report)")
     a.add_argument("recording", type=Path, help="the recording to correct")
-    a.add_argument("--out", type=Path, required=True, help="output CSV (written only on success)")
+    a.add_argument("--out", type=Path, required=True,
+                   help="output: a .csv table, or for a ROS bag / MCAP file a calibrated log of the same kind "
+                        "(written only on success)")
     a.add_argument("--no-effects", action="store_true", help="apply the base model only, not the fitted effects")
+    a.add_argument("--noise", type=Path, metavar="JSON",
+                   help="noise report (accelcal noise): fills the covariances of a calibrated ROS log")
+    a.add_argument("--already-calibrated", action="store_true",
+                   help="apply to data an autopilot calibrated already (PX4 sensor_combined): only when the "
+                        "calibration was fitted to such data")
     _reader_options(a)
     a.set_defaults(func=_apply)
 
 
 def _apply(args) -> int:
-    from dataclasses import replace
-
     from ..calibration import load_calibration
+    from . import apply_log
 
     cal = load_calibration(args.calibration)
+    if apply_log.writes_log(args):
+        return apply_log.apply_to_log(args, cal)
+    if args.noise is not None:
+        warn("--noise fills the covariances of a calibrated ROS log; a table has none: not used")
     rec = _read(args)
-    expected = cal.input_unit or cal.unit
-    if expected is not None and rec.unit != ("counts" if expected == "counts" else "m/s^2"):
-        raise AccelcalError(f"{args.recording} is read as {rec.unit} but {args.calibration} was made from "
-                            f"{expected}: pass --unit {'counts' if expected == 'counts' else 'm/s2 (or g, mg)'}")
-    effects = () if args.no_effects else cal.effects
-    # a term in time runs on the calibration session's clock: it describes that session only
-    drift = [e.id for e in effects if effect(e.id).covariate == TIME]
-    if drift and cal.provenance.get("recording_sha256") != recording_sha256(args.recording):
-        warn(f"the calibration's {', '.join(drift)} term describes the drift during its own session; it is not "
-              "applied to another recording")
-        effects = tuple(e for e in effects if e.id not in drift)
-    cal = replace(cal, effects=effects)
-    x = cal.apply(rec.acc, t=rec.t, temp=rec.temp, unit=rec.unit)
-    w, gyro_note = _gyro(cal, rec, args)
+    check_source(cal, rec, args)
+    x, w, effects, gyro_note = corrected(cal, rec, args)
     _write_corrected(args.out, rec, x, w)
     names = ", ".join(e.id for e in effects) or "none"
     written = "ax, ay, az in m/s^2" + (", gx, gy, gz in rad/s" if w is not None else
@@ -67,25 +74,6 @@ def _apply(args) -> int:
     if gyro_note:
         print(f"  {gyro_note}", file=sys.stderr)
     return 0
-
-
-def _gyro(cal, rec, args):
-    """The calibrated rate [rad/s] (or None) and a line on why the gyro was not corrected."""
-    if cal.gyro is None:
-        return None, "" if rec.gyro is None else "gyro not corrected: the calibration has no gyroscope"
-    if rec.gyro is None or args.no_gyro:
-        return None, "the calibration's gyroscope not applied: the recording has no gyro (--gyro FILE)"
-    import numpy as np
-
-    from ..units import ANGULAR_RATE_UNITS
-
-    made = cal.gyro.model.raw_unit
-    have = rec.gyro_unit or "rad/s"
-    if (made == "counts") != (have == "counts"):
-        raise AccelcalError(f"the recording's gyro is read as {have} but {args.calibration}'s gyroscope was made from "
-                            f"{made}: pass --gyro-unit {made}")
-    raw = rec.gyro if made == have else np.asarray(rec.gyro) * (ANGULAR_RATE_UNITS[have] / ANGULAR_RATE_UNITS[made])
-    return cal.apply_gyro(raw, rec.acc, t=rec.t, temp=rec.temp, unit=rec.unit), ""
 
 
 def _write_corrected(path: Path, rec, x, w=None) -> None:

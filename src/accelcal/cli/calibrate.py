@@ -46,7 +46,7 @@ def _calibrate(args) -> int:
 
     from ..calibration import calibrate_recording
     from ..calibration.summary import STANDARD_GRAVITY_SOURCE
-    from ..errors import RecordingError
+    from ..errors import AccelcalError, RecordingError
 
     t0 = time.perf_counter()
     rec = _read(args)
@@ -62,11 +62,17 @@ def _calibrate(args) -> int:
                                              search=search,
                                              min_poses=gyro.GYRO_MIN_RESTS if gyro.wants_gyro(args, rec) else 0)
         except RecordingError as e:
-            raise RecordingError(f"{e}{_rate_hint(rec)}") from None
+            raise RecordingError(f"{e}{_rate_hint(rec)}{_source_hint(rec)}") from None
+        except AccelcalError as e:
+            if not rec.precalibrated:
+                raise
+            raise type(e)(f"{e}{_source_hint(rec)}") from None
     if gyro.wants_gyro(args, rec):
         with _step("calibrating the gyroscope"):
             cal = replace(cal, gyro=gyro.calibrate(args, rec, cal, poses))
     prov = {**_provenance(args, t0), "g_source": "--g" if args.g is not None else STANDARD_GRAVITY_SOURCE}
+    if rec.device_id is not None:  # apply warns when the calibration reaches another unit
+        prov["device_id"] = rec.device_id
     cal = _with_provenance(cal, prov)
     figures = []
     if args.figures is not None:
@@ -98,6 +104,15 @@ def _strict_status(cal, args) -> int:
     return fail(f"--strict: the calibration is untrustworthy ({problems[0]}" +
                 (f"; {len(problems) - 1} more" if len(problems) > 1 else "") + f"); it is written to {args.out}",
                 code=3)
+
+
+def _source_hint(rec) -> str:
+    """What the reader read, when it was data someone had calibrated already (a PX4 flight log's sensor_combined)."""
+    if not rec.precalibrated:
+        return ""
+    return (f" [the data were read from {rec.precalibrated}: a flight log, not a calibration session; calibrate from "
+            "static poses with the raw sensor_accel logged (PX4's logger profile: sensor comparison or thermal "
+            "calibration)]")
 
 
 def _with_provenance(cal, extra: dict):

@@ -18,6 +18,13 @@ accelerometer and gyroscope), a PX4 ULog, an ArduPilot DataFlash log, or a table
 The exported values are continuous-time, the worst axis, with every axis and the
 interval in a comment: noise density N [m/s^2/sqrt(Hz), rad/s/sqrt(Hz)] and random
 walk K [m/s^3/sqrt(Hz), rad/s^2/sqrt(Hz)] of the IEEE fit of the Allan deviation.
+Part of a recording: --start/--end (seconds from its first sample) analyse one static
+stretch; --intervals FILE (or the rests a file marks itself) pools the rests, each
+static on its own, the orientation free to change between them.
+The summary quotes the data-sheet units (angle random walk deg/sqrt(h), velocity
+random walk m/s/sqrt(h), bias instability deg/h and mg, from the flicker floor
+0.664 B), how long a record would give each term +-WIDTH (--plan-width), and where
+allan_variance_ros would read a value more than 2x apart, why.
 """
 
 
@@ -40,6 +47,10 @@ def add_parser(sub, epilog: str) -> None:
     n.add_argument("--figure", type=Path, metavar="PNG", help="also draw the Allan deviations (.png and .pdf)")
     n.add_argument("--level", type=float, default=0.95, help="confidence level of the intervals (default 0.95)")
     n.add_argument("--seed", type=int, default=0, help="seed of the bootstrap (default 0)")
+    n.add_argument("--start", type=float, metavar="S", help="analyse from S seconds after the first sample")
+    n.add_argument("--end", type=float, metavar="S", help="analyse up to S seconds after the first sample")
+    n.add_argument("--plan-width", type=_positive, default=0.25, metavar="W",
+                   help="the record-length planner's relative interval half-width (default 0.25: +-25 %%)")
     _reader_options(n)
     n.set_defaults(func=_noise)
 
@@ -52,17 +63,17 @@ def _noise(args) -> int:
         raise AccelcalError(f"{args.recording}: no such file or folder")
     if not 0 < args.level < 1:
         raise AccelcalError(f"--level must be between 0 and 1, got {args.level}")
-    if args.intervals is not None:
-        raise AccelcalError("--intervals: the noise analysis takes the whole recording as one rest; cut the static "
-                            "part out instead")
+    if args.intervals is not None and (args.start is not None or args.end is not None):
+        raise AccelcalError("--intervals chooses the rests already; give either --intervals or --start/--end")
     rec = _read(args)
+    segments = _segments(args, rec)
     cal = None
     if args.calibration is not None:
         from ..calibration import load_calibration
 
         cal = load_calibration(args.calibration)
     with _step("Allan deviations and the noise fit"):
-        report = analyse_noise(rec, level=args.level, seed=args.seed)
+        report = analyse_noise(rec, level=args.level, seed=args.seed, segments=segments)
     texts, warnings = _noise_exports(args, rec, report, cal)
     figure = None
     if args.figure is not None:
@@ -72,8 +83,38 @@ def _noise(args) -> int:
             figure = noise_figure(report, title=f"{args.recording.name}: {report.duration_s / 3600:.3g} h at "
                                                 f"{report.fs:.4g} Hz")
     _noise_write(args, report, texts, figure, t0)
-    _noise_summary(args, report, warnings)
+    _noise_summary(args, report, warnings, _avr_readings(rec, report, segments))
     return 0
+
+
+def _segments(args, rec):
+    """The sample ranges to analyse: --start/--end, the recording's rests (--intervals or its own), or None."""
+    import numpy as np
+
+    if args.start is None and args.end is None:
+        return None if rec.intervals is None else [tuple(int(v) for v in row) for row in rec.intervals]
+    t = rec.t - rec.t[0]
+    start = 0.0 if args.start is None else args.start
+    end = float(t[-1]) if args.end is None else args.end
+    if not (np.isfinite(start) and np.isfinite(end) and 0 <= start < end):
+        raise AccelcalError(f"--start {start:g} / --end {end:g}: need 0 <= start < end (seconds from the first sample)")
+    if start >= t[-1]:
+        raise AccelcalError(f"--start {start:g} s is beyond the recording's end ({t[-1]:.4g} s)")
+    a, b = int(np.searchsorted(t, start)), int(np.searchsorted(t, end, side="right"))
+    if b - a < 4:
+        raise AccelcalError(f"--start {start:g} / --end {end:g} holds {b - a} samples; give a longer stretch")
+    return [(a, b)]
+
+
+def _avr_readings(rec, report, segments) -> dict:
+    """allan_variance_ros's reading of each sensor, on the one continuous stretch analysed (not on pooled rests)."""
+    from ..noise.avr import avr_reading
+
+    if segments is not None and len(segments) > 1:
+        return {}
+    a, b = segments[0] if segments else (0, rec.n)
+    data = {"accelerometer": rec.acc, "gyroscope": rec.gyro}
+    return {name: avr_reading(data[name][a:b], report.fs) for name in report.sensors if data[name] is not None}
 
 
 def _noise_exports(args, rec, report, cal) -> tuple[dict, list]:
@@ -115,19 +156,45 @@ def _noise_write(args, report, texts: dict, figure, t0: float) -> None:
         save_figure(figure, args.figure)
 
 
-def _noise_summary(args, report, warnings: list) -> None:
+def _noise_summary(args, report, warnings: list, avr: dict) -> None:
+    from ..noise.avr import avr_lines
     from ..noise.export import exported_values
+    from ..noise.planner import plan_lines
 
     lines = [f"noise: {report.n} samples, {report.duration_s / 3600:.3g} h at {report.fs:.4g} Hz"]
     lines += [f"  read: {n}" for n in report.notes if n]
+    differ = []
     for s in report.sensors.values():
         ex = [exported_values(s, j) for j in range(3)]
         lines.append(f"  {s.sensor}: noise density " + ", ".join(f"{e['noise_density']['value']:.3g}" for e in ex)
                      + f" {s.unit}/sqrt(Hz); random walk " + ", ".join(
                          f"{'<' if e['random_walk']['upper_bound'] else ''}{e['random_walk']['value']:.3g}" for e in ex)
                      + f" {ex[0]['random_walk']['unit']} (x, y, z)")
+        quoted = _quoted(s)
+        if quoted:
+            lines.append(f"    {quoted}")
+        lines += ["  " + line for line in plan_lines(s, report.duration_s, args.plan_width, report.level)]
+        if s.sensor in avr:
+            differ += avr_lines(s.sensor, s.unit, avr[s.sensor], [e["noise_density"]["value"] for e in ex],
+                                [e["random_walk"]["value"] for e in ex])
+    lines += [f"  {line}" for line in differ]
     lines.append(f"  written to {args.out}" + "".join(f", {p}" for p in (args.kalibr, args.openvins, args.figure)
                                                          if p is not None))
     print("\n".join(lines), file=sys.stderr)
     for w in (*report.warnings, *warnings):
         warn(w)
+
+
+def _quoted(s) -> str:
+    """The data-sheet units of the white noise and the flicker floor (the JSON's ``conversions``), x, y, z."""
+    from ..noise.export import conversions
+
+    c = [conversions(s.sensor, s.unit, terms) for terms in s.terms]
+    if not c[0]:
+        return ""
+    names = {"angle_random_walk_deg_sqrt_h": ("angle random walk", "deg/sqrt(h)"),
+             "velocity_random_walk_m_s_sqrt_h": ("velocity random walk", "m/s/sqrt(h)"),
+             "bias_instability_floor_deg_h": ("bias instability (0.664 B)", "deg/h"),
+             "bias_instability_floor_mg": ("bias instability (0.664 B)", "mg")}
+    return "; ".join(f"{names[k][0]} " + ", ".join(f"{x[k]:.3g}" for x in c) + f" {names[k][1]}"
+                     for k in c[0] if k in names) + " (x, y, z)"

@@ -201,10 +201,11 @@ def check_finite(path, topic: str, values: np.ndarray, what: str) -> None:
 
 
 def make_recording(path, *, t, acc, gyro, notes: Sequence[str], time_name: str, time_values,
-                   temp=None) -> Recording:
+                   temp=None, device_id: str | None = None, precalibrated: str | None = None) -> Recording:
     """The :class:`Recording` of an IMU topic: acc in m/s², gyro in rad/s, the recorded time column kept."""
     return Recording(t, acc, temp, str(path), notes=tuple(notes), unit="m/s^2", time_column=(time_name, time_values),
-                     gyro=gyro, gyro_unit=None if gyro is None else "rad/s")
+                     gyro=gyro, gyro_unit=None if gyro is None else "rad/s", device_id=device_id,
+                     precalibrated=precalibrated)
 
 
 __all__ = ["MAX_STAMP_US", "ColumnBuffer", "Progress", "microseconds", "TIME_SOURCES", "check_finite", "check_rows", "check_time_source", "choose",

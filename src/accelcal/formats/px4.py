@@ -39,6 +39,9 @@ from .logs import (Progress, check_finite, check_rows, check_time_source, choose
 
 ULOG_MAGIC = b"ULog\x01\x12\x35"
 TOPICS = ("sensor_accel", "sensor_gyro", "sensor_combined")
+#: What the recording's ``precalibrated`` says of sensor_combined, and of the x, y, z of PX4 before 1.10.
+COMBINED_CALIBRATED = "PX4 sensor_combined (already calibrated by the autopilot: CAL_ACC*/CAL_GYRO* applied)"
+OLD_ACCEL_CALIBRATED = "PX4 sensor_accel x, y, z (calibrated by the autopilot in this PX4 version)"
 #: File size above which the read announces itself (pyulog parses in one call).
 _ANNOUNCE_BYTES = 64 * 2**20
 
@@ -184,7 +187,10 @@ def _raw(path, data, inst: int, ulog, time_source: str, notes: list):
     cal = _calibration_parameters(ulog, _device(acc_d))
     if cal:
         notes.append(f"the autopilot's own calibration of accelerometer {inst} is in the log's parameters: {cal}")
-    return make_recording(path, t=t, acc=acc, gyro=gyro, notes=notes, time_name=name, time_values=chosen, temp=temp)
+    device = _device(acc_d)
+    return make_recording(path, t=t, acc=acc, gyro=gyro, notes=notes, time_name=name, time_values=chosen, temp=temp,
+                          device_id=None if device == "?" else device,
+                          precalibrated=OLD_ACCEL_CALIBRATED if old else None)
 
 
 def _gyro(path, data, inst: int, time_source: str, at_us: np.ndarray, notes: list):
@@ -228,7 +234,8 @@ def _combined(path, d, time_source: str, notes: list):
         notes.append(f"the accelerometer is stamped {np.median(rel):.0f} us (median) after the gyro; t is the gyro's")
     if time_source == "log":
         notes.append("sensor_combined has one time stamp (timestamp): used for --time-source log too")
-    return make_recording(path, t=t, acc=acc, gyro=gyro, notes=notes, time_name="timestamp_us", time_values=ts)
+    return make_recording(path, t=t, acc=acc, gyro=gyro, notes=notes, time_name="timestamp_us", time_values=ts,
+                          precalibrated=COMBINED_CALIBRATED)
 
 
 def _device(d) -> str:

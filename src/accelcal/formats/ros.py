@@ -30,11 +30,14 @@ nanoseconds are kept as the recording's time column (``header_stamp_ns`` or
 from __future__ import annotations
 
 import struct
+from dataclasses import replace
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
-from ..errors import LogFormatError, TopicError
+from ..errors import LogFormatError, RecordingError, TopicError
+from . import ros_recover
 from .logs import (ColumnBuffer, Progress, check_finite, check_rows, check_time_source, choose, clock_note,
                       make_recording, require_extra, stamps_to_time)
 
@@ -87,24 +90,66 @@ def read(path, *, topic: str | None = None, time_source: str = "header", progres
     MissingExtraError, LogFormatError, TopicError
         One line naming the cause and the fix.
     """
+    return read_topic(path, topic=topic, time_source=time_source, progress=progress).recording
+
+
+class TopicRead(NamedTuple):
+    """:func:`read_topic`'s result: the recording and what a writer of the same bag needs."""
+
+    recording: object
+    order: np.ndarray       # order[r]: index, among the topic's messages in the bag's order, of recording row r
+    topic: str
+    kind: str               # "ROS 1 bag", "ROS 2 bag", "ROS 2 bag file (sqlite3)" or "MCAP file"
+    header_ns: np.ndarray   # header stamps [ns] of the topic's messages in the bag's order
+    recovered: Path | None = None  # the damaged storage file read up to its damage (formats.ros_recover)
+
+
+def read_topic(path, *, topic: str | None = None, time_source: str = "header", progress=None) -> TopicRead:
+    """:func:`read`, with the bag's order of the messages (the recording's rows are sorted by
+    header stamp when the bag recorded some out of order)."""
     check_time_source(time_source)
     path = Path(path)
     require_extra("ros", path)
     bag_path, kind = _locate(path)
+    try:
+        with _open(bag_path, kind) as reader:
+            return _read_open(reader, path, bag_path, kind, topic, time_source, progress)
+    except DamagedBagError as damaged:
+        storage = storage_file(bag_path, kind)
+        if storage is None:
+            raise
+        try:
+            reader = ros_recover.recover(storage)
+        except Exception as e:  # damaged beyond its header: the first error, and why nothing is left
+            why = str(e).split(": ", 1)[-1] if isinstance(e, LogFormatError) else f"recovery failed: {_why(e)}"
+            raise LogFormatError(f"{damaged}; {why}") from None
+        try:
+            got = _read_open(reader, path, bag_path, kind, topic, time_source, progress)
+        except RecordingError as e:  # nothing usable before the damage
+            raise LogFormatError(f"{damaged}; read up to the damage: {str(e).split(': ', 1)[-1]}") from None
+        finally:
+            reader.close()
+        note = reader.note(got.topic, _expected_count(bag_path, kind, got.topic))
+        rec = replace(got.recording, notes=got.recording.notes + (note,))
+        return got._replace(recording=rec, recovered=storage)
+
+
+def _read_open(reader, path, bag_path, kind, topic, time_source, progress) -> TopicRead:
+    """The topic of an open reader (a rosbags reader, or the intact part of a damaged file)."""
     from rosbags.typesys import Stores, get_typestore
 
     ros1 = kind == "ROS 1 bag"
     typestore = get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.LATEST)
-    with _open(bag_path, kind) as reader:
-        conns = _connections(reader, bag_path, kind)
-        everything = {c.topic: f"{c.msgtype}, {c.msgcount} messages" for c in conns}
-        imu = {c.topic: f"{c.msgcount} messages" for c in conns if c.msgtype == IMU_TYPE}
-        name = choose(path, imu, topic, everything, kind="sensor_msgs/Imu topic", option="--topic")
-        mine = [c for c in conns if c.topic == name]
-        _check_definition(path, name, mine, typestore, ros1)
-        count = sum(max(int(c.msgcount or 0), 0) for c in mine)
-        decoded = _stream(reader, mine, path, name, kind, count, ros1, typestore, progress)
-    return _recording(path, name, kind, decoded, time_source)
+    conns = _connections(reader, bag_path, kind)
+    everything = {c.topic: f"{c.msgtype}, {c.msgcount} messages" for c in conns}
+    imu = {c.topic: f"{c.msgcount} messages" for c in conns if c.msgtype == IMU_TYPE}
+    name = choose(path, imu, topic, everything, kind="sensor_msgs/Imu topic", option="--topic")
+    mine = [c for c in conns if c.topic == name]
+    _check_definition(path, name, mine, typestore, ros1)
+    count = sum(max(int(c.msgcount or 0), 0) for c in mine)
+    decoded = _stream(reader, mine, path, name, kind, count, ros1, typestore, progress)
+    rec, order = _recording(path, name, kind, decoded, time_source)
+    return TopicRead(rec, order, name, kind, decoded["stamps"][:, 0].copy())
 
 
 def _locate(path: Path) -> tuple[Path, str]:
@@ -131,6 +176,34 @@ def _locate(path: Path) -> tuple[Path, str]:
     raise LogFormatError(f"{path}: not a ROS bag or MCAP file (no ROS 1, MCAP or sqlite3 signature)")
 
 
+class DamagedBagError(LogFormatError):
+    """A bag rosbags cannot open or read through; its MCAP or sqlite3 storage may be recovered."""
+
+
+def storage_file(bag_path: Path, kind: str) -> Path | None:
+    """The one MCAP or sqlite3 file of a log, which :mod:`.ros_recover` can read up to a damage (else None)."""
+    if kind in ("MCAP file", "ROS 2 bag file (sqlite3)"):
+        return bag_path
+    if kind == "ROS 2 bag":
+        files = sorted([*bag_path.glob("*.mcap"), *bag_path.glob("*.db3")])
+        return files[0] if len(files) == 1 else None
+    return None
+
+
+def _expected_count(bag_path: Path, kind: str, topic: str) -> int | None:
+    """The topic's message count in a ROS 2 bag's metadata.yaml (None when there is none)."""
+    if kind != "ROS 2 bag":
+        return None
+    from ruamel.yaml import YAML  # rosbags' own YAML parser
+
+    try:
+        meta = YAML(typ="safe").load((bag_path / "metadata.yaml").read_text())["rosbag2_bagfile_information"]
+        return next(int(t["message_count"]) for t in meta["topics_with_message_count"]
+                    if t["topic_metadata"]["name"] == topic)
+    except Exception:  # no usable count: the note estimates instead
+        return None
+
+
 class _open:
     """Open a bag with rosbags; every failure becomes one LogFormatError line."""
 
@@ -146,8 +219,8 @@ class _open:
             self.reader = Reader(self.path)
             self.reader.open()
         except Exception as e:  # rosbags, sqlite3, struct, yaml, zstd: all mean a damaged or foreign file
-            raise LogFormatError(f"{self.path}: cannot open this {self.kind} ({_why(e)}); "
-                                 f"{_fix(self.kind)}") from None
+            raise DamagedBagError(f"{self.path}: cannot open this {self.kind} ({_why(e)}); "
+                                  f"{_fix(self.kind)}") from None
         return self.reader
 
     def __exit__(self, *exc):
@@ -173,7 +246,7 @@ def _connections(reader, path, kind):
     try:
         return list(reader.connections)
     except Exception as e:
-        raise LogFormatError(f"{path}: cannot list the topics of this {kind} ({_why(e)}); {_fix(kind)}") from None
+        raise DamagedBagError(f"{path}: cannot list the topics of this {kind} ({_why(e)}); {_fix(kind)}") from None
 
 
 def _check_definition(path, topic, conns, typestore, ros1: bool) -> None:
@@ -211,8 +284,8 @@ def _stream(reader, conns, path, topic, kind, count, ros1, typestore, progress) 
     except (LogFormatError, TopicError):
         raise
     except Exception as e:  # a damaged chunk, index or compressed block in the middle of the bag
-        raise LogFormatError(f"{path}: {kind} damaged after {floats.n + len(raws)} messages of {topic} "
-                             f"({_why(e)}); {_fix(kind)}") from None
+        raise DamagedBagError(f"{path}: {kind} damaged after {floats.n + len(raws)} messages of {topic} "
+                              f"({_why(e)}); {_fix(kind)}") from None
     return {"floats": floats.result(), "stamps": stamps.result(), "frames": frames}
 
 
@@ -309,6 +382,7 @@ def _recording(path, topic, kind, decoded, time_source):
     check_finite(path, topic, acc, "linear_acceleration")
     check_finite(path, topic, gyro, "angular_velocity")
     header_ns, log_ns = stamps[:, 0], stamps[:, 1]
+    order = np.arange(len(acc))
     frames = ", ".join(sorted(f.decode("utf-8", "replace") or "''" for f in decoded["frames"]))
     notes = [f"{kind}, topic {topic} (sensor_msgs/Imu, frame {frames}): {len(acc)} messages; "
              "linear_acceleration [m/s^2] and angular_velocity [rad/s]"]
@@ -332,7 +406,8 @@ def _recording(path, topic, kind, decoded, time_source):
     note = clock_note(header_ns, log_ns, "header stamps", "bag record times")
     if note and np.any(header_ns != 0):
         notes.append(f"warning: {note}; {'header stamps used' if time_source == 'header' else 'record times used'}")
-    return make_recording(path, t=t, acc=acc, gyro=gyro, notes=notes, time_name=time_col[0], time_values=time_col[1])
+    rec = make_recording(path, t=t, acc=acc, gyro=gyro, notes=notes, time_name=time_col[0], time_values=time_col[1])
+    return rec, order
 
 
-__all__ = ["IMU_TYPE", "read", "sniff"]
+__all__ = ["IMU_TYPE", "TopicRead", "read", "read_topic", "sniff"]

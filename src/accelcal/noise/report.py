@@ -151,7 +151,7 @@ class NoiseReport:
 
 
 def analyse_noise(rec, *, level: float = DEFAULT_LEVEL, n_boot: int = DEFAULT_N_BOOT, seed: int = 0,
-                  min_edf: float = DEFAULT_MIN_EDF, allow_motion: bool = False) -> NoiseReport:
+                  min_edf: float = DEFAULT_MIN_EDF, allow_motion: bool = False, segments=None) -> NoiseReport:
     """Noise of a static :class:`~accelcal.recording.Recording` (accelerometer, and gyroscope if recorded).
 
     Parameters
@@ -168,6 +168,11 @@ def analyse_noise(rec, *, level: float = DEFAULT_LEVEL, n_boot: int = DEFAULT_N_
         Smallest white-FM edf of the last τ of the grid.
     allow_motion : bool
         Analyse a recording that is not static (a warning instead of the refusal).
+    segments : sequence of (start, stop), optional
+        Sample ranges ``[start, stop)`` to analyse, e.g. the rests of a calibration session
+        or a static stretch of a longer log: each is checked to be static on its own (the
+        orientation may change between them) and their Allan variances are pooled
+        (:mod:`accelcal.noise.allan`); default the whole recording.
 
     Raises
     ------
@@ -180,41 +185,83 @@ def analyse_noise(rec, *, level: float = DEFAULT_LEVEL, n_boot: int = DEFAULT_N_
         raise NoiseAnalysisError(f"need 0 < level < 1 and n_boot >= 50, got level={level}, n_boot={n_boot}")
     t = np.asarray(rec.t, dtype=float)
     fs = 1.0 / float(np.median(np.diff(t)))
+    parts = _parts(segments, len(t))
     warnings, notes = [], list(rec.notes)
-    warnings += sampling_warnings(t)
-    static = static_check(rec.acc, rec.gyro, fs)
+    static = _static_parts(rec, parts, fs, warnings)
     if static["refuse"] and not allow_motion:
         raise NotStaticError(f"{rec.source}: not a static recording: {static['refuse']}; the noise analysis needs the "
-                             "sensor at rest in one orientation for the whole recording (cut the static part out)")
+                             "sensor at rest in one orientation for the whole recording (cut the static part out: "
+                             "--start/--end, or its rests: --intervals)")
     warnings += static["warnings"] + ([f"not static ({static['refuse']}): analysed anyway"] if static["refuse"] else [])
     seeds = np.random.SeedSequence(int(seed)).spawn(2)
-    sensors = {"accelerometer": _sensor("accelerometer", rec.acc, rec.unit or "counts", fs, level, n_boot, seeds[0],
-                                        min_edf)}
+    cut = [slice(a, b) for a, b in parts]
+    sensors = {"accelerometer": _sensor("accelerometer", [rec.acc[c] for c in cut], rec.unit or "counts", fs, level,
+                                        n_boot, seeds[0], min_edf)}
     if rec.gyro is not None:
-        sensors["gyroscope"] = _sensor("gyroscope", rec.gyro, getattr(rec, "gyro_unit", None) or "rad/s", fs, level,
-                                       n_boot, seeds[1], min_edf)
-    duration = float(t[-1] - t[0]) + 1.0 / fs
+        sensors["gyroscope"] = _sensor("gyroscope", [rec.gyro[c] for c in cut], getattr(rec, "gyro_unit", None) or
+                                       "rad/s", fs, level, n_boot, seeds[1], min_edf)
+    duration = sum(float(t[b - 1] - t[a]) + 1.0 / fs for a, b in parts)
+    if segments is not None:
+        longest = max(float(t[b - 1] - t[a]) + 1.0 / fs for a, b in parts)
+        notes.append(f"analysed {len(parts)} stretch(es) of the recording, {duration:.4g} s in all (the longest "
+                     f"{longest:.4g} s), their Allan variances pooled: t = " + ", ".join(
+                         f"{t[a] - t[0]:.4g}-{t[b - 1] - t[0]:.4g} s" for a, b in parts[:6])
+                     + (" ..." if len(parts) > 6 else ""))
     for s in sensors.values():
         warnings += resolution_warnings(s, duration)
-    return NoiseReport(source=str(rec.source), fs=fs, n=int(len(t)), duration_s=duration, level=float(level),
+    return NoiseReport(source=str(rec.source), fs=fs, n=int(sum(b - a for a, b in parts)), duration_s=duration, level=float(level),
                        n_boot=int(n_boot), seed=int(seed), sensors=sensors, static=static, warnings=tuple(warnings),
                        notes=tuple(notes))
 
 
-def _sensor(name, x, unit, fs, level, n_boot, seed_seq, min_edf) -> SensorNoise:
-    x = np.asarray(x, dtype=float)
-    if not np.all(np.isfinite(x)):
+def _parts(segments, n: int) -> list[tuple[int, int]]:
+    """The sample ranges analysed: the whole recording, or the given ones (each at least 4 samples, inside it)."""
+    if segments is None:
+        return [(0, n)]
+    parts = [(int(a), int(b)) for a, b in segments]
+    if not parts:
+        raise NoiseAnalysisError("no stretch of the recording to analyse (the intervals are empty)")
+    for a, b in parts:
+        if not 0 <= a < b <= n or b - a < 4:
+            raise NoiseAnalysisError(f"the stretch of samples {a}-{b} is not a range of at least 4 samples inside "
+                                     f"the recording's {n}")
+    return parts
+
+
+def _static_parts(rec, parts, fs: float, warnings: list) -> dict:
+    """:func:`static_check` of each stretch (the orientation may change between them), merged."""
+    checks = []
+    for k, (a, b) in enumerate(parts):
+        c = static_check(rec.acc[a:b], None if rec.gyro is None else rec.gyro[a:b], fs)
+        tag = "" if len(parts) == 1 else f"stretch {k + 1} (t = {rec.t[a] - rec.t[0]:.4g} s): "
+        c["refuse"] = c["refuse"] and tag + c["refuse"]
+        c["warnings"] = [tag + w for w in c["warnings"]]
+        warnings += [tag + w for w in sampling_warnings(np.asarray(rec.t[a:b], dtype=float))] if b - a > 2 else []
+        checks.append(c)
+    if len(checks) == 1:
+        return checks[0]
+    rates = [c["max_rate_departure"] for c in checks if c["max_rate_departure"] is not None]
+    return {"block_s": checks[0]["block_s"], "max_tilt_deg": max(c["max_tilt_deg"] for c in checks),
+            "noisy_blocks": sum(c["noisy_blocks"] for c in checks), "max_rate_departure": max(rates, default=None),
+            "refuse": next((c["refuse"] for c in checks if c["refuse"]), None),
+            "warnings": [w for c in checks for w in c["warnings"]], "stretches": len(checks)}
+
+
+def _sensor(name, segments, unit, fs, level, n_boot, seed_seq, min_edf) -> SensorNoise:
+    x = [np.asarray(s, dtype=float) for s in segments]
+    if not all(np.all(np.isfinite(s)) for s in x):
         raise NoiseAnalysisError(f"the {name} holds non-finite values")
     allan = allan_variance(x, fs, min_edf=min_edf)
     if allan.taus.size < 5:
         raise NoiseAnalysisError(f"the recording reaches only {allan.taus.size} octaves of tau "
-                                 f"({allan.taus[-1]:.3g} s); the five noise terms need at least 5: record longer")
+                                 f"({allan.taus[-1]:.3g} s); the five noise terms need at least 5: record longer "
+                                 "(or give a longer static stretch)")
     if np.any(allan.avar <= 0):
         axis = "xyz"[int(np.argmax(np.any(allan.avar <= 0, axis=0)))]
         raise NoiseAnalysisError(f"the {name}'s {axis} axis is constant (zero Allan variance): a stuck sensor?")
     rng = np.random.default_rng(seed_seq)
     fits, boots, edfs, terms, errors = [], [], [], [], []
-    for j in range(x.shape[1]):
+    for j in range(x[0].shape[1]):
         fit, edf, sigma_m = fit_ieee(allan, j)
         boot = bootstrap_fits(fit, allan, edf, sigma_m, n_boot, rng)
         fits.append(fit)
