@@ -10,7 +10,11 @@ implementation, so that errors and doubtful cases take exactly the reference's p
 * ``REFERENCE`` (1): hand the problem to the reference (non-finite or all-zero poses,
   geometry not clearly three-dimensional, Gram-matrix route not certified);
 * ``NO_ELLIPSOID`` (2): the estimate is no ellipsoid (Ŝ not positive definite, λ <= 0);
-* ``NON_FINITE`` (3): NaN or infinite poses (batched kernels).
+* ``NON_FINITE`` (3): NaN or infinite poses (batched kernels);
+* ``UNSCREENED`` (5, full LLS, inside the module only): as ``REFERENCE``, and the pose
+  geometry was not shown clearly three-dimensional: the batches report which trials
+  their moment screen passed (``clear``), so that only the others get the reference
+  geometry check (:func:`accelcal.validation.degenerate_trials`).
 
 Imported only through :func:`accelcal.kernels.compiled` (it imports numba).
 """
@@ -24,6 +28,7 @@ import numpy as np
 from .kernels import jit
 
 OK, REFERENCE, NO_ELLIPSOID, NON_FINITE = 0, 1, 2, 3
+UNSCREENED = 5
 
 # Constants of the fast route, as in accelcal.lls (the tolerances a caller may change,
 # MIN_GAP and EIGVEC_TOL, are arguments).
@@ -333,16 +338,17 @@ def _all_finite(z):
 # ----------------------------------------------------------------------------- full LLS
 @jit
 def _full_lls(z, g, min_gap, eigvec_tol, out, N, L, x, wk):
-    """Full LLS of one problem into ``out`` = (b (3), M (9), λ of the unit Θ̂); status."""
+    """Full LLS of one problem into ``out`` = (b (3), M (9), λ of the unit Θ̂); status
+    (UNSCREENED up to the geometry screen, REFERENCE after it)."""
     n = z.shape[0]
     if z.shape[1] != 3 or n < 10:  # the reference raises the error
-        return REFERENCE
+        return UNSCREENED
     k = math.sqrt(_sum_squares(z) / n)
     if not (math.isfinite(k) and k > 0):
-        return REFERENCE
+        return UNSCREENED
     _normal_matrix(z, k, N)
     if not _geometry_from_normal_matrix(N, n):
-        return REFERENCE
+        return UNSCREENED
     norm = _null_vector(N, x, L, wk, min_gap, eigvec_tol)
     if norm < 0:
         return REFERENCE
@@ -365,7 +371,7 @@ def full_lls(z, g, min_gap, eigvec_tol, bias, M):
     s = _full_lls(z, g, min_gap, eigvec_tol, out, np.empty((10, 10)), np.empty((10, 10)), np.empty(10),
                   np.empty(30))
     if s != OK:
-        return -float(s)
+        return -float(REFERENCE if s == UNSCREENED else s)
     for i in range(3):
         bias[i] = out[i]
         for j in range(3):
@@ -451,11 +457,13 @@ def _full_lls_svd(z, g, out, X, V, theta):
 
 
 @jit
-def full_lls_batch(z, g, min_gap, eigvec_tol, bias, M, status):
+def full_lls_batch(z, g, min_gap, eigvec_tol, bias, M, status, clear):
     """Full LLS of every trial of ``z`` (T, n, 3): ``bias`` (T, 3), ``M`` (T, 3, 3) (NaN
-    unless OK), ``status`` (T,).  Trials the Gram route cannot certify are solved by
-    :func:`_full_lls_svd`; those whose null space is not clearly one-dimensional, or whose
-    poses are not finite, are left to the caller (REFERENCE, NON_FINITE)."""
+    unless OK), ``status`` (T,); ``clear`` (T,) True where the moment screen showed the
+    poses clearly three-dimensional (then the reference geometry check passes too).
+    Trials the Gram route cannot certify are solved by :func:`_full_lls_svd`; those whose
+    null space is not clearly one-dimensional, or whose poses are not finite, are left to
+    the caller (REFERENCE, NON_FINITE)."""
     N = np.empty((10, 10))
     L = np.empty((10, 10))
     x = np.empty(10)
@@ -466,7 +474,8 @@ def full_lls_batch(z, g, min_gap, eigvec_tol, bias, M, status):
     for t in range(z.shape[0]):
         zt = z[t]
         s = _full_lls(zt, g, min_gap, eigvec_tol, out, N, L, x, wk)
-        if s == REFERENCE:
+        clear[t] = s != UNSCREENED
+        if s == REFERENCE or s == UNSCREENED:
             s = NON_FINITE if not _all_finite(zt) else _full_lls_svd(zt, g, out, X, V, x)
         status[t] = s
         if s == OK:
@@ -552,13 +561,15 @@ def bias_lls(z, bias):
 
 
 @jit
-def bias_lls_batch(z, bias, M, status):
+def bias_lls_batch(z, bias, M, status, clear):
     """Bias-only LLS of every trial of ``z`` (T, n, 3) into ``bias`` (T, 3), ``M`` (T, 3, 3)
-    the identity of the model; status (T,)."""
+    the identity of the model; status (T,); ``clear`` as in :func:`full_lls_batch` (the
+    kernel hands to the reference exactly the trials its screen does not pass)."""
     out = np.empty(4)
     for t in range(z.shape[0]):
         zt = z[t]
         s = _bias_lls(zt, out)
+        clear[t] = s == OK
         if s == REFERENCE and not _all_finite(zt):
             s = NON_FINITE
         status[t] = s
@@ -786,6 +797,8 @@ def full_als_batch(z, g, noise_std, T1, T2, min_gap, eigvec_tol, bias, M, status
     for t in range(z.shape[0]):
         zt = z[t]
         s = _full_lls(zt, g, min_gap, eigvec_tol, out, N, L, x, wk)
+        if s == UNSCREENED:
+            s = REFERENCE
         if s == REFERENCE and not _all_finite(zt):
             s = NON_FINITE
         if s == OK:

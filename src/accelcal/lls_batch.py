@@ -29,8 +29,8 @@ def full_lls_batch(z, g: float) -> BatchResult:
         return _refuse_degenerate(_full_lls_batch_svd(z, check_g(g)), z)
     z = np.ascontiguousarray(z)
     T = len(z)
-    bias, M, status = np.empty((T, 3)), np.empty((T, 3, 3)), np.empty(T, np.int8)
-    K.full_lls_batch(z, _float_or_nan(g), MIN_GAP, EIGVEC_TOL, bias, M, status)
+    bias, M, status, clear = np.empty((T, 3)), np.empty((T, 3, 3)), np.empty(T, np.int8), np.empty(T, bool)
+    K.full_lls_batch(z, _float_or_nan(g), MIN_GAP, EIGVEC_TOL, bias, M, status, clear)
     if (status == K.NON_FINITE).any():
         raise NonFiniteError(_NON_FINITE)
     g = check_g(g)
@@ -40,13 +40,14 @@ def full_lls_batch(z, g: float) -> BatchResult:
         r = _full_lls_batch_svd(z[ref], g)
         bias[ref], M[ref], valid[ref] = r.bias, r.M, r.valid
     return _refuse_degenerate(BatchResult(method="full_lls", bias=bias, M=M, valid=valid,
-                                          status=_status(valid, NotPositiveDefiniteError)), z)
+                                          status=_status(valid, NotPositiveDefiniteError)), z, clear)
 
 
-def _refuse_degenerate(r: BatchResult, z) -> BatchResult:
+def _refuse_degenerate(r: BatchResult, z, clear=None) -> BatchResult:
     """The trials whose poses the single-problem estimators refuse as degenerate (nearly
-    coplanar, along one axis, identical): NaN, invalid, ``DegeneratePosesError``."""
-    bad = degenerate_trials(z)
+    coplanar, along one axis, identical): NaN, invalid, ``DegeneratePosesError``.
+    ``clear``: the trials the kernel's moment screen passed, which need no further check."""
+    bad = degenerate_trials(z, clear)
     if bad.any():
         r.bias[bad], r.M[bad], r.valid[bad] = np.nan, np.nan, False
         r.status[bad] = DegeneratePosesError.__name__
@@ -85,8 +86,8 @@ def bias_lls_batch(z, g: float) -> BatchResult:
         return _refuse_degenerate(_bias_lls_batch_normal(z), z)
     z = np.ascontiguousarray(z)
     T = len(z)
-    bias, M, status = np.empty((T, 3)), np.empty((T, 3, 3)), np.empty(T, np.int8)
-    K.bias_lls_batch(z, bias, M, status)
+    bias, M, status, clear = np.empty((T, 3)), np.empty((T, 3, 3)), np.empty(T, np.int8), np.empty(T, bool)
+    K.bias_lls_batch(z, bias, M, status, clear)
     if (status == K.NON_FINITE).any():
         raise NonFiniteError(_NON_FINITE)
     check_g(g)
@@ -96,7 +97,7 @@ def bias_lls_batch(z, g: float) -> BatchResult:
         r = _bias_lls_batch_normal(z[ref])
         bias[ref], valid[ref] = r.bias, r.valid
     return _refuse_degenerate(BatchResult(method="bias_lls", bias=bias, M=M, valid=valid,
-                                          status=_status(valid, DegeneratePosesError)), z)
+                                          status=_status(valid, DegeneratePosesError)), z, clear)
 
 
 def _bias_lls_batch_normal(z) -> BatchResult:

@@ -124,21 +124,43 @@ def scatter_is_clearly_3d(C, sum_sq: float) -> bool:
     return f - c * c / a - e2 * e2 / d2 > 0
 
 
-def degenerate_trials(z: np.ndarray) -> np.ndarray:
+def degenerate_trials(z: np.ndarray, clear: np.ndarray | None = None) -> np.ndarray:
     """(T,) True for the trials of ``z`` (T, n, 3) whose poses :func:`check_poses` refuses
     as degenerate (identical, along one axis, coplanar): the batched estimators mark them
-    as the single-problem ones raise, ``DegeneratePosesError``.  The moment screen of
-    :func:`geometry_is_clearly_fine` passes almost every trial; the rest get the reference check."""
-    n = z.shape[1]
-    s1, S2 = z.sum(axis=1), np.einsum("tni,tnj->tij", z, z)
+    as the single-problem ones raise, ``DegeneratePosesError``.
+
+    ``clear`` (T,) marks trials already shown clearly three-dimensional by a sound moment
+    screen (a compiled batch kernel's, from the moments it forms anyway); without it the
+    screen of :func:`scatter_is_clearly_3d` runs vectorised over the trials.  Only the
+    trials the screen does not pass (almost none in a Monte Carlo) get the reference check,
+    one by one, so every decision is that of the single-problem check."""
+    if clear is None:
+        clear = _screen_trials(z)
     out = np.zeros(len(z), dtype=bool)
-    for t in range(len(z)):
-        if not geometry_is_clearly_fine(s1[t].tolist(), S2[t].tolist(), n):
-            try:
-                check_geometry(z[t])
-            except DegeneratePosesError:
-                out[t] = True
+    for t in np.flatnonzero(~np.asarray(clear, dtype=bool)):
+        try:
+            check_geometry(z[t])
+        except DegeneratePosesError:
+            out[t] = True
     return out
+
+
+def _screen_trials(z: np.ndarray) -> np.ndarray:
+    """:func:`geometry_is_clearly_fine` of every trial of ``z`` (T, n, 3) at once: the same
+    arithmetic on arrays (NaN compares False, as there)."""
+    n = z.shape[1]
+    m = z.mean(axis=1)
+    S2 = np.einsum("tni,tnj->tij", z, z)
+    with np.errstate(all="ignore"):
+        C = S2 - n * m[:, :, None] * m[:, None, :]
+        a, b, c, d, e, f = C[:, 0, 0], C[:, 0, 1], C[:, 0, 2], C[:, 1, 1], C[:, 1, 2], C[:, 2, 2]
+        tr = a + d + f
+        ok = tr > _MIN_SPREAD * (S2[:, 0, 0] + S2[:, 1, 1] + S2[:, 2, 2])
+        shift = _MOMENT_MARGIN * COPLANAR_TOL
+        a, b, c, d, e, f = a / tr - shift, b / tr, c / tr, d / tr - shift, e / tr, f / tr - shift
+        d2 = d - b * b / a
+        e2 = e - b * c / a
+        return ok & (a > 0) & (d2 > 0) & (f - c * c / a - e2 * e2 / d2 > 0)
 
 
 def check_geometry(z: np.ndarray) -> None:
