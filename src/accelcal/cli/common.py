@@ -91,6 +91,10 @@ def _reader_options(p) -> None:
     r.add_argument("--unit", metavar="UNIT", help="acceleration unit: m/s2, g, mg or counts (overrides the header)")
     r.add_argument("--time-unit", metavar="UNIT", help="unit of the time column: s, ms, us or ns")
     r.add_argument("--rate", type=_positive, metavar="HZ", help="sampling rate: time from the sample index")
+    r.add_argument("--clock", choices=("auto", "stamps"),
+                   help="tables: time the samples by the sensor's clock fitted to the stamps against the sample "
+                        "counter or the row index (auto, the default: host receive times jitter), or by the stamps as "
+                        "they are (stamps)")
     r.add_argument("--intervals", type=Path, metavar="FILE",
                    help="known static intervals: imucal section list (JSON), JSON [[start, end], ...] in s, "
                         "or CSV with start,end columns (s, or start_index,end_index in samples)")
@@ -139,7 +143,7 @@ def _read(args):
         return read(args.recording, format=args.format, columns=args.columns, unit=args.unit,
                     time_unit=args.time_unit, rate=args.rate, intervals=args.intervals,
                     gyro=None if args.no_gyro else args.gyro, gyro_unit=args.gyro_unit, topic=args.topic,
-                    instance=args.instance, time_source=args.time_source)
+                    instance=args.instance, time_source=args.time_source, clock=args.clock)
 
 
 def _static_settings(args, rec) -> dict:
