@@ -47,6 +47,10 @@ SHIFT_WINDOW = 50
 #: Stamps within this fraction of a period of the clock are the clock (kept as written: the
 #: digits a file was written with read back exactly).
 STAMPS_ON_CLOCK = 1e-4
+#: Samples per block of :func:`_wander`, and the wander (in periods) beyond which stamps without
+#: a counter are no constant-rate clock (PX4's sensor_combined: 8 periods; SNU's host stamps: 0.2).
+WANDER_BLOCK = 50
+WANDER_PERIODS = 0.5
 #: Fewest stamps on either side of a candidate gap that can decide it (none nearer the ends).
 MIN_SIDE = 10
 #: A step longer than this many periods is a candidate gap (decided by its level shift).
@@ -264,6 +268,12 @@ def stamp_numbers(stamps) -> np.ndarray:
         open_[j] = False
         near = np.flatnonzero(open_ & (np.abs(cand - i) < SHIFT_WINDOW))  # only their windows saw the shift
         shifts[near] = [_level_shift(r, int(cand[q])) for q in near]
+    # next to the ends no level can be measured: there a step far beyond the jitter is a gap
+    dr = np.diff(r)  # steps about the clock: free of the trend the uncounted gaps leave in r
+    sigma = 1.4826 * float(np.median(np.abs(dr - np.median(dr))))
+    edge = open_ & ((cand + 1 < MIN_SIDE) | (n - cand - 1 < MIN_SIDE))
+    edge &= dt[cand] > h + max(0.5 * h, 6.0 * sigma)
+    extra[cand[edge]] += np.round(dt[cand[edge]] / h).astype(np.int64) - 1
     return np.concatenate([[0], np.cumsum(1 + extra)])
 
 
@@ -319,7 +329,21 @@ def clocked_time(t, counter, *, counter_name: str, mode: str, timed_by_rate: boo
     c = estimate_clock(t, counter, counter_name=counter_name, where=where, path=path)
     if np.max(np.abs(c.t - t)) <= STAMPS_ON_CLOCK * (1.0 / c.rate):
         return t, [c.note().replace("times are the clock's", "the stamps are on it (kept)")]
+    wander = _wander(t - c.t)
+    if counter is None and wander > WANDER_PERIODS / c.rate:
+        return t, [f"clock: the stamps follow no constant rate (their medians over {WANDER_BLOCK} samples wander "
+                   f"{1e3 * wander:.3g} ms from the best one, {c.rate:.6g} Hz): kept as they are"]
     return c.t, [c.note()]
+
+
+def _wander(r) -> float:
+    """Largest |median| of the residuals over blocks of :data:`WANDER_BLOCK` samples: how far the
+    stamps stray from the clock for longer than jitter lasts."""
+    m = len(r) // WANDER_BLOCK
+    if m == 0:
+        return 0.0
+    blocks = np.asarray(r[:m * WANDER_BLOCK]).reshape(m, WANDER_BLOCK)
+    return float(np.max(np.abs(np.median(blocks, axis=1))))
 
 
 __all__ = ["CLOCK_MODES", "COUNTER_NAMES", "Clock", "clocked_time", "counter_numbers", "estimate_clock", "fit_clock",
