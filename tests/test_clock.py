@@ -145,3 +145,43 @@ def test_snu_sessions_are_read_at_100_hz_without_gaps(k):
     assert np.all(np.diff(rec.t) * 100 < 1.01)
     if k > 1:  # good1 has 9 poses, too few for the full accelerometer model the gyro needs here
         assert not _missing(_gyro(rec, 9.79871))
+
+
+def test_ros1_header_seq_numbers_the_samples(tmp_path, monkeypatch):
+    """A ROS 1 bag timed by its record times (the host's, jittery): header.seq says where messages are
+    missing and the clock gives the sensor's rate."""
+    pytest.importorskip("rosbags")
+    from accelcal.formats import ros_synthetic
+
+    rng = np.random.default_rng(2)
+    seqs = iter(np.delete(np.arange(600), [200, 201, 202]))
+    plain = ros_synthetic._message
+
+    def numbered(store, stamp_ns, acc, gyro, frame_id):  # the driver numbers its messages
+        msg = plain(store, stamp_ns, acc, gyro, frame_id)
+        return type(msg)(**{**msg.__dict__, "header": type(msg.header)(seq=int(next(seqs)), stamp=msg.header.stamp,
+                                                                       frame_id=msg.header.frame_id)})
+
+    monkeypatch.setattr(ros_synthetic, "_message", numbered)
+    k = np.delete(np.arange(600), [200, 201, 202])
+    t = 1.7e9 + k / 200.0
+    acc = np.tile([0.1, 0.2, 9.8], (k.size, 1)) + 0.01 * rng.standard_normal((k.size, 3))
+    path = ros_synthetic.write_imu_bag(tmp_path / "imu.bag", t, acc, np.zeros((k.size, 3)), kind="ros1",
+                                       latency_s=rng.uniform(0.001, 0.004, k.size))
+    rec = read(path, time_source="log")
+    note = next(n for n in rec.notes if n.startswith("clock:"))
+    assert "counter 'header.seq'" in note and "1 gap(s), 3 sample(s) missing" in note
+    assert abs(rec.rate / 200.0 - 1) < 5e-4
+
+
+def test_rostopic_csv_header_seq_is_the_counter(tmp_path):
+    rng = np.random.default_rng(4)
+    k = np.arange(400)
+    recv = np.maximum.accumulate(1.7e9 + k / 100.0 + rng.exponential(3e-3, k.size)) + 1e-6 * k  # in order
+    rows = "".join(f"{int(r * 1e9)},{i},0.1,0.2,9.8\n" for i, r in zip(k, recv))
+    path = tmp_path / "imu.csv"
+    path.write_text("%time,field.header.seq,field.linear_acceleration.x,field.linear_acceleration.y,"
+                    "field.linear_acceleration.z\n" + rows)  # receive times (%time) only: they jitter
+    rec = read(path)
+    assert "counter 'field.header.seq'" in next(n for n in rec.notes if n.startswith("clock:"))
+    assert abs(rec.rate / 100.0 - 1) < 5e-4 and np.ptp(np.diff(rec.t)) < 1e-9

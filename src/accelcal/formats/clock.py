@@ -42,6 +42,8 @@ COUNTER_NAMES = frozenset({
     "nsample", "headerseq", "fieldheaderseq", "framecounter", "imucounter", "sensorcounter", "datacounter"})
 #: Stamps further than this many robust σ from the clock line are left out of its fit.
 OUTLIER_SIGMA = 5.0
+#: The quadratic (drift) times are used when its coefficient exceeds this many standard errors.
+DRIFT_SIGNIFICANT = 5.0
 #: Samples on either side of a candidate gap whose median stamps measure its level shift.
 SHIFT_WINDOW = 50
 #: Stamps within this fraction of a period of the clock are the clock (kept as written: the
@@ -135,10 +137,11 @@ def estimate_clock(stamps, counter=None, *, counter_name: str = "counter", where
 def fit_clock(stamps, k) -> tuple[np.ndarray, float, float, float]:
     """``(times, h, jitter, drift_ppm)`` of the clock through ``stamps`` against sample numbers ``k``.
 
-    ``h``: the slope of the robust line ``stamps ≈ a + h k`` (the mean period); ``times``
-    and ``jitter`` (robust σ of the stamps about it) from the quadratic through the same
-    stamps, so that a clock whose rate drifts (the IMU-TK fork's data2: 131 ppm) is
-    followed and its drift is not counted as jitter.
+    ``h``: the slope of the robust line ``stamps ≈ a + h k`` (the mean period); ``drift``
+    from the quadratic through the same stamps; ``times`` and ``jitter`` (robust σ of the
+    stamps about them) from the quadratic when its curvature exceeds
+    :data:`DRIFT_SIGNIFICANT` standard errors (a clock whose rate drifts, the IMU-TK fork's
+    data2: 131 ppm, is followed and its drift not counted as jitter), else from the line.
     """
     s = np.asarray(stamps, float)
     kc = (np.asarray(k, np.int64) - k[0]).astype(float)
@@ -157,10 +160,14 @@ def fit_clock(stamps, k) -> tuple[np.ndarray, float, float, float]:
     times, drift = a + h * x, 0.0
     if keep.sum() > 10 and kc[-1] > 0:
         c = np.polyfit(x[keep], s[keep], 2)
-        times = np.polyval(c, x)
-        r = s - times
-        sigma = 1.4826 * float(np.median(np.abs(r[keep] - np.median(r[keep]))))
+        r = s - np.polyval(c, x)
+        s2 = 1.4826 * float(np.median(np.abs(r[keep] - np.median(r[keep]))))
         drift = float(2.0 * c[0] * kc[-1] / h * 1e6)  # period at the end vs the start, relative
+        xk = x[keep] / max(mid, 1.0)
+        X = np.column_stack([xk * xk, xk, np.ones_like(xk)])
+        se_c = s2 * float(np.sqrt(np.linalg.inv(X.T @ X)[0, 0])) / max(mid, 1.0) ** 2
+        if abs(c[0]) > DRIFT_SIGNIFICANT * se_c:  # a drift the stamps show: follow it
+            times, sigma = np.polyval(c, x), s2
     return times, float(h), sigma, drift
 
 

@@ -202,11 +202,13 @@ def check_finite(path, topic: str, values: np.ndarray, what: str) -> None:
 
 
 def make_recording(path, *, t, acc, gyro, notes: Sequence[str], time_name: str, time_values,
-                   temp=None) -> Recording:
+                   temp=None, counter=None, counter_name: str = "counter") -> Recording:
     """The :class:`Recording` of an IMU topic: acc in m/s², gyro in rad/s, the recorded time column kept;
-    timed by the sensor's clock fitted to the chosen stamps (:mod:`.clock`: stamps on it are kept
-    as they are; a log's record time, which jitters, is replaced by it)."""
-    t, clock_notes = clocked_time(np.asarray(t, float), None, counter_name="", mode="auto", timed_by_rate=False,
+    timed by the sensor's clock fitted to the chosen stamps against ``counter`` (ROS 1's
+    ``header.seq``) or the message index (:mod:`.clock`: stamps on it are kept as they are; a
+    log's record time, which jitters, is replaced by it)."""
+    t, clock_notes = clocked_time(np.asarray(t, float), counter, counter_name=counter_name, mode="auto",
+                                  timed_by_rate=False,
                                   where=lambda i: f"message {i}", path=path)
     notes = (*notes, *clock_notes)
     return Recording(t, acc, temp, str(path), notes=tuple(notes), unit="m/s^2", time_column=(time_name, time_values),
