@@ -42,6 +42,8 @@ COUNTER_NAMES = frozenset({
     "nsample", "headerseq", "fieldheaderseq", "framecounter", "imucounter", "sensorcounter", "datacounter"})
 #: Stamps further than this many robust σ from the clock line are left out of its fit.
 OUTLIER_SIGMA = 5.0
+#: Largest number of residuals a median of :func:`fit_clock` is taken over (a regular subsample beyond).
+MEDIAN_SAMPLES = 20_000
 #: The quadratic (drift) times are used when its coefficient exceeds this many standard errors.
 DRIFT_SIGNIFICANT = 5.0
 #: Samples on either side of a candidate gap whose median stamps measure its level shift.
@@ -147,28 +149,49 @@ def fit_clock(stamps, k) -> tuple[np.ndarray, float, float, float]:
     kc = (np.asarray(k, np.int64) - k[0]).astype(float)
     mid = 0.5 * kc[-1]
     x = kc - mid  # centred: the slope and the intercept are fitted apart
-    keep = np.ones(len(s), bool)
+    every = max(1, len(s) // MEDIAN_SAMPLES)  # a long record's outliers are judged on a regular subsample
+    xs, ss = x[::every], s[::every]
+    keep = np.ones(len(ss), bool)
     for _ in range(5):
-        h, a = np.polyfit(x[keep], s[keep], 1)
-        r = s - (a + h * x)
-        dev = np.abs(r - np.median(r[keep]))
+        h, a = _polyfit(xs[keep], ss[keep], 1, mid)
+        rs = ss - (a + h * xs)
+        dev = np.abs(rs - np.median(rs[keep]))
         sigma = 1.4826 * float(np.median(dev[keep]))
         new = dev <= max(OUTLIER_SIGMA * sigma, 1e-9 * abs(h))
-        if np.array_equal(new, keep):
-            break
+        changed = int(np.count_nonzero(new != keep))
         keep = new
+        if changed <= 1e-3 * len(ss):  # the line moves no more than a thousandth of the stamps would move it
+            break
+    r = s - (a + h * x)
+    keep = np.abs(r - np.median(r[::every])) <= max(OUTLIER_SIGMA * sigma, 1e-9 * abs(h))
+    if every > 1:
+        h, a = _polyfit(x[keep], s[keep], 1, mid)
     times, drift = a + h * x, 0.0
     if keep.sum() > 10 and kc[-1] > 0:
-        c = np.polyfit(x[keep], s[keep], 2)
-        r = s - np.polyval(c, x)
-        s2 = 1.4826 * float(np.median(np.abs(r[keep] - np.median(r[keep]))))
+        c = _polyfit(x[keep], s[keep], 2, mid)
+        r = (s - np.polyval(c, x))[::every][keep[::every]]
+        s2 = 1.4826 * float(np.median(np.abs(r - np.median(r))))
         drift = float(2.0 * c[0] * kc[-1] / h * 1e6)  # period at the end vs the start, relative
-        xk = x[keep] / max(mid, 1.0)
-        X = np.column_stack([xk * xk, xk, np.ones_like(xk)])
-        se_c = s2 * float(np.sqrt(np.linalg.inv(X.T @ X)[0, 0])) / max(mid, 1.0) ** 2
+        xk = x[keep][::every] / max(mid, 1.0)  # the curvature's standard error from the subsample, scaled
+        m = [float(np.sum(xk ** p)) * every for p in range(5)]  # moments: X^T X of (x^2, x, 1)
+        xtx = np.array([[m[4], m[3], m[2]], [m[3], m[2], m[1]], [m[2], m[1], m[0]]])
+        se_c = s2 * float(np.sqrt(np.linalg.inv(xtx)[0, 0])) / max(mid, 1.0) ** 2
         if abs(c[0]) > DRIFT_SIGNIFICANT * se_c:  # a drift the stamps show: follow it
             times, sigma = np.polyval(c, x), s2
     return times, float(h), sigma, drift
+
+
+def _polyfit(x, y, deg: int, scale: float) -> np.ndarray:
+    """``np.polyfit(x, y, deg)`` by the normal equations of ``x / scale`` (in [-1, 1]: well
+    conditioned for degree 2), in a few passes over the data instead of a least-squares solve
+    of the whole Vandermonde matrix (1 M stamps: 0.03 s instead of 0.6 s)."""
+    scale = max(float(scale), 1.0)
+    z = x / scale
+    pw = [np.ones_like(z), z, z * z][:deg + 1]
+    A = np.array([[float(np.dot(p, q)) for q in pw] for p in pw])
+    b = np.array([float(np.dot(p, y)) for p in pw])
+    coef = np.linalg.solve(A, b)  # lowest power first, in z
+    return np.array([coef[j] / scale ** j for j in range(deg, -1, -1)])
 
 
 def counter_numbers(counter, stamps, name: str, where, path) -> tuple[np.ndarray, int]:
@@ -261,7 +284,7 @@ def stamp_numbers(stamps) -> np.ndarray:
     r = s - times  # residual about the clock; a gap of m samples raises all later ones by m h
     extra = np.zeros(n - 1, np.int64)
     cap = np.maximum(np.round(dt[cand] / h).astype(np.int64) - 1, 1)  # a gap is no longer than its step
-    shifts = np.array([_level_shift(r, i) for i in cand])
+    shifts = _level_shifts(r, cand, h)
     open_ = np.ones(cand.size, bool)
     while True:
         m = np.minimum(np.round(shifts / h).astype(np.int64), cap)
@@ -299,6 +322,31 @@ def _best_split(r, cand, ok, j: int) -> int:
         return float(np.sum(np.abs(a - np.median(a))) + np.sum(np.abs(b - np.median(b))))
 
     return int(near[np.argmin([cost(int(cand[q])) for q in near])])
+
+
+def _level_shifts(r, cand, h: float) -> np.ndarray:
+    """:func:`_level_shift` of every candidate: those with full windows at once (a gathered
+    (k, SHIFT_WINDOW) block each side), the few near the ends one by one.  The medians are
+    taken only where the windows' means already differ by a quarter period (their difference
+    by cumulative sums, for all at once): elsewhere no gap can be (host jitter makes a fifth
+    of the steps candidates)."""
+    n = len(r)
+    cs = np.concatenate([[0.0], np.cumsum(r)])
+    W = SHIFT_WINDOW
+    inside = (cand + 1 >= W) & (cand + 1 + W <= n)
+    c = np.where(inside, cand, W)  # placeholders for the ends, decided below
+    means = (cs[c + 1 + W] - cs[c + 1]) / W - (cs[c + 1] - cs[c + 1 - W]) / W
+    full = inside & (means > 0.25 * h)
+    out = np.where(inside, means, 0.0)
+    off = np.arange(SHIFT_WINDOW)
+    for lo in range(0, int(full.sum()), 50_000):  # blocks: bounded memory
+        c = cand[full][lo:lo + 50_000]
+        after = np.median(r[c[:, None] + 1 + off], axis=1)
+        before = np.median(r[c[:, None] + 1 - SHIFT_WINDOW + off], axis=1)
+        out[np.flatnonzero(full)[lo:lo + 50_000]] = after - before
+    for q in np.flatnonzero(~inside):
+        out[q] = _level_shift(r, int(cand[q]))
+    return out
 
 
 def _level_shift(r, i: int) -> float:
