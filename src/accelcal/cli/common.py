@@ -41,6 +41,13 @@ units: acceleration in m/s^2, g, mg or raw counts (from the header, --unit, or t
   m/s^2) and b is in counts; the bias-only models need physical units.
   Time in s, ms, us, ns or ISO 8601 date-times (from the header, --time-unit, or
   the values), or --rate HZ when there is none.
+clock: the samples are timed by the sensor's clock, fitted to the stamps against a
+  sample counter (INDEX, seq, counter, sample, n_samples, header.seq; --columns
+  counter=NAME) or the row index: host receive times that jitter or arrive in
+  batches give the sensor's rate, and a gap only where samples are missing (the
+  counter, or stamps shifted for good); rate, jitter and drift are in the read:
+  lines; --clock stamps keeps the stamps as written. A gyro in a file of its own is
+  aligned to the accelerometer by the motions both see (offset stated, applied).
 logs: ROS 1/2 bags and MCAP files, PX4 ULog, ArduPilot DataFlash; the IMU topic is
   found (--topic, --instance when there are several), timed by the sensor's stamps
   (--time-source log: the log's clock); the gyroscope comes along.
@@ -86,7 +93,8 @@ def _reader_options(p) -> None:
     names = ", ".join(["auto", *FORMATS])
     r.add_argument("--format", default="auto", metavar="FMT", help=f"file format ({names}; default auto)")
     r.add_argument("--columns", metavar="SPEC",
-                   help="which column is which: t=NAME,ax=NAME,ay=NAME,az=NAME[,gx=..,gy=..,gz=..][,temp=NAME] "
+                   help="which column is which: t=NAME,ax=NAME,ay=NAME,az=NAME[,gx=..,gy=..,gz=..][,temp=NAME]"
+                        "[,counter=NAME] "
                         "(names or 1-based numbers)")
     r.add_argument("--unit", metavar="UNIT", help="acceleration unit: m/s2, g, mg or counts (overrides the header)")
     r.add_argument("--time-unit", metavar="UNIT", help="unit of the time column: s, ms, us or ns")

@@ -54,6 +54,8 @@ ALIASES = {
                   "gyroscope)",
     "temp": "temp, temperature, imu_temp, die_temp",
     "pose": "pose, pose_id (label of the known static pose of each sample; empty between poses)",
+    "counter": "INDEX, seq, counter, sample, n_samples, field.header.seq ... (a sample counter: the clock's "
+               "sample numbers, accelcal.formats.clock)",
 }
 
 
