@@ -185,3 +185,27 @@ def test_rostopic_csv_header_seq_is_the_counter(tmp_path):
     rec = read(path)
     assert "counter 'field.header.seq'" in next(n for n in rec.notes if n.startswith("clock:"))
     assert abs(rec.rate / 100.0 - 1) < 5e-4 and np.ptp(np.diff(rec.t)) < 1e-9
+
+
+def test_the_clock_costs_less_than_parsing_its_stamps():
+    """Speed, as a ratio in one run: fitting the clock to 100 000 host stamps (exponential jitter,
+    a fifth of the steps candidate gaps: the worst case) against parsing the same stamps from
+    text with numpy's C reader.  Measured 1.1-1.9x; the margin catches a 3x slip."""
+    import io
+    import time
+
+    rng = np.random.default_rng(0)
+    s = np.maximum.accumulate(np.arange(100_000) * 0.01 + rng.exponential(2e-3, 100_000)) + 1e-5 * np.arange(100_000)
+    text = "\n".join(f"{v:.7f}" for v in s)
+
+    def best(f):
+        out = []
+        for _ in range(3):
+            t0 = time.perf_counter()
+            f()
+            out.append(time.perf_counter() - t0)
+        return min(out)
+
+    parse = best(lambda: np.loadtxt(io.StringIO(text)))
+    clock = best(lambda: estimate_clock(s))
+    assert clock < 6.0 * parse, (clock, parse)

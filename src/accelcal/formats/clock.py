@@ -188,8 +188,9 @@ def _polyfit(x, y, deg: int, scale: float) -> np.ndarray:
     scale = max(float(scale), 1.0)
     z = x / scale
     pw = [np.ones_like(z), z, z * z][:deg + 1]
-    A = np.array([[float(np.dot(p, q)) for q in pw] for p in pw])
-    b = np.array([float(np.dot(p, y)) for p in pw])
+    # sums of products, not np.dot: a BLAS call per product waits for its threads on a busy machine
+    A = np.array([[float(np.sum(p * q)) for q in pw] for p in pw])
+    b = np.array([float(np.sum(p * y)) for p in pw])
     coef = np.linalg.solve(A, b)  # lowest power first, in z
     return np.array([coef[j] / scale ** j for j in range(deg, -1, -1)])
 
