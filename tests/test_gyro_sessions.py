@@ -31,12 +31,23 @@ def test_fork_data1_short_still_phases_need_no_hand_tuning():
     assert r["gyro"].quality.n_motions >= 29
 
 
-def test_snu_host_timestamps_integrate_by_the_sample_index():
+def test_snu_host_timestamps_are_read_on_the_sensors_clock():
+    """The reader times SNU's host stamps by the clock fitted to them (accelcal.formats.clock): the
+    gyro gets even 100.0 Hz steps and keeps every motion.  Given the stamps as they are, the gyro's
+    own safeguard still finds their jitter and integrates by the sample index."""
+    from dataclasses import replace
+
     g = _calibrate("snu_good2")["gyro"]
     tb = g.settings["time_base"]
+    assert abs(tb["rate"] / 100.0 - 1) < 5e-4 and tb["jitter"] < 0.01 and tb["gaps"] == 0
+    assert not any("missing" in w for w in g.quality.warnings)
+    spec = SESSIONS["snu_good2"]
+    raw = calibrate_session(replace(spec, read={**spec.read, "clock": "stamps"}), local_paths(["snu_good2"]))["gyro"]
+    tb = raw.settings["time_base"]
     assert tb["jitter"] > 0.05 and tb["used"] == "index"
     assert tb["chi2_per_dof"]["index"] < 0.5 * tb["chi2_per_dof"]["timestamps"]
-    assert any("sample index" in w for w in g.quality.warnings)
+    assert any("sample index" in w for w in raw.quality.warnings)
+    assert raw.quality.n_motions < g.quality.n_motions  # a motion dropped as "missing samples"
 
 
 def test_the_files_each_session_needs_are_in_the_data_table():

@@ -41,6 +41,13 @@ units: acceleration in m/s^2, g, mg or raw counts (from the header, --unit, or t
   m/s^2) and b is in counts; the bias-only models need physical units.
   Time in s, ms, us, ns or ISO 8601 date-times (from the header, --time-unit, or
   the values), or --rate HZ when there is none.
+clock: the samples are timed by the sensor's clock, fitted to the stamps against a
+  sample counter (INDEX, seq, counter, sample, n_samples, header.seq; --columns
+  counter=NAME) or the row index: host receive times that jitter or arrive in
+  batches give the sensor's rate, and a gap only where samples are missing (the
+  counter, or stamps shifted for good); rate, jitter and drift are in the read:
+  lines; --clock stamps keeps the stamps as written. A gyro in a file of its own is
+  aligned to the accelerometer by the motions both see (offset stated, applied).
 logs: ROS 1/2 bags and MCAP files, PX4 ULog, ArduPilot DataFlash; the IMU topic is
   found (--topic, --instance when there are several), timed by the sensor's stamps
   (--time-source log: the log's clock); the gyroscope comes along.
@@ -89,11 +96,16 @@ def _reader_options(p) -> None:
     names = ", ".join(["auto", *FORMATS])
     r.add_argument("--format", default="auto", metavar="FMT", help=f"file format ({names}; default auto)")
     r.add_argument("--columns", metavar="SPEC",
-                   help="which column is which: t=NAME,ax=NAME,ay=NAME,az=NAME[,gx=..,gy=..,gz=..][,temp=NAME] "
+                   help="which column is which: t=NAME,ax=NAME,ay=NAME,az=NAME[,gx=..,gy=..,gz=..][,temp=NAME]"
+                        "[,counter=NAME] "
                         "(names or 1-based numbers)")
     r.add_argument("--unit", metavar="UNIT", help="acceleration unit: m/s2, g, mg or counts (overrides the header)")
     r.add_argument("--time-unit", metavar="UNIT", help="unit of the time column: s, ms, us or ns")
     r.add_argument("--rate", type=_positive, metavar="HZ", help="sampling rate: time from the sample index")
+    r.add_argument("--clock", choices=("auto", "stamps"),
+                   help="tables: time the samples by the sensor's clock fitted to the stamps against the sample "
+                        "counter or the row index (auto, the default: host receive times jitter), or by the stamps as "
+                        "they are (stamps)")
     r.add_argument("--intervals", type=Path, metavar="FILE",
                    help="known static intervals: imucal section list (JSON), JSON [[start, end], ...] in s, "
                         "or CSV with start,end columns (s, or start_index,end_index in samples)")
@@ -142,7 +154,7 @@ def _read(args):
         return read(args.recording, format=args.format, columns=args.columns, unit=args.unit,
                     time_unit=args.time_unit, rate=args.rate, intervals=args.intervals,
                     gyro=None if args.no_gyro else args.gyro, gyro_unit=args.gyro_unit, topic=args.topic,
-                    instance=args.instance, time_source=args.time_source)
+                    instance=args.instance, time_source=args.time_source, clock=args.clock)
 
 
 def _static_settings(args, rec) -> dict:

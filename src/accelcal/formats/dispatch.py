@@ -32,11 +32,15 @@ from .registry import (BINARY_HEAD_BYTES, FALLBACK, FORMATS, LOG_OPTIONS, OPTION
                        Format, format_named)
 from .text import load_text
 
+#: Values of ``clock=`` (:data:`accelcal.formats.clock.CLOCK_MODES`; repeated here: this module
+#: imports no numerical library).
+CLOCK_MODES = ("auto", "stamps")
+
 
 def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit: str | None = None,
          time_unit: str | None = None, rate: float | None = None, intervals=None, gyro=None,
          gyro_unit: str | None = None, topic: str | None = None, instance: int | None = None,
-         time_source: str | None = None):
+         time_source: str | None = None, clock: str | None = None):
     """Read an accelerometer recording (and its gyroscope, when the file or ``gyro`` has one).
 
     Parameters
@@ -79,6 +83,11 @@ def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit
         Logs: the sensor's own stamps (``'header'``, the default) or the time the log
         recorded each message.
 
+    clock : {'auto', 'stamps'}, optional
+        Tables: time the samples by the sensor's clock, fitted to the time stamps against
+        the sample counter or the row index (``'auto'``, the default: rate, jitter, drift and
+        gaps in the notes, :mod:`accelcal.formats.clock`), or by the stamps as they are.
+
     Returns
     -------
     Recording
@@ -89,11 +98,13 @@ def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit
 
     path = Path(path)
     options = {"columns": columns, "unit": unit, "time_unit": time_unit, "rate": rate, "gyro_unit": gyro_unit,
-               "topic": topic, "instance": instance, "time_source": time_source}
+               "topic": topic, "instance": instance, "time_source": time_source, "clock": clock}
     if strict:
         return checked_recording(_read_strict(path, format, {**options, "intervals": intervals, "gyro": gyro}))
     fmt = None if format == "auto" else format_named(format)
     _check_options(unit, time_unit, rate, gyro_unit, time_source)
+    if clock is not None and clock not in CLOCK_MODES:
+        raise RecordingError(f"--clock must be {' or '.join(CLOCK_MODES)}, got {clock!r}")
     notes: list[str] = []
     text = None
     if fmt is None:
@@ -115,7 +126,7 @@ def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit
     if gyro is not None:
         from .gyro_file import attach_gyro
 
-        rec = attach_gyro(rec, gyro, gyro_unit=gyro_unit, time_unit=time_unit)
+        rec = attach_gyro(rec, gyro, gyro_unit=gyro_unit, time_unit=time_unit, clock=clock or "auto")
     return checked_recording(rec)
 
 
@@ -214,6 +225,8 @@ def _read_format(path: Path, fmt: Format, text: str | None, options: dict, notes
         rec = _with_unit(rec, options["unit"], path)
     if options["time_unit"] is not None and "time_unit" not in fmt.options:
         notes.append(f"--time-unit ignored: the {fmt.name} format defines its time")
+    if options["clock"] is not None and "clock" not in fmt.options:
+        notes.append(f"--clock ignored: the {fmt.name} format times its samples itself")
     if options["gyro_unit"] is not None and "gyro_unit" not in fmt.options and rec.gyro is not None:
         notes.append(f"--gyro-unit ignored: the {fmt.name} format defines its gyro's unit")
     return rec

@@ -18,13 +18,15 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RecordingError
+from .clock import clocked_time
 from .inference import resolve_gyro_unit, time_seconds
 from .parsing import parse_numbers
+from .sync import estimate_offset, shift_gyro, sphere_centre
 from .table import ACC_ROLES, GYRO_ROLES, _map_columns, _numeric_block, _split_table
 from .text import load_text
 
 
-def read_gyro_table(path, *, gyro_unit: str | None = None, time_unit: str | None = None):
+def read_gyro_table(path, *, gyro_unit: str | None = None, time_unit: str | None = None, clock: str = "auto"):
     """``(t or None, gyro (n, 3) in rad/s or counts, unit, notes)`` of a gyro file (module docstring)."""
     path = Path(path)
     text, notes = load_text(path)
@@ -50,11 +52,15 @@ def read_gyro_table(path, *, gyro_unit: str | None = None, time_unit: str | None
         tcol = block[:, roles["t"]] if block is not None and np.all(np.isfinite(block[:, roles["t"]])) else None
         t, _ = time_seconds(column("t"), None, time_unit, units.get("t"), tab.names, roles, tab.dc, path, tab.lines,
                             tab.preamble, parsed=tcol)
+        t, _ = clocked_time(t, None, counter_name="", mode=clock, timed_by_rate=False,
+                            where=lambda i: f"line {tab.lines[i]}", path=path)  # on the clock, as the accelerometer
     return t, gyro, unit, [*notes, f"gyro from {path.name}: {note}"]
 
 
-def attach_gyro(rec, path, *, gyro_unit: str | None = None, time_unit: str | None = None):
-    """``rec`` with the gyro of the file ``path`` (module docstring).
+def attach_gyro(rec, path, *, gyro_unit: str | None = None, time_unit: str | None = None, clock: str = "auto"):
+    """``rec`` with the gyro of the file ``path`` (module docstring): both on their clocks
+    (:mod:`.clock`), their time offset measured from the motions (:mod:`.sync`), stated, and
+    applied when it exceeds its uncertainty.
 
     Raises
     ------
@@ -68,12 +74,20 @@ def attach_gyro(rec, path, *, gyro_unit: str | None = None, time_unit: str | Non
     if rec.gyro is not None:
         raise RecordingError(f"{rec.source} has gyro columns of its own and --gyro {path} gives another gyro: "
                              "drop --gyro, or pass --no-gyro to calibrate the accelerometer alone")
-    t, gyro, unit, notes = read_gyro_table(path, gyro_unit=gyro_unit, time_unit=time_unit)
+    t, gyro, unit, notes = read_gyro_table(path, gyro_unit=gyro_unit, time_unit=time_unit, clock=clock)
     if t is None and len(gyro) != rec.n:
         raise GyroInputError(f"{path} has {len(gyro)} gyro samples, the accelerometer {rec.n}: their time bases do "
                              "not match; give a gyro file sampled with the accelerometer (--gyro FILE)")
     if t is not None:
         check_time_base(rec.t, t, sample_interval(rec.t).h)
+    zero = sphere_centre(rec.acc) if rec.unit != "m/s^2" else 0.0
+    offset = estimate_offset(rec.t, rec.acc, gyro, source=str(path), acc_zero=zero)
+    if offset is None:
+        notes.append("gyro - accelerometer time offset not measured: no motion both of them see")
+    else:
+        notes.append(offset.note(f"gyro from {Path(path).name}"))
+        if offset.applied:
+            gyro = shift_gyro(rec.t, gyro, offset.tau)
     return replace(rec, gyro=gyro, gyro_unit=unit, notes=rec.notes + tuple(notes))
 
 

@@ -6,14 +6,16 @@ import numpy as np
 
 from ..recording import Recording
 from ..errors import RecordingError
+from .clock import clocked_time
 from .parsing import check_time, drop_trailing_blank, read_delimited, to_float
 
 
-def read_imutk_ascii(path, text: str | None = None) -> Recording:
+def read_imutk_ascii(path, text: str | None = None, clock: str = "auto") -> Recording:
     """Read an IMU-TK ASCII file (e.g. ``xsens_acc.mat``): whitespace-separated time, x, y, z.
 
     Values are returned as stored (raw counts for the Xsens example; see
-    ``nominal_conversion('imutk_xsens')``).
+    ``nominal_conversion('imutk_xsens')``).  Time: the sensor's clock fitted to the
+    stamps (``clock='auto'``), or the stamps as they are (``'stamps'``), as the table reader.
     """
     df = drop_trailing_blank(read_delimited(path, "4 whitespace-separated columns (t x y z)", text,
                                           sep=r"\s+", header=None))
@@ -21,4 +23,6 @@ def read_imutk_ascii(path, text: str | None = None) -> Recording:
         raise RecordingError(f"{path}: {df.shape[1]} columns, expected 4 (t x y z) in an IMU-TK ASCII file")
     t, x, y, z = (to_float(df, i, path, first_line=1, name=n) for i, n in enumerate(("t", "x", "y", "z")))
     check_time(t, path, first_line=1)
-    return Recording(t, np.column_stack([x, y, z]), None, str(path))
+    t, notes = clocked_time(t, None, counter_name="", mode=clock, timed_by_rate=False,
+                            where=lambda i: f"line {i + 1}", path=path)
+    return Recording(t, np.column_stack([x, y, z]), None, str(path), notes=tuple(notes))

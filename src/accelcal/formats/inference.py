@@ -131,9 +131,10 @@ def _preamble_rate(preamble) -> tuple[float | None, str]:
     return None, ""
 
 
-def time_seconds(values, rate, tu, header_unit, names, roles, dc, path, lines, preamble, parsed=None):
+def time_seconds(values, rate, tu, header_unit, names, roles, dc, path, lines, preamble, parsed=None, counter=None):
     """Time [s] from the first sample, and a note on how it was obtained (``parsed``: the
-    column already converted to floats, when the table reader has it)."""
+    column already converted to floats, when the table reader has it; ``counter``: the
+    sample counter's label, when the table has one, for the hint of a missing time)."""
     n = len(lines)
     if rate is not None:
         ignored = " (time column ignored)" if values is not None else ""
@@ -142,8 +143,9 @@ def time_seconds(values, rate, tu, header_unit, names, roles, dc, path, lines, p
         fs, note = _preamble_rate(preamble)
         if fs is None:
             found = ", ".join(names)[:150] if names is not None else "none"
-            raise RecordingError(f"{path}: no time column (found: {found}); pass --rate HZ to time the samples "
-                                 "by their index, or --columns t=NAME")
+            by = f"by their {counter}" if counter else "by their index"
+            raise RecordingError(f"{path}: no time column (found: {found}); pass --rate HZ (the sensor's rate) to "
+                                 f"time the samples {by}, or --columns t=NAME")
         return np.arange(n) / fs, note
     s = np.char.strip(values.astype(str))
     label = f"time (column {names[roles['t']].strip()!r})" if names is not None else "time"
@@ -162,7 +164,7 @@ def time_seconds(values, rate, tu, header_unit, names, roles, dc, path, lines, p
         x = parsed if parsed is not None else parse_numbers(values, dc, path, "t", names, roles["t"], lines)
         t0 = float(x[0])
         rel = x - x[0]
-    _check_increasing(rel, path, label, lines)
+    _check_increasing(rel, path, label, lines, repeats_allowed=counter is not None)
     if tu is not None:
         unit, how = time_unit(tu), "--time-unit"
     elif header_unit is not None:
@@ -172,7 +174,8 @@ def time_seconds(values, rate, tu, header_unit, names, roles, dc, path, lines, p
     f = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}[unit]
     epoch = abs(t0) * f >= 1e6  # clock or epoch time: seconds from the first sample keep the digits
     t = rel * f if epoch else x * f
-    rate_hz = 1.0 / float(np.median(np.diff(t)))
+    steps = np.diff(t)
+    rate_hz = 1.0 / float(np.median(steps[steps > 0]))
     note = f"time unit: {unit} ({how}): {rate_hz:.4g} Hz over {t[-1] - t[0]:.4g} s"
     if how.startswith("inferred") or not 1.0 <= rate_hz <= 20000.0:
         note += "; pass --time-unit if wrong"
@@ -220,9 +223,10 @@ def _datetime_time(s, path, label, lines):
     return t, (f"time: ISO 8601 date-times from {ts.iloc[0].isoformat()} (UTC): {rate_hz:.4g} Hz, {t[-1]:.4g} s")
 
 
-def _check_increasing(t, path, label, lines):
+def _check_increasing(t, path, label, lines, repeats_allowed: bool = False):
+    """Time must increase; with a sample counter it may repeat (a batch of samples received at once)."""
     d = np.diff(t)
-    bad = np.flatnonzero(d <= 0)
+    bad = np.flatnonzero(d < 0 if repeats_allowed else d <= 0)
     if bad.size:
         i = int(bad[0]) + 1
         what = "repeats" if d[bad[0]] == 0 else "goes back"

@@ -29,6 +29,7 @@ import numpy as np
 
 from ..errors import LogFormatError, TopicError
 from ..recording import MIN_ROWS, Recording
+from .clock import clocked_time
 from .registry import TIME_SOURCES, format_named
 
 #: Largest spread (1st to 99th percentile) of the latency log − sensor stamp, in sample
@@ -201,8 +202,16 @@ def check_finite(path, topic: str, values: np.ndarray, what: str) -> None:
 
 
 def make_recording(path, *, t, acc, gyro, notes: Sequence[str], time_name: str, time_values,
-                   temp=None, device_id: str | None = None, precalibrated: str | None = None) -> Recording:
-    """The :class:`Recording` of an IMU topic: acc in m/s², gyro in rad/s, the recorded time column kept."""
+                   temp=None, device_id: str | None = None, precalibrated: str | None = None, counter=None,
+                   counter_name: str = "counter") -> Recording:
+    """The :class:`Recording` of an IMU topic: acc in m/s², gyro in rad/s, the recorded time column kept;
+    timed by the sensor's clock fitted to the chosen stamps against ``counter`` (ROS 1's
+    ``header.seq``) or the message index (:mod:`.clock`: stamps on it are kept as they are; a
+    log's record time, which jitters, is replaced by it)."""
+    t, clock_notes = clocked_time(np.asarray(t, float), counter, counter_name=counter_name, mode="auto",
+                                  timed_by_rate=False,
+                                  where=lambda i: f"message {i}", path=path)
+    notes = (*notes, *clock_notes)
     return Recording(t, acc, temp, str(path), notes=tuple(notes), unit="m/s^2", time_column=(time_name, time_values),
                      gyro=gyro, gyro_unit=None if gyro is None else "rad/s", device_id=device_id,
                      precalibrated=precalibrated)

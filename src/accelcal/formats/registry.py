@@ -30,9 +30,9 @@ from ..registry import resolve
 
 #: The reading options (of :func:`accelcal.formats.read`) a reader may take itself.  One it
 #: does not take is applied by the dispatcher: ``unit`` converts or checks the values,
-#: ``rate`` replaces the time by sample index / rate, ``time_unit`` and ``gyro_unit`` are
-#: ignored with a note, ``columns`` and the log options are refused.
-TABLE_OPTIONS = ("columns", "unit", "time_unit", "rate", "gyro_unit")
+#: ``rate`` replaces the time by sample index / rate, ``time_unit``, ``gyro_unit`` and
+#: ``clock`` are ignored with a note, ``columns`` and the log options are refused.
+TABLE_OPTIONS = ("columns", "unit", "time_unit", "rate", "gyro_unit", "clock")
 #: The options of logs, which hold several sensors and two clocks: the IMU topic, the
 #: sensor instance, and whose time stamps (``'header'``: the sensor's, ``'log'``: the log's).
 LOG_OPTIONS = ("topic", "instance", "time_source")
@@ -42,7 +42,7 @@ READING_OPTIONS = TABLE_OPTIONS + LOG_OPTIONS
 #: The command-line option of each reading option, for messages.
 OPTION_FLAGS = {"columns": "--columns", "unit": "--unit", "time_unit": "--time-unit", "rate": "--rate",
                 "gyro_unit": "--gyro-unit", "topic": "--topic", "instance": "--instance",
-                "time_source": "--time-source"}
+                "time_source": "--time-source", "clock": "--clock"}
 #: Characters of the decoded text that text formats are sniffed on.
 TEXT_HEAD_CHARS = 8192
 #: Bytes of the file that binary formats are sniffed on.
@@ -163,7 +163,7 @@ FORMATS: dict[str, Format] = {f.name: f for f in (
            strict_reader="accelcal.formats.canonical:read_canonical",
            writer="accelcal.formats.canonical:write_canonical"),
     Format(name="imutk", title="IMU-TK ASCII (t x y z, e.g. xsens_acc.mat), which csv reads too",
-           reader="accelcal.formats.imutk:read_imutk_ascii"),
+           reader="accelcal.formats.imutk:read_imutk_ascii", options=("clock",)),
     Format(name="ros", title="ROS 1 bag, ROS 2 bag (its folder, metadata.yaml, .db3 or .mcap) or bare .mcap file: "
                              "a sensor_msgs/Imu topic, accelerometer and gyroscope",
            reader="accelcal.formats.ros:read", sniff="accelcal.formats.ros:sniff", options=("topic", "time_source"),

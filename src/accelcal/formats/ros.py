@@ -38,6 +38,7 @@ import numpy as np
 
 from ..errors import LogFormatError, RecordingError, TopicError
 from . import ros_recover
+from .clock import looks_like_counter
 from .logs import (ColumnBuffer, Progress, check_finite, check_rows, check_time_source, choose, clock_note,
                       make_recording, require_extra, stamps_to_time)
 
@@ -265,7 +266,7 @@ def _check_definition(path, topic, conns, typestore, ros1: bool) -> None:
 def _stream(reader, conns, path, topic, kind, count, ros1, typestore, progress) -> dict:
     """Decode every message of the topic into preallocated arrays (module docstring)."""
     floats = ColumnBuffer(count, 6)
-    stamps = ColumnBuffer(count, 2, np.int64)
+    stamps = ColumnBuffer(count, 3, np.int64)  # header stamp, record time, header.seq (ROS 1; else -1)
     report = Progress(f"{path} {topic}", count or None, progress)
     decoder = _Decoder(path, topic, ros1)
     raws, logs, frames = [], [], set()
@@ -333,7 +334,8 @@ class _Decoder:
                 # both serialisations put the stamp at byte 4 and the frame id's characters at byte 16
                 sec = _field(block, 4, order + ("u4" if self.ros1 else "i4")).astype(np.int64)
                 nsec = _field(block, 8, order + "u4").astype(np.int64)
-                stamps.extend(np.column_stack([sec * 1_000_000_000 + nsec, np.asarray(logs, dtype=np.int64)]))
+                seq = _field(block, 0, order + "u4").astype(np.int64) if self.ros1 else np.full(len(raws), -1)
+                stamps.extend(np.column_stack([sec * 1_000_000_000 + nsec, np.asarray(logs, dtype=np.int64), seq]))
                 frames.add(bytes(block[0, 16:16 + flen]).rstrip(b"\0"))
                 self.count += len(raws)
                 raws.clear()
@@ -345,7 +347,8 @@ class _Decoder:
             gyro = struct.unpack_from(order + "3d", raw, body + _GYRO_AT)
             sec, nsec = struct.unpack_from(order + ("II" if self.ros1 else "iI"), raw, 4)
             floats.extend(np.array([acc + gyro]))
-            stamps.extend(np.array([[sec * 1_000_000_000 + nsec, log_ns]], dtype=np.int64))
+            seq = struct.unpack_from(order + "I", raw, 0)[0] if self.ros1 else -1
+            stamps.extend(np.array([[sec * 1_000_000_000 + nsec, log_ns, seq]], dtype=np.int64))
             frames.add(raw[16:16 + flen].rstrip(b"\0"))
             self.count += 1
         raws.clear()
@@ -381,7 +384,7 @@ def _recording(path, topic, kind, decoded, time_source):
     acc, gyro = floats[:, :3], floats[:, 3:]
     check_finite(path, topic, acc, "linear_acceleration")
     check_finite(path, topic, gyro, "angular_velocity")
-    header_ns, log_ns = stamps[:, 0], stamps[:, 1]
+    header_ns, log_ns, seq = stamps[:, 0], stamps[:, 1], stamps[:, 2]
     order = np.arange(len(acc))
     frames = ", ".join(sorted(f.decode("utf-8", "replace") or "''" for f in decoded["frames"]))
     notes = [f"{kind}, topic {topic} (sensor_msgs/Imu, frame {frames}): {len(acc)} messages; "
@@ -393,7 +396,7 @@ def _recording(path, topic, kind, decoded, time_source):
         late = int(np.sum(np.diff(header_ns) < 0))
         if late:  # a bag is in record order: latency jitter can swap messages the sensor stamped in order
             order = np.argsort(header_ns, kind="stable")
-            acc, gyro, header_ns, log_ns = acc[order], gyro[order], header_ns[order], log_ns[order]
+            acc, gyro, header_ns, log_ns, seq = acc[order], gyro[order], header_ns[order], log_ns[order], seq[order]
             notes.append(f"{late} message(s) were recorded out of header-stamp order: sorted by header stamp")
         t = stamps_to_time(header_ns, path, f"topic {topic}: header.stamp",
                            "the driver's stamps are not in order; use the bag's record time (--time-source log)")
@@ -406,7 +409,11 @@ def _recording(path, topic, kind, decoded, time_source):
     note = clock_note(header_ns, log_ns, "header stamps", "bag record times")
     if note and np.any(header_ns != 0):
         notes.append(f"warning: {note}; {'header stamps used' if time_source == 'header' else 'record times used'}")
-    rec = make_recording(path, t=t, acc=acc, gyro=gyro, notes=notes, time_name=time_col[0], time_values=time_col[1])
+    # ROS 1 numbers each message in header.seq (a counter of the publisher's messages: one per sample);
+    # drivers that leave it 0 number nothing
+    counter = seq if np.all(seq >= 0) and looks_like_counter(seq) else None
+    rec = make_recording(path, t=t, acc=acc, gyro=gyro, notes=notes, time_name=time_col[0], time_values=time_col[1],
+                         counter=counter, counter_name="header.seq")
     return rec, order
 
 

@@ -22,11 +22,12 @@ import numpy as np
 from ..errors import RecordingError
 from ..recording import MIN_ROWS, Recording, intervals_from_labels
 from ..units import to_celsius, unit_in_name
+from .clock import clocked_time, is_counter_name, looks_like_counter
 from .inference import resolve_acceleration_unit, resolve_gyro_unit, time_seconds
 from .parsing import DECIMAL_COMMA, NUMBER, norm_name, parse_numbers, split_fields
 from .text import COMMENT_MARKERS, is_comment, load_text
 
-ROLES = ("t", "ax", "ay", "az", "gx", "gy", "gz", "temp", "pose")
+ROLES = ("t", "ax", "ay", "az", "gx", "gy", "gz", "temp", "pose", "counter")
 ACC_ROLES, GYRO_ROLES = ("ax", "ay", "az"), ("gx", "gy", "gz")
 #: Delimiters tried, in order of preference when two fit equally well.
 DELIMITERS = ("\t", ";", ",", "|", " ")
@@ -53,6 +54,8 @@ ALIASES = {
                   "gyroscope)",
     "temp": "temp, temperature, imu_temp, die_temp",
     "pose": "pose, pose_id (label of the known static pose of each sample; empty between poses)",
+    "counter": "INDEX, seq, counter, sample, n_samples, field.header.seq ... (a sample counter: the clock's "
+               "sample numbers, accelcal.formats.clock)",
 }
 
 
@@ -146,11 +149,15 @@ class _Table(NamedTuple):
 
 
 def read_table(path, *, text: str | None = None, columns=None, unit: str | None = None,
-               time_unit: str | None = None, rate: float | None = None, gyro_unit: str | None = None) -> Recording:
+               time_unit: str | None = None, rate: float | None = None, gyro_unit: str | None = None,
+               clock: str = "auto") -> Recording:
     """Read a delimited text table (the ``csv`` format; see the module docstring).
 
     ``gyro_unit`` (``rad/s``, ``deg/s``, ``counts``) is the unit of the gyro columns, if
-    any (default: the header's, else inferred from the values).
+    any (default: the header's, else inferred from the values).  ``clock``: ``'auto'``
+    times the samples by the sensor's clock fitted to the time stamps against the sample
+    counter (or the row index), ``'stamps'`` by the stamps as they are
+    (:mod:`accelcal.formats.clock`).
 
     Raises
     ------
@@ -197,8 +204,10 @@ def read_table(path, *, text: str | None = None, columns=None, unit: str | None 
         gyro, gyro_unit_name, note = resolve_gyro_unit(triad(GYRO_ROLES), units, gyro_unit, path)
         notes.append(note)
     t, tnote = time_seconds(column("t") if "t" in roles else None, rate, time_unit, units.get("t"), names, roles, dc,
-                            path, lines, tab.preamble, parsed=parsed("t") if "t" in roles else None)
-    notes.append(tnote)
+                            path, lines, tab.preamble, parsed=parsed("t") if "t" in roles else None,
+                            counter=_counter_label(names, roles))
+    t, cnotes = _sensor_clock(t, tnote, numbers, names, roles, units, clock, rate, lines, path)
+    notes += cnotes
     temp = None
     if "temp" in roles:
         temp = numbers("temp")
@@ -211,6 +220,29 @@ def read_table(path, *, text: str | None = None, columns=None, unit: str | None 
         time_column = (names[roles["t"]].strip() if names is not None else "t", column("t").astype(str))
     return Recording(t, acc, temp, str(path), intervals=iv, labels=labels, notes=tuple(n for n in notes if n),
                      unit=unit_name, time_column=time_column, gyro=gyro, gyro_unit=gyro_unit_name)
+
+
+def _counter_label(names, roles) -> str | None:
+    if "counter" not in roles:
+        return None
+    return f"counter {names[roles['counter']].strip()!r}" if names is not None else "the counter"
+
+
+def _sensor_clock(t, tnote, numbers, names, roles, units, clock, rate, lines, path):
+    """The times from the sensor's clock (:func:`accelcal.formats.clock.clocked_time`) and the notes."""
+    counter = None
+    if "counter" in roles:
+        counter = numbers("counter")
+        if not looks_like_counter(counter) and not units.get("counter_given"):
+            name = names[roles["counter"]].strip()
+            return t, [tnote, f"column {name!r} is not a sample counter (not integers going up): not used as one"]
+    name = names[roles["counter"]].strip() if "counter" in roles and names is not None else "counter"
+    timed_by_rate = "t" not in roles or rate is not None
+    t_new, notes = clocked_time(t, counter, counter_name=name, mode=clock, timed_by_rate=timed_by_rate,
+                                where=lambda i: f"line {lines[i]}", path=path)
+    if notes and not timed_by_rate and clock != "stamps":
+        tnote = re.sub(r": [0-9.e+-]+ Hz over ", ", ", tnote)  # the clock's note states the rate
+    return t_new, [tnote, *notes]
 
 
 def _numeric_block(tab: _Table):
@@ -361,6 +393,8 @@ def _map_columns(names, k: int, given: dict, path, required=ACC_ROLES) -> tuple[
                                          f"(found: {', '.join(stripped)[:150]})")
                 roles[role] = hits[0]
         _find_roles(stripped, roles, path)
+    if "counter" in given:
+        units["counter_given"] = True
     found = ", ".join(n.strip() for n in names)[:150] if names is not None else f"{k} unnamed columns"
     missing = [r for r in required if r not in roles]
     if missing:
@@ -384,7 +418,7 @@ def _map_columns(names, k: int, given: dict, path, required=ACC_ROLES) -> tuple[
         used[i] = role
     if names is not None:
         for role, i in roles.items():
-            kind = {"t": "time", "temp": "temperature", "pose": None}.get(
+            kind = {"t": "time", "temp": "temperature", "pose": None, "counter": None}.get(
                 role, "angular_rate" if role in GYRO_ROLES else "acceleration")
             if kind:
                 base, u = unit_in_name(names[i].strip(), kind)
@@ -420,6 +454,8 @@ def _find_roles(names, roles: dict, path) -> None:
                 cand["temp"].append(i)
         if norm_name(n) in _POSE:
             cand["pose"].append(i)
+        if is_counter_name(n):
+            cand["counter"].append(i)
     if not any(cand[a] for a in ("ax", "ay", "az")) and not any(r in roles for r in ("ax", "ay", "az")):
         for i, n in enumerate(names):  # plain x, y, z columns (FastAhrs 'x, y, z')
             if norm_name(n) in ("x", "y", "z") and i not in roles.values():
@@ -432,6 +468,8 @@ def _find_roles(names, roles: dict, path) -> None:
             # rostopic echo -p: %time is when the message was received, the header stamp
             # when the sensor sampled it
             hits = [i for i in hits if norm_name(names[i]) == "fieldheaderstamp"]
+        if role == "counter":
+            hits = hits[:1]  # the first counter; --columns counter=NAME chooses another
         if len(hits) > 1:
             raise RecordingError(f"{path}: {len(hits)} columns could be {role} ({', '.join(names[i] for i in hits)}); "
                                  f"choose one with --columns {role}=NAME")
