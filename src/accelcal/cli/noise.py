@@ -55,6 +55,10 @@ def _noise(args) -> int:
         raise AccelcalError("--intervals: the noise analysis takes the whole recording as one rest; cut the static "
                             "part out instead")
     rec = _read(args)
+    if args.no_gyro and rec.gyro is not None:  # the table's own gyro columns too, not only --gyro FILE
+        from dataclasses import replace
+
+        rec = replace(rec, gyro=None, gyro_unit=None, notes=rec.notes + ("gyro columns ignored (--no-gyro)",))
     cal = None
     if args.calibration is not None:
         from ..calibration import load_calibration

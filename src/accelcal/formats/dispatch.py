@@ -213,7 +213,10 @@ def _read_format(path: Path, fmt: Format, text: str | None, options: dict, notes
     if options["time_unit"] is not None and "time_unit" not in fmt.options:
         notes.append(f"--time-unit ignored: the {fmt.name} format defines its time")
     if options["gyro_unit"] is not None and "gyro_unit" not in fmt.options and rec.gyro is not None:
-        notes.append(f"--gyro-unit ignored: the {fmt.name} format defines its gyro's unit")
+        from .units_evidence import override_gyro_unit
+
+        rec, note = override_gyro_unit(rec, options["gyro_unit"], fmt.name)
+        notes.append(note)
     return rec
 
 

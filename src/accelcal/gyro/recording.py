@@ -30,7 +30,8 @@ def calibrate_recording_gyro(rec, acc_cal, poses, *, estimator: str = "gyro_iter
     Parameters
     ----------
     rec : Recording
-        With ``gyro`` (rad/s or counts: ``gyro_unit``).
+        With ``gyro`` (rad/s or counts: ``gyro_unit``; None: the unit is decided by the
+        session's motions, :mod:`accelcal.gyro.unit_evidence`, or refused in one line).
     acc_cal : Calibration
         The accelerometer's calibration of ``rec`` (its frame is the gyro's).
     poses : StaticPoses
@@ -52,7 +53,7 @@ def calibrate_recording_gyro(rec, acc_cal, poses, *, estimator: str = "gyro_iter
     """
     if rec.gyro is None:
         raise GyroInputError(f"{rec.source}: no gyro samples (gyro columns, or a file of its own: --gyro FILE)")
-    unit = rec.gyro_unit or "rad/s"
+    unit = rec.gyro_unit  # None: not stated; the session's motions or rotations decide it (unit_evidence)
     if rec.rotations:
         from .ferraris import calibrate_ferraris_session
 

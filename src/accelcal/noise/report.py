@@ -64,6 +64,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import AccelcalError, NotStaticError
+from ..formats.units_evidence import require_gyro_unit
 from .allan import DEFAULT_MIN_EDF, AllanVariance, allan_variance
 from .allan_fit import NoiseFit, bootstrap_fits, fit_avar_model_error, model_edf
 from .terms import TERMS, model_avar
@@ -175,9 +176,13 @@ def analyse_noise(rec, *, level: float = DEFAULT_LEVEL, n_boot: int = DEFAULT_N_
         The sensor moved (one line: how much, where, and what to record instead).
     NoiseAnalysisError
         Too short, a constant axis, bad settings.
+    UndecidedUnitError
+        A gyro whose unit neither the file nor the user states: a static record cannot
+        decide it (:mod:`accelcal.formats.units_evidence`).
     """
     if not 0 < level < 1 or n_boot < 50:
         raise NoiseAnalysisError(f"need 0 < level < 1 and n_boot >= 50, got level={level}, n_boot={n_boot}")
+    require_gyro_unit(rec, "a static record")  # no motion decides rad/s from deg/s: 57x
     t = np.asarray(rec.t, dtype=float)
     fs = 1.0 / float(np.median(np.diff(t)))
     warnings, notes = [], list(rec.notes)
@@ -191,7 +196,7 @@ def analyse_noise(rec, *, level: float = DEFAULT_LEVEL, n_boot: int = DEFAULT_N_
     sensors = {"accelerometer": _sensor("accelerometer", rec.acc, rec.unit or "counts", fs, level, n_boot, seeds[0],
                                         min_edf)}
     if rec.gyro is not None:
-        sensors["gyroscope"] = _sensor("gyroscope", rec.gyro, getattr(rec, "gyro_unit", None) or "rad/s", fs, level,
+        sensors["gyroscope"] = _sensor("gyroscope", rec.gyro, rec.gyro_unit, fs, level,
                                        n_boot, seeds[1], min_edf)
     duration = float(t[-1] - t[0]) + 1.0 / fs
     for s in sensors.values():
