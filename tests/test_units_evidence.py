@@ -177,3 +177,38 @@ def test_a_recording_holds_an_undecided_gyro_as_none():
     assert rec.gyro_unit is None
     with pytest.raises(UndecidedUnitError):
         require_gyro_unit(rec, "a static record")
+
+
+def test_apply_takes_an_undecided_unit_from_the_calibration_only_for_its_own_recording(session, tmp_path, capsys):
+    """calibrate decides deg/s from the motions; apply on the same file uses it; on another file of no
+    stated unit it refuses naming --gyro-unit (and writes nothing), and with it applies."""
+    path, _ = cells.write("csv", session, "deg/s", False, tmp_path)
+    cal, out = tmp_path / "cal.json", tmp_path / "corr.csv"
+    assert cli.main(["calibrate", str(path), "--g", str(cells.G), "--out", str(cal)]) == 0
+    assert "unit deg/s, decided by the motions" in capsys.readouterr().err
+    assert cli.main(["apply", str(cal), str(path), "--out", str(out)]) == 0
+    w = np.loadtxt(out, delimiter=",", skiprows=1, usecols=(4, 5, 6))
+    moving = np.linalg.norm(session["rates"], axis=1) > 0.2
+    assert np.linalg.norm(w[moving] - session["rates"][moving]) < 0.03 * np.linalg.norm(session["rates"][moving])
+    other = tmp_path / "other.csv"
+    other.write_text(path.read_text().replace("\n0,", "\n0.0,", 1))  # the same session, another file
+    capsys.readouterr()
+    out.unlink()
+    assert cli.main(["apply", str(cal), str(other), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "--gyro-unit" in err and len(err.strip().splitlines()) == 1 and not out.exists()
+    assert cli.main(["apply", str(cal), str(other), "--gyro-unit", "deg/s", "--out", str(out)]) == 0
+    np.testing.assert_allclose(np.loadtxt(out, delimiter=",", skiprows=1, usecols=(4, 5, 6)), w, atol=1e-9)
+
+
+@pytest.mark.parametrize("scale, unit", [(1.0, "g"), (9.80665, "m/s^2"), (1000.0, "mg"), (1.6, "counts"),
+                                         (4.0, "counts"), (415.0, "counts")])
+def test_the_acceleration_unit_is_the_one_whose_g_the_rests_read(scale, unit, session):
+    """Rests at 1 g in g, m/s^2 or mg (motions between them do not move the median); any other
+    magnitude is raw counts, whose scale the full models estimate: never a physical unit 1.6x off."""
+    from accelcal.formats.units_evidence import acceleration_unit_from_rests
+
+    acc = session["acc"] / session["g"] * scale
+    if unit == "counts" and scale > 100:
+        acc = np.round(acc + 32768.0)
+    assert acceleration_unit_from_rests(acc)[0] == unit

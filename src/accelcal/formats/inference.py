@@ -2,7 +2,8 @@
 
 Acceleration comes out in m/s² or raw counts (:mod:`accelcal.units`): a unit in the
 header (``acc_x [g]``, ``ax_mg``), ``unit=`` (which wins), or, failing both, the
-magnitude of the data (median ``|a|`` near 1 → g, near 9.8 → m/s², ...).  Angular rate
+magnitude of the rests (median ``|a|`` within 25 % of 1 g in g, m/s² or mg; anything
+else raw counts, whose scale the calibration estimates: :mod:`.units_evidence`).  Angular rate
 comes out in rad/s or raw counts, its unit from the header (``gyr_x [deg/s]``,
 ``gx_dps``) or ``gyro_unit=``; without either, integers are raw counts and anything else
 is left undecided (``gyro_unit`` None) for the motions to decide: the magnitude of the
@@ -24,7 +25,7 @@ from ..errors import RecordingError
 from ..recording import Recording
 from ..units import ANGULAR_RATE_UNITS, G0, acceleration_unit, angular_rate_unit, time_unit
 from .parsing import DECIMAL_COMMA, NUMBER, norm_name, parse_numbers
-from .units_evidence import gyro_unit_from_values
+from .units_evidence import acceleration_unit_from_rests, gyro_unit_from_values
 
 #: Canonical sampling rate the time-unit inference aims at [Hz] (typical IMU logging).
 TYPICAL_RATE_HZ = 100.0
@@ -59,17 +60,8 @@ def resolve_acceleration_unit(acc, units: dict, unit: str | None, path):
 
 
 def infer_acceleration_unit(acc, path):
-    norm = float(np.median(np.linalg.norm(acc, axis=1)))
-    integer = bool(np.all(acc == np.round(acc)))
-    if 0.3 <= norm <= 3.0:
-        u = "g"
-    elif 3.0 < norm <= 30.0:
-        u = "m/s^2"
-    elif 300.0 <= norm <= 3000.0 and not integer:
-        u = "mg"
-    else:
-        u = "counts"
-    acc, note = convert_acc(acc, u, f"inferred from the median |a| = {norm:.4g}; pass --unit if wrong")
+    u, how = acceleration_unit_from_rests(acc)  # the rests' magnitude decides (units_evidence)
+    acc, note = convert_acc(acc, u, how)
     return acc, "counts" if u == "counts" else "m/s^2", note
 
 

@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import RecordingError
-from ..units import ANGULAR_RATE_UNITS, angular_rate_unit
+from ..units import ANGULAR_RATE_UNITS, G0, angular_rate_unit
 
 #: Largest |value| above which integer gyro values are raw counts.
 COUNTS_ABOVE = 50
@@ -62,6 +62,37 @@ def override_gyro_unit(rec, gyro_unit: str, format_name: str):
             "follow its spec)")
 
 
+#: |a| at rest in g within which a physical unit is taken: a real accelerometer's scale error and
+#: the tilt of a mean stay far inside it; g, m/s^2 and mg are 9.8 and 100 apart.
+REST_BAND_G = (0.75, 1.25)
+#: Samples per block of the rest magnitude (the quietest half of the blocks are the rests).
+REST_BLOCK = 100
+
+
+def rest_magnitude(acc) -> float:
+    """Median |a| of the rests: the means of the quietest half of :data:`REST_BLOCK`-sample blocks."""
+    acc = np.asarray(acc, float)
+    m = len(acc) // REST_BLOCK
+    if m < 2:
+        return float(np.median(np.linalg.norm(acc, axis=1)))
+    blocks = acc[: m * REST_BLOCK].reshape(m, REST_BLOCK, 3)
+    var = blocks.var(axis=1).sum(axis=1)
+    quiet = var <= np.median(var)
+    return float(np.median(np.linalg.norm(blocks[quiet].mean(axis=1), axis=1)))
+
+
+def acceleration_unit_from_rests(acc) -> tuple[str, str]:
+    """The acceleration unit the rests' magnitude decides (|a| = 1 g in g, m/s^2 or mg, within
+    :data:`REST_BAND_G`), else raw counts (their scale is estimated, never taken as physical), and how."""
+    norm = rest_magnitude(acc)
+    integer = bool(np.all(np.asarray(acc) == np.round(acc)))
+    for u, one_g in (("g", 1.0), ("m/s^2", G0), ("mg", 1000.0)):
+        if REST_BAND_G[0] <= norm / one_g <= REST_BAND_G[1] and not (integer and u == "mg"):
+            return u, f"inferred from the median |a| = {norm:.4g} of the rests, {norm / one_g:.3f} g; pass --unit if wrong"
+    return "counts", (f"inferred from the median |a| = {norm:.4g} of the rests, 1 g in none of g, m/s^2, mg"
+                      f"{' (integers)' if integer else ''}: raw counts; pass --unit if wrong")
+
+
 def require_gyro_unit(rec, use: str) -> None:
     """One-line :class:`RecordingError` when ``rec`` has a gyro whose unit nothing decided.
 
@@ -78,4 +109,5 @@ class UndecidedUnitError(RecordingError):
     """A unit that neither the file, the user nor the evidence decides."""
 
 
-__all__ = ["COUNTS_ABOVE", "UNDECIDED_NOTE", "UndecidedUnitError", "gyro_unit_from_values", "require_gyro_unit"]
+__all__ = ["COUNTS_ABOVE", "REST_BAND_G", "REST_BLOCK", "SPEC_GYRO_UNITS", "acceleration_unit_from_rests",
+           "override_gyro_unit", "rest_magnitude", "UNDECIDED_NOTE", "UndecidedUnitError", "gyro_unit_from_values", "require_gyro_unit"]
