@@ -52,7 +52,10 @@ class Recording:
         Angular rate at the same instants as ``acc``, in ``gyro_unit``; None when the
         file has no gyroscope (or the reader does not read it).
     gyro_unit : {'rad/s', 'counts'} or None
-        Unit of ``gyro`` when known (data in deg/s are converted to rad/s when read).
+        Unit of ``gyro`` when known (data in deg/s are converted to rad/s when read); None
+        with a gyro: not stated, the values as written, for the motions of a calibration
+        session to decide (:mod:`accelcal.gyro.unit_evidence`; a static record cannot:
+        :func:`accelcal.formats.units_evidence.require_gyro_unit`).
     rotations : dict or None
         Known rotations of a Ferraris session (imucal's ``x_rot``, ``y_rot``, ``z_rot``
         sections): ``{label: (start, stop)}``, sample ranges; None when the file does not

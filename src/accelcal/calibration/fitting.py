@@ -9,6 +9,7 @@ import numpy as np
 
 from ..errors import (AccelcalError, DegeneratePosesError, NotConvergedError, NotPositiveDefiniteError,
                       TooFewPosesError)
+from ..one_orientation import check_several_orientations
 from ..registry import estimator, estimators
 
 from .base import Calibration
@@ -160,11 +161,16 @@ def calibrate_recording(rec, g: float, method: str = "full_lls", *, static: dict
     TooFewPosesError, DegeneratePosesError
         Not enough poses or orientations for the method (the message names the count and
         what to do).
+    OneOrientationError
+        The sensor keeps one orientation for the whole record (a static record), found
+        from its 1 s means before the detection (:mod:`accelcal.one_orientation`).
     """
     if not (np.isfinite(g) and 9.7 <= g <= 9.9):
         raise AccelcalError(f"g = {g:g}: the local gravity magnitude in m/s^2 (9.78-9.83 on the Earth's surface; "
                             "data in g are converted, pass --unit g)")
     est = estimator(method)
+    if rec.intervals is None:  # a static record: said at once, before detection walks it (one_orientation)
+        check_several_orientations(rec, est.min_poses, est.cli_name)
     poses, searched = _static_poses(rec, g, static or {}, max(est.min_poses, min_poses) if search else 0)
     prov = dict(provenance or {})
     prov.setdefault("static", {})

@@ -33,7 +33,8 @@ input: a table with time and three acceleration columns, e.g. a CSV with header
   comma, semicolon, tab or whitespace separated, decimal comma, # comments, gzip.
   temp      optional temperature column [degC]
   gyro      optional gyroscope columns (gx, gyr_x, wx, angular_velocity.x ...; rad/s,
-            deg/s or counts), or --gyro FILE: calibrated from the same session
+            deg/s or counts: from the header, --gyro-unit, or decided by the motions),
+            or --gyro FILE: calibrated from the same session
 {formats}
 units: acceleration in m/s^2, g, mg or raw counts (from the header, --unit, or the
   data's magnitude); g and mg are converted to m/s^2. --g is the local gravity in

@@ -54,7 +54,13 @@ def _gyro(cal, rec, args):
     from ..units import ANGULAR_RATE_UNITS
 
     made = cal.gyro.model.raw_unit
-    have = rec.gyro_unit or "rad/s"
+    have = rec.gyro_unit
+    if have is None:  # not stated: decided only where the calibration's own motions decided it
+        if cal.provenance.get("recording_sha256") != recording_sha256(args.recording):
+            raise AccelcalError(f"{args.recording}: the gyro's unit is not stated in the file and a recording other "
+                                f"than the calibration's own cannot be assumed to share its {made}; pass "
+                                f"--gyro-unit rad/s, deg/s or counts")
+        have = made
     if (made == "counts") != (have == "counts"):
         raise AccelcalError(f"the recording's gyro is read as {have} but {args.calibration}'s gyroscope was made from "
                             f"{made}: pass --gyro-unit {made}")

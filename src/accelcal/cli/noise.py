@@ -66,6 +66,10 @@ def _noise(args) -> int:
     if args.intervals is not None and (args.start is not None or args.end is not None):
         raise AccelcalError("--intervals chooses the rests already; give either --intervals or --start/--end")
     rec = _read(args)
+    if args.no_gyro and rec.gyro is not None:  # the table's own gyro columns too, not only --gyro FILE
+        from dataclasses import replace
+
+        rec = replace(rec, gyro=None, gyro_unit=None, notes=rec.notes + ("gyro columns ignored (--no-gyro)",))
     segments = _segments(args, rec)
     cal = None
     if args.calibration is not None:

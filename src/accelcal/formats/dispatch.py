@@ -228,7 +228,10 @@ def _read_format(path: Path, fmt: Format, text: str | None, options: dict, notes
     if options["clock"] is not None and "clock" not in fmt.options:
         notes.append(f"--clock ignored: the {fmt.name} format times its samples itself")
     if options["gyro_unit"] is not None and "gyro_unit" not in fmt.options and rec.gyro is not None:
-        notes.append(f"--gyro-unit ignored: the {fmt.name} format defines its gyro's unit")
+        from .units_evidence import override_gyro_unit
+
+        rec, note = override_gyro_unit(rec, options["gyro_unit"], fmt.name)
+        notes.append(note)
     return rec
 
 

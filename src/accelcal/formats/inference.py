@@ -2,11 +2,12 @@
 
 Acceleration comes out in m/s² or raw counts (:mod:`accelcal.units`): a unit in the
 header (``acc_x [g]``, ``ax_mg``), ``unit=`` (which wins), or, failing both, the
-magnitude of the data (median ``|a|`` near 1 → g, near 9.8 → m/s², ...).  Angular rate
+magnitude of the rests (median ``|a|`` within 25 % of 1 g in g, m/s² or mg; anything
+else raw counts, whose scale the calibration estimates: :mod:`.units_evidence`).  Angular rate
 comes out in rad/s or raw counts, its unit from the header (``gyr_x [deg/s]``,
-``gx_dps``), ``gyro_unit=``, or the values (integers → counts; a 99th percentile of
-``|ω|`` of :data:`DEG_S_ABOVE` or more → deg/s, hand motions reaching 10 rad/s = 573 deg/s
-being rare; else rad/s).  Time comes out
+``gx_dps``) or ``gyro_unit=``; without either, integers are raw counts and anything else
+is left undecided (``gyro_unit`` None) for the motions to decide: the magnitude of the
+values cannot tell rad/s from deg/s (:mod:`.units_evidence`).  Time comes out
 in seconds from the first sample: its unit from ``time_unit=``, the header
 (``time_ms``), or the values (epoch magnitudes; integer steps → the unit that makes the
 rate nearest 100 Hz), ISO 8601 date-times parsed, or ``rate=`` (time from the sample
@@ -24,11 +25,10 @@ from ..errors import RecordingError
 from ..recording import Recording
 from ..units import ANGULAR_RATE_UNITS, G0, acceleration_unit, angular_rate_unit, time_unit
 from .parsing import DECIMAL_COMMA, NUMBER, norm_name, parse_numbers
+from .units_evidence import acceleration_unit_from_rests, gyro_unit_from_values
 
 #: Canonical sampling rate the time-unit inference aims at [Hz] (typical IMU logging).
 TYPICAL_RATE_HZ = 100.0
-#: 99th percentile of |ω| at and above which gyro values without a unit are taken as deg/s.
-DEG_S_ABOVE = 10.0
 
 
 def convert_acc(acc, u: str, how: str):
@@ -60,17 +60,8 @@ def resolve_acceleration_unit(acc, units: dict, unit: str | None, path):
 
 
 def infer_acceleration_unit(acc, path):
-    norm = float(np.median(np.linalg.norm(acc, axis=1)))
-    integer = bool(np.all(acc == np.round(acc)))
-    if 0.3 <= norm <= 3.0:
-        u = "g"
-    elif 3.0 < norm <= 30.0:
-        u = "m/s^2"
-    elif 300.0 <= norm <= 3000.0 and not integer:
-        u = "mg"
-    else:
-        u = "counts"
-    acc, note = convert_acc(acc, u, f"inferred from the median |a| = {norm:.4g}; pass --unit if wrong")
+    u, how = acceleration_unit_from_rests(acc)  # the rests' magnitude decides (units_evidence)
+    acc, note = convert_acc(acc, u, how)
     return acc, "counts" if u == "counts" else "m/s^2", note
 
 
@@ -81,7 +72,8 @@ def convert_gyro(gyro, u: str, how: str):
 
 
 def resolve_gyro_unit(gyro, units: dict, gyro_unit: str | None, path):
-    """Angular rate in rad/s or counts, its unit name and a note saying where the unit came from."""
+    """Angular rate in rad/s or counts, its unit name and a note saying where the unit came from; the raw
+    values, unit None, when nothing but the motions can decide it (:mod:`.units_evidence`)."""
     header = units.get("gyro_units", {})
     if gyro_unit is not None:
         u = angular_rate_unit(gyro_unit)
@@ -96,18 +88,11 @@ def resolve_gyro_unit(gyro, units: dict, gyro_unit: str | None, path):
                                  "convert them to one unit or pass --gyro-unit")
         u, how = next(iter(header.values())), "from the header"
     else:
-        u, how = infer_gyro_unit(gyro)
+        u, how = gyro_unit_from_values(gyro)
+        if u is None:  # left to the evidence of the motions (units_evidence)
+            return gyro, None, how
     gyro, note = convert_gyro(gyro, u, how)
     return gyro, "counts" if u == "counts" else "rad/s", note
-
-
-def infer_gyro_unit(gyro) -> tuple[str, str]:
-    """The gyro unit from the values (module docstring) and how it was found."""
-    if np.all(gyro == np.round(gyro)) and np.abs(gyro).max() > 50:
-        return "counts", "inferred: integer values; pass --gyro-unit if wrong"
-    p99 = float(np.percentile(np.linalg.norm(gyro, axis=1), 99))
-    u = "deg/s" if p99 >= DEG_S_ABOVE else "rad/s"
-    return u, f"inferred from the 99th percentile |w| = {p99:.3g}; pass --gyro-unit if wrong"
 
 
 def with_inferred_unit(rec: Recording) -> Recording:

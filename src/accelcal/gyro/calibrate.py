@@ -42,6 +42,7 @@ from .model import RAW_UNITS, GyroModel
 from .rests import (bias_series, check_time_base, fit_bias, measuring_range, motion_bias_variance, rest_noise,
                     rest_statistics, sample_interval, saturated_samples)
 from .result import RULES, GyroCalibration, GyroQuality
+from .unit_evidence import unit_from_motions
 
 #: Total rotation [deg] about a gyro axis below which its column of C is not determined.
 MIN_AXIS_TURN_DEG = 5.0
@@ -223,7 +224,9 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
         The accelerometer's static poses (``intervals``, ``means``, ``mean_std``).
     accel : object with ``apply(raw) -> m/s²``
         The accelerometer calibration fitted to ``poses``.
-    raw_unit : {'rad/s', 'deg/s', 'counts'}
+    raw_unit : {'rad/s', 'deg/s', 'counts'} or None
+        None: not stated; the motions decide it (:mod:`accelcal.gyro.unit_evidence`), or
+        a one-line refusal.
     acc : array_like (n, 3), optional
         Raw accelerometer samples (needed with ``g_sensitivity``).
     t_gyro : array_like (n,), optional
@@ -290,8 +293,13 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
                   "more slowly between poses, or give the range with --gyro-range if it is wider than the data "
                   "suggest")
     ms = all_ms.subset(used)
-    nominal, nominal_from = _nominal(raw_unit, nominal_sensitivity, ms, integrator)
-    _check_nominal(ms, u, nominal, nominal_from)
+    if raw_unit is None and nominal_sensitivity is not None:
+        raw_unit = "counts"  # a sensitivity is counts per rad/s
+    if raw_unit is None:  # not stated: the motions decide it (unit_evidence)
+        raw_unit, nominal, nominal_from = unit_from_motions(ms, integrator, gyro)
+    else:
+        nominal, nominal_from = _nominal(raw_unit, nominal_sensitivity, ms, integrator)
+        _check_nominal(ms, u, nominal, nominal_from)
     _check_axes(ms, nominal, tb.h)
     fitter = est.load()
     if time_base not in ("auto", "index", "timestamps"):

@@ -168,6 +168,9 @@ def calibrate_ferraris_session(t, gyro, sections: dict, *, raw_unit: str = "deg/
         assumption).
     nominal_sensitivity : float, optional
         Raw units per rad/s (counts).
+    raw_unit : {'rad/s', 'deg/s', 'counts'} or None
+        None: not stated; the rotations' summed rate against their stated angles decides it
+        (:mod:`accelcal.gyro.unit_evidence`), or a one-line refusal.
 
     Returns
     -------
@@ -179,6 +182,7 @@ def calibrate_ferraris_session(t, gyro, sections: dict, *, raw_unit: str = "deg/
     from .model import RAW_UNITS, GyroModel
     from .rests import fit_bias, rest_noise, rest_statistics, sample_interval
     from .result import GyroQuality
+    from .unit_evidence import unit_from_rotations
 
     missing = [k for k in (*rest_names, *rotation_names) if k not in sections]
     if missing:
@@ -188,11 +192,16 @@ def calibrate_ferraris_session(t, gyro, sections: dict, *, raw_unit: str = "deg/
     tb = sample_interval(t)
     rs = rest_statistics(t, gyro, np.array([sections[k] for k in rest_names]))
     best = fit_bias(rs, "all")
+    segs = [gyro[slice(*sections[k])] - best.bias for k in rotation_names]
+    unit_from = "stated"
+    if raw_unit is None and nominal_sensitivity is not None:
+        raw_unit = "counts"  # a sensitivity is counts per rad/s
+    if raw_unit is None:  # not stated: the rotations of known angle decide it
+        raw_unit, unit_from = unit_from_rotations(segs, tb.h, angles_deg, gyro)
     nominal = 1.0 / float(nominal_sensitivity) if nominal_sensitivity is not None else RAW_UNITS[raw_unit]
     if nominal is None:
         raise RotationAngleError("raw counts need the nominal gyro sensitivity (--gyro-sensitivity) to check the "
                                  "rotation angles")
-    segs = [gyro[slice(*sections[k])] - best.bias for k in rotation_names]
     axes, axis_cov = None, None
     if accel is not None and acc is not None:
         from .calibrate import accel_directions
@@ -228,7 +237,8 @@ def calibrate_ferraris_session(t, gyro, sections: dict, *, raw_unit: str = "deg/
     settings = {"estimator": fit.estimator, "integrator": "sum", "bias_mode": "all", "nominal": nominal,
                 "time_base": {"h": tb.h, "rate": tb.rate, "jitter": tb.jitter}, "angles_deg": angles.tolist(),
                 "senses": fit.senses.tolist(), "nominal_angles_deg": fit.nominal_angles_deg.tolist(),
-                "axes": None if axes is None else np.asarray(axes).tolist(), "iterations": 1}
+                "axes": None if axes is None else np.asarray(axes).tolist(), "iterations": 1,
+                "nominal_from": f"unit {raw_unit}" if unit_from == "stated" else unit_from}
     return estimator(fit.estimator).load_calibration()(model, se, quality, {}, settings)
 
 

@@ -34,7 +34,8 @@ def calibrate_recording_gyro(rec, acc_cal, poses, *, estimator: str | None = Non
     Parameters
     ----------
     rec : Recording
-        With ``gyro`` (rad/s or counts: ``gyro_unit``).
+        With ``gyro`` (rad/s or counts: ``gyro_unit``; None: the unit is decided by the
+        session's motions, :mod:`accelcal.gyro.unit_evidence`, or refused in one line).
     acc_cal : Calibration
         The accelerometer's calibration of ``rec`` (its frame is the gyro's).
     poses : StaticPoses
@@ -57,7 +58,7 @@ def calibrate_recording_gyro(rec, acc_cal, poses, *, estimator: str | None = Non
     """
     if rec.gyro is None:
         raise GyroInputError(f"{rec.source}: no gyro samples (gyro columns, or a file of its own: --gyro FILE)")
-    unit = rec.gyro_unit or "rad/s"
+    unit = rec.gyro_unit  # None: not stated; the session's motions or rotations decide it (unit_evidence)
     entry, chosen_by = _estimator_for(rec, estimator)
     cal = _calibrate(rec, acc_cal, poses, entry.name, unit, nominal_sensitivity, gyro_range, g_sensitivity,
                      rotation_angles)

@@ -64,6 +64,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import AccelcalError, NotStaticError
+from ..formats.units_evidence import require_gyro_unit
 from .allan import DEFAULT_MIN_EDF, AllanVariance, allan_variance
 from .allan_fit import NoiseFit, bootstrap_fits, fit_avar_model_error, model_edf
 from .terms import TERMS, model_avar
@@ -180,9 +181,13 @@ def analyse_noise(rec, *, level: float = DEFAULT_LEVEL, n_boot: int = DEFAULT_N_
         The sensor moved (one line: how much, where, and what to record instead).
     NoiseAnalysisError
         Too short, a constant axis, bad settings.
+    UndecidedUnitError
+        A gyro whose unit neither the file nor the user states: a static record cannot
+        decide it (:mod:`accelcal.formats.units_evidence`).
     """
     if not 0 < level < 1 or n_boot < 50:
         raise NoiseAnalysisError(f"need 0 < level < 1 and n_boot >= 50, got level={level}, n_boot={n_boot}")
+    require_gyro_unit(rec, "a static record")  # no motion decides rad/s from deg/s: 57x
     t = np.asarray(rec.t, dtype=float)
     fs = 1.0 / float(np.median(np.diff(t)))
     parts = _parts(segments, len(t))
@@ -198,8 +203,8 @@ def analyse_noise(rec, *, level: float = DEFAULT_LEVEL, n_boot: int = DEFAULT_N_
     sensors = {"accelerometer": _sensor("accelerometer", [rec.acc[c] for c in cut], rec.unit or "counts", fs, level,
                                         n_boot, seeds[0], min_edf)}
     if rec.gyro is not None:
-        sensors["gyroscope"] = _sensor("gyroscope", [rec.gyro[c] for c in cut], getattr(rec, "gyro_unit", None) or
-                                       "rad/s", fs, level, n_boot, seeds[1], min_edf)
+        sensors["gyroscope"] = _sensor("gyroscope", [rec.gyro[c] for c in cut], rec.gyro_unit, fs, level, n_boot,
+                                       seeds[1], min_edf)
     duration = sum(float(t[b - 1] - t[a]) + 1.0 / fs for a, b in parts)
     if segments is not None:
         longest = max(float(t[b - 1] - t[a]) + 1.0 / fs for a, b in parts)
