@@ -7,6 +7,7 @@ import sys
 import time
 from pathlib import Path
 
+from ..errors import AccelcalError
 from ..registry import estimators
 from . import gyro
 from .common import (STANDARD_GRAVITY, _gravity, _nominal, _provenance, _rate_hint, _read, _reader_options,
@@ -43,10 +44,12 @@ def _calibrate(args) -> int:
 
     from ..calibration import calibrate_recording
     from ..calibration.summary import STANDARD_GRAVITY_SOURCE
-    from ..errors import RecordingError
+    from ..errors import RecordingError, TooFewPosesError
 
     t0 = time.perf_counter()
     rec = _read(args)
+    if rec.acc is None:
+        return _calibrate_gyro_only(args, rec, t0)
     rec = replace(rec, notes=rec.notes + (gyro.note_gyro(args, rec),))
     g = STANDARD_GRAVITY if args.g is None else args.g
     static = _static_settings(args, rec)
@@ -60,6 +63,12 @@ def _calibrate(args) -> int:
                                              min_poses=gyro.GYRO_MIN_RESTS if gyro.wants_gyro(args, rec) else 0)
         except RecordingError as e:
             raise RecordingError(f"{e}{_rate_hint(rec)}") from None
+        except TooFewPosesError as e:  # unnamed columns taken for ax, ay, az may be another sensor's
+            guess = next((n for n in rec.notes if n.startswith("no header: columns read as")), None)
+            if guess is None:
+                raise
+            raise TooFewPosesError(f"{e} [{guess.split(' (')[0]}: if they are a gyro's, pass --columns "
+                                   "gx=..,gy=..,gz=..]") from None
     if gyro.wants_gyro(args, rec):
         with _step("calibrating the gyroscope"):
             cal = replace(cal, gyro=gyro.calibrate(args, rec, cal, poses))
@@ -82,6 +91,26 @@ def _calibrate(args) -> int:
     _summary(cal, poses, rec, args)
     if cal.gyro is not None:
         print(cal.gyro.summary(), file=sys.stderr)
+    return 0
+
+
+def _calibrate_gyro_only(args, rec, t0) -> int:
+    """A recording without accelerometer: the gyro from its rotations of known angle, written
+    as a calibration file's ``gyroscope`` object (format 2) without the accelerometer's."""
+    from ..atomic import write_json_atomic
+    from ..calibration.base import FORMAT_VERSION
+    from ..jsonsafe import json_safe
+
+    if args.figures is not None or args.sensitivity is not None or args.zero is not None:
+        raise AccelcalError("--figures, --sensitivity and --zero concern the accelerometer; this recording has none "
+                            "(a gyro alone)")
+    with _step("finding the rotations and calibrating the gyroscope"):
+        cal = gyro.calibrate_gyro_only(args, rec)
+    out = {"format_version": FORMAT_VERSION, "sensor": "gyroscope", "accelerometer": None,
+           "gyroscope": cal.to_dict(), "notes": list(rec.notes), **_provenance(args, t0)}
+    write_json_atomic(args.out, json_safe(out))
+    lines = [f"read: {n}" for n in rec.notes if n]
+    print("\n".join(lines + [cal.summary(), f"written to {args.out}"]), file=sys.stderr)
     return 0
 
 

@@ -188,8 +188,10 @@ def analyse_noise(rec, *, level: float = DEFAULT_LEVEL, n_boot: int = DEFAULT_N_
                              "sensor at rest in one orientation for the whole recording (cut the static part out)")
     warnings += static["warnings"] + ([f"not static ({static['refuse']}): analysed anyway"] if static["refuse"] else [])
     seeds = np.random.SeedSequence(int(seed)).spawn(2)
-    sensors = {"accelerometer": _sensor("accelerometer", rec.acc, rec.unit or "counts", fs, level, n_boot, seeds[0],
-                                        min_edf)}
+    sensors = {}
+    if rec.acc is not None:  # None: a gyro-only recording
+        sensors["accelerometer"] = _sensor("accelerometer", rec.acc, rec.unit or "counts", fs, level, n_boot, seeds[0],
+                                           min_edf)
     if rec.gyro is not None:
         sensors["gyroscope"] = _sensor("gyroscope", rec.gyro, getattr(rec, "gyro_unit", None) or "rad/s", fs, level,
                                        n_boot, seeds[1], min_edf)
@@ -286,12 +288,13 @@ def _blocks(x: np.ndarray, fs: float) -> np.ndarray:
 
 
 def static_check(acc, gyro, fs: float) -> dict:
-    """Did the sensor move?  Tilt of the 1 s accelerometer means, departure of the 1 s gyro means, noisy blocks."""
-    b = _blocks(np.asarray(acc, dtype=float), fs)
+    """Did the sensor move?  Tilt of the 1 s accelerometer means, departure of the 1 s gyro means, noisy blocks
+    (of the accelerometer; of the gyro when there is no accelerometer)."""
+    b = _blocks(np.asarray(acc if acc is not None else gyro, dtype=float), fs)
     means = b.mean(axis=1)
     ref = np.median(means, axis=0)
     cos = means @ ref / (np.linalg.norm(means, axis=1) * np.linalg.norm(ref) + 1e-300)
-    tilt = np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
+    tilt = np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))) if acc is not None else np.zeros(len(means))
     var = b.var(axis=1).sum(axis=1)
     noisy = int(np.sum(var > NOISY_BLOCK_FACTOR * np.median(var)))
     out = {"block_s": b.shape[1] / fs, "max_tilt_deg": float(tilt.max()), "noisy_blocks": noisy,

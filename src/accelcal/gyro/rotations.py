@@ -1,0 +1,251 @@
+"""Rotations of known angle found in the gyro alone, and the gyro calibrated from them.
+
+A rate table (or a hand on a table) turns the sensor by a known angle about one axis
+between two rests, once about each axis; the runs may be recorded apart (the CTU rig: one
+``.mat`` variable per axis) or in one record.  Nothing marks where a rotation is, and
+there may be no accelerometer: the gyro says it.
+
+Rests and rotations, per run (:func:`find_rotations`):
+
+1. the run's quietest :data:`REFERENCE_S` (the least mean ``|ω|²``: a rate gyro's bias
+   is small beside a turn) gives a first bias and the noise of a moving mean of
+   :data:`SMOOTH_S`;
+2. the sensor turns where that moving mean departs from the first bias by more than
+   :data:`THRESHOLD` of its noise; turns less than :data:`MERGE_S` apart are one motion;
+3. the rests are the still stretches between motions (:data:`MIN_REST_S` or longer,
+   :data:`TRIM_S` cut at each end); the run's bias is their weighted mean
+   (:func:`accelcal.gyro.rests.fit_bias`), each run its own: a gyro's turn-on bias
+   differs from run to run (CTU: by up to 0.19 °/s, 0.5 % of a turn's sum);
+4. a motion that turns by :data:`MIN_ROTATION_DEG` or more by the nominal scale is a
+   rotation; its integration window reaches :data:`PAD_S` into the rests around it (the
+   bias is removed: the rests add only noise, and no slow start is cut off).
+
+The fit is :func:`accelcal.gyro.ferraris.fit_ferraris` with each rotation's nominal axis
+(its largest component) and its run's bias and bias variance: three rotations, one about
+each axis, determine the nine parameters exactly.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import NoMotionError, RotationAngleError, TooFewMotionsError
+
+#: Length of the quiet stretch that gives each run's first bias and noise [s].
+REFERENCE_S = 2.0
+#: Moving mean whose departure from the first bias marks a motion [s].
+SMOOTH_S = 0.25
+#: Departure, in standard deviations of that moving mean at rest, that is motion.
+THRESHOLD = 8.0
+#: Motions closer than this are one [s].
+MERGE_S = 1.0
+#: Shortest rest kept [s], and what is cut from its ends next to motion [s].
+MIN_REST_S, TRIM_S = 1.0, 0.25
+#: Smallest turn taken for a rotation of known angle [deg] (by the nominal scale).
+MIN_ROTATION_DEG = 30.0
+#: How far the integration window reaches into the rests around a rotation [s].
+PAD_S = 0.5
+
+
+@dataclass(frozen=True)
+class Rotation:
+    """One rotation found in the gyro."""
+
+    run: int
+    window: tuple[int, int]  #: integration window [start, stop), sample indices of the recording
+    motion: tuple[int, int]  #: where the sensor turns
+    axis: int  #: its largest component (0, 1, 2: x, y, z)
+    nominal_deg: float  #: its angle by the nominal scale, bias removed
+
+
+@dataclass(frozen=True)
+class RunRests:
+    """The rests of one run and the bias they give."""
+
+    run: tuple[int, int]
+    intervals: np.ndarray  #: (p, 2) [start, stop)
+    bias: np.ndarray  #: (3,)
+    bias_se: np.ndarray  #: (3,) inflated by the rests' scatter when it exceeds their errors
+    noise: np.ndarray  #: (3,) per-sample variance for sums (raw unit²)
+    excess: float  #: scatter of the run's rest means about its bias, in their errors (nan: one rest)
+
+
+def _segments(mask: np.ndarray) -> list[tuple[int, int]]:
+    """``[start, stop)`` of the runs of True."""
+    d = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
+    return list(zip(np.flatnonzero(d == 1).tolist(), np.flatnonzero(d == -1).tolist()))
+
+
+def _moving_mean(x: np.ndarray, m: int) -> np.ndarray:
+    """Centred moving mean of ``m`` samples (shorter at the ends)."""
+    c = np.concatenate([np.zeros((1, x.shape[1])), np.cumsum(x, axis=0)])
+    i = np.arange(len(x))
+    lo, hi = np.clip(i - m // 2, 0, len(x)), np.clip(i - m // 2 + m, 0, len(x))
+    return (c[hi] - c[lo]) / (hi - lo)[:, None]
+
+
+def _motions(g: np.ndarray, h: float) -> list[tuple[int, int]]:
+    """Where one run's sensor turns (steps 1-2 of the module docstring), run-relative."""
+    n = len(g)
+    w = int(min(max(round(REFERENCE_S / h), 10), max(n // 4, 10)))
+    m = int(max(round(SMOOTH_S / h), 3))
+    c = np.concatenate([[0.0], np.cumsum(np.sum(g * g, axis=1))])
+    i0 = int(np.argmin(c[w:] - c[:-w]))
+    ref = g[i0:i0 + w]
+    b0 = ref.mean(axis=0)
+    mm = _moving_mean(g - b0, m)
+    sd = np.std(_moving_mean(ref - b0, m)[m:-m] if w > 3 * m else mm[i0:i0 + w], axis=0)
+    sd = np.maximum(sd, 1e-12 * max(float(np.abs(g).max()), 1e-300))
+    moving = np.max(np.abs(mm) / sd, axis=1) > THRESHOLD
+    segs = _segments(moving)
+    merged: list[tuple[int, int]] = []
+    for a, b in segs:
+        if merged and a - merged[-1][1] < MERGE_S / h:
+            merged[-1] = (merged[-1][0], b)
+        else:
+            merged.append((a, b))
+    return [(max(a - m // 2, 0), min(b + m // 2, n)) for a, b in merged]
+
+
+def find_rotations(t, gyro, runs=None, *, nominal: float) -> tuple[list[Rotation], list[RunRests], list[str]]:
+    """The rotations and each run's rests (module docstring).
+
+    Parameters
+    ----------
+    t, gyro : array_like (n,), (n, 3)
+        Time [s] and raw gyro samples.
+    runs : array_like (k, 2), optional
+        Runs recorded apart (:attr:`~accelcal.recording.Recording.runs`); default one.
+    nominal : float
+        Nominal rad/s per raw unit (the angle of a motion, to tell rotations from jolts).
+
+    Returns
+    -------
+    rotations, rests per run, notes (motions too small to be rotations)
+    """
+    from .rests import fit_bias, rest_noise, rest_statistics, sample_interval
+
+    t, gyro = np.asarray(t, float), np.asarray(gyro, float)
+    runs = np.array([[0, len(t)]]) if runs is None else np.asarray(runs, int)
+    rotations, rests, notes = [], [], []
+    for k, (a, b) in enumerate(runs):
+        h = sample_interval(t[a:b]).h
+        motions = _motions(gyro[a:b], h)
+        still = np.ones(b - a, bool)
+        for s, e in motions:
+            still[s:e] = False
+        trim = int(round(TRIM_S / h))
+        iv = [(s + trim * (s > 0), e - trim * (e < b - a)) for s, e in _segments(still)]
+        iv = np.array([(a + s, a + e) for s, e in iv if e - s >= MIN_REST_S / h], dtype=np.int64).reshape(-1, 2)
+        if len(iv) == 0:
+            raise NoMotionError(f"run {k + 1} (samples {a}-{b}) has no rest of {MIN_REST_S:g} s or more: a rotation "
+                                "of known angle needs the sensor at rest before and after it (its bias)")
+        rs = rest_statistics(t, gyro, iv)
+        est = fit_bias(rs, "all")
+        excess = est.excess
+        rests.append(RunRests((int(a), int(b)), iv, est.bias, est.bias_se * (max(1.0, excess) if len(iv) > 1 else 1.0),
+                              rest_noise(rs), excess))
+        pad = int(round(PAD_S / h))
+        for s, e in motions:
+            lo = max(s - pad, 0)
+            hi = min(e + pad, b - a)
+            y = h * (gyro[a + lo:a + hi] - est.bias).sum(axis=0)
+            angle = float(np.rad2deg(abs(nominal) * np.linalg.norm(y)))
+            when = f"run {k + 1}, t = {t[a + s] - t[a]:.3g}-{t[a + e - 1] - t[a]:.3g} s"
+            if angle < MIN_ROTATION_DEG:
+                notes.append(f"a motion of {angle:.3g} deg ({when}) is not a rotation of known angle: left out")
+                continue
+            rotations.append(Rotation(k, (int(a + lo), int(a + hi)), (int(a + s), int(a + e)),
+                                      int(np.argmax(np.abs(y))), angle))
+    return rotations, rests, notes
+
+
+def angles_for(rotations: list[Rotation], angles_deg) -> np.ndarray:
+    """The stated angle of each rotation: one for all, three by axis (x, y, z: each rotation
+    takes its axis's), or one per rotation in time order."""
+    a = np.atleast_1d(np.asarray(angles_deg, float))
+    if a.size == 1:
+        return np.full(len(rotations), float(a[0]))
+    if a.size == 3:
+        return a[[r.axis for r in rotations]]
+    if a.size == len(rotations):
+        return a
+    raise RotationAngleError(f"{a.size} rotation angles for {len(rotations)} rotations: give one for all, three (one "
+                             "per axis x, y, z) or one per rotation in time order (--rotation-angle)")
+
+
+def calibrate_rotations(t, gyro, *, angles_deg, runs=None, raw_unit: str = "rad/s", nominal_sensitivity=None,
+                        angle_std_deg: float = 0.0, source: str = "the recording"):
+    """Calibrate a gyro from rotations of known angle found in it (module docstring).
+
+    Parameters
+    ----------
+    t, gyro : array_like (n,), (n, 3)
+        Time [s] and raw gyro samples (``raw_unit``: rad/s, or counts with ``nominal_sensitivity``).
+    angles_deg : float or sequence
+        The stated angles (:func:`angles_for`).
+    runs : array_like (k, 2), optional
+        Runs recorded apart, each with its own bias.
+    nominal_sensitivity : float, optional
+        Raw counts per rad/s.
+    angle_std_deg : float
+        Uncertainty of each stated angle [deg].
+
+    Returns
+    -------
+    GyroFerrarisCalibration
+        In the frame of the rotation axes (nominal: the sensor's x, y, z); bias: the
+        weighted mean of the runs' (each listed in ``settings['runs']``).
+    """
+    from .ferraris import N_ROTATIONS, ferraris_calibration, fit_ferraris
+    from .model import RAW_UNITS
+    from .rests import sample_interval
+
+    nominal = 1.0 / float(nominal_sensitivity) if nominal_sensitivity is not None else RAW_UNITS.get(raw_unit)
+    if nominal is None:
+        raise RotationAngleError("raw counts need the nominal gyro sensitivity (--gyro-sensitivity) to find the "
+                                 "rotations and check their angles")
+    t, gyro = np.asarray(t, float), np.asarray(gyro, float)
+    rotations, rests, notes = find_rotations(t, gyro, runs, nominal=nominal)
+    if not rotations:
+        raise NoMotionError(f"{source}: no rotation found (the gyro turns by less than {MIN_ROTATION_DEG:g} deg "
+                            "throughout): a gyro without accelerometer is calibrated from rotations of known angle, one "
+                            "about each axis; for the noise of a static record use accelcal noise")
+    axes = sorted({r.axis for r in rotations})
+    if len(rotations) < N_ROTATIONS or axes != [0, 1, 2]:
+        found = ", ".join(f"{r.nominal_deg:.0f} deg about {'xyz'[r.axis]}" for r in rotations)
+        raise TooFewMotionsError(f"{source}: rotations found: {found}; the gyro's 9 parameters need at least one about "
+                                 "each of x, y and z (record the missing ones)")
+    angles = angles_for(rotations, angles_deg)
+    h = float(np.mean([sample_interval(t[a:b]).h for a, b in (r.run for r in rests)]))
+    segs = [gyro[slice(*r.window)] - rests[r.run].bias for r in rotations]
+    noise = np.mean([r.noise for r in rests], axis=0)
+    fit = fit_ferraris(segs, h, angles, np.eye(3)[[r.axis for r in rotations]], nominal=nominal, y_var=noise,
+                       bias_var=np.array([rests[r.run].bias_se ** 2 for r in rotations]), angle_std_deg=angle_std_deg,
+                       names=tuple(f"{'xyz'[r.axis]} (run {r.run + 1})" for r in rotations))
+    w = 1.0 / np.array([r.bias_se ** 2 for r in rests])
+    bias = np.sum(w * np.array([r.bias for r in rests]), axis=0) / np.sum(w, axis=0)
+    spread = np.array([r.bias for r in rests]) - bias
+    chi2 = np.sum(spread ** 2 * w, axis=0)
+    bias_se = np.sqrt(1.0 / np.sum(w, axis=0)) * np.sqrt(np.maximum(1.0, chi2 / max(len(rests) - 1, 1)))
+    warnings = [f"the runs' biases differ by up to {np.max(np.ptp([r.bias for r in rests], axis=0)):.3g} {raw_unit} "
+                "(turn-on bias): each rotation had its own run's removed; the bias stated is their mean"] \
+        if len(rests) > 1 and np.any(chi2 > 4 * (len(rests) - 1)) else []
+    motions = {"t_start": [float(t[r.motion[0]]) for r in rotations], "t_end": [float(t[r.motion[1] - 1])
+                                                                               for r in rotations],
+               "window": [list(r.window) for r in rotations], "run": [r.run + 1 for r in rotations],
+               "axis": ["xyz"[r.axis] for r in rotations], "angle_deg": fit.angles_deg.tolist(),
+               "stated_deg": angles.tolist(), "used": [True] * len(rotations), "note": [""] * len(rotations)}
+    settings = {"bias_mode": "per run" if len(rests) > 1 else "all", "angles_deg": angles.tolist(),
+                "frame": "rotation axes", "axes": "nominal (each rotation's largest component)",
+                "time_base": {"h": h, "rate": 1.0 / h, "jitter": None},
+                "runs": [{"samples": list(r.run), "rests": r.intervals.tolist(), "bias": r.bias.tolist(),
+                          "bias_se": r.bias_se.tolist(), "rest_excess": r.excess} for r in rests],
+                "notes": notes}
+    return ferraris_calibration(fit, bias, bias_se, raw_unit, nominal, nominal_axes=True, settings=settings,
+                                motions=motions, warnings=warnings)
+
+
+__all__ = ["MIN_ROTATION_DEG", "Rotation", "RunRests", "angles_for", "calibrate_rotations", "find_rotations"]
