@@ -165,3 +165,44 @@ def test_ctu_agrees_with_its_scripts_logic_and_pooling_the_biases_does_not(ctu):
     assert [r["samples"] for r in per.settings["runs"]] == [[0, 4001], [4001, 8002], [8002, 12003]]
     pooled = calibrate_rotations(ctu.t, ctu.gyro, angles_deg=CTU_ANGLES)
     assert abs(pooled.model.T[2, 0] - per.model.T[2, 0]) > 4 * se_T[2, 0]
+
+
+class _Identity:
+    """An accelerometer calibration that leaves the samples as they are (m/s²)."""
+
+    def apply(self, raw):
+        return np.asarray(raw, float)
+
+
+def test_with_an_accelerometer_a_turn_about_the_vertical_has_gravity_for_its_axis():
+    """The turntable's axes tilted 1.5 deg from the sensor's: gravity measures them, so C comes
+    out in the accelerometer's frame; the nominal axes would put the tilt into T (26 mrad)."""
+    rng = np.random.default_rng(6)
+    tilt = np.deg2rad(1.5)
+    true_axes = np.array([[np.cos(tilt), np.sin(tilt), 0.0], [0.0, np.cos(tilt), np.sin(tilt)],
+                          [np.sin(tilt), 0.0, np.cos(tilt)]])
+    gyro, acc = [], []
+    for k, (axis, angle) in enumerate(zip(true_axes, (360.0, 365.0, 362.0))):
+        one = np.zeros(3)
+        one[k] = 1.0
+        omega = _run(k, angle, np.zeros(3), rng) @ C_TRUE.T  # a turn about e_k (and its noise), no bias
+        R = _rotation_onto(one, axis)  # turned onto the tilted axis
+        gyro.append((omega @ R.T) @ np.linalg.inv(C_TRUE).T + BIASES[k])
+        acc.append(9.81 * axis + 0.01 * rng.standard_normal((len(omega), 3)))
+    g, a = np.concatenate(gyro), np.concatenate(acc)
+    edges = np.cumsum([0] + [len(x) for x in gyro])
+    runs = np.column_stack([edges[:-1], edges[1:]])
+    t = np.arange(len(g)) / RATE
+    cal = calibrate_rotations(t, g, angles_deg=(360.0, 365.0, 362.0), runs=runs, accel=_Identity(), acc=a)
+    assert cal.settings["frame"] == "accelerometer frame"
+    assert np.all(np.abs((cal.model.C - C_TRUE) / cal.standard_errors["C"]) < 4.5)
+    nominal = calibrate_rotations(t, g, angles_deg=(360.0, 365.0, 362.0), runs=runs)
+    assert np.max(np.abs(nominal.model.C - C_TRUE)) > 0.02
+
+
+def _rotation_onto(u, v) -> np.ndarray:
+    """The rotation matrix turning unit vector ``u`` onto ``v``."""
+    c = np.cross(u, v)
+    s, d = np.linalg.norm(c), float(u @ v)
+    K = np.array([[0, -c[2], c[1]], [c[2], 0, -c[0]], [-c[1], c[0], 0]])
+    return np.eye(3) + K + K @ K * ((1 - d) / s ** 2 if s > 0 else 0.0)

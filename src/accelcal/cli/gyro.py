@@ -86,12 +86,12 @@ def calibrate(args, rec, cal, poses):
     if rng is not None and not rng[0] < rng[1]:
         raise AccelcalError(f"--gyro-range must be LO,HI with LO < HI, got {args.gyro_range!r}")
     angles = _angles(args)
-    if angles is not None and len(angles) not in (1, 3):
+    if angles is not None and rec.rotations and len(angles) not in (1, 3):
         raise AccelcalError(f"--rotation-angle must be 1 or 3 number(s) separated by commas, got {args.rotation_angle!r}")
     return calibrate_recording_gyro(rec, cal, poses, estimator=args.gyro_method,
                                     nominal_sensitivity=nominal_sensitivity(args.gyro_sensitivity), gyro_range=rng,
                                     g_sensitivity={"auto": "auto", "on": True, "off": False}[args.gyro_g_sensitivity],
-                                    rotation_angles=angles)
+                                    rotation_angles=angles, angle_std_deg=args.rotation_angle_std)
 
 
 def _angles(args):

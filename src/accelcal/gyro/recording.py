@@ -9,7 +9,9 @@ what ``accelcal calibrate`` does, for Python.
 
 The data decide the protocol, not a name: a recording that marks rotations of known angle
 (:attr:`Recording.rotations`, imucal's ``*_rot`` sections) is a Ferraris session
-(:func:`accelcal.gyro.ferraris.calibrate_ferraris_session`); any other is a multi-position
+(:func:`accelcal.gyro.ferraris.calibrate_ferraris_session`); one whose rotation angles are
+given but not marked has them found in the gyro, each run with its own bias
+(:func:`accelcal.gyro.rotations.calibrate_rotations`); any other is a multi-position
 session, calibrated from the motions between the accelerometer's rests
 (:func:`accelcal.gyro.calibrate.calibrate_gyro`).
 """
@@ -24,7 +26,7 @@ MIN_RESTS = 1 + max(e.min_poses for e in estimators("gyroscope", data="motions")
 
 
 def calibrate_recording_gyro(rec, acc_cal, poses, *, estimator: str = "gyro_iterative", nominal_sensitivity=None,
-                             gyro_range=None, g_sensitivity="auto", rotation_angles=None):
+                             gyro_range=None, g_sensitivity="auto", rotation_angles=None, angle_std_deg: float = 0.0):
     """The gyro of ``rec`` (module docstring).
 
     Parameters
@@ -42,8 +44,13 @@ def calibrate_recording_gyro(rec, acc_cal, poses, *, estimator: str = "gyro_iter
     gyro_range : (lo, hi), optional
         The measuring range in the raw unit.
     g_sensitivity : bool or 'auto'
-    rotation_angles : float or sequence of 3, optional
-        Ferraris sessions: the angle of each rotation [deg] (default 360).
+    rotation_angles : float or sequence, optional
+        Ferraris sessions: the angle of each rotation [deg] (default 360).  Given for a
+        recording without marked rotations: the rotations of known angle are found in the
+        gyro (:func:`accelcal.gyro.rotations.calibrate_rotations`) instead of the motions
+        between rests.
+    angle_std_deg : float
+        Uncertainty of each stated angle [deg].
 
     Returns
     -------
@@ -63,11 +70,14 @@ def calibrate_recording_gyro(rec, acc_cal, poses, *, estimator: str = "gyro_iter
         accel = {"accel": acc_cal, "acc": rec.acc} if acc_cal.model == "full" else {}
         return calibrate_ferraris_session(rec.t, rec.gyro, sections, raw_unit=unit,
                                           angles_deg=360.0 if rotation_angles is None else rotation_angles,
-                                          nominal_sensitivity=nominal_sensitivity, **accel)
-    if rotation_angles is not None:
-        raise RotationAngleError("--rotation-angle applies to a Ferraris session, whose rotations are marked "
-                                 "(imucal's *_rot sections: --intervals SECTION_LIST, or an annotated session); "
-                                 f"{rec.source} has none")
+                                          nominal_sensitivity=nominal_sensitivity, angle_std_deg=angle_std_deg, **accel)
+    if rotation_angles is not None:  # rotations of known angle, not marked: found in the gyro, each run its bias
+        from .rotations import calibrate_rotations
+
+        accel = {"accel": acc_cal, "acc": rec.acc} if acc_cal is not None and acc_cal.model == "full" else {}
+        return calibrate_rotations(rec.t, rec.gyro, angles_deg=rotation_angles, runs=rec.runs, raw_unit=unit,
+                                   nominal_sensitivity=nominal_sensitivity, angle_std_deg=angle_std_deg,
+                                   source=str(rec.source), **accel)
     from .calibrate import calibrate_gyro
 
     return calibrate_gyro(rec.t, rec.gyro, poses, acc_cal, raw_unit=unit, acc=rec.acc,

@@ -20,9 +20,13 @@ Rests and rotations, per run (:func:`find_rotations`):
    rotation; its integration window reaches :data:`PAD_S` into the rests around it (the
    bias is removed: the rests add only noise, and no slow start is cut off).
 
-The fit is :func:`accelcal.gyro.ferraris.fit_ferraris` with each rotation's nominal axis
-(its largest component) and its run's bias and bias variance: three rotations, one about
-each axis, determine the nine parameters exactly.
+The fit is :func:`accelcal.gyro.ferraris.fit_ferraris` with each rotation's axis and its
+run's bias and bias variance: three rotations, one about each axis, determine the nine
+parameters exactly.  The axis is the nominal one (the rotation's largest component: the
+frame is then that of the rotation axes), or, with a full accelerometer calibration, the
+gravity direction during the rotation when the data show a turn about the vertical (the
+calibrated specific force keeps its direction within :data:`VERTICAL_TOLERANCE_DEG`
+throughout the window): the frame is then the accelerometer's.
 """
 
 from __future__ import annotations
@@ -47,6 +51,9 @@ MIN_REST_S, TRIM_S = 1.0, 0.25
 MIN_ROTATION_DEG = 30.0
 #: How far the integration window reaches into the rests around a rotation [s].
 PAD_S = 0.5
+#: Largest angle [deg] between the 0.5 s means of the specific force during a rotation and
+#: their mean for the turn to be about the vertical (its axis then measured by gravity).
+VERTICAL_TOLERANCE_DEG = 3.0
 
 
 @dataclass(frozen=True)
@@ -176,8 +183,33 @@ def angles_for(rotations: list[Rotation], angles_deg) -> np.ndarray:
                              "per axis x, y, z) or one per rotation in time order (--rotation-angle)")
 
 
+def measured_axes(rotations: list[Rotation], accel, acc, h: float):
+    """The gravity direction of each rotation about the vertical (module docstring), its
+    covariance, and notes on the rotations whose axis stays nominal (None for those)."""
+    from .calibrate import accel_directions
+
+    acc = np.asarray(acc, float)
+    axes, covs, notes = [], [], []
+    k = max(int(round(0.5 / h)), 1)
+    for r in rotations:
+        seg = acc[slice(*r.window)]
+        blocks = seg[: len(seg) // k * k].reshape(-1, k, 3).mean(axis=1)
+        u, cov, _ = accel_directions(accel, np.vstack([seg.mean(axis=0), blocks]),
+                                     np.vstack([seg.std(axis=0, ddof=1) / np.sqrt(len(seg)), np.ones_like(blocks)]))
+        spread = float(np.rad2deg(np.arccos(np.clip(u[1:] @ u[0], -1.0, 1.0))).max())
+        if spread <= VERTICAL_TOLERANCE_DEG:
+            axes.append(u[0])
+            covs.append(cov[0])
+        else:
+            axes.append(None)
+            covs.append(None)
+            notes.append(f"the rotation about {'xyz'[r.axis]} tilts gravity by up to {spread:.3g} deg: not about the "
+                         "vertical, its axis is taken as nominal")
+    return axes, covs, notes
+
+
 def calibrate_rotations(t, gyro, *, angles_deg, runs=None, raw_unit: str = "rad/s", nominal_sensitivity=None,
-                        angle_std_deg: float = 0.0, source: str = "the recording"):
+                        angle_std_deg: float = 0.0, source: str = "the recording", accel=None, acc=None):
     """Calibrate a gyro from rotations of known angle found in it (module docstring).
 
     Parameters
@@ -192,12 +224,16 @@ def calibrate_rotations(t, gyro, *, angles_deg, runs=None, raw_unit: str = "rad/
         Raw counts per rad/s.
     angle_std_deg : float
         Uncertainty of each stated angle [deg].
+    accel, acc : optional
+        A full accelerometer calibration (``apply(raw) -> m/s²``) and the raw accelerometer
+        samples: rotations about the vertical get gravity as their axis (module docstring).
 
     Returns
     -------
     GyroFerrarisCalibration
-        In the frame of the rotation axes (nominal: the sensor's x, y, z); bias: the
-        weighted mean of the runs' (each listed in ``settings['runs']``).
+        In the frame of the rotation axes (nominal: the sensor's x, y, z), or the
+        accelerometer's when every axis is measured; bias: the weighted mean of the runs'
+        (each listed in ``settings['runs']``).
     """
     from .ferraris import N_ROTATIONS, ferraris_calibration, fit_ferraris
     from .model import RAW_UNITS
@@ -222,9 +258,16 @@ def calibrate_rotations(t, gyro, *, angles_deg, runs=None, raw_unit: str = "rad/
     h = float(np.mean([sample_interval(t[a:b]).h for a, b in (r.run for r in rests)]))
     segs = [gyro[slice(*r.window)] - rests[r.run].bias for r in rotations]
     noise = np.mean([r.noise for r in rests], axis=0)
-    fit = fit_ferraris(segs, h, angles, np.eye(3)[[r.axis for r in rotations]], nominal=nominal, y_var=noise,
-                       bias_var=np.array([rests[r.run].bias_se ** 2 for r in rotations]), angle_std_deg=angle_std_deg,
-                       names=tuple(f"{'xyz'[r.axis]} (run {r.run + 1})" for r in rotations))
+    axes, axis_cov = np.eye(3)[[r.axis for r in rotations]], None
+    if accel is not None and acc is not None:
+        found, covs, axis_notes = measured_axes(rotations, accel, acc, h)
+        notes = notes + axis_notes
+        if all(a is not None for a in found):
+            axes, axis_cov = np.array(found), np.array(covs)
+    fit = fit_ferraris(segs, h, angles, axes, nominal=nominal, y_var=noise,
+                       bias_var=np.array([rests[r.run].bias_se ** 2 for r in rotations]), axis_cov=axis_cov,
+                       angle_std_deg=angle_std_deg, names=tuple(f"{'xyz'[r.axis]} (run {r.run + 1})" for r in rotations))
+    measured = axis_cov is not None
     w = 1.0 / np.array([r.bias_se ** 2 for r in rests])
     bias = np.sum(w * np.array([r.bias for r in rests]), axis=0) / np.sum(w, axis=0)
     spread = np.array([r.bias for r in rests]) - bias
@@ -239,13 +282,15 @@ def calibrate_rotations(t, gyro, *, angles_deg, runs=None, raw_unit: str = "rad/
                "axis": ["xyz"[r.axis] for r in rotations], "angle_deg": fit.angles_deg.tolist(),
                "stated_deg": angles.tolist(), "used": [True] * len(rotations), "note": [""] * len(rotations)}
     settings = {"bias_mode": "per run" if len(rests) > 1 else "all", "angles_deg": angles.tolist(),
-                "frame": "rotation axes", "axes": "nominal (each rotation's largest component)",
+                "frame": "accelerometer frame" if measured else "rotation axes",
+                "axes": axes.tolist() if measured else "nominal (each rotation's largest component)",
                 "time_base": {"h": h, "rate": 1.0 / h, "jitter": None},
                 "runs": [{"samples": list(r.run), "rests": r.intervals.tolist(), "bias": r.bias.tolist(),
                           "bias_se": r.bias_se.tolist(), "rest_excess": r.excess} for r in rests],
                 "notes": notes}
-    return ferraris_calibration(fit, bias, bias_se, raw_unit, nominal, nominal_axes=True, settings=settings,
+    return ferraris_calibration(fit, bias, bias_se, raw_unit, nominal, nominal_axes=not measured, settings=settings,
                                 motions=motions, warnings=warnings)
 
 
-__all__ = ["MIN_ROTATION_DEG", "Rotation", "RunRests", "angles_for", "calibrate_rotations", "find_rotations"]
+__all__ = ["MIN_ROTATION_DEG", "VERTICAL_TOLERANCE_DEG", "Rotation", "RunRests", "angles_for", "calibrate_rotations",
+           "find_rotations", "measured_axes"]
