@@ -12,6 +12,8 @@ parametrisations), :mod:`~accelcal.gyro.integrate` (five integrators, the exact 
 :mod:`~accelcal.gyro.calibrate` (the whole session, its trust lines and typed errors,
 :mod:`~accelcal.gyro.errors`), :mod:`~accelcal.gyro.result` (``to_dict``/``from_dict``,
 ``summary()``), :mod:`~accelcal.gyro.ferraris` (rotations of known angle),
+:mod:`~accelcal.gyro.rotations` (rotations of known angle found in the gyro alone, each run
+its bias: ``calibrate_rotations(rec.t, rec.gyro, angles_deg=..., runs=rec.runs)``),
 :mod:`~accelcal.gyro.export` (IMU-TK's ``.calib`` and imucal's JSON),
 :mod:`~accelcal.gyro.recording` (a recording's gyro after its accelerometer, as the CLI),
 :mod:`~accelcal.gyro.simulate` (sessions with an exactly known rotation).  The static
@@ -31,6 +33,7 @@ _LAZY = {
     "integrate_intervals": "integrate", "integrate_sequential": "integrate",
     "imutk_files": "export", "imucal_json": "export", "calibration_imutk": "export", "calibration_imucal": "export",
     "calibrate_recording_gyro": "recording",
+    "calibrate_rotations": "rotations", "find_rotations": "rotations",
 }
 
 
