@@ -83,6 +83,23 @@ def test_a_struct_of_vectors_is_a_table_with_a_header(tmp_path):
     rec = read(path)
     np.testing.assert_allclose(rec.acc, acc, rtol=1e-12)
     assert rec.rate == pytest.approx(100.0)
+    gyro = 0.01 * rng.standard_normal((200, 3))
+    scipy.io.savemat(path, {"imu": {"t": np.arange(200) / 100.0, "acc": acc, "gyr": gyro}})  # triads: acc_x ...
+    rec = read(path, gyro_unit="rad/s")
+    assert "variable imu (200x7 values; columns t, acc_x, acc_y, acc_z, gyr_x, gyr_y, gyr_z)" in rec.notes
+    np.testing.assert_array_equal(rec.gyro, gyro)
+
+
+def test_column_vectors_side_by_side_are_a_table(tmp_path):
+    """MATLAB's import of a spreadsheet: one vector per column; the odd one out is left alone."""
+    rng = np.random.default_rng(5)
+    acc = _acc(rng)
+    path = tmp_path / "v.mat"
+    scipy.io.savemat(path, {"Time": np.arange(200) / 100.0, "AccX": acc[:, 0], "AccY": acc[:, 1], "AccZ": acc[:, 2],
+                            "Temp": np.ones(7), "unit": "m/s^2"})
+    rec = read(path)
+    np.testing.assert_array_equal(rec.acc, acc)
+    assert "variable vectors (200x4 values; columns Time, AccX, AccY, AccZ)" in rec.notes
 
 
 @pytest.mark.parametrize("content, message", [

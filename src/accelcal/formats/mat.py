@@ -2,8 +2,11 @@
 
 Version 5 files (MATLAB's default up to ``-v7``, and SciPy's ``savemat``) are read by
 :func:`scipy.io.loadmat`.  A numeric matrix is read as a table without header (its
-columns numbered: :mod:`.variables`); a struct whose fields are vectors of one length is
-read as a table whose header is the field names.  Version 7.3 files are HDF5, which
+columns numbered: :mod:`.variables`); a struct whose fields are vectors and n x 3
+triads of one length is read as a table whose header is the field names (a triad
+``acc`` gives ``acc_x, acc_y, acc_z``); column vectors of one length saved side by side
+(MATLAB's import of a spreadsheet: ``t, AccX, AccY, AccZ``) are the variable
+:data:`VECTORS`, a table headed by their names.  Version 7.3 files are HDF5, which
 needs h5py (not in accelcal's environment): they are refused in one line saying how to
 save a version 5 file instead.  IMU-TK's ``.mat`` files are ASCII tables despite the
 name: the sniff goes by the MAT-file header, so they stay tables.
@@ -19,6 +22,8 @@ from .variables import Variable, choose, describe, read_variables, usable
 #: The start of a MAT-file's 116-byte text header; the version and endian marks at bytes 124-127.
 HEADER = b"MATLAB "
 VERSIONS = {b"\x00\x01IM": 5, b"\x01\x00MI": 5, b"\x00\x02IM": 7.3, b"\x02\x00MI": 7.3}
+#: The name of the table made of a file's column vectors of one length.
+VECTORS = "vectors"
 
 
 def sniff(path, head: bytes) -> bool:
@@ -52,6 +57,10 @@ def read_mat(path, *, variable: str | None = None, columns=None, unit=None, time
             found[name] = describe(v.block.shape, "values" if v.names is None else f"columns {', '.join(v.names)}"[:80])
         else:
             found[name] = v
+    table = _vectors({k: v for k, v in content.items() if not k.startswith("__") and k not in matrices})
+    if table is not None and VECTORS not in found:
+        matrices[VECTORS] = table
+        found[VECTORS] = describe(table.block.shape, f"columns {', '.join(table.names)}"[:80])
     chosen = choose(path, found, variable, "MATLAB file")
     return read_variables(path, [matrices[n] for n in chosen], columns=columns, unit=unit, time_unit=time_unit,
                           rate=rate, gyro_unit=gyro_unit)
@@ -69,20 +78,44 @@ def _variable(name: str, value) -> Variable | str:
     return Variable(name, a.astype(float))
 
 
+def _columns(items) -> dict[str, np.ndarray]:
+    """``{column name: values}`` of named numeric vectors (n x 1, 1 x n) and triads (n x 3)."""
+    cols = {}
+    for name, value in items:
+        v = np.asarray(value)
+        if v.dtype.kind not in "biuf" or v.ndim != 2 or v.size == 0:
+            continue
+        if 1 in v.shape:
+            cols[name] = v.reshape(-1).astype(float)
+        elif v.shape[1] == 3 and v.shape[0] > 3:
+            cols.update({f"{name}_{a}": v[:, j].astype(float) for j, a in enumerate("xyz")})
+    return cols
+
+
 def _struct(name: str, a: np.ndarray) -> Variable | str:
-    """A 1x1 struct of numeric vectors of one length: a table with the field names as header."""
+    """A 1x1 struct of numeric vectors and triads of one length: a table with the field names as header."""
     if a.size != 1:
         return f"({describe(a.shape, 'struct array')})"
     rec = a.reshape(-1)[0]
-    cols, lengths = {}, set()
-    for field in a.dtype.names:
-        v = np.asarray(rec[field])
-        if v.dtype.kind in "biuf" and v.ndim == 2 and 1 in v.shape:
-            cols[field] = v.reshape(-1).astype(float)
-            lengths.add(v.size)
+    cols = _columns((field, rec[field]) for field in a.dtype.names)
+    lengths = {len(v) for v in cols.values()}
     if len(cols) < 3 or len(lengths) != 1 or not usable((lengths.pop(), len(cols))):
-        return f"(struct of {len(a.dtype.names)} fields, not 3 or more numeric vectors of one length)"
+        return f"(struct of {len(a.dtype.names)} fields, not 3 or more numeric columns of one length)"
     return Variable(name, np.column_stack(list(cols.values())), tuple(cols))
+
+
+def _vectors(content: dict) -> Variable | None:
+    """The file's column vectors of the most common length, side by side, if 3 or more."""
+    cols = {k: v for k, v in _columns((k, v) for k, v in content.items()
+                                       if np.asarray(v).dtype.names is None and 1 in np.shape(v)).items()}
+    if not cols:
+        return None
+    lengths = [len(v) for v in cols.values()]
+    n = max(set(lengths), key=lengths.count)
+    same = {k: v for k, v in cols.items() if len(v) == n}
+    if len(same) < 3 or not usable((n, len(same))):
+        return None
+    return Variable(VECTORS, np.column_stack(list(same.values())), tuple(same))
 
 
 def _kind(a: np.ndarray) -> str:
