@@ -123,6 +123,13 @@ def test_cli_calibrates_a_gyro_only_mat_file_run_by_run(tmp_path):
     se = np.array(g["standard_errors"]["C"])
     assert np.all(np.abs((np.array(g["model"]["C"]) - C_TRUE) / se) < 4.5)
     assert "scale factors [ppm]" in err and "run 3:" in err and "vs rotation axes" in err
+    from accelcal.calibration import load_calibration
+    from accelcal.calibration.base import CalibrationFileError
+    from accelcal.gyro.result import GyroCalibration
+
+    assert GyroCalibration.from_dict(g).to_dict() == g  # the gyroscope object reads back
+    with pytest.raises(CalibrationFileError, match="a gyroscope calibrated alone .* apply and export take"):
+        load_calibration(out)
 
 
 @pytest.mark.parametrize("args, message", [
