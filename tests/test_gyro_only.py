@@ -213,3 +213,30 @@ def _rotation_onto(u, v) -> np.ndarray:
     s, d = np.linalg.norm(c), float(u @ v)
     K = np.array([[0, -c[2], c[1]], [c[2], 0, -c[0]], [-c[1], c[0], 0]])
     return np.eye(3) + K + K @ K * ((1 - d) / s ** 2 if s > 0 else 0.0)
+
+
+def test_a_section_list_gives_the_ctu_scripts_windows_and_offsets_exactly(ctu, tmp_path):
+    """--intervals with the script's offsets (samples 1-2000 of each run) and windows (*_rot,
+    the README's, in samples of the joined runs): the script's logic from the command line."""
+    from accelcal_repro.gyro.ferraris_sessions import ctu_calibration
+
+    sections = {"x_p": (0, 2000), "x_rot": (2419, 2910), "y_p": (4001, 6001), "y_rot": (6565, 7121),
+                "z_p": (8002, 10002), "z_rot": (10976, 11502)}
+    path = tmp_path / "sections.json"
+    path.write_text(json.dumps({k: {"start": a, "end": b} for k, (a, b) in sections.items()}))
+    out = tmp_path / "ctu.json"
+    code, err = _cli("calibrate", CTU, "--variable", "x_rotation,y_rotation,z_rotation", "--columns", "gx=1,gy=2,gz=3",
+                     "--rate", "100", "--gyro-unit", "deg/s", "--rotation-angle", ",".join(map(str, CTU_ANGLES)),
+                     "--intervals", path, "--out", out)
+    assert code == 0, err
+    g = json.loads(out.read_text())["gyroscope"]
+    script = ctu_calibration(CTU).set_index("parameter")
+    scale = np.diag(np.array(g["model"]["C"])) - 1.0  # nominal 1 rad/s per rad/s
+    np.testing.assert_allclose(1e6 * scale, script.loc[["s_x", "s_y", "s_z"], "value"], rtol=1e-9)
+    assert g["motions"]["window"] == [[2419, 2910], [6565, 7121], [10976, 11502]]
+    sections["y_rot"] = (6565, 8100)  # into the third run
+    path.write_text(json.dumps({k: {"start": a, "end": b} for k, (a, b) in sections.items()}))
+    code, err = _cli("calibrate", CTU, "--variable", "x_rotation,y_rotation,z_rotation", "--columns", "gx=1,gy=2,gz=3",
+                     "--rate", "100", "--gyro-unit", "deg/s", "--rotation-angle", "360", "--intervals", path, "--out",
+                     tmp_path / "bad.json")
+    assert code == 2 and "spans two runs" in err and not (tmp_path / "bad.json").exists()

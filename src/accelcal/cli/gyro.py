@@ -117,9 +117,12 @@ def calibrate_gyro_only(args, rec):
     if angles is None:
         raise AccelcalError(f"{args.recording}: a gyro without accelerometer is calibrated from rotations of known "
                             "angle: give their angles with --rotation-angle DEG[,DEG,DEG] (one per axis x, y, z)")
+    # a section list (--intervals) gives the rotations' windows (*_rot) and the rests; else they are found
+    windows = None if not rec.rotations else sorted(rec.rotations.values())
     return calibrate_rotations(rec.t, rec.gyro, angles_deg=angles, runs=rec.runs, raw_unit=rec.gyro_unit or "rad/s",
                                nominal_sensitivity=nominal_sensitivity(args.gyro_sensitivity),
-                               angle_std_deg=args.rotation_angle_std, source=str(args.recording))
+                               angle_std_deg=args.rotation_angle_std, source=str(args.recording), windows=windows,
+                               rest_intervals=rec.intervals)
 
 
 def search_line(cal) -> str | None:

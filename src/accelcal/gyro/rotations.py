@@ -116,7 +116,8 @@ def _motions(g: np.ndarray, h: float) -> list[tuple[int, int]]:
     return [(max(a - m // 2, 0), min(b + m // 2, n)) for a, b in merged]
 
 
-def find_rotations(t, gyro, runs=None, *, nominal: float) -> tuple[list[Rotation], list[RunRests], list[str]]:
+def find_rotations(t, gyro, runs=None, *, nominal: float, windows=None,
+                   rest_intervals=None) -> tuple[list[Rotation], list[RunRests], list[str]]:
     """The rotations and each run's rests (module docstring).
 
     Parameters
@@ -127,46 +128,66 @@ def find_rotations(t, gyro, runs=None, *, nominal: float) -> tuple[list[Rotation
         Runs recorded apart (:attr:`~accelcal.recording.Recording.runs`); default one.
     nominal : float
         Nominal rad/s per raw unit (the angle of a motion, to tell rotations from jolts).
+    windows : sequence of (start, stop), optional
+        The rotations' integration windows as given (a section list's ``*_rot``), instead
+        of those found; each inside one run.
+    rest_intervals : array_like (p, 2), optional
+        The rests as given (a section list's other sections), instead of those found.
 
     Returns
     -------
     rotations, rests per run, notes (motions too small to be rotations)
     """
-    from .rests import fit_bias, rest_noise, rest_statistics, sample_interval
+    from .rests import sample_interval
 
     t, gyro = np.asarray(t, float), np.asarray(gyro, float)
     runs = np.array([[0, len(t)]]) if runs is None else np.asarray(runs, int)
     rotations, rests, notes = [], [], []
     for k, (a, b) in enumerate(runs):
         h = sample_interval(t[a:b]).h
-        motions = _motions(gyro[a:b], h)
+        motions = _motions(gyro[a:b], h) if windows is None or rest_intervals is None else []
+        rest = _run_rests(t, gyro, k, a, b, h, motions, rest_intervals)
+        rests.append(rest)
+        pad = int(round(PAD_S / h))
+        spans = [(max(s - pad, 0), min(e + pad, b - a), s, e) for s, e in motions] if windows is None else \
+            [(s - a, e - a, s - a, e - a) for s, e in windows if a <= s < b]
+        for lo, hi, s, e in spans:
+            if a + hi > b:
+                raise RotationAngleError(f"the rotation window {a + lo}-{a + hi} spans two runs; each rotation lies "
+                                         "inside one run (samples of the joined recording)")
+            y = h * (gyro[a + lo:a + hi] - rest.bias).sum(axis=0)
+            angle = float(np.rad2deg(abs(nominal) * np.linalg.norm(y)))
+            when = f"run {k + 1}, t = {t[a + s] - t[a]:.3g}-{t[a + e - 1] - t[a]:.3g} s"
+            if angle < MIN_ROTATION_DEG and windows is None:
+                notes.append(f"a motion of {angle:.3g} deg ({when}) is not a rotation of known angle: left out")
+                continue
+            rotations.append(Rotation(k, (int(a + lo), int(a + hi)), (int(a + s), int(a + e)),
+                                      int(np.argmax(np.abs(y))), angle))
+    return rotations, rests, notes
+
+
+def _run_rests(t, gyro, k: int, a: int, b: int, h: float, motions, given) -> RunRests:
+    """One run's rests (given, or between its motions) and the bias they give (step 3)."""
+    from .rests import fit_bias, rest_noise, rest_statistics
+
+    if given is not None:
+        iv = np.asarray(given, dtype=np.int64).reshape(-1, 2)
+        iv = iv[(iv[:, 0] >= a) & (iv[:, 1] <= b)]
+    else:
         still = np.ones(b - a, bool)
         for s, e in motions:
             still[s:e] = False
         trim = int(round(TRIM_S / h))
         iv = [(s + trim * (s > 0), e - trim * (e < b - a)) for s, e in _segments(still)]
         iv = np.array([(a + s, a + e) for s, e in iv if e - s >= MIN_REST_S / h], dtype=np.int64).reshape(-1, 2)
-        if len(iv) == 0:
-            raise NoMotionError(f"run {k + 1} (samples {a}-{b}) has no rest of {MIN_REST_S:g} s or more: a rotation "
-                                "of known angle needs the sensor at rest before and after it (its bias)")
-        rs = rest_statistics(t, gyro, iv)
-        est = fit_bias(rs, "all")
-        excess = est.excess
-        rests.append(RunRests((int(a), int(b)), iv, est.bias, est.bias_se * (max(1.0, excess) if len(iv) > 1 else 1.0),
-                              rest_noise(rs), excess))
-        pad = int(round(PAD_S / h))
-        for s, e in motions:
-            lo = max(s - pad, 0)
-            hi = min(e + pad, b - a)
-            y = h * (gyro[a + lo:a + hi] - est.bias).sum(axis=0)
-            angle = float(np.rad2deg(abs(nominal) * np.linalg.norm(y)))
-            when = f"run {k + 1}, t = {t[a + s] - t[a]:.3g}-{t[a + e - 1] - t[a]:.3g} s"
-            if angle < MIN_ROTATION_DEG:
-                notes.append(f"a motion of {angle:.3g} deg ({when}) is not a rotation of known angle: left out")
-                continue
-            rotations.append(Rotation(k, (int(a + lo), int(a + hi)), (int(a + s), int(a + e)),
-                                      int(np.argmax(np.abs(y))), angle))
-    return rotations, rests, notes
+    if len(iv) == 0:
+        raise NoMotionError(f"run {k + 1} (samples {a}-{b}) has no rest" + (" among the given intervals" if given
+                            is not None else f" of {MIN_REST_S:g} s or more") + ": a rotation of known angle needs "
+                            "the sensor at rest around it (its bias)")
+    rs = rest_statistics(t, gyro, iv)
+    est = fit_bias(rs, "all")
+    return RunRests((int(a), int(b)), iv, est.bias, est.bias_se * (max(1.0, est.excess) if len(iv) > 1 else 1.0),
+                    rest_noise(rs), est.excess)
 
 
 def angles_for(rotations: list[Rotation], angles_deg) -> np.ndarray:
@@ -209,7 +230,8 @@ def measured_axes(rotations: list[Rotation], accel, acc, h: float):
 
 
 def calibrate_rotations(t, gyro, *, angles_deg, runs=None, raw_unit: str = "rad/s", nominal_sensitivity=None,
-                        angle_std_deg: float = 0.0, source: str = "the recording", accel=None, acc=None):
+                        angle_std_deg: float = 0.0, source: str = "the recording", accel=None, acc=None,
+                        windows=None, rest_intervals=None):
     """Calibrate a gyro from rotations of known angle found in it (module docstring).
 
     Parameters
@@ -227,6 +249,8 @@ def calibrate_rotations(t, gyro, *, angles_deg, runs=None, raw_unit: str = "rad/
     accel, acc : optional
         A full accelerometer calibration (``apply(raw) -> m/s²``) and the raw accelerometer
         samples: rotations about the vertical get gravity as their axis (module docstring).
+    windows, rest_intervals : optional
+        The rotations' windows and the rests as given (:func:`find_rotations`).
 
     Returns
     -------
@@ -244,7 +268,8 @@ def calibrate_rotations(t, gyro, *, angles_deg, runs=None, raw_unit: str = "rad/
         raise RotationAngleError("raw counts need the nominal gyro sensitivity (--gyro-sensitivity) to find the "
                                  "rotations and check their angles")
     t, gyro = np.asarray(t, float), np.asarray(gyro, float)
-    rotations, rests, notes = find_rotations(t, gyro, runs, nominal=nominal)
+    rotations, rests, notes = find_rotations(t, gyro, runs, nominal=nominal, windows=windows,
+                                             rest_intervals=rest_intervals)
     if not rotations:
         raise NoMotionError(f"{source}: no rotation found (the gyro turns by less than {MIN_ROTATION_DEG:g} deg "
                             "throughout): a gyro without accelerometer is calibrated from rotations of known angle, one "
