@@ -179,4 +179,7 @@ def test_the_ctu_rates_read_as_three_runs():
     rec = read(path, variable="x_rotation,y_rotation,z_rotation", columns="gx=1,gy=2,gz=3", rate=100.0,
                gyro_unit="deg/s")
     assert rec.acc is None and rec.runs.tolist() == [[0, 4001], [4001, 8002], [8002, 12003]]
+    code, err = _cli("noise", path, "--variable", "x_rotation,y_rotation", "--columns", "gx=1,gy=2,gz=3", "--rate",
+                     "100", "--out", Path("/nonexistent/x.json"))
+    assert code == 2 and "2 runs recorded apart: one Allan deviation needs one uninterrupted record" in err
     assert np.rad2deg(rec.gyro[:, 0].max()) == pytest.approx(116.94, abs=0.01)
