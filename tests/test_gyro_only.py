@@ -240,3 +240,19 @@ def test_a_section_list_gives_the_ctu_scripts_windows_and_offsets_exactly(ctu, t
                      "--rate", "100", "--gyro-unit", "deg/s", "--rotation-angle", "360", "--intervals", path, "--out",
                      tmp_path / "bad.json")
     assert code == 2 and "spans two runs" in err and not (tmp_path / "bad.json").exists()
+
+
+def test_a_gyro_only_table_is_calibrated_where_it_was_refused(tmp_path):
+    """A CSV of t, gx, gy, gz (the CTU rotations as a user converts them) once stopped at 'no
+    column for ax, ay, az'; one run holding the three rotations has one bias, from all its rests."""
+    rng = np.random.default_rng(7)
+    runs, _ = _session(rng, [BIASES[0]] * 3)
+    g = np.rad2deg(np.concatenate(runs))
+    path, out = tmp_path / "rates.csv", tmp_path / "gyro.json"
+    np.savetxt(path, np.column_stack([np.arange(len(g)) / RATE, g]), delimiter=",", header="t,gx,gy,gz", comments="",
+               fmt="%.6f")
+    code, err = _cli("calibrate", path, "--gyro-unit", "deg/s", "--rotation-angle", "360,365,362", "--out", out)
+    assert code == 0, err
+    gyro = json.loads(out.read_text())["gyroscope"]
+    assert gyro["settings"]["bias_mode"] == "all" and len(gyro["settings"]["runs"][0]["rests"]) == 4
+    assert np.all(np.abs((np.array(gyro["model"]["C"]) - C_TRUE) / np.array(gyro["standard_errors"]["C"])) < 4.5)

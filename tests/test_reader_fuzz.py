@@ -46,7 +46,8 @@ READINGS = [("auto", False), *((name, False) for name in FORMATS),
 
 HEADERS = ["t,ax,ay,az", "time,acc_x,acc_y,acc_z", "timestamp;accX;accY;accZ", "TIME\tAX\tAY\tAZ", "t ax ay az",
            "time [ms],ax [g],ay [g],az [g]", "%time,field.linear_acceleration.x,field.linear_acceleration.y,"
-           "field.linear_acceleration.z", "x, y, z", "datetime,ax,ay,az", "", "a,b", "t,ax,ax,az", "pose,t,ax,ay,az"]
+           "field.linear_acceleration.z", "x, y, z", "datetime,ax,ay,az", "", "a,b", "t,ax,ax,az", "pose,t,ax,ay,az",
+           "t,gx,gy,gz"]
 JUNK = ["nan", "inf", "-inf", "", "1e400", "abc", "1,5", "--", "0x10", "1.2.3", "  ", "\x00", "é", "#", ">>>", ";",
         "\t", "1e-400", "9999999999999999999999", "-0", "+.5", "NaN"]
 

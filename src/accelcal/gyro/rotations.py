@@ -259,7 +259,7 @@ def calibrate_rotations(t, gyro, *, angles_deg, runs=None, raw_unit: str = "rad/
         accelerometer's when every axis is measured; bias: the weighted mean of the runs'
         (each listed in ``settings['runs']``).
     """
-    from .ferraris import N_ROTATIONS, ferraris_calibration, fit_ferraris
+    from .ferraris import ferraris_calibration, fit_ferraris
     from .model import RAW_UNITS
     from .rests import sample_interval
 
@@ -270,15 +270,7 @@ def calibrate_rotations(t, gyro, *, angles_deg, runs=None, raw_unit: str = "rad/
     t, gyro = np.asarray(t, float), np.asarray(gyro, float)
     rotations, rests, notes = find_rotations(t, gyro, runs, nominal=nominal, windows=windows,
                                              rest_intervals=rest_intervals)
-    if not rotations:
-        raise NoMotionError(f"{source}: no rotation found (the gyro turns by less than {MIN_ROTATION_DEG:g} deg "
-                            "throughout): a gyro without accelerometer is calibrated from rotations of known angle, one "
-                            "about each axis; for the noise of a static record use accelcal noise")
-    axes = sorted({r.axis for r in rotations})
-    if len(rotations) < N_ROTATIONS or axes != [0, 1, 2]:
-        found = ", ".join(f"{r.nominal_deg:.0f} deg about {'xyz'[r.axis]}" for r in rotations)
-        raise TooFewMotionsError(f"{source}: rotations found: {found}; the gyro's 9 parameters need at least one about "
-                                 "each of x, y and z (record the missing ones)")
+    _check_coverage(rotations, source)
     angles = angles_for(rotations, angles_deg)
     h = float(np.mean([sample_interval(t[a:b]).h for a, b in (r.run for r in rests)]))
     segs = [gyro[slice(*r.window)] - rests[r.run].bias for r in rotations]
@@ -293,14 +285,7 @@ def calibrate_rotations(t, gyro, *, angles_deg, runs=None, raw_unit: str = "rad/
                        bias_var=np.array([rests[r.run].bias_se ** 2 for r in rotations]), axis_cov=axis_cov,
                        angle_std_deg=angle_std_deg, names=tuple(f"{'xyz'[r.axis]} (run {r.run + 1})" for r in rotations))
     measured = axis_cov is not None
-    w = 1.0 / np.array([r.bias_se ** 2 for r in rests])
-    bias = np.sum(w * np.array([r.bias for r in rests]), axis=0) / np.sum(w, axis=0)
-    spread = np.array([r.bias for r in rests]) - bias
-    chi2 = np.sum(spread ** 2 * w, axis=0)
-    bias_se = np.sqrt(1.0 / np.sum(w, axis=0)) * np.sqrt(np.maximum(1.0, chi2 / max(len(rests) - 1, 1)))
-    warnings = [f"the runs' biases differ by up to {np.max(np.ptp([r.bias for r in rests], axis=0)):.3g} {raw_unit} "
-                "(turn-on bias): each rotation had its own run's removed; the bias stated is their mean"] \
-        if len(rests) > 1 and np.any(chi2 > 4 * (len(rests) - 1)) else []
+    bias, bias_se, warnings = session_bias(rests, raw_unit)
     motions = {"t_start": [float(t[r.motion[0]]) for r in rotations], "t_end": [float(t[r.motion[1] - 1])
                                                                                for r in rotations],
                "window": [list(r.window) for r in rotations], "run": [r.run + 1 for r in rotations],
@@ -317,5 +302,33 @@ def calibrate_rotations(t, gyro, *, angles_deg, runs=None, raw_unit: str = "rad/
                                 motions=motions, warnings=warnings)
 
 
+def _check_coverage(rotations: list[Rotation], source: str) -> None:
+    """At least one rotation about each axis, else one line saying what was found."""
+    from .ferraris import N_ROTATIONS
+
+    if not rotations:
+        raise NoMotionError(f"{source}: no rotation found (the gyro turns by less than {MIN_ROTATION_DEG:g} deg "
+                            "throughout): a gyro without accelerometer is calibrated from rotations of known angle, one "
+                            "about each axis; for the noise of a static record use accelcal noise")
+    if len(rotations) < N_ROTATIONS or sorted({r.axis for r in rotations}) != [0, 1, 2]:
+        found = ", ".join(f"{r.nominal_deg:.0f} deg about {'xyz'[r.axis]}" for r in rotations)
+        raise TooFewMotionsError(f"{source}: rotations found: {found}; the gyro's 9 parameters need at least one about "
+                                 "each of x, y and z (record the missing ones)")
+
+
+def session_bias(rests: list[RunRests], raw_unit: str):
+    """The bias stated for the session: the runs' weighted mean, its s.e. inflated by their
+    scatter (turn-on biases differ), and a warning when they differ beyond their errors."""
+    b = np.array([r.bias for r in rests])
+    w = 1.0 / np.array([r.bias_se ** 2 for r in rests])
+    bias = np.sum(w * b, axis=0) / np.sum(w, axis=0)
+    chi2 = np.sum((b - bias) ** 2 * w, axis=0)
+    bias_se = np.sqrt(1.0 / np.sum(w, axis=0)) * np.sqrt(np.maximum(1.0, chi2 / max(len(rests) - 1, 1)))
+    warnings = [f"the runs' biases differ by up to {np.max(np.ptp(b, axis=0)):.3g} {raw_unit} (turn-on bias): each "
+                "rotation had its own run's removed; the bias stated is their mean"] \
+        if len(rests) > 1 and np.any(chi2 > 4 * (len(rests) - 1)) else []
+    return bias, bias_se, warnings
+
+
 __all__ = ["MIN_ROTATION_DEG", "VERTICAL_TOLERANCE_DEG", "Rotation", "RunRests", "angles_for", "calibrate_rotations",
-           "find_rotations", "measured_axes"]
+           "find_rotations", "measured_axes", "session_bias"]
