@@ -256,3 +256,14 @@ def test_a_gyro_only_table_is_calibrated_where_it_was_refused(tmp_path):
     gyro = json.loads(out.read_text())["gyroscope"]
     assert gyro["settings"]["bias_mode"] == "all" and len(gyro["settings"]["runs"][0]["rests"]) == 4
     assert np.all(np.abs((np.array(gyro["model"]["C"]) - C_TRUE) / np.array(gyro["standard_errors"]["C"])) < 4.5)
+
+
+def test_a_unit_off_by_57_is_refused_by_the_stated_angles(tmp_path):
+    """The stated angles decide the unit: deg/s read as rad/s turns 57x too far: one line."""
+    rng = np.random.default_rng(8)
+    runs, _ = _session(rng, BIASES)
+    path = _mat(tmp_path, a=np.rad2deg(runs[0]), b=np.rad2deg(runs[1]), c=np.rad2deg(runs[2]))
+    code, err = _cli("calibrate", path, "--variable", "a,b,c", "--columns", "gx=1,gy=2,gz=3", "--rate", "100",
+                     "--gyro-unit", "rad/s", "--rotation-angle", "360,365,362", "--out", tmp_path / "g.json")
+    assert code == 2 and __import__("re").search(r"turns 20\d{3}\.\d deg", err) and "(--gyro-unit, --gyro-sens" in err
+    assert not (tmp_path / "g.json").exists()

@@ -116,7 +116,7 @@ def fit_ferraris(segments, h: float, angles_deg, axes=None, *, nominal: float = 
             raise RotationAngleError(
                 f"the {name} rotation turns {nominal_deg[j]:.1f} deg by the nominal gyro scale, not the stated "
                 f"{np.rad2deg(theta[j]):.1f} deg: check the rotation angle (--rotation-angle), the section of that "
-                "rotation in the section list, or the gyro unit/sensitivity")
+                "rotation in the section list, or the gyro unit (--gyro-unit, --gyro-sensitivity)")
     senses = np.where(np.sum(Y * A, axis=1) * nominal >= 0, 1.0, -1.0)
     target = (senses * theta)[:, None] * A
     P = Y @ np.linalg.inv(Y.T @ Y)  # C Yᵀ = targetᵀ in least squares; three rotations: P = Y⁻ᵀ, exact
