@@ -183,3 +183,23 @@ def test_the_ctu_rates_read_as_three_runs():
                      "100", "--out", Path("/nonexistent/x.json"))
     assert code == 2 and "2 runs recorded apart: one Allan deviation needs one uninterrupted record" in err
     assert np.rad2deg(rec.gyro[:, 0].max()) == pytest.approx(116.94, abs=0.01)
+
+
+def test_rds_and_several_r_variables(tmp_path):
+    """saveRDS's single object is named after the file; save()'s several are listed and chosen."""
+    import pandas as pd
+    import rdata
+
+    rng = np.random.default_rng(6)
+    acc = _acc(rng)
+    df = pd.DataFrame({"time": np.arange(200) / 100.0, "acc_x": acc[:, 0], "acc_y": acc[:, 1], "acc_z": acc[:, 2]})
+    rdata.write_rds(tmp_path / "one.rds", df)
+    rec = read(tmp_path / "one.rds")
+    assert detect_format(tmp_path / "one.rds") == "rda" and "variable one (200x4 values; columns time, acc_x, acc_y, " \
+        "acc_z)" in rec.notes
+    np.testing.assert_array_equal(rec.acc, acc)
+    rdata.write_rda(tmp_path / "two.RData", {"a": df, "b": df.iloc[::2].reset_index(drop=True), "n": np.arange(3.0)},
+                    compression="bzip2")
+    with pytest.raises(RecordingError, match=r"2 variables could be the recording: a, b; choose one with --variable"):
+        read(tmp_path / "two.RData")
+    assert read(tmp_path / "two.RData", variable="b").n == 100
