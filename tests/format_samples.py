@@ -139,5 +139,40 @@ def ardupilot(rng) -> bytes:
                                                 gyro))
 
 
+def _gyro_deg_s(rng) -> np.ndarray:
+    """A gyro at rest in deg/s, biased enough that its unit is read from the values (>= 10 deg/s)."""
+    return np.array([12.0, -3.0, 5.0]) + 0.2 * rng.standard_normal((ROWS, 3))
+
+
+def mat(rng) -> bytes:
+    """A MATLAB v5 file (SciPy's savemat): a struct of named vectors t_s, ax_mps2..az_mps2,
+    gx_dps..gz_dps (units in the names), and a char variable that is not a recording."""
+    import scipy.io
+
+    acc, gyro = specific_force(rng), _gyro_deg_s(rng)
+    cols = {"t_s": np.arange(ROWS) / RATE_HZ, **{f"a{a}_mps2": acc[:, j] for j, a in enumerate("xyz")},
+            **{f"g{a}_dps": gyro[:, j] for j, a in enumerate("xyz")}}
+    out = io.BytesIO()
+    scipy.io.savemat(out, {"imu": {k: v[:, None] for k, v in cols.items()}, "sensor": "test unit"})
+    return out.getvalue()
+
+
+def rda(rng) -> bytes:
+    """An R data file (rdata's writer, gzip): a data frame 't [s]', 'ax [m/s^2]'.., 'gx [deg/s]'.."""
+    import tempfile
+    from pathlib import Path
+
+    import pandas as pd
+    import rdata
+
+    acc, gyro = specific_force(rng), _gyro_deg_s(rng)
+    df = pd.DataFrame({"t [s]": np.arange(ROWS) / RATE_HZ, **{f"a{a} [m/s^2]": acc[:, j] for j, a in enumerate("xyz")},
+                       **{f"g{a} [deg/s]": gyro[:, j] for j, a in enumerate("xyz")}})
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "sample.rda"
+        rdata.write_rda(path, {"imu": df})
+        return path.read_bytes()
+
+
 SAMPLES = {"block-log": block_log, "mpu6050": mpu6050, "imucal": imucal, "imucal-annotated": imucal_annotated,
-           "csv": csv, "imutk": imutk, "ros": ros, "px4": px4, "ardupilot": ardupilot}
+           "csv": csv, "imutk": imutk, "ros": ros, "px4": px4, "ardupilot": ardupilot, "mat": mat, "rda": rda}

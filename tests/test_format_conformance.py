@@ -102,12 +102,12 @@ def test_options_a_reader_does_not_take_are_applied_or_refused(name, sample):
     fmt = FORMATS[name]
     path = sample(name)
     if "columns" not in fmt.options:
-        with pytest.raises(RecordingError, match="--columns applies to the csv format"):
+        with pytest.raises(RecordingError, match="--columns applies to the csv(, mat or rda)? formats?, not to"):
             read(path, format=name, columns="t=1,ax=2,ay=3,az=4")
     if "time_unit" not in fmt.options:
         assert f"--time-unit ignored: the {name} format defines its time" in read(path, format=name,
                                                                                   time_unit="ms").notes
-    for option, value in (("topic", "/imu"), ("instance", 0), ("time_source", "log")):
+    for option, value in (("topic", "/imu"), ("instance", 0), ("time_source", "log"), ("variable", "imu")):
         if option not in fmt.options:
             with pytest.raises(RecordingError, match=f"{OPTION_FLAGS[option]} applies to the .* not to {name}"):
                 read(path, format=name, **{option: value})

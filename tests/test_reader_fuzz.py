@@ -46,7 +46,8 @@ READINGS = [("auto", False), *((name, False) for name in FORMATS),
 
 HEADERS = ["t,ax,ay,az", "time,acc_x,acc_y,acc_z", "timestamp;accX;accY;accZ", "TIME\tAX\tAY\tAZ", "t ax ay az",
            "time [ms],ax [g],ay [g],az [g]", "%time,field.linear_acceleration.x,field.linear_acceleration.y,"
-           "field.linear_acceleration.z", "x, y, z", "datetime,ax,ay,az", "", "a,b", "t,ax,ax,az", "pose,t,ax,ay,az"]
+           "field.linear_acceleration.z", "x, y, z", "datetime,ax,ay,az", "", "a,b", "t,ax,ax,az", "pose,t,ax,ay,az",
+           "t,gx,gy,gz"]
 JUNK = ["nan", "inf", "-inf", "", "1e400", "abc", "1,5", "--", "0x10", "1.2.3", "  ", "\x00", "é", "#", ">>>", ";",
         "\t", "1e-400", "9999999999999999999999", "-0", "+.5", "NaN"]
 
@@ -141,9 +142,13 @@ def damaged_files(draw, fmt: str | None = None) -> bytes:
 
 
 def _check_recording(rec, fmt: str, strict: bool) -> None:
-    assert rec.acc.ndim == 2 and rec.acc.shape == (rec.n, 3) and rec.n >= MIN_ROWS
-    assert np.all(np.isfinite(rec.acc)) and np.all(np.isfinite(rec.t)) and np.all(np.diff(rec.t) > 0)
-    assert rec.unit in ((None, "m/s^2", "counts") if strict else ("m/s^2", "counts"))
+    assert rec.n >= MIN_ROWS and np.all(np.isfinite(rec.t)) and np.all(np.diff(rec.t) > 0)
+    if rec.acc is None:  # a gyro-only recording: its gyro, no acceleration unit
+        assert not strict and rec.unit is None and rec.gyro is not None
+    else:
+        assert rec.acc.ndim == 2 and rec.acc.shape == (rec.n, 3) and np.all(np.isfinite(rec.acc))
+        assert rec.unit in ((None, "m/s^2", "counts") if strict else ("m/s^2", "counts"))
+    assert rec.gyro is None or (rec.gyro.shape == (rec.n, 3) and np.all(np.isfinite(rec.gyro)))
     assert rec.temp is None or (rec.temp.shape == (rec.n,) and np.all(np.isfinite(rec.temp)))
     if fmt != "auto" and not FORMATS[fmt].intervals:
         assert rec.intervals is None, f"{fmt} does not declare known intervals"

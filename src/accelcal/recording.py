@@ -26,8 +26,9 @@ class Recording:
     ----------
     t : ndarray, shape (n,)
         Time [s], strictly increasing.
-    acc : ndarray, shape (n, 3)
-        Specific force in the file's unit (m/s² or raw counts).
+    acc : ndarray, shape (n, 3), or None
+        Specific force in the file's unit (m/s² or raw counts); None for a gyro-only
+        recording (a rate table's rotations: then ``gyro`` is required and ``unit`` None).
     temp : ndarray, shape (n,) or None
         Temperature [°C] if recorded.
     source : str
@@ -67,6 +68,10 @@ class Recording:
     precalibrated : str or None
         What these values are, when the file says someone calibrated them already (a PX4
         ``sensor_combined``); ``accelcal apply`` refuses to correct them a second time unless told.
+    runs : ndarray of int, shape (k, 2), or None
+        Separately recorded runs joined into one recording (``[start, stop)``, sorted,
+        covering every sample; several variables of one ``.mat`` file): each rests on its
+        own, so each has its own bias, and no motion spans two.  None: one run.
     """
 
     t: np.ndarray
@@ -83,14 +88,19 @@ class Recording:
     rotations: dict | None = None
     device_id: str | None = None
     precalibrated: str | None = None
+    runs: np.ndarray | None = None
 
     def __post_init__(self):
         t = np.array(self.t, dtype=float)
-        acc = np.array(self.acc, dtype=float)
+        if self.acc is None and (self.gyro is None or self.unit is not None):
+            raise RecordingError(f"{self.source}: a recording without accelerometer needs gyroscope data "
+                                 "(and no acceleration unit)")
+        acc = None if self.acc is None else np.array(self.acc, dtype=float)
         temp = None if self.temp is None else np.array(self.temp, dtype=float)
-        if t.ndim != 1 or acc.shape != (t.size, 3) or (temp is not None and temp.shape != t.shape):
+        if t.ndim != 1 or (acc is not None and acc.shape != (t.size, 3)) or (temp is not None and
+                                                                              temp.shape != t.shape):
             raise RecordingError(
-                f"{self.source}: inconsistent shapes t{t.shape}, acc{acc.shape}"
+                f"{self.source}: inconsistent shapes t{t.shape}, acc{None if acc is None else acc.shape}"
                 + ("" if temp is None else f", temp{temp.shape}"))
         gyro = _check_gyro(self.gyro, self.gyro_unit, t.size, self.source)
         intervals, labels = _check_intervals(self.intervals, self.labels, t.size, self.source)
@@ -105,6 +115,7 @@ class Recording:
         object.__setattr__(self, "labels", labels)
         object.__setattr__(self, "notes", tuple(self.notes))
         object.__setattr__(self, "rotations", _check_rotations(self.rotations, t.size, self.source))
+        object.__setattr__(self, "runs", _check_runs(self.runs, t.size, self.source))
         if self.unit not in (None, "m/s^2", "counts"):
             raise RecordingError(f"{self.source}: unit {self.unit!r}; a Recording holds m/s^2 or counts "
                                  "(convert g and mg when reading)")
@@ -160,6 +171,17 @@ def _check_gyro(gyro, unit: str | None, n: int, source: str):
         raise RecordingError(f"{source}: gyroscope unit {unit!r}; a Recording holds rad/s or counts "
                              "(convert deg/s when reading)")
     return gyro
+
+
+def _check_runs(runs, n: int, source: str):
+    """Runs as a (k, 2) int array of consecutive ranges covering ``[0, n)`` (or None)."""
+    if runs is None:
+        return None
+    r = np.array(runs, dtype=np.int64).reshape(-1, 2)
+    if len(r) == 0 or r[0, 0] != 0 or r[-1, 1] != n or np.any(r[1:, 0] != r[:-1, 1]) or np.any(r[:, 1] <= r[:, 0]):
+        raise RecordingError(f"{source}: runs {r.tolist()} are not consecutive ranges covering the {n} samples")
+    r.setflags(write=False)
+    return r
 
 
 def _check_rotations(rotations, n: int, source: str):

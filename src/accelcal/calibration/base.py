@@ -451,6 +451,10 @@ def load_calibration(path) -> Calibration:
 def _from_dict(d, source: str) -> Calibration:
     if not isinstance(d, dict):
         raise CalibrationFileError(f"{source}: not a calibration (expected a JSON object)")
+    if d.get("sensor") == "gyroscope" and d.get("accelerometer", 1) is None:
+        raise CalibrationFileError(f"{source}: a gyroscope calibrated alone (no accelerometer): apply and export take "
+                                   "a calibration with an accelerometer; its model is the file's 'gyroscope' object "
+                                   "(accelcal.gyro.result.GyroCalibration.from_dict)")
     try:
         if "model_after" in d and "cal_type" not in d:
             return _from_discrepancy(d)

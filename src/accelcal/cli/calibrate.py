@@ -7,6 +7,7 @@ import sys
 import time
 from pathlib import Path
 
+from ..errors import AccelcalError
 from ..registry import estimators
 from . import gyro
 from .common import (STANDARD_GRAVITY, _gravity, _nominal, _provenance, _rate_hint, _read, _reader_options,
@@ -46,10 +47,12 @@ def _calibrate(args) -> int:
 
     from ..calibration import calibrate_recording
     from ..calibration.summary import STANDARD_GRAVITY_SOURCE
-    from ..errors import AccelcalError, RecordingError
+    from ..errors import AccelcalError, RecordingError, TooFewPosesError
 
     t0 = time.perf_counter()
     rec = _read(args)
+    if rec.acc is None:
+        return _calibrate_gyro_only(args, rec, t0)
     rec = replace(rec, notes=rec.notes + (gyro.note_gyro(args, rec),))
     g = STANDARD_GRAVITY if args.g is None else args.g
     static = _static_settings(args, rec)
@@ -63,6 +66,14 @@ def _calibrate(args) -> int:
                                              min_poses=gyro.GYRO_MIN_RESTS if gyro.wants_gyro(args, rec) else 0)
         except RecordingError as e:
             raise RecordingError(f"{e}{_rate_hint(rec)}{_source_hint(rec)}") from None
+        except TooFewPosesError as e:  # unnamed columns taken for ax, ay, az may be another sensor's
+            guess = next((n for n in rec.notes if n.startswith("no header: columns read as")), None)
+            if guess is not None:
+                raise TooFewPosesError(f"{e} [{guess.split(' (')[0]}: if they are a gyro's, pass --columns "
+                                       "gx=..,gy=..,gz=..]") from None
+            if not rec.precalibrated:
+                raise
+            raise type(e)(f"{e}{_source_hint(rec)}") from None
         except AccelcalError as e:
             if not rec.precalibrated:
                 raise
@@ -113,6 +124,26 @@ def _source_hint(rec) -> str:
     return (f" [the data were read from {rec.precalibrated}: a flight log, not a calibration session; calibrate from "
             "static poses with the raw sensor_accel logged (PX4's logger profile: sensor comparison or thermal "
             "calibration)]")
+
+
+def _calibrate_gyro_only(args, rec, t0) -> int:
+    """A recording without accelerometer: the gyro from its rotations of known angle, written
+    as a calibration file's ``gyroscope`` object (format 2) without the accelerometer's."""
+    from ..atomic import write_json_atomic
+    from ..calibration.base import FORMAT_VERSION
+    from ..jsonsafe import json_safe
+
+    if args.figures is not None or args.sensitivity is not None or args.zero is not None:
+        raise AccelcalError("--figures, --sensitivity and --zero concern the accelerometer; this recording has none "
+                            "(a gyro alone)")
+    with _step("finding the rotations and calibrating the gyroscope"):
+        cal = gyro.calibrate_gyro_only(args, rec)
+    out = {"format_version": FORMAT_VERSION, "sensor": "gyroscope", "accelerometer": None,
+           "gyroscope": cal.to_dict(), "notes": list(rec.notes), **_provenance(args, t0)}
+    write_json_atomic(args.out, json_safe(out))
+    lines = [f"read: {n}" for n in rec.notes if n]
+    print("\n".join(lines + [cal.summary(), f"written to {args.out}"]), file=sys.stderr)
+    return 0
 
 
 def _with_provenance(cal, extra: dict):

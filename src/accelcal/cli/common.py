@@ -110,6 +110,9 @@ def _reader_options(p) -> None:
     r.add_argument("--intervals", type=Path, metavar="FILE",
                    help="known static intervals: imucal section list (JSON), JSON [[start, end], ...] in s, "
                         "or CSV with start,end columns (s, or start_index,end_index in samples)")
+    r.add_argument("--variable", metavar="NAME[,NAME...]",
+                   help="MATLAB and R files: the variable that is the recording (default the only one); several: runs "
+                        "of one session recorded apart, each with its own rest and bias")
     r.add_argument("--gyro", type=Path, metavar="FILE",
                    help="the gyroscope in a file of its own, sampled with the accelerometer (IMU-TK's t x y z)")
     r.add_argument("--gyro-unit", metavar="UNIT", help="gyro unit: rad/s, deg/s or counts (overrides the header)")
@@ -155,7 +158,7 @@ def _read(args):
         return read(args.recording, format=args.format, columns=args.columns, unit=args.unit,
                     time_unit=args.time_unit, rate=args.rate, intervals=args.intervals,
                     gyro=None if args.no_gyro else args.gyro, gyro_unit=args.gyro_unit, topic=args.topic,
-                    instance=args.instance, time_source=args.time_source, clock=args.clock)
+                    instance=args.instance, time_source=args.time_source, clock=args.clock, variable=args.variable)
 
 
 def _static_settings(args, rec) -> dict:

@@ -34,8 +34,11 @@ def add_gyro_options(c) -> None:
                    help="fit a bias proportional to the specific force: auto (when the rest means show one, F test), "
                         "on, off (IMU-TK's model has none; default auto)")
     g.add_argument("--rotation-angle", metavar="DEG[,DEG,DEG]",
-                   help="Ferraris sessions (rotations marked *_rot): the angle of each rotation, one for all or one "
-                        "per axis x,y,z (default 360)")
+                   help="rotations of known angle: the angle of each, one for all or one per axis x,y,z (or one per "
+                        "rotation in time order). Ferraris sessions (rotations marked *_rot): default 360; a gyro "
+                        "without accelerometer (its rotations found in it, each run with its own bias): required")
+    g.add_argument("--rotation-angle-std", type=float, default=0.0, metavar="DEG",
+                   help="uncertainty of each stated angle [deg] (default 0), carried into the standard errors")
 
 
 def _numbers(text: str, what: str, count: tuple[int, ...]) -> list[float]:
@@ -84,15 +87,44 @@ def calibrate(args, rec, cal, poses):
     rng = None if args.gyro_range is None else _numbers(args.gyro_range, "--gyro-range", (2,))
     if rng is not None and not rng[0] < rng[1]:
         raise AccelcalError(f"--gyro-range must be LO,HI with LO < HI, got {args.gyro_range!r}")
-    angles = None
-    if args.rotation_angle is not None:
-        angles = _numbers(args.rotation_angle, "--rotation-angle", (1, 3))
-        if not all(0 < a <= 3600 for a in angles):
-            raise AccelcalError(f"--rotation-angle: angles in degrees, positive, got {args.rotation_angle!r}")
+    angles = _angles(args)
+    if angles is not None and rec.rotations and len(angles) not in (1, 3):
+        raise AccelcalError(f"--rotation-angle must be 1 or 3 number(s) separated by commas, got {args.rotation_angle!r}")
     return calibrate_recording_gyro(rec, cal, poses, estimator=args.gyro_method,
                                     nominal_sensitivity=nominal_sensitivity(args.gyro_sensitivity), gyro_range=rng,
                                     g_sensitivity={"auto": "auto", "on": True, "off": False}[args.gyro_g_sensitivity],
-                                    rotation_angles=angles)
+                                    rotation_angles=angles, angle_std_deg=args.rotation_angle_std)
+
+
+def _angles(args):
+    if args.rotation_angle is None:
+        return None
+    angles = _numbers(args.rotation_angle, "--rotation-angle", tuple(range(1, 100)))
+    if not all(0 < a <= 3600 for a in angles):
+        raise AccelcalError(f"--rotation-angle: angles in degrees, positive, got {args.rotation_angle!r}")
+    if not (math.isfinite(args.rotation_angle_std) and args.rotation_angle_std >= 0):
+        raise AccelcalError(f"--rotation-angle-std must be >= 0 degrees, got {args.rotation_angle_std}")
+    return angles
+
+
+def calibrate_gyro_only(args, rec):
+    """The gyro of a recording without accelerometer, from the rotations of known angle found in it
+    (:func:`accelcal.gyro.rotations.calibrate_rotations`: each run with its own bias)."""
+    from ..gyro.rotations import calibrate_rotations
+
+    if args.no_gyro:
+        raise AccelcalError(f"{args.recording}: --no-gyro, but the recording has no accelerometer: nothing to "
+                            "calibrate")
+    angles = _angles(args)
+    if angles is None:
+        raise AccelcalError(f"{args.recording}: a gyro without accelerometer is calibrated from rotations of known "
+                            "angle: give their angles with --rotation-angle DEG[,DEG,DEG] (one per axis x, y, z)")
+    # a section list (--intervals) gives the rotations' windows (*_rot) and the rests; else they are found
+    windows = None if not rec.rotations else sorted(rec.rotations.values())
+    return calibrate_rotations(rec.t, rec.gyro, angles_deg=angles, runs=rec.runs, raw_unit=rec.gyro_unit or "rad/s",
+                               nominal_sensitivity=nominal_sensitivity(args.gyro_sensitivity),
+                               angle_std_deg=args.rotation_angle_std, source=str(args.recording), windows=windows,
+                               rest_intervals=rec.intervals)
 
 
 def search_line(cal) -> str | None:
@@ -104,5 +136,5 @@ def search_line(cal) -> str | None:
             "(the most precise full-model fit; --threshold, --window, --min-duration to choose yourself)")
 
 
-__all__ = ["GYRO_MIN_RESTS", "add_gyro_options", "calibrate", "nominal_sensitivity", "note_gyro", "search_line",
+__all__ = ["GYRO_MIN_RESTS", "add_gyro_options", "calibrate", "calibrate_gyro_only", "nominal_sensitivity", "note_gyro", "search_line",
            "wants_gyro"]

@@ -40,7 +40,7 @@ CLOCK_MODES = ("auto", "stamps")
 def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit: str | None = None,
          time_unit: str | None = None, rate: float | None = None, intervals=None, gyro=None,
          gyro_unit: str | None = None, topic: str | None = None, instance: int | None = None,
-         time_source: str | None = None, clock: str | None = None):
+         time_source: str | None = None, clock: str | None = None, variable: str | None = None):
     """Read an accelerometer recording (and its gyroscope, when the file or ``gyro`` has one).
 
     Parameters
@@ -82,6 +82,10 @@ def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit
     time_source : {'header', 'log'}, optional
         Logs: the sensor's own stamps (``'header'``, the default) or the time the log
         recorded each message.
+    variable : str, optional
+        Files of named variables (MATLAB ``.mat``, R data): the variable that is the
+        recording; several, comma-separated, are runs of one session recorded apart
+        (:attr:`~accelcal.recording.Recording.runs`).  Default the only usable one.
 
     clock : {'auto', 'stamps'}, optional
         Tables: time the samples by the sensor's clock, fitted to the time stamps against
@@ -98,7 +102,8 @@ def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit
 
     path = Path(path)
     options = {"columns": columns, "unit": unit, "time_unit": time_unit, "rate": rate, "gyro_unit": gyro_unit,
-               "topic": topic, "instance": instance, "time_source": time_source, "clock": clock}
+               "topic": topic, "instance": instance, "time_source": time_source, "clock": clock,
+               "variable": variable}
     if strict:
         return checked_recording(_read_strict(path, format, {**options, "intervals": intervals, "gyro": gyro}))
     fmt = None if format == "auto" else format_named(format)
@@ -206,11 +211,12 @@ def _sniff_text(path: Path, text: str) -> Format:
 def _read_format(path: Path, fmt: Format, text: str | None, options: dict, notes: list[str]):
     """Run ``fmt``'s reader with the options it takes; apply the others (see
     :data:`~accelcal.formats.registry.READING_OPTIONS`); notes on the file go to ``notes``."""
-    for option in ("columns", *LOG_OPTIONS):
+    for option in ("columns", "variable", *LOG_OPTIONS):
         if options[option] is not None and option not in fmt.options:
             takers = [f.name for f in FORMATS.values() if option in f.options]
-            fix = f"pass --format {FALLBACK} to read it as a plain table" if option == "columns" else \
-                "a file of one sensor and one clock has no choice to make"
+            fix = {"columns": f"pass --format {FALLBACK} to read it as a plain table",
+                   "variable": "a file of one table has no variables to choose from"}.get(
+                option, "a file of one sensor and one clock has no choice to make")
             raise RecordingError(f"{path}: {OPTION_FLAGS[option]} applies to the {_either(takers)} format"
                                  f"{'s' if len(takers) > 1 else ''}, not to {fmt.name} ({fix})")
     reader = fmt.load_reader(path)
@@ -244,6 +250,10 @@ def _with_unit(rec, unit: str | None, path):
     """Apply ``unit=`` to a format reader's recording (converting g, mg to m/s²)."""
     from .inference import convert_acc, with_inferred_unit
 
+    if rec.acc is None:  # a gyro-only recording
+        if unit is not None:
+            raise RecordingError(f"{path}: --unit {unit} given, but the recording has no accelerometer (gyro only)")
+        return rec
     if unit is None:
         return rec if rec.unit is not None else with_inferred_unit(rec)
     u = acceleration_unit(unit)

@@ -33,16 +33,19 @@ from ..registry import resolve
 #: ``rate`` replaces the time by sample index / rate, ``time_unit``, ``gyro_unit`` and
 #: ``clock`` are ignored with a note, ``columns`` and the log options are refused.
 TABLE_OPTIONS = ("columns", "unit", "time_unit", "rate", "gyro_unit", "clock")
+#: The option of files of named variables (MATLAB, R): which variable is the recording
+#: (several, comma-separated: runs of one session).
+VARIABLE_OPTIONS = ("variable",)
 #: The options of logs, which hold several sensors and two clocks: the IMU topic, the
 #: sensor instance, and whose time stamps (``'header'``: the sensor's, ``'log'``: the log's).
 LOG_OPTIONS = ("topic", "instance", "time_source")
 #: The values of ``time_source``.
 TIME_SOURCES = ("header", "log")
-READING_OPTIONS = TABLE_OPTIONS + LOG_OPTIONS
+READING_OPTIONS = TABLE_OPTIONS + VARIABLE_OPTIONS + LOG_OPTIONS
 #: The command-line option of each reading option, for messages.
 OPTION_FLAGS = {"columns": "--columns", "unit": "--unit", "time_unit": "--time-unit", "rate": "--rate",
                 "gyro_unit": "--gyro-unit", "topic": "--topic", "instance": "--instance",
-                "time_source": "--time-source", "clock": "--clock"}
+                "time_source": "--time-source", "clock": "--clock", "variable": "--variable"}
 #: Characters of the decoded text that text formats are sniffed on.
 TEXT_HEAD_CHARS = 8192
 #: Bytes of the file that binary formats are sniffed on.
@@ -175,6 +178,15 @@ FORMATS: dict[str, Format] = {f.name: f for f in (
     Format(name="ardupilot", title="ArduPilot DataFlash .bin log: its IMU messages (after ArduPilot's calibration)",
            reader="accelcal.formats.ardupilot:read", sniff="accelcal.formats.ardupilot:sniff", options=LOG_OPTIONS,
            text=False, extra="ardupilot", requires=("pymavlink",)),
+    Format(name="mat", title="MATLAB .mat (v5; v7.3 needs h5py, not included): a numeric matrix, its columns numbered "
+                             "as a headerless table's (--columns), or a struct of vectors; --variable NAME chooses "
+                             "(NAME,NAME,...: runs of one session)",
+           reader="accelcal.formats.mat:read_mat", sniff="accelcal.formats.mat:sniff",
+           options=TABLE_OPTIONS + VARIABLE_OPTIONS, text=False),
+    Format(name="rda", title="R data (.rda/.RData of save(), .rds of saveRDS()): a numeric matrix by its dimnames "
+                             "or a data frame; an imu object's freq times it; --variable NAME chooses",
+           reader="accelcal.formats.rda:read_rda", sniff="accelcal.formats.rda:sniff",
+           options=TABLE_OPTIONS + VARIABLE_OPTIONS, text=False, extra="rdata", requires=("rdata",)),
 )}
 
 #: The format of a text file that no format's sniff recognises.
@@ -210,4 +222,4 @@ def formats_help(width: int = 80) -> str:
 
 
 __all__ = ["BINARY_HEAD_BYTES", "FALLBACK", "FORMATS", "Format", "LOG_OPTIONS", "OPTION_FLAGS", "READING_OPTIONS",
-           "TABLE_OPTIONS", "TEXT_HEAD_CHARS", "TIME_SOURCES", "format_named", "formats_help"]
+           "TABLE_OPTIONS", "VARIABLE_OPTIONS", "TEXT_HEAD_CHARS", "TIME_SOURCES", "format_named", "formats_help"]

@@ -143,6 +143,8 @@ class _Table(NamedTuple):
         """The strings of column ``i`` (object array)."""
         if self.data is not None:
             return np.asarray([r[i] for r in self.data], dtype=object)
+        if self.raw is None:  # a matrix (read_matrix): its numbers as text
+            return np.asarray([repr(float(v)) for v in self.block[:, i]], dtype=object)
         if self.delim == " ":
             return np.asarray([ln.split()[i] for ln in self.raw], dtype=object)
         return np.asarray([ln.split(self.delim)[i].strip() for ln in self.raw], dtype=object)
@@ -169,7 +171,26 @@ def read_table(path, *, text: str | None = None, columns=None, unit: str | None 
     notes: list[str] = []
     if text is None:
         text, notes = load_text(path)
-    tab = _split_table(text, path)
+    return _table_recording(_split_table(text, path), path, notes, columns, unit, time_unit, rate, gyro_unit)
+
+
+def read_matrix(path, names, block: np.ndarray, *, notes=(), columns=None, unit: str | None = None,
+                time_unit: str | None = None, rate: float | None = None, gyro_unit: str | None = None,
+                file_rate: tuple[float, str] | None = None) -> Recording:
+    """A recording from a numeric matrix (a variable of a ``.mat`` or ``.rda`` file), its
+    columns found as a table's: by ``names`` (column names, or None: numbered as in a
+    headerless table) or by ``columns=``.  ``file_rate`` (Hz, where the file states it)
+    times the samples when the matrix has no time column and ``rate`` is not given."""
+    block = np.asarray(block, dtype=float)
+    if block.ndim != 2 or len(block) < MIN_ROWS:
+        raise RecordingError(f"{path}: only {len(block)} rows; need at least {MIN_ROWS}")
+    tab = _Table(None if names is None else [str(n) for n in names], None, range(1, len(block) + 1), [], ",", False,
+                 block.shape[1], block, None)
+    return _table_recording(tab, Path(path), list(notes), columns, unit, time_unit, rate, gyro_unit, file_rate)
+
+
+def _table_recording(tab, path, notes, columns, unit, time_unit, rate, gyro_unit, file_rate=None) -> Recording:
+    """The recording of a split table (:func:`read_table`'s second half)."""
     names, dc, lines = tab.names, tab.dc, tab.lines
     what = {"\t": "tab", ";": "semicolon", ",": "comma", "|": "'|'", " ": "whitespace"}[tab.delim]
     if tab.delim != "," or dc:
@@ -196,16 +217,23 @@ def read_table(path, *, text: str | None = None, columns=None, unit: str | None 
     def triad(axes):
         return np.column_stack([numbers(a) for a in axes])
 
-    acc, unit_name, note = resolve_acceleration_unit(triad(ACC_ROLES), units, unit, path)
-    notes.append(note)
+    acc, unit_name = None, None
+    if "ax" in roles:
+        acc, unit_name, note = resolve_acceleration_unit(triad(ACC_ROLES), units, unit, path)
+        notes.append(note)
+    elif unit is not None:
+        raise RecordingError(f"{path}: --unit {unit} given, but the table has no acceleration columns (gyro only)")
     gyro, gyro_unit_name = None, None
     notes.append(units.get("gyro_note", ""))
     if "gx" in roles:
         gyro, gyro_unit_name, note = resolve_gyro_unit(triad(GYRO_ROLES), units, gyro_unit, path)
         notes.append(note)
-    t, tnote = time_seconds(column("t") if "t" in roles else None, rate, time_unit, units.get("t"), names, roles, dc,
-                            path, lines, tab.preamble, parsed=parsed("t") if "t" in roles else None,
-                            counter=_counter_label(names, roles))
+    if "t" not in roles and rate is None and file_rate is not None:
+        t, tnote = np.arange(len(lines)) / file_rate[0], f"t = sample index / {file_rate[0]:g} Hz ({file_rate[1]})"
+    else:
+        t, tnote = time_seconds(column("t") if "t" in roles else None, rate, time_unit, units.get("t"), names, roles,
+                                dc, path, lines, tab.preamble, parsed=parsed("t") if "t" in roles else None,
+                                counter=_counter_label(names, roles))
     t, cnotes = _sensor_clock(t, tnote, numbers, names, roles, units, clock, rate, lines, path)
     notes += cnotes
     temp = None
@@ -397,9 +425,12 @@ def _map_columns(names, k: int, given: dict, path, required=ACC_ROLES) -> tuple[
         units["counter_given"] = True
     found = ", ".join(n.strip() for n in names)[:150] if names is not None else f"{k} unnamed columns"
     missing = [r for r in required if r not in roles]
+    if missing and required == ACC_ROLES and not any(r in roles for r in ACC_ROLES) and \
+            all(r in roles for r in GYRO_ROLES):
+        missing = []  # a gyro-only table (rate-table rotations): the gyro columns named, no accelerometer
     if missing:
         raise RecordingError(f"{path}: no column for {', '.join(missing)} (found: {found}); "
-                             "name them with --columns t=TIME,ax=X,ay=Y,az=Z")
+                             "name them with --columns t=TIME,ax=X,ay=Y,az=Z (a gyro alone: gx=..,gy=..,gz=..)")
     gyro = [r for r in GYRO_ROLES if r in roles]
     if 0 < len(gyro) < 3:
         if any(r in given for r in GYRO_ROLES):

@@ -13,6 +13,8 @@ parametrisations; their files: :mod:`accelcal.export`), :mod:`~accelcal.gyro.int
 :mod:`~accelcal.gyro.calibrate` (the whole session, its trust lines and typed errors,
 :mod:`~accelcal.gyro.errors`), :mod:`~accelcal.gyro.result` (``to_dict``/``from_dict``,
 ``summary()``), :mod:`~accelcal.gyro.ferraris` (rotations of known angle),
+:mod:`~accelcal.gyro.rotations` (rotations of known angle found in the gyro alone, each run
+its bias: ``calibrate_rotations(rec.t, rec.gyro, angles_deg=..., runs=rec.runs)``),
 :mod:`~accelcal.gyro.recording` (a recording's gyro after its accelerometer, as the CLI),
 :mod:`~accelcal.gyro.simulate` (sessions with an exactly known rotation).  The static
 detection settings for sessions with short still phases: :mod:`accelcal.static_auto`.
@@ -30,6 +32,7 @@ _LAZY = {
     "fit_ferraris": "ferraris", "FerrarisFit": "ferraris", "calibrate_ferraris_session": "ferraris",
     "integrate_intervals": "integrate", "integrate_sequential": "integrate",
     "calibrate_recording_gyro": "recording",
+    "calibrate_rotations": "rotations", "find_rotations": "rotations",
 }
 
 

@@ -90,7 +90,9 @@ def fit_ferraris(segments, h: float, angles_deg, axes=None, *, nominal: float = 
     nominal : float
         Nominal rad/s per raw unit (the stated-angle check).
     y_var, bias_var : array_like (3,), optional
-        Per-sample variance for sums and variance of the removed bias (raw unit²).
+        Per-sample variance for sums and variance of the removed bias (raw unit²);
+        ``bias_var`` may be (r, 3), one per rotation (runs that rest, and have a bias,
+        each on their own).
     axis_cov : array_like (3, 3, 3), optional
         Covariance of each axis direction.
     angle_std_deg : float
@@ -114,17 +116,17 @@ def fit_ferraris(segments, h: float, angles_deg, axes=None, *, nominal: float = 
             raise RotationAngleError(
                 f"the {name} rotation turns {nominal_deg[j]:.1f} deg by the nominal gyro scale, not the stated "
                 f"{np.rad2deg(theta[j]):.1f} deg: check the rotation angle (--rotation-angle), the section of that "
-                "rotation in the section list, or the gyro unit/sensitivity")
+                "rotation in the section list, or the gyro unit (--gyro-unit, --gyro-sensitivity)")
     senses = np.where(np.sum(Y * A, axis=1) * nominal >= 0, 1.0, -1.0)
     target = (senses * theta)[:, None] * A
     P = Y @ np.linalg.inv(Y.T @ Y)  # C Yᵀ = targetᵀ in least squares; three rotations: P = Y⁻ᵀ, exact
     C = target.T @ P
     cov = np.zeros((9, 9))
     yv = np.zeros(3) if y_var is None else np.asarray(y_var, float)
-    bv = np.zeros(3) if bias_var is None else np.asarray(bias_var, float)
+    bv = np.broadcast_to(np.zeros(3) if bias_var is None else np.asarray(bias_var, float), (len(segs), 3))
     for j, s in enumerate(segs):
         dur = h * len(s)
-        covY = np.diag(h * h * len(s) * yv + dur * dur * bv)
+        covY = np.diag(h * h * len(s) * yv + dur * dur * bv[j])
         covT = np.deg2rad(angle_std_deg) ** 2 * np.outer(A[j], A[j])
         if axis_cov is not None:
             covT = covT + theta[j] ** 2 * np.asarray(axis_cov, float)[j]
@@ -178,10 +180,8 @@ def calibrate_ferraris_session(t, gyro, sections: dict, *, raw_unit: str = "deg/
         Exactly determined: no residual, ``dof = 0``; the standard errors come from the
         noise (module docstring).
     """
-    from ..registry import estimator
-    from .model import RAW_UNITS, GyroModel
+    from .model import RAW_UNITS
     from .rests import fit_bias, rest_noise, rest_statistics, sample_interval
-    from .result import GyroQuality
     from .unit_evidence import unit_from_rotations
 
     missing = [k for k in (*rest_names, *rotation_names) if k not in sections]
@@ -215,7 +215,22 @@ def calibrate_ferraris_session(t, gyro, sections: dict, *, raw_unit: str = "deg/
     fit = fit_ferraris(segs, tb.h, angles, axes, nominal=nominal, y_var=rest_noise(rs),
                        bias_var=best.bias_se ** 2, axis_cov=axis_cov, angle_std_deg=angle_std_deg,
                        names=tuple(n.split("_")[0] for n in rotation_names))
-    model = GyroModel(fit.C, best.bias, None, raw_unit)
+    settings = {"bias_mode": "all", "time_base": {"h": tb.h, "rate": tb.rate, "jitter": tb.jitter},
+                "angles_deg": angles.tolist(), "axes": None if axes is None else np.asarray(axes).tolist(),
+                "nominal_from": f"unit {raw_unit}" if unit_from == "stated" else unit_from}
+    return ferraris_calibration(fit, best.bias, best.bias_se * max(1.0, best.excess), raw_unit, nominal,
+                                nominal_axes=axes is None, settings=settings)
+
+
+def ferraris_calibration(fit: FerrarisFit, bias, bias_se, raw_unit: str, nominal: float, *, nominal_axes: bool,
+                         settings: dict, motions=None, warnings=()):
+    """The :class:`~accelcal.gyro.result.GyroFerrarisCalibration` of a fit: the misalignment's and
+    the scale factors' standard errors from ``fit.cov``, the warnings of an exact fit."""
+    from ..registry import estimator
+    from .model import GyroModel
+    from .result import GyroQuality
+
+    model = GyroModel(fit.C, np.asarray(bias, float), None, raw_unit)
     se_C = np.sqrt(np.clip(np.diag(fit.cov), 0, None)).reshape(3, 3)
     Jt = np.zeros((9, 9))
     for i in range(3):
@@ -224,23 +239,23 @@ def calibrate_ferraris_session(t, gyro, sections: dict, *, raw_unit: str = "deg/
                 Jt[3 * i + j, 3 * i + j] = 1.0 / fit.C[j, j]
                 Jt[3 * i + j, 4 * j] = -fit.C[i, j] / fit.C[j, j] ** 2
     se = {"C": se_C, "T": np.sqrt(np.clip(np.diag(Jt @ fit.cov @ Jt.T), 0, None)).reshape(3, 3),
-          "scale_factors": np.diag(se_C) / abs(nominal), "bias": best.bias_se * max(1.0, best.excess)}
-    warnings = ["three rotations determine the nine parameters exactly: no residual checks the fit; the ± rest on "
-                "the noise alone (and on --rotation-angle's uncertainty)"]
-    if axes is None:
+          "scale_factors": np.diag(se_C) / abs(nominal), "bias": np.asarray(bias_se, float)}
+    n = len(fit.senses)
+    warnings = list(warnings)
+    if n == N_ROTATIONS:
+        warnings.insert(0, "three rotations determine the nine parameters exactly: no residual checks the fit; the ± "
+                           "rest on the noise alone (and on --rotation-angle's uncertainty)")
+    if nominal_axes:
         warnings.append("the rotation axes are assumed to be the sensor's x, y and z (imucal's assumption; measured "
                         "ones need a full accelerometer calibration): the misalignments are relative to them")
-    quality = GyroQuality(n_motions=3, n_parameters=9, dof=0, chi2=float("nan"), p_value=float("nan"),
+    quality = GyroQuality(n_motions=n, n_parameters=9, dof=3 * n - 9, chi2=float("nan"), p_value=float("nan"),
                           excess=float("nan"), residual_rms_deg=0.0, predicted_rms_deg=float("nan"),
                           axis_turn_deg=tuple(float(a) for a in fit.angles_deg), warnings=tuple(warnings),
-                          flags=("exactly_determined",))
-    settings = {"estimator": fit.estimator, "integrator": "sum", "bias_mode": "all", "nominal": nominal,
-                "time_base": {"h": tb.h, "rate": tb.rate, "jitter": tb.jitter}, "angles_deg": angles.tolist(),
-                "senses": fit.senses.tolist(), "nominal_angles_deg": fit.nominal_angles_deg.tolist(),
-                "axes": None if axes is None else np.asarray(axes).tolist(), "iterations": 1,
-                "nominal_from": f"unit {raw_unit}" if unit_from == "stated" else unit_from}
-    return estimator(fit.estimator).load_calibration()(model, se, quality, {}, settings)
+                          flags=("exactly_determined",) if n == N_ROTATIONS else ())
+    settings = {"estimator": fit.estimator, "integrator": "sum", "nominal": nominal, "senses": fit.senses.tolist(),
+                "nominal_angles_deg": fit.nominal_angles_deg.tolist(), "iterations": 1, **settings}
+    return estimator(fit.estimator).load_calibration()(model, se, quality, dict(motions or {}), settings)
 
 
 __all__ = ["FerrarisFit", "N_ROTATIONS", "REST_SECTIONS", "ROTATION_SECTIONS", "calibrate_ferraris_session",
-           "fit_ferraris", "rotation_singular_values"]
+           "ferraris_calibration", "fit_ferraris", "rotation_singular_values"]

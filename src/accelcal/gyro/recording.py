@@ -10,10 +10,12 @@ what ``accelcal calibrate`` does, for Python.
 The data decide the protocol, and the choice is said: a recording that marks rotations of
 known angle (:attr:`Recording.rotations`, imucal's ``*_rot`` sections) is a Ferraris session
 (:func:`accelcal.gyro.ferraris.calibrate_ferraris_session`, the ``gyro_ferraris`` entry of the
-registry's rotation estimators); any other is a multi-position session, calibrated from the
-motions between the accelerometer's rests (:func:`accelcal.gyro.calibrate.calibrate_gyro`, a
-motion estimator).  An estimator asked for that does not fit the session's data is refused in
-one line, never replaced; the calibration's ``settings["estimator_chosen_by"]`` says who chose.
+registry's rotation estimators); one whose rotation angles are given but not marked has them
+found in the gyro, each run with its own bias (:func:`accelcal.gyro.rotations.calibrate_rotations`);
+any other is a multi-position session, calibrated from the motions between the accelerometer's
+rests (:func:`accelcal.gyro.calibrate.calibrate_gyro`, a motion estimator).  An estimator asked
+for that does not fit the session's data is refused in one line, never replaced; the
+calibration's ``settings["estimator_chosen_by"]`` says who chose.
 """
 
 from __future__ import annotations
@@ -28,7 +30,7 @@ MIN_RESTS = 1 + max(e.min_poses for e in estimators("gyroscope", data="motions")
 
 
 def calibrate_recording_gyro(rec, acc_cal, poses, *, estimator: str | None = None, nominal_sensitivity=None,
-                             gyro_range=None, g_sensitivity="auto", rotation_angles=None):
+                             gyro_range=None, g_sensitivity="auto", rotation_angles=None, angle_std_deg: float = 0.0):
     """The gyro of ``rec`` (module docstring).
 
     Parameters
@@ -48,8 +50,13 @@ def calibrate_recording_gyro(rec, acc_cal, poses, *, estimator: str | None = Non
     gyro_range : (lo, hi), optional
         The measuring range in the raw unit.
     g_sensitivity : bool or 'auto'
-    rotation_angles : float or sequence of 3, optional
-        Ferraris sessions: the angle of each rotation [deg] (default 360).
+    rotation_angles : float or sequence, optional
+        Ferraris sessions: the angle of each rotation [deg] (default 360).  Given for a
+        recording without marked rotations: the rotations of known angle are found in the
+        gyro (:func:`accelcal.gyro.rotations.calibrate_rotations`) instead of the motions
+        between rests.
+    angle_std_deg : float
+        Uncertainty of each stated angle [deg].
 
     Returns
     -------
@@ -59,18 +66,19 @@ def calibrate_recording_gyro(rec, acc_cal, poses, *, estimator: str | None = Non
     if rec.gyro is None:
         raise GyroInputError(f"{rec.source}: no gyro samples (gyro columns, or a file of its own: --gyro FILE)")
     unit = rec.gyro_unit  # None: not stated; the session's motions or rotations decide it (unit_evidence)
-    entry, chosen_by = _estimator_for(rec, estimator)
+    entry, chosen_by = _estimator_for(rec, estimator, rotation_angles is not None)
     cal = _calibrate(rec, acc_cal, poses, entry.name, unit, nominal_sensitivity, gyro_range, g_sensitivity,
-                     rotation_angles)
+                     rotation_angles, angle_std_deg)
     return dataclasses.replace(cal, settings={**cal.settings, "estimator_chosen_by": chosen_by})
 
 
-def _estimator_for(rec, name: str | None):
+def _estimator_for(rec, name: str | None, angles_given: bool):
     """The registry entry that calibrates ``rec``'s gyro and who chose it; one line if ``name`` cannot."""
-    data = "rotations" if rec.rotations else "motions"
+    data = "rotations" if rec.rotations or angles_given else "motions"
     if name is None:
         entry = estimators("gyroscope", data=data)[0]
         why = ("the data: rotations of known angle are marked" if rec.rotations else
+               "the data: rotations of stated angle (--rotation-angle)" if angles_given else
                "the data: motions between rests")
         return entry, why
     entry = estimator(name)
@@ -80,13 +88,16 @@ def _estimator_for(rec, name: str | None):
     if entry.data != data:
         fits = ", ".join(e.cli_name for e in estimators("gyroscope", data=data))
         marked = ("marks rotations of known angle (a Ferraris session)" if rec.rotations else
-                  "marks no rotations of known angle (imucal's *_rot sections: --intervals SECTION_LIST)")
+                  "has rotations of stated angle (--rotation-angle)" if angles_given else
+                  "marks no rotations of known angle (imucal's *_rot sections: --intervals SECTION_LIST, or "
+                  "--rotation-angle)")
         raise GyroInputError(f"{rec.source} {marked}: {entry.cli_name} fits {entry.data}; its estimators: {fits} "
                              "(or leave --gyro-method out to let the data choose)")
     return entry, "--gyro-method"
 
 
-def _calibrate(rec, acc_cal, poses, estimator, unit, nominal_sensitivity, gyro_range, g_sensitivity, rotation_angles):
+def _calibrate(rec, acc_cal, poses, estimator, unit, nominal_sensitivity, gyro_range, g_sensitivity, rotation_angles,
+               angle_std_deg):
     if rec.rotations:
         from .ferraris import calibrate_ferraris_session
 
@@ -97,11 +108,14 @@ def _calibrate(rec, acc_cal, poses, estimator, unit, nominal_sensitivity, gyro_r
         accel = {"accel": acc_cal, "acc": rec.acc} if acc_cal.model == "full" else {}
         return calibrate_ferraris_session(rec.t, rec.gyro, sections, raw_unit=unit,
                                           angles_deg=360.0 if rotation_angles is None else rotation_angles,
-                                          nominal_sensitivity=nominal_sensitivity, **accel)
-    if rotation_angles is not None:
-        raise RotationAngleError("--rotation-angle applies to a Ferraris session, whose rotations are marked "
-                                 "(imucal's *_rot sections: --intervals SECTION_LIST, or an annotated session); "
-                                 f"{rec.source} has none")
+                                          nominal_sensitivity=nominal_sensitivity, angle_std_deg=angle_std_deg, **accel)
+    if rotation_angles is not None:  # rotations of known angle, not marked: found in the gyro, each run its bias
+        from .rotations import calibrate_rotations
+
+        accel = {"accel": acc_cal, "acc": rec.acc} if acc_cal is not None and acc_cal.model == "full" else {}
+        return calibrate_rotations(rec.t, rec.gyro, angles_deg=rotation_angles, runs=rec.runs, raw_unit=unit,
+                                   nominal_sensitivity=nominal_sensitivity, angle_std_deg=angle_std_deg,
+                                   source=str(rec.source), **accel)
     from .calibrate import calibrate_gyro
 
     return calibrate_gyro(rec.t, rec.gyro, poses, acc_cal, raw_unit=unit, acc=rec.acc,

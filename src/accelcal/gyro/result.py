@@ -166,10 +166,14 @@ class GyroCalibration:
                 f"{a} {v:.2f} ± {e:.2f}" for a, v, e in zip("xyz", k, ke)))
         T, Te = m.T, se.get("T", np.full((3, 3), np.nan))
         off = [(i, j) for i in range(3) for j in range(3) if i != j]
-        lines.append("  misalignment T (vs accelerometer frame) [mrad]: " + ", ".join(
+        lines.append(f"  misalignment T (vs {s.get('frame', 'accelerometer frame')}) [mrad]: " + ", ".join(
             f"{'xyz'[i]}{'xyz'[j]} {1e3 * T[i, j]:+.2f} ± {1e3 * Te[i, j]:.2f}" for i, j in off))
         be = se.get("bias", np.full(3, np.nan))
         lines.append(f"  bias [{unit}]: " + ", ".join(f"{a} {v:.6g} ± {e:.2g}" for a, v, e in zip("xyz", m.bias, be)))
+        runs = s.get("runs") or []
+        for k, run in enumerate(runs if len(runs) > 1 else []):  # runs recorded apart: each its own bias
+            lines.append(f"    run {k + 1}: " + ", ".join(f"{a} {v:.6g} ± {e:.2g}" for a, v, e in
+                                                      zip("xyz", run["bias"], run["bias_se"])))
         if m.g_sensitivity is not None:
             Ge = se.get("g_sensitivity", np.full((3, 3), np.nan))
             lines.append(f"  g-sensitivity [{unit} per m/s^2]: " + ", ".join(

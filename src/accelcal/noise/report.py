@@ -188,6 +188,9 @@ def analyse_noise(rec, *, level: float = DEFAULT_LEVEL, n_boot: int = DEFAULT_N_
     if not 0 < level < 1 or n_boot < 50:
         raise NoiseAnalysisError(f"need 0 < level < 1 and n_boot >= 50, got level={level}, n_boot={n_boot}")
     require_gyro_unit(rec, "a static record")  # no motion decides rad/s from deg/s: 57x
+    if getattr(rec, "runs", None) is not None and len(rec.runs) > 1:
+        raise NoiseAnalysisError(f"{rec.source}: {len(rec.runs)} runs recorded apart: one Allan deviation needs one "
+                                 "uninterrupted record; analyse them one at a time (--variable NAME)")
     t = np.asarray(rec.t, dtype=float)
     fs = 1.0 / float(np.median(np.diff(t)))
     parts = _parts(segments, len(t))
@@ -200,8 +203,10 @@ def analyse_noise(rec, *, level: float = DEFAULT_LEVEL, n_boot: int = DEFAULT_N_
     warnings += static["warnings"] + ([f"not static ({static['refuse']}): analysed anyway"] if static["refuse"] else [])
     seeds = np.random.SeedSequence(int(seed)).spawn(2)
     cut = [slice(a, b) for a, b in parts]
-    sensors = {"accelerometer": _sensor("accelerometer", [rec.acc[c] for c in cut], rec.unit or "counts", fs, level,
-                                        n_boot, seeds[0], min_edf)}
+    sensors = {}
+    if rec.acc is not None:  # None: a gyro-only recording
+        sensors["accelerometer"] = _sensor("accelerometer", [rec.acc[c] for c in cut], rec.unit or "counts", fs,
+                                           level, n_boot, seeds[0], min_edf)
     if rec.gyro is not None:
         sensors["gyroscope"] = _sensor("gyroscope", [rec.gyro[c] for c in cut], rec.gyro_unit, fs, level, n_boot,
                                        seeds[1], min_edf)
@@ -338,12 +343,13 @@ def _blocks(x: np.ndarray, fs: float) -> np.ndarray:
 
 
 def static_check(acc, gyro, fs: float) -> dict:
-    """Did the sensor move?  Tilt of the 1 s accelerometer means, departure of the 1 s gyro means, noisy blocks."""
-    b = _blocks(np.asarray(acc, dtype=float), fs)
+    """Did the sensor move?  Tilt of the 1 s accelerometer means, departure of the 1 s gyro means, noisy blocks
+    (of the accelerometer; of the gyro when there is no accelerometer)."""
+    b = _blocks(np.asarray(acc if acc is not None else gyro, dtype=float), fs)
     means = b.mean(axis=1)
     ref = np.median(means, axis=0)
     cos = means @ ref / (np.linalg.norm(means, axis=1) * np.linalg.norm(ref) + 1e-300)
-    tilt = np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
+    tilt = np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))) if acc is not None else np.zeros(len(means))
     var = b.var(axis=1).sum(axis=1)
     noisy = int(np.sum(var > NOISY_BLOCK_FACTOR * np.median(var)))
     out = {"block_s": b.shape[1] / fs, "max_tilt_deg": float(tilt.max()), "noisy_blocks": noisy,
