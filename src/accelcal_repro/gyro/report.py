@@ -15,9 +15,10 @@ Tables (tidy, written by :func:`run`):
 * ``imucal_parameters.csv``, ``imucal_figure_of_merit.csv``, ``ctu_parameters.csv`` — the
   Ferraris sessions (:mod:`accelcal_repro.gyro.ferraris_sessions`);
 * ``stability.csv`` — per group of sessions of one unit (IMU-TK fork data1-4, SNU good1-3)
-  and parameter: mean, scatter between sessions, the median s.e., and the excess
-  ``sqrt(χ²/dof)`` of the sessions about their weighted mean (1: the sessions agree within
-  their standard errors).
+  and parameter: mean, scatter between sessions, the median s.e., the χ²/dof of the
+  sessions about their weighted mean and its square root, the excess (1: the sessions agree
+  within their standard errors); pooled rows ``s_*`` and ``T_*`` sum the χ² and the dof
+  of the scales and of the misalignments.
 """
 
 from __future__ import annotations
@@ -53,7 +54,9 @@ def _our_parameters(name: str, g) -> list[dict]:
 
 
 def stability(params: pd.DataFrame, groups=GROUPS) -> pd.DataFrame:
-    """Session-to-session scatter of each parameter within each group (module docstring)."""
+    """Session-to-session scatter of each parameter within each group (module docstring), and
+    pooled over the scales (``s_*``) and over the misalignments (``T_*``): their χ² summed,
+    over their dof summed (the biases are not pooled: a turn-on bias differs by session)."""
     rows = []
     for group, names in groups.items():
         sub = params[params.session.isin(names)]
@@ -65,8 +68,18 @@ def stability(params: pd.DataFrame, groups=GROUPS) -> pd.DataFrame:
             chi2 = float(np.sum(w * (d.value - mean) ** 2))
             rows.append({"group": group, "parameter": p, "unit": d.unit.iloc[0], "sessions": len(d),
                          "weighted_mean": mean, "scatter_std": float(d.value.std(ddof=1)),
-                         "median_se": float(d.se.median()), "excess": math.sqrt(chi2 / (len(d) - 1))})
-    return pd.DataFrame(rows)
+                         "median_se": float(d.se.median()), "excess": math.sqrt(chi2 / (len(d) - 1)),
+                         "chi2": chi2, "dof": len(d) - 1, "chi2_per_dof": chi2 / (len(d) - 1)})
+    out = pd.DataFrame(rows)
+    pooled = []
+    for group in dict.fromkeys(out.group) if len(out) else ():
+        for kind, prefix in (("s_*", "s_"), ("T_*", "T_")):
+            d = out[(out.group == group) & out.parameter.str.startswith(prefix)]
+            if len(d):
+                chi2, dof = float(d.chi2.sum()), int(d.dof.sum())
+                pooled.append({"group": group, "parameter": kind, "unit": d.unit.iloc[0], "sessions": int(d.sessions.max()),
+                               "excess": math.sqrt(chi2 / dof), "chi2": chi2, "dof": dof, "chi2_per_dof": chi2 / dof})
+    return pd.concat([out, pd.DataFrame(pooled)], ignore_index=True) if pooled else out
 
 
 def _session_row(name: str, r: dict) -> dict:
