@@ -239,16 +239,35 @@ def motion_estimator(name: str):
     return e
 
 
-def _standard_errors(C, cov, nominal, excess, bias_est) -> dict:
-    k = max(1.0, excess if math.isfinite(excess) else 1.0)
-    cov = cov * k * k
-    se_C = np.sqrt(np.clip(np.diag(cov), 0, None)).reshape(3, 3)
-    Jt = np.zeros((9, 9))  # ∂vec(T)/∂vec(C), T_ij = C_ij / C_jj
+def _misalignment_jacobian(C) -> np.ndarray:
+    """∂vec(T)/∂vec(C) (9, 9), ``T_ij = C_ij / C_jj`` (zero rows on the diagonal)."""
+    Jt = np.zeros((9, 9))
     for i in range(3):
         for j in range(3):
             if i != j:
                 Jt[3 * i + j, 3 * i + j] = 1.0 / C[j, j]
                 Jt[3 * i + j, 4 * j] = -C[i, j] / C[j, j] ** 2
+    return Jt
+
+
+def _parameter_dof(adj, C) -> dict:
+    """Satterthwaite degrees of freedom of ``C``'s entries, of ``T``'s and of the scale
+    factors (:class:`accelcal.gyro.noise.AdjustedCovariance`); None (JSON) for infinite."""
+    def tidy(v):
+        return [None if not np.isfinite(x) else float(x) for x in np.ravel(v)]
+    dof_C = adj.dof(np.eye(9))
+    Jt = _misalignment_jacobian(C)
+    off = [3 * i + j for i in range(3) for j in range(3) if i != j]
+    dof_T = np.full(9, np.nan)
+    dof_T[off] = adj.dof(Jt[off])
+    return {"C": tidy(dof_C), "T": tidy(dof_T), "scale_factors": tidy(dof_C[[0, 4, 8]])}
+
+
+def _standard_errors(C, cov, nominal, excess, bias_est) -> dict:
+    k = max(1.0, excess if math.isfinite(excess) else 1.0)
+    cov = cov * k * k
+    se_C = np.sqrt(np.clip(np.diag(cov), 0, None)).reshape(3, 3)
+    Jt = _misalignment_jacobian(C)
     se_T = np.sqrt(np.clip(np.diag(Jt @ cov @ Jt.T), 0, None)).reshape(3, 3)
     kb = max(1.0, bias_est.excess if math.isfinite(bias_est.excess) else 1.0)
     out = {"C": se_C, "T": se_T, "scale_factors": np.diag(se_C) / abs(nominal), "bias": bias_est.bias_se * kb}
@@ -360,15 +379,16 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
     for name in tried:  # the noise model fitted with C; the time base judged by the rest noise alone
         msb = dataclasses.replace(ms, h=bases[name])
         if noise_model:
-            fits[name], noisy = fit_with_noise(fitter, msb, nominal * np.eye(3), integrator)
+            fits[name], noisy, adj = fit_with_noise(fitter, msb, nominal * np.eye(3), integrator)
         else:
-            fits[name], noisy = fitter(dataclasses.replace(msb, noise=None), nominal * np.eye(3), integrator), msb
+            fits[name], noisy, adj = fitter(dataclasses.replace(msb, noise=None), nominal * np.eye(3),
+                                            integrator), msb, None
         ev = evaluate(noisy, fits[name].C, integrator, rest_only=True)
         rest_fits[name] = dataclasses.replace(fits[name], chi2=ev.chi2, evaluation=ev)
-        noises[name] = noisy.noise
+        noises[name] = (noisy.noise, adj)
     chosen = min(rest_fits, key=lambda k: rest_fits[k].chi2)
     fit = fits[chosen]
-    noise = noises[chosen]
+    noise, adj = noises[chosen]
     all_ms = dataclasses.replace(all_ms, h=bases[chosen])
     model = GyroModel(fit.C, best.bias, best.g_sensitivity if g_sensitivity else None, raw_unit)
     se = _standard_errors(fit.C, fit.cov, nominal, fit.excess, best)
@@ -383,7 +403,8 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
                 "bias_rests": {"chi2": best.chi2, "dof": best.dof, "excess": best.excess},
                 "g_sensitivity": bool(g_sensitivity), "g_sensitivity_test": g_test,
                 "noise_model": {**noise.to_dict(), "chi2": fit.chi2, "dof": fit.dof,
-                                "chi2_per_dof": fit.chi2 / max(fit.dof, 1)} if noise_model else None}
+                                "chi2_per_dof": fit.chi2 / max(fit.dof, 1),
+                                "parameter_dof": _parameter_dof(adj, fit.C)} if noise_model else None}
     return est.load_calibration()(model, se, quality, table, settings)
 
 

@@ -260,39 +260,63 @@ def estimate_components(parts, theta0=None, max_iter: int = 100) -> np.ndarray:
     return theta
 
 
-def adjusted_covariance(parts, theta) -> np.ndarray:
+@dataclass(frozen=True)
+class AdjustedCovariance:
+    """The covariance of ``vec(C)`` with estimated variance components (:func:`adjusted_covariance`)
+    and what the degrees of freedom of its entries need."""
+
+    cov: np.ndarray  #: (9, 9) Kenward-Roger adjusted
+    W: np.ndarray  #: (k, k) covariance of the components estimated (inverse REML information), k not at zero
+    dPhi: tuple  #: per component not at zero: ``∂Φ/∂θ`` (9, 9)
+
+    def dof(self, L) -> np.ndarray:
+        """Satterthwaite degrees of freedom of the linear functions ``L (k, 9)`` of ``vec(C)``:
+        ``2 var² / Var(var̂)`` (inf: no component estimated)."""
+        L = np.atleast_2d(np.asarray(L, float))
+        var = np.einsum("ki,ij,kj->k", L, self.cov, L)
+        if not self.dPhi:
+            return np.full(len(L), np.inf)
+        g = np.array([np.einsum("ki,ij,kj->k", L, d, L) for d in self.dPhi])  # (c, k)
+        v = np.einsum("ck,cd,dk->k", g, self.W, g)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(v > 0, 2.0 * var ** 2 / v, np.inf)
+
+
+def adjusted_covariance(parts, theta) -> AdjustedCovariance:
     """Covariance (9, 9) of ``vec(C)`` with the variance components estimated: the
     Kenward-Roger (1997) adjustment of ``Φ = (Jᵀ Σ⁻¹ J)⁻¹`` for the estimation error of
     ``θ`` (``Φ + 2 Φ Λ Φ``, ``Λ = Σ_ij W_ij (Q_ij - P_i Φ P_j)``, ``W`` the inverse REML
-    information of the components not at zero).  With a few dozen motions and a
-    component shaped like the parameters themselves (a per-motion error of ``C``) the
-    plain ``Φ`` is 10-20 % too small (:mod:`accelcal_repro.gyro.coverage`)."""
-    r, J = parts.r.reshape(-1), parts.J.reshape(-1, 9)
+    information of the components not at zero), and what the Satterthwaite degrees of
+    freedom of its entries need.  With a few dozen motions and a component shaped like
+    the parameters themselves (a per-motion error of ``C``) the plain ``Φ`` is 10-20 % too
+    small (:mod:`accelcal_repro.gyro.coverage`)."""
+    J = parts.J.reshape(-1, 9)
     S = parts.fixed + sum(a * v for a, v in zip(theta, parts.V))
     Si = np.linalg.inv(S)
     SJ = Si @ J
     Phi = np.linalg.inv(J.T @ SJ)
     on = [k for k, a in enumerate(theta) if a > 0]
     if not on:
-        return Phi
+        return AdjustedCovariance(Phi, np.zeros((0, 0)), ())
     P = Si - SJ @ Phi @ SJ.T
     PV = {k: P @ parts.V[k] for k in on}
     info = np.array([[0.5 * np.sum(PV[i] * PV[j].T) for j in on] for i in on])
     W = np.linalg.pinv(info)
-    Pk = {k: -SJ.T @ parts.V[k] @ SJ for k in on}
+    Pk = {k: -SJ.T @ parts.V[k] @ SJ for k in on}  # ∂(Jᵀ Σ⁻¹ J)/∂θ_k
     Lam = np.zeros((9, 9))
     for a, i in enumerate(on):
         for b, j in enumerate(on):
             Q = SJ.T @ parts.V[i] @ Si @ parts.V[j] @ SJ
             Lam += W[a, b] * (Q - Pk[i] @ Phi @ Pk[j])
-    return Phi + 2.0 * Phi @ Lam @ Phi
+    return AdjustedCovariance(Phi + 2.0 * Phi @ Lam @ Phi, W, tuple(-Phi @ Pk[k] @ Phi for k in on))
 
 
-def fit_with_noise(fitter, ms: MotionSet, C0, method: str = "magnus4") -> tuple[GyroFit, MotionSet]:
+def fit_with_noise(fitter, ms: MotionSet, C0, method: str = "magnus4"
+                   ) -> tuple[GyroFit, MotionSet, AdjustedCovariance]:
     """The fit of ``C`` (``fitter``: :func:`~accelcal.gyro.fit.fit_iterative` or the one-step)
     with the variance components of ``ms.noise`` estimated from its residuals, alternated
-    until both settle (module docstring).  Returns the last fit and ``ms`` with the
-    estimated components."""
+    until both settle (module docstring).  Returns the last fit (its ``cov`` adjusted),
+    ``ms`` with the estimated components, and the adjusted covariance (degrees of freedom)."""
     fit = fitter(ms, C0, method)
     theta = None
     for _ in range(MAX_ALTERNATIONS):
@@ -304,9 +328,9 @@ def fit_with_noise(fitter, ms: MotionSet, C0, method: str = "magnus4") -> tuple[
         fit = fitter(ms, fit.C if fitter.__name__ == "fit_iterative" else C0, method)
         if not moved:
             break
-    cov = adjusted_covariance(covariance_parts(ms, fit.C, method), ms.noise.variances)
-    return dataclasses.replace(fit, cov=cov), ms
+    adj = adjusted_covariance(covariance_parts(ms, fit.C, method), ms.noise.variances)
+    return dataclasses.replace(fit, cov=adj.cov), ms, adj
 
 
-__all__ = ["COMPONENTS", "MotionNoise", "adjusted_covariance", "bias_wander", "estimate_components", "fit_with_noise",
+__all__ = ["AdjustedCovariance", "COMPONENTS", "MotionNoise", "adjusted_covariance", "bias_wander", "estimate_components", "fit_with_noise",
            "g_sensitivity_test", "wander_variance"]

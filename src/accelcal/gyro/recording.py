@@ -24,7 +24,7 @@ MIN_RESTS = 1 + max(e.min_poses for e in estimators("gyroscope", data="motions")
 
 
 def calibrate_recording_gyro(rec, acc_cal, poses, *, estimator: str = "gyro_iterative", nominal_sensitivity=None,
-                             gyro_range=None, g_sensitivity="auto", rotation_angles=None):
+                             gyro_range=None, g_sensitivity="auto", rotation_angles=None, noise_model: bool = True):
     """The gyro of ``rec`` (module docstring).
 
     Parameters
@@ -44,6 +44,8 @@ def calibrate_recording_gyro(rec, acc_cal, poses, *, estimator: str = "gyro_iter
     g_sensitivity : bool or 'auto'
     rotation_angles : float or sequence of 3, optional
         Ferraris sessions: the angle of each rotation [deg] (default 360).
+    noise_model : bool
+        Multi-position sessions: the noise model between the rests (:mod:`accelcal.gyro.noise`).
 
     Returns
     -------
@@ -72,7 +74,7 @@ def calibrate_recording_gyro(rec, acc_cal, poses, *, estimator: str = "gyro_iter
 
     return calibrate_gyro(rec.t, rec.gyro, poses, acc_cal, raw_unit=unit, acc=rec.acc,
                           nominal_sensitivity=nominal_sensitivity, estimator=estimator, gyro_range=gyro_range,
-                          g_sensitivity=g_sensitivity)
+                          g_sensitivity=g_sensitivity, noise_model=noise_model)
 
 
 __all__ = ["MIN_RESTS", "calibrate_recording_gyro"]

@@ -117,6 +117,21 @@ class GyroCalibration:
     def method(self) -> str:
         return self.CAL_TYPE
 
+    def interval95(self, name: str) -> np.ndarray:
+        """Half-width of the 95 % interval of ``name`` (``C``, ``T``, ``scale_factors``):
+        ``t(0.975, ν) s.e.`` with the Satterthwaite degrees of freedom ``ν`` the noise model
+        gives each parameter (:mod:`accelcal.gyro.noise`); ``1.96 s.e.`` without it."""
+        from .. import distributions as dist
+
+        se = np.asarray(self.standard_errors[name], float)
+        dof = ((self.settings.get("noise_model") or {}).get("parameter_dof") or {}).get(name)
+        if dof is None:
+            return 1.959963984540054 * se
+        nu = np.array([np.inf if v is None else v for v in dof], float).reshape(se.shape)
+        q = np.where(np.isfinite(nu) & (nu > 0), dist.t_ppf(0.975, np.where(np.isfinite(nu) & (nu > 0), nu, 1.0)),
+                     1.959963984540054)
+        return q * se
+
     def to_dict(self) -> dict:
         return _f({"sensor": "gyroscope", "cal_type": self.CAL_TYPE or None, "model": self.model.to_dict(),
                    "standard_errors": {k: np.asarray(v) for k, v in self.standard_errors.items()},

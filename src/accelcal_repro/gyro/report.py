@@ -18,7 +18,9 @@ Tables (tidy, written by :func:`run`):
   and parameter: mean, scatter between sessions, the median s.e., the χ²/dof of the
   sessions about their weighted mean and its square root, the excess (1: the sessions agree
   within their standard errors); pooled rows ``s_*`` and ``T_*`` sum the χ² and the dof
-  of the scales and of the misalignments.
+  of the scales and of the misalignments; ``noise_model`` False: the same sessions
+  calibrated with the rest noise alone (the ± before :mod:`accelcal.gyro.noise`), whose
+  figure of merit is ``accelcal_rest_noise`` in ``figure_of_merit.csv``.
 """
 
 from __future__ import annotations
@@ -106,7 +108,7 @@ def run(out: Path, paths: dict, sessions=tuple(SESSIONS), imutk_run: dict | None
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    srows, prows, peer_tabs, foms, times = [], [], [], [], []
+    srows, prows, peer_tabs, foms, times, rest_rows = [], [], [], [], [], []
     tabs = {"imucal_parameters": pd.DataFrame(), "imucal_figure_of_merit": pd.DataFrame()}
     for name in sessions:
         spec = SESSIONS[name]
@@ -118,6 +120,11 @@ def run(out: Path, paths: dict, sessions=tuple(SESSIONS), imutk_run: dict | None
         srows.append(_session_row(name, r))
         times.append({"session": name, "accelerometer_s": r["acc_seconds"], "gyro_s": r["gyro_seconds"]})
         prows += _our_parameters(name, r["gyro"])
+        if any(name in g for g in GROUPS.values()):  # the same session with the rest noise alone (before)
+            before = calibrate_session(spec, paths, noise_model=False)["gyro"]
+            rest_rows += [{**row, "noise_model": False} for row in _our_parameters(name, before)]
+            foms.append(figure_of_merit(name, r["rec"], r["poses"], r["acc"], before, {}).query(
+                "calibration == 'accelcal'").assign(calibration="accelcal_rest_noise"))
         if r["rec"].rotations:  # a Ferraris session: imucal runs on it (its own accelerometer for everyone)
             p = paths[spec.dataset]
             imucal = run_imucal(p[spec.acc], p[spec.intervals])
@@ -131,7 +138,10 @@ def run(out: Path, paths: dict, sessions=tuple(SESSIONS), imutk_run: dict | None
                  "parameters": pd.DataFrame(prows),
                  "peer_parameters": pd.concat(peer_tabs, ignore_index=True) if peer_tabs else pd.DataFrame(),
                  "figure_of_merit": pd.concat(foms, ignore_index=True) if foms else pd.DataFrame()})
-    tabs["stability"] = stability(tabs["parameters"])
+    rest = pd.DataFrame(rest_rows)
+    tabs["stability"] = pd.concat([stability(tabs["parameters"]).assign(noise_model=True)]
+                                  + ([stability(rest).assign(noise_model=False)] if len(rest) else []),
+                                  ignore_index=True)
     tabs["ctu_parameters"] = ctu_calibration(paths[CTU[0]][CTU[1]])
     tabs = {k: v if len(v.columns) else pd.DataFrame(columns=["none"]) for k, v in tabs.items()}  # a header
     for k, v in tabs.items():
