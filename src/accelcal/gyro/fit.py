@@ -170,6 +170,7 @@ class CovarianceParts:
     rest: np.ndarray  #: (2m, 2m) from the rests' noise alone (gyro white noise, bias, pose means)
     fixed: np.ndarray  #: (2m, 2m) ``rest`` plus the noise model's fixed part (the bias's wander)
     V: tuple  #: per variance component (2m, 2m): the covariance of a unit component
+    A: np.ndarray | None = None  #: (2m, 3p) ∂r/∂u of every rest's direction
 
 
 def covariance_parts(ms: MotionSet, C, method: str = "magnus4") -> CovarianceParts:
@@ -209,16 +210,14 @@ def covariance_parts(ms: MotionSet, C, method: str = "magnus4") -> CovariancePar
 
     rest = rest_part(ms.u_cov) + motion_block(it.Q + bias_part(ms.bias_var))
     if ms.noise is None:
-        return CovarianceParts(it.R, r, J, rest, rest, ())
+        return CovarianceParts(it.R, r, J, rest, rest, (), A2)
     fixed = rest + motion_block(bias_part(ms.noise.wander_var))
-    if ms.noise.direction_cov is not None:  # the accelerometer calibration's error, common to all rests
-        fixed = fixed + A2 @ ms.noise.direction_cov @ A2.T
     P = np.eye(3)[None] - ms.u[:, :, None] * ms.u[:, None, :]
     # a per-motion error of C, δC = E C with E's entries iid (unit variance): δφ = D vec(E C), D = ∂φ/∂vec(C)
     per_motion_C = it.dphi_dC @ np.kron(np.eye(3), C.T @ C) @ np.swapaxes(it.dphi_dC, -1, -2)
     T = np.asarray(ms.noise.durations, float)
     V = (motion_block(per_motion_C), motion_block(T[:, None, None] * np.eye(3)), rest_part(P))
-    return CovarianceParts(it.R, r, J, rest, fixed, V)
+    return CovarianceParts(it.R, r, J, rest, fixed, V, A2)
 
 
 def evaluate(ms: MotionSet, C, method: str = "magnus4", *, rest_only: bool = False) -> Evaluation:

@@ -22,9 +22,12 @@ shape and an unknown size:
   component): a rest that is not quite at rest, a placement the accelerometer model
   misses.  It couples the two motions that share a rest.
 
-And, fixed: **the accelerometer calibration's own uncertainty** (its frame is the gyro's):
-one error of every rest's direction, common to the session
-(:func:`accelcal.gyro.calibrate.accel_direction_cov`).
+And **the accelerometer calibration's own uncertainty** (its frame is the gyro's): one
+error of every rest's direction, common to the session
+(:func:`accelcal.gyro.calibrate.accel_direction_cov`), propagated into the covariance of
+``C`` (not into the weights: ``C`` stays in the frame of the accelerometer calibration it
+is delivered with).  On SNU good2 the accelerometer's y-x non-orthogonality is ±0.45 deg
+(7.9 mrad): the gyro's ``T_xy`` in that frame cannot be known better.
 
 The three in the middle are variance components ``θ`` of the residual covariance ``Σ(θ) = Σ_0 +
 Σ_k θ_k V_k`` (:func:`accelcal.gyro.fit.covariance_parts`), estimated by restricted
@@ -328,8 +331,22 @@ def fit_with_noise(fitter, ms: MotionSet, C0, method: str = "magnus4"
         fit = fitter(ms, fit.C if fitter.__name__ == "fit_iterative" else C0, method)
         if not moved:
             break
-    adj = adjusted_covariance(covariance_parts(ms, fit.C, method), ms.noise.variances)
+    parts = covariance_parts(ms, fit.C, method)
+    adj = adjusted_covariance(parts, ms.noise.variances)
+    if ms.noise.direction_cov is not None:
+        adj = dataclasses.replace(adj, cov=adj.cov + _accel_part(parts, ms.noise))
     return dataclasses.replace(fit, cov=adj.cov), ms, adj
+
+
+def _accel_part(parts, mn: MotionNoise) -> np.ndarray:
+    """Covariance (9, 9) of ``vec(C)`` from the accelerometer calibration's error: ``D cov_u Dᵀ``
+    with ``D = ∂Ĉ/∂u = -Φ Jᵀ Σ⁻¹ A``.  Propagated, not weighted: ``C`` stays in the frame of
+    the accelerometer calibration it is delivered with."""
+    J = parts.J.reshape(-1, 9)
+    S = parts.fixed + sum(a * v for a, v in zip(mn.variances, parts.V))
+    SJ = np.linalg.solve(S, J)
+    D = np.linalg.solve(J.T @ SJ, SJ.T @ parts.A)
+    return D @ mn.direction_cov @ D.T
 
 
 __all__ = ["AdjustedCovariance", "COMPONENTS", "MotionNoise", "adjusted_covariance", "bias_wander", "estimate_components", "fit_with_noise",
