@@ -193,6 +193,13 @@ class GyroCalibration:
             lines.append(f"  motion residuals: {q.residual_rms_deg:.3g} deg RMS vs {q.predicted_rms_deg:.3g} deg "
                          f"from the rest noise (chi2/dof = {q.chi2 / max(q.dof, 1):.3g} on {q.dof} dof, "
                          f"excess {q.excess:.3g})")
+        nm = s.get("noise_model")
+        if nm:
+            wander = ", ".join(f"{v:.2g}" for v in nm.get("wander_psd", ()))
+            lines.append(f"  noise between the rests (the ±): per-motion error of C {100 * (nm.get('rotation_rel') or 0):.2g} %,"
+                         f" motion rate noise {nm.get('motion_rate') or 0:.2g} rad/sqrt(s), rest directions "
+                         f"{1e3 * (nm.get('rest_direction') or 0):.2g} mrad, bias wander PSD [{wander}] ({unit})^2/s "
+                         f"(chi2/dof = {nm.get('chi2_per_dof', float('nan')):.3g})")
         lines.append(f"  nominal {nom:.6g} rad/s per {unit} ({s.get('nominal_from', 'unit')})")
         lines += [f"warning: gyroscope: {w}" for w in q.warnings]
         return "\n".join(lines)
