@@ -5,8 +5,11 @@ a bias that walks (rate random walk), a rotation error per motion proportional t
 angle, per-rest accelerometer offsets, white noise — at sizes measured on the IMU-TK fork
 and SNU sessions (:mod:`accelcal.gyro.noise`'s estimates there: walk PSD 1e-8-2e-7
 rad²/s³, per-motion relative error 0.1-0.4 %, white noise 6-7e-4 rad/s per sample at 100
-Hz).  Each trial is calibrated by :func:`accelcal.gyro.calibrate.calibrate_gyro` as a
-session is (the known rests as poses, a perfect accelerometer), once with the noise model
+Hz), an accelerometer with 5 mrad errors calibrated (full LLS) from the same 17 rests.
+Each trial is calibrated by :func:`accelcal.gyro.calibrate.calibrate_gyro` as a
+session is (the known rests as poses, a perfect accelerometer, or with ``fitted_accelerometer``
+one with its own errors calibrated from the same rests: the gyro's frame is then the
+fitted one, whose uncertainty the ± carry), once with the noise model
 and once with the rest noise alone (the ± scaled by ``max(1, excess)``, the former way);
 a parameter is covered when ``|estimate - truth|`` is within its 95 % interval
 (:meth:`accelcal.gyro.result.GyroCalibration.interval95`: ``t(0.975, ν) s.e.`` with the
@@ -23,8 +26,8 @@ import pandas as pd
 
 #: The simulated sessions (sizes from the real ones, module docstring).
 SESSION = {"n_motions": 16, "angle_deg": 90.0, "peak_rate_dps": 150.0, "fs": 100.0, "rest_s": 1.5,
-           "init_rest_s": 5.0, "acc_noise": 0.01, "gyro_noise": 7e-4, "bias_walk_psd": 1e-7,
-           "motion_rel_std": 2e-3, "rest_offset_std": 0.0}
+           "init_rest_s": 5.0, "acc_noise": 0.03, "gyro_noise": 7e-4, "bias_walk_psd": 1e-7,
+           "motion_rel_std": 2e-3, "rest_offset_std": 0.0, "fitted_accelerometer": True}
 Z95 = 1.959963984540054
 PARAMETERS = ("s_x", "s_y", "s_z", "T_xy", "T_xz", "T_yx", "T_yz", "T_zx", "T_zy")
 
@@ -55,13 +58,23 @@ def trial(rng: np.random.Generator, session: dict = SESSION) -> list[dict]:
     from accelcal.gyro.model import GyroModel
     from accelcal.static import static_poses_from_intervals
 
+    session = dict(session)
+    fitted = session.pop("fitted_accelerometer", False)
     C = random_gyro_matrix(rng, 0.01, 0.5)
-    sim = simulate_recording(rng, C=C, gyro_bias=rng.normal(0, 0.01, 3), **session)
+    M = np.eye(3)
+    if fitted:  # an accelerometer with its own errors, calibrated from the same rests (full LLS)
+        M = np.tril(np.eye(3) + rng.normal(0, 5e-3, (3, 3)))
+    sim = simulate_recording(rng, C=C, gyro_bias=rng.normal(0, 0.01, 3), M=M, **session)
     poses = static_poses_from_intervals(sim["t"], sim["acc"], sim["rest_intervals"])
+    accel = _Identity()
+    if fitted:
+        from accelcal.calibration.fitting import calibrate_poses
+
+        accel = calibrate_poses(poses, sim["g"], "full_lls", unit="m/s^2")
     truth = _values(GyroModel(C, np.zeros(3)))
     rows = []
     for model in (True, False):
-        cal = calibrate_gyro(sim["t"], sim["gyro"], poses, _Identity(), g_sensitivity=False, noise_model=model)
+        cal = calibrate_gyro(sim["t"], sim["gyro"], poses, accel, g_sensitivity=False, noise_model=model)
         est, se, half = _values(cal.model), _ses(cal), _ses(cal, half=True)
         for p, e, s, w, t in zip(PARAMETERS, est, se, half, truth):
             rows.append({"noise_model": model, "parameter": p, "error": e - t, "se": s, "half_width": w,

@@ -149,7 +149,8 @@ def run(out: Path, paths: dict, sessions=tuple(SESSIONS), imutk_run: dict | None
     return tabs
 
 
-COLORS = {"accelcal": "C0", "imutk_run": "C1", "imutk_published": "C3", "factory": "C2", "imucal": "C4",
+COLORS = {"accelcal": "C0", "accelcal_rest_noise": "0.6", "imutk_run": "C1", "imutk_published": "C3", "factory": "C2",
+          "imucal": "C4",
           "accelcal_measured_axes": "C9"}
 
 
