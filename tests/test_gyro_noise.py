@@ -118,3 +118,33 @@ def test_coverage_and_stability_claims_judge_their_tables():
                          for k, v in (("s_*", 1.5), ("T_*", 0.7))])
     assert _stability_claim(stab)["verdict"] == "reproduced"
     assert _stability_claim(stab.assign(chi2_per_dof=[2.4, 0.7]))["verdict"] == "not_reproduced"
+
+
+def test_accelerometer_direction_covariance_matches_refits():
+    # the rests' directions under the accelerometer calibration refitted to re-noised pose means
+    import dataclasses
+
+    from accelcal.calibration.fitting import calibrate_poses
+    from accelcal.gyro.calibrate import accel_direction_cov
+    from accelcal.gyro.simulate import simulate_recording
+    from accelcal.static import static_poses_from_intervals
+
+    rng = np.random.default_rng(8)
+    M = np.tril(np.eye(3) + rng.normal(0, 5e-3, (3, 3)))
+    sim = simulate_recording(rng, n_motions=16, rest_s=1.5, init_rest_s=5.0, acc_noise=0.05, M=M)
+    poses = static_poses_from_intervals(sim["t"], sim["acc"], sim["rest_intervals"])
+    cal = calibrate_poses(poses, sim["g"], "full_lls", unit="m/s^2")
+    f = cal.apply(poses.means)
+    sig2 = float(np.sum((np.linalg.norm(f, axis=1) - sim["g"]) ** 2)) / (len(f) - 9)
+    pred = accel_direction_cov(cal, f) / sig2  # per unit noise variance of the pose means
+    assert pred.shape == (3 * len(f),) * 2 and np.allclose(pred, pred.T)
+    assert accel_direction_cov(SimpleNamespace(apply=lambda z: z), f) is None  # no base model: none
+    s = 0.01
+    us = []
+    for _ in range(200):
+        noisy = dataclasses.replace(poses, means=poses.means + s * rng.standard_normal(poses.means.shape))
+        x = calibrate_poses(noisy, sim["g"], "full_lls", unit="m/s^2").apply(poses.means)
+        us.append((x / np.linalg.norm(x, axis=1, keepdims=True)).ravel())
+    emp = np.cov(np.array(us).T) / s ** 2
+    ratio = np.trace(emp) / np.trace(pred)  # 1.01 on this draw
+    assert abs(ratio - 1) < 0.25, ratio
