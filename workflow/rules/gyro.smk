@@ -42,6 +42,7 @@ GYRO_STAGE = declare_stage(
             ("imucal's session: accelcal's Ferraris fit and imucal's", results("gyro/sessions/imucal_parameters.csv")),
             ("Session-to-session stability (IMU-TK fork data1-4, SNU good1-3)", results("gyro/sessions/stability.csv")),
             ("Monte Carlo: median RMS error / CRLB per configuration", results("gyro/montecarlo_summary.csv")),
+            ("Coverage of the 95 % intervals with a wandering bias", results("gyro/coverage_summary.csv")),
             ("Monte Carlo: time per problem (wall times)", results("gyro/montecarlo_timing.csv"))),
 )
 
@@ -110,6 +111,25 @@ rule gyro_montecarlo:
         "../scripts/gyro_montecarlo.py"
 
 
+rule gyro_coverage:
+    """Coverage of the gyro's 95 % intervals in a Monte Carlo with a wandering bias."""
+    output:
+        table=results("gyro/coverage.csv"),
+        summary=results("gyro/coverage_summary.csv"),
+    params:
+        gyro=GYRO,
+    log:
+        log_path("gyro/coverage"),
+    benchmark:
+        bench_path("gyro/coverage"),
+    threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=20,  # default config: about 2 min
+    script:
+        "../scripts/gyro_coverage.py"
+
+
 rule gyro_ipopt:
     """The Gauss-Newton gyro fit against CasADi/IPOPT on the same cost."""
     output:
@@ -159,6 +179,8 @@ rule gyro_claims:
         figure_of_merit=results("gyro/sessions/figure_of_merit.csv"),
         peer_parameters=results("gyro/sessions/peer_parameters.csv"),
         imucal_parameters=results("gyro/sessions/imucal_parameters.csv"),
+        coverage=results("gyro/coverage_summary.csv"),
+        stability=results("gyro/sessions/stability.csv"),
     output:
         results("claims/gyro.csv"),
     log:
@@ -232,6 +254,7 @@ rule gyro:
     input:
         expand(results("gyro/sessions/{t}.csv"), t=GYRO_SESSION_TABLES),
         results("gyro/montecarlo_summary.csv"),
+        results("gyro/coverage_summary.csv"),
         results("gyro/ipopt_check.csv"),
         results("claims/gyro.csv"),
         figure_files(*GYRO_STAGE.figures),

@@ -39,6 +39,7 @@ from .errors import GyroInputError, NoMotionError, SaturatedGyroError, TooFewMot
 from .fit import MIN_MOTIONS, MotionSet, evaluate, initial_scale, rotation_angles_deg
 from .integrate import integrate_intervals, log_so3
 from .model import RAW_UNITS, GyroModel
+from .noise import MotionNoise, bias_wander, fit_with_noise, g_sensitivity_test, wander_variance
 from .rests import (bias_series, check_time_base, fit_bias, measuring_range, motion_bias_variance, rest_noise,
                     rest_statistics, sample_interval, saturated_samples)
 from .result import RULES, GyroCalibration, GyroQuality
@@ -163,18 +164,67 @@ def _nominal(raw_unit: str, nominal_sensitivity, ms: MotionSet, integrator: str)
 
 
 def _use_g_sensitivity(choice, rs, bias, f_rest, acc) -> tuple[bool, dict]:
-    """Whether to fit the g-sensitivity: as given, or for 'auto' by an F test on the rest means."""
+    """Whether to fit the g-sensitivity: as given, or for 'auto' by the nested F test on the
+    rest means with the bias's wander in their covariance (:func:`accelcal.gyro.noise.g_sensitivity_test`:
+    a wandering bias is not mistaken for ``G f``)."""
     if choice != "auto":
         return bool(choice), {"decided": "given"}
     p = len(rs.means)
     if acc is None or p < MIN_RESTS_G or bias == "first":
         return False, {"decided": "auto", "reason": "no raw accelerometer samples" if acc is None else
                        f"{p} rests (< {MIN_RESTS_G})" if p < MIN_RESTS_G else "bias from the first rest"}
-    without, with_g = fit_bias(rs, "all"), fit_bias(rs, "all", f_rest)
-    d1, d2 = 9, with_g.dof
-    F = ((without.chi2 - with_g.chi2) / d1) / (with_g.chi2 / d2)
-    pv = float(dist.f_sf(F, d1, d2))
-    return pv < G_SENSITIVITY_P, {"decided": "auto", "F": float(F), "p_value": pv, "dof": [d1, d2]}
+    test = g_sensitivity_test(rs.means, rs.mean_std, rs.t_mid, f_rest)
+    return test["p_value"] < G_SENSITIVITY_P, {"decided": "auto", **test}
+
+
+def accel_direction_cov(accel, f_rest) -> np.ndarray | None:
+    """Joint covariance (3p, 3p) of the rests' gravity directions from the accelerometer
+    calibration's own uncertainty (its parameters' ``σ̂² (JᵀJ)⁻¹``, as
+    :func:`accelcal.uncertainty.standard_errors`): the gyro's ``C`` is expressed in the
+    accelerometer's frame, so an error of that frame is an error of ``C`` common to every
+    motion.  None for a calibration that is not the base model's (``M``, ``bias``, ``g``;
+    'full' or 'bias'), or without a degree of freedom left."""
+    from ..model import dM_dparams, params_from_m
+    from ..uncertainty import residual_jacobian
+
+    kind = getattr(accel, "model", None)
+    if kind not in ("full", "bias") or not all(hasattr(accel, a) for a in ("M", "bias", "g")):
+        return None
+    x = np.asarray(f_rest, float)
+    M, b = np.asarray(accel.M, float), np.asarray(accel.bias, float)
+    z = x @ M.T + b  # the rest means in the calibration's own unit, without its effects' offsets
+    J = residual_jacobian(z, M, b, kind)
+    n, q = J.shape
+    if n <= q:
+        return None
+    r = np.linalg.norm(x, axis=1) - float(accel.g)
+    cov = float(r @ r) / (n - q) * np.linalg.inv(J.T @ J)
+    Mi = np.linalg.inv(M)
+    dx = [np.broadcast_to(-Mi[:, j], x.shape) for j in range(3)]  # ∂x/∂b_j
+    if kind == "full":
+        dx += [-(x @ (Mi @ dMk).T) for dMk in dM_dparams(*params_from_m(M))]
+    nx = np.linalg.norm(x, axis=1)
+    u = x / nx[:, None]
+    P = (np.eye(3)[None] - u[:, :, None] * u[:, None, :]) / nx[:, None, None]
+    U = np.stack([np.einsum("pij,pj->pi", P, d) for d in dx], axis=2).reshape(-1, q)  # (3p, q)
+    return U @ cov @ U.T
+
+
+def _motion_noise(rs, best, t, starts, stops, f_rest, direction_cov=None) -> MotionNoise:
+    """The noise model of the motions before its components are fitted: durations and the
+    wander's part (:mod:`accelcal.gyro.noise`), for the bias mode of ``best``."""
+    q = bias_wander(rs.means, rs.mean_std, rs.t_mid, f_rest if best.g_sensitivity is not None else None)
+    p = len(rs.t_mid)
+    if best.mode == "interpolated":
+        weights = None
+    else:  # a constant bias: the weighted mean of the rests, or the first
+        a = np.eye(p)[0] if best.mode == "first" else np.mean(1.0 / rs.mean_std ** 2, axis=1)
+        a = a / a.sum()
+        weights = lambda tt: np.broadcast_to(a, (len(tt), p))  # noqa: E731
+    ts, te = t[starts], t[np.minimum(stops, len(t) - 1)]
+    windows = np.column_stack([t[rs.intervals[:, 0]], t[rs.intervals[:, 1] - 1]])
+    return MotionNoise(durations=np.maximum(te - ts, 0.0), wander_q=q, direction_cov=direction_cov,
+                       wander_var=wander_variance(q, rs.t_mid, ts, te, weights, windows))
 
 
 def motion_estimator(name: str):
@@ -190,16 +240,35 @@ def motion_estimator(name: str):
     return e
 
 
-def _standard_errors(C, cov, nominal, excess, bias_est) -> dict:
-    k = max(1.0, excess if math.isfinite(excess) else 1.0)
-    cov = cov * k * k
-    se_C = np.sqrt(np.clip(np.diag(cov), 0, None)).reshape(3, 3)
-    Jt = np.zeros((9, 9))  # ∂vec(T)/∂vec(C), T_ij = C_ij / C_jj
+def _misalignment_jacobian(C) -> np.ndarray:
+    """∂vec(T)/∂vec(C) (9, 9), ``T_ij = C_ij / C_jj`` (zero rows on the diagonal)."""
+    Jt = np.zeros((9, 9))
     for i in range(3):
         for j in range(3):
             if i != j:
                 Jt[3 * i + j, 3 * i + j] = 1.0 / C[j, j]
                 Jt[3 * i + j, 4 * j] = -C[i, j] / C[j, j] ** 2
+    return Jt
+
+
+def _parameter_dof(adj, C) -> dict:
+    """Satterthwaite degrees of freedom of ``C``'s entries, of ``T``'s and of the scale
+    factors (:class:`accelcal.gyro.noise.AdjustedCovariance`); None (JSON) for infinite."""
+    def tidy(v):
+        return [None if not np.isfinite(x) else float(x) for x in np.ravel(v)]
+    dof_C = adj.dof(np.eye(9))
+    Jt = _misalignment_jacobian(C)
+    off = [3 * i + j for i in range(3) for j in range(3) if i != j]
+    dof_T = np.full(9, np.nan)
+    dof_T[off] = adj.dof(Jt[off])
+    return {"C": tidy(dof_C), "T": tidy(dof_T), "scale_factors": tidy(dof_C[[0, 4, 8]])}
+
+
+def _standard_errors(C, cov, nominal, excess, bias_est) -> dict:
+    k = max(1.0, excess if math.isfinite(excess) else 1.0)
+    cov = cov * k * k
+    se_C = np.sqrt(np.clip(np.diag(cov), 0, None)).reshape(3, 3)
+    Jt = _misalignment_jacobian(C)
     se_T = np.sqrt(np.clip(np.diag(Jt @ cov @ Jt.T), 0, None)).reshape(3, 3)
     kb = max(1.0, bias_est.excess if math.isfinite(bias_est.excess) else 1.0)
     out = {"C": se_C, "T": se_T, "scale_factors": np.diag(se_C) / abs(nominal), "bias": bias_est.bias_se * kb}
@@ -211,7 +280,7 @@ def _standard_errors(C, cov, nominal, excess, bias_est) -> dict:
 def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, t_gyro=None,
                    nominal_sensitivity=None, estimator: str = "gyro_iterative", integrator: str = "magnus4",
                    bias: str = "interpolated", g_sensitivity="auto", gyro_range=None,
-                   time_base: str = "auto") -> GyroCalibration:
+                   time_base: str = "auto", noise_model: bool = True) -> GyroCalibration:
     """Calibrate the gyro of a multi-position session (module docstring).
 
     Parameters
@@ -256,6 +325,12 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
         5 %); then both are fitted and the one whose motion residuals fit the noise better
         (lower χ²) is kept — host receive times jitter while the sensor samples evenly,
         a sensor's own time stamps jitter with its sampling — and the choice is said.
+    noise_model : bool
+        Fit the noise between the rests (:mod:`accelcal.gyro.noise`: the bias's wander from
+        the rests, per-motion rotation errors, extra angle random walk in the motions, rest
+        direction errors) and weight the motions and give the ± by it (default).  False:
+        the rests' white noise alone, the ± scaled by ``max(1, excess)`` (the former
+        behaviour; the 95 % intervals then cover far less than 95 % when the bias wanders).
     """
     t0 = time.perf_counter()
     t = np.asarray(t, float)
@@ -279,7 +354,8 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
     sat = saturated_samples(gyro, gyro_range)
     starts, stops, before, after, notes = _motions(poses.intervals, tb.gaps, sat)
     all_ms = MotionSet(y, tb.h, starts, stops, before, after, u, u_cov, rest_noise(rs),
-                       motion_bias_variance(best, rs, before, after))
+                       motion_bias_variance(best, rs, before, after),
+                       _motion_noise(rs, best, t, starts, stops, f_rest, accel_direction_cov(accel, f_rest)))
     if all_ms.n_motions < MIN_MOTIONS:
         raise TooFewMotionsError(f"{len(u)} rests give {all_ms.n_motions} motions; the gyro's 9 parameters need at "
                                  f"least {MIN_MOTIONS}: record more poses (or shorter still phases: --min-duration)")
@@ -307,24 +383,36 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
     bases = {"index": tb.h, "timestamps": t}
     tried = ["index"] if (time_base == "auto" and tb.jitter <= RULES["jitter"]) else (
         ["index", "timestamps"] if time_base == "auto" else [time_base])
-    fits = {}
-    for name in tried:
-        fits[name] = fitter(dataclasses.replace(ms, h=bases[name]), nominal * np.eye(3), integrator)
-    chosen = min(fits, key=lambda k: fits[k].chi2)
+    fits, rest_fits, noises = {}, {}, {}
+    for name in tried:  # the noise model fitted with C; the time base judged by the rest noise alone
+        msb = dataclasses.replace(ms, h=bases[name])
+        if noise_model:
+            fits[name], noisy, adj = fit_with_noise(fitter, msb, nominal * np.eye(3), integrator)
+        else:
+            fits[name], noisy, adj = fitter(dataclasses.replace(msb, noise=None), nominal * np.eye(3),
+                                            integrator), msb, None
+        ev = evaluate(noisy, fits[name].C, integrator, rest_only=True)
+        rest_fits[name] = dataclasses.replace(fits[name], chi2=ev.chi2, evaluation=ev)
+        noises[name] = (noisy.noise, adj)
+    chosen = min(rest_fits, key=lambda k: rest_fits[k].chi2)
     fit = fits[chosen]
+    noise, adj = noises[chosen]
     all_ms = dataclasses.replace(all_ms, h=bases[chosen])
     model = GyroModel(fit.C, best.bias, best.g_sensitivity if g_sensitivity else None, raw_unit)
     se = _standard_errors(fit.C, fit.cov, nominal, fit.excess, best)
-    quality, table = _assess(fit, all_ms, used, notes, t, tb, best, integrator,
-                             {k: f.chi2 / max(f.dof, 1) for k, f in fits.items()}, chosen,
-                             _range_use(gyro, gyro_range, all_ms.subset(used)))
+    quality, table = _assess(rest_fits[chosen], all_ms, used, notes, t, tb, best, integrator,
+                             {k: f.chi2 / max(f.dof, 1) for k, f in rest_fits.items()}, chosen,
+                             _range_use(gyro, gyro_range, all_ms.subset(used)), se["C"])
     settings = {"estimator": est.name, "integrator": integrator, "bias_mode": bias, "nominal": nominal,
                 "nominal_from": nominal_from, "iterations": fit.iterations, "fit_seconds": fit.seconds,
                 "seconds": time.perf_counter() - t0, "n_rests": len(u),
                 "time_base": {"h": tb.h, "rate": tb.rate, "jitter": tb.jitter, "gaps": int(len(tb.gaps)),
-                              "used": chosen, "chi2_per_dof": {k: f.chi2 / max(f.dof, 1) for k, f in fits.items()}},
+                              "used": chosen, "chi2_per_dof": {k: f.chi2 / max(f.dof, 1) for k, f in rest_fits.items()}},
                 "bias_rests": {"chi2": best.chi2, "dof": best.dof, "excess": best.excess},
-                "g_sensitivity": bool(g_sensitivity), "g_sensitivity_test": g_test}
+                "g_sensitivity": bool(g_sensitivity), "g_sensitivity_test": g_test,
+                "noise_model": {**noise.to_dict(), "chi2": fit.chi2, "dof": fit.dof,
+                                "chi2_per_dof": fit.chi2 / max(fit.dof, 1),
+                                "parameter_dof": _parameter_dof(adj, fit.C)} if noise_model else None}
     return est.load_calibration()(model, se, quality, table, settings)
 
 
@@ -337,8 +425,9 @@ def _range_use(gyro, gyro_range, ms: MotionSet) -> float:
     return max(float(np.max(np.abs(gyro[a:b + 1] - centre))) / half for a, b in zip(ms.starts, ms.stops))
 
 
-def _assess(fit, all_ms: MotionSet, used, notes, t, tb, best, integrator, base_chi2, chosen, range_use):
-    """Quality, warnings and the per-motion table of a fit."""
+def _assess(fit, all_ms: MotionSet, used, notes, t, tb, best, integrator, base_chi2, chosen, range_use, se_C):
+    """Quality, warnings and the per-motion table of a fit (``fit``: judged by the rest noise
+    alone; ``se_C`` the standard errors of ``C`` with the noise model)."""
     ev = fit.evaluation
     ms = all_ms.subset(used)
     C = fit.C
@@ -366,8 +455,9 @@ def _assess(fit, all_ms: MotionSet, used, notes, t, tb, best, integrator, base_c
         flags.append("excess")
         warnings.append(f"motion residuals are {fit.excess:.3g}x what the rest noise predicts (chi2/dof = "
                         f"{fit.chi2 / dof:.3g} on {dof} dof): the gyro model, the integration or the rests miss "
-                        "something (a disturbed rest, saturation, bias drift); the ± include this factor")
-    rel = np.sqrt(np.diag(fit.cov)[[0, 4, 8]]) * max(1.0, fit.excess) / np.abs(np.diag(C))
+                        "something (a disturbed rest, saturation, bias drift); the ± carry the noise model fitted to "
+                        "the motions (settings: noise_model)")
+    rel = np.diag(se_C) / np.abs(np.diag(C))
     weak = [a for a in range(3) if rel[a] > RULES["scale_rel_se"] or turn[a] < RULES["min_axis_turn_deg"]]
     if weak:
         flags.append("few_axes")
@@ -436,4 +526,4 @@ def evaluate_model(t, gyro, poses, accel, C, bias_vector, *, integrator: str = "
     return evaluate(ms, C, integrator), ms
 
 
-__all__ = ["MIN_MOTIONS", "accel_directions", "calibrate_gyro", "evaluate_model", "motion_estimator"]
+__all__ = ["MIN_MOTIONS", "accel_direction_cov", "accel_directions", "calibrate_gyro", "evaluate_model", "motion_estimator"]

@@ -84,6 +84,10 @@ class MotionSet:
         integrated autocorrelation time, raw unit².
     bias_var : ndarray (m, 3)
         Variance of the bias removed during each motion, raw unit².
+    noise : MotionNoise, optional
+        The noise between the rests beyond the rests' white noise
+        (:mod:`accelcal.gyro.noise`): per-motion rotation errors, the bias's wander, the
+        rests' direction errors; None: the rest noise alone.
     """
 
     y: np.ndarray
@@ -96,6 +100,7 @@ class MotionSet:
     u_cov: np.ndarray
     y_var: np.ndarray
     bias_var: np.ndarray
+    noise: object = None
 
     @property
     def n_motions(self) -> int:
@@ -105,7 +110,8 @@ class MotionSet:
         """The same data with only the motions ``keep`` (bool mask or indices)."""
         idx = np.arange(self.n_motions)[keep]
         return MotionSet(self.y, self.h, self.starts[idx], self.stops[idx], self.rest_before[idx],
-                         self.rest_after[idx], self.u, self.u_cov, self.y_var, self.bias_var[idx])
+                         self.rest_after[idx], self.u, self.u_cov, self.y_var, self.bias_var[idx],
+                         None if self.noise is None else self.noise.subset(idx))
 
 
 def tangent_basis(u) -> np.ndarray:
@@ -153,8 +159,22 @@ class Evaluation:
         return np.rad2deg(np.sqrt(d))
 
 
-def evaluate(ms: MotionSet, C, method: str = "magnus4") -> Evaluation:
-    """Residuals, their Jacobian in ``vec(C)`` and their predicted covariance at ``C``."""
+@dataclass(frozen=True)
+class CovarianceParts:
+    """The residual covariance at one ``C`` in pieces: ``cov = fixed + Σ_k θ_k V[k]`` for the
+    variance components ``θ`` of :class:`accelcal.gyro.noise.MotionNoise` (its ``COMPONENTS``)."""
+
+    R: np.ndarray  #: (m, 3, 3) integrated rotations
+    r: np.ndarray  #: (m, 2) residuals [rad]
+    J: np.ndarray  #: (m, 2, 9) ∂r/∂vec(C)
+    rest: np.ndarray  #: (2m, 2m) from the rests' noise alone (gyro white noise, bias, pose means)
+    fixed: np.ndarray  #: (2m, 2m) ``rest`` plus the noise model's fixed part (the bias's wander)
+    V: tuple  #: per variance component (2m, 2m): the covariance of a unit component
+    A: np.ndarray | None = None  #: (2m, 3p) ∂r/∂u of every rest's direction
+
+
+def covariance_parts(ms: MotionSet, C, method: str = "magnus4") -> CovarianceParts:
+    """Residuals, their Jacobian in ``vec(C)`` and their covariance in pieces at ``C``."""
     C = np.asarray(C, float)
     omega = ms.y @ C.T
     rate_cov = C @ np.diag(ms.y_var) @ C.T
@@ -167,18 +187,48 @@ def evaluate(ms: MotionSet, C, method: str = "magnus4") -> Evaluation:
     EW = Et @ skew(w)  # (m, 2, 3): ∂r/∂φ_end
     r = np.einsum("mki,mi->mk", Et, w)
     J = EW @ it.dphi_dC
-    GC = it.G @ C
-    gyro = it.Q + GC @ (ms.bias_var[:, :, None] * np.swapaxes(GC, -1, -2))
     m, p = ms.n_motions, len(ms.u)
     A = np.zeros((m, 2, p, 3))  # ∂r_i/∂u of every rest: E_iᵀ R_iᵀ at the start, -E_iᵀ at the end
     A[np.arange(m), :, ms.rest_before, :] += Et @ Rt
     A[np.arange(m), :, ms.rest_after, :] -= Et
-    AU = np.einsum("mkpi,pij->mkpj", A, ms.u_cov).reshape(2 * m, 3 * p)
-    cov = AU @ A.reshape(2 * m, 3 * p).T
+    A2 = A.reshape(2 * m, 3 * p)
     idx = 2 * np.arange(m)[:, None, None] + np.arange(2)[None, :, None], 2 * np.arange(m)[:, None, None] + \
         np.arange(2)[None, None, :]
-    cov[idx] += EW @ gyro @ np.swapaxes(EW, -1, -2)
-    return Evaluation(it.R, r, J, cov, np.linalg.cholesky(cov))
+
+    def motion_block(per_motion):  # (m, 3, 3) rotation-vector covariance -> (2m, 2m) block diagonal
+        out = np.zeros((2 * m, 2 * m))
+        out[idx] = EW @ per_motion @ np.swapaxes(EW, -1, -2)
+        return out
+
+    def rest_part(u_cov):  # (p, 3, 3) covariance of the rests' directions -> (2m, 2m)
+        return np.einsum("mkpi,pij->mkpj", A, u_cov).reshape(2 * m, 3 * p) @ A2.T
+
+    GC = it.G @ C
+
+    def bias_part(bias_var):
+        return GC @ (bias_var[:, :, None] * np.swapaxes(GC, -1, -2))
+
+    rest = rest_part(ms.u_cov) + motion_block(it.Q + bias_part(ms.bias_var))
+    if ms.noise is None:
+        return CovarianceParts(it.R, r, J, rest, rest, (), A2)
+    fixed = rest + motion_block(bias_part(ms.noise.wander_var))
+    P = np.eye(3)[None] - ms.u[:, :, None] * ms.u[:, None, :]
+    # a per-motion error of C, δC = E C with E's entries iid (unit variance): δφ = D vec(E C), D = ∂φ/∂vec(C)
+    per_motion_C = it.dphi_dC @ np.kron(np.eye(3), C.T @ C) @ np.swapaxes(it.dphi_dC, -1, -2)
+    T = np.asarray(ms.noise.durations, float)
+    V = (motion_block(per_motion_C), motion_block(T[:, None, None] * np.eye(3)), rest_part(P))
+    return CovarianceParts(it.R, r, J, rest, fixed, V, A2)
+
+
+def evaluate(ms: MotionSet, C, method: str = "magnus4", *, rest_only: bool = False) -> Evaluation:
+    """Residuals, their Jacobian in ``vec(C)`` and their predicted covariance at ``C``
+    (``rest_only``: from the rests' noise alone, without the noise model of ``ms``)."""
+    parts = covariance_parts(ms, C, method)
+    if rest_only or ms.noise is None:
+        cov = parts.rest
+    else:
+        cov = parts.fixed + sum(v * V for v, V in zip(ms.noise.variances, parts.V))
+    return Evaluation(parts.R, parts.r, parts.J, cov, np.linalg.cholesky(cov))
 
 
 @dataclass(frozen=True)
@@ -342,5 +392,5 @@ def rotation_angles_deg(R) -> np.ndarray:
     return np.rad2deg(np.linalg.norm(log_so3(R), axis=-1))
 
 
-__all__ = ["Evaluation", "GyroFit", "MIN_MOTIONS", "MotionSet", "crlb", "evaluate", "fit_iterative", "fit_one_step",
+__all__ = ["CovarianceParts", "Evaluation", "GyroFit", "covariance_parts", "MIN_MOTIONS", "MotionSet", "crlb", "evaluate", "fit_iterative", "fit_one_step",
            "initial_scale", "motion_singular_values", "rotation_angles_deg", "tangent_basis"]

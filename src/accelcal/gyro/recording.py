@@ -30,7 +30,8 @@ MIN_RESTS = 1 + max(e.min_poses for e in estimators("gyroscope", data="motions")
 
 
 def calibrate_recording_gyro(rec, acc_cal, poses, *, estimator: str | None = None, nominal_sensitivity=None,
-                             gyro_range=None, g_sensitivity="auto", rotation_angles=None, angle_std_deg: float = 0.0):
+                             gyro_range=None, g_sensitivity="auto", rotation_angles=None, angle_std_deg: float = 0.0,
+                             noise_model: bool = True):
     """The gyro of ``rec`` (module docstring).
 
     Parameters
@@ -57,6 +58,8 @@ def calibrate_recording_gyro(rec, acc_cal, poses, *, estimator: str | None = Non
         between rests.
     angle_std_deg : float
         Uncertainty of each stated angle [deg].
+    noise_model : bool
+        Multi-position sessions: the noise model between the rests (:mod:`accelcal.gyro.noise`).
 
     Returns
     -------
@@ -68,7 +71,7 @@ def calibrate_recording_gyro(rec, acc_cal, poses, *, estimator: str | None = Non
     unit = rec.gyro_unit  # None: not stated; the session's motions or rotations decide it (unit_evidence)
     entry, chosen_by = _estimator_for(rec, estimator, rotation_angles is not None)
     cal = _calibrate(rec, acc_cal, poses, entry.name, unit, nominal_sensitivity, gyro_range, g_sensitivity,
-                     rotation_angles, angle_std_deg)
+                     rotation_angles, angle_std_deg, noise_model)
     return dataclasses.replace(cal, settings={**cal.settings, "estimator_chosen_by": chosen_by})
 
 
@@ -97,7 +100,7 @@ def _estimator_for(rec, name: str | None, angles_given: bool):
 
 
 def _calibrate(rec, acc_cal, poses, estimator, unit, nominal_sensitivity, gyro_range, g_sensitivity, rotation_angles,
-               angle_std_deg):
+               angle_std_deg, noise_model):
     if rec.rotations:
         from .ferraris import calibrate_ferraris_session
 
@@ -120,7 +123,7 @@ def _calibrate(rec, acc_cal, poses, estimator, unit, nominal_sensitivity, gyro_r
 
     return calibrate_gyro(rec.t, rec.gyro, poses, acc_cal, raw_unit=unit, acc=rec.acc,
                           nominal_sensitivity=nominal_sensitivity, estimator=estimator, gyro_range=gyro_range,
-                          g_sensitivity=g_sensitivity)
+                          g_sensitivity=g_sensitivity, noise_model=noise_model)
 
 
 __all__ = ["MIN_RESTS", "calibrate_recording_gyro"]

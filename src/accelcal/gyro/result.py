@@ -117,6 +117,21 @@ class GyroCalibration:
     def method(self) -> str:
         return self.CAL_TYPE
 
+    def interval95(self, name: str) -> np.ndarray:
+        """Half-width of the 95 % interval of ``name`` (``C``, ``T``, ``scale_factors``):
+        ``t(0.975, ν) s.e.`` with the Satterthwaite degrees of freedom ``ν`` the noise model
+        gives each parameter (:mod:`accelcal.gyro.noise`); ``1.96 s.e.`` without it."""
+        from .. import distributions as dist
+
+        se = np.asarray(self.standard_errors[name], float)
+        dof = ((self.settings.get("noise_model") or {}).get("parameter_dof") or {}).get(name)
+        if dof is None:
+            return 1.959963984540054 * se
+        nu = np.array([np.inf if v is None else v for v in dof], float).reshape(se.shape)
+        q = np.where(np.isfinite(nu) & (nu > 0), dist.t_ppf(0.975, np.where(np.isfinite(nu) & (nu > 0), nu, 1.0)),
+                     1.959963984540054)
+        return q * se
+
     def to_dict(self) -> dict:
         return _f({"sensor": "gyroscope", "cal_type": self.CAL_TYPE or None, "model": self.model.to_dict(),
                    "standard_errors": {k: np.asarray(v) for k, v in self.standard_errors.items()},
@@ -183,6 +198,13 @@ class GyroCalibration:
             lines.append(f"  motion residuals: {q.residual_rms_deg:.3g} deg RMS vs {q.predicted_rms_deg:.3g} deg "
                          f"from the rest noise (chi2/dof = {q.chi2 / max(q.dof, 1):.3g} on {q.dof} dof, "
                          f"excess {q.excess:.3g})")
+        nm = s.get("noise_model")
+        if nm:
+            wander = ", ".join(f"{v:.2g}" for v in nm.get("wander_psd", ()))
+            lines.append(f"  noise between the rests (the ±): per-motion error of C {100 * (nm.get('rotation_rel') or 0):.2g} %,"
+                         f" motion rate noise {nm.get('motion_rate') or 0:.2g} rad/sqrt(s), rest directions "
+                         f"{1e3 * (nm.get('rest_direction') or 0):.2g} mrad, bias wander PSD [{wander}] ({unit})^2/s "
+                         f"(chi2/dof = {nm.get('chi2_per_dof', float('nan')):.3g})")
         lines.append(f"  nominal {nom:.6g} rad/s per {unit} ({s.get('nominal_from', 'unit')})")
         lines += [f"warning: gyroscope: {w}" for w in q.warnings]
         return "\n".join(lines)

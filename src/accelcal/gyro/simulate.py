@@ -171,14 +171,24 @@ def simulate_session(rng: np.random.Generator, *, n_motions: int = 20, angle_deg
 def simulate_recording(rng: np.random.Generator, *, n_motions: int = 24, angle_deg: float = 100.0,
                        peak_rate_dps: float = 150.0, fs: float = 100.0, rest_s: float = 3.0, init_rest_s: float = 20.0,
                        g: float = 9.81, M=None, acc_bias=None, acc_noise: float = 0.01, C=None, gyro_bias=None,
-                       gyro_noise: float = 0.003, g_sensitivity=None, axis=None) -> dict:
+                       gyro_noise: float = 0.003, g_sensitivity=None, axis=None, bias_walk_psd: float = 0.0,
+                       motion_rel_std: float = 0.0, rest_offset_std: float = 0.0) -> dict:
     """A whole multi-position recording (time series) with its truth: an initial rest, then
     motions between rests; the sensor turns about itself (no linear acceleration).
 
     Accelerometer ``M f + b + noise`` (f the specific force, ``|f| = g``), gyro ``C⁻¹ ω +
     b_g + G f + noise``.  ``axis`` (3,): every motion turns about this one body axis
-    (alternating sense), instead of random moving axes.  Returns ``t``, ``acc``, ``gyro``
-    and the truth (``C``, ``M``, the biases, ``G``).
+    (alternating sense), instead of random moving axes.
+
+    What real sessions add (:mod:`accelcal.gyro.noise`): ``bias_walk_psd`` [rad²/s³] a
+    random walk of the gyro bias (rate random walk, every axis); ``motion_rel_std`` a
+    per-motion error of the rate, ``ω (I + E_i)`` with ``E_i``'s entries N(0, std²) (a
+    rotation error of about ``std × angle`` in every direction: a time-stamp or scale
+    error of that motion); ``rest_offset_std`` [rad] a per-rest offset of the accelerometer,
+    N(0, (g std)²) on each axis (a placement the accelerometer model misses).
+
+    Returns ``t``, ``acc``, ``gyro``, ``rest_intervals`` (the rests' ``[start, stop)``) and
+    the truth (``C``, ``M``, the biases, ``G``).
     """
     M = np.eye(3) if M is None else np.asarray(M, float)
     C = np.eye(3) if C is None else np.asarray(C, float)
@@ -189,7 +199,7 @@ def simulate_recording(rng: np.random.Generator, *, n_motions: int = 24, angle_d
     R_world = np.linalg.qr(rng.standard_normal((3, 3)))[0]
     R_world *= np.sign(np.linalg.det(R_world))
     n0, nr = int(round(init_rest_s * fs)), int(round(rest_s * fs))
-    Rs, ws = [np.broadcast_to(R_world, (n0, 3, 3))], [np.zeros((n0, 3))]
+    Rs, ws, rests, pos = [np.broadcast_to(R_world, (n0, 3, 3))], [np.zeros((n0, 3))], [(0, n0)], n0
     for i in range(n_motions):
         if axis is None:
             mo = random_motion(rng, angle_deg, peak_rate_dps)
@@ -199,19 +209,29 @@ def simulate_recording(rng: np.random.Generator, *, n_motions: int = 24, angle_d
                         np.array([_PEAK * abs(ang) / np.deg2rad(peak_rate_dps)]), np.zeros(1))
         tt = np.arange(1, int(np.ceil(mo.duration * fs)) + 1) * h
         Rs.append(R_world @ mo.orientations(tt))
-        ws.append(mo.rates(tt))
+        w = mo.rates(tt)
+        ws.append(w + w @ (motion_rel_std * rng.standard_normal((3, 3))).T if motion_rel_std else w)
         R_world = R_world @ mo.rotation()
         Rs.append(np.broadcast_to(R_world, (nr, 3, 3)))
         ws.append(np.zeros((nr, 3)))
+        pos += len(tt)
+        rests.append((pos, pos + nr))
+        pos += nr
     R = np.concatenate(Rs)
     w = np.concatenate(ws)
     f = g * np.einsum("nji,j->ni", R, up)  # specific force in the body frame
     acc = f @ M.T + ab + acc_noise * rng.standard_normal(f.shape)
+    if rest_offset_std:
+        for a, b in rests:
+            acc[a:b] += g * rest_offset_std * rng.standard_normal(3)
     gyro = w @ np.linalg.inv(C).T + gb + gyro_noise * rng.standard_normal(w.shape)
+    if bias_walk_psd:
+        walk = np.cumsum(np.sqrt(bias_walk_psd * h) * rng.standard_normal(w.shape), axis=0)
+        gyro = gyro + walk @ np.linalg.inv(C).T
     if g_sensitivity is not None:
         gyro = gyro + f @ np.asarray(g_sensitivity, float).T
     return {"t": np.arange(len(f)) * h, "acc": acc, "gyro": gyro, "rates": w, "C": C, "M": M, "acc_bias": ab,
-            "gyro_bias": gb, "g_sensitivity": g_sensitivity, "g": g}
+            "gyro_bias": gb, "g_sensitivity": g_sensitivity, "g": g, "rest_intervals": np.array(rests)}
 
 
 def random_gyro_matrix(rng: np.random.Generator, scale_std: float = 0.02, misalignment_std_deg: float = 1.0,

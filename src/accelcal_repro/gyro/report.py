@@ -15,9 +15,12 @@ Tables (tidy, written by :func:`run`):
 * ``imucal_parameters.csv``, ``imucal_figure_of_merit.csv``, ``ctu_parameters.csv`` — the
   Ferraris sessions (:mod:`accelcal_repro.gyro.ferraris_sessions`);
 * ``stability.csv`` — per group of sessions of one unit (IMU-TK fork data1-4, SNU good1-3)
-  and parameter: mean, scatter between sessions, the median s.e., and the excess
-  ``sqrt(χ²/dof)`` of the sessions about their weighted mean (1: the sessions agree within
-  their standard errors).
+  and parameter: mean, scatter between sessions, the median s.e., the χ²/dof of the
+  sessions about their weighted mean and its square root, the excess (1: the sessions agree
+  within their standard errors); pooled rows ``s_*`` and ``T_*`` sum the χ² and the dof
+  of the scales and of the misalignments; ``noise_model`` False: the same sessions
+  calibrated with the rest noise alone (the ± before :mod:`accelcal.gyro.noise`), whose
+  figure of merit is ``accelcal_rest_noise`` in ``figure_of_merit.csv``.
 """
 
 from __future__ import annotations
@@ -53,7 +56,9 @@ def _our_parameters(name: str, g) -> list[dict]:
 
 
 def stability(params: pd.DataFrame, groups=GROUPS) -> pd.DataFrame:
-    """Session-to-session scatter of each parameter within each group (module docstring)."""
+    """Session-to-session scatter of each parameter within each group (module docstring), and
+    pooled over the scales (``s_*``) and over the misalignments (``T_*``): their χ² summed,
+    over their dof summed (the biases are not pooled: a turn-on bias differs by session)."""
     rows = []
     for group, names in groups.items():
         sub = params[params.session.isin(names)]
@@ -65,8 +70,18 @@ def stability(params: pd.DataFrame, groups=GROUPS) -> pd.DataFrame:
             chi2 = float(np.sum(w * (d.value - mean) ** 2))
             rows.append({"group": group, "parameter": p, "unit": d.unit.iloc[0], "sessions": len(d),
                          "weighted_mean": mean, "scatter_std": float(d.value.std(ddof=1)),
-                         "median_se": float(d.se.median()), "excess": math.sqrt(chi2 / (len(d) - 1))})
-    return pd.DataFrame(rows)
+                         "median_se": float(d.se.median()), "excess": math.sqrt(chi2 / (len(d) - 1)),
+                         "chi2": chi2, "dof": len(d) - 1, "chi2_per_dof": chi2 / (len(d) - 1)})
+    out = pd.DataFrame(rows)
+    pooled = []
+    for group in dict.fromkeys(out.group) if len(out) else ():
+        for kind, prefix in (("s_*", "s_"), ("T_*", "T_")):
+            d = out[(out.group == group) & out.parameter.str.startswith(prefix)]
+            if len(d):
+                chi2, dof = float(d.chi2.sum()), int(d.dof.sum())
+                pooled.append({"group": group, "parameter": kind, "unit": d.unit.iloc[0], "sessions": int(d.sessions.max()),
+                               "excess": math.sqrt(chi2 / dof), "chi2": chi2, "dof": dof, "chi2_per_dof": chi2 / dof})
+    return pd.concat([out, pd.DataFrame(pooled)], ignore_index=True) if pooled else out
 
 
 def _session_row(name: str, r: dict) -> dict:
@@ -93,7 +108,7 @@ def run(out: Path, paths: dict, sessions=tuple(SESSIONS), imutk_run: dict | None
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    srows, prows, peer_tabs, foms, times = [], [], [], [], []
+    srows, prows, peer_tabs, foms, times, rest_rows = [], [], [], [], [], []
     tabs = {"imucal_parameters": pd.DataFrame(), "imucal_figure_of_merit": pd.DataFrame()}
     for name in sessions:
         spec = SESSIONS[name]
@@ -105,6 +120,11 @@ def run(out: Path, paths: dict, sessions=tuple(SESSIONS), imutk_run: dict | None
         srows.append(_session_row(name, r))
         times.append({"session": name, "accelerometer_s": r["acc_seconds"], "gyro_s": r["gyro_seconds"]})
         prows += _our_parameters(name, r["gyro"])
+        if any(name in g for g in GROUPS.values()):  # the same session with the rest noise alone (before)
+            before = calibrate_session(spec, paths, noise_model=False)["gyro"]
+            rest_rows += [{**row, "noise_model": False} for row in _our_parameters(name, before)]
+            foms.append(figure_of_merit(name, r["rec"], r["poses"], r["acc"], before, {}).query(
+                "calibration == 'accelcal'").assign(calibration="accelcal_rest_noise"))
         if r["rec"].rotations:  # a Ferraris session: imucal runs on it (its own accelerometer for everyone)
             p = paths[spec.dataset]
             imucal = run_imucal(p[spec.acc], p[spec.intervals])
@@ -118,7 +138,10 @@ def run(out: Path, paths: dict, sessions=tuple(SESSIONS), imutk_run: dict | None
                  "parameters": pd.DataFrame(prows),
                  "peer_parameters": pd.concat(peer_tabs, ignore_index=True) if peer_tabs else pd.DataFrame(),
                  "figure_of_merit": pd.concat(foms, ignore_index=True) if foms else pd.DataFrame()})
-    tabs["stability"] = stability(tabs["parameters"])
+    rest = pd.DataFrame(rest_rows)
+    tabs["stability"] = pd.concat([stability(tabs["parameters"]).assign(noise_model=True)]
+                                  + ([stability(rest).assign(noise_model=False)] if len(rest) else []),
+                                  ignore_index=True)
     tabs["ctu_parameters"] = ctu_calibration(paths[CTU[0]][CTU[1]])
     tabs = {k: v if len(v.columns) else pd.DataFrame(columns=["none"]) for k, v in tabs.items()}  # a header
     for k, v in tabs.items():
@@ -126,7 +149,8 @@ def run(out: Path, paths: dict, sessions=tuple(SESSIONS), imutk_run: dict | None
     return tabs
 
 
-COLORS = {"accelcal": "C0", "imutk_run": "C1", "imutk_published": "C3", "factory": "C2", "imucal": "C4",
+COLORS = {"accelcal": "C0", "accelcal_rest_noise": "0.6", "imutk_run": "C1", "imutk_published": "C3", "factory": "C2",
+          "imucal": "C4",
           "accelcal_measured_axes": "C9"}
 
 

@@ -98,7 +98,8 @@ def read_session(spec: SessionSpec, paths: dict):
                 intervals=p[spec.intervals] if spec.intervals else None, **spec.read)
 
 
-def calibrate_session(spec: SessionSpec, paths: dict, *, estimator: str | None = None) -> dict:
+def calibrate_session(spec: SessionSpec, paths: dict, *, estimator: str | None = None,
+                      noise_model: bool = True) -> dict:
     """Accelerometer and gyro of one session, as ``accelcal calibrate`` (module docstring), and their times."""
     from dataclasses import replace
 
@@ -109,7 +110,7 @@ def calibrate_session(spec: SessionSpec, paths: dict, *, estimator: str | None =
     t0 = time.perf_counter()
     acc, poses = calibrate_recording(rec, spec.g, spec.method, search=True, min_poses=MIN_RESTS)
     t1 = time.perf_counter()
-    gyro = calibrate_recording_gyro(rec, acc, poses, estimator=estimator)
+    gyro = calibrate_recording_gyro(rec, acc, poses, estimator=estimator, noise_model=noise_model)
     t2 = time.perf_counter()
     search = acc.provenance.get("static", {}).get("search")
     return {"session": spec.name, "rec": rec, "poses": poses, "acc": replace(acc, gyro=gyro), "gyro": gyro,

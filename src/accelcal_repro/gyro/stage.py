@@ -2,7 +2,7 @@
 
 Pieces (``workflow/rules/gyro.smk`` runs each as a job; :func:`run` all in one process, for
 tests): :func:`integrator_table` (:mod:`.integrators`), :func:`monte_carlo_tables`
-(:mod:`.montecarlo`), :func:`ipopt_table` (:mod:`.ipopt_check`), :func:`accelcal_repro.gyro.report.run`
+(:mod:`.montecarlo`), :func:`coverage_tables` (:mod:`.coverage`), :func:`ipopt_table` (:mod:`.ipopt_check`), :func:`accelcal_repro.gyro.report.run`
 (the real sessions and the peers) and :func:`claims`.  ``config`` is the workflow config's
 ``gyro`` section (``config/config.yaml``).
 
@@ -13,6 +13,8 @@ papers'), each rule stated in its text:
   induces at hand-motion rates;
 * the iterative estimate at the Cramér–Rao bound; where the one-step estimate is enough
   and where it is not; Gauss-Newton finds IPOPT's minimum;
+* the 95 % intervals' coverage in a Monte Carlo with a wandering bias (:mod:`.coverage`),
+  and the session-to-session χ²/dof of scales and misalignments on the real sessions;
 * on the real sessions: the figure of merit against IMU-TK (published results, and its run
   from source when the config names it), the Xsens sensitivities against the data sheet,
   the imucal session against imucal itself.
@@ -63,14 +65,25 @@ FOM_IMUTK = Claim("gyro", "figure_of_merit_vs_imutk", "accelcal's gyro calibrati
                   "published results; its run from source where given)", "every session")
 XSENS_SHEET = Claim("gyro", "xsens_data_sheet", "The Xsens gyro sensitivities (counts per rad/s) agree with the data "
                     "sheet's within 0.2 %", "< 0.2 %")
+COVERAGE = Claim("gyro", "interval_coverage", "With the noise model between the rests, the gyro's 95 % intervals of "
+                 "scale and misalignment cover the truth 0.93-0.97 of the time in a Monte Carlo with a wandering "
+                 "bias and per-motion errors (pooled over the nine parameters)", "0.93-0.97")
+STABILITY = Claim("gyro", "session_stability", "Session to session, the gyro scales and misalignments agree within "
+                  "their standard errors: χ²/dof <= 2, pooled over the scales and over the misalignments, for the "
+                  "IMU-TK fork sessions and for SNU good2/good3 (biases excluded: a turn-on bias)", "<= 2")
+#: Samples (trials x 9 parameters) the coverage rule needs: 2 binomial s.e. of 0.95 within the 0.02 margin.
+COVERAGE_MINIMUM = MinimumSample(math.ceil(0.95 * 0.05 / 0.01 ** 2), "parameter draws (trials x 9)",
+                                 "with fewer, 2 binomial standard errors of the coverage exceed the rule's 0.02 margin")
 IMUCAL_AGREES = Claim("gyro", "imucal_agrees", "On imucal's example session accelcal's Ferraris fit (nominal axes, "
                       "as imucal) agrees with imucal's on every scale and misalignment within 3 standard errors",
                       "<= 3 s.e.")
 
 
 def claims(integ: pd.DataFrame, mc: pd.DataFrame, ipopt: pd.DataFrame, fom: pd.DataFrame,
-           peer_parameters: pd.DataFrame, imucal_parameters: pd.DataFrame | None = None) -> pd.DataFrame:
-    """The stage's claims (module docstring) from its tables."""
+           peer_parameters: pd.DataFrame, imucal_parameters: pd.DataFrame | None = None,
+           coverage: pd.DataFrame | None = None, stability: pd.DataFrame | None = None) -> pd.DataFrame:
+    """The stage's claims (module docstring) from its tables (``coverage``: the summary of
+    :mod:`.coverage`; ``stability``: the sessions' table of :mod:`.report`)."""
     from .integrators import choose
     from .montecarlo import summary
 
@@ -109,7 +122,35 @@ def claims(integ: pd.DataFrame, mc: pd.DataFrame, ipopt: pd.DataFrame, fom: pd.D
         rows.append(IMUCAL_AGREES.judge(d, d <= 3.0, "results/gyro/sessions/imucal_parameters.csv: diff_in_se", "{:.2f} s.e."))
     else:
         rows.append(IMUCAL_AGREES.not_reproducible("imucal's session was not calibrated (gyro/sessions/sessions.csv)"))
+    rows.append(_coverage_claim(coverage))
+    rows.append(_stability_claim(stability))
     return pd.DataFrame(rows, columns=COLUMNS)
+
+
+def _coverage_claim(coverage) -> dict:
+    if coverage is None or not len(coverage) or "noise_model" not in coverage:
+        return COVERAGE.not_reproducible("no coverage Monte Carlo (gyro/coverage_summary.csv)")
+    c = coverage[coverage.noise_model.astype(str) == "True"].set_index("parameter")
+    if "all" not in c.index:
+        return COVERAGE.not_reproducible("no coverage Monte Carlo (gyro/coverage_summary.csv)")
+    v, n = float(c.loc["all", "coverage"]), float(c.loc["all", "n"])
+    kinds = ", ".join(f"{k} {c.loc[k, 'coverage']:.3f}" for k in ("scale", "misalignment") if k in c.index)
+    return COVERAGE.judge(v, 0.93 <= v <= 0.97, f"results/gyro/coverage_summary.csv: all ({kinds}; "
+                          f"± {float(c.loc['all', 'coverage_se']):.3f})", "{:.3f}", scale=COVERAGE_MINIMUM.at(n))
+
+
+def _stability_claim(stability) -> dict:
+    if stability is None or not len(stability) or "chi2_per_dof" not in stability:
+        return STABILITY.not_reproducible("no session-to-session table (gyro/sessions/stability.csv)")
+    d = stability[stability.parameter.isin(["s_*", "T_*"])]
+    if "noise_model" in d:
+        d = d[d.noise_model.astype(str) == "True"]
+    if not len(d):
+        return STABILITY.not_reproducible("fewer than two sessions of one unit were calibrated")
+    worst = float(d.chi2_per_dof.max())
+    shown = "; ".join(f"{r.group} {r.parameter} {r.chi2_per_dof:.2f}" for r in d.itertuples())
+    return STABILITY.judge(worst, worst <= 2.0, "results/gyro/sessions/stability.csv: pooled rows s_*, T_*",
+                           shown=shown)
 
 
 def _fom_claim(fom: pd.DataFrame) -> dict:
@@ -155,6 +196,14 @@ def ipopt_table(config: dict) -> tuple[pd.DataFrame, pd.DataFrame]:
     return df.drop(columns=list(IPOPT_TIMES)), df[["motions", *IPOPT_TIMES]]
 
 
+def coverage_tables(config: dict) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The coverage Monte Carlo of the 95 % intervals (:mod:`.coverage`) and its summary."""
+    from . import coverage
+
+    df = coverage.coverage(int(config["coverage"]["trials"]), int(config["seed"]))
+    return df, coverage.summary(df)
+
+
 def monte_carlo_summary(mc: pd.DataFrame) -> pd.DataFrame:
     """Median RMS error / CRLB per configuration, estimator and kind of parameter (the report's table)."""
     from .montecarlo import summary
@@ -175,18 +224,21 @@ def run(out: Path, config: dict, paths: dict, imutk_run: dict | None = None) -> 
     integ = integrator_table(config)
     mc, timing = monte_carlo_tables(config)
     ipopt, ipopt_times = ipopt_table(config)
+    cov, cov_summary = coverage_tables(config)
     tabs = report.run(out / "sessions", paths, tuple(config["sessions"]), imutk_run)
     for name, df in (("integrators", integ), ("montecarlo", mc), ("montecarlo_timing", timing),
                      ("montecarlo_summary", monte_carlo_summary(mc)), ("ipopt_check", ipopt),
-                     ("ipopt_timing", ipopt_times)):
+                     ("ipopt_timing", ipopt_times), ("coverage", cov), ("coverage_summary", cov_summary)):
         df.to_csv(out / f"{name}.csv", index=False)
     save_figure(integrators.figure(integ), out / "integrators")
     save_figure(montecarlo.figure(mc), out / "montecarlo")
     save_figure(report.figure(tabs["figure_of_merit"], tabs["imucal_figure_of_merit"]), out / "figure_of_merit")
-    led = claims(integ, mc, ipopt, tabs["figure_of_merit"], tabs["peer_parameters"], tabs["imucal_parameters"])
+    led = claims(integ, mc, ipopt, tabs["figure_of_merit"], tabs["peer_parameters"], tabs["imucal_parameters"],
+                 cov_summary, tabs["stability"])
     led.to_csv(out / "claims.csv", index=False)
-    return {"integrators": integ, "montecarlo": mc, "timing": timing, "ipopt": ipopt, "claims": led, **tabs}
+    return {"integrators": integ, "montecarlo": mc, "timing": timing, "ipopt": ipopt, "claims": led,
+            "coverage": cov_summary, **tabs}
 
 
-__all__ = ["IPOPT_TIMES", "claims", "integrator_table", "ipopt_table", "monte_carlo_summary", "monte_carlo_tables",
+__all__ = ["IPOPT_TIMES", "claims", "coverage_tables", "integrator_table", "ipopt_table", "monte_carlo_summary", "monte_carlo_tables",
            "run"]
