@@ -25,9 +25,10 @@ PACKAGES = ("accelcal", "accelcal_repro")
 #: Third-party packages the core may import anywhere, and where matplotlib is allowed.
 CORE_DEPENDENCIES = {"numpy", "scipy", "pandas", "casadi"}
 PLOTTING_MODULES = {"plotting.py", "discrepancy/figures.py", "noise/figures.py"}
-#: Optional extras (ros, px4, ardupilot), each imported lazily by its log reader only.
+#: Optional extras (ros, px4, ardupilot, geomag), each imported lazily by its log reader (the IGRF by
+#: the magnetometer's field module) only.
 EXTRA_MODULES = {"formats/ros.py": {"rosbags"}, "formats/ros_synthetic.py": {"rosbags"},
-                 "formats/px4.py": {"pyulog"}, "formats/ardupilot.py": {"pymavlink"}}
+                 "formats/px4.py": {"pyulog"}, "formats/ardupilot.py": {"pymavlink"}, "mag/field.py": {"ppigrf"}}
 #: numba (the optional ``fast`` extra) is imported by the kernel loader only, on first use.
 KERNEL_LOADER = "kernels.py"
 

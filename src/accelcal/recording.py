@@ -53,6 +53,11 @@ class Recording:
         file has no gyroscope (or the reader does not read it).
     gyro_unit : {'rad/s', 'counts'} or None
         Unit of ``gyro`` when known (data in deg/s are converted to rad/s when read).
+    mag : ndarray, shape (n, 3), or None
+        Magnetic field at the same instants as ``acc``, in ``mag_unit``; None when the file
+        has no magnetometer (or the reader does not read it).
+    mag_unit : {'uT', 'counts'} or None
+        Unit of ``mag`` (gauss, tesla... are converted to µT when read).
     rotations : dict or None
         Known rotations of a Ferraris session (imucal's ``x_rot``, ``y_rot``, ``z_rot``
         sections): ``{label: (start, stop)}``, sample ranges; None when the file does not
@@ -72,6 +77,8 @@ class Recording:
     gyro: np.ndarray | None = None
     gyro_unit: str | None = None
     rotations: dict | None = None
+    mag: np.ndarray | None = None
+    mag_unit: str | None = None
 
     def __post_init__(self):
         t = np.array(self.t, dtype=float)
@@ -83,7 +90,9 @@ class Recording:
                 + ("" if temp is None else f", temp{temp.shape}"))
         gyro = _check_gyro(self.gyro, self.gyro_unit, t.size, self.source)
         intervals, labels = _check_intervals(self.intervals, self.labels, t.size, self.source)
-        for a in (t, acc, temp, intervals, gyro):
+        mag = _check_mag(self.mag, self.mag_unit, t.size, self.source)
+        object.__setattr__(self, "mag", mag)
+        for a in (t, acc, temp, intervals, gyro, mag):
             if a is not None:
                 a.setflags(write=False)  # frozen means frozen: no in-place edits of shared data
         object.__setattr__(self, "t", t)
@@ -123,6 +132,19 @@ def _check_gyro(gyro, unit: str | None, n: int, source: str):
         raise RecordingError(f"{source}: gyroscope unit {unit!r}; a Recording holds rad/s or counts "
                              "(convert deg/s when reading)")
     return gyro
+
+
+def _check_mag(mag, unit: str | None, n: int, source: str):
+    """The field as an (n, 3) float array (or None), in a unit a Recording holds."""
+    if mag is None:
+        return None
+    mag = np.array(mag, dtype=float)
+    if mag.shape != (n, 3):
+        raise RecordingError(f"{source}: magnetometer data of shape {mag.shape}, expected ({n}, 3) like the "
+                             "accelerometer")
+    if unit not in (None, "uT", "counts"):
+        raise RecordingError(f"{source}: magnetometer unit {unit!r}; a Recording holds uT or counts")
+    return mag
 
 
 def _check_rotations(rotations, n: int, source: str):

@@ -8,7 +8,7 @@ import time
 from pathlib import Path
 
 from ..registry import estimators
-from . import gyro
+from . import gyro, mag
 from .common import (STANDARD_GRAVITY, _gravity, _nominal, _provenance, _rate_hint, _read, _reader_options,
                      _static_options, _static_settings, _step)
 
@@ -35,6 +35,7 @@ def add_parser(sub, epilog: str) -> None:
     n.add_argument("--zero", metavar="C[,C,C]", help="the output at zero specific force [counts] (default 0)")
     _static_options(c)
     gyro.add_gyro_options(c)
+    mag.add_mag_options(c)
     c.set_defaults(func=_calibrate)
 
 
@@ -47,7 +48,8 @@ def _calibrate(args) -> int:
 
     t0 = time.perf_counter()
     rec = _read(args)
-    rec = replace(rec, notes=rec.notes + (gyro.note_gyro(args, rec),))
+    rec = replace(rec, notes=rec.notes + (gyro.note_gyro(args, rec), mag.note_mag(args, rec)))
+    mag.field_from_args(args)  # a bad --location or --date is refused before any work
     g = STANDARD_GRAVITY if args.g is None else args.g
     static = _static_settings(args, rec)
     method = args.method
@@ -63,6 +65,9 @@ def _calibrate(args) -> int:
     if gyro.wants_gyro(args, rec):
         with _step("calibrating the gyroscope"):
             cal = replace(cal, gyro=gyro.calibrate(args, rec, cal, poses))
+    if mag.wants_mag(args, rec):
+        with _step("calibrating the magnetometer"):
+            cal = replace(cal, mag=mag.calibrate(args, rec, cal, poses))
     prov = {**_provenance(args, t0), "g_source": "--g" if args.g is not None else STANDARD_GRAVITY_SOURCE}
     cal = _with_provenance(cal, prov)
     figures = []
@@ -82,6 +87,8 @@ def _calibrate(args) -> int:
     _summary(cal, poses, rec, args)
     if cal.gyro is not None:
         print(cal.gyro.summary(), file=sys.stderr)
+    if cal.mag is not None:
+        print(cal.mag.summary(), file=sys.stderr)
     return 0
 
 

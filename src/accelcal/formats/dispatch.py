@@ -36,7 +36,7 @@ from .text import load_text
 def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit: str | None = None,
          time_unit: str | None = None, rate: float | None = None, intervals=None, gyro=None,
          gyro_unit: str | None = None, topic: str | None = None, instance: int | None = None,
-         time_source: str | None = None):
+         time_source: str | None = None, mag_unit: str | None = None):
     """Read an accelerometer recording (and its gyroscope, when the file or ``gyro`` has one).
 
     Parameters
@@ -70,6 +70,9 @@ def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit
         Unit of the gyro values (``rad/s``, ``deg/s``, ``counts``) of a table or of the
         ``gyro`` file; overrides the header.  Formats that define their gyro's unit ignore
         it (with a note).
+    mag_unit : str, optional
+        Unit of the magnetometer columns of a table (``uT``, ``T``, ``gauss``, ``mG``,
+        ``counts``...); overrides the header (:mod:`accelcal.formats.magnetic`).
     topic : str, optional
         Logs: the IMU topic (ROS), ``sensor_accel`` or ``sensor_combined`` (PX4), the IMU
         message (DataFlash); default the only one (several: a one-line error listing them).
@@ -87,7 +90,7 @@ def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit
     """
     path = Path(path)
     options = {"columns": columns, "unit": unit, "time_unit": time_unit, "rate": rate, "gyro_unit": gyro_unit,
-               "topic": topic, "instance": instance, "time_source": time_source}
+               "mag_unit": mag_unit, "topic": topic, "instance": instance, "time_source": time_source}
     if strict:
         return _read_strict(path, format, {**options, "intervals": intervals, "gyro": gyro})
     fmt = None if format == "auto" else format_named(format)
@@ -214,6 +217,8 @@ def _read_format(path: Path, fmt: Format, text: str | None, options: dict, notes
         notes.append(f"--time-unit ignored: the {fmt.name} format defines its time")
     if options["gyro_unit"] is not None and "gyro_unit" not in fmt.options and rec.gyro is not None:
         notes.append(f"--gyro-unit ignored: the {fmt.name} format defines its gyro's unit")
+    if options["mag_unit"] is not None and "mag_unit" not in fmt.options and rec.mag is not None:
+        notes.append(f"--mag-unit ignored: the {fmt.name} format defines its magnetometer's unit")
     return rec
 
 

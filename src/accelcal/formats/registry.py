@@ -30,9 +30,9 @@ from ..errors import MissingExtraError, RecordingError
 
 #: The reading options (of :func:`accelcal.formats.read`) a reader may take itself.  One it
 #: does not take is applied by the dispatcher: ``unit`` converts or checks the values,
-#: ``rate`` replaces the time by sample index / rate, ``time_unit`` and ``gyro_unit`` are
+#: ``rate`` replaces the time by sample index / rate, ``time_unit``, ``gyro_unit`` and ``mag_unit`` are
 #: ignored with a note, ``columns`` and the log options are refused.
-TABLE_OPTIONS = ("columns", "unit", "time_unit", "rate", "gyro_unit")
+TABLE_OPTIONS = ("columns", "unit", "time_unit", "rate", "gyro_unit", "mag_unit")
 #: The options of logs, which hold several sensors and two clocks: the IMU topic, the
 #: sensor instance, and whose time stamps (``'header'``: the sensor's, ``'log'``: the log's).
 LOG_OPTIONS = ("topic", "instance", "time_source")
@@ -41,7 +41,7 @@ TIME_SOURCES = ("header", "log")
 READING_OPTIONS = TABLE_OPTIONS + LOG_OPTIONS
 #: The command-line option of each reading option, for messages.
 OPTION_FLAGS = {"columns": "--columns", "unit": "--unit", "time_unit": "--time-unit", "rate": "--rate",
-                "gyro_unit": "--gyro-unit", "topic": "--topic", "instance": "--instance",
+                "gyro_unit": "--gyro-unit", "mag_unit": "--mag-unit", "topic": "--topic", "instance": "--instance",
                 "time_source": "--time-source"}
 #: Characters of the decoded text that text formats are sniffed on.
 TEXT_HEAD_CHARS = 8192
