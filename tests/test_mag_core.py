@@ -164,3 +164,16 @@ def test_coverage_counts_sections_of_the_sphere():
     rng = np.random.default_rng(0)
     assert coverage(_directions(rng, 5000)) == 1.0
     assert coverage(_directions(rng, 5000)[:, [0, 1, 2]] * [1, 1, 0] + [0, 0, 1e-9]) < 0.3
+
+
+def test_nested_soft_iron_test_names_a_sphere_and_an_ellipsoid():
+    """A sphere with noise: p not small; the SNU-like ellipsoid: p tiny (false positive and power)."""
+    rng = np.random.default_rng(9)
+    h = _directions(rng, 800)
+    cov = np.eye(3) * 0.002**2
+    sphere = B_TRUE + h * 0.35 + rng.normal(size=h.shape) * 0.002
+    ellipsoid = _raw(h) + rng.normal(size=h.shape) * 0.002
+    p_sph = calibrate_magnetometer(sphere).trust["soft_iron_p"]
+    p_ell = calibrate_magnetometer(ellipsoid).trust["soft_iron_p"]
+    assert p_sph > 0.01 and p_ell < 1e-6
+    del cov

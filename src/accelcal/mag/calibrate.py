@@ -14,7 +14,9 @@ import numpy as np
 
 from .align import MIN_DIRECTIONS, align
 from .errors import MagDisturbanceError
-from .fit import FieldSamples
+from scipy.stats import f as f_dist
+
+from .fit import FieldSamples, fit_hard_iron
 from .model import MagModel
 from .registry import mag_estimator
 from .result import MagCalibration, spreads
@@ -77,8 +79,7 @@ def calibrate_magnetometer(mag, *, raw_unit: str = "unknown", acc_cal=None, pose
     else:
         noise_where = "the accelerometer's rests"
     cov, n_noise, how = rest_noise(m, intervals)
-    if cov is not None:
-        how = f"{noise_where}: {how}"
+    how = f"{noise_where}: {how}" if cov is not None else "no rest: the s.e. from the fit's own residual"
     samples = FieldSamples(m, noise_cov=cov, noise_source=how, n_independent=_n_independent(m, intervals))
     est = mag_estimator(estimator)
     fit = est.fit(samples)
@@ -104,6 +105,7 @@ def calibrate_magnetometer(mag, *, raw_unit: str = "unknown", acc_cal=None, pose
     trust = {"coverage": cover, "noise_source": how, "n_samples": int(samples.n),
              "chi2_dof": None if fit.chi2 is None else fit.chi2 / fit.dof,
              "disturbed_rests": [int(k) for k in disturbed], "alignment_from": align_how}
+    trust.update(_soft_iron_test(samples, fit))
     if f_dirs is not None:
         trust.update(spreads(h_dirs @ R.T, f_dirs))
         trust["dip_spread_unaligned_deg"] = spreads(h_dirs, f_dirs)["dip_spread_deg"]
@@ -111,6 +113,19 @@ def calibrate_magnetometer(mag, *, raw_unit: str = "unknown", acc_cal=None, pose
         trust["dip_model_deg"] = float(field["dip_deg"])
     return MagCalibration(model=model, fit=fit, alignment=alignment, estimator=est.name, trust=trust,
                           notes=tuple(notes))
+
+
+def _soft_iron_test(samples, fit) -> dict:
+    """The nested test of a sphere (hard iron and one scale, 4 unknowns) against the full
+    ellipsoid (9): F = (Δχ² / 5) / (χ²_full / dof), robust to a χ²/dof above 1."""
+    if fit.n_parameters != 9:
+        return {}
+    sphere = fit_hard_iron(samples)
+    full_c2, sph_c2 = fit.residual_rms**2 * samples.n, sphere.residual_rms**2 * samples.n
+    if samples.noise_cov is not None:
+        full_c2, sph_c2 = fit.chi2, float(sphere.chi2)
+    F = max((sph_c2 - full_c2) / 5.0, 0.0) / max(full_c2 / fit.dof, 1e-300)
+    return {"soft_iron_F": float(F), "soft_iron_p": float(f_dist.sf(F, 5, fit.dof))}
 
 
 def _rests_in_kept_rows(poses, rows) -> list[tuple[int, int]]:

@@ -87,6 +87,11 @@ class EllipsoidFit:
     notes: tuple[str, ...] = field(default_factory=tuple)
 
     @property
+    def n_parameters(self) -> int:
+        """Free parameters: 4 for the sphere (hard iron and one scale), else 9."""
+        return 4 if self.method == "hard_iron" else 9
+
+    @property
     def theta(self) -> np.ndarray:
         return np.concatenate([self.b, vec_from_sym(self.A)])
 

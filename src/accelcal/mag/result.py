@@ -84,9 +84,14 @@ class MagCalibration:
         else:
             lines.append(f"  not aligned to the accelerometer: {self.trust.get('alignment_from')}")
         t = self.trust
-        chi = "n/a (noise not measured)" if t.get("chi2_dof") is None else f"{t['chi2_dof']:.2f}"
+        chi = "n/a" if t.get("chi2_dof") is None else f"{t['chi2_dof']:.2f}"
         lines.append(f"  trust: coverage {100 * t.get('coverage', float('nan')):.0f} % of directions, chi2/dof {chi} "
-                     f"(noise from {t.get('noise_source')})")
+                     f"(noise: {t.get('noise_source')})")
+        if t.get("soft_iron_F") is not None:
+            needed = t["soft_iron_p"] < 0.01
+            lines.append(f"  soft iron against a sphere: F = {t['soft_iron_F']:.3g} (p = {t['soft_iron_p']:.2g}): "
+                         + ("needed" if needed else "not distinguishable: the hard iron alone (--mag-method "
+                                                   "hard-iron) fits as well"))
         if "dip_spread_deg" in t:
             lines.append(f"  |m| spread {100 * t['norm_spread']:.2f} %, dip spread {t['dip_spread_deg']:.3f} deg "
                          f"(without the alignment {t['dip_spread_unaligned_deg']:.3f} deg)")

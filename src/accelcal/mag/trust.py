@@ -19,6 +19,8 @@ from .errors import MagDegenerateError, MagInputError
 SATURATED_SHARE = 0.01
 #: Coverage (share of the 80 sections) below which the fit is flagged, and below which it is refused.
 COVERAGE_WARN, COVERAGE_REFUSE = 0.5, 0.1
+#: The quietest windows are rests only when their variance is below this share of the whole session's.
+QUIET_SHARE = 1e-2
 #: A rest whose field moves by more than this many standard errors (and ``DISTURBANCE_REL`` of the field) is disturbed.
 DISTURBANCE_Z, DISTURBANCE_REL = 6.0, 0.01
 
@@ -101,6 +103,8 @@ def quiet_intervals(m, window: int = 50) -> list[tuple[int, int]]:
         return []
     v = np.array([m[i * window:(i + 1) * window].var(axis=0).sum() for i in range(n)])
     floor = np.percentile(v, 5)
+    if floor > QUIET_SHARE * m.var(axis=0).sum():
+        return []  # nothing rests: the noise is unknown (estimated from the fit's residual)
     return [(i * window, (i + 1) * window) for i in np.flatnonzero(v <= 3 * max(floor, 1e-300))]
 
 
