@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.optimize import least_squares
+from scipy.stats import chi2 as chi2_dist
 
 from .errors import MagDegenerateError, MagFitError, MagInputError
 from .model import PARAMETERS, sym_from_vec, vec_from_sym
@@ -71,8 +72,9 @@ class EllipsoidFit:
     """An ellipsoid ``|A (m - b)| = 1`` fitted to field samples.
 
     ``cov`` is the covariance of ``theta = [b, A_xx, A_xy, A_xz, A_yy, A_yz, A_zz]``
-    (:data:`accelcal.mag.model.PARAMETERS`); ``sigma_scale`` is 1 when the noise was
-    measured (else the residual's own scale, and ``chi2`` is None).
+    (:data:`accelcal.mag.model.PARAMETERS`): the Cramér–Rao bound at the estimate for the
+    measured noise, times χ²/dof when the χ² test rejects that noise (p < 0.01); with the
+    noise unknown, scaled by the residual (and ``chi2`` is None).
     """
 
     A: np.ndarray
@@ -201,7 +203,11 @@ def _result(theta, samples, method, iterations, notes=(), bias_correct=True) -> 
     sv = np.linalg.svd(J, compute_uv=False)
     chi2 = float(r @ r)
     known = samples.noise_cov is not None
-    scale = 1.0 if known else chi2 / max(dof, 1)
+    scale = chi2 / max(dof, 1)
+    if known:
+        # the measured noise explains the residual unless χ² rejects it (p < 0.01): then the
+        # misfit is part of the error too, and the s.e. grow by sqrt(χ²/dof), as the accelerometer's
+        scale = scale if chi2_dist.sf(chi2, max(dof, 1)) < 0.01 else 1.0
     inflate = 1.0 if samples.n_independent is None else max(samples.n / samples.n_independent, 1.0)
     cov = None
     if sv[-1] > 1e-12 * sv[0]:

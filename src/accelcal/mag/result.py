@@ -87,6 +87,8 @@ class MagCalibration:
         chi = "n/a" if t.get("chi2_dof") is None else f"{t['chi2_dof']:.2f}"
         lines.append(f"  trust: coverage {100 * t.get('coverage', float('nan')):.0f} % of directions, chi2/dof {chi} "
                      f"(noise: {t.get('noise_source')})")
+        if t.get("chi2_dof") is not None and t["chi2_dof"] > CHI2_WARN:
+            lines.append(f"  ±: the Cramér-Rao bound for the rests' noise, x{np.sqrt(t['chi2_dof']):.2f} for the excess")
         if t.get("soft_iron_F") is not None:
             needed = t["soft_iron_p"] < 0.01
             lines.append(f"  soft iron against a sphere: F = {t['soft_iron_F']:.3g} (p = {t['soft_iron_p']:.2g}): "
