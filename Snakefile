@@ -54,6 +54,7 @@ include: "workflow/rules/measured.smk"
 include: "workflow/rules/discrepancy.smk"
 include: "workflow/rules/gyro.smk"
 include: "workflow/rules/noise.smk"
+include: "workflow/rules/mag.smk"
 include: "workflow/rules/benchmark.smk"
 include: "workflow/rules/claims.smk"
 include: "workflow/rules/report.smk"
@@ -61,7 +62,7 @@ include: "workflow/rules/report.smk"
 
 #: The stages, in the order of the claims ledger and of the tables in each report section.
 STAGES = (BURKHARD_STAGE, BATISTA_STAGE, TERESHKOV_STAGE, MEASURED_STAGE, DISCREPANCY_STAGE, GYRO_STAGE, NOISE_STAGE,
-          BENCHMARK_STAGE)
+          MAG_STAGE, BENCHMARK_STAGE)
 
 
 rule all:

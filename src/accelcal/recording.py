@@ -57,6 +57,11 @@ class Recording:
         with a gyro: not stated, the values as written, for the motions of a calibration
         session to decide (:mod:`accelcal.gyro.unit_evidence`; a static record cannot:
         :func:`accelcal.formats.units_evidence.require_gyro_unit`).
+    mag : ndarray, shape (n, 3), or None
+        Magnetic field at the same instants as ``acc``, in ``mag_unit``; None when the file
+        has no magnetometer (or the reader does not read it).
+    mag_unit : {'uT', 'counts'} or None
+        Unit of ``mag`` (gauss, tesla... are converted to µT when read).
     rotations : dict or None
         Known rotations of a Ferraris session (imucal's ``x_rot``, ``y_rot``, ``z_rot``
         sections): ``{label: (start, stop)}``, sample ranges; None when the file does not
@@ -89,6 +94,8 @@ class Recording:
     device_id: str | None = None
     precalibrated: str | None = None
     runs: np.ndarray | None = None
+    mag: np.ndarray | None = None
+    mag_unit: str | None = None
 
     def __post_init__(self):
         t = np.array(self.t, dtype=float)
@@ -104,7 +111,9 @@ class Recording:
                 + ("" if temp is None else f", temp{temp.shape}"))
         gyro = _check_gyro(self.gyro, self.gyro_unit, t.size, self.source)
         intervals, labels = _check_intervals(self.intervals, self.labels, t.size, self.source)
-        for a in (t, acc, temp, intervals, gyro):
+        mag = _check_mag(self.mag, self.mag_unit, t.size, self.source)
+        object.__setattr__(self, "mag", mag)
+        for a in (t, acc, temp, intervals, gyro, mag):
             if a is not None:
                 a.setflags(write=False)  # frozen means frozen: no in-place edits of shared data
         object.__setattr__(self, "t", t)
@@ -182,6 +191,19 @@ def _check_runs(runs, n: int, source: str):
         raise RecordingError(f"{source}: runs {r.tolist()} are not consecutive ranges covering the {n} samples")
     r.setflags(write=False)
     return r
+
+
+def _check_mag(mag, unit: str | None, n: int, source: str):
+    """The field as an (n, 3) float array (or None), in a unit a Recording holds."""
+    if mag is None:
+        return None
+    mag = np.array(mag, dtype=float)
+    if mag.shape != (n, 3):
+        raise RecordingError(f"{source}: magnetometer data of shape {mag.shape}, expected ({n}, 3) like the "
+                             "accelerometer")
+    if unit not in (None, "uT", "counts"):
+        raise RecordingError(f"{source}: magnetometer unit {unit!r}; a Recording holds uT or counts")
+    return mag
 
 
 def _check_rotations(rotations, n: int, source: str):

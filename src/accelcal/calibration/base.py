@@ -14,6 +14,7 @@ from ..errors import (AccelcalError)
 from ..effects import EFFECT_IDS, EFFECTS, TEMPERATURE, TIME, effect
 from ..extended_model import model_terms
 from ..jsonsafe import json_safe
+from ..mag.result import MagCalibration
 from ..registry import ESTIMATORS, class_of_type, subclasses, types_of
 from ..units import G0, acceleration_unit
 from .summary import calibration_summary
@@ -106,6 +107,9 @@ class Calibration:
     gyro : GyroCalibration or None
         The gyroscope calibrated from the same session (:mod:`accelcal.gyro`), in this
         accelerometer's frame; None when the recording had no gyro (or a format-0/1 file).
+    mag : MagCalibration or None
+        The magnetometer calibrated from the same session (:mod:`accelcal.mag`), aligned to
+        this accelerometer's frame; None when the recording had no magnetometer.
     """
 
     CAL_TYPE: ClassVar[str] = ""
@@ -125,6 +129,7 @@ class Calibration:
     poses: dict = field(default_factory=dict)
     provenance: dict = field(default_factory=dict)
     gyro: object | None = None
+    mag: object | None = None
 
     def __post_init__(self):
         for name in ("bias", "input_offset", "input_sensitivity"):
@@ -332,6 +337,7 @@ class Calibration:
             **self._method_fields(),
             "poses": {k: _jsonable(v) for k, v in self.poses.items()},
             "gyroscope": None if self.gyro is None else self.gyro.to_dict(),
+            **({} if self.mag is None else {"magnetometer": self.mag.to_dict()}),
             **self.provenance,
         }
         return json_safe(d)
@@ -489,7 +495,7 @@ def _common(d: dict, version: int) -> dict:
         poses["n_samples"] = poses["n_samples"].astype(int)
     known = {"format", "format_version", "cal_type", "method", "model", "g", "n_poses", "bias", "M", "scale_factors",
              "nonorthogonality_deg", "gain", "residual_rms", "residuals", "standard_errors", "standard_errors_noise",
-             "unit", "units", "input", "effects", "quality", "poses", "gyroscope"}
+             "unit", "units", "input", "effects", "quality", "poses", "gyroscope", "magnetometer"}
     known |= {k for c in _all_calibration_classes() for k in c._method_field_names()}
     return {
         "bias": _arr(d["bias"]), "M": _arr(d["M"]), "g": float(d["g"]), "unit": unit,
@@ -504,6 +510,7 @@ def _common(d: dict, version: int) -> dict:
         "poses": poses,
         "provenance": {k: v for k, v in d.items() if k not in known},
         "gyro": _gyro(d.get("gyroscope")),
+        "mag": _mag(d.get("magnetometer")),
     }
 
 
@@ -518,6 +525,11 @@ def _gyro(d):
         raise CalibrationFileError(f"gyroscope: unknown calibration type {d.get('cal_type')!r}; known: "
                                    f"{', '.join(e.name for e in gyro)}")
     return ESTIMATORS[d["cal_type"]].load_calibration().from_dict(d)
+
+
+def _mag(d):
+    """The ``magnetometer`` object (None: absent)."""
+    return MagCalibration.from_dict(d) if d else None
 
 
 def _method_values(cls, d: dict) -> dict:

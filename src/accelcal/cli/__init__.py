@@ -1,5 +1,5 @@
 """Command line: ``accelcal calibrate``, ``accelcal apply``, ``accelcal export``, ``accelcal discrepancy``,
-``accelcal noise``.
+``accelcal noise``, ``accelcal mag``.
 
 One module per subcommand (``add_parser`` and its handler), the shared options in
 :mod:`.common`.
@@ -21,11 +21,11 @@ import sys
 from .. import __version__
 from ..errors import AccelcalError
 from ..formats.registry import formats_help
-from . import apply, calibrate, discrepancy, export, noise
+from . import apply, calibrate, discrepancy, export, mag, noise
 from .common import MODEL_HELP, STANDARD_GRAVITY, _methods_help, fail
 
 #: The subcommands, in the order the help lists them.
-SUBCOMMANDS = (calibrate, apply, export, discrepancy, noise)
+SUBCOMMANDS = (calibrate, apply, export, discrepancy, noise, mag)
 
 
 #: One BLAS thread unless the user chose: the command's matrices are small, and threads of a

@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from ..errors import AccelcalError
 from .common import _read, _reader_options, warn
 from .correct import check_source, corrected
 
@@ -19,7 +20,9 @@ calibration was made from. The output CSV keeps the time column as it was record
 calibrated ax, ay, az in m/s^2; when the calibration has a gyroscope and the recording
 a gyro (its columns, its log topic or --gyro FILE), the calibrated gx, gy, gz in rad/s
 in the accelerometer's frame; a gyro the calibration does not correct is written as
-recorded, as gx_raw, gy_raw, gz_raw (and temp, if present).
+recorded, as gx_raw, gy_raw, gz_raw; when the calibration has a magnetometer and the
+recording its columns, the calibrated mx, my, mz (unit field, or uT with --location, in
+the accelerometer's frame; uncorrected: mx_raw, my_raw, mz_raw); and temp, if present.
 
 Calibrated logs: a ROS 1 bag, ROS 2 bag (folder, or its .db3 file) or MCAP file is
 written back as a log of the same kind when --out is not a .csv (OUT.bag, a new folder,
@@ -65,10 +68,13 @@ def _apply(args) -> int:
     rec = _read(args)
     check_source(cal, rec, args)
     x, w, effects, gyro_note = corrected(cal, rec, args)
-    _write_corrected(args.out, rec, x, w)
+    m = _mag(cal, rec, args)
+    _write_corrected(args.out, rec, x, w, m)
     names = ", ".join(e.id for e in effects) or "none"
     written = "ax, ay, az in m/s^2" + (", gx, gy, gz in rad/s" if w is not None else
                                        ", gx_raw, gy_raw, gz_raw as recorded" if rec.gyro is not None else "")
+    if m is not None:
+        written += f", mx, my, mz ({cal.mag.model.strength_unit})"
     print(f"apply: {rec.n} samples of {args.recording} calibrated with {args.calibration} ({cal.CAL_TYPE}; "
           f"effects applied: {names}); {written} written to {args.out}", file=sys.stderr)
     if gyro_note:
@@ -76,7 +82,19 @@ def _apply(args) -> int:
     return 0
 
 
-def _write_corrected(path: Path, rec, x, w=None) -> None:
+def _mag(cal, rec, args):
+    """The calibrated field (or None when the calibration or the recording has no magnetometer)."""
+    if getattr(cal, "mag", None) is None or rec.mag is None or args.no_mag:
+        return None
+    made = cal.mag.model.raw_unit
+    have = rec.mag_unit or "unknown"
+    if made != have:
+        raise AccelcalError(f"the recording's magnetometer is read as {have} but {args.calibration}'s magnetometer "
+                            f"was made from {made}: pass --mag-unit {made}")
+    return cal.mag.apply(rec.mag)
+
+
+def _write_corrected(path: Path, rec, x, w=None, m=None) -> None:
     import pandas as pd
 
     from ..atomic import atomic_output
@@ -87,6 +105,10 @@ def _write_corrected(path: Path, rec, x, w=None) -> None:
         data.update(gx=w[:, 0], gy=w[:, 1], gz=w[:, 2])
     elif rec.gyro is not None:  # not corrected: named apart, so that nobody takes it for calibrated
         data.update(gx_raw=rec.gyro[:, 0], gy_raw=rec.gyro[:, 1], gz_raw=rec.gyro[:, 2])
+    if m is not None:
+        data.update(mx=m[:, 0], my=m[:, 1], mz=m[:, 2])
+    elif rec.mag is not None:
+        data.update(mx_raw=rec.mag[:, 0], my_raw=rec.mag[:, 1], mz_raw=rec.mag[:, 2])
     if rec.temp is not None:
         data["temp"] = rec.temp
     with atomic_output(path) as tmp, open(tmp, "w", newline="") as f:

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from ..errors import AccelcalError
 from ..registry import estimators
-from . import gyro
+from . import gyro, mag
 from .common import (STANDARD_GRAVITY, _gravity, _nominal, _provenance, _rate_hint, _read, _reader_options,
                      _static_options, _static_settings, _step, fail)
 
@@ -39,6 +39,7 @@ def add_parser(sub, epilog: str) -> None:
     c.add_argument("--strict", action="store_true",
                    help="exit 3 when the fit is untrustworthy (its quality warnings; the file is still written), so "
                         "that a script can tell")
+    mag.add_mag_options(c)
     c.set_defaults(func=_calibrate)
 
 
@@ -53,7 +54,8 @@ def _calibrate(args) -> int:
     rec = _read(args)
     if rec.acc is None:
         return _calibrate_gyro_only(args, rec, t0)
-    rec = replace(rec, notes=rec.notes + (gyro.note_gyro(args, rec),))
+    rec = replace(rec, notes=rec.notes + (gyro.note_gyro(args, rec), mag.note_mag(args, rec)))
+    mag.field_from_args(args)  # a bad --location or --date is refused before any work
     g = STANDARD_GRAVITY if args.g is None else args.g
     static = _static_settings(args, rec)
     method = args.method
@@ -81,6 +83,9 @@ def _calibrate(args) -> int:
     if gyro.wants_gyro(args, rec):
         with _step("calibrating the gyroscope"):
             cal = replace(cal, gyro=gyro.calibrate(args, rec, cal, poses))
+    if mag.wants_mag(args, rec):
+        with _step("calibrating the magnetometer"):
+            cal = replace(cal, mag=mag.calibrate(args, rec, cal, poses))
     prov = {**_provenance(args, t0), "g_source": "--g" if args.g is not None else STANDARD_GRAVITY_SOURCE}
     if rec.device_id is not None:  # apply warns when the calibration reaches another unit
         prov["device_id"] = rec.device_id
@@ -102,6 +107,8 @@ def _calibrate(args) -> int:
     _summary(cal, poses, rec, args)
     if cal.gyro is not None:
         print(cal.gyro.summary(), file=sys.stderr)
+    if cal.mag is not None:
+        print(cal.mag.summary(), file=sys.stderr)
     return _strict_status(cal, args)
 
 

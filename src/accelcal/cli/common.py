@@ -117,6 +117,9 @@ def _reader_options(p) -> None:
                    help="the gyroscope in a file of its own, sampled with the accelerometer (IMU-TK's t x y z)")
     r.add_argument("--gyro-unit", metavar="UNIT", help="gyro unit: rad/s, deg/s or counts (overrides the header)")
     r.add_argument("--no-gyro", action="store_true", help="leave the gyroscope out (the accelerometer alone)")
+    r.add_argument("--mag-unit", metavar="UNIT", help="magnetometer unit: uT, T, mT, nT, gauss, mG or counts "
+                                                      "(overrides the header)")
+    r.add_argument("--no-mag", action="store_true", help="leave the magnetometer out")
     # logs hold several sensors and two clocks; None: the reader's default, and refused by a table
     r.add_argument("--topic", metavar="NAME", help="logs: the IMU topic (ROS), sensor_accel or sensor_combined "
                                                    "(PX4), the IMU message (DataFlash); default the only one")
@@ -158,7 +161,8 @@ def _read(args):
         return read(args.recording, format=args.format, columns=args.columns, unit=args.unit,
                     time_unit=args.time_unit, rate=args.rate, intervals=args.intervals,
                     gyro=None if args.no_gyro else args.gyro, gyro_unit=args.gyro_unit, topic=args.topic,
-                    instance=args.instance, time_source=args.time_source, clock=args.clock, variable=args.variable)
+                    instance=args.instance, time_source=args.time_source, clock=args.clock, variable=args.variable,
+                    mag_unit=args.mag_unit)
 
 
 def _static_settings(args, rec) -> dict:

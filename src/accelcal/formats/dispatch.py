@@ -40,7 +40,8 @@ CLOCK_MODES = ("auto", "stamps")
 def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit: str | None = None,
          time_unit: str | None = None, rate: float | None = None, intervals=None, gyro=None,
          gyro_unit: str | None = None, topic: str | None = None, instance: int | None = None,
-         time_source: str | None = None, clock: str | None = None, variable: str | None = None):
+         time_source: str | None = None, clock: str | None = None, variable: str | None = None,
+         mag_unit: str | None = None):
     """Read an accelerometer recording (and its gyroscope, when the file or ``gyro`` has one).
 
     Parameters
@@ -74,6 +75,9 @@ def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit
         Unit of the gyro values (``rad/s``, ``deg/s``, ``counts``) of a table or of the
         ``gyro`` file; overrides the header.  Formats that define their gyro's unit ignore
         it (with a note).
+    mag_unit : str, optional
+        Unit of the magnetometer columns of a table (``uT``, ``T``, ``gauss``, ``mG``,
+        ``counts``...); overrides the header (:mod:`accelcal.formats.magnetic`).
     topic : str, optional
         Logs: the IMU topic (ROS), ``sensor_accel`` or ``sensor_combined`` (PX4), the IMU
         message (DataFlash); default the only one (several: a one-line error listing them).
@@ -102,7 +106,7 @@ def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit
 
     path = Path(path)
     options = {"columns": columns, "unit": unit, "time_unit": time_unit, "rate": rate, "gyro_unit": gyro_unit,
-               "topic": topic, "instance": instance, "time_source": time_source, "clock": clock,
+               "mag_unit": mag_unit, "topic": topic, "instance": instance, "time_source": time_source, "clock": clock,
                "variable": variable}
     if strict:
         return checked_recording(_read_strict(path, format, {**options, "intervals": intervals, "gyro": gyro}))
@@ -238,6 +242,8 @@ def _read_format(path: Path, fmt: Format, text: str | None, options: dict, notes
 
         rec, note = override_gyro_unit(rec, options["gyro_unit"], fmt.name)
         notes.append(note)
+    if options["mag_unit"] is not None and "mag_unit" not in fmt.options and rec.mag is not None:
+        notes.append(f"--mag-unit ignored: the {fmt.name} format defines its magnetometer's unit")
     return rec
 
 

@@ -30,9 +30,9 @@ from ..registry import resolve
 
 #: The reading options (of :func:`accelcal.formats.read`) a reader may take itself.  One it
 #: does not take is applied by the dispatcher: ``unit`` converts or checks the values,
-#: ``rate`` replaces the time by sample index / rate, ``time_unit``, ``gyro_unit`` and
-#: ``clock`` are ignored with a note, ``columns`` and the log options are refused.
-TABLE_OPTIONS = ("columns", "unit", "time_unit", "rate", "gyro_unit", "clock")
+#: ``rate`` replaces the time by sample index / rate, ``time_unit``, ``gyro_unit``, ``mag_unit``
+#: and ``clock`` are ignored with a note, ``columns`` and the log options are refused.
+TABLE_OPTIONS = ("columns", "unit", "time_unit", "rate", "gyro_unit", "mag_unit", "clock")
 #: The option of files of named variables (MATLAB, R): which variable is the recording
 #: (several, comma-separated: runs of one session).
 VARIABLE_OPTIONS = ("variable",)
@@ -44,7 +44,7 @@ TIME_SOURCES = ("header", "log")
 READING_OPTIONS = TABLE_OPTIONS + VARIABLE_OPTIONS + LOG_OPTIONS
 #: The command-line option of each reading option, for messages.
 OPTION_FLAGS = {"columns": "--columns", "unit": "--unit", "time_unit": "--time-unit", "rate": "--rate",
-                "gyro_unit": "--gyro-unit", "topic": "--topic", "instance": "--instance",
+                "gyro_unit": "--gyro-unit", "mag_unit": "--mag-unit", "topic": "--topic", "instance": "--instance",
                 "time_source": "--time-source", "clock": "--clock", "variable": "--variable"}
 #: Characters of the decoded text that text formats are sniffed on.
 TEXT_HEAD_CHARS = 8192

@@ -24,10 +24,11 @@ from ..recording import MIN_ROWS, Recording, intervals_from_labels
 from ..units import to_celsius, unit_in_name
 from .clock import clocked_time, is_counter_name, looks_like_counter
 from .inference import resolve_acceleration_unit, resolve_gyro_unit, time_seconds
+from .magnetic import MAG_ROLES, mag_axis, mag_unit_in_name, resolve_mag_unit
 from .parsing import DECIMAL_COMMA, NUMBER, norm_name, parse_numbers, split_fields
 from .text import COMMENT_MARKERS, is_comment, load_text
 
-ROLES = ("t", "ax", "ay", "az", "gx", "gy", "gz", "temp", "pose", "counter")
+ROLES = ("t", "ax", "ay", "az", "gx", "gy", "gz", "mx", "my", "mz", "temp", "pose", "counter")
 ACC_ROLES, GYRO_ROLES = ("ax", "ay", "az"), ("gx", "gy", "gz")
 #: Delimiters tried, in order of preference when two fit equally well.
 DELIMITERS = ("\t", ";", ",", "|", " ")
@@ -52,6 +53,8 @@ ALIASES = {
                   "linear_acceleration.x (x, y, z alone when nothing else matches)",
     "gx, gy, gz": "gx, gyr_x, gyro_x, gyroX, Gyro. X, wx, omega_x, angular_velocity.x (optional: the "
                   "gyroscope)",
+    "mx, my, mz": "mx, mag_x, magX, Mag. X, magnetometer_x, compass_x, magnetic_field.x (optional: the "
+                  "magnetometer; units uT, T, mT, nT, gauss, mG or counts)",
     "temp": "temp, temperature, imu_temp, die_temp",
     "pose": "pose, pose_id (label of the known static pose of each sample; empty between poses)",
     "counter": "INDEX, seq, counter, sample, n_samples, field.header.seq ... (a sample counter: the clock's "
@@ -152,7 +155,7 @@ class _Table(NamedTuple):
 
 def read_table(path, *, text: str | None = None, columns=None, unit: str | None = None,
                time_unit: str | None = None, rate: float | None = None, gyro_unit: str | None = None,
-               clock: str = "auto") -> Recording:
+               clock: str = "auto", mag_unit: str | None = None) -> Recording:
     """Read a delimited text table (the ``csv`` format; see the module docstring).
 
     ``gyro_unit`` (``rad/s``, ``deg/s``, ``counts``) is the unit of the gyro columns, if
@@ -228,6 +231,10 @@ def _table_recording(tab, path, notes, columns, unit, time_unit, rate, gyro_unit
     if "gx" in roles:
         gyro, gyro_unit_name, note = resolve_gyro_unit(triad(GYRO_ROLES), units, gyro_unit, path)
         notes.append(note)
+    mag, mag_unit_name = None, None
+    if "mx" in roles:
+        mag, mag_unit_name, note = resolve_mag_unit(triad(MAG_ROLES), units.get("mag_units", {}), mag_unit, path)
+        notes.append(note)
     if "t" not in roles and rate is None and file_rate is not None:
         t, tnote = np.arange(len(lines)) / file_rate[0], f"t = sample index / {file_rate[0]:g} Hz ({file_rate[1]})"
     else:
@@ -247,7 +254,8 @@ def _table_recording(tab, path, notes, columns, unit, time_unit, rate, gyro_unit
     if "t" in roles and rate is None:
         time_column = (names[roles["t"]].strip() if names is not None else "t", column("t").astype(str))
     return Recording(t, acc, temp, str(path), intervals=iv, labels=labels, notes=tuple(n for n in notes if n),
-                     unit=unit_name, time_column=time_column, gyro=gyro, gyro_unit=gyro_unit_name)
+                     unit=unit_name, time_column=time_column, gyro=gyro, gyro_unit=gyro_unit_name,
+                     mag=mag, mag_unit=mag_unit_name)
 
 
 def _counter_label(names, roles) -> str | None:
@@ -442,13 +450,26 @@ def _map_columns(names, k: int, given: dict, path, required=ACC_ROLES) -> tuple[
                               "--columns gx=..,gy=..,gz=..)")
         for r in gyro:
             del roles[r]
+    mag = [r for r in MAG_ROLES if r in roles]
+    if 0 < len(mag) < 3:
+        if any(r in given for r in MAG_ROLES):
+            raise RecordingError(f"{path}: --columns names a magnetometer column for {', '.join(mag)} only: name "
+                                 "all three (mx=..,my=..,mz=..)")
+        for r in mag:
+            del roles[r]
     used = {}
     for role, i in roles.items():
         if i in used:
             raise RecordingError(f"{path}: column {i + 1} given for both {used[i]} and {role}")
         used[i] = role
     if names is not None:
+        for role in (r for r in MAG_ROLES if r in roles):
+            u = mag_unit_in_name(names[roles[role]].strip())[1]
+            if u is not None:
+                units.setdefault("mag_units", {})[role] = u
         for role, i in roles.items():
+            if role in MAG_ROLES:
+                continue
             kind = {"t": "time", "temp": "temperature", "pose": None, "counter": None}.get(
                 role, "angular_rate" if role in GYRO_ROLES else "acceleration")
             if kind:
@@ -483,6 +504,9 @@ def _find_roles(names, roles: dict, path) -> None:
                 cand["t"].append(i)
             elif kind == "temperature" and key in _TEMP:
                 cand["temp"].append(i)
+        axis = mag_axis(norm_name(mag_unit_in_name(n)[0]))
+        if axis is not None:
+            cand["m" + axis].append(i)
         if norm_name(n) in _POSE:
             cand["pose"].append(i)
         if is_counter_name(n):

@@ -60,6 +60,8 @@ _SMAC = ("SMAC-Group/imudata", "dd603068355f2dfa757a474645cd327c5cb6dbb5")
 _CTU = ("labliscvut/imu_calibration", "053aa5d56669c115fba484ea119e50af8ddc1e79")
 _SNU = ("ChanghyeonKim93/IMU_calibration_staticposes", "468a3dc3db1575a73222128461b1c19e565bd377")
 _PYULOG = ("PX4/pyulog", "3cf17793f14709713ab297d3743314c658874068")
+_CK = ("CK-Explorer/Magnetometer-and-Accelerometer-Calibration", "61ac7669f1cbba2e5ce77763a40ebc123d95ac60")
+_QMC = ("tomisuarez2/MagnetometerCalibration", "eb93f820ffc06155579b7d86928795915eef714a")
 _FORK_SHA256 = {
     "data1/acc_data.txt": "d1fc1ad4b19bde88c2cdd6aee4a852e32399d8acbd9bcbbc24157e4c13a385d8",
     "data1/gyro_data.txt": "a97e7fe4334c0012581dd77888c988050494b7a75715a81756bc839a0abe5739",
@@ -133,6 +135,20 @@ DATASETS: dict[str, dict[str, FileSpec]] = {
                     for i, s in enumerate(("6eb2d25e637580306cb07c821c6f807573f25c8e9c668e3cdd034936640c4ca0",
                                            "8bf71efcd5f500caf0cbc3c1de97b6041129e3594824f5d8584325b7741b7014",
                                            "b34ed1cc40003f5323568df8976b39c3813f0494e3f065a0ee988119bfe21e9e"), start=1)},
+    # magnetometer sessions (the mag stage): accelerometer + magnetometer by hand, and a magnetometer
+    # alone with its author's published calibration
+    "mag_ck_explorer": {
+        "acc_mag_log.csv": FileSpec(_raw(*_CK, "Data Examples/acc_mag_log.csv"),
+                                    "5435904892cc4eb8fc17085c30ab39430af5e29546d1c209d0bf41c588da1819"),
+    },
+    "mag_qmc5883l_suarez": {
+        "noisy_raw_data.csv": FileSpec(_raw(*_QMC, "calibration data/noisy_raw_data.csv"),
+                                       "703d0f329c27d2985cef49b89bcee0d1ca0b815d3c687089d1a4d33657b0a513"),
+        "filtered_raw_data.csv": FileSpec(_raw(*_QMC, "calibration data/filtered_raw_data.csv"),
+                                          "850ff706b65f380d68960aff905b40672bd6448073e164f35365e9a6a457dc2c"),
+        "paramters_mag.csv": FileSpec(_raw(*_QMC, "optimization result data/paramters_mag.csv"),
+                                      "8b36ea49a8bfd1d388027c366901d4b79df633b20a688ba94e61860b6d5e722b"),
+    },
     "px4_ulog": {
         "sample.ulg": FileSpec(_raw(*_PYULOG, "test/sample.ulg"),
                                "81952e6059bc095717e7911c010e07f85749d6b04d332a5ffc51575a3fd0a558"),
