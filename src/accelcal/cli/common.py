@@ -143,8 +143,12 @@ def _static_options(p) -> None:
 
 @contextmanager
 def _step(what: str, after_s: float = 2.0):
-    """Announce ``what`` on stderr only if it is still running after ``after_s`` seconds,
-    so that quick runs print nothing but their summary (or their one-line error)."""
+    """Announce ``what`` on stderr only if it is still running after ``after_s`` seconds and
+    stderr is a terminal, so that quick runs print nothing but their summary (or their
+    one-line error), and what a script reads does not depend on how loaded the machine is."""
+    if not sys.stderr.isatty():
+        yield
+        return
     timer = threading.Timer(after_s, lambda: print(f"accelcal: {what} ...", file=sys.stderr, flush=True))
     timer.daemon = True
     timer.start()

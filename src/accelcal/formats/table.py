@@ -174,7 +174,8 @@ def read_table(path, *, text: str | None = None, columns=None, unit: str | None 
     notes: list[str] = []
     if text is None:
         text, notes = load_text(path)
-    return _table_recording(_split_table(text, path), path, notes, columns, unit, time_unit, rate, gyro_unit)
+    return _table_recording(_split_table(text, path), path, notes, columns, unit, time_unit, rate, gyro_unit,
+                            clock=clock, mag_unit=mag_unit)
 
 
 def read_matrix(path, names, block: np.ndarray, *, notes=(), columns=None, unit: str | None = None,
@@ -192,7 +193,8 @@ def read_matrix(path, names, block: np.ndarray, *, notes=(), columns=None, unit:
     return _table_recording(tab, Path(path), list(notes), columns, unit, time_unit, rate, gyro_unit, file_rate)
 
 
-def _table_recording(tab, path, notes, columns, unit, time_unit, rate, gyro_unit, file_rate=None) -> Recording:
+def _table_recording(tab, path, notes, columns, unit, time_unit, rate, gyro_unit, file_rate=None, *,
+                     clock: str = "auto", mag_unit: str | None = None) -> Recording:
     """The recording of a split table (:func:`read_table`'s second half)."""
     names, dc, lines = tab.names, tab.dc, tab.lines
     what = {"\t": "tab", ";": "semicolon", ",": "comma", "|": "'|'", " ": "whitespace"}[tab.delim]
