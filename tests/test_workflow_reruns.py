@@ -61,3 +61,21 @@ def test_ci_reruns_are_byte_identical(ci_workflow, tmp_path):
                  "discrepancy_chunk", "discrepancy_score", "discrepancy_summary", "discrepancy_measured_report",
                  "discrepancy_adis", "discrepancy_claims", "discrepancy_confusion_figure", "claims"):
         assert rule in ran, rule  # the job did rerun
+
+
+def test_a_claim_threshold_reruns_only_the_claims(ci_workflow, tmp_path):
+    """Config per key (common.smk's config_keys): a rule's params hold only the keys its code
+    reads, so a new threshold of a claim that no figure draws reruns the stage's claims job
+    and what gathers the claims (the ledger, the report), never a Monte Carlo or a figure."""
+    import yaml
+
+    override = tmp_path / "thresholds.yaml"
+    override.write_text(yaml.safe_dump({"tereshkov": {"claims": {"straight_torque_max_fraction": 0.2}},
+                                        "batista2011": {"claims": {"t_max": 5.0}},
+                                        "burkhard2024": {"claims": {"magnitude_factor": 4.0}}}))
+    proc = snakemake(ci_workflow[0], "all", "-n", "--rerun-triggers", "params", "--configfile", CI, override)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    ran = set(re.findall(r"^(?:local)?rule (\w+):$", proc.stdout + proc.stderr, re.M))
+    stage_claims = {"tereshkov_claims", "batista2011_claims", "burkhard2024_claims"}
+    assert stage_claims <= ran, ran
+    assert ran - stage_claims <= {"claims", "report", "all"}, sorted(ran - stage_claims)

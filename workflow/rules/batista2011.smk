@@ -9,9 +9,8 @@ BATISTA = config["batista2011"]
 
 
 def batista_cfg(*sections):
-    """The stage config restricted to seed, g and ``sections``: a job reruns only when
-    what it uses changes (e.g. new claim thresholds do not rerun the Monte Carlo)."""
-    return {k: BATISTA[k] for k in ("seed", "g") + sections}
+    """The stage config restricted to seed, g and ``sections`` (:func:`config_keys`)."""
+    return config_keys(BATISTA, "seed", "g", *sections)
 
 BATISTA_OUT = results("batista2011")
 BATISTA_STAGE = declare_stage(
@@ -226,7 +225,9 @@ for _fid in BATISTA_STAGE.figures:
         output:
             **figure_outputs(_fid, f"../report/{_fid}.rst", "Batista 2011"),
         params:
-            cfg=BATISTA,
+            # what the figures read: the designs and filters they draw, the thresholds of the calibration figure
+            cfg=config_keys(BATISTA, "seed", "g", "calibration", "filter", "observability", "claims.mean_threshold",
+                            "claims.std_threshold"),
             figure=_fid,
         log:
             log_path(f"batista2011/figure_{_fid}"),

@@ -157,7 +157,7 @@ for _job, _spec in BURKHARD_FIGURE_JOBS.items():
                                                "Burkhard 2024").items()},
         params:
             figures=_spec["figures"],
-            cfg=BURKHARD,
+            cfg=config_keys(BURKHARD, "experiments", "g", "timing"),  # what the figures read
         log:
             log_path(f"burkhard2024/{_job}"),
         benchmark:

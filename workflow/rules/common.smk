@@ -35,6 +35,30 @@ def figure_files(*figure_ids):
     return [results(f"figures/{fid}.{ext}") for fid in figure_ids for ext in ("png", "pdf")]
 
 
+# --------------------------------------------------------------------------- config per key
+# As pypsa-eur's config_provider: a rule's params hold only the keys its code reads, so that
+# --rerun-triggers params reruns it only when one of those changes (a new claim threshold
+# reruns the claims job, not the Monte Carlo that the claims are computed from).
+
+
+def config_keys(section, *paths):
+    """The keys ``paths`` of a config ``section`` (``"claims.gyro_convergence_s"`` for a nested
+    key), in a mapping of the same shape.  A path the section does not have is left out: the
+    code that reads it applies its documented default, as it would with the whole section."""
+    out = {}
+    for path in paths:
+        *parents, leaf = path.split(".")
+        src, dst = section, out
+        for key in parents:
+            if not isinstance(src.get(key), dict):
+                break
+            src, dst = src[key], dst.setdefault(key, {})
+        else:
+            if leaf in src:
+                dst[leaf] = src[leaf]
+    return out
+
+
 #: Outputs one stage makes and another reads (measured -> discrepancy).
 MEASURED_CSV = results("measured/{recording}.csv")  # a recording as the canonical CSV of the CLI
 MEASURED_SUMMARY = results("measured/summary.csv")
