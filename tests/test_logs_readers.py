@@ -330,6 +330,18 @@ def test_dataflash_imu_instances(tmp_path):
     assert ardupilot.read(old, topic="IMU2").n == 300
 
 
+def test_an_fmt_message_declaring_a_too_short_message_is_one_line_not_a_hang(tmp_path):
+    """pymavlink advances by an FMT's declared length minus 3: a length below 3 made it loop
+    forever on a damaged log the reader fuzz found; the reader refuses it before pymavlink."""
+    t_us = 10_000_000 + np.arange(300) * 2500
+    data = bytearray(write_dataflash(tmp_path / "a.bin", t_us, ACC[:300], GYRO[:300]).read_bytes())
+    data[4] = 0  # the first FMT message (FMT's own) now declares a 0-byte message
+    bad = tmp_path / "bad.bin"
+    bad.write_bytes(bytes(data))
+    with pytest.raises(LogFormatError, match="FMT message at byte 0 declares a message shorter"):
+        ardupilot.read(bad)
+
+
 # --------------------------------------------------------------------------- extras and registry data
 
 

@@ -36,6 +36,21 @@ _NAMES = ("IMU", "IMU2", "IMU3")
 _CHUNK = 8192
 
 
+def _short_format(path: Path) -> int | None:
+    """The offset of an FMT message that declares a message length below 3 bytes, or None.
+
+    pymavlink advances by the declared length minus the 3-byte header: a length of 0, 1 or
+    2 sends it back over the same bytes forever (a damaged log seen to hang the reader).
+    Every ``A3 95 80`` (the FMT message's header) is checked, including any that the data
+    happen to contain: such a coincidence with a length below 3 is a few in 10^9 per byte."""
+    d = np.fromfile(path, dtype=np.uint8)
+    if d.size < 5:
+        return None
+    hit = (d[:-4] == 0xA3) & (d[1:-3] == 0x95) & (d[2:-2] == 0x80) & (d[4:] < 3)
+    where = np.flatnonzero(hit)
+    return int(where[0]) if where.size else None
+
+
 def sniff(path, head: bytes) -> bool:
     """True for a DataFlash binary log (it opens with the FMT message of FMT)."""
     return head.startswith(DATAFLASH_MAGIC)
@@ -67,6 +82,11 @@ def read(path, *, topic: str | None = None, time_source: str = "header", instanc
 
     if not path.is_file():
         raise LogFormatError(f"{path}: no such file")
+    bad = _short_format(path)
+    if bad is not None:
+        raise LogFormatError(f"{path}: the DataFlash log has damaged bytes (an FMT message at byte {bad} declares a "
+                             "message shorter than its own header); its samples cannot be trusted: download the log "
+                             "again")
     with _captured_output() as chatter:
         try:
             log = DFReader.DFReader_binary(str(path), zero_time_base=True)
