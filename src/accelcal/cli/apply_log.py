@@ -25,8 +25,8 @@ def writes_log(args) -> bool:
     from ..formats import ros
 
     out, src = Path(args.out), Path(args.recording)
-    if out.name.lower().endswith((".csv", ".csv.gz")):
-        return False
+    if out.name.lower().endswith((".csv", ".csv.gz")) or not src.exists():
+        return False  # a table; or a missing recording, which the reader names in its one line
     head = b""
     if src.is_file():
         with open(src, "rb") as f:
