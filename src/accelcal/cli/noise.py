@@ -54,7 +54,7 @@ def _noise(args) -> int:
     if args.intervals is not None:
         raise AccelcalError("--intervals: the noise analysis takes the whole recording as one rest; cut the static "
                             "part out instead")
-    rec = _read(args)
+    rec = _read(args, accelerometer=False)
     cal = None
     if args.calibration is not None:
         from ..calibration import load_calibration
