@@ -290,3 +290,11 @@ def test_commands_that_need_an_accelerometer_refuse_a_gyro_alone(tmp_path, comma
     code, err = _cli(*args, "--columns", "gx=1,gy=2,gz=3", "--rate", "100", "--out", out)
     assert code == 2 and not out.exists()
     assert f"no accelerometer in this recording (a gyro alone), which 'accelcal {command[0]}' needs" in err, err
+
+
+def test_the_python_accelerometer_calibration_refuses_a_gyro_alone(ctu):
+    from accelcal import calibrate_recording
+    from accelcal.errors import RecordingError
+
+    with pytest.raises(RecordingError, match=r"no accelerometer in this recording .*\.calibrate_rotations"):
+        calibrate_recording(ctu, 9.81)

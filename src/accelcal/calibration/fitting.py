@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import (AccelcalError, DegeneratePosesError, NotConvergedError, NotPositiveDefiniteError,
-                      TooFewPosesError)
+                      RecordingError, TooFewPosesError)
 from ..registry import estimator
 
 from .base import Calibration
@@ -156,6 +156,9 @@ def calibrate_recording(rec, g: float, method: str = "full_lls", *, static: dict
     if not (np.isfinite(g) and 9.7 <= g <= 9.9):
         raise AccelcalError(f"g = {g:g}: the local gravity magnitude in m/s^2 (9.78-9.83 on the Earth's surface; "
                             "data in g are converted, pass --unit g)")
+    if rec.acc is None:
+        raise RecordingError(f"{rec.source}: no accelerometer in this recording (a gyro alone): calibrate its gyro from "
+                             "rotations of known angle (accelcal.gyro.rotations.calibrate_rotations)")
     est = estimator(method)
     poses, searched = _static_poses(rec, g, static or {}, max(est.min_poses, min_poses) if search else 0)
     prov = dict(provenance or {})
