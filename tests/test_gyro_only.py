@@ -267,3 +267,34 @@ def test_a_unit_off_by_57_is_refused_by_the_stated_angles(tmp_path):
                      "--gyro-unit", "rad/s", "--rotation-angle", "360,365,362", "--out", tmp_path / "g.json")
     assert code == 2 and __import__("re").search(r"turns 20\d{3}\.\d deg", err) and "(--gyro-unit, --gyro-sens" in err
     assert not (tmp_path / "g.json").exists()
+
+
+@pytest.mark.parametrize("command", [("apply", "CAL"), ("discrepancy", "--g", "9.81")])
+def test_commands_that_need_an_accelerometer_refuse_a_gyro_alone(tmp_path, command):
+    rng = np.random.default_rng(9)
+    path = _mat(tmp_path, rest=BIASES[0] + NOISE * rng.standard_normal((500, 3)))
+    out = tmp_path / "out"
+    args = [a if a != "CAL" else tmp_path / "cal.json" for a in command]
+    if command[0] == "apply":  # a calibration of a simulated accelerometer to apply
+        from accelcal.calibration import calibrate_recording
+        from accelcal.recording import Recording
+        from accelcal.simulation import random_directions, simulate_recording
+
+        u = np.vstack([[0, 0, 1.0], random_directions(rng, 15)])
+        sim = simulate_recording(rng, u, 9.81, np.eye(3), np.zeros(3), noise_std=0.01)
+        calibrate_recording(Recording(sim["t"], sim["acc"], None, "sim", unit="m/s^2"), 9.81,
+                            "full_lls")[0].save(tmp_path / "cal.json")
+        args = [args[0], args[1], path]
+    else:
+        args = [args[0], path, *args[1:]]
+    code, err = _cli(*args, "--columns", "gx=1,gy=2,gz=3", "--rate", "100", "--out", out)
+    assert code == 2 and not out.exists()
+    assert f"no accelerometer in this recording (a gyro alone), which 'accelcal {command[0]}' needs" in err, err
+
+
+def test_the_python_accelerometer_calibration_refuses_a_gyro_alone(ctu):
+    from accelcal import calibrate_recording
+    from accelcal.errors import RecordingError
+
+    with pytest.raises(RecordingError, match=r"no accelerometer in this recording .*\.calibrate_rotations"):
+        calibrate_recording(ctu, 9.81)

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import (AccelcalError, DegeneratePosesError, NotConvergedError, NotPositiveDefiniteError,
-                      TooFewPosesError)
+                      RecordingError, TooFewPosesError)
 from ..one_orientation import check_several_orientations
 from ..registry import estimator, estimators
 
@@ -168,6 +168,9 @@ def calibrate_recording(rec, g: float, method: str = "full_lls", *, static: dict
     if not (np.isfinite(g) and 9.7 <= g <= 9.9):
         raise AccelcalError(f"g = {g:g}: the local gravity magnitude in m/s^2 (9.78-9.83 on the Earth's surface; "
                             "data in g are converted, pass --unit g)")
+    if rec.acc is None:
+        raise RecordingError(f"{rec.source}: no accelerometer in this recording (a gyro alone): calibrate its gyro from "
+                             "rotations of known angle (accelcal.gyro.rotations.calibrate_rotations)")
     est = estimator(method)
     if rec.intervals is None:  # a static record: said at once, before detection walks it (one_orientation)
         check_several_orientations(rec, est.min_poses, est.cli_name)

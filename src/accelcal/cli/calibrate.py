@@ -51,7 +51,7 @@ def _calibrate(args) -> int:
     from ..errors import AccelcalError, RecordingError, TooFewPosesError
 
     t0 = time.perf_counter()
-    rec = _read(args)
+    rec = _read(args, accelerometer=False)
     if rec.acc is None:
         return _calibrate_gyro_only(args, rec, t0)
     rec = replace(rec, notes=rec.notes + (gyro.note_gyro(args, rec), mag.note_mag(args, rec)))

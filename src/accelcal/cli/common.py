@@ -158,15 +158,21 @@ def _step(what: str, after_s: float = 2.0):
         timer.cancel()
 
 
-def _read(args):
+def _read(args, *, accelerometer: bool = True):
+    """The recording of ``args``; ``accelerometer``: the command needs one (a gyro alone is
+    refused in one line)."""
     from ..formats import read
 
     with _step(f"reading {args.recording}"):
-        return read(args.recording, format=args.format, columns=args.columns, unit=args.unit,
-                    time_unit=args.time_unit, rate=args.rate, intervals=args.intervals,
-                    gyro=None if args.no_gyro else args.gyro, gyro_unit=args.gyro_unit, topic=args.topic,
-                    instance=args.instance, time_source=args.time_source, clock=args.clock, variable=args.variable,
-                    mag_unit=args.mag_unit)
+        rec = read(args.recording, format=args.format, columns=args.columns, unit=args.unit,
+                   time_unit=args.time_unit, rate=args.rate, intervals=args.intervals,
+                   gyro=None if args.no_gyro else args.gyro, gyro_unit=args.gyro_unit, topic=args.topic,
+                   instance=args.instance, time_source=args.time_source, clock=args.clock, variable=args.variable,
+                   mag_unit=args.mag_unit)
+    if accelerometer and rec.acc is None:
+        raise AccelcalError(f"{args.recording}: no accelerometer in this recording (a gyro alone), which "
+                            f"'accelcal {args.command}' needs; name its columns with --columns ax=..,ay=..,az=..")
+    return rec
 
 
 def _static_settings(args, rec) -> dict:
