@@ -53,6 +53,24 @@ def test_every_cell_is_right_or_refused_in_one_line(fmt, session, ferraris):
                     assert "decided by the motions" in got
 
 
+def test_a_static_records_gyro_is_right_or_refused_unless_its_file_breaks_its_formats_spec():
+    """Static records: a unit stated (header, --gyro-unit) or proven (integers: counts) gives the right
+    values; none stated: refused naming --gyro-unit.  A log whose spec fixes rad/s but holds deg/s is
+    taken at its spec's word: without motions nothing can tell (on a session with motions the evidence
+    refuses it, test above)."""
+    s = cells.static_session()
+    for fmt in cells.FORMATS:
+        spec = SPEC_GYRO_UNITS.get(fmt)
+        for unit in cells.UNITS:
+            for declared in (True, False):
+                got = cells.static_outcome(fmt, unit, declared, s)
+                if spec is not None and not declared and unit != spec and spec != "counts":
+                    continue  # the file breaks its spec: the documented limit (no evidence without motions)
+                assert got.startswith(("right", "refused")), f"{fmt} {unit} {declared}: {got}"
+                if got.startswith("refused"):
+                    assert "--gyro-unit" in got and not declared
+
+
 def test_a_static_record_of_no_stated_gyro_unit_is_refused_naming_the_option(tmp_path, capsys):
     """The ADIS case: a static deg/s gyro in a table. Before: read as rad/s, exit 0, density 57x too large."""
     rng = np.random.default_rng(3)
