@@ -230,3 +230,21 @@ def test_the_acceleration_unit_is_the_one_whose_g_the_rests_read(scale, unit, se
     if unit == "counts" and scale > 100:
         acc = np.round(acc + 32768.0)
     assert acceleration_unit_from_rests(acc)[0] == unit
+
+
+def test_turns_about_the_vertical_alone_do_not_decide_the_unit(session):
+    """Motions about gravity: any scale carries gravity onto itself, so no unit is taken."""
+    from accelcal.gyro.errors import GyroInputError
+    from accelcal.gyro.fit import MotionSet
+    from accelcal.gyro.unit_evidence import unit_from_motions
+
+    n, k = 1100, 10
+    y = np.zeros((n, 3))
+    starts = np.arange(k) * 100 + 50
+    for a in starts:
+        y[a:a + 50, 2] = np.deg2rad(90.0) / 0.5  # 90 deg about z in 0.5 s
+    up = np.tile([0.0, 0.0, 1.0], (k + 1, 1))
+    ms = MotionSet(y, 0.01, starts - 1, starts + 50, np.arange(k), np.arange(k) + 1, up,
+                   np.tile(1e-6 * np.eye(3), (k + 1, 1, 1)), np.full(3, 1e-6), np.zeros((k, 3)))
+    with pytest.raises(GyroInputError, match="tilt gravity.*--gyro-unit"):
+        unit_from_motions(ms, "magnus4", y)
