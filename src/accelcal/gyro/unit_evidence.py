@@ -40,8 +40,9 @@ def decide(c: float, integer_values: bool, what: str) -> tuple[str, str]:
     if fits:
         u = fits[0]
         other = next(o for o in CANDIDATES if o != u)
+        apart = max(RAW_UNITS[u], RAW_UNITS[other]) / min(RAW_UNITS[u], RAW_UNITS[other])
         return u, (f"unit {u}, decided by {what}: they fit {c:.4g} rad/s per raw unit, {c / RAW_UNITS[u]:.3f} x "
-                   f"{u}'s factor ({other} would be {RAW_UNITS[u] / RAW_UNITS[other]:.3g} x off)")
+                   f"{u}'s factor ({other} would be {apart:.3g} x off)")
     if integer_values:
         return "counts", f"scalar search (raw counts: integer values, which {what} scale by {c:.4g} rad/s per count)"
     raise GyroInputError(f"the gyro's unit is not stated and {what} do not decide it: they fit {c:.4g} rad/s per "
@@ -84,4 +85,5 @@ def unit_from_rotations(segments, h: float, angles_deg, gyro) -> tuple[str, str]
     return unit, how
 
 
-__all__ = ["CANDIDATES", "DECIDE_FACTOR", "MIN_TILTING", "MIN_TILT_DEG", "decide", "is_integer_valued", "unit_from_motions", "unit_from_rotations"]
+__all__ = ["CANDIDATES", "DECIDE_FACTOR", "MIN_TILTING", "MIN_TILT_DEG", "decide", "is_integer_valued",
+           "unit_from_motions", "unit_from_rotations"]
