@@ -53,6 +53,24 @@ def test_every_cell_is_right_or_refused_in_one_line(fmt, session, ferraris):
                     assert "decided by the motions" in got
 
 
+def test_a_static_records_gyro_is_right_or_refused_unless_its_file_breaks_its_formats_spec():
+    """Static records: a unit stated (header, --gyro-unit) or proven (integers: counts) gives the right
+    values; none stated: refused naming --gyro-unit.  A log whose spec fixes rad/s but holds deg/s is
+    taken at its spec's word: without motions nothing can tell (on a session with motions the evidence
+    refuses it, test above)."""
+    s = cells.static_session()
+    for fmt in cells.FORMATS:
+        spec = SPEC_GYRO_UNITS.get(fmt)
+        for unit in cells.UNITS:
+            for declared in (True, False):
+                got = cells.static_outcome(fmt, unit, declared, s)
+                if spec is not None and not declared and unit != spec and spec != "counts":
+                    continue  # the file breaks its spec: the documented limit (no evidence without motions)
+                assert got.startswith(("right", "refused")), f"{fmt} {unit} {declared}: {got}"
+                if got.startswith("refused"):
+                    assert "--gyro-unit" in got and not declared
+
+
 def test_a_static_record_of_no_stated_gyro_unit_is_refused_naming_the_option(tmp_path, capsys):
     """The ADIS case: a static deg/s gyro in a table. Before: read as rad/s, exit 0, density 57x too large."""
     rng = np.random.default_rng(3)
@@ -212,3 +230,21 @@ def test_the_acceleration_unit_is_the_one_whose_g_the_rests_read(scale, unit, se
     if unit == "counts" and scale > 100:
         acc = np.round(acc + 32768.0)
     assert acceleration_unit_from_rests(acc)[0] == unit
+
+
+def test_turns_about_the_vertical_alone_do_not_decide_the_unit(session):
+    """Motions about gravity: any scale carries gravity onto itself, so no unit is taken."""
+    from accelcal.gyro.errors import GyroInputError
+    from accelcal.gyro.fit import MotionSet
+    from accelcal.gyro.unit_evidence import unit_from_motions
+
+    n, k = 1100, 10
+    y = np.zeros((n, 3))
+    starts = np.arange(k) * 100 + 50
+    for a in starts:
+        y[a:a + 50, 2] = np.deg2rad(90.0) / 0.5  # 90 deg about z in 0.5 s
+    up = np.tile([0.0, 0.0, 1.0], (k + 1, 1))
+    ms = MotionSet(y, 0.01, starts - 1, starts + 50, np.arange(k), np.arange(k) + 1, up,
+                   np.tile(1e-6 * np.eye(3), (k + 1, 1, 1)), np.full(3, 1e-6), np.zeros((k, 3)))
+    with pytest.raises(GyroInputError, match="tilt gravity.*--gyro-unit"):
+        unit_from_motions(ms, "magnus4", y)

@@ -160,6 +160,35 @@ def outcome(fmt: str, unit: str, declared: bool, s: dict) -> str:
     return f"WRONG x{factor:.3g} (rms error {100 * err:.3g} %)"
 
 
+def static_session(seed: int = 7, n: int = 1000) -> dict:
+    """A static record (one orientation, the gyro at rest with a bias): no motion decides a unit."""
+    rng = np.random.default_rng(seed)
+    gyro = [0.004, -0.003, 0.002] + 0.002 * rng.standard_normal((n, 3))
+    acc = [0.2, -0.1, G] + 0.01 * rng.standard_normal((n, 3))
+    parts = np.array(["z_p"] * n)
+    return {"t": np.arange(n) / FS, "acc": acc, "gyro": gyro, "rates": np.zeros((n, 3)), "parts": parts}
+
+
+def static_outcome(fmt: str, unit: str, declared: bool, s: dict) -> str:
+    """What the noise analysis gets of a static record's gyro: ``right`` (the rates in rad/s, or raw counts
+    said to be counts), ``refused: ...`` (one line), or ``WRONG xF``."""
+    from accelcal.formats import read
+    from accelcal.formats.units_evidence import require_gyro_unit
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path, kwargs = write(fmt, s, unit, declared, Path(tmp))
+        try:
+            rec = read(path, **kwargs)
+            require_gyro_unit(rec, "a static record")
+        except AccelcalError as e:
+            return f"refused: {str(e).splitlines()[0]}"
+    if rec.gyro_unit == "counts":
+        truth = in_unit(s["gyro"], unit)
+        return "right (counts)" if np.allclose(rec.gyro, truth, atol=1e-3) else "WRONG (counts of other values)"
+    factor = float(np.median(np.abs(rec.gyro) / np.abs(s["gyro"])))
+    return f"right ({rec.gyro_unit})" if abs(factor - 1) < 1e-3 else f"WRONG x{factor:.3g}"
+
+
 def table() -> list[tuple[str, str, str, str]]:
     """Every cell: (format, unit, declared or not, outcome)."""
     s, f = session(), ferraris_session()
@@ -168,6 +197,16 @@ def table() -> list[tuple[str, str, str, str]]:
             for fmt in FORMATS for unit in UNITS for d in (True, False)]
 
 
+def static_table() -> list[tuple[str, str, str, str]]:
+    """Every static cell: (format, unit, declared or not, outcome)."""
+    s = static_session()
+    return [(fmt, unit, "declared" if d else "undeclared", static_outcome(fmt, unit, d, s))
+            for fmt in FORMATS for unit in UNITS for d in (True, False)]
+
+
 if __name__ == "__main__":
     for row in table():
+        print(" | ".join(row))
+    print("static records (the noise analysis):")
+    for row in static_table():
         print(" | ".join(row))

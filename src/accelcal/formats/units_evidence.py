@@ -1,4 +1,4 @@
-"""The gyro's unit where the file does not state it: what the values decide, and the refusal where nothing does.
+"""Units where the file does not state them: what the values decide, and the refusal where nothing does.
 
 A gyro's unit comes from the file (a unit in the header, a format whose spec fixes it:
 ROS ``sensor_msgs/Imu``, PX4, ArduPilot are SI), from the user (``--gyro-unit``), or from
@@ -15,6 +15,12 @@ density came out 57x too large).  So the reader decides only what the values pro
   the integrated rotation carries each rest's gravity direction onto the next).  A use
   that has no motions (the noise analysis of a static record) refuses with one line naming
   ``--gyro-unit``: :func:`require_gyro_unit`.
+
+``--gyro-unit`` also overrides the unit a log's spec fixes (:func:`override_gyro_unit`), for
+a file that does not follow it.  The acceleration's unit, when neither the header nor
+``--unit`` states it, is the one in which the rests read 1 g (:func:`acceleration_unit_from_rests`):
+g, m/s² and mg are 9.8 and 100 apart, and anything else is raw counts, whose scale the
+calibration estimates.
 """
 
 from __future__ import annotations
@@ -88,7 +94,8 @@ def acceleration_unit_from_rests(acc) -> tuple[str, str]:
     integer = bool(np.all(np.asarray(acc) == np.round(acc)))
     for u, one_g in (("g", 1.0), ("m/s^2", G0), ("mg", 1000.0)):
         if REST_BAND_G[0] <= norm / one_g <= REST_BAND_G[1] and not (integer and u == "mg"):
-            return u, f"inferred from the median |a| = {norm:.4g} of the rests, {norm / one_g:.3f} g; pass --unit if wrong"
+            return u, (f"inferred from the median |a| = {norm:.4g} of the rests, {norm / one_g:.3f} g; pass --unit "
+                       "if wrong")
     return "counts", (f"inferred from the median |a| = {norm:.4g} of the rests, 1 g in none of g, m/s^2, mg"
                       f"{' (integers)' if integer else ''}: raw counts; pass --unit if wrong")
 
@@ -109,5 +116,6 @@ class UndecidedUnitError(RecordingError):
     """A unit that neither the file, the user nor the evidence decides."""
 
 
-__all__ = ["COUNTS_ABOVE", "REST_BAND_G", "REST_BLOCK", "SPEC_GYRO_UNITS", "acceleration_unit_from_rests",
-           "override_gyro_unit", "rest_magnitude", "UNDECIDED_NOTE", "UndecidedUnitError", "gyro_unit_from_values", "require_gyro_unit"]
+__all__ = ["COUNTS_ABOVE", "REST_BAND_G", "REST_BLOCK", "SPEC_GYRO_UNITS", "UNDECIDED_NOTE", "UndecidedUnitError",
+           "acceleration_unit_from_rests", "gyro_unit_from_values", "override_gyro_unit", "require_gyro_unit",
+           "rest_magnitude"]

@@ -27,6 +27,8 @@ CANDIDATES = ("rad/s", "deg/s")
 #: ``c`` within this factor of a unit's factor to rad/s decides that unit (the candidates are 57.3 apart;
 #: a real gyro's scale error is a few %).
 DECIDE_FACTOR = 1.5
+#: Motions tilting gravity by more than MIN_TILT_DEG that the decision needs.
+MIN_TILTING, MIN_TILT_DEG = 3, 20.0
 
 
 def decide(c: float, integer_values: bool, what: str) -> tuple[str, str]:
@@ -38,8 +40,9 @@ def decide(c: float, integer_values: bool, what: str) -> tuple[str, str]:
     if fits:
         u = fits[0]
         other = next(o for o in CANDIDATES if o != u)
+        apart = max(RAW_UNITS[u], RAW_UNITS[other]) / min(RAW_UNITS[u], RAW_UNITS[other])
         return u, (f"unit {u}, decided by {what}: they fit {c:.4g} rad/s per raw unit, {c / RAW_UNITS[u]:.3f} x "
-                   f"{u}'s factor ({other} would be {RAW_UNITS[u] / RAW_UNITS[other]:.3g} x off)")
+                   f"{u}'s factor ({other} would be {apart:.3g} x off)")
     if integer_values:
         return "counts", f"scalar search (raw counts: integer values, which {what} scale by {c:.4g} rad/s per count)"
     raise GyroInputError(f"the gyro's unit is not stated and {what} do not decide it: they fit {c:.4g} rad/s per "
@@ -53,7 +56,16 @@ def is_integer_valued(gyro) -> bool:
 
 
 def unit_from_motions(ms, integrator: str, gyro) -> tuple[str, float, str]:
-    """``(unit, nominal [rad/s per raw unit], how)`` of a multi-position session's motions ``ms``."""
+    """``(unit, nominal [rad/s per raw unit], how)`` of a multi-position session's motions ``ms``.
+
+    Only motions that tilt gravity carry evidence (a turn about the vertical leaves it in
+    place for any scale): fewer than :data:`MIN_TILTING` of them, and the unit is refused.
+    """
+    tilt = np.rad2deg(np.arccos(np.clip(np.sum(ms.u[ms.rest_before] * ms.u[ms.rest_after], axis=1), -1, 1)))
+    if int(np.sum(tilt > MIN_TILT_DEG)) < MIN_TILTING:
+        raise GyroInputError(f"the gyro's unit is not stated and only {int(np.sum(tilt > MIN_TILT_DEG))} of "
+                             f"{len(tilt)} motions tilt gravity by more than {MIN_TILT_DEG:g} deg ({MIN_TILTING} "
+                             "needed to decide it); pass --gyro-unit rad/s, deg/s or counts")
     c = float(initial_scale(ms, integrator))
     unit, how = decide(c, is_integer_valued(gyro), "the motions between rests")
     nominal = c if unit == "counts" else RAW_UNITS[unit]
@@ -73,4 +85,5 @@ def unit_from_rotations(segments, h: float, angles_deg, gyro) -> tuple[str, str]
     return unit, how
 
 
-__all__ = ["CANDIDATES", "DECIDE_FACTOR", "decide", "is_integer_valued", "unit_from_motions", "unit_from_rotations"]
+__all__ = ["CANDIDATES", "DECIDE_FACTOR", "MIN_TILTING", "MIN_TILT_DEG", "decide", "is_integer_valued",
+           "unit_from_motions", "unit_from_rotations"]
