@@ -14,7 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from accelcal.export import (CONSUMERS, ExportError, ExportInputs, export, output_paths, write_files)
+from accelcal.export import CONSUMERS
+from accelcal.export.api import ExportError, ExportInputs, export, output_paths, write_files
 from accelcal.export import registry
 
 from .export_fixtures import full_calibration, gyro_quality, noise_report
@@ -129,7 +130,7 @@ def test_a_section_added_by_another_part_lands_in_the_parameter_file(monkeypatch
 
 
 def test_strict_sees_the_quality_warnings_of_both_sensors():
-    from accelcal.export import trust_problems
+    from accelcal.export.api import trust_problems
 
     cal = full_calibration()
     assert trust_problems(cal) == []

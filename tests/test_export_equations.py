@@ -20,7 +20,7 @@ import re
 import numpy as np
 import pytest
 
-from accelcal.export import ExportInputs, export
+from accelcal.export.api import ExportInputs, export
 from .export_fixtures import full_calibration, noise_report
 
 yaml = pytest.importorskip("yaml")

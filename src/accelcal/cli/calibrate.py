@@ -114,7 +114,7 @@ def _calibrate(args) -> int:
 
 def _strict_status(cal, args) -> int:
     """0, or 3 with --strict when the calibration's fit is untrustworthy (one line saying why)."""
-    from ..export import trust_problems
+    from ..export.api import trust_problems
 
     problems = trust_problems(cal) if args.strict else []
     if not problems:

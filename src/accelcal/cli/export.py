@@ -72,7 +72,7 @@ def _target(args) -> tuple[str, Path]:
 
 def _export(args) -> int:
     from ..calibration import load_calibration
-    from ..export import ExportInputs, export, output_paths, trust_problems, write_files
+    from ..export.api import ExportInputs, export, output_paths, trust_problems, write_files
 
     name, path = _target(args)
     cal = load_calibration(args.calibration)

@@ -1,7 +1,7 @@
 """The one registry of export consumers: the estimators' and autopilots' files accelcal writes.
 
 Everything that chooses or describes a consumer reads it from here: ``accelcal export --to``
-(its choices and help), :func:`accelcal.export.export` and the conformance suite
+(its choices and help), :func:`accelcal.export.api.export` and the conformance suite
 (``tests/test_export_conformance.py``, parametrised over :data:`CONSUMERS`).  Writers are
 named ``module:function`` and imported on first use, so that ``accelcal --help`` imports
 no numerical library.

@@ -127,7 +127,7 @@ def openvins_yaml(report, *, rostopic: str = "/imu0", inflate: float = 1.0, cali
                  model: str = "kalibr") -> tuple[str, list]:
     """OpenVINS's ``kalibr_imu_chain.yaml`` (:mod:`accelcal.export.openvins`); returns (text, warnings):
     the terms the file leaves out."""
-    from ..export import export
+    from ..export.api import export
     from ..export.openvins import write
 
     inputs = ExportInputs(calibration, report_dict(report), {"rostopic": rostopic, "inflate": inflate, "model": model})
@@ -137,7 +137,7 @@ def openvins_yaml(report, *, rostopic: str = "/imu0", inflate: float = 1.0, cali
 
 def calibrated_kalibr_yaml(report, calibration, *, rostopic: str = "/imu0", inflate: float = 1.0) -> tuple[str, list]:
     """Kalibr's ``imu.yaml`` with the calibration's intrinsics (:mod:`accelcal.export.kalibr`); (text, warnings)."""
-    from ..export import export
+    from ..export.api import export
 
     out = export("kalibr", ExportInputs(calibration, report_dict(report), {"rostopic": rostopic, "inflate": inflate}))
     return out.files[""], [x.line() for x in out.left_out]

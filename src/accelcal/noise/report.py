@@ -187,10 +187,10 @@ def analyse_noise(rec, *, level: float = DEFAULT_LEVEL, n_boot: int = DEFAULT_N_
     """
     if not 0 < level < 1 or n_boot < 50:
         raise NoiseAnalysisError(f"need 0 < level < 1 and n_boot >= 50, got level={level}, n_boot={n_boot}")
-    require_gyro_unit(rec, "a static record")  # no motion decides rad/s from deg/s: 57x
     if getattr(rec, "runs", None) is not None and len(rec.runs) > 1:
         raise NoiseAnalysisError(f"{rec.source}: {len(rec.runs)} runs recorded apart: one Allan deviation needs one "
                                  "uninterrupted record; analyse them one at a time (--variable NAME)")
+    require_gyro_unit(rec, "a static record")  # no motion decides rad/s from deg/s: 57x
     t = np.asarray(rec.t, dtype=float)
     fs = 1.0 / float(np.median(np.diff(t)))
     parts = _parts(segments, len(t))
