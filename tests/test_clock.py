@@ -209,3 +209,11 @@ def test_the_clock_costs_less_than_parsing_its_stamps():
     parse = best(lambda: np.loadtxt(io.StringIO(text)))
     clock = best(lambda: estimate_clock(s))
     assert clock < 6.0 * parse, (clock, parse)
+
+
+def test_short_records_with_long_steps_do_not_break_the_clock():
+    for n in (4, 11, 60):
+        s = np.arange(n) * 0.01
+        s[n // 2:] += 0.02  # two samples missing in the middle
+        c = estimate_clock(s)
+        assert c.missing == 2 and abs(c.rate - 100.0) < 1e-6

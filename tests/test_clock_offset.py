@@ -55,3 +55,30 @@ def test_two_time_bases_that_cannot_be_aligned_are_refused(sim, tmp_path):
     r = subprocess.run([sys.executable, "-m", "accelcal.cli", "calibrate", str(acc), "--gyro", str(gyro), "--out",
                         str(out)], capture_output=True, text=True)
     assert r.returncode == 2 and not out.exists() and len(r.stderr.strip().splitlines()) == 1, r.stderr
+
+
+def test_px4_gyro_topic_late_by_20_ms_is_aligned(sim, tmp_path):
+    """PX4's sensor_gyro is a topic of its own: its samples are interpolated to the accelerometer's
+    instants, then shifted by the offset the motions show."""
+    pytest.importorskip("pyulog")
+    from accelcal.formats import px4
+
+    from .log_fixtures import write_ulog
+
+    t = sim["t"]
+    ts = (np.round(t * 1e6) + 1_000_000).astype(np.uint64)
+    late = _late(sim, 0.02)
+    topics = {("sensor_accel", 0): {"timestamp": ts + 50, "timestamp_sample": ts, "device_id": np.full(t.size, 7, np.uint32),
+                                    **{k: sim["acc"][:, j].astype(np.float32) for j, k in enumerate("xyz")}},
+              ("sensor_gyro", 0): {"timestamp": ts + 310, "timestamp_sample": ts + 300,
+                                   "device_id": np.full(t.size, 9, np.uint32),
+                                   **{k: late[:, j].astype(np.float32) for j, k in enumerate("xyz")}}}
+    rec = px4.read(write_ulog(tmp_path / "raw.ulg", topics))
+    note = next(n for n in rec.notes if "time offset" in n)
+    assert note.startswith("sensor_gyro - accelerometer time offset +20") and "not applied" not in note
+    assert np.corrcoef(rec.gyro[50:-50, 2], sim["gyro"][50:-50, 2])[0, 1] > 0.999
+
+
+def test_short_records_measure_no_offset_and_break_nothing(sim):
+    for n in (5, 40, 120):
+        estimate_offset(sim["t"][:n], sim["acc"][:n], sim["gyro"][:n])  # None or an Offset, never an error

@@ -277,12 +277,16 @@ def stamp_numbers(stamps) -> np.ndarray:
     if n < 4:
         return k
     dt = np.diff(s)
-    h = float(np.median(dt))
+    h = h0 = float(np.median(dt))  # the median step: the period, whatever gaps the fit below has not counted
     cand = np.flatnonzero(dt > CANDIDATE_STEP * h)
     if cand.size == 0:
         return k
-    times, h, _, _ = fit_clock(s, k)
-    r = s - times  # residual about the clock; a gap of m samples raises all later ones by m h
+    # the period from steps over SHIFT_WINDOW rows (median: the few that span a gap do not count,
+    # and the jitter of one stamp is divided by the window), not a fit that the gaps would tilt
+    lag = max(1, min(SHIFT_WINDOW, n // 4))  # most pairs this far apart span no gap
+    h = float(np.median((s[lag:] - s[:-lag]) / lag))
+    r = s - h * k
+    r -= np.median(r)  # residual about the clock; a gap of m samples raises all later ones by m h
     extra = np.zeros(n - 1, np.int64)
     cap = np.maximum(np.round(dt[cand] / h).astype(np.int64) - 1, 1)  # a gap is no longer than its step
     shifts = _level_shifts(r, cand, h)
@@ -303,8 +307,8 @@ def stamp_numbers(stamps) -> np.ndarray:
     dr = np.diff(r)  # steps about the clock: free of the trend the uncounted gaps leave in r
     sigma = 1.4826 * float(np.median(np.abs(dr - np.median(dr))))
     edge = open_ & ((cand + 1 < MIN_SIDE) | (n - cand - 1 < MIN_SIDE))
-    edge &= dt[cand] > h + max(0.5 * h, 6.0 * sigma)
-    extra[cand[edge]] += np.round(dt[cand[edge]] / h).astype(np.int64) - 1
+    edge &= dt[cand] > h0 + max(0.5 * h0, 10.0 * sigma)
+    extra[cand[edge]] += np.round(dt[cand[edge]] / h0).astype(np.int64) - 1
     return np.concatenate([[0], np.cumsum(1 + extra)])
 
 
@@ -335,10 +339,10 @@ def _level_shifts(r, cand, h: float) -> np.ndarray:
     cs = np.concatenate([[0.0], np.cumsum(r)])
     W = SHIFT_WINDOW
     inside = (cand + 1 >= W) & (cand + 1 + W <= n)
-    c = np.where(inside, cand, W)  # placeholders for the ends, decided below
-    means = (cs[c + 1 + W] - cs[c + 1]) / W - (cs[c + 1] - cs[c + 1 - W]) / W
-    full = inside & (means > 0.25 * h)
-    out = np.where(inside, means, 0.0)
+    c = cand[inside]
+    out = np.zeros(cand.size)
+    out[inside] = (cs[c + 1 + W] - cs[c + 1]) / W - (cs[c + 1] - cs[c + 1 - W]) / W  # the means' shift
+    full = inside & (out > 0.25 * h)
     off = np.arange(SHIFT_WINDOW)
     for lo in range(0, int(full.sum()), 50_000):  # blocks: bounded memory
         c = cand[full][lo:lo + 50_000]

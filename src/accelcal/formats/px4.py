@@ -20,8 +20,10 @@ Time: ``time_source='header'`` (default) is ``timestamp_sample``, when the senso
 sampled; ``'log'`` is ``timestamp``, when the sample was published.  ``sensor_combined``
 has one stamp, its gyro's (the accelerometer's offset ``accelerometer_timestamp_relative``
 is noted when it is not zero).  The gyro instance's samples are interpolated to the
-accelerometer's sample times when the two differ; the recorded microseconds are kept as
-the time column (``timestamp_sample_us`` or ``timestamp_us``).
+accelerometer's sample times when the two differ, and then shifted by their time offset
+measured from the motions (:mod:`accelcal.formats.sync`; stated, applied when beyond its
+uncertainty); the recorded microseconds are kept as the time column
+(``timestamp_sample_us`` or ``timestamp_us``).
 """
 
 from __future__ import annotations
@@ -36,6 +38,7 @@ from ..errors import LogFormatError, TopicError
 from ..recording import MIN_ROWS
 from .logs import (Progress, check_finite, check_rows, check_time_source, choose, clock_note, make_recording,
                       microseconds, require_extra, stamps_to_time)
+from .sync import estimate_offset, shift_gyro
 
 ULOG_MAGIC = b"ULog\x01\x12\x35"
 TOPICS = ("sensor_accel", "sensor_gyro", "sensor_combined")
@@ -181,6 +184,8 @@ def _raw(path, data, inst: int, ulog, time_source: str, notes: list):
                         "; in this PX4 version x, y, z are already calibrated (x_raw holds the counts)" if old else
                         ", the driver's output before the autopilot's calibration"))
     gyro = _gyro(path, data, inst, time_source, chosen, notes)
+    if gyro is not None and any("interpolated to the accelerometer" in n for n in notes):
+        gyro = _aligned(path, t, acc, gyro, notes)
     note = clock_note(sample * 1000, log * 1000, "sample times", "publication times")
     if note and "timestamp_sample" in acc_d.data:
         notes.append(f"warning: {note}")
@@ -215,6 +220,17 @@ def _gyro(path, data, inst: int, time_source: str, at_us: np.ndarray, notes: lis
     x = (ts - ts[0]).astype(np.float64)
     xi = (at_us - ts[0]).astype(np.float64)
     return np.column_stack([np.interp(xi, x, w[:, k]) for k in range(3)])
+
+
+def _aligned(path, t, acc, gyro, notes: list):
+    """The gyro of its own topic shifted by its time offset against the accelerometer, measured from the
+    motions (:mod:`.sync`; a flight's linear accelerations may leave it unmeasured: said so)."""
+    offset = estimate_offset(t, acc, gyro, source=str(path))
+    if offset is None:
+        notes.append("sensor_gyro - sensor_accel time offset not measured: no motion both of them see")
+        return gyro
+    notes.append(offset.note("sensor_gyro"))
+    return shift_gyro(t, gyro, offset.tau) if offset.applied else gyro
 
 
 def _combined(path, d, time_source: str, notes: list):

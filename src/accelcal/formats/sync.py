@@ -78,11 +78,13 @@ def _peak(du: np.ndarray, u: np.ndarray, w: np.ndarray, max_lag: int) -> tuple[f
     lags = np.arange(-max_lag, max_lag + 1)
     c = np.full(lags.size, -1.0)
     for q, L in enumerate(lags):
+        if abs(L) > n - 11:  # too little overlap (and a negative stop would wrap)
+            continue
         i = slice(max(0, -L), n - max(0, L))  # du[i], u[i] against w[i + L]
         a = du[i]
         b = np.cross(u[i], w[max(0, L):n + min(0, L)])
         den = np.sqrt(np.sum(a * a) * np.sum(b * b))
-        if len(a) > 10 and den > 0:
+        if den > 0:
             c[q] = float(np.sum(a * b) / den)
     k = int(np.argmax(c))
     frac = 0.0
@@ -120,7 +122,9 @@ def estimate_offset(t, acc, gyro, *, source: str = "", acc_zero=0.0) -> Offset |
     """
     t = np.asarray(t, float)
     h = float(np.median(np.diff(t)))
-    max_lag = max(2, int(round(MAX_OFFSET_S / h)))
+    max_lag = min(int(round(MAX_OFFSET_S / h)), len(t) // 4)  # a short record: a shorter search
+    if max_lag < 2:
+        return None
     du, u, w = motion_signals(t, acc, gyro, acc_zero)
     lag, corr = _peak(du, u, w, max_lag)
     if corr < MIN_CORRELATION or abs(lag) >= max_lag - 0.5:
