@@ -61,7 +61,8 @@ def _calibrate(args) -> int:
                                              search=search,
                                              min_poses=gyro.GYRO_MIN_RESTS if gyro.wants_gyro(args, rec) else 0)
         except RecordingError as e:
-            raise RecordingError(f"{e}{_rate_hint(rec)}") from None
+            hint = " (the magnetometer without rests: accelcal mag RECORDING)" if mag.wants_mag(args, rec) else ""
+            raise RecordingError(f"{e}{_rate_hint(rec)}{hint}") from None
     if gyro.wants_gyro(args, rec):
         with _step("calibrating the gyroscope"):
             cal = replace(cal, gyro=gyro.calibrate(args, rec, cal, poses))
