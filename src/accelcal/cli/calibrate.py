@@ -67,7 +67,8 @@ def _calibrate(args) -> int:
                                              search=search,
                                              min_poses=gyro.GYRO_MIN_RESTS if gyro.wants_gyro(args, rec) else 0)
         except RecordingError as e:
-            raise RecordingError(f"{e}{_rate_hint(rec)}{_source_hint(rec)}") from None
+            hint = " (the magnetometer without rests: accelcal mag RECORDING)" if mag.wants_mag(args, rec) else ""
+            raise RecordingError(f"{e}{_rate_hint(rec)}{hint}{_source_hint(rec)}") from None
         except TooFewPosesError as e:  # unnamed columns taken for ax, ay, az may be another sensor's
             guess = next((n for n in rec.notes if n.startswith("no header: columns read as")), None)
             if guess is not None:

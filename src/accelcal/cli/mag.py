@@ -103,12 +103,13 @@ def _mag(args) -> int:
                                   g_tolerance=args.g_tolerance)
     doc = {"format": "accelcal-magnetometer", "format_version": 1, "recording": str(args.recording),
            "accelerometer": how, "magnetometer": mcal.to_dict()}
-    from ..atomic import write_json_atomic
+    from ..atomic import atomic_output, write_json_atomic
 
-    outputs = _exports(mcal, args)
+    outputs = _exports(mcal, args)  # every export made (or refused) before anything is written
     write_json_atomic(args.out, json.loads(json.dumps(doc, default=_plain)))
     for path, text in outputs:
-        path.write_text(text)
+        with atomic_output(path) as tmp:
+            Path(tmp).write_text(text)
     for n in tab.notes:
         print(f"read: {n}", file=sys.stderr)
     print(f"accelerometer: {how}", file=sys.stderr)
