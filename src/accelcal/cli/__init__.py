@@ -55,7 +55,7 @@ def main(argv: list[str] | None = None) -> int:
 
 def _parser() -> argparse.ArgumentParser:
     epilog = MODEL_HELP.format(methods=_methods_help(), formats=formats_help())
-    p = argparse.ArgumentParser(prog="accelcal", description="Accelerometer calibration from static poses.",
+    p = argparse.ArgumentParser(prog="accelcal", description="IMU calibration: accelerometer, gyroscope, magnetometer and noise.",
                                 formatter_class=argparse.RawDescriptionHelpFormatter, epilog=epilog)
     p.add_argument("--version", action="version", version=f"accelcal {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
