@@ -140,6 +140,10 @@ DATASETS: dict[str, dict[str, FileSpec]] = {
     "mag_ck_explorer": {
         "acc_mag_log.csv": FileSpec(_raw(*_CK, "Data Examples/acc_mag_log.csv"),
                                     "5435904892cc4eb8fc17085c30ab39430af5e29546d1c209d0bf41c588da1819"),
+        "acc_log.csv": FileSpec(_raw(*_CK, "Data Examples/acc_log.csv"),
+                                "738f6e3c0d8766393ddaaff717240ebab6b2726f8303b74e47eb69c8d47c152f"),
+        # Apache-2.0: the licence travels with the data
+        "LICENSE": FileSpec(_raw(*_CK, "LICENSE"), "9f25d93756f5ce264e47c446d09108cf782e95a1f4b387468da32fd2cd579310"),
     },
     "mag_qmc5883l_suarez": {
         "noisy_raw_data.csv": FileSpec(_raw(*_QMC, "calibration data/noisy_raw_data.csv"),
@@ -148,6 +152,7 @@ DATASETS: dict[str, dict[str, FileSpec]] = {
                                           "850ff706b65f380d68960aff905b40672bd6448073e164f35365e9a6a457dc2c"),
         "paramters_mag.csv": FileSpec(_raw(*_QMC, "optimization result data/paramters_mag.csv"),
                                       "8b36ea49a8bfd1d388027c366901d4b79df633b20a688ba94e61860b6d5e722b"),
+        "LICENSE": FileSpec(_raw(*_QMC, "LICENSE"), "e5ad1edc0cf9b8a947f0cc98f9383c8ec9b7c324652e4dd5db38482d0c5b1e70"),
     },
     "px4_ulog": {
         "sample.ulg": FileSpec(_raw(*_PYULOG, "test/sample.ulg"),
