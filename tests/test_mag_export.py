@@ -64,3 +64,24 @@ def test_magneto_form_and_refusal_of_counts():
     assert np.allclose((RAW - b) @ Ainv.T, m.correct(RAW))
     with pytest.raises(AccelcalError, match="physical unit"):
         px4_params(m)
+
+
+@pytest.mark.parametrize("consumer, rows", [("px4", "px4_rows"), ("ardupilot", "ardupilot_rows")])
+def test_accelcal_export_writes_the_compass_beside_the_imu(consumer, rows):
+    """`accelcal export --to px4|ardupilot` of a calibration with a magnetometer: the autopilot's file
+    holds the compass parameters the tests above check, next to the accelerometer's."""
+    from types import SimpleNamespace
+
+    from accelcal.export.registry import sections
+    from accelcal.mag import export as mag_export
+
+    m = MagModel(A, B, raw_unit="uT")
+    inputs = SimpleNamespace(calibration=SimpleNamespace(mag=SimpleNamespace(model=m)),
+                             option=lambda name, default=None: default)
+    section = {"px4": mag_export.px4_section, "ardupilot": mag_export.ardupilot_section}[consumer]
+    assert section in sections(consumer)  # the registry entry carries it
+    params, left_out, notes = section(inputs)
+    expected = mag_export.px4_rows(m) if rows == "px4_rows" else mag_export.ardupilot_rows(m)[0]
+    assert params == expected and left_out == []
+    no_mag = SimpleNamespace(calibration=SimpleNamespace(mag=None), option=inputs.option)
+    assert section(no_mag) == ([], [], [])

@@ -19,8 +19,9 @@ and checks it against ``accelcal apply``.
 
 from __future__ import annotations
 
-import importlib
 from dataclasses import dataclass, field
+
+from ..registry import resolve
 
 #: What a consumer may need beyond the accelerometer.
 NEEDS = ("gyro", "noise")
@@ -64,12 +65,7 @@ class Consumer:
             raise ValueError(f"consumer {self.name}: unknown needs {sorted(set(self.needs) - set(NEEDS))}")
 
     def load_writer(self):
-        return _resolve(self.writer)
-
-
-def _resolve(path: str):
-    module, _, name = path.partition(":")
-    return getattr(importlib.import_module(module), name)
+        return resolve(self.writer)
 
 
 _E = "accelcal.export"
@@ -97,13 +93,16 @@ CONSUMERS: dict[str, Consumer] = {c.name: c for c in (
              writer=f"{_E}.kfgins:write", needs=("gyro", "noise"), options=("corr_time_h",),
              source="i2Nav-WHU/KF-GINS src/kf-gins/gi_engine.cpp, src/kf_gins.cpp"),
     Consumer(name="px4", title="PX4 parameter file (.params, QGroundControl's layout): CAL_ACCn_xOFF/xSCALE, "
-                               "CAL_GYROn_xOFF",
+                               "CAL_GYROn_xOFF, CAL_MAGn_xOFF/xSCALE/xODIAG",
              writer=f"{_E}.px4:write", options=("instance", "device_id"),
-             sections=(f"{_E}.px4:accelerometer_section", f"{_E}.px4:gyroscope_section"),
+             sections=(f"{_E}.px4:accelerometer_section", f"{_E}.px4:gyroscope_section",
+                       "accelcal.mag.export:px4_section"),
              source="PX4/PX4-Autopilot src/lib/sensor_calibration/Accelerometer.hpp, Gyroscope.hpp"),
-    Consumer(name="ardupilot", title="ArduPilot parameter file (.parm): INS_ACCOFFS_x, INS_ACCSCAL_x, INS_GYROFFS_x",
+    Consumer(name="ardupilot", title="ArduPilot parameter file (.parm): INS_ACCOFFS_x, INS_ACCSCAL_x, INS_GYROFFS_x, "
+                                     "COMPASS_OFS_x, COMPASS_DIA_x, COMPASS_ODI_x, COMPASS_SCALE",
              writer=f"{_E}.ardupilot:write", options=("instance",),
-             sections=(f"{_E}.ardupilot:accelerometer_section", f"{_E}.ardupilot:gyroscope_section"),
+             sections=(f"{_E}.ardupilot:accelerometer_section", f"{_E}.ardupilot:gyroscope_section",
+                       "accelcal.mag.export:ardupilot_section"),
              source="ArduPilot/ardupilot libraries/AP_InertialSensor/AP_InertialSensor_Backend.cpp"),
     Consumer(name="imutk", title="IMU-TK .calib files (PATH_acc.calib, PATH_gyro.calib): x = T K (raw - b)",
              writer=f"{_E}.imutk:write", files=("_acc.calib", "_gyro.calib"),
@@ -129,7 +128,7 @@ def add_section(consumer: str, function: str) -> None:
 
 def sections(consumer: str) -> list:
     """The section functions of ``consumer``'s file: its own, then the added ones."""
-    return [_resolve(f) for f in (*CONSUMERS[consumer].sections, *_ADDED.get(consumer, ()))]
+    return [resolve(f) for f in (*CONSUMERS[consumer].sections, *_ADDED.get(consumer, ()))]
 
 
 def consumer_named(name: str) -> Consumer:

@@ -57,8 +57,8 @@ def _comment(model, prefix: str) -> list[str]:
     return lines
 
 
-def px4_params(model, instance: int = 0) -> str:
-    """``CAL_MAGn_*`` parameters (QGroundControl's ``.params`` tab-separated: vehicle, component, name, value, type)."""
+def px4_rows(model, instance: int = 0) -> list[tuple[str, float]]:
+    """``CAL_MAGn_*`` parameters as ``(name, value)``: offsets [gauss], the symmetric matrix ``S``."""
     k = _gauss_factor(model)
     S = model.A * output_scale(model)  # raw -> output, both in the raw unit
     off = model.b * k
@@ -66,27 +66,58 @@ def px4_params(model, instance: int = 0) -> str:
     rows = [(f"{p}{a}OFF", off[i]) for i, a in enumerate("XYZ")]
     rows += [(f"{p}{a}SCALE", S[i, i]) for i, a in enumerate("XYZ")]
     rows += [(f"{p}{a}ODIAG", S[i, j]) for a, (i, j) in zip("XYZ", ((0, 1), (0, 2), (1, 2)))]
-    return "\n".join(_comment(model, "#") + [f"1\t1\t{n}\t{v:.9g}\t9" for n, v in rows]) + "\n"
+    return rows
 
 
-def ardupilot_params(model, instance: int = 1) -> str:
-    """``COMPASS_OFS*``, ``COMPASS_DIA*``, ``COMPASS_ODI*``, ``COMPASS_SCALE*`` (Mission Planner's ``NAME,VALUE``)."""
+def px4_params(model, instance: int = 0) -> str:
+    """``CAL_MAGn_*`` parameters (QGroundControl's ``.params`` tab-separated: vehicle, component, name, value, type)."""
+    return "\n".join(_comment(model, "#") + [f"1\t1\t{n}\t{v:.9g}\t9" for n, v in px4_rows(model, instance)]) + "\n"
+
+
+def ardupilot_rows(model, instance: int = 1) -> tuple[list[tuple[str, float]], list[str]]:
+    """``COMPASS_OFS*``, ``COMPASS_DIA*``, ``COMPASS_ODI*``, ``COMPASS_SCALE*`` as ``(name, value)`` [milligauss],
+    and the comment lines (where the scale went)."""
     k = _gauss_factor(model) * 1000.0  # milligauss
     r = _radius(model.A)
     D = model.A * r  # unit volume: diagonals near 1, as ArduPilot's calibrator leaves them
     scale = output_scale(model) / r
     lo, hi = ARDUPILOT_SCALE_RANGE
-    lines = _comment(model, "#")
+    lines = []
     if not lo <= scale <= hi:
         D, scale = D * scale, 1.0
-        lines.append("# the scale to the model's strength is outside COMPASS_SCALE's range: put in the matrix")
+        lines.append("the scale to the model's strength is outside COMPASS_SCALE's range: put in the matrix")
     n = "" if instance == 1 else str(instance)
     ofs = -model.b * k
     rows = [(f"COMPASS_OFS{n}_{a}", ofs[i]) for i, a in enumerate("XYZ")]
     rows += [(f"COMPASS_DIA{n}_{a}", D[i, i]) for i, a in enumerate("XYZ")]
     rows += [(f"COMPASS_ODI{n}_{a}", D[i, j]) for a, (i, j) in zip("XYZ", ((0, 1), (0, 2), (1, 2)))]
     rows.append((f"COMPASS_SCALE{n}", scale))
-    return "\n".join(lines + [f"{name},{v:.9g}" for name, v in rows]) + "\n"
+    return rows, lines
+
+
+def ardupilot_params(model, instance: int = 1) -> str:
+    """The ArduPilot rows (:func:`ardupilot_rows`) in Mission Planner's ``NAME,VALUE`` layout."""
+    rows, lines = ardupilot_rows(model, instance)
+    return "\n".join(_comment(model, "#") + [f"# {x}" for x in lines] + [f"{name},{v:.9g}" for name, v in rows]) + "\n"
+
+
+def px4_section(inputs):
+    """The ``px4`` consumer's magnetometer section (:mod:`accelcal.export.registry`): CAL_MAG0 from the
+    calibration's magnetometer, if it has one."""
+    mag = getattr(inputs.calibration, "mag", None)
+    if mag is None:
+        return [], [], []
+    notes = [x.lstrip("# ") for x in _comment(mag.model, "#")[1:]]
+    return px4_rows(mag.model, int(inputs.option("instance", 0))), [], notes
+
+
+def ardupilot_section(inputs):
+    """The ``ardupilot`` consumer's magnetometer section: COMPASS_* of the calibration's magnetometer, if any."""
+    mag = getattr(inputs.calibration, "mag", None)
+    if mag is None:
+        return [], [], []
+    rows, lines = ardupilot_rows(mag.model, int(inputs.option("instance", 0)) + 1)  # INS set 0 is compass 1
+    return rows, [], [x.lstrip("# ") for x in _comment(mag.model, "#")[1:]] + lines
 
 
 def magneto_text(model) -> str:
@@ -100,4 +131,5 @@ def magneto_text(model) -> str:
     return "\n".join(out) + "\n"
 
 
-__all__ = ["ARDUPILOT_SCALE_RANGE", "ardupilot_params", "magneto_text", "output_scale", "px4_params"]
+__all__ = ["ARDUPILOT_SCALE_RANGE", "ardupilot_params", "ardupilot_rows", "ardupilot_section", "magneto_text",
+           "output_scale", "px4_params", "px4_rows", "px4_section"]
