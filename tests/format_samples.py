@@ -111,7 +111,7 @@ def _gyro(rng) -> np.ndarray:
 
 def ros(rng) -> bytes:
     """A ROS 1 bag (rosbags' writer) with one sensor_msgs/Imu topic, absolute header stamps."""
-    from accelcal.formats.ros_synthetic import write_imu_bag
+    from .ros_synthetic import write_imu_bag
 
     acc, gyro = specific_force(rng), _gyro(rng)
     return _log_bytes(lambda p: write_imu_bag(p.with_suffix(".bag"), 1.7e9 + np.arange(ROWS) / RATE_HZ, acc, gyro,

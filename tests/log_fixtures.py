@@ -1,7 +1,7 @@
 """Writers of small robotics logs for the log-reader tests: DataFlash (ArduPilot) and ULog (PX4).
 
 ROS bags and MCAP files are written with rosbags' own writers
-(:func:`accelcal.formats.ros_synthetic.write_imu_bag`); pyulog and pymavlink have no
+(:func:`tests.ros_synthetic.write_imu_bag`); pyulog and pymavlink have no
 writers, so the two binary formats are written here from their published layouts
 (ArduPilot's DataFlash: 0xA3 0x95 headers and FMT messages; PX4's ULog file format:
 header, definitions, subscriptions and data messages).

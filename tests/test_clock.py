@@ -151,7 +151,7 @@ def test_ros1_header_seq_numbers_the_samples(tmp_path, monkeypatch):
     """A ROS 1 bag timed by its record times (the host's, jittery): header.seq says where messages are
     missing and the clock gives the sensor's rate."""
     pytest.importorskip("rosbags")
-    from accelcal.formats import ros_synthetic
+    from . import ros_synthetic
 
     rng = np.random.default_rng(2)
     seqs = iter(np.delete(np.arange(600), [200, 201, 202]))

@@ -15,7 +15,7 @@ import accelcal
 from accelcal import cli
 from accelcal.calibration import FullLLSCalibration
 from accelcal.formats import px4, ros
-from accelcal.formats.ros_synthetic import write_imu_bag
+from .ros_synthetic import write_imu_bag
 
 DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
 BAG = DATA / "imutk_fork_sessions" / "data1" / "rosbag2_2023_08_11-21_37_35"

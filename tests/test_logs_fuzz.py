@@ -25,7 +25,7 @@ from hypothesis import strategies as st
 
 from accelcal.errors import RecordingError
 from accelcal.formats import read
-from accelcal.formats.ros_synthetic import write_imu_bag
+from .ros_synthetic import write_imu_bag
 from accelcal.recording import MIN_ROWS
 from tests.log_fixtures import write_dataflash, write_ulog
 

@@ -19,7 +19,7 @@ import accelcal
 from accelcal import cli
 from accelcal.errors import LogFormatError, RecordingError, TopicError
 from accelcal.formats import FORMATS, ardupilot, detect_format, px4, read, ros
-from accelcal.formats.ros_synthetic import write_imu_bag
+from .ros_synthetic import write_imu_bag
 from tests.log_fixtures import write_dataflash, write_ulog
 
 DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
@@ -131,7 +131,7 @@ def test_frame_ids_of_varying_length_are_decoded_one_by_one(tmp_path):
     from rosbags.rosbag2 import Writer
     from rosbags.typesys import Stores, get_typestore
 
-    from accelcal.formats.ros_synthetic import _message
+    from .ros_synthetic import _message
 
     store = get_typestore(Stores.LATEST)
     p = tmp_path / "var"
@@ -148,7 +148,7 @@ def test_big_endian_cdr_is_read(tmp_path):
     from rosbags.rosbag2 import Writer
     from rosbags.typesys import Stores, get_typestore
 
-    from accelcal.formats.ros_synthetic import _message
+    from .ros_synthetic import _message
 
     store = get_typestore(Stores.LATEST)
     p = tmp_path / "be"

@@ -16,7 +16,7 @@ from accelcal import cli
 from accelcal.calibration import FullLLSCalibration
 from accelcal.errors import LogFormatError
 from accelcal.formats import ros
-from accelcal.formats.ros_synthetic import write_imu_bag
+from .ros_synthetic import write_imu_bag
 
 N = 6000
 T = 1.7e9 + np.arange(N) / 400.0

@@ -19,7 +19,7 @@ from accelcal import cli
 from accelcal.calibration import FullLLSCalibration
 from accelcal.errors import LogFormatError
 from accelcal.formats import px4, ros, ros_write
-from accelcal.formats.ros_synthetic import write_imu_bag
+from .ros_synthetic import write_imu_bag
 from tests.log_fixtures import write_ulog
 
 DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"

@@ -244,7 +244,7 @@ def _run(*argv) -> tuple[int, str]:
 def test_accelcal_noise_on_a_bag_writes_every_output(tmp_path):
     pytest.importorskip("rosbags")
     pytest.importorskip("matplotlib")
-    from accelcal.formats.ros_synthetic import write_imu_bag
+    from .ros_synthetic import write_imu_bag
 
     rec = _record(9, n=2**15)
     bag = write_imu_bag(tmp_path / "static.mcap", 1.7e9 + rec.t, rec.acc, rec.gyro, kind="mcap", topic="/imu0")
@@ -260,7 +260,7 @@ def test_accelcal_noise_on_a_bag_writes_every_output(tmp_path):
 
 def test_accelcal_noise_refuses_a_moving_recording_in_one_line_and_writes_nothing(tmp_path):
     pytest.importorskip("rosbags")
-    from accelcal.formats.ros_synthetic import write_imu_bag
+    from .ros_synthetic import write_imu_bag
 
     rec = _record(10, n=2**14)
     gyro = rec.gyro.copy()

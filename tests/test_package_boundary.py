@@ -27,7 +27,7 @@ CORE_DEPENDENCIES = {"numpy", "scipy", "pandas", "casadi"}
 PLOTTING_MODULES = {"plotting.py", "discrepancy/figures.py", "noise/figures.py"}
 #: Optional extras (ros, px4, ardupilot, rdata, geomag), each imported lazily by its reader (the IGRF by
 #: the magnetometer's field module) only.
-EXTRA_MODULES = {"formats/ros.py": {"rosbags", "ruamel"}, "formats/ros_synthetic.py": {"rosbags"},
+EXTRA_MODULES = {"formats/ros.py": {"rosbags", "ruamel"},
                  "formats/ros_write.py": {"rosbags"},
                  # rosbags' own dependencies: its YAML, and its MCAP chunk decompressors
                  "formats/ros_recover.py": {"rosbags", "lz4", "backports", "compression"},

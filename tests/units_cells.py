@@ -110,7 +110,7 @@ def write(fmt: str, s: dict, unit: str, declared: bool, folder: Path) -> tuple[P
         path.write_text("\n".join(lines) + "\n")
         return path, {"rate": FS, **option}
     if fmt == "ros":
-        from accelcal.formats.ros_synthetic import write_imu_bag
+        from .ros_synthetic import write_imu_bag
 
         return write_imu_bag(path, 1.7e9 + t, acc, w, kind="ros1"), option
     if fmt == "px4":

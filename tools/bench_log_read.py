@@ -2,7 +2,7 @@
 
 Writes a synthetic bag with rosbags' own writer (1,440,000 ``sensor_msgs/Imu`` messages,
 serialised in numpy chunks checked byte-for-byte against rosbags' serialiser, see
-:mod:`accelcal.formats.ros_synthetic`), then reads it in fresh subprocesses on one
+:mod:`tests.ros_synthetic`), then reads it in fresh subprocesses on one
 core, side by side in one run:
 
 * ``accelcal``: :func:`accelcal.formats.read` (what ``accelcal calibrate BAG`` reads with:
@@ -68,7 +68,8 @@ HARNESS = PEAK + ("import sys, time, json\nfrom pathlib import Path\nPATH = sys.
 
 
 def write_bag(path: Path, kind: str, minutes: float, rate: float) -> dict:
-    from accelcal.formats.ros_synthetic import write_imu_bag
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the tests' bag writer
+    from tests.ros_synthetic import write_imu_bag
 
     n = int(round(minutes * 60 * rate))
     rng = np.random.default_rng(SEED)

@@ -67,7 +67,8 @@ def allantools_oadev(x):
 
 def prepare(rda: Path, work: Path):
     """The record as ``.npy`` (10⁶ × 6, SI units) and as a ROS 2 bag (header stamps from 1.7e9 s)."""
-    from accelcal.formats.ros_synthetic import write_imu_bag
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the tests' bag writer
+    from tests.ros_synthetic import write_imu_bag
     from accelcal_repro.measured.smac import read_smac_imu
 
     rec = read_smac_imu(rda)

@@ -16,8 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import AccelcalError
-from .logs import require_extra
+from accelcal.errors import AccelcalError
+from accelcal.formats.logs import require_extra
 
 KINDS = ("ros1", "ros2-sqlite3", "ros2-mcap", "mcap")
 _CHUNK = 20000
