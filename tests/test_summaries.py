@@ -131,3 +131,38 @@ def test_the_summary_prints_what_json_cannot_hold(two_effects):
     # a random walk is said as such: its coefficient and its change over the session, no infinite size or tau
     assert "a random walk" in line and "K 0.0002" in line and "over the 400 s session" in line
     assert "inf" not in line and "correlation between" not in line
+
+
+def test_one_summary_type_with_three_renderers():
+    """Every result the command line prints answers summary(written_to=...) with a Summary: its text
+    is the str itself, and its dict and HTML say the same (title, body, warnings)."""
+    import html
+
+    from accelcal.summary import Summary
+
+    s = Summary(["gyroscope: gyro_iterative", "  scale factors [ppm]: x +12 ± 3", "warning: gyroscope: few motions",
+                 "written to c.json"])
+    assert s == "gyroscope: gyro_iterative\n  scale factors [ppm]: x +12 ± 3\nwarning: gyroscope: few motions\n" \
+                "written to c.json" and s + "\n" == str(s) + "\n"
+    assert s.as_dict() == {"title": "gyroscope: gyro_iterative",
+                           "lines": ["  scale factors [ppm]: x +12 ± 3", "written to c.json"],
+                           "warnings": ["gyroscope: few motions"]}
+    h = s.as_html()
+    assert h.startswith('<section class="summary"><h4>gyroscope: gyro_iterative</h4>')
+    assert html.escape("gyroscope: few motions") in h and "± 3" in h
+
+
+def test_every_result_type_returns_a_summary():
+    import inspect
+
+    from accelcal.calibration.base import Calibration
+    from accelcal.discrepancy.report import DiscrepancyReport
+    from accelcal.discrepancy.results import DiscrepancyResult
+    from accelcal.gyro.result import GyroCalibration
+    from accelcal.mag.result import MagCalibration
+    from accelcal.noise.report import NoiseReport
+
+    for cls in (Calibration, GyroCalibration, MagCalibration, DiscrepancyReport, DiscrepancyResult, NoiseReport):
+        sig = inspect.signature(cls.summary)
+        assert "written_to" in sig.parameters and sig.parameters["written_to"].kind is inspect.Parameter.KEYWORD_ONLY
+        assert sig.return_annotation in ("Summary", "Summary"), (cls.__name__, sig.return_annotation)

@@ -16,6 +16,7 @@ from ..extended_model import model_terms
 from ..jsonsafe import json_safe
 from ..mag.result import MagCalibration
 from ..registry import ESTIMATORS, class_of_type, subclasses, types_of
+from ..summary import Summary
 from ..units import G0, acceleration_unit
 from .summary import calibration_summary
 
@@ -189,7 +190,7 @@ class Calibration:
 
     # ----------------------------------------------------------------- summary
 
-    def summary(self, *, init_rest_s: float | None = None, written_to=None) -> str:
+    def summary(self, *, written_to=None, init_rest_s: float | None = None) -> Summary:
         """The calibration in a few lines: what ``accelcal calibrate`` prints.
 
         The method and its poses (with the static detection's noise reference and the
@@ -207,10 +208,10 @@ class Calibration:
 
         Returns
         -------
-        str
-            Lines without a final newline.
+        Summary
+            Lines without a final newline (a ``str``; also as a dict and HTML).
         """
-        return calibration_summary(self, init_rest_s=init_rest_s, written_to=written_to)
+        return Summary(calibration_summary(self, init_rest_s=init_rest_s, written_to=written_to))
 
     # ----------------------------------------------------------------- apply
 

@@ -161,44 +161,7 @@ def _noise_write(args, report, texts: dict, figure, t0: float) -> None:
 
 
 def _noise_summary(args, report, warnings: list, avr: dict) -> None:
-    from ..noise.avr import avr_lines
-    from ..noise.export import exported_values
-    from ..noise.planner import plan_lines
-
-    lines = [f"noise: {report.n} samples, {report.duration_s / 3600:.3g} h at {report.fs:.4g} Hz"]
-    lines += [f"  read: {n}" for n in report.notes if n]
-    differ = []
-    for s in report.sensors.values():
-        ex = [exported_values(s, j) for j in range(3)]
-        lines.append(f"  {s.sensor}: noise density " + ", ".join(f"{e['noise_density']['value']:.3g}" for e in ex)
-                     + f" {s.unit}/sqrt(Hz); random walk " + ", ".join(
-                         f"{'<' if e['random_walk']['upper_bound'] else ''}{e['random_walk']['value']:.3g}" for e in ex)
-                     + f" {ex[0]['random_walk']['unit']} (x, y, z)")
-        quoted = _quoted(s)
-        if quoted:
-            lines.append(f"    {quoted}")
-        lines += ["  " + line for line in plan_lines(s, report.duration_s, args.plan_width, report.level)]
-        if s.sensor in avr:
-            differ += avr_lines(s.sensor, s.unit, avr[s.sensor], [e["noise_density"]["value"] for e in ex],
-                                [e["random_walk"]["value"] for e in ex])
-    lines += [f"  {line}" for line in differ]
-    lines.append(f"  written to {args.out}" + "".join(f", {p}" for p in (args.kalibr, args.openvins, args.figure)
-                                                         if p is not None))
-    print("\n".join(lines), file=sys.stderr)
+    written = ", ".join(str(p) for p in (args.out, args.kalibr, args.openvins, args.figure) if p is not None)
+    print(report.summary(written_to=written, plan_width=args.plan_width, allan_variance_ros=avr), file=sys.stderr)
     for w in (*report.warnings, *warnings):
         warn(w)
-
-
-def _quoted(s) -> str:
-    """The data-sheet units of the white noise and the flicker floor (the JSON's ``conversions``), x, y, z."""
-    from ..noise.export import conversions
-
-    c = [conversions(s.sensor, s.unit, terms) for terms in s.terms]
-    if not c[0]:
-        return ""
-    names = {"angle_random_walk_deg_sqrt_h": ("angle random walk", "deg/sqrt(h)"),
-             "velocity_random_walk_m_s_sqrt_h": ("velocity random walk", "m/s/sqrt(h)"),
-             "bias_instability_floor_deg_h": ("bias instability (0.664 B)", "deg/h"),
-             "bias_instability_floor_mg": ("bias instability (0.664 B)", "mg")}
-    return "; ".join(f"{names[k][0]} " + ", ".join(f"{x[k]:.3g}" for x in c) + f" {names[k][1]}"
-                     for k in c[0] if k in names) + " (x, y, z)"

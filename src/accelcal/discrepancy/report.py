@@ -29,6 +29,7 @@ from ..noise.allan import avar_interval, pooled_edf
 from ..noise.terms import TERMS, model_avar
 from ..recording import Recording
 from ..static import StaticPoses, detect_static_recording
+from ..summary import Summary
 from .detect import discrepancy
 from .fit import pose_data_from_static
 from .joint_noise import describe_noise_model
@@ -85,7 +86,7 @@ class DiscrepancyReport:
                            "n_samples": self.poses.n_samples.tolist()})
         return d
 
-    def summary(self, *, written_to=None) -> str:
+    def summary(self, *, written_to=None) -> Summary:
         """Both layers in a few lines: what ``accelcal discrepancy`` prints.
 
         The deterministic layer's lines (:meth:`DiscrepancyResult.summary
@@ -99,10 +100,10 @@ class DiscrepancyReport:
 
         Returns
         -------
-        str
-            Lines without a final newline.
+        Summary
+            Lines without a final newline (a ``str``; also as a dict and HTML).
         """
-        return report_summary(self, written_to)
+        return Summary(report_summary(self, written_to))
 
 
 def _pose_mean_variance(model: dict, starts, durations) -> np.ndarray:

@@ -8,6 +8,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from .. import distributions as dist
+from ..summary import Summary
 from ..effects import EFFECTS
 from .fit import Fit, PoseData, evaluate, parameter_names
 from .identifiability import Identifiability
@@ -205,9 +206,10 @@ class DiscrepancyResult:
         r, _, _ = evaluate(self.final.p, self.data, self.final.effects, jacobian=False)
         return np.full(len(self.data), np.nan) if r is None else r
 
-    def summary(self, unit: str | None = None) -> str:
+    def summary(self, unit: str | None = None, *, written_to=None) -> Summary:
         """The deterministic layer in a few lines (:func:`~accelcal.discrepancy.summary.result_lines`; ``unit``: the data's)."""
-        return "\n".join(result_lines(self, unit))
+        lines = result_lines(self, unit)
+        return Summary(lines + ([f"written to {written_to}"] if written_to is not None else []))
 
     def statistics(self) -> dict:
         """The gaps and what noise alone predicts, before (base) and after (named effects)."""

@@ -16,6 +16,7 @@ from typing import ClassVar
 
 import numpy as np
 
+from ..summary import Summary
 from .model import RAW_UNITS, GyroModel
 
 #: Thresholds of the warnings (:mod:`accelcal.gyro.calibrate`).
@@ -159,8 +160,8 @@ class GyroCalibration:
 
     __hash__ = None
 
-    def summary(self) -> str:
-        """Lines for the command line: the triad with ±, the fit, the trust lines."""
+    def summary(self, *, written_to=None) -> Summary:
+        """Lines for the command line: the triad with ±, the fit, the trust lines (``written_to``: the file)."""
         m, se, q, s = self.model, self.standard_errors, self.quality, self.settings
         nom = self.nominal
         unit = m.raw_unit
@@ -207,7 +208,9 @@ class GyroCalibration:
                          f"(chi2/dof = {nm.get('chi2_per_dof', float('nan')):.3g})")
         lines.append(f"  nominal {nom:.6g} rad/s per {unit} ({s.get('nominal_from', 'unit')})")
         lines += [f"warning: gyroscope: {w}" for w in q.warnings]
-        return "\n".join(lines)
+        if written_to is not None:
+            lines.append(f"written to {written_to}")
+        return Summary(lines)
 
 
 @dataclass(frozen=True, eq=False)

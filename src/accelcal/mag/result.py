@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..summary import Summary
 from .align import Alignment, dip_angles
 from .fit import EllipsoidFit
 from .model import PARAMETERS, MagModel
@@ -67,7 +68,8 @@ class MagCalibration:
                            f"{t['dip_model_deg']:.2f} by {d:+.2f} deg: a local disturbance")
         return out
 
-    def summary(self) -> str:
+    def summary(self, *, written_to=None) -> Summary:
+        """The magnetometer in a few lines: the model with ±, the fit and the trust lines."""
         m, f = self.model, self.fit
         se = f.se if f is not None and f.se is not None else np.full(9, np.nan)
         lines = [f"magnetometer ({self.estimator}, {self.trust.get('n_samples', '?')} samples, raw unit "
@@ -99,7 +101,9 @@ class MagCalibration:
                          f"(without the alignment {t['dip_spread_unaligned_deg']:.3f} deg)")
         lines += [f"  note: {n}" for n in self.notes]
         lines += [f"  warning: magnetometer: {w}" for w in self.warnings()]
-        return "\n".join(lines)
+        if written_to is not None:
+            lines.append(f"written to {written_to}")
+        return Summary(lines)
 
     def to_dict(self) -> dict:
         f, a = self.fit, self.alignment

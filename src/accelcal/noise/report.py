@@ -65,6 +65,7 @@ import numpy as np
 
 from ..errors import AccelcalError, NotStaticError
 from ..formats.units_evidence import require_gyro_unit
+from ..summary import Summary
 from .allan import DEFAULT_MIN_EDF, AllanVariance, allan_variance
 from .allan_fit import NoiseFit, bootstrap_fits, fit_avar_model_error, model_edf
 from .terms import TERMS, model_avar
@@ -149,6 +150,40 @@ class NoiseReport:
 
 
 # --------------------------------------------------------------------------- analysis
+
+    def summary(self, *, written_to=None, plan_width=None, allan_variance_ros: dict | None = None) -> Summary:
+        """The report in a few lines: what ``accelcal noise`` prints (its warnings apart).
+
+        Per sensor the exported noise density and random walk, the data-sheet units, the
+        record-length planner (``plan_width``: :mod:`accelcal.noise.planner`) and, where an
+        allan_variance_ros reading of the same record (``allan_variance_ros``: ``{sensor:
+        reading}``, :func:`accelcal.noise.avr.avr_reading`) would differ by more than 2x, why.
+        """
+        from .avr import avr_lines
+        from .export import exported_values  # noise.export reads this module
+        from .planner import plan_lines
+
+        avr = allan_variance_ros or {}
+        lines = [f"noise: {self.n} samples, {self.duration_s / 3600:.3g} h at {self.fs:.4g} Hz"]
+        lines += [f"  read: {n}" for n in self.notes if n]
+        differ = []
+        for s in self.sensors.values():
+            ex = [exported_values(s, j) for j in range(3)]
+            lines.append(f"  {s.sensor}: noise density " + ", ".join(f"{e['noise_density']['value']:.3g}" for e in ex)
+                         + f" {s.unit}/sqrt(Hz); random walk " + ", ".join(
+                             f"{'<' if e['random_walk']['upper_bound'] else ''}{e['random_walk']['value']:.3g}"
+                             for e in ex) + f" {ex[0]['random_walk']['unit']} (x, y, z)")
+            quoted = _quoted(s)
+            if quoted:
+                lines.append(f"    {quoted}")
+            lines += ["  " + line for line in plan_lines(s, self.duration_s, plan_width, self.level)]
+            if s.sensor in avr:
+                differ += avr_lines(s.sensor, s.unit, avr[s.sensor], [e["noise_density"]["value"] for e in ex],
+                                    [e["random_walk"]["value"] for e in ex])
+        lines += [f"  {line}" for line in differ]
+        if written_to is not None:
+            lines.append(f"  written to {written_to}")
+        return Summary(lines)
 
 
 def analyse_noise(rec, *, level: float = DEFAULT_LEVEL, n_boot: int = DEFAULT_N_BOOT, seed: int = 0,
@@ -420,6 +455,21 @@ def needed_tau(fit: NoiseFit, term: str, fs: float, value: float | None = None) 
     total = model_avar({k: math.sqrt(v) for k, v in c.items()}, taus, fs)
     ok = part >= RESOLVED_SHARE * total
     return float(taus[np.argmax(ok)]) if ok.any() else math.inf
+
+
+def _quoted(s) -> str:
+    """The data-sheet units of the white noise and the flicker floor (the JSON's ``conversions``), x, y, z."""
+    from .export import conversions  # noise.export reads this module
+
+    c = [conversions(s.sensor, s.unit, terms) for terms in s.terms]
+    if not c[0]:
+        return ""
+    names = {"angle_random_walk_deg_sqrt_h": ("angle random walk", "deg/sqrt(h)"),
+             "velocity_random_walk_m_s_sqrt_h": ("velocity random walk", "m/s/sqrt(h)"),
+             "bias_instability_floor_deg_h": ("bias instability (0.664 B)", "deg/h"),
+             "bias_instability_floor_mg": ("bias instability (0.664 B)", "mg")}
+    return "; ".join(f"{names[k][0]} " + ", ".join(f"{x[k]:.3g}" for x in c) + f" {names[k][1]}"
+                     for k in c[0] if k in names) + " (x, y, z)"
 
 
 __all__ = ["DEFAULT_LEVEL", "DEFAULT_N_BOOT", "IEEE_TERMS", "NoiseAnalysisError", "NoiseReport", "SensorNoise",
