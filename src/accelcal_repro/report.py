@@ -425,6 +425,26 @@ def build_report(*, claims: str | os.PathLike, figures: Mapping[str, str | os.Pa
         The config files of the run, in the order they were applied.
     """
     ledger = read_claims(claims)
+    nav, body = _figure_sections(ledger, figures, captions, conclusions, tables, config)
+    for key, title, html in (("claims", "Claims ledger", _ledger_section(ledger)),
+                             ("config", "Configuration and seeds", _config_section(config, config_files)),
+                             ("environment", "Package versions", _environment_section(lock_text)),
+                             ("walltime", "Wall time per stage", _walltime_section(benchmarks_dir))):
+        nav.append(f'<li><a href="#{key}">{title}</a></li>')
+        body.append(html)
+    n_by_verdict = ", ".join(f"{int((ledger['verdict'] == v).sum())} {v}" for v in VERDICTS)
+    head = ('<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
+            '<meta name="viewport" content="width=device-width, initial-scale=1">'
+            f"<title>accelcal reproduction report</title><style>{CSS}</style></head><body>")
+    intro = ("<h1>accelcal reproduction report</h1><p>Reproductions of Burkhard, Sharma, Skaloud (2024), "
+             "Batista et al. (2011) and Tereshkov from simulations, public recordings calibrated without ground "
+             f"truth, and the claims ledger: {len(ledger)} claims, {n_by_verdict}.</p>"
+             f"{verdict_summary_html(ledger)}<nav><ul>{''.join(nav)}</ul></nav>")
+    return head + intro + "\n".join(body) + "</body></html>\n"
+
+
+def _figure_sections(ledger, figures, captions, conclusions, tables, config) -> tuple[list[str], list[str]]:
+    """The navigation entries and sections of the figures and summary tables, section by section."""
     by_section: dict[str, list[str]] = {}
     for fid in sorted(figures):
         by_section.setdefault(figure_section(fid), []).append(fid)
@@ -432,7 +452,6 @@ def build_report(*, claims: str | os.PathLike, figures: Mapping[str, str | os.Pa
     tables_by_section: dict[str, list[tuple[str, Path]]] = {}
     for key, title, path in tables:
         tables_by_section.setdefault(key, []).append((title, Path(path)))
-
     nav, body = [], []
     for key, title in sections:
         figs, tabs = by_section.get(key, []), tables_by_section.get(key, [])
@@ -449,40 +468,47 @@ def build_report(*, claims: str | os.PathLike, figures: Mapping[str, str | os.Pa
             except ReportError as e:
                 raise ReportError(f"figure {fid}: {e}") from None
             body.append(figure_html(fid, embed_png(figures[fid]), conclusions.get(fid), caption))
-        for title_t, path in tabs:  # in the order the stages registered them
-            body.append(f"<h3>{_esc(title_t)} <span class=\"fid\">{_esc(path.as_posix())}</span></h3>")
-            if path.is_file():
-                try:
-                    body.append(view_table(pd.read_csv(path), TABLE_VIEWS.get(path.as_posix())))
-                except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as e:
-                    raise ReportError(f"table {path} is not a readable CSV: {str(e).splitlines()[0]}") from None
-            else:
-                body.append('<p class="note">not present (the stage has not run).</p>')
+        body += [_table_html(title_t, path) for title_t, path in tabs]  # in the order the stages registered them
         body.append("</section>")
+    return nav, body
 
-    nav.append('<li><a href="#claims">Claims ledger</a></li>')
-    body.append('<section><h2 id="claims">Claims ledger</h2><p class="note">Every claim of the three papers with '
-                "the value this workflow computed and the verdict by the rule stated in the claim "
-                f"(<code>results/claims.csv</code>). <code>{NOT_TESTABLE}</code>: the run's sample is too small for "
-                "the rule to give both verdicts (the evidence gives the n it has and the n it needs); it is neither "
-                "reproduced nor not reproduced.</p>" + ledger_html(ledger) + "</section>")
 
-    nav.append('<li><a href="#config">Configuration and seeds</a></li>')
+def _table_html(title: str, path: Path) -> str:
+    head = f"<h3>{_esc(title)} <span class=\"fid\">{_esc(path.as_posix())}</span></h3>"
+    if not path.is_file():
+        return head + '\n<p class="note">not present (the stage has not run).</p>'
+    try:
+        return head + "\n" + view_table(pd.read_csv(path), TABLE_VIEWS.get(path.as_posix()))
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as e:
+        raise ReportError(f"table {path} is not a readable CSV: {str(e).splitlines()[0]}") from None
+
+
+def _ledger_section(ledger) -> str:
+    return ('<section><h2 id="claims">Claims ledger</h2><p class="note">Every claim of the three papers with '
+            "the value this workflow computed and the verdict by the rule stated in the claim "
+            f"(<code>results/claims.csv</code>). <code>{NOT_TESTABLE}</code>: the run's sample is too small for "
+            "the rule to give both verdicts (the evidence gives the n it has and the n it needs); it is neither "
+            "reproduced nor not reproduced.</p>" + ledger_html(ledger) + "</section>")
+
+
+def _config_section(config, config_files) -> str:
     seeds = pd.DataFrame(seed_paths(config), columns=["key", "seed"])
     files = ", ".join(f"<code>{_esc(f)}</code>" for f in config_files) or "(none given)"
-    body.append(f'<section><h2 id="config">Configuration and seeds</h2><p>Config file(s), each extending the ones '
-                f"before it: {files}.</p>"
-                f"<h3>Seeds</h3>{html_table(seeds)}<h3>The whole configuration</h3>{config_html(config)}</section>")
+    return (f'<section><h2 id="config">Configuration and seeds</h2><p>Config file(s), each extending the ones '
+            f"before it: {files}.</p>"
+            f"<h3>Seeds</h3>{html_table(seeds)}<h3>The whole configuration</h3>{config_html(config)}</section>")
 
-    nav.append('<li><a href="#environment">Package versions</a></li>')
+
+def _environment_section(lock_text: str) -> str:
     pins = pd.DataFrame(parse_lock(lock_text), columns=["package", "version", "only where"])
     digest = re.search(r"^# requirements-sha256: ([0-9a-f]+)$", lock_text, re.M)
     digest_html = f" Requirements digest <code>{digest.group(1)}</code>." if digest else ""
-    body.append(f'<section><h2 id="environment">Package versions</h2><p>{len(pins)} pins of '
-                f"<code>environment.lock</code> (installed by <code>tools/setup.sh</code> with hashes)."
-                f"{digest_html}</p>{html_table(pins, max_rows=1000)}</section>")
+    return (f'<section><h2 id="environment">Package versions</h2><p>{len(pins)} pins of '
+            f"<code>environment.lock</code> (installed by <code>tools/setup.sh</code> with hashes)."
+            f"{digest_html}</p>{html_table(pins, max_rows=1000)}</section>")
 
-    nav.append('<li><a href="#walltime">Wall time per stage</a></li>')
+
+def _walltime_section(benchmarks_dir) -> str:
     bench = read_benchmarks(benchmarks_dir)
     if bench.empty:
         times = '<p class="note">No benchmark files found.</p>'
@@ -493,20 +519,10 @@ def build_report(*, claims: str | os.PathLike, figures: Mapping[str, str | os.Pa
         per_job = bench.rename(columns={"s": "wall time [s]", "cpu_s": "CPU time [s]", "max_rss": "peak memory [MB]"})
         times = (f"{html_table(per_stage)}<p>Total over all jobs: {bench['s'].sum():.1f} s.</p>"
                  f"<details><summary>Per job</summary>{html_table(per_job, max_rows=1000)}</details>")
-    body.append('<section><h2 id="walltime">Wall time per stage</h2><p class="note">From Snakemake\'s benchmark files '
-                "(<code>results/benchmarks/&lt;stage&gt;/&lt;job&gt;.tsv</code>) as they were when this page was built: "
-                "the last run of each job, on whatever machine and load it ran. Jobs of a stage may have run in "
-                f"parallel, so the sum is CPU-side work, not elapsed time.</p>{times}</section>")
-
-    n_by_verdict = ", ".join(f"{int((ledger['verdict'] == v).sum())} {v}" for v in VERDICTS)
-    head = ('<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
-            '<meta name="viewport" content="width=device-width, initial-scale=1">'
-            f"<title>accelcal reproduction report</title><style>{CSS}</style></head><body>")
-    intro = ("<h1>accelcal reproduction report</h1><p>Reproductions of Burkhard, Sharma, Skaloud (2024), "
-             "Batista et al. (2011) and Tereshkov from simulations, public recordings calibrated without ground "
-             f"truth, and the claims ledger: {len(ledger)} claims, {n_by_verdict}.</p>"
-             f"{verdict_summary_html(ledger)}<nav><ul>{''.join(nav)}</ul></nav>")
-    return head + intro + "\n".join(body) + "</body></html>\n"
+    return ('<section><h2 id="walltime">Wall time per stage</h2><p class="note">From Snakemake\'s benchmark files '
+            "(<code>results/benchmarks/&lt;stage&gt;/&lt;job&gt;.tsv</code>) as they were when this page was built: "
+            "the last run of each job, on whatever machine and load it ran. Jobs of a stage may have run in "
+            f"parallel, so the sum is CPU-side work, not elapsed time.</p>{times}</section>")
 
 
 def write_report(text: str, path: str | os.PathLike) -> Path:
