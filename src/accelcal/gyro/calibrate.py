@@ -351,6 +351,48 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
     y = gyro - bias_series(best, rs, t)
     if g_sensitivity:
         y = y - np.asarray(accel.apply(np.asarray(acc, float)), float) @ best.g_sensitivity.T
+    all_ms, used, notes = _usable_motions(y, t, tb, poses, rs, best, u, u_cov, f_rest, accel, gyro, gyro_range)
+    ms = all_ms.subset(used)
+    if raw_unit is None and nominal_sensitivity is not None:
+        raw_unit = "counts"  # a sensitivity is counts per rad/s
+    if raw_unit is None:  # not stated: the motions decide it (unit_evidence)
+        raw_unit, nominal, nominal_from = unit_from_motions(ms, integrator, gyro)
+    else:
+        nominal, nominal_from = _nominal(raw_unit, nominal_sensitivity, ms, integrator)
+        _check_nominal(ms, u, nominal, nominal_from)
+    _check_axes(ms, nominal, tb.h)
+    if time_base not in ("auto", "index", "timestamps"):
+        raise GyroInputError(f"unknown time base {time_base!r}; known: auto, index, timestamps")
+    bases = {"index": tb.h, "timestamps": t}
+    tried = ["index"] if (time_base == "auto" and tb.jitter <= RULES["jitter"]) else (
+        ["index", "timestamps"] if time_base == "auto" else [time_base])
+    fits, rest_fits, noises = _fit_time_bases(est.load(), ms, {k: bases[k] for k in tried}, nominal, integrator,
+                                              noise_model)
+    chosen = min(rest_fits, key=lambda k: rest_fits[k].chi2)
+    fit = fits[chosen]
+    noise, adj = noises[chosen]
+    all_ms = dataclasses.replace(all_ms, h=bases[chosen])
+    model = GyroModel(fit.C, best.bias, best.g_sensitivity if g_sensitivity else None, raw_unit)
+    se = _standard_errors(fit.C, fit.cov, nominal, fit.excess, best)
+    chi2_per_dof = {k: f.chi2 / max(f.dof, 1) for k, f in rest_fits.items()}
+    quality, table = _assess(rest_fits[chosen], all_ms, used, notes, t, tb, best, integrator, chi2_per_dof, chosen,
+                             _range_use(gyro, gyro_range, all_ms.subset(used)), se["C"])
+    settings = {"estimator": est.name, "integrator": integrator, "bias_mode": bias, "nominal": nominal,
+                "nominal_from": nominal_from, "iterations": fit.iterations, "fit_seconds": fit.seconds,
+                "seconds": time.perf_counter() - t0, "n_rests": len(u),
+                "time_base": {"h": tb.h, "rate": tb.rate, "jitter": tb.jitter, "gaps": int(len(tb.gaps)),
+                              "used": chosen, "chi2_per_dof": chi2_per_dof},
+                "bias_rests": {"chi2": best.chi2, "dof": best.dof, "excess": best.excess},
+                "g_sensitivity": bool(g_sensitivity), "g_sensitivity_test": g_test,
+                "noise_model": {**noise.to_dict(), "chi2": fit.chi2, "dof": fit.dof,
+                                "chi2_per_dof": fit.chi2 / max(fit.dof, 1),
+                                "parameter_dof": _parameter_dof(adj, fit.C)} if noise_model else None}
+    return est.load_calibration()(model, se, quality, table, settings)
+
+
+def _usable_motions(y, t, tb, poses, rs, best, u, u_cov, f_rest, accel, gyro, gyro_range):
+    """Every motion between the rests (bias removed from ``y``) with its noise, which are usable
+    and why the others are not; one line when too few are."""
     sat = saturated_samples(gyro, gyro_range)
     starts, stops, before, after, notes = _motions(poses.intervals, tb.gaps, sat)
     all_ms = MotionSet(y, tb.h, starts, stops, before, after, u, u_cov, rest_noise(rs),
@@ -368,24 +410,15 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
                   f"{sum('missing' in n for n in notes)} with missing samples), {MIN_MOTIONS} needed: turn the sensor "
                   "more slowly between poses, or give the range with --gyro-range if it is wider than the data "
                   "suggest")
-    ms = all_ms.subset(used)
-    if raw_unit is None and nominal_sensitivity is not None:
-        raw_unit = "counts"  # a sensitivity is counts per rad/s
-    if raw_unit is None:  # not stated: the motions decide it (unit_evidence)
-        raw_unit, nominal, nominal_from = unit_from_motions(ms, integrator, gyro)
-    else:
-        nominal, nominal_from = _nominal(raw_unit, nominal_sensitivity, ms, integrator)
-        _check_nominal(ms, u, nominal, nominal_from)
-    _check_axes(ms, nominal, tb.h)
-    fitter = est.load()
-    if time_base not in ("auto", "index", "timestamps"):
-        raise GyroInputError(f"unknown time base {time_base!r}; known: auto, index, timestamps")
-    bases = {"index": tb.h, "timestamps": t}
-    tried = ["index"] if (time_base == "auto" and tb.jitter <= RULES["jitter"]) else (
-        ["index", "timestamps"] if time_base == "auto" else [time_base])
+    return all_ms, used, notes
+
+
+def _fit_time_bases(fitter, ms, bases: dict, nominal: float, integrator: str, noise_model: bool):
+    """The fit on each time base (``{name: h or t}``): the fits, the fits judged by the rest noise
+    alone (which chooses the base), and each base's noise model and its small-sample adjustment."""
     fits, rest_fits, noises = {}, {}, {}
-    for name in tried:  # the noise model fitted with C; the time base judged by the rest noise alone
-        msb = dataclasses.replace(ms, h=bases[name])
+    for name, base in bases.items():  # the noise model fitted with C; the time base judged by the rest noise alone
+        msb = dataclasses.replace(ms, h=base)
         if noise_model:
             fits[name], noisy, adj = fit_with_noise(fitter, msb, nominal * np.eye(3), integrator)
         else:
@@ -394,26 +427,7 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
         ev = evaluate(noisy, fits[name].C, integrator, rest_only=True)
         rest_fits[name] = dataclasses.replace(fits[name], chi2=ev.chi2, evaluation=ev)
         noises[name] = (noisy.noise, adj)
-    chosen = min(rest_fits, key=lambda k: rest_fits[k].chi2)
-    fit = fits[chosen]
-    noise, adj = noises[chosen]
-    all_ms = dataclasses.replace(all_ms, h=bases[chosen])
-    model = GyroModel(fit.C, best.bias, best.g_sensitivity if g_sensitivity else None, raw_unit)
-    se = _standard_errors(fit.C, fit.cov, nominal, fit.excess, best)
-    quality, table = _assess(rest_fits[chosen], all_ms, used, notes, t, tb, best, integrator,
-                             {k: f.chi2 / max(f.dof, 1) for k, f in rest_fits.items()}, chosen,
-                             _range_use(gyro, gyro_range, all_ms.subset(used)), se["C"])
-    settings = {"estimator": est.name, "integrator": integrator, "bias_mode": bias, "nominal": nominal,
-                "nominal_from": nominal_from, "iterations": fit.iterations, "fit_seconds": fit.seconds,
-                "seconds": time.perf_counter() - t0, "n_rests": len(u),
-                "time_base": {"h": tb.h, "rate": tb.rate, "jitter": tb.jitter, "gaps": int(len(tb.gaps)),
-                              "used": chosen, "chi2_per_dof": {k: f.chi2 / max(f.dof, 1) for k, f in rest_fits.items()}},
-                "bias_rests": {"chi2": best.chi2, "dof": best.dof, "excess": best.excess},
-                "g_sensitivity": bool(g_sensitivity), "g_sensitivity_test": g_test,
-                "noise_model": {**noise.to_dict(), "chi2": fit.chi2, "dof": fit.dof,
-                                "chi2_per_dof": fit.chi2 / max(fit.dof, 1),
-                                "parameter_dof": _parameter_dof(adj, fit.C)} if noise_model else None}
-    return est.load_calibration()(model, se, quality, table, settings)
+    return fits, rest_fits, noises
 
 
 def _range_use(gyro, gyro_range, ms: MotionSet) -> float:
