@@ -10,7 +10,7 @@ from pathlib import Path
 from ..registry import estimators
 from . import gyro
 from .common import (STANDARD_GRAVITY, _gravity, _nominal, _provenance, _rate_hint, _read, _reader_options,
-                     _static_options, _static_settings, _step, fail)
+                     _search_static, _static_options, _static_settings, _step, fail)
 
 
 def add_parser(sub, epilog: str) -> None:
@@ -55,7 +55,7 @@ def _calibrate(args) -> int:
     static = _static_settings(args, rec)
     method = args.method
     # the defaults first; too few poses for the method (or the gyro's rests): the candidates' best
-    search = not any(getattr(args, k) is not None for k in ("window", "threshold", "min_duration", "trim"))
+    search = _search_static(args)
     with _step(f"detecting static poses and estimating {method} from {rec.n} samples"):
         try:
             cal, poses = calibrate_recording(rec, g, method, static=static, conversion=_nominal(args, rec),

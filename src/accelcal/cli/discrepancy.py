@@ -9,7 +9,9 @@ from pathlib import Path
 
 from ..effects import EFFECT_IDS
 from ..errors import AccelcalError
-from .common import _gravity, _provenance, _rate_hint, _read, _reader_options, _static_options, _static_settings, _step
+from ..gyro.recording import MIN_RESTS as GYRO_MIN_RESTS  # imports no numerical library
+from .common import (_gravity, _provenance, _rate_hint, _read, _reader_options, _search_static, _static_options,
+                     _static_settings, _step)
 
 DISCREPANCY_HELP = """\
 discrepancy report (JSON):
@@ -69,7 +71,8 @@ def _discrepancy(args) -> int:
     with _step("static detection, deterministic and stochastic layers (the noise bootstrap takes a while)"):
         try:
             analysis = report.discrepancy_report(rec, args.g, stochastic=report.DEFAULT_STOCHASTIC, unit=rec.unit,
-                                                static_kw=static)
+                                                static_kw=static, search=_search_static(args),
+                                                min_poses=GYRO_MIN_RESTS if rec.gyro is not None else 0)
         except RecordingError as e:
             raise RecordingError(f"{e}{_rate_hint(rec)}") from None
     figures = []
