@@ -33,6 +33,7 @@ from ..static import StaticPoses
 from ..static_auto import find_static_poses
 from .detect import discrepancy
 from .fit import pose_data_from_static
+from .gyro_loop import gyro_layer
 from .joint_noise import describe_noise_model
 from .stochastic import StochasticResult
 from .stochastic.implication import centred_pose_variance, pose_difference_variance
@@ -75,6 +76,8 @@ class DiscrepancyReport:
     fs: float
     unit: str | None = None
     static: dict | None = None  #: the detection settings and the search's record (as calibrate's provenance)
+    gyro: object = None  #: the gyro loop's GyroLoopResult, or None (``gyro_error`` says why)
+    gyro_error: str = "not run"
 
     def to_dict(self) -> dict:
         d = self.deterministic.to_dict()
@@ -85,6 +88,9 @@ class DiscrepancyReport:
         d["noise_implication"] = self.implication
         if self.static is not None:
             d["static"] = self.static
+        # one report for the whole IMU: the accelerometer's keys at the top (as before), each sensor below
+        d["gyroscope"] = self.gyro.to_dict() if self.gyro is not None else {"outcome": "not_tested",
+                                                                            "reason": self.gyro_error}
         d["poses"].update({"t_start": self.poses.t_start.tolist(), "t_end": self.poses.t_end.tolist(),
                            "mean": self.poses.means.tolist(), "mean_std": self.poses.mean_std.tolist(),
                            "n_samples": self.poses.n_samples.tolist()})
@@ -336,7 +342,7 @@ def _axis_allan_check(a, stoch, wander_avar, K: float, band: tuple, level: float
 def discrepancy_report(rec: Recording, g: float, *, rules: Rules | None = None,
                        stochastic: StochasticSettings | None = DEFAULT_STOCHASTIC, unit: str = "u",
                        static_kw: dict | None = None, search: bool = False,
-                       min_poses: int = 0) -> DiscrepancyReport:
+                       min_poses: int = 0, gyro: bool = True) -> DiscrepancyReport:
     """The discrepancy report of a recording: static poses, both layers and their join.
 
     Finds the static poses as ``accelcal calibrate`` does (one code path,
@@ -374,7 +380,8 @@ def discrepancy_report(rec: Recording, g: float, *, rules: Rules | None = None,
                                      (rules or Rules()).alpha)
     else:
         err = "not run"
-    return DiscrepancyReport(poses, det, stoch, err, impl, rec.rate, unit, static)
+    gyro_result, gyro_err = gyro_layer(rec, g, poses, alpha=(rules or Rules()).alpha) if gyro else (None, "not run")
+    return DiscrepancyReport(poses, det, stoch, err, impl, rec.rate, unit, static, gyro_result, gyro_err or "")
 
 
 __all__ = ["DEFAULT_STOCHASTIC", "DiscrepancyReport", "StochasticSettings", "allan_check", "discrepancy_report",
