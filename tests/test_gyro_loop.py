@@ -83,3 +83,18 @@ def test_a_gyro_that_cannot_be_calibrated_is_one_line_and_the_accelerometer_loop
     assert "\n" not in d["gyroscope"]["reason"] and d["gyroscope"]["reason"].startswith("gyroscope not tested:")
     check_statuses(d)
     assert "gyroscope: gyroscope not tested" in rep.summary()
+
+
+def test_an_effect_repeats_only_when_named_on_every_tested_session_of_the_unit():
+    import pandas as pd
+
+    from accelcal_repro.gyro.loop_sessions import repeats
+
+    rows = pd.DataFrame([{"session": "a1", "named": "g_sensitivity", "reason": ""},
+                         {"session": "a2", "named": "g_sensitivity,motion_bias", "reason": ""},
+                         {"session": "a3", "named": "", "reason": "gyroscope not tested: too few poses"},
+                         {"session": "b1", "named": "scale_asymmetry", "reason": ""},
+                         {"session": "b2", "named": "none", "reason": ""}])
+    r = repeats(rows, {"a": ("a1", "a2", "a3"), "b": ("b1", "b2")}).set_index(["unit", "effect"])
+    assert r.loc[("a", "g_sensitivity"), "repeats"] and r.loc[("a", "g_sensitivity"), "sessions_tested"] == 2
+    assert not r.loc[("a", "motion_bias"), "repeats"] and not r.loc[("b", "scale_asymmetry"), "repeats"]
