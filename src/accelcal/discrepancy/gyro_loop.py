@@ -30,19 +30,20 @@ Identifiability: the share of ``L⁻¹X`` that ``L⁻¹J`` absorbs; a candidate 
 absorbed (> :data:`MAX_ABSORBED`) or whose motions lack what it needs (``needs``: both
 senses of rotation per axis, several rates, ...) is ``not_identifiable``, with the motions
 it would need.  The minimum detectable effect of each parameter is the size that alone gives
-the F test power 0.8 at α, in the parameter's own unit.
+the F test power 0.8 at α over the number of candidates (Holm's first step), in the
+parameter's own unit.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from ..gyro.calibrate import _motions, accel_directions
 from ..gyro.fit import MotionSet, _residuals, evaluate
-from ..gyro.rests import (bias_series, fit_bias, motion_bias_variance, rest_noise, rest_statistics, sample_interval,
-                          saturated_samples)
+from ..gyro.rests import (RestStatistics, bias_series, fit_bias, motion_bias_variance, rest_noise, rest_statistics,
+                          sample_interval, saturated_samples)
 from .statistics import critical_noncentrality, holm
 
 #: A candidate whose whitened columns the base model absorbs beyond this share is not identifiable.
@@ -90,7 +91,7 @@ class GyroMotions:
     nominal: float  #: rad/s per raw unit
     g_sensitivity_in_base: bool
     t: np.ndarray | None = None  #: sample times [s] (for the bias the rests take from a perturbation)
-    intervals: np.ndarray | None = None  #: the rests, sample ranges
+    rests: RestStatistics | None = None  #: the gyro's rests (their weights for that bias)
     bias_mode: str = "interpolated"
 
 
@@ -117,8 +118,19 @@ def gyro_motions(rec, acc_cal, poses, gcal) -> GyroMotions:
                    motion_bias_variance(best, rs, before, after))
     used = np.asarray(gcal.motions.get("used", [True] * ms.n_motions), bool)
     return GyroMotions(ms.subset(used), np.asarray(gcal.model.C, float), s.get("integrator", "magnus4"), f,
-                       float(s.get("nominal", 1.0)), gs, np.asarray(t, float), np.asarray(poses.intervals),
-                       s.get("bias_mode", "interpolated"))
+                       float(s.get("nominal", 1.0)), gs, np.asarray(t, float), rs, s.get("bias_mode", "interpolated"))
+
+
+def _moving(gm: GyroMotions, k: float = 5.0) -> np.ndarray:
+    """1 where the sensor turns (rate above ``k`` times the rest noise on some axis, inside a
+    motion), else 0: the samples a bias change "while moving" acts on (a motion's interval
+    also holds the still ends its rests' trim left out)."""
+    y = gm.ms.y
+    inside = np.zeros(len(y), bool)
+    for a, b in zip(gm.ms.starts, gm.ms.stops):
+        inside[a:b + 1] = True
+    noise = np.sqrt(np.asarray(gm.ms.y_var, float))
+    return (inside & np.any(np.abs(y) > k * noise, axis=1)).astype(float)
 
 
 def _through_bias(gm: GyroMotions, d: np.ndarray) -> np.ndarray:
@@ -126,10 +138,16 @@ def _through_bias(gm: GyroMotions, d: np.ndarray) -> np.ndarray:
 
     The bias comes from the rests (interpolated between them by default), so an effect
     present at rest (a g-sensitivity) moves the bias too, and only its change between
-    the rests reaches the motions."""
-    if gm.t is None or not np.any(d[np.concatenate([np.arange(a, b) for a, b in gm.intervals])]):
+    the rests reaches the motions.  Linear in ``d``: the rests' means of ``d``, weighted
+    as the gyro's own rests are."""
+    if gm.rests is None:
         return d
-    rs = rest_statistics(gm.t, d, gm.intervals)
+    iv = gm.rests.intervals
+    c = np.concatenate([np.zeros((1, 3)), np.cumsum(d, axis=0)])
+    means = (c[iv[:, 1]] - c[iv[:, 0]]) / (iv[:, 1] - iv[:, 0])[:, None]
+    if not np.any(means):
+        return d
+    rs = replace(gm.rests, means=means)
     return d - bias_series(fit_bias(rs, gm.bias_mode), rs, gm.t)
 
 
@@ -148,10 +166,7 @@ def _directions(name: str, gm: GyroMotions) -> list[np.ndarray] | None:
         h = gm.ms.h if np.ndim(gm.ms.h) == 0 else np.gradient(gm.ms.h)[:, None]
         return [np.gradient(y, axis=0) / h]
     if name == "motion_bias":
-        moving = np.zeros(len(y))
-        for a, b in zip(gm.ms.starts, gm.ms.stops):
-            moving[a:b + 1] = 1.0
-        return [-np.outer(moving, e[k]) for k in range(3)]
+        return [-np.outer(_moving(gm), e[k]) for k in range(3)]
     raise KeyError(name)
 
 
@@ -241,7 +256,10 @@ def _sign_coverage(gm: GyroMotions, min_deg: float = 30.0) -> list[str]:
 
 
 def _test(base_w: np.ndarray, Xw: np.ndarray, rw: np.ndarray, E: np.ndarray, alpha: float) -> dict:
-    """F test of the whitened columns ``Xw`` on top of ``base_w``, bootstrap p-value (null draws ``E``)."""
+    """F test of the whitened columns ``Xw`` on top of ``base_w``, bootstrap p-value (null draws ``E``).
+
+    ``alpha``: the level the MDE is computed at (the caller passes α over the number of
+    candidates, the Bonferroni level Holm's first rejection needs)."""
     n = len(rw)
     Qb = _orth(base_w)
     Xp = _resid(Qb, Xw)
@@ -280,6 +298,7 @@ def gyro_discrepancy(gm: GyroMotions, *, alpha: float = 0.05, n_boot: int = 999,
     wrong_way = _sign_coverage(gm)
     for _ in range(max_rounds):
         rows = {}
+        n_candidates = sum(1 for c in candidates if c not in named and Xws[c] is not None)
         for c in candidates:
             if c in named:
                 continue
@@ -288,7 +307,7 @@ def gyro_discrepancy(gm: GyroMotions, *, alpha: float = 0.05, n_boot: int = 999,
                 rows[c] = {"status": "in_base_model" if c == "g_sensitivity" and gm.g_sensitivity_in_base else
                            "not_identifiable", "needs": info.needs, "params": list(info.params), "unit": info.unit}
                 continue
-            row = _test(base, Xws[c], rw, E, alpha)
+            row = _test(base, Xws[c], rw, E, alpha / max(1, n_candidates))
             if c == "scale_asymmetry" and wrong_way and row["status"] == "tested":
                 row = {**row, "status": "not_identifiable", "axes_lacking": wrong_way}
             rows[c] = {**row, "needs": info.needs, "params": list(info.params), "unit": info.unit}
