@@ -380,7 +380,8 @@ def discrepancy_report(rec: Recording, g: float, *, rules: Rules | None = None,
                                      (rules or Rules()).alpha)
     else:
         err = "not run"
-    gyro_result, gyro_err = gyro_layer(rec, g, poses, alpha=(rules or Rules()).alpha) if gyro else (None, "not run")
+    gyro_result, gyro_err = (gyro_layer(rec, g, poses, alpha=(rules or Rules()).alpha) if gyro and rec.gyro is not None
+                             else (None, "no gyro in the recording" if rec.gyro is None else "gyro left out (--no-gyro)"))
     return DiscrepancyReport(poses, det, stoch, err, impl, rec.rate, unit, static, gyro_result, gyro_err or "")
 
 
