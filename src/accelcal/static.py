@@ -305,6 +305,12 @@ def _spans(runs: np.ndarray, h: int, m: int, n: int) -> np.ndarray:
     stop = runs[:, 1] + h
     start = np.where(start > 0, start + m, 0)   # the recording's own start borders no motion
     stop = np.where(stop < n, stop - m, n)
+    # Two quiet runs closer than a window (a motion so brief that the windows only partly
+    # holding it stay quiet) would give poses that share samples: cut both at the middle
+    # of the loud centres between them, ``m`` either side, so that poses stay disjoint.
+    clash = np.flatnonzero(stop[:-1] > start[1:])
+    mid = (runs[clash, 1] + runs[clash + 1, 0]) // 2
+    stop[clash], start[clash + 1] = mid - m, mid + m
     return np.column_stack([start, np.maximum(stop, start)])
 
 

@@ -188,4 +188,48 @@ def choose_static(t, acc, g: float, *, unit: str | None = None, min_poses: int =
     return StaticChoice(best[1], best[2], best[0], table)
 
 
-__all__ = ["MERGE_DEG", "SHAPES", "THRESHOLDS", "StaticChoice", "choose_static", "merge_split_rests"]
+def find_static_poses(rec, g: float, static: dict | None = None, need: int = 0):
+    """The front end of ``accelcal calibrate`` and ``accelcal discrepancy``: one code path.
+
+    The poses of ``rec`` with the settings ``static`` (its known intervals when it carries
+    them); if they are fewer than ``need`` (0: never search), the candidates' best
+    (:func:`choose_static`).  Both commands call this, so that they fit the same poses.
+
+    Returns
+    -------
+    poses : StaticPoses
+    searched : dict or None
+        The search's record (``settings``, ``description``, ``defaults_found``,
+        ``defaults_note``, ``candidates``), None when the settings ``static`` were kept.
+
+    Raises
+    ------
+    AccelcalError
+        No static pose (the defaults' own reason when the search finds nothing either).
+    """
+    from .static import detect_static_recording
+
+    static = dict(static or {})
+    failed = None
+    try:
+        poses = detect_static_recording(rec, **static)
+        found, why = len(poses), ""
+    except AccelcalError as e:
+        if not need or rec.intervals is not None:
+            raise
+        poses, found, why, failed = None, 0, str(e), e
+    if not need or rec.intervals is not None or found >= need:
+        return poses, None
+    try:
+        choice = choose_static(rec.t, rec.acc, g, unit=rec.unit, min_poses=need,
+                               init_duration=static.get("init_duration"))
+    except AccelcalError:
+        if failed is not None:  # the defaults' own reason says more than "no setting finds enough"
+            raise failed from None
+        return poses, None
+    return choice.poses, {"settings": dict(choice.settings), "description": choice.describe(),
+                          "defaults_found": found, "defaults_note": why[:200], "candidates": len(choice.table)}
+
+
+__all__ = ["MERGE_DEG", "SHAPES", "THRESHOLDS", "StaticChoice", "choose_static", "find_static_poses",
+           "merge_split_rests"]

@@ -11,6 +11,7 @@ from ..errors import (AccelcalError, DegeneratePosesError, NotConvergedError, No
                       RecordingError, TooFewPosesError)
 from ..one_orientation import check_several_orientations
 from ..registry import estimator, estimators
+from ..static_auto import find_static_poses
 
 from .base import Calibration
 
@@ -174,7 +175,7 @@ def calibrate_recording(rec, g: float, method: str = "full_lls", *, static: dict
     est = estimator(method)
     if rec.intervals is None:  # a static record: said at once, before detection walks it (one_orientation)
         check_several_orientations(rec, est.min_poses, est.cli_name)
-    poses, searched = _static_poses(rec, g, static or {}, max(est.min_poses, min_poses) if search else 0)
+    poses, searched = find_static_poses(rec, g, static, max(est.min_poses, min_poses) if search else 0)
     prov = dict(provenance or {})
     prov.setdefault("static", {})
     prov["static"].update({"reference": poses.reference, "note": poses.reference_note,
@@ -189,34 +190,6 @@ def calibrate_recording(rec, g: float, method: str = "full_lls", *, static: dict
     except TooFewPosesError as e:
         raise TooFewPosesError(f"{e}; {_too_few_hint(rec, poses, est)}") from None
     return cal, poses
-
-
-def _static_poses(rec, g: float, static: dict, need: int):
-    """The poses with ``static``, or, if they are fewer than ``need`` (0: never), the
-    candidates' best (:func:`accelcal.static_auto.choose_static`); the search's record or None."""
-    from ..static import detect_static_recording
-
-    failed = None
-    try:
-        poses = detect_static_recording(rec, **static)
-        found, why = len(poses), ""
-    except AccelcalError as e:
-        if not need or rec.intervals is not None:
-            raise
-        poses, found, why, failed = None, 0, str(e), e
-    if not need or rec.intervals is not None or found >= need:
-        return poses, None
-    from ..static_auto import choose_static
-
-    try:
-        choice = choose_static(rec.t, rec.acc, g, unit=rec.unit, min_poses=need,
-                               init_duration=static.get("init_duration"))
-    except AccelcalError:
-        if failed is not None:  # the defaults' own reason says more than "no setting finds enough"
-            raise failed from None
-        return poses, None
-    return choice.poses, {"settings": dict(choice.settings), "description": choice.describe(),
-                          "defaults_found": found, "defaults_note": why[:200], "candidates": len(choice.table)}
 
 
 @dataclass(frozen=True)

@@ -11,7 +11,7 @@ from ..errors import AccelcalError
 from ..registry import estimators
 from . import gyro, mag
 from .common import (STANDARD_GRAVITY, _gravity, _nominal, _provenance, _rate_hint, _read, _reader_options,
-                     _static_options, _static_settings, _step, fail)
+                     _search_static, _static_options, _static_settings, _step, fail)
 
 
 def add_parser(sub, epilog: str) -> None:
@@ -60,7 +60,7 @@ def _calibrate(args) -> int:
     static = _static_settings(args, rec)
     method = args.method
     # the defaults first; too few poses for the method (or the gyro's rests): the candidates' best
-    search = not any(getattr(args, k) is not None for k in ("window", "threshold", "min_duration", "trim"))
+    search = _search_static(args)
     with _step(f"detecting static poses and estimating {method} from {rec.n} samples"):
         try:
             cal, poses = calibrate_recording(rec, g, method, static=static, conversion=_nominal(args, rec),

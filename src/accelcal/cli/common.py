@@ -175,6 +175,11 @@ def _read(args, *, accelerometer: bool = True):
     return rec
 
 
+def _search_static(args) -> bool:
+    """Search the detection settings (when the defaults find too few poses) unless the user set one."""
+    return not any(getattr(args, k) is not None for k in ("window", "threshold", "min_duration", "trim"))
+
+
 def _static_settings(args, rec) -> dict:
     """Keyword arguments of accelcal.static.detect_static from the options."""
     kw = {}

@@ -9,7 +9,9 @@ from pathlib import Path
 
 from ..effects import EFFECT_IDS
 from ..errors import AccelcalError
-from .common import _gravity, _provenance, _rate_hint, _read, _reader_options, _static_options, _static_settings, _step
+from ..gyro.recording import MIN_RESTS as GYRO_MIN_RESTS  # imports no numerical library
+from .common import (_gravity, _provenance, _rate_hint, _read, _reader_options, _search_static, _static_options,
+                     _static_settings, _step)
 
 DISCREPANCY_HELP = """\
 discrepancy report (JSON):
@@ -30,6 +32,13 @@ discrepancy report (JSON):
   stochastic   Allan deviation of the rests vs a white-noise simulator, named noise
                terms, Allan gap before/after; noise_implication: what they mean for
                the pose residuals
+  gyroscope    the gyro's loop (when the recording has a gyro and --no-gyro is not given):
+               named effects (g_sensitivity, scale_asymmetry, rate_nonlinearity,
+               time_offset, motion_bias), per round and candidate the test (F, p_value,
+               p_adjusted, mde, absorbed share; not_identifiable with the motions it
+               needs), excess_before/after, estimates; outcome 'not_tested' with a
+               one-line reason when the gyro cannot be calibrated from these rests
+  static       the detection settings (searched as `accelcal calibrate` does)
   The report is also a calibration: `accelcal apply REPORT.json RECORDING` applies
   its base model with the named effects.
 
@@ -66,10 +75,12 @@ def _discrepancy(args) -> int:
     if rec.unit is None:
         raise AccelcalError("the acceleration unit is unknown: pass --unit")
     static = _static_settings(args, rec)
+    with_gyro = rec.gyro is not None and not args.no_gyro  # as calibrate (cli.gyro.wants_gyro)
     with _step("static detection, deterministic and stochastic layers (the noise bootstrap takes a while)"):
         try:
             analysis = report.discrepancy_report(rec, args.g, stochastic=report.DEFAULT_STOCHASTIC, unit=rec.unit,
-                                                static_kw=static)
+                                                static_kw=static, search=_search_static(args), gyro=with_gyro,
+                                                min_poses=GYRO_MIN_RESTS if with_gyro else 0)
         except RecordingError as e:
             raise RecordingError(f"{e}{_rate_hint(rec)}") from None
     figures = []

@@ -28,10 +28,13 @@ from ..errors import AccelcalError
 from ..noise.allan import avar_interval, pooled_edf
 from ..noise.terms import TERMS, model_avar
 from ..recording import Recording
-from ..static import StaticPoses, detect_static_recording
+from ..registry import estimator
+from ..static import StaticPoses
+from ..static_auto import find_static_poses
 from ..summary import Summary
 from .detect import discrepancy
 from .fit import pose_data_from_static
+from .gyro_loop import gyro_layer
 from .joint_noise import describe_noise_model
 from .stochastic import StochasticResult
 from .stochastic.implication import centred_pose_variance, pose_difference_variance
@@ -73,6 +76,9 @@ class DiscrepancyReport:
     implication: dict
     fs: float
     unit: str | None = None
+    static: dict | None = None  #: the detection settings and the search's record (as calibrate's provenance)
+    gyro: object = None  #: the gyro loop's GyroLoopResult, or None (``gyro_error`` says why)
+    gyro_error: str = "not run"
 
     def to_dict(self) -> dict:
         d = self.deterministic.to_dict()
@@ -81,6 +87,11 @@ class DiscrepancyReport:
         if self.stochastic is None:
             d["stochastic_error"] = self.stochastic_error
         d["noise_implication"] = self.implication
+        if self.static is not None:
+            d["static"] = self.static
+        # one report for the whole IMU: the accelerometer's keys at the top (as before), each sensor below
+        d["gyroscope"] = self.gyro.to_dict() if self.gyro is not None else {"outcome": "not_tested",
+                                                                            "reason": self.gyro_error}
         d["poses"].update({"t_start": self.poses.t_start.tolist(), "t_end": self.poses.t_end.tolist(),
                            "mean": self.poses.means.tolist(), "mean_std": self.poses.mean_std.tolist(),
                            "n_samples": self.poses.n_samples.tolist()})
@@ -331,10 +342,14 @@ def _axis_allan_check(a, stoch, wander_avar, K: float, band: tuple, level: float
 
 def discrepancy_report(rec: Recording, g: float, *, rules: Rules | None = None,
                        stochastic: StochasticSettings | None = DEFAULT_STOCHASTIC, unit: str = "u",
-                       static_kw: dict | None = None) -> DiscrepancyReport:
+                       static_kw: dict | None = None, search: bool = False,
+                       min_poses: int = 0, gyro: bool = True) -> DiscrepancyReport:
     """The discrepancy report of a recording: static poses, both layers and their join.
 
-    Detects the static poses, runs the deterministic layer on their means and the
+    Finds the static poses as ``accelcal calibrate`` does (one code path,
+    :func:`accelcal.static_auto.find_static_poses`: the settings ``static_kw``, and with
+    ``search`` the candidates' best when they give fewer poses than the full model needs,
+    or ``min_poses`` if more), runs the deterministic layer on their means and the
     stochastic layer on the same rests (``stochastic=None`` skips it), and joins them
     (:func:`noise_implication`).
 
@@ -345,7 +360,11 @@ def discrepancy_report(rec: Recording, g: float, *, rules: Rules | None = None,
         A recording whose rests are too short for the stochastic layer is not an error:
         the report says why that layer is missing.
     """
-    poses = detect_static_recording(rec, **(static_kw or {}))
+    need = max(estimator("full_lls").min_poses, min_poses) if search else 0
+    poses, searched = find_static_poses(rec, g, static_kw, need)
+    static = {**(static_kw or {}), "known_intervals": rec.intervals is not None}
+    if searched is not None:
+        static.update({**searched["settings"], "search": searched})
     det = discrepancy(pose_data_from_static(poses, g), rules or Rules())
     stoch, err, impl = None, "", {}
     if stochastic is not None:
@@ -362,7 +381,9 @@ def discrepancy_report(rec: Recording, g: float, *, rules: Rules | None = None,
                                      (rules or Rules()).alpha)
     else:
         err = "not run"
-    return DiscrepancyReport(poses, det, stoch, err, impl, rec.rate, unit)
+    gyro_result, gyro_err = (gyro_layer(rec, g, poses, alpha=(rules or Rules()).alpha) if gyro and rec.gyro is not None
+                             else (None, "no gyro in the recording" if rec.gyro is None else "gyro left out (--no-gyro)"))
+    return DiscrepancyReport(poses, det, stoch, err, impl, rec.rate, unit, static, gyro_result, gyro_err or "")
 
 
 __all__ = ["DEFAULT_STOCHASTIC", "DiscrepancyReport", "StochasticSettings", "allan_check", "discrepancy_report",

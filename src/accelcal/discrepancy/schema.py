@@ -44,6 +44,14 @@ STATUS: dict[str, dict[str, str]] = {
                             "the wander, or told apart from another): the recording cannot rule it out",
         "error": "the loop failed (a model did not converge); the errors key says why",
     },
+    "gyroscope.outcome": {
+        "effect": "the gyro loop named an effect beyond the gyro model (gyroscope.named)",
+        "none": "nothing named for the gyro, and every applicable candidate was tested",
+        "not_identifiable": "nothing named for the gyro, and a candidate could not be tested with these motions "
+                            "(its row's needs says which motions it would need)",
+        "not_tested": "the gyro loop did not run: no gyro, or the gyro could not be calibrated from these rests "
+                      "(gyroscope.reason, one line); the accelerometer's loop ran",
+    },
     "null": {"colored": "white pose noise times a scale plus a bias wander or per-placement offset, estimated "
                         "jointly; bootstrap likelihood-ratio tests",
              "white": "white pose noise times a common scale; F-tests (the negative control)"},
@@ -95,6 +103,10 @@ REPORT_SCHEMA: dict = {
         "excess_explained_by": {"type": "array", "items": {"type": "string"},
                                 "description": "what carries the excess when excess_status is explained: named "
                                                "effects, outlier poses, the noise term, a white scale above 1"},
+        "gyroscope": {"type": "object", "properties": {
+            "outcome": {"enum": list(STATUS["gyroscope.outcome"])},
+            "named": {"type": "array", "items": {"type": "string"}},
+            "reason": {"type": "string"}}},
         "noise_model": {"type": "object", "properties": {
             "term": {"enum": list(STATUS["noise_model.term"])},
             "process": {"enum": list(STATUS["noise_model.process"])},

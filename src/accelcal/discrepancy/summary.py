@@ -68,6 +68,10 @@ def report_summary(report, written_to=None) -> str:
                          f"(explained: {'yes' if imp['explains_excess'] else 'no'})")
     else:
         lines.append(f"  stochastic layer: {report.stochastic_error or 'not run'}")
+    if report.gyro is not None:
+        lines.append(report.gyro.summary())
+    elif report.gyro_error.startswith("gyroscope not tested"):  # a gyro that could not be calibrated
+        lines.append(f"gyroscope: {report.gyro_error}")
     if written_to is not None:
         lines.append(f"  written to {written_to}")
     return "\n".join(lines)

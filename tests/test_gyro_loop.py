@@ -1,0 +1,100 @@
+"""The gyro's discrepancy loop: nothing named on an effect-free session, a hidden effect named and
+refitted, a candidate the motions cannot test called not identifiable with what it needs, and a gyro
+that cannot be calibrated reported in one line while the accelerometer's loop still runs."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from accelcal.discrepancy import gyro_loop as GL
+from accelcal.discrepancy.report import discrepancy_report
+from accelcal.discrepancy.schema import check_statuses
+from accelcal.recording import Recording
+from accelcal_repro.gyro import loop_benchmark as LB
+
+
+@pytest.fixture(scope="module")
+def null_case():
+    return LB.run_case(11, n_boot=199)
+
+
+def test_an_effect_free_session_names_nothing_and_every_candidate_has_an_mde(null_case):
+    assert null_case["named"] == []
+    assert set(null_case["mde"]) == set(GL.CANDIDATE_NAMES)  # all identifiable on 24 random turns
+    assert null_case["excess_before"] == pytest.approx(1.0, abs=0.35)
+
+
+@pytest.mark.parametrize("effect", ["scale_asymmetry", "g_sensitivity"])
+def test_a_hidden_effect_at_five_times_its_mde_is_named_and_closes_the_gap(null_case, effect):
+    case = LB.run_case(12, effect, 5.0 * null_case["mde"][effect], n_boot=199)
+    assert case["named"][:1] == [effect]
+    assert case["excess_after"] < case["excess_before"] and case["excess_after"] < 1.4
+
+
+def test_the_linearised_columns_match_a_refit():
+    """The candidate's column is the residuals' derivative: a small asymmetry added to the samples
+    (less what the rests' bias takes of it) moves the residuals by the column times its size."""
+    rng = np.random.default_rng(3)
+    sim = LB.simulate_recording(rng, **LB.DESIGN)
+    rec = Recording(t=sim["t"], acc=sim["acc"], temp=None, source="s", unit="m/s^2", gyro=sim["gyro"],
+                    gyro_unit="rad/s")
+    from accelcal.calibration import calibrate_recording
+    from accelcal.gyro.fit import _residuals
+    from accelcal.gyro.recording import calibrate_recording_gyro
+
+    acc, poses = calibrate_recording(rec, 9.81, "full_lls", search=True, min_poses=6)
+    gm = GL.gyro_motions(rec, acc, poses, calibrate_recording_gyro(rec, acc, poses, g_sensitivity=False))
+    X = GL.candidate_jacobian("scale_asymmetry", gm)
+    a = 1e-3
+    d = np.where(gm.ms.y[:, [0]] < 0, gm.ms.y[:, [0]], 0.0) * np.eye(3)[0]
+    y = gm.ms.y + a * GL._through_bias(gm, d)
+    dr = _residuals(GL._with_y(gm.ms, y), gm.C, gm.integrator) - _residuals(gm.ms, gm.C, gm.integrator)
+    np.testing.assert_allclose(dr, a * X[:, 0], rtol=0.02, atol=1e-9)
+
+
+def test_small_turns_leave_the_asymmetry_untestable_and_say_what_they_need():
+    """Eight turns of 3 deg: no axis turns 30 deg both ways, so the scale asymmetry cannot be
+    tested; the row says so, names the axes, and the motions it would need.  Without the
+    accelerometer samples the g-sensitivity cannot be formed: not identifiable, never untested."""
+    from accelcal.gyro.simulate import simulate_session
+
+    rng = np.random.default_rng(5)
+    ses = simulate_session(rng, n_motions=8, angle_deg=3.0, peak_rate_dps=20.0, gyro_noise=1e-3,
+                           direction_noise=1e-3)
+    gm = GL.GyroMotions(ses.data, ses.C, "magnus4", None, 1.0, False)
+    res = GL.gyro_discrepancy(gm, n_boot=99)
+    row = res.rounds[0]["scale_asymmetry"]
+    assert row["status"] == "not_identifiable" and row["axes_lacking"] == ["x", "y", "z"]
+    assert "both ways" in row["needs"]
+    assert res.rounds[0]["g_sensitivity"]["status"] == "not_identifiable"
+    assert res.outcome == "not_identifiable" or res.named
+
+
+def test_a_gyro_that_cannot_be_calibrated_is_one_line_and_the_accelerometer_loop_runs():
+    rng = np.random.default_rng(2)
+    sim = LB.simulate_recording(rng, **{**LB.DESIGN, "n_motions": 14})
+    rec = Recording(t=sim["t"], acc=sim["acc"], temp=None, source="s", unit="m/s^2",
+                    gyro=1e-4 * rng.standard_normal(sim["gyro"].shape), gyro_unit="rad/s")  # a gyro that saw nothing
+    rep = discrepancy_report(rec, 9.81, stochastic=None, search=True, min_poses=6)
+    d = rep.to_dict()
+    assert d["outcome"] in ("none", "not_identifiable") or d["outcome"]  # the accelerometer's loop ran
+    assert d["gyroscope"]["outcome"] == "not_tested"
+    assert "\n" not in d["gyroscope"]["reason"] and d["gyroscope"]["reason"].startswith("gyroscope not tested:")
+    check_statuses(d)
+    assert "gyroscope: gyroscope not tested" in rep.summary()
+
+
+def test_an_effect_repeats_only_when_named_on_every_tested_session_of_the_unit():
+    import pandas as pd
+
+    from accelcal_repro.gyro.loop_sessions import repeats
+
+    rows = pd.DataFrame([{"session": "a1", "named": "g_sensitivity", "reason": ""},
+                         {"session": "a2", "named": "g_sensitivity,motion_bias", "reason": ""},
+                         {"session": "a3", "named": "", "reason": "gyroscope not tested: too few poses"},
+                         {"session": "b1", "named": "scale_asymmetry", "reason": ""},
+                         {"session": "b2", "named": "none", "reason": ""}])
+    r = repeats(rows, {"a": ("a1", "a2", "a3"), "b": ("b1", "b2")}).set_index(["unit", "effect"])
+    assert r.loc[("a", "g_sensitivity"), "repeats"] and r.loc[("a", "g_sensitivity"), "sessions_tested"] == 2
+    assert not r.loc[("a", "motion_bias"), "repeats"] and not r.loc[("b", "scale_asymmetry"), "repeats"]
