@@ -148,3 +148,24 @@ def test_compiled_route_agrees_on_fuzzed_tables(text):
             numeric_block.use_pandas = choice
         if fast is not None:
             assert_same(fast, general)
+
+
+def test_a_large_table_reads_within_a_few_times_pandas(tmp_path):
+    """200 000 rows of t + 6 channels: ``read_table`` (reading, units, time, checks) takes at
+    most 8x the CPU time of ``pandas.read_csv`` on the same file, both timed here, best of 2
+    (measured 2.5-3x; the line-by-line route took 12-19x)."""
+    import pandas as pd
+
+    from accelcal.formats.table import read_table
+
+    rng = np.random.default_rng(0)
+    tails = [",".join(f"{v:.5g}" for v in row)
+             for row in rng.normal(size=(997, 6)) * 0.01 + [0.1, -0.2, 0.3, 0.0, 0.0, -1.0]]
+    path = tmp_path / "large.csv"
+    path.write_text("time,gx,gy,gz,ax,ay,az\n" + "\n".join(f"{i / 100:.2f},{tails[i % 997]}" for i in range(200_000)))
+    cost = {}
+    for name, read in (("pandas", pd.read_csv), ("accelcal", read_table)) * 2:
+        c0 = time.process_time()
+        read(path)
+        cost[name] = min(cost.get(name, np.inf), time.process_time() - c0)
+    assert cost["accelcal"] < 8 * cost["pandas"], cost
