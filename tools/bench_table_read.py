@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import resource
 import subprocess
 import sys
 import tempfile
@@ -71,12 +70,14 @@ def write_csv(rda: Path, out: Path) -> None:
 
 
 def child(cmd: list[str]) -> tuple[float, float, str]:
-    """(CPU seconds, peak RSS [MB], stdout) of one child process."""
-    before = resource.getrusage(resource.RUSAGE_CHILDREN)
-    out = subprocess.run(cmd, check=True, env=ONE_CORE, capture_output=True, text=True).stdout
-    after = resource.getrusage(resource.RUSAGE_CHILDREN)
-    cpu = after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime
-    return cpu, after.ru_maxrss / 1024, out
+    """(CPU seconds, peak RSS [MB], stdout) of one child process (its own rusage: ``os.wait4``)."""
+    proc = subprocess.Popen(cmd, env=ONE_CORE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    out = proc.stdout.read()
+    _, status, usage = os.wait4(proc.pid, 0)
+    proc.returncode = os.waitstatus_to_exitcode(status)
+    if proc.returncode:
+        raise SystemExit(f"{cmd[:4]} failed ({proc.returncode})")
+    return usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024, out
 
 
 def main(argv=None) -> int:
