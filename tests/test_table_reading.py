@@ -12,18 +12,16 @@ Then its speed and memory against pandas' own reader on the same file, in one ru
 
 from __future__ import annotations
 
-import resource
-import subprocess
-import sys
 import time
 
 import numpy as np
+import pandas as pd
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from accelcal.formats import numeric_block
-from accelcal.formats.table import _fast_table, _general_table
+from accelcal.formats.table import _fast_table, _general_table, read_table
 
 from .test_reader_fuzz import JUNK, _valid_table
 
@@ -154,10 +152,6 @@ def test_a_large_table_reads_within_a_few_times_pandas(tmp_path):
     """200 000 rows of t + 6 channels: ``read_table`` (reading, units, time, checks) takes at
     most 8x the CPU time of ``pandas.read_csv`` on the same file, both timed here, best of 2
     (measured 2.5-3x; the line-by-line route took 12-19x)."""
-    import pandas as pd
-
-    from accelcal.formats.table import read_table
-
     rng = np.random.default_rng(0)
     tails = [",".join(f"{v:.5g}" for v in row)
              for row in rng.normal(size=(997, 6)) * 0.01 + [0.1, -0.2, 0.3, 0.0, 0.0, -1.0]]
