@@ -14,6 +14,7 @@ when the file does not say (:mod:`.inference`).
 from __future__ import annotations
 
 import re
+from collections.abc import Sequence
 from pathlib import Path
 from typing import NamedTuple
 
@@ -25,6 +26,7 @@ from ..units import to_celsius, unit_in_name
 from .clock import clocked_time, is_counter_name, looks_like_counter
 from .inference import resolve_acceleration_unit, resolve_gyro_unit, time_seconds
 from .magnetic import MAG_ROLES, mag_axis, mag_unit_in_name, resolve_mag_unit
+from .numeric_block import Body, field_strings, parse_block
 from .parsing import DECIMAL_COMMA, NUMBER, norm_name, parse_numbers, split_fields
 from .text import COMMENT_MARKERS, is_comment, load_text
 
@@ -130,27 +132,25 @@ class _Table(NamedTuple):
     """The rows of a table: header names (or None), data rows, their file line numbers, the
     lines above the header (line number, fields), delimiter, decimal comma, field count;
     a plain numeric table (:func:`_fast_table`) has ``block`` (its floats) and its data
-    lines in ``raw`` instead of ``data``."""
+    lines in ``raw`` instead of ``data``, and ``lines`` a range."""
 
     names: list[str] | None
     data: list[list[str]] | None
-    lines: list[int]
+    lines: Sequence[int]
     preamble: list[tuple[int, list[str]]]
     delim: str
     dc: bool
     k: int
     block: np.ndarray | None = None
-    raw: list[str] | None = None
+    raw: Body | None = None
 
     def column(self, i: int) -> np.ndarray:
-        """The strings of column ``i`` (object array)."""
+        """The strings of column ``i`` (an object or str array)."""
         if self.data is not None:
             return np.asarray([r[i] for r in self.data], dtype=object)
         if self.raw is None:  # a matrix (read_matrix): its numbers as text
             return np.asarray([repr(float(v)) for v in self.block[:, i]], dtype=object)
-        if self.delim == " ":
-            return np.asarray([ln.split()[i] for ln in self.raw], dtype=object)
-        return np.asarray([ln.split(self.delim)[i].strip() for ln in self.raw], dtype=object)
+        return field_strings(self.raw, i, self.delim, self.k)
 
 
 def read_table(path, *, text: str | None = None, columns=None, unit: str | None = None,
@@ -298,7 +298,15 @@ def _numeric_block(tab: _Table):
 
 
 def _split_table(text: str, path) -> _Table:
-    """Delimiter, header and data rows of the text (comments and blank lines skipped)."""
+    """Delimiter, header and data rows of the text (comments and blank lines skipped): a
+    plain numeric table by a compiled parser (:func:`_fast_table`), anything else line by
+    line (:func:`_general_table`), which names what is wrong."""
+    fast = _fast_table(text)
+    return fast if fast is not None else _general_table(text, path)
+
+
+def _general_table(text: str, path) -> _Table:
+    """:func:`_split_table` field by field: every line split in Python (seconds for 10⁶ lines)."""
     all_lines = text.splitlines()
     # is_comment inlined: this runs once per line of files of 10^5 lines
     numbered = [(no, ln) for no, ln in enumerate(all_lines, start=1)
@@ -309,16 +317,7 @@ def _split_table(text: str, path) -> _Table:
         delim, dc, k = sniff([ln for _, ln in numbered])
     except RecordingError as e:
         raise RecordingError(f"{path}: {e}") from None
-    fast = _fast_table(all_lines, numbered, delim, dc, k)
-    if fast is not None:
-        return fast
-    if delim == " ":
-        rows = [ln.split() for _, ln in numbered]
-    else:
-        rows = [[f.strip() for f in ln.split(delim)] for _, ln in numbered]
-    for i, r in enumerate(rows):
-        if len(r) == k + 1 and r[-1] == "":
-            rows[i] = r[:-1]
+    rows = _split_rows([ln for _, ln in numbered], delim, k)
     header, first = _find_header(rows, k, dc)
     if header is None and first == 0:  # a header that looks like a comment: rostopic's '%time,field...'
         rows, numbered, header = _comment_header(all_lines, numbered, rows, delim, k)
@@ -335,39 +334,86 @@ def _split_table(text: str, path) -> _Table:
     return _Table(rows[header] if header is not None else None, data, lines, preamble, delim, dc, k)
 
 
-def _fast_table(all_lines, numbered, delim: str, dc: bool, k: int) -> _Table | None:
-    """A plain numeric table, parsed by numpy's C reader (a fifth of the time of the field by
-    field route on IMU-TK's 51 175-line files): a header line or none, then rows of ``k``
-    numbers.  None for anything else (a preamble, a comment header, text or empty fields,
-    decimal commas, ragged rows, too few rows): the general route then reads it and names
-    what is wrong."""
-    import io
-
-    if dc or delim not in (" ", ",", "\t", ";") or len(numbered) < MIN_ROWS + 1:
-        return None
-    head = [split_fields(ln, delim) for _, ln in numbered[:2]]
-
-    def numeric(r):
-        return len(r) == k and all(NUMBER.match(c) for c in r)
-
-    if numeric(head[0]):
-        above = numbered[0][0] - 1
-        if above >= 1 and is_comment(all_lines[above - 1]):
-            return None  # perhaps a header written as a comment
-        names, first = None, 0
-    elif len(head[0]) == k and not any(NUMBER.match(c) for c in head[0]) and numeric(head[1]):
-        names, first = head[0], 1
+def _split_rows(lines: list[str], delim: str, k: int) -> list[list[str]]:
+    """The stripped fields of each line; a trailing empty field after ``k`` fields dropped."""
+    if delim == " ":
+        rows = [ln.split() for ln in lines]
     else:
+        rows = [[f.strip() for f in ln.split(delim)] for ln in lines]
+    for i, r in enumerate(rows):
+        if len(r) == k + 1 and r[-1] == "":
+            rows[i] = r[:-1]
+    return rows
+
+
+#: Lines at the top of a file in which :func:`_fast_table` looks for the header and the first
+#: data row (a preamble longer than this goes the general way).
+_HEAD_LINES = 256
+#: Content lines at the end of a file that :func:`sniff` reads.
+_SNIFF_LINES = 200
+
+
+def _fast_table(text: str) -> _Table | None:
+    """A plain numeric table, its structure found as :func:`_general_table` finds it but from
+    the first lines and the last :data:`_SNIFF_LINES` content lines only, its data parsed by a
+    compiled parser (:func:`.numeric_block.parse_block`): the same names, rows, line numbers and numbers.
+    None for anything else (decimal commas, text or empty fields, comment or blank lines
+    inside the data, ragged rows, too few rows, a long preamble, any error): the general route
+    then reads it and names what is wrong."""
+    cut = _after_lines(text, _HEAD_LINES)
+    head = text[:cut].splitlines(keepends=True)
+    head_lines = text[:cut].splitlines()
+    numbered = [(no, ln) for no, ln in enumerate(head_lines, start=1)
+                if (s := ln.lstrip()) and not s.startswith(COMMENT_MARKERS)]
+    if not numbered:
         return None
-    raw = [ln for _, ln in numbered[first:]]
+    sample = [ln for _, ln in numbered] if cut == len(text) else _sniff_sample(text, numbered[0][1])
     try:
-        block = np.loadtxt(io.StringIO("\n".join(raw)), delimiter=None if delim == " " else delim, ndmin=2,
-                           comments=None, dtype=float)
-    except ValueError:
+        delim, dc, k = sniff(sample)
+        rows = _split_rows([ln for _, ln in numbered], delim, k)
+        header, first = _find_header(rows, k, dc)
+    except RecordingError:
         return None
-    if block.shape != (len(raw), k):
+    if dc:
         return None
-    return _Table(names, None, [no for no, _ in numbered[first:]], [], delim, dc, k, block, raw)
+    if header is None and first == 0:
+        rows, numbered, header = _comment_header(head_lines, numbered, rows, delim, k)
+        first = 1 if header is not None else 0
+    if first >= len(numbered):
+        return None
+    start_line = numbered[first][0]
+    parsed = parse_block(text, sum(len(ln) for ln in head[:start_line - 1]), delim, k)
+    if parsed is None or len(parsed[0]) < MIN_ROWS:
+        return None
+    block, body = parsed
+    preamble = [(numbered[i][0], rows[i]) for i in range(first if header is None else header)]
+    return _Table(rows[header] if header is not None else None, None, range(start_line, start_line + len(block)),
+                  preamble, delim, dc, k, block, body)
+
+
+def _after_lines(text: str, n: int) -> int:
+    """The offset just after the ``n``-th newline of ``text`` (its length if it has fewer)."""
+    pos = 0
+    for _ in range(n):
+        pos = text.find("\n", pos) + 1
+        if pos == 0:
+            return len(text)
+    return pos
+
+
+def _sniff_sample(text: str, first: str) -> list[str]:
+    """What :func:`sniff` reads of all the content lines of ``text`` (the first and the last
+    :data:`_SNIFF_LINES`), from a tail of the text grown until it holds them."""
+    size = 1 << 14
+    while True:
+        start = max(0, len(text) - size)
+        lines = text[start:].splitlines()[1 if start else 0:]  # the first may be cut
+        content = [ln for ln in lines if (s := ln.lstrip()) and not s.startswith(COMMENT_MARKERS)]
+        if start == 0:
+            return content
+        if len(content) >= _SNIFF_LINES:
+            return [first] + content[-_SNIFF_LINES:]
+        size *= 4
 
 
 def _comment_header(all_lines, numbered, rows, delim, k):

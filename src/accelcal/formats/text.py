@@ -37,7 +37,7 @@ def load_text(path: Path) -> tuple[str, list[str]]:
             raise RecordingError(f"{path}: damaged gzip file ({' '.join(str(e).split())}); "
                                  "decompress it with gunzip to see what is left") from None
         notes.append("gzip-compressed")
-    if not raw.strip():
+    if not raw or raw.isspace():  # (not raw.strip(): a copy of the file)
         raise RecordingError(f"{path}: empty file (expected a recording: a table of t, ax, ay, az)")
     kind = binary_kind(raw)
     if kind:
