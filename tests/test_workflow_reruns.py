@@ -78,4 +78,6 @@ def test_a_claim_threshold_reruns_only_the_claims(ci_workflow, tmp_path):
     ran = set(re.findall(r"^(?:local)?rule (\w+):$", proc.stdout + proc.stderr, re.M))
     stage_claims = {"tereshkov_claims", "batista2011_claims", "burkhard2024_claims"}
     assert stage_claims <= ran, ran
-    assert ran - stage_claims <= {"claims", "report", "all"}, sorted(ran - stage_claims)
+    # the ledger (results/claims.csv) and what reads it: the report, the job-seconds per stage and its figure
+    readers_of_the_ledger = {"claims", "report", "all", "timing_stages", "timing_benchmark_figure", "benchmark"}
+    assert ran - stage_claims <= readers_of_the_ledger, sorted(ran - stage_claims)

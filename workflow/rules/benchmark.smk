@@ -32,8 +32,9 @@ rule timing_filters:
     output:
         f"{TIMING_DIR}/filters.csv",
     params:
-        batista=config["batista2011"],
-        tereshkov=config["tereshkov"],
+        # what the timed runs read (config per key: new claim thresholds do not rerun the timing)
+        batista=config_keys(config["batista2011"], "seed", "g", "filter"),
+        tereshkov=config_keys(config["tereshkov"], *TERESHKOV_RUNS),
         bench=BENCHMARK["tereshkov"],
     log:
         log_path("benchmark/filters"),

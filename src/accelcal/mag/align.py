@@ -17,7 +17,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from .errors import MagDegenerateError
 from .model import rotvec_to_matrix
@@ -81,6 +80,8 @@ def _jacobian(p, f, h, R0):
 
 def _refine(f, h, R0, dip0):
     p0 = np.array([0.0, 0.0, 0.0, dip0])
+    from scipy.optimize import least_squares  # here: scipy.optimize costs 0.2-0.6 s to import
+
     s = least_squares(_residual, p0, jac=_jacobian, args=(f, h, R0), method="lm", xtol=1e-14, ftol=1e-14)
     return rotvec_to_matrix(s.x[:3]) @ R0, float(s.x[3]), float(s.cost)
 

@@ -12,9 +12,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import distributions as dist  # scipy.stats would cost ~1 s at import
 from .align import MIN_DIRECTIONS, align
 from .errors import MagDisturbanceError
-from scipy.stats import f as f_dist
 
 from .fit import FieldSamples, fit_hard_iron
 from .model import MagModel
@@ -125,7 +125,7 @@ def _soft_iron_test(samples, fit) -> dict:
     if samples.noise_cov is not None:
         full_c2, sph_c2 = fit.chi2, float(sphere.chi2)
     F = max((sph_c2 - full_c2) / 5.0, 0.0) / max(full_c2 / fit.dof, 1e-300)
-    return {"soft_iron_F": float(F), "soft_iron_p": float(f_dist.sf(F, 5, fit.dof))}
+    return {"soft_iron_F": float(F), "soft_iron_p": float(dist.f_sf(F, 5, fit.dof))}
 
 
 def _rests_in_kept_rows(poses, rows) -> list[tuple[int, int]]:

@@ -17,9 +17,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import least_squares
-from scipy.stats import chi2 as chi2_dist
 
+from .. import distributions as dist  # scipy.stats would cost ~1 s at import
 from .errors import MagDegenerateError, MagFitError, MagInputError
 from .model import PARAMETERS, sym_from_vec, vec_from_sym
 
@@ -207,7 +206,7 @@ def _result(theta, samples, method, iterations, notes=(), bias_correct=True) -> 
     if known:
         # the measured noise explains the residual unless χ² rejects it (p < 0.01): then the
         # misfit is part of the error too, and the s.e. grow by sqrt(χ²/dof), as the accelerometer's
-        scale = scale if chi2_dist.sf(chi2, max(dof, 1)) < 0.01 else 1.0
+        scale = scale if dist.chi2_sf(chi2, max(dof, 1)) < 0.01 else 1.0
     inflate = 1.0 if samples.n_independent is None else max(samples.n / samples.n_independent, 1.0)
     cov = None
     if sv[-1] > 1e-12 * sv[0]:
@@ -231,6 +230,8 @@ def fit_ellipsoid_ml(samples: FieldSamples, start: EllipsoidFit | None = None) -
     if start is None:
         start = fit_ellipsoid_lg(samples)
     theta0 = start.theta
+    from scipy.optimize import least_squares  # here: scipy.optimize costs 0.2-0.6 s to import
+
     sol = least_squares(lambda th: _residuals(th, samples.m, samples.noise_cov, True)[0], theta0,
                         jac=lambda th: _residuals(th, samples.m, samples.noise_cov, True)[1],
                         method="lm", xtol=1e-12, ftol=1e-12, max_nfev=200)
@@ -262,6 +263,8 @@ def fit_hard_iron(samples: FieldSamples) -> EllipsoidFit:
     def res(p):
         r, J = _residuals(full(p), m, samples.noise_cov, True)
         return r, J @ P
+
+    from scipy.optimize import least_squares  # here: scipy.optimize costs 0.2-0.6 s to import
 
     s = least_squares(lambda p: res(p)[0], np.concatenate([b0, [1 / r0]]), jac=lambda p: res(p)[1], method="lm")
     out = _result(full(s.x), samples, "hard_iron", int(s.nfev))
