@@ -100,7 +100,7 @@ def test_discrepancy_fits_the_poses_calibrate_fits(name, tmp_path, monkeypatch, 
     if code != 0:  # refused by calibrate: discrepancy refuses too, in one line, before its loop
         assert handed is None and d_code == 2, (cal_err, d_err)
         assert len(d_err.strip().splitlines()) == 1 and d_err.startswith("accelcal: error:")
-        pytest.skip(f"calibrate refuses {name}: {cal_err.strip().splitlines()[-1][:100]}")
+        return  # both refuse alike: what the test asks
     assert handed is not None, f"calibrate fits {name}, discrepancy refuses: {d_err.strip()}"
     poses = cal["poses"]
     np.testing.assert_array_equal(handed.t_start, poses["t_start"])

@@ -152,7 +152,7 @@ def test_a_static_record_given_to_calibrate_is_recognised_before_pose_detection(
     def walked(*a, **k):
         raise AssertionError("pose detection ran on a static record")
 
-    monkeypatch.setattr(fitting, "_static_poses", walked)
+    monkeypatch.setattr(fitting, "find_static_poses", walked)
     out = tmp_path / "c.json"
     code = cli.main(["calibrate", str(path), "--out", str(out)])
     err = capsys.readouterr().err
