@@ -353,21 +353,10 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
         y = y - np.asarray(accel.apply(np.asarray(acc, float)), float) @ best.g_sensitivity.T
     all_ms, used, notes = _usable_motions(y, t, tb, poses, rs, best, u, u_cov, f_rest, accel, gyro, gyro_range)
     ms = all_ms.subset(used)
-    if raw_unit is None and nominal_sensitivity is not None:
-        raw_unit = "counts"  # a sensitivity is counts per rad/s
-    if raw_unit is None:  # not stated: the motions decide it (unit_evidence)
-        raw_unit, nominal, nominal_from = unit_from_motions(ms, integrator, gyro)
-    else:
-        nominal, nominal_from = _nominal(raw_unit, nominal_sensitivity, ms, integrator)
-        _check_nominal(ms, u, nominal, nominal_from)
+    raw_unit, nominal, nominal_from = _unit_and_nominal(raw_unit, nominal_sensitivity, ms, u, integrator, gyro)
     _check_axes(ms, nominal, tb.h)
-    if time_base not in ("auto", "index", "timestamps"):
-        raise GyroInputError(f"unknown time base {time_base!r}; known: auto, index, timestamps")
-    bases = {"index": tb.h, "timestamps": t}
-    tried = ["index"] if (time_base == "auto" and tb.jitter <= RULES["jitter"]) else (
-        ["index", "timestamps"] if time_base == "auto" else [time_base])
-    fits, rest_fits, noises = _fit_time_bases(est.load(), ms, {k: bases[k] for k in tried}, nominal, integrator,
-                                              noise_model)
+    bases = _time_bases(time_base, tb, t)
+    fits, rest_fits, noises = _fit_time_bases(est.load(), ms, bases, nominal, integrator, noise_model)
     chosen = min(rest_fits, key=lambda k: rest_fits[k].chi2)
     fit = fits[chosen]
     noise, adj = noises[chosen]
@@ -384,10 +373,35 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
                               "used": chosen, "chi2_per_dof": chi2_per_dof},
                 "bias_rests": {"chi2": best.chi2, "dof": best.dof, "excess": best.excess},
                 "g_sensitivity": bool(g_sensitivity), "g_sensitivity_test": g_test,
-                "noise_model": {**noise.to_dict(), "chi2": fit.chi2, "dof": fit.dof,
-                                "chi2_per_dof": fit.chi2 / max(fit.dof, 1),
-                                "parameter_dof": _parameter_dof(adj, fit.C)} if noise_model else None}
+                "noise_model": _noise_settings(noise, adj, fit) if noise_model else None}
     return est.load_calibration()(model, se, quality, table, settings)
+
+
+def _noise_settings(noise, adj, fit) -> dict:
+    """The noise model between the rests as the calibration's settings keep it."""
+    return {**noise.to_dict(), "chi2": fit.chi2, "dof": fit.dof, "chi2_per_dof": fit.chi2 / max(fit.dof, 1),
+            "parameter_dof": _parameter_dof(adj, fit.C)}
+
+
+def _time_bases(time_base: str, tb, t) -> dict:
+    """The time bases to fit (``{name: h or t}``): the index, or with jittering steps both (module docstring)."""
+    if time_base not in ("auto", "index", "timestamps"):
+        raise GyroInputError(f"unknown time base {time_base!r}; known: auto, index, timestamps")
+    bases = {"index": tb.h, "timestamps": t}
+    tried = ["index"] if (time_base == "auto" and tb.jitter <= RULES["jitter"]) else (
+        ["index", "timestamps"] if time_base == "auto" else [time_base])
+    return {k: bases[k] for k in tried}
+
+
+def _unit_and_nominal(raw_unit, nominal_sensitivity, ms, u, integrator, gyro):
+    """The raw unit (stated, or decided by the motions) and the nominal rad/s per raw unit, checked."""
+    if raw_unit is None and nominal_sensitivity is not None:
+        raw_unit = "counts"  # a sensitivity is counts per rad/s
+    if raw_unit is None:  # not stated: the motions decide it (unit_evidence)
+        return unit_from_motions(ms, integrator, gyro)
+    nominal, nominal_from = _nominal(raw_unit, nominal_sensitivity, ms, integrator)
+    _check_nominal(ms, u, nominal, nominal_from)
+    return raw_unit, nominal, nominal_from
 
 
 def _usable_motions(y, t, tb, poses, rs, best, u, u_cov, f_rest, accel, gyro, gyro_range):
