@@ -54,7 +54,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import distributions as dist
-from .fit import GyroFit, MotionSet, covariance_parts
+from .fit import GyroFit, MotionSet, _golden, covariance_parts
 
 #: The variance components estimated from the motion residuals, in the order of ``MotionNoise.variances``.
 COMPONENTS = ("rotation_rel", "motion_rate", "rest_direction")
@@ -127,20 +127,7 @@ def _best_q(y, X, D, K) -> float:
     if k == 0 and _reml_1d(y, X, D, K, 0.0) >= ll[0]:
         return 0.0
     lo, hi = math.log(grid[max(k - 1, 0)]), math.log(grid[min(k + 1, len(grid) - 1)])
-    g = (math.sqrt(5.0) - 1.0) / 2.0
-    f = lambda x: -_reml_1d(y, X, D, K, math.exp(x))  # noqa: E731
-    a, b = hi - g * (hi - lo), lo + g * (hi - lo)
-    fa, fb = f(a), f(b)
-    while hi - lo > 1e-3:
-        if fa < fb:
-            hi, b, fb = b, a, fa
-            a = hi - g * (hi - lo)
-            fa = f(a)
-        else:
-            lo, a, fa = a, b, fb
-            b = lo + g * (hi - lo)
-            fb = f(b)
-    return math.exp(0.5 * (lo + hi))
+    return math.exp(_golden(lambda x: -_reml_1d(y, X, D, K, math.exp(x)), lo, hi, 1e-3))
 
 
 def bias_wander(means, mean_std, t_mid, f_rest=None) -> np.ndarray:
