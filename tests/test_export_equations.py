@@ -17,6 +17,7 @@ import json
 import math
 import re
 
+import cv2
 import numpy as np
 import pytest
 
@@ -89,11 +90,40 @@ def test_kalibr_scale_misalignment_model_equals_apply():
 # --------------------------------------------------------------------------- OpenVINS
 
 
-def _openvins_read(text):
+def _filestorage_node(text, tmp_path):
+    """The file as OpenVINS opens it: ``cv::FileStorage(path, READ)``, node ``imu0``.
+
+    rpng/open_vins ov_core/src/utils/opencv_yaml_parse.h l. 590-600 (parse_external_yaml opens the
+    external file with cv::FileStorage) and l. 448-468 (a Matrix3d is read element by element,
+    ``(double)file_node[node_name][r][c]``); scalars by ``file_node[node_name] >> value`` (l. 372).
+    """
+    path = tmp_path / "kalibr_imu_chain.yaml"
+    path.write_text(text)
+    fs = cv2.FileStorage(str(path), cv2.FILE_STORAGE_READ)
+    assert fs.isOpened(), "OpenCV's FileStorage cannot open the export"
+    return fs, fs.getNode("imu0")
+
+
+def _openvins_read(text, tmp_path):
     """ov_msckf/src/core/VioManagerOptions.h l. 306-351 and ov_msckf/src/state/State.h l. 91-116."""
     assert text.startswith("%YAML:1.0\n")  # OpenCV FileStorage's header, which OpenVINS's parser needs
+    fs, node = _filestorage_node(text, tmp_path)
     y = yaml.safe_load(text.split("\n", 1)[1])["imu0"]
-    Tw, Ta, R_ia, R_ig, Tg = (np.array(y[k], float) for k in ("Tw", "Ta", "R_IMUtoACC", "R_IMUtoGYRO", "Tg"))
+
+    def mat3(name):
+        n = node.getNode(name)
+        assert n.isSeq() and n.size() == 3, name
+        return np.array([[n.at(r).at(c).real() for c in range(3)] for r in range(3)])
+
+    Tw, Ta, R_ia, R_ig, Tg = (mat3(k) for k in ("Tw", "Ta", "R_IMUtoACC", "R_IMUtoGYRO", "Tg"))
+    # OpenCV reads every number PyYAML reads (a key OpenCV misparsed would be silently wrong there)
+    for key, value in y.items():
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            assert node.getNode(key).real() == pytest.approx(value, rel=1e-15, abs=0), key
+    assert node.getNode("model").string() == y["model"]
+    for k, m in zip(("Tw", "Ta", "R_IMUtoACC", "R_IMUtoGYRO", "Tg"), (Tw, Ta, R_ia, R_ig, Tg)):
+        assert np.array_equal(m, np.array(y[k], float)), k
+    fs.release()
     Dw, Da = np.linalg.inv(Tw), np.linalg.inv(Ta)                           # l. 319-320
     R_ACCtoIMU, R_GYROtoIMU = R_ia.T, R_ig.T                                 # l. 321-322
     if y["model"] == "kalibr":                                               # l. 342-344, State::Dm l. 95-96
@@ -115,10 +145,10 @@ def _openvins_read(text):
 
 
 @pytest.mark.parametrize("model", ["kalibr", "rpng"])
-def test_openvins_intrinsics_in_both_models_equal_apply(model):
+def test_openvins_intrinsics_in_both_models_equal_apply(model, tmp_path):
     cal = full_calibration(seed=5)
     text = _one("openvins", cal, model=model).files[""]
-    y, Dw, Da, R_ACCtoIMU, R_GYROtoIMU, Tg = _openvins_read(text)
+    y, Dw, Da, R_ACCtoIMU, R_GYROtoIMU, Tg = _openvins_read(text, tmp_path)
     ba = _vec_comment(text, "accelerometer bias b_a")
     bg = _vec_comment(text, "gyroscope bias b_g")
     raw_a, raw_g = _data(cal)
