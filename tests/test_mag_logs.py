@@ -141,7 +141,7 @@ def test_ros_mag_on_another_time_base_is_refused_or_warned(tmp_path, capsys):
 
 # ---- PX4 -------------------------------------------------------------------------------------------------------
 
-def _ulog(tmp_path, *, mags=(0,), raw=True, vehicle=False, seed=0):
+def _ulog(tmp_path, *, mags=(0,), raw=True, vehicle=False, seed=0, spoil=None):
     pytest.importorskip("pyulog")
     from tests.log_fixtures import write_ulog
 
@@ -154,6 +154,8 @@ def _ulog(tmp_path, *, mags=(0,), raw=True, vehicle=False, seed=0):
                                    "z": np.zeros(len(t), np.float32)}}
     ms = us[::EVERY] + 3000
     gauss = (m[::EVERY] / 100.0).astype(np.float32)  # SensorMag.msg: x, y, z in gauss
+    if spoil is not None:
+        gauss = spoil(gauss)
     for i in mags if raw else ():
         topics[("sensor_mag", i)] = {"timestamp": ms + 200, "timestamp_sample": ms,
                                      "device_id": np.full(len(ms), 396825 + i, np.uint32),
@@ -242,7 +244,24 @@ def test_ardupilot_mag_that_cannot_be_undone_is_refused(tmp_path, capsys, case, 
     out = tmp_path / "m.json"
     assert main(["mag", str(p), "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and says in err[0] and "--no-mag" in err[0] and not out.exists()
+    assert len(err) == 1 and says in err[0] and "--no-mag" not in err[0] and not out.exists()
+    cal = tmp_path / "cal.json"
+    assert main(["calibrate", str(p), "--out", str(cal), "--g", "9.81", "--no-gyro"]) == 0
+    lines = [ln for ln in capsys.readouterr().err.splitlines() if "warning: magnetometer:" in ln]
+    assert len(lines) == 1 and says in lines[0] and "--no-mag" in lines[0]
+    assert "magnetometer" not in json.loads(cal.read_text())
+
+
+@pytest.mark.parametrize("spoil, says", [(lambda g: g * [1, 0, 1], "magnetometer y is constant"),
+                                         (lambda g: np.minimum(g, [0.2, 9, 9]).astype(np.float32), "saturated")])
+def test_px4_bad_magnetometer_columns(tmp_path, capsys, spoil, says):
+    """A constant (zero) axis, a saturated axis: `mag` refuses in one line, `calibrate` keeps the
+    accelerometer with one `warning: magnetometer:` line."""
+    p = _ulog(tmp_path, spoil=spoil)
+    out = tmp_path / "m.json"
+    assert main(["mag", str(p), "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and says in err[0] and not out.exists()
     cal = tmp_path / "cal.json"
     assert main(["calibrate", str(p), "--out", str(cal), "--g", "9.81", "--no-gyro"]) == 0
     lines = [ln for ln in capsys.readouterr().err.splitlines() if "warning: magnetometer:" in ln]

@@ -143,6 +143,8 @@ def _read_session(args):
                mag_topic=args.mag_topic, mag_instance=args.mag_instance)
     if rec.mag is None:
         why = mag_problem(rec) or "no magnetometer in this log (no sensor_msgs/MagneticField topic, sensor_mag or MAG)"
+        for tail in (", or pass --no-mag", "; pass --no-mag", " (or --no-mag)"):  # calibrate's option, not this one's
+            why = why.removesuffix(tail)
         raise MagInputError(f"{path}: {why}")
     return MagTable(rec.t, rec.mag, rec.mag_unit, rec.acc, rec.unit, rec.notes)
 

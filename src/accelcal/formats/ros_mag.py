@@ -2,10 +2,11 @@
 and MCAP bags, bare MCAP files): read with the IMU (:func:`accelcal.formats.ros.read`).
 
 The message (``sensor_msgs/msg/MagneticField.msg``, common_interfaces; ROS 1's is the same):
-``std_msgs/Header header``, ``geometry_msgs/Vector3 magnetic_field`` — "Measurement of the
-Magnetic Field vector at a specific location. If the covariance of the measurement is
-known, it should be filled in. [...] in Tesla" — and ``float64[9]
-magnetic_field_covariance``.  The field is read in tesla and converted to µT (x 1e6) as the
+``std_msgs/Header header``, ``geometry_msgs/Vector3 magnetic_field`` — "x, y, and z
+components of the field vector in Tesla.  If your sensor does not output 3 axes, put NaNs in
+the components not reported." — and ``float64[9] magnetic_field_covariance``.  Messages
+with a NaN are left out by the fit (:func:`accelcal.mag.trust.prepare`); an axis NaN in
+every message cannot be calibrated (one warning note).  The field is read in tesla and converted to µT (x 1e6) as the
 table reader converts a column in T (:data:`accelcal.formats.magnetic.MAG_UNITS`).
 
 Chosen like the IMU topic: the only ``MagneticField`` topic, or ``--mag-topic`` when there are
@@ -90,9 +91,10 @@ def _decode(reader, conns, path, topic, ros1: bool, typestore):
     if not rows:
         raise MagSkipped(f"topic {topic} has no messages")
     field = np.array(rows, dtype=float)
-    if not np.all(np.isfinite(field)):
-        raise LogFormatError(f"{path}: topic {topic}: magnetic_field is not finite in "
-                             f"{int((~np.isfinite(field).all(axis=1)).sum())} messages")
+    silent = [a for k, a in enumerate("xyz") if not np.isfinite(field[:, k]).any()]
+    if silent:  # MagneticField.msg: "If your sensor does not output 3 axes, put NaNs in the components not reported"
+        raise LogFormatError(f"{path}: topic {topic}: magnetic_field.{'/'.join(silent)} is NaN in every message (a "
+                             "sensor that does not report it); a 3-axis calibration needs all three")
     return np.array(heads, np.int64), np.array(logs, np.int64), field, ", ".join(sorted(frames))
 
 
