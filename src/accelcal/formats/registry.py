@@ -184,7 +184,7 @@ FORMATS: dict[str, Format] = {f.name: f for f in (
     Format(name="ardupilot", title="ArduPilot DataFlash .bin log: its IMU messages (after ArduPilot's calibration)",
            reader="accelcal.formats.ardupilot:read", sniff="accelcal.formats.ardupilot:sniff",
            options=LOG_OPTIONS + ("mag_instance",), text=False, extra="ardupilot", requires=("pymavlink",)),
-    Format(name="mat", title="MATLAB .mat (v5; v7.3 needs h5py, not included): a numeric matrix, its columns numbered "
+    Format(name="mat", title="MATLAB .mat (v5; v7.3 with the mat73 extra, h5py): a numeric matrix, its columns numbered "
                              "as a headerless table's (--columns), or a struct of vectors; --variable NAME chooses "
                              "(NAME,NAME,...: runs of one session)",
            reader="accelcal.formats.mat:read_mat", sniff="accelcal.formats.mat:sniff",
