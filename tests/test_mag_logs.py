@@ -73,6 +73,15 @@ def test_place_holds_each_sample_on_its_nearest_row_once():
     assert k.sum() == 1000 and np.abs(out[k, 0] - imu[k]).max() <= 0.002 + 1e-12 and "sharing a row" in note
 
 
+def test_stamps_that_do_not_overlap_the_imus_are_another_time_base(tmp_path, capsys):
+    """PX4's sensor_mag stamped 1000 s after the IMU (a clock of its own): not placed, one line."""
+    p = _ulog(tmp_path, mag_shift_us=1_000_000_000)
+    rec = read(p)
+    assert rec.mag is None and rec.acc is not None
+    warn = [n for n in rec.notes if n.startswith(MAG_WARNING)]
+    assert len(warn) == 1 and "another time base" in warn[0] and "overlap in 0 s" in warn[0]
+
+
 # ---- ROS -------------------------------------------------------------------------------------------------------
 
 def _bag(tmp_path, kind, *, mags=None, latency=0.002, seed=0):
@@ -141,7 +150,7 @@ def test_ros_mag_on_another_time_base_is_refused_or_warned(tmp_path, capsys):
 
 # ---- PX4 -------------------------------------------------------------------------------------------------------
 
-def _ulog(tmp_path, *, mags=(0,), raw=True, vehicle=False, seed=0, spoil=None):
+def _ulog(tmp_path, *, mags=(0,), raw=True, vehicle=False, seed=0, spoil=None, mag_shift_us=0):
     pytest.importorskip("pyulog")
     from tests.log_fixtures import write_ulog
 
@@ -152,7 +161,7 @@ def _ulog(tmp_path, *, mags=(0,), raw=True, vehicle=False, seed=0, spoil=None):
                                     "z": acc[:, 2].astype(np.float32)},
               ("sensor_gyro", 0): {**imu, "x": np.zeros(len(t), np.float32), "y": np.zeros(len(t), np.float32),
                                    "z": np.zeros(len(t), np.float32)}}
-    ms = us[::EVERY] + 3000
+    ms = us[::EVERY] + 3000 + mag_shift_us
     gauss = (m[::EVERY] / 100.0).astype(np.float32)  # SensorMag.msg: x, y, z in gauss
     if spoil is not None:
         gauss = spoil(gauss)
