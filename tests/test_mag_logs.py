@@ -150,7 +150,7 @@ def test_ros_mag_on_another_time_base_is_refused_or_warned(tmp_path, capsys):
 
 # ---- PX4 -------------------------------------------------------------------------------------------------------
 
-def _ulog(tmp_path, *, mags=(0,), raw=True, vehicle=False, seed=0, spoil=None, mag_shift_us=0):
+def _ulog(tmp_path, *, mags=(0,), raw=True, vehicle=False, seed=0, spoil=None, mag_shift_us=0, old=False):
     pytest.importorskip("pyulog")
     from tests.log_fixtures import write_ulog
 
@@ -169,7 +169,8 @@ def _ulog(tmp_path, *, mags=(0,), raw=True, vehicle=False, seed=0, spoil=None, m
         topics[("sensor_mag", i)] = {"timestamp": ms + 200, "timestamp_sample": ms,
                                      "device_id": np.full(len(ms), 396825 + i, np.uint32),
                                      "x": gauss[:, 0] * (1 + i), "y": gauss[:, 1], "z": gauss[:, 2],
-                                     "is_external": np.ones(len(ms), np.uint32)}
+                                     "is_external": np.ones(len(ms), np.uint32),
+                                     **({"x_raw": np.zeros(len(ms), np.uint32)} if old else {})}
     if vehicle:
         topics[("vehicle_magnetometer", 0)] = {"timestamp": ms, **{f"magnetometer_ga[{k}]": gauss[:, k]
                                                                     for k in range(3)}}
@@ -198,6 +199,9 @@ def test_px4_several_compasses_and_calibrated_only_logs(tmp_path, capsys):
     rec = read(p)
     assert rec.mag is None and any(n.startswith(MAG_WARNING) and "--mag-instance" in n for n in rec.notes)
     assert np.nanmax(read(p, mag_instance=1).mag[:, 0]) > np.nanmax(read(p, mag_instance=0).mag[:, 0])
+    (tmp_path / "old").mkdir()
+    old = read(_ulog(tmp_path / "old", old=True))  # PX4 < 1.10: x, y, z calibrated by the driver
+    assert old.mag is None and any(n.startswith(MAG_WARNING) and "x_raw" in n for n in old.notes)
     (tmp_path / "v").mkdir()
     q = _ulog(tmp_path / "v", raw=False, vehicle=True)
     out = tmp_path / "m.json"

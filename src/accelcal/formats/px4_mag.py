@@ -11,10 +11,11 @@ _power * _power_compensation) - _offset))`` from ``CAL_MAGn_*OFF``, ``*SCALE``, 
 external compass's ``CAL_MAGn_ROT`` is not in it (the alignment to the accelerometer
 estimates that rotation).  Read in gauss and converted to µT (x 100).
 
-Not read as raw: ``vehicle_magnetometer`` (``magnetometer_ga``) and old logs'
-``sensor_combined.magnetometer_ga``, which are the output of ``Correct`` (calibrated, and
-in the vehicle's frame): when only they are logged, the magnetometer is not read and one
-``warning: magnetometer:`` note says why.
+Not read as raw: ``sensor_mag`` of PX4 before 1.10 (it has ``x_raw``: the driver applied
+``CAL_MAGn`` offsets and scales to ``x, y, z`` itself, as to ``sensor_accel`` then),
+``vehicle_magnetometer`` (``magnetometer_ga``) and old logs' ``sensor_combined.magnetometer_ga``,
+which are the output of ``Correct`` (calibrated, in the vehicle's frame): the magnetometer
+is then not read and one ``warning: magnetometer:`` note says why.
 
 Instances: one ``multi_id`` per compass (``device_id`` names it), chosen like the IMU's
 (``--mag-instance`` when several have at least :data:`~accelcal.recording.MIN_ROWS`
@@ -59,6 +60,9 @@ def add_magnetometer(rec, path, data: dict, params: dict, time_source: str, inst
     missing = [f for f in ("x", "y", "z") if f not in d.data]
     if missing:
         return skipped(rec, f"sensor_mag instance {inst} lacks {', '.join(missing)}; {_FIX}")
+    if "x_raw" in d.data:  # as sensor_accel before PX4 1.10: the driver applied the calibration itself
+        return skipped(rec, f"in this PX4 version sensor_mag x, y, z are calibrated by the driver (CAL_MAG offsets and "
+                            f"scales applied; x_raw holds the chip's counts before its rotation), not raw; {_FIX}")
     key = "timestamp_sample" if time_source == "header" and "timestamp_sample" in d.data else "timestamp"
     field = np.column_stack([d.data[k].astype(np.float64) for k in ("x", "y", "z")]) * GAUSS_TO_UT
     ok = np.all(np.isfinite(field), axis=1)
