@@ -15,7 +15,9 @@ from pathlib import Path
 import numpy as np
 
 IMU_FORMAT = ("IMU", "QBffffffIIfBBHH", "TimeUS,I,GyrX,GyrY,GyrZ,AccX,AccY,AccZ,EG,EA,T,GH,AH,GHz,AHz")
-_DF_STRUCT = {"Q": "Q", "B": "B", "f": "f", "I": "I", "H": "H", "n": "4s", "N": "16s", "Z": "64s"}
+MAG_FORMAT = ("MAG", "QBhhhhhhhhhBI", "TimeUS,I,MagX,MagY,MagZ,OfsX,OfsY,OfsZ,MOX,MOY,MOZ,Health,S")
+PARM_FORMAT = ("PARM", "QNf", "TimeUS,Name,Value")
+_DF_STRUCT = {"Q": "Q", "B": "B", "f": "f", "I": "I", "H": "H", "h": "h", "n": "4s", "N": "16s", "Z": "64s"}
 
 
 def _df_fmt(type_id: int, name: str, fmt: str, cols: str) -> bytes:
@@ -23,16 +25,27 @@ def _df_fmt(type_id: int, name: str, fmt: str, cols: str) -> bytes:
     return b"\xa3\x95\x80" + struct.pack("<BB4s16s64s", type_id, length, name.encode(), fmt.encode(), cols.encode())
 
 
-def write_dataflash(path, t_us, acc, gyro, *, instances=(0,), temp=25.0, names=("IMU",)) -> Path:
-    """A DataFlash log with one IMU message per sample and instance (``I`` field), or old-style names."""
+def write_dataflash(path, t_us, acc, gyro, *, instances=(0,), temp=25.0, names=("IMU",), mag=None,
+                    params=None) -> Path:
+    """A DataFlash log with one IMU message per sample and instance (``I`` field), or old-style names;
+    ``mag``: rows ``(TimeUS, I, MagX, MagY, MagZ, OfsX, OfsY, OfsZ, MOX, MOY, MOZ, Health, S)`` written
+    as MAG messages among the IMU's by time; ``params``: {name: value} as PARM messages at the start."""
     path = Path(path)
     out = bytearray()
+    for k, (name, fmt, cols) in enumerate((MAG_FORMAT, PARM_FORMAT) if mag is not None or params else ()):
+        out += _df_fmt(0x30 + k, name, fmt, cols)
+    for name, value in (params or {}).items():
+        out += b"\xa3\x95\x31" + struct.pack("<Q16sf", 0, name.encode(), float(value))
+    pending = sorted(mag or [], key=lambda r: r[0], reverse=True)
     ids = {}
     for k, name in enumerate(names):
         ids[name] = 0x40 + k
         out += _df_fmt(ids[name], name, IMU_FORMAT[1], IMU_FORMAT[2])
     layout = "<" + "".join(_DF_STRUCT[c] for c in IMU_FORMAT[1])
+    mag_layout = "<" + "".join(_DF_STRUCT[c] for c in MAG_FORMAT[1])
     for i, tu in enumerate(np.asarray(t_us, dtype=np.int64)):
+        while pending and pending[-1][0] <= tu:
+            out += b"\xa3\x95\x30" + struct.pack(mag_layout, *[int(v) for v in pending.pop()])
         for name in names:
             for inst in instances:
                 out += b"\xa3\x95" + bytes([ids[name]]) + struct.pack(

@@ -24,7 +24,8 @@ _CHUNK = 20000
 
 
 def write_imu_bag(path, t, acc, gyro, *, kind: str = "ros2-sqlite3", topic: str = "/imu", frame_id: str = "imu_link",
-                  latency_s=0.002, extra_topics: dict | None = None, serialize: str = "rosbags") -> Path:
+                  latency_s=0.002, extra_topics: dict | None = None, serialize: str = "rosbags",
+                  mag: dict | None = None) -> Path:
     """Write a ``sensor_msgs/Imu`` topic; returns the path to give to a reader.
 
     Parameters
@@ -44,6 +45,9 @@ def write_imu_bag(path, t, acc, gyro, *, kind: str = "ros2-sqlite3", topic: str 
         sample time (``sensor_msgs/msg/Imu`` for a second IMU topic).
     serialize : {'rosbags', 'fast'}
         See the module docstring.
+    mag : dict, optional
+        ``{topic: (t [s], field [T] (k, 3), latency [s])}``: ``sensor_msgs/MagneticField`` topics,
+        written in record-time order among the IMU's messages.
     """
     require_extra("ros")
     from rosbags.typesys import Stores, get_typestore
@@ -62,13 +66,18 @@ def write_imu_bag(path, t, acc, gyro, *, kind: str = "ros2-sqlite3", topic: str 
     with _writer(target, kind) as w:
         conn = _connection(w, topic, "sensor_msgs/msg/Imu", store, ros1)
         extras = [(_connection(w, name, typ, store, ros1), typ) for name, typ in (extra_topics or {}).items()]
+        pending = _mag_messages(w, store, ros1, mag or {})
         for a in range(0, len(t), _CHUNK):
             b = min(a + _CHUNK, len(t))
             raws = _serialize(store, ros1, stamp_ns[a:b], acc[a:b], gyro[a:b], frame_id, serialize)
             for i, raw in enumerate(raws):
+                while pending and pending[-1][0] <= log_ns[a + i]:
+                    w.write(*pending.pop()[1:])
                 w.write(conn, int(log_ns[a + i]), raw)
                 for c, typ in extras:
                     w.write(c, int(log_ns[a + i]) + 1, _default_message(store, typ, ros1))
+        for _, c, ns, raw in reversed(pending):
+            w.write(c, ns, raw)
     if kind != "mcap":
         return path
     inner = next(target.glob("*.mcap"))
@@ -159,6 +168,26 @@ def _fast(ros1, stamp_ns, acc, gyro, frame_id):
     block[:, 8:12] = nsec.astype("<u4").view(np.uint8).reshape(n, 4)
     block[:, head.size:] = doubles.astype("<f8").view(np.uint8).reshape(n, -1)
     return [row.tobytes() for row in block]
+
+
+def _mag_messages(w, store, ros1: bool, mag: dict) -> list:
+    """``(record ns, connection, record ns, raw)`` of every magnetometer message, latest first (popped in order)."""
+    types = store.types
+    Time, Header = types["builtin_interfaces/msg/Time"], types["std_msgs/msg/Header"]
+    Vec, Mag = types["geometry_msgs/msg/Vector3"], types["sensor_msgs/msg/MagneticField"]
+    ser = store.serialize_ros1 if ros1 else store.serialize_cdr
+    out = []
+    for topic, (tm, field, latency) in mag.items():
+        conn = w.add_connection(topic, "sensor_msgs/msg/MagneticField", typestore=store)
+        for ts, f in zip(np.asarray(tm, float), np.asarray(field, float)):
+            sec, nsec = divmod(int(round(ts * 1e9)), 1_000_000_000)
+            kw = {"seq": 0} if "seq" in Header.__dataclass_fields__ else {}
+            msg = Mag(header=Header(stamp=Time(sec=sec, nanosec=nsec), frame_id="mag_link", **kw),
+                      magnetic_field=Vec(x=float(f[0]), y=float(f[1]), z=float(f[2])),
+                      magnetic_field_covariance=np.zeros(9))
+            ns = int(round((ts + latency) * 1e9))
+            out.append((ns, conn, ns, bytes(ser(msg, "sensor_msgs/msg/MagneticField"))))
+    return sorted(out, key=lambda e: e[0], reverse=True)
 
 
 def _default_message(store, msgtype: str, ros1: bool) -> bytes:

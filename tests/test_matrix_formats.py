@@ -125,8 +125,55 @@ def test_damaged_and_v73_files_are_one_line_exit_2(tmp_path):
         assert code == 2 and not out.exists() and "is damaged or not a .mat" in err and len(err.splitlines()) == 1
     v73 = tmp_path / "v73.mat"
     v73.write_bytes(b"MATLAB 7.3 MAT-file, Platform: GLNXA64, HDF5 schema 1.00 .".ljust(124) + b"\x00\x02IM" + b"\0" * 400)
-    code, err = _cli("calibrate", v73, "--out", out)
-    assert code == 2 and "a MATLAB v7.3 (HDF5) file, which needs h5py" in err and "'-v7'" in err
+    code, err = _cli("calibrate", v73, "--out", out)  # the header, but no HDF5 after it
+    assert code == 2 and "not a readable MATLAB v7.3 file" in err and len(err.splitlines()) == 1
+
+
+def _save_v73(path, variables: dict) -> Path:
+    """A MATLAB v7.3 file as MATLAB writes one: a 512-byte user block holding the MAT header, then
+    HDF5 datasets with MATLAB's dimensions reversed and a MATLAB_class attribute (a struct: a group)."""
+    h5py = pytest.importorskip("h5py")
+    with h5py.File(path, "w", userblock_size=512) as f:
+        for name, value in variables.items():
+            if isinstance(value, dict):
+                g = f.create_group(name)
+                g.attrs["MATLAB_class"] = np.bytes_("struct")
+                for k, v in value.items():
+                    g.create_dataset(k, data=np.atleast_2d(np.asarray(v, float).T))  # (n, k) in MATLAB
+                    g[k].attrs["MATLAB_class"] = np.bytes_("double")
+            elif isinstance(value, str):
+                f.create_dataset(name, data=np.array([[ord(c)] for c in value], np.uint16))
+                f[name].attrs["MATLAB_class"] = np.bytes_("char")
+            else:
+                f.create_dataset(name, data=np.asarray(value, float).T)
+                f[name].attrs["MATLAB_class"] = np.bytes_("double")
+    with open(path, "r+b") as fh:
+        fh.write(b"MATLAB 7.3 MAT-file, Platform: GLNXA64, HDF5 schema 1.00 .".ljust(116) + bytes(8) + b"\x00\x02IM")
+    return path
+
+
+def test_a_v73_file_reads_as_its_v5_twin(tmp_path):
+    """The same variables saved as v5 (scipy) and v7.3 (HDF5 as MATLAB lays it out) give the same recording."""
+    rng = np.random.default_rng(4)
+    acc, t = _acc(rng, 300), np.arange(300) / 100.0
+    v73 = _save_v73(tmp_path / "s73.mat", {"imu": {"t": t, "acc": acc}, "note": "rig 2", "m": np.c_[t, acc]})
+    scipy.io.savemat(tmp_path / "s5.mat", {"imu": {"t": t[:, None], "acc": acc}, "note": "rig 2", "m": np.c_[t, acc]})
+    for variable in ("imu", "m"):
+        a, b = read(v73, variable=variable), read(tmp_path / "s5.mat", variable=variable)
+        np.testing.assert_array_equal(a.acc, b.acc)
+        np.testing.assert_array_equal(a.t, b.t)
+    with pytest.raises(RecordingError) as v73_err:
+        read(v73, variable="note")
+    with pytest.raises(RecordingError) as v5_err:
+        read(tmp_path / "s5.mat", variable="note")
+    assert str(v73_err.value).split(": ", 1)[1] == str(v5_err.value).split(": ", 1)[1]  # both: (1 char)
+
+
+def test_a_v73_file_without_h5py_names_the_extra(tmp_path, monkeypatch):
+    v73 = _save_v73(tmp_path / "s73.mat", {"m": np.c_[np.arange(50) / 10, _acc(np.random.default_rng(5), 50)]})
+    monkeypatch.setitem(__import__("sys").modules, "h5py", None)
+    code, err = _cli("calibrate", v73, "--out", tmp_path / "cal.json")
+    assert code == 2 and "accelcal[mat73]" in err and "'-v7'" in err and len(err.splitlines()) == 1
 
 
 def test_a_missing_rdata_extra_is_one_line(tmp_path, monkeypatch):

@@ -25,14 +25,14 @@ PACKAGES = ("accelcal", "accelcal_repro")
 #: Third-party packages the core may import anywhere, and where matplotlib is allowed.
 CORE_DEPENDENCIES = {"numpy", "scipy", "pandas", "casadi"}
 PLOTTING_MODULES = {"plotting.py", "discrepancy/figures.py", "noise/figures.py"}
-#: Optional extras (ros, px4, ardupilot, rdata, geomag), each imported lazily by its reader (the IGRF by
+#: Optional extras (ros, px4, ardupilot, rdata, mat73, geomag), each imported lazily by its reader (the IGRF by
 #: the magnetometer's field module) only.
 EXTRA_MODULES = {"formats/ros.py": {"rosbags", "ruamel"},
                  "formats/ros_write.py": {"rosbags"},
                  # rosbags' own dependencies: its YAML, and its MCAP chunk decompressors
                  "formats/ros_recover.py": {"rosbags", "lz4", "backports", "compression"},
                  "formats/px4.py": {"pyulog"}, "formats/ardupilot.py": {"pymavlink"}, "formats/rda.py": {"rdata"},
-                 "mag/field.py": {"ppigrf"}}
+                 "formats/mat.py": {"h5py"}, "mag/field.py": {"ppigrf"}}
 #: numba (the optional ``fast`` extra) is imported by the kernel loader only, on first use.
 KERNEL_LOADER = "kernels.py"
 

@@ -124,6 +124,10 @@ def _reader_options(p) -> None:
     r.add_argument("--topic", metavar="NAME", help="logs: the IMU topic (ROS), sensor_accel or sensor_combined "
                                                    "(PX4), the IMU message (DataFlash); default the only one")
     r.add_argument("--instance", type=int, metavar="I", help="logs: the sensor instance (PX4 multi_id, DataFlash I)")
+    r.add_argument("--mag-topic", metavar="NAME", help="ROS logs: the sensor_msgs/MagneticField topic (default the only "
+                                                       "one)")
+    r.add_argument("--mag-instance", type=int, metavar="I", help="PX4 and DataFlash logs: the magnetometer instance "
+                                                               "(sensor_mag multi_id, MAG I) when several are logged")
     r.add_argument("--time-source", choices=TIME_SOURCES, help="logs: the sensor's stamps (header, the default) or "
                                                                "the times the log recorded the messages (log)")
 
@@ -168,7 +172,14 @@ def _read(args, *, accelerometer: bool = True):
                    time_unit=args.time_unit, rate=args.rate, intervals=args.intervals,
                    gyro=None if args.no_gyro else args.gyro, gyro_unit=args.gyro_unit, topic=args.topic,
                    instance=args.instance, time_source=args.time_source, clock=args.clock, variable=args.variable,
-                   mag_unit=args.mag_unit)
+                   mag_unit=args.mag_unit, mag_topic=getattr(args, "mag_topic", None),
+                   mag_instance=getattr(args, "mag_instance", None))
+    if getattr(args, "no_mag", False):  # a log's magnetometer left out: no warning about it either
+        from dataclasses import replace
+
+        from ..formats.mag_logs import MAG_WARNING
+
+        rec = replace(rec, notes=tuple(n for n in rec.notes if not n.startswith(MAG_WARNING)))
     if accelerometer and rec.acc is None:
         raise AccelcalError(f"{args.recording}: no accelerometer in this recording (a gyro alone), which "
                             f"'accelcal {args.command}' needs; name its columns with --columns ax=..,ay=..,az=..")

@@ -75,12 +75,21 @@ def add_parser(sub, epilog: str) -> None:
                                    "the accelerometer (rests, or samples whose specific force is close to g) and "
                                    "estimate the dip. Trust lines: coverage, chi2/dof, dip consistency.",
                        formatter_class=argparse.RawDescriptionHelpFormatter, epilog=epilog)
-    c.add_argument("recording", type=Path, help="a table with mx, my, mz (and ax, ay, az) columns")
+    c.add_argument("recording", type=Path, help="a table with mx, my, mz (and ax, ay, az) columns, or a log: a ROS "
+                                                "bag or MCAP file with a sensor_msgs/MagneticField topic, a PX4 ULog "
+                                                "with sensor_mag, an ArduPilot DataFlash log with MAG")
     c.add_argument("--out", type=Path, required=True, help="magnetometer calibration JSON (written only on success)")
     c.add_argument("--columns", metavar="ROLE=COL,...", help="which column is which (mx=..,my=..,mz=..,ax=..)")
     c.add_argument("--mag-unit", metavar="UNIT", help="magnetometer unit: uT, T, mT, nT, gauss, mG or counts")
     c.add_argument("--unit", metavar="UNIT", help="acceleration unit: m/s2, g, mg or counts")
     c.add_argument("--rate", type=_positive, metavar="HZ", help="sampling rate (files without time)")
+    lg = c.add_argument_group("logs (ROS, PX4, ArduPilot): which sensors, which clock")
+    lg.add_argument("--topic", metavar="NAME", help="the IMU topic or message (default the only one)")
+    lg.add_argument("--instance", type=int, metavar="I", help="the IMU instance (PX4 multi_id, DataFlash I)")
+    lg.add_argument("--mag-topic", metavar="NAME", help="ROS: the sensor_msgs/MagneticField topic (default the only one)")
+    lg.add_argument("--mag-instance", type=int, metavar="I", help="PX4 sensor_mag multi_id, DataFlash MAG I")
+    lg.add_argument("--time-source", choices=("header", "log"), help="the sensors' stamps (header, the default) or the "
+                                                                    "times the log recorded the messages (log)")
     c.add_argument("--g-tolerance", type=_positive, default=0.02, metavar="REL",
                    help="without rests: samples whose |specific force| is within REL of its median align the "
                         "magnetometer (default 0.02)")
@@ -91,12 +100,10 @@ def add_parser(sub, epilog: str) -> None:
 
 
 def _mag(args) -> int:
-    from ..formats.mag_table import read_mag_table
     from ..mag.calibrate import calibrate_magnetometer
 
     field = field_from_args(args)
-    tab = read_mag_table(args.recording, columns=args.columns, mag_unit=args.mag_unit, unit=args.unit,
-                         rate=args.rate)
+    tab = _read_session(args)
     acc_cal, poses, how = _accelerometer(tab, args)
     mcal = calibrate_magnetometer(tab.mag, raw_unit=tab.mag_unit, acc_cal=acc_cal, poses=poses, acc=tab.acc,
                                   estimator=args.mag_method, field=field, source=str(args.recording),
@@ -116,6 +123,30 @@ def _mag(args) -> int:
     print(mcal.summary(), file=sys.stderr)
     print(f"written to {args.out}" + "".join(f", {p}" for p, _ in outputs), file=sys.stderr)
     return 0
+
+
+LOG_FORMATS = ("ros", "px4", "ardupilot")
+
+
+def _read_session(args):
+    """The magnetometer (and accelerometer) of a table, or of a log's IMU and magnetometer (one
+    line naming the cause and the option when the log's magnetometer cannot be read)."""
+    from ..formats import detect_format, read
+    from ..formats.mag_logs import mag_problem
+    from ..formats.mag_table import MagTable, read_mag_table
+    from ..mag.errors import MagInputError
+
+    path = args.recording
+    if not path.exists() or detect_format(path) not in LOG_FORMATS:
+        return read_mag_table(path, columns=args.columns, mag_unit=args.mag_unit, unit=args.unit, rate=args.rate)
+    rec = read(path, topic=args.topic, instance=args.instance, time_source=args.time_source,
+               mag_topic=args.mag_topic, mag_instance=args.mag_instance)
+    if rec.mag is None:
+        why = mag_problem(rec) or "no magnetometer in this log (no sensor_msgs/MagneticField topic, sensor_mag or MAG)"
+        for tail in (", or pass --no-mag", "; pass --no-mag", " (or --no-mag)"):  # calibrate's option, not this one's
+            why = why.removesuffix(tail)
+        raise MagInputError(f"{path}: {why}")
+    return MagTable(rec.t, rec.mag, rec.mag_unit, rec.acc, rec.unit, rec.notes)
 
 
 def _plain(x):

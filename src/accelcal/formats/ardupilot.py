@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import LogFormatError
+from .ardupilot_mag import add_magnetometer
 from .logs import (ColumnBuffer, Progress, check_finite, check_rows, check_time_source, choose, make_recording,
                       microseconds, require_extra, stamps_to_time)
 
@@ -57,7 +58,7 @@ def sniff(path, head: bytes) -> bool:
 
 
 def read(path, *, topic: str | None = None, time_source: str = "header", instance: int | None = None,
-         progress=None):
+         progress=None, mag_instance: int | None = None):
     """Read one IMU of an ArduPilot DataFlash log.
 
     Parameters
@@ -69,11 +70,14 @@ def read(path, *, topic: str | None = None, time_source: str = "header", instanc
     time_source : {'header', 'log'}
         Both are ``TimeUS`` (the message's one stamp).
     progress : None, False or callable
+    mag_instance : int, optional
+        The compass (``MAG``'s ``I``) when several are logged (:mod:`.ardupilot_mag`).
 
     Returns
     -------
     Recording
-        ``acc`` [m/s²], ``gyro`` [rad/s], ``temp`` [°C].
+        ``acc`` [m/s²], ``gyro`` [rad/s], ``temp`` [°C], ``mag`` [µT] (ArduPilot's
+        correction undone) where ``MAG`` is logged.
     """
     check_time_source(time_source)
     path = Path(path)
@@ -111,8 +115,8 @@ def read(path, *, topic: str | None = None, time_source: str = "header", instanc
     cands = {str(i): f"{int(np.sum(inst == i))} samples" for i in present}
     chosen = int(choose(path, cands, None if instance is None else str(instance), cands,
                         kind=f"{name} instance", option="--instance"))
-    rows = rows[inst == chosen]
-    return _recording(path, name, chosen, rows, time_source)
+    rec = _recording(path, name, chosen, rows[inst == chosen], time_source)
+    return add_magnetometer(rec, log, path, mag_instance)
 
 
 @contextlib.contextmanager

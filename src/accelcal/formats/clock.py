@@ -167,7 +167,7 @@ def fit_clock(stamps, k) -> tuple[np.ndarray, float, float, float]:
     if every > 1:
         h, a = _polyfit(x[keep], s[keep], 1, mid)
     times, drift = a + h * x, 0.0
-    if keep.sum() > 10 and kc[-1] > 0:
+    if keep.sum() > 10 and kc[-1] > 0 and np.ptp(x[keep]) > 0.5 * mid:  # a curvature needs the stamps' span
         c = _polyfit(x[keep], s[keep], 2, mid)
         r = (s - np.polyval(c, x))[::every][keep[::every]]
         s2 = 1.4826 * float(np.median(np.abs(r - np.median(r))))

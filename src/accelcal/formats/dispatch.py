@@ -28,7 +28,8 @@ from pathlib import Path
 from ..errors import RecordingError
 from ..units import acceleration_unit, angular_rate_unit
 from ..units import time_unit as time_unit_name
-from .registry import (BINARY_HEAD_BYTES, FALLBACK, FORMATS, LOG_OPTIONS, OPTION_FLAGS, TEXT_HEAD_CHARS, TIME_SOURCES,
+from .registry import (BINARY_HEAD_BYTES, FALLBACK, FORMATS, LOG_OPTIONS, MAG_LOG_OPTIONS, OPTION_FLAGS,
+                       TEXT_HEAD_CHARS, TIME_SOURCES,
                        Format, format_named)
 from .text import load_text
 
@@ -41,7 +42,7 @@ def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit
          time_unit: str | None = None, rate: float | None = None, intervals=None, gyro=None,
          gyro_unit: str | None = None, topic: str | None = None, instance: int | None = None,
          time_source: str | None = None, clock: str | None = None, variable: str | None = None,
-         mag_unit: str | None = None):
+         mag_unit: str | None = None, mag_topic: str | None = None, mag_instance: int | None = None):
     """Read an accelerometer recording (and its gyroscope, when the file or ``gyro`` has one).
 
     Parameters
@@ -77,7 +78,7 @@ def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit
         it (with a note).
     mag_unit : str, optional
         Unit of the magnetometer columns of a table (``uT``, ``T``, ``gauss``, ``mG``,
-        ``counts``...); overrides the header (:mod:`accelcal.formats.magnetic`).
+        ``counts``...); overrides the header.  ``mag_topic`` / ``mag_instance``: a log's (:mod:`.mag_logs`).
     topic : str, optional
         Logs: the IMU topic (ROS), ``sensor_accel`` or ``sensor_combined`` (PX4), the IMU
         message (DataFlash); default the only one (several: a one-line error listing them).
@@ -107,7 +108,7 @@ def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit
     path = Path(path)
     options = {"columns": columns, "unit": unit, "time_unit": time_unit, "rate": rate, "gyro_unit": gyro_unit,
                "mag_unit": mag_unit, "topic": topic, "instance": instance, "time_source": time_source, "clock": clock,
-               "variable": variable}
+               "variable": variable, "mag_topic": mag_topic, "mag_instance": mag_instance}
     if strict:
         return checked_recording(_read_strict(path, format, {**options, "intervals": intervals, "gyro": gyro}))
     fmt = None if format == "auto" else format_named(format)
@@ -215,7 +216,7 @@ def _sniff_text(path: Path, text: str) -> Format:
 def _read_format(path: Path, fmt: Format, text: str | None, options: dict, notes: list[str]):
     """Run ``fmt``'s reader with the options it takes; apply the others (see
     :data:`~accelcal.formats.registry.READING_OPTIONS`); notes on the file go to ``notes``."""
-    for option in ("columns", "variable", *LOG_OPTIONS):
+    for option in ("columns", "variable", *LOG_OPTIONS, *MAG_LOG_OPTIONS):
         if options[option] is not None and option not in fmt.options:
             takers = [f.name for f in FORMATS.values() if option in f.options]
             fix = {"columns": f"pass --format {FALLBACK} to read it as a plain table",

@@ -6,9 +6,11 @@ columns numbered: :mod:`.variables`); a struct whose fields are vectors and n x 
 triads of one length is read as a table whose header is the field names (a triad
 ``acc`` gives ``acc_x, acc_y, acc_z``); column vectors of one length saved side by side
 (MATLAB's import of a spreadsheet: ``t, AccX, AccY, AccZ``) are the variable
-:data:`VECTORS`, a table headed by their names.  Version 7.3 files are HDF5, which
-needs h5py (not in accelcal's environment): they are refused in one line saying how to
-save a version 5 file instead.  IMU-TK's ``.mat`` files are ASCII tables despite the
+:data:`VECTORS`, a table headed by their names.  Version 7.3 files (``save(FILE, '-v7.3')``,
+MATLAB's only form above 2 GB) are HDF5, read through h5py (the ``mat73`` extra) into the
+same variables: each dataset's ``MATLAB_class`` attribute says what it is (numeric,
+``char``, ``logical``, ``cell``; a group is a ``struct``), and its dimensions are MATLAB's
+reversed (HDF5 is row-major, MATLAB column-major), so each array is transposed back.  IMU-TK's ``.mat`` files are ASCII tables despite the
 name: the sniff goes by the MAT-file header, so they stay tables.
 """
 
@@ -37,16 +39,7 @@ def read_mat(path, *, variable: str | None = None, columns=None, unit=None, time
     (several, comma-separated: runs of one session)."""
     with open(path, "rb") as fh:
         head = fh.read(128)
-    if VERSIONS.get(head[124:128]) == 7.3:
-        raise RecordingError(f"{path}: a MATLAB v7.3 (HDF5) file, which needs h5py (not installed with accelcal): "
-                             "save it as version 7 in MATLAB, save(FILE, VARS, '-v7'), and read that")
-    import scipy.io
-
-    try:
-        content = scipy.io.loadmat(path, squeeze_me=False, chars_as_strings=True)
-    except Exception as e:  # a damaged file can fail anywhere inside the parser
-        raise RecordingError(f"{path}: not a readable MATLAB v5 file ({type(e).__name__}: {str(e)[:80]}): the file "
-                             "is damaged or not a .mat; copy or save it again") from None
+    content = _load_v73(path) if VERSIONS.get(head[124:128]) == 7.3 else _load_v5(path)
     found, matrices = {}, {}
     for name, value in content.items():
         if name.startswith("__"):
@@ -64,6 +57,51 @@ def read_mat(path, *, variable: str | None = None, columns=None, unit=None, time
     chosen = choose(path, found, variable, "MATLAB file")
     return read_variables(path, [matrices[n] for n in chosen], columns=columns, unit=unit, time_unit=time_unit,
                           rate=rate, gyro_unit=gyro_unit)
+
+
+def _load_v5(path) -> dict:
+    import scipy.io  # ~0.3 s: only when a .mat is read
+
+    try:
+        return scipy.io.loadmat(path, squeeze_me=False, chars_as_strings=True)
+    except Exception as e:  # a damaged file can fail anywhere inside the parser
+        raise RecordingError(f"{path}: not a readable MATLAB v5 file ({type(e).__name__}: {str(e)[:80]}): the file "
+                             "is damaged or not a .mat; copy or save it again") from None
+
+
+def _load_v73(path) -> dict:
+    """``{name: array}`` of a v7.3 (HDF5) file, shaped and typed as :func:`scipy.io.loadmat` gives a v5 file's."""
+    try:
+        import h5py  # the mat73 extra
+    except ImportError:
+        raise RecordingError(f"{path}: a MATLAB v7.3 (HDF5) file needs h5py: pip install 'accelcal[mat73]', or save "
+                             "it as version 7 in MATLAB, save(FILE, VARS, '-v7'), and read that") from None
+    try:
+        with h5py.File(path, "r") as f:
+            return {name: _h5_value(f[name], h5py) for name in f if not name.startswith("#")}
+    except Exception as e:  # h5py raises OSError, KeyError, ValueError... on a damaged file
+        raise RecordingError(f"{path}: not a readable MATLAB v7.3 file ({type(e).__name__}: {str(e)[:80]}): the file "
+                             "is damaged or not a .mat; copy or save it again") from None
+
+
+def _h5_value(obj, h5py) -> np.ndarray:
+    """One v7.3 variable (or struct field) as :func:`scipy.io.loadmat` would give it."""
+    cls = obj.attrs.get("MATLAB_class", b"")
+    cls = cls.decode() if isinstance(cls, bytes) else str(cls)
+    if isinstance(obj, h5py.Group):
+        fields = [k for k in obj if isinstance(obj[k], h5py.Dataset)]
+        out = np.empty((1, 1), dtype=[(k, object) for k in fields] or [("empty", object)])
+        for k in fields:
+            out[0, 0][k] = _h5_value(obj[k], h5py)
+        return out
+    if obj.attrs.get("MATLAB_empty", 0):
+        return np.zeros((0, 0))
+    if cls == "char":
+        return np.array(["".join(map(chr, np.asarray(obj[()]).T.reshape(-1)))])
+    if cls in ("cell", "function_handle") or obj.dtype.kind in "OV":  # references, complex pairs: described only
+        return np.empty(obj.shape[::-1], dtype=complex if obj.dtype.names == ("real", "imag") else object)
+    a = np.asarray(obj[()]).T  # MATLAB's dimensions, reversed by HDF5
+    return a.astype(bool) if cls == "logical" else a
 
 
 def _variable(name: str, value) -> Variable | str:

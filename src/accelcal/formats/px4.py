@@ -38,6 +38,7 @@ from ..errors import LogFormatError, TopicError
 from ..recording import MIN_ROWS
 from .logs import (Progress, check_finite, check_rows, check_time_source, choose, clock_note, make_recording,
                       microseconds, require_extra, stamps_to_time)
+from .px4_mag import MAG_TOPICS, add_magnetometer
 from .sync import estimate_offset, shift_gyro
 
 ULOG_MAGIC = b"ULog\x01\x12\x35"
@@ -55,8 +56,8 @@ def sniff(path, head: bytes) -> bool:
 
 
 def read(path, *, topic: str | None = None, time_source: str = "header", instance: int | None = None,
-         progress=None):
-    """Read the accelerometer and gyroscope of a PX4 ULog file.
+         progress=None, mag_instance: int | None = None):
+    """Read the accelerometer, gyroscope and magnetometer of a PX4 ULog file.
 
     Parameters
     ----------
@@ -71,12 +72,14 @@ def read(path, *, topic: str | None = None, time_source: str = "header", instanc
         The raw sensor instance (``multi_id``); needed when several are logged.
     progress : None, False or callable
         See :class:`accelcal.formats.logs.Progress`.
+    mag_instance : int, optional
+        The ``sensor_mag`` instance; needed when several are logged (:mod:`.px4_mag`).
 
     Returns
     -------
     Recording
         ``acc`` [m/s²], ``gyro`` [rad/s] (None when not logged), ``temp`` [°C] from the
-        raw accelerometer where logged.
+        raw accelerometer where logged, ``mag`` [µT] from ``sensor_mag`` where logged.
     """
     check_time_source(time_source)
     path = Path(path)
@@ -87,6 +90,17 @@ def read(path, *, topic: str | None = None, time_source: str = "header", instanc
     data = {(d.name, d.multi_id): d for d in ulog.data_list}
     for d in data.values():
         _require(path, d, ("timestamp",))
+    notes = []
+    topic, inst = _choose(path, data, topic, instance, notes)
+    if topic == "sensor_combined":
+        rec = _combined(path, data[("sensor_combined", 0)], time_source, notes)
+    else:
+        rec = _raw(path, data, inst, ulog, time_source, notes)
+    return add_magnetometer(rec, path, data, ulog.initial_parameters, time_source, mag_instance)
+
+
+def _choose(path, data: dict, topic: str | None, instance: int | None, notes: list) -> tuple[str, int | None]:
+    """The IMU topic (the raw sensor_accel when logged with enough samples) and its instance."""
     raw = {i: len(d.data["timestamp"]) for (name, i), d in data.items() if name == "sensor_accel"}
     usable = {i: n for i, n in raw.items() if n >= MIN_ROWS}
     everything = {name: f"{len(d.data['timestamp'])} samples" for (name, _), d in data.items()}
@@ -95,7 +109,6 @@ def read(path, *, topic: str | None = None, time_source: str = "header", instanc
     if topic not in ("sensor_accel", "sensor_combined"):
         raise TopicError(f"{path}: --topic {topic}: a PX4 log's IMU is read from sensor_accel (raw, with sensor_gyro) "
                          "or sensor_combined (calibrated by the autopilot)")
-    notes = []
     if topic == "sensor_combined":
         if ("sensor_combined", 0) not in data:
             raise TopicError(f"{path}: no sensor_combined and no raw sensor_accel with at least {MIN_ROWS} samples in "
@@ -105,16 +118,15 @@ def read(path, *, topic: str | None = None, time_source: str = "header", instanc
                          "it slowly): reading sensor_combined instead")
         if instance not in (None, 0):
             raise TopicError(f"{path}: sensor_combined has one instance; --instance chooses a raw sensor_accel")
-        return _combined(path, data[("sensor_combined", 0)], time_source, notes)
+        return topic, None
     if not usable:
         raise TopicError(f"{path}: no sensor_accel with at least {MIN_ROWS} samples (logged: "
                          + (", ".join(f"instance {i}: {n}" for i, n in raw.items()) or "none")
                          + "); read sensor_combined (--topic sensor_combined), calibrated by the autopilot")
     rates = {i: _rate(data[("sensor_accel", i)]) for i in usable}
     cands = {str(i): f"{n} samples at {rates[i]:.4g} Hz" for i, n in usable.items()}
-    inst = int(choose(path, cands, None if instance is None else str(instance), cands,
-                      kind="sensor_accel instance", option="--instance"))
-    return _raw(path, data, inst, ulog, time_source, notes)
+    return topic, int(choose(path, cands, None if instance is None else str(instance), cands,
+                             kind="sensor_accel instance", option="--instance"))
 
 
 def _parse(pyulog, path: Path, progress):
@@ -126,7 +138,7 @@ def _parse(pyulog, path: Path, progress):
     chatter = io.StringIO()
     try:
         with contextlib.redirect_stdout(chatter):  # pyulog prints its warnings; they become our one line
-            ulog = pyulog.ULog(str(path), message_name_filter_list=list(TOPICS))
+            ulog = pyulog.ULog(str(path), message_name_filter_list=[*TOPICS, *MAG_TOPICS])
     except Exception as e:  # pyulog raises ULogException, struct.error, IndexError... on damaged files
         why = " ".join(str(e).split())[:120] or type(e).__name__
         raise LogFormatError(f"{path}: not a readable ULog file ({why}); the log is damaged or truncated in its "

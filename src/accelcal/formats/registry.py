@@ -39,13 +39,17 @@ VARIABLE_OPTIONS = ("variable",)
 #: The options of logs, which hold several sensors and two clocks: the IMU topic, the
 #: sensor instance, and whose time stamps (``'header'``: the sensor's, ``'log'``: the log's).
 LOG_OPTIONS = ("topic", "instance", "time_source")
+#: The options of a log's magnetometer: its topic (ROS ``sensor_msgs/MagneticField``) or its instance
+#: (PX4 ``sensor_mag`` multi_id, DataFlash ``MAG`` ``I``) when several are logged.
+MAG_LOG_OPTIONS = ("mag_topic", "mag_instance")
 #: The values of ``time_source``.
 TIME_SOURCES = ("header", "log")
-READING_OPTIONS = TABLE_OPTIONS + VARIABLE_OPTIONS + LOG_OPTIONS
+READING_OPTIONS = TABLE_OPTIONS + VARIABLE_OPTIONS + LOG_OPTIONS + MAG_LOG_OPTIONS
 #: The command-line option of each reading option, for messages.
 OPTION_FLAGS = {"columns": "--columns", "unit": "--unit", "time_unit": "--time-unit", "rate": "--rate",
                 "gyro_unit": "--gyro-unit", "mag_unit": "--mag-unit", "topic": "--topic", "instance": "--instance",
-                "time_source": "--time-source", "clock": "--clock", "variable": "--variable"}
+                "time_source": "--time-source", "clock": "--clock", "variable": "--variable",
+                "mag_topic": "--mag-topic", "mag_instance": "--mag-instance"}
 #: Characters of the decoded text that text formats are sniffed on.
 TEXT_HEAD_CHARS = 8192
 #: Bytes of the file that binary formats are sniffed on.
@@ -169,16 +173,18 @@ FORMATS: dict[str, Format] = {f.name: f for f in (
            reader="accelcal.formats.imutk:read_imutk_ascii", options=("clock",)),
     Format(name="ros", title="ROS 1 bag, ROS 2 bag (its folder, metadata.yaml, .db3 or .mcap) or bare .mcap file: "
                              "a sensor_msgs/Imu topic, accelerometer and gyroscope",
-           reader="accelcal.formats.ros:read", sniff="accelcal.formats.ros:sniff", options=("topic", "time_source"),
+           reader="accelcal.formats.ros:read", sniff="accelcal.formats.ros:sniff",
+           options=("topic", "time_source", "mag_topic"),
            text=False, extra="ros", requires=("rosbags",)),
     Format(name="px4", title="PX4 ULog: the raw sensor_accel/sensor_gyro when logged, else sensor_combined (already "
                              "calibrated by the autopilot)",
-           reader="accelcal.formats.px4:read", sniff="accelcal.formats.px4:sniff", options=LOG_OPTIONS, text=False,
+           reader="accelcal.formats.px4:read", sniff="accelcal.formats.px4:sniff",
+           options=LOG_OPTIONS + ("mag_instance",), text=False,
            extra="px4", requires=("pyulog",)),
     Format(name="ardupilot", title="ArduPilot DataFlash .bin log: its IMU messages (after ArduPilot's calibration)",
-           reader="accelcal.formats.ardupilot:read", sniff="accelcal.formats.ardupilot:sniff", options=LOG_OPTIONS,
-           text=False, extra="ardupilot", requires=("pymavlink",)),
-    Format(name="mat", title="MATLAB .mat (v5; v7.3 needs h5py, not included): a numeric matrix, its columns numbered "
+           reader="accelcal.formats.ardupilot:read", sniff="accelcal.formats.ardupilot:sniff",
+           options=LOG_OPTIONS + ("mag_instance",), text=False, extra="ardupilot", requires=("pymavlink",)),
+    Format(name="mat", title="MATLAB .mat (v5; v7.3 with the mat73 extra, h5py): a numeric matrix, its columns numbered "
                              "as a headerless table's (--columns), or a struct of vectors; --variable NAME chooses "
                              "(NAME,NAME,...: runs of one session)",
            reader="accelcal.formats.mat:read_mat", sniff="accelcal.formats.mat:sniff",
@@ -221,5 +227,6 @@ def formats_help(width: int = 80) -> str:
     return "\n".join(lines)
 
 
-__all__ = ["BINARY_HEAD_BYTES", "FALLBACK", "FORMATS", "Format", "LOG_OPTIONS", "OPTION_FLAGS", "READING_OPTIONS",
+__all__ = ["BINARY_HEAD_BYTES", "FALLBACK", "FORMATS", "Format", "LOG_OPTIONS", "MAG_LOG_OPTIONS", "OPTION_FLAGS",
+           "READING_OPTIONS",
            "TABLE_OPTIONS", "VARIABLE_OPTIONS", "TEXT_HEAD_CHARS", "TIME_SOURCES", "format_named", "formats_help"]

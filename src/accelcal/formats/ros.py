@@ -41,6 +41,7 @@ from . import ros_recover
 from .clock import looks_like_counter
 from .logs import (ColumnBuffer, Progress, check_finite, check_rows, check_time_source, choose, clock_note,
                       make_recording, require_extra, stamps_to_time)
+from .ros_mag import add_magnetometer
 
 IMU_TYPE = "sensor_msgs/msg/Imu"
 ROS1_MAGIC = b"#ROSBAG V2.0\n"
@@ -65,7 +66,7 @@ def sniff(path, head: bytes) -> bool:
         (head.startswith(SQLITE_MAGIC) and path.suffix == ".db3")
 
 
-def read(path, *, topic: str | None = None, time_source: str = "header", progress=None):
+def read(path, *, topic: str | None = None, time_source: str = "header", progress=None, mag_topic: str | None = None):
     """Read the ``sensor_msgs/Imu`` topic of a ROS bag or MCAP file.
 
     Parameters
@@ -80,18 +81,21 @@ def read(path, *, topic: str | None = None, time_source: str = "header", progres
         ``header.stamp`` (default) or the bag's record time.
     progress : None, False or callable
         Progress on stderr after 2 s (None), silent (False), or ``f(done, total)``.
+    mag_topic : str, optional
+        The ``sensor_msgs/MagneticField`` topic; default the only one (:mod:`.ros_mag`).
 
     Returns
     -------
     Recording
-        ``acc`` [m/s²], ``gyro`` [rad/s], ``t`` [s] from the first sample, ``notes``.
+        ``acc`` [m/s²], ``gyro`` [rad/s], ``t`` [s] from the first sample, ``mag`` [µT] on the
+        rows nearest its samples (NaN between them), ``notes``.
 
     Raises
     ------
     MissingExtraError, LogFormatError, TopicError
         One line naming the cause and the fix.
     """
-    return read_topic(path, topic=topic, time_source=time_source, progress=progress).recording
+    return read_topic(path, topic=topic, time_source=time_source, progress=progress, mag_topic=mag_topic).recording
 
 
 class TopicRead(NamedTuple):
@@ -105,16 +109,17 @@ class TopicRead(NamedTuple):
     recovered: Path | None = None  # the damaged storage file read up to its damage (formats.ros_recover)
 
 
-def read_topic(path, *, topic: str | None = None, time_source: str = "header", progress=None) -> TopicRead:
+def read_topic(path, *, topic: str | None = None, time_source: str = "header", progress=None,
+               mag_topic: str | None = False) -> TopicRead:
     """:func:`read`, with the bag's order of the messages (the recording's rows are sorted by
-    header stamp when the bag recorded some out of order)."""
+    header stamp when the bag recorded some out of order); ``mag_topic=False``: no magnetometer."""
     check_time_source(time_source)
     path = Path(path)
     require_extra("ros", path)
     bag_path, kind = _locate(path)
     try:
         with _open(bag_path, kind) as reader:
-            return _read_open(reader, path, bag_path, kind, topic, time_source, progress)
+            return _read_open(reader, path, bag_path, kind, topic, time_source, progress, mag_topic)
     except DamagedBagError as damaged:
         storage = storage_file(bag_path, kind)
         if storage is None:
@@ -125,7 +130,7 @@ def read_topic(path, *, topic: str | None = None, time_source: str = "header", p
             why = str(e).split(": ", 1)[-1] if isinstance(e, LogFormatError) else f"recovery failed: {_why(e)}"
             raise LogFormatError(f"{damaged}; {why}") from None
         try:
-            got = _read_open(reader, path, bag_path, kind, topic, time_source, progress)
+            got = _read_open(reader, path, bag_path, kind, topic, time_source, progress, mag_topic)
         except RecordingError as e:  # nothing usable before the damage
             raise LogFormatError(f"{damaged}; read up to the damage: {str(e).split(': ', 1)[-1]}") from None
         finally:
@@ -135,7 +140,7 @@ def read_topic(path, *, topic: str | None = None, time_source: str = "header", p
         return got._replace(recording=rec, recovered=storage)
 
 
-def _read_open(reader, path, bag_path, kind, topic, time_source, progress) -> TopicRead:
+def _read_open(reader, path, bag_path, kind, topic, time_source, progress, mag_topic) -> TopicRead:
     """The topic of an open reader (a rosbags reader, or the intact part of a damaged file)."""
     from rosbags.typesys import Stores, get_typestore
 
@@ -150,7 +155,17 @@ def _read_open(reader, path, bag_path, kind, topic, time_source, progress) -> To
     count = sum(max(int(c.msgcount or 0), 0) for c in mine)
     decoded = _stream(reader, mine, path, name, kind, count, ros1, typestore, progress)
     rec, order = _recording(path, name, kind, decoded, time_source)
+    if mag_topic is not False:
+        rec = add_magnetometer(rec, reader, conns, path, kind, ros1, typestore, mag_topic, time_source,
+                               decoded["stamps"][:, :2][_rows(decoded, time_source)])
     return TopicRead(rec, order, name, kind, decoded["stamps"][:, 0].copy())
+
+
+def _rows(decoded, time_source: str) -> np.ndarray:
+    """The bag's message indices in the recording's row order (sorted by header stamp, as :func:`_recording`)."""
+    head = decoded["stamps"][:, 0]
+    late = time_source == "header" and np.any(np.diff(head) < 0)
+    return np.argsort(head, kind="stable") if late else np.arange(len(head))
 
 
 def _locate(path: Path) -> tuple[Path, str]:
