@@ -183,6 +183,12 @@ def _residuals(theta, m, cov, bias_correct: bool):
     return f / w, J / w[:, None]
 
 
+def sampson_residuals(theta, samples: FieldSamples, bias_correct: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """The residuals ``(n,)`` the fits minimise and their Jacobian ``(n, 9)`` in ``theta``
+    (:data:`accelcal.mag.model.PARAMETERS`), in noise units when ``samples.noise_cov`` is known."""
+    return _residuals(np.asarray(theta, float), samples.m, samples.noise_cov, bias_correct)
+
+
 def information(theta, samples: FieldSamples) -> np.ndarray:
     """Fisher information ``JᵀJ`` of the nine parameters at ``theta`` (noise units;
     with unknown noise, per unit variance)."""
@@ -278,4 +284,4 @@ def fit_hard_iron(samples: FieldSamples) -> EllipsoidFit:
 
 
 __all__ = ["EllipsoidFit", "FieldSamples", "MIN_SAMPLES", "crlb", "fit_ellipsoid_lg", "fit_ellipsoid_ml",
-           "fit_hard_iron", "information", "li_griffiths"]
+           "fit_hard_iron", "information", "li_griffiths", "sampson_residuals"]

@@ -8,12 +8,13 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from accelcal.discrepancy.mag_loop import field_samples, mag_discrepancy
 from accelcal.mag.align import dip_angles
 from accelcal.mag.calibrate import calibrate_magnetometer
 from accelcal.mag.model import PARAMETERS
 
 from . import peers
-from .sessions import load
+from .sessions import FILES, load
 
 METHODS = ("raw", "magneto", "dorveaux", "ck_explorer", "accelcal")
 #: The published figures of the peers (tomisuarez2/MagnetometerCalibration README): the
@@ -88,6 +89,23 @@ def stability(cals: dict) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def loop_rows(name: str, dirs: dict, *, alpha: float = 0.05, n_boot: int = 199, seed: int = 0) -> list[dict]:
+    """The magnetometer loop on one real session: a row per candidate of the first round,
+    with what was named, the AR noise model and the excess before and after."""
+    s = load(name, dirs[FILES[name][0]])
+    samples, _ = field_samples(np.where(np.isfinite(s.m), s.m, 0.0), s.rest_idx, name)
+    res = mag_discrepancy(samples, None, alpha=alpha, n_boot=n_boot, seed=seed)
+    rows = []
+    for c, r in res.rounds[0].items():
+        rows.append({"session": name, "candidate": c, "status": r["status"], "F": r.get("F", np.nan),
+                     "p_value": r.get("p_value", np.nan), "p_adjusted": r.get("p_adjusted", np.nan),
+                     "mde": ";".join(f"{x:.3g}" for x in r.get("mde", [])), "window": str(r.get("window", "")),
+                     "named": ";".join(res.named) or "none", "excess_before": res.excess_before,
+                     "excess_after": res.excess_after, "ar_order": res.noise["order"], "lag1": res.noise["lag1"],
+                     "n_samples": res.n_samples})
+    return rows
+
+
 def figure(table: pd.DataFrame):
     """|m| spread and dip spread per session and method (bars)."""
     import matplotlib.pyplot as plt
@@ -114,4 +132,4 @@ def figure(table: pd.DataFrame):
     return fig
 
 
-__all__ = ["METHODS", "PUBLISHED", "figure", "session_rows", "stability"]
+__all__ = ["METHODS", "PUBLISHED", "figure", "loop_rows", "session_rows", "stability"]
