@@ -86,4 +86,44 @@ def ar_covariance(J, r, noise: ARNoise | None = None) -> tuple[np.ndarray, ARNoi
     return cov, noise
 
 
-__all__ = ["ARNoise", "MAX_ORDER", "ar_covariance", "fit_ar"]
+def correlation_length(r) -> int:
+    """The first lag at which the residuals' autocorrelation falls below 1/e (samples)."""
+    x = np.asarray(r, float) - np.mean(r)
+    n = len(x)
+    f = np.fft.rfft(x, 2 * n)
+    acf = np.fft.irfft(f * np.conj(f))[:n]
+    below = np.flatnonzero(acf <= acf[0] / np.e)
+    return int(below[0]) if below.size else n
+
+
+def block_covariance(J, r, noise_cov=None) -> tuple[np.ndarray | None, dict]:
+    """Covariance of a least-squares estimate whose residuals ``r`` are correlated over long
+    stretches: the jackknife over blocks of samples (the cluster-robust sandwich's CR3 form),
+    the blocks :data:`BLOCK_LENGTHS` correlation
+    lengths long (at least :data:`MIN_BLOCKS`, at most :data:`MAX_BLOCKS` of them).
+
+    It holds whatever the residuals' correlation (an AR model of a few lags cannot describe a
+    misfit that changes with the orientation over hundreds of samples, SNU's), and it costs
+    what a few blocks cost: the variance of a variance from ``K`` blocks (``K - 1`` dof)."""
+    J, r = np.asarray(J, float), np.asarray(r, float)
+    n = len(r)
+    L = correlation_length(r)
+    k = int(np.clip(n // max(BLOCK_LENGTHS * L, 1), MIN_BLOCKS, MAX_BLOCKS))
+    if n < 2 * k * J.shape[1]:
+        return None, {}
+    edges = np.linspace(0, n, k + 1).astype(int)
+    JJ = J.T @ J
+    # the jackknife over blocks (each left out in turn, one Gauss-Newton step): the plain
+    # sandwich's fitted residuals are pulled towards each block's own data and, with a dozen
+    # blocks for nine parameters, it came out 35 % low in a Monte Carlo of correlated noise
+    d = np.array([np.linalg.solve(JJ - J[a:b].T @ J[a:b], J[a:b].T @ r[a:b]) for a, b in zip(edges[:-1], edges[1:])])
+    d -= d.mean(axis=0)
+    cov = d.T @ d * (k - 1) / k
+    return cov, {"blocks": k, "correlation_length": L}
+
+
+#: Blocks of the sandwich: this many correlation lengths long, between MIN_BLOCKS and MAX_BLOCKS of them.
+BLOCK_LENGTHS, MIN_BLOCKS, MAX_BLOCKS = 4, 12, 60
+
+__all__ = ["ARNoise", "BLOCK_LENGTHS", "MAX_BLOCKS", "MAX_ORDER", "MIN_BLOCKS", "ar_covariance", "block_covariance",
+           "correlation_length", "fit_ar"]

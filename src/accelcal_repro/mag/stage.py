@@ -69,8 +69,16 @@ def session_rows(name: str, data_dir, published_params=None) -> tuple[list[dict]
     return rows, mc
 
 
+def _chi2_dof(x, se) -> float:
+    """χ²/dof of the sessions' values about their weighted mean (1: the s.e. explain the scatter)."""
+    w = 1.0 / np.asarray(se, float) ** 2
+    mu = float(np.sum(w * x) / np.sum(w))
+    return float(np.sum(w * (np.asarray(x) - mu) ** 2) / max(len(x) - 1, 1))
+
+
 def stability(cals: dict) -> pd.DataFrame:
-    """Session-to-session scatter of accelcal's parameters against their standard errors."""
+    """Session-to-session scatter of accelcal's parameters against their standard errors:
+    ``ratio`` (scatter / RMS s.e.) and ``chi2_dof`` (about the weighted mean; the goal is <= 2)."""
     rows = []
     names = list(cals)
     theta = np.array([cals[n].fit.theta for n in names])
@@ -78,14 +86,15 @@ def stability(cals: dict) -> pd.DataFrame:
     for i, p in enumerate(PARAMETERS):
         rows.append({"parameter": p, **{n: theta[k, i] for k, n in enumerate(names)},
                      "scatter": float(np.std(theta[:, i], ddof=1)), "rms_se": float(np.sqrt(np.mean(se[:, i] ** 2))),
-                     "ratio": float(np.std(theta[:, i], ddof=1) / np.sqrt(np.mean(se[:, i] ** 2)))})
+                     "ratio": float(np.std(theta[:, i], ddof=1) / np.sqrt(np.mean(se[:, i] ** 2))),
+                     "chi2_dof": _chi2_dof(theta[:, i], se[:, i])})
     al = [cals[n].alignment for n in names]
     if all(a is not None for a in al):
         dips = np.array([a.dip_deg for a in al])
         se_d = np.array([a.se_dip_deg for a in al])
         rows.append({"parameter": "dip_deg", **{n: dips[k] for k, n in enumerate(names)},
                      "scatter": float(np.std(dips, ddof=1)), "rms_se": float(np.sqrt(np.mean(se_d**2))),
-                     "ratio": float(np.std(dips, ddof=1) / np.sqrt(np.mean(se_d**2)))})
+                     "ratio": float(np.std(dips, ddof=1) / np.sqrt(np.mean(se_d**2))), "chi2_dof": _chi2_dof(dips, se_d)})
     return pd.DataFrame(rows)
 
 
