@@ -49,7 +49,7 @@ def test_without_the_noise_model_correlated_noise_names_effects_that_are_not_the
     as independent (AR(0)), strongly low-passed noise names a disturbance or soft iron."""
     design = {"rho": 0.95}
     named_ar = [LB.run_case(40 + k, n_boot=99, design=design)["named"] for k in range(4)]
-    monkeypatch.setattr(ML, "fit_ar", lambda r: fit_ar(r, max_order=0))
+    monkeypatch.setattr(ML, "fit_ar", lambda r, **kw: fit_ar(r, max_order=0))
     named_white = [LB.run_case(40 + k, n_boot=99, design=design)["named"] for k in range(4)]
     assert sum(bool(x) for x in named_ar) <= 1
     assert sum(bool(x) for x in named_white) >= 3
