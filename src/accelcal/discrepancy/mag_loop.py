@@ -24,6 +24,11 @@ windows between :data:`N_GRID` + 1 boundaries; its p-value is that of the larges
 all windows (the bootstrap repeats the search), its MDE is at the Bonferroni level over them.
 The most significant candidate is named and refitted (``soft_iron``: the ellipsoid's ML fit;
 the others: one Gauss-Newton step), and the next round tests the rest on top of it.
+
+An AR(1) does not describe residuals correlated over hundreds of samples (SNU's): each
+candidate is also tested by a Wald test with the block jackknife's covariance
+(:func:`block_p`, robust to any correlation shorter than a block, Holm-adjusted as well),
+and a candidate is named only when both reject.
 """
 
 from __future__ import annotations
@@ -35,7 +40,7 @@ import numpy as np
 from .. import distributions as dist
 from ..errors import AccelcalError
 from ..mag.fit import FieldSamples, fit_ellipsoid_ml, fit_hard_iron, sampson_residuals
-from ..mag.noise import ARNoise, fit_ar
+from ..mag.noise import ARNoise, block_covariance, fit_ar
 from ..mag.trust import prepare, quiet_intervals, rest_noise
 from .gyro_loop import _orth as orth
 from .gyro_loop import _resid as project_out
@@ -106,7 +111,8 @@ class MagLoopResult:
                 "n_samples": self.n_samples, "alpha": self.alpha, "n_boot": self.n_boot,
                 "noise_model": "the rests' noise (Sampson residuals in its units), whitened by an AR(1) model of the "
                                "residuals of the ellipsoid (their autocorrelation), times one common scale estimated "
-                               "from the residuals", "noise": self.noise, "notes": list(self.notes)}
+                               "from the residuals; a candidate is named only when the Wald test with the block jackknife's "
+                               "covariance (p_blocks) rejects too", "noise": self.noise, "notes": list(self.notes)}
 
     def summary(self) -> str:
         named = ", ".join(self.named) or "none"
@@ -192,6 +198,30 @@ def _disturbance_row(c, base_w, J, rw, E, ar, level, n_grid) -> dict:
     return _row(c, **row)
 
 
+def block_p(r, A, k: int, n_tests: int = 1) -> float:
+    """The last ``k`` columns of ``A`` by a Wald test with the block jackknife's covariance
+    (:func:`accelcal.mag.noise.block_covariance`: whatever the residuals' correlation),
+    Hotelling's F with the blocks as the degrees of freedom; times ``n_tests`` (a searched window)."""
+    coef = np.linalg.lstsq(A, r, rcond=None)[0]
+    cov, info = block_covariance(A, r - A @ coef)
+    if cov is None or info["blocks"] <= k + 1:
+        return float("nan")
+    K, b = info["blocks"], coef[-k:]
+    W = float(b @ np.linalg.pinv(cov[-k:, -k:]) @ b)
+    return min(1.0, float(dist.f_sf(W * (K - k) / (k * (K - 1)), k, K - k)) * n_tests)
+
+
+def _with_block_p(rows: dict, state: dict, named: dict, temp) -> None:
+    """Each tested row's ``p_blocks``: its test again under the block jackknife's noise model."""
+    J, theta = state["J"], state["theta"]
+    base = np.column_stack([state["Jb"], *_named_columns(named, J, theta, temp)])
+    for c, row in rows.items():
+        if row["status"] != "tested":
+            continue
+        X = window_columns(J, row["window"]) if c == "disturbance" else _columns(c, J, theta, temp)
+        row["p_blocks"] = block_p(state["r"], np.column_stack([base, X]), X.shape[1], row.get("n_windows", 1))
+
+
 def _round(samples, temp, named: dict, ar, E, alpha, n_grid, candidates) -> tuple[dict, dict]:
     """One round: every candidate not yet named, tested on top of the base and the named."""
     theta, r, Jb, J = _base(samples, "soft_iron" in named)
@@ -209,7 +239,9 @@ def _round(samples, temp, named: dict, ar, E, alpha, n_grid, candidates) -> tupl
             rows[c.name] = _row(c, status="not_identifiable", reason="no temperature column (or a constant one)")
             continue
         rows[c.name] = _row(c, **nested_test(base_w, ar.whiten(X), rw, E, level))
-    return rows, {"theta": theta, "r": r, "J": J, "base_w": base_w, "rw": rw}
+    state = {"theta": theta, "r": r, "J": J, "Jb": Jb}
+    _with_block_p(rows, state, named, temp)
+    return rows, state
 
 
 def noise_model(samples: FieldSamples, temp=None) -> ARNoise:
@@ -236,10 +268,12 @@ def mag_discrepancy(samples: FieldSamples, temp=None, *, alpha: float = 0.05, n_
     for _ in range(max_rounds):
         rows, _state = _round(samples, temp, named, ar, E, alpha, n_grid, candidates)
         tested = [c for c, r in rows.items() if r["status"] == "tested"]
-        for c, pa in zip(tested, holm([rows[c]["p_value"] for c in tested])):
-            rows[c]["p_adjusted"] = float(pa)
+        for c, pa, pb in zip(tested, holm([rows[c]["p_value"] for c in tested]),
+                             holm([rows[c]["p_blocks"] for c in tested])):
+            rows[c].update(p_adjusted=float(pa), p_blocks_adjusted=float(pb))
         rounds.append(rows)
-        sig = [c for c in tested if rows[c]["p_adjusted"] < alpha]
+        # named when both noise models reject: the AR(1)'s F test and the block jackknife's Wald test
+        sig = [c for c in tested if rows[c]["p_adjusted"] < alpha and rows[c]["p_blocks_adjusted"] < alpha]
         if not sig:
             break
         # the bootstrap's p-values tie at 1/(n_boot+1): then the F distribution's tail decides

@@ -108,6 +108,7 @@ def loop_rows(name: str, dirs: dict, *, alpha: float = 0.05, n_boot: int = 199, 
     for c, r in res.rounds[0].items():
         rows.append({"session": name, "candidate": c, "status": r["status"], "F": r.get("F", np.nan),
                      "p_value": r.get("p_value", np.nan), "p_adjusted": r.get("p_adjusted", np.nan),
+                     "p_blocks_adjusted": r.get("p_blocks_adjusted", np.nan),
                      "mde": ";".join(f"{x:.3g}" for x in r.get("mde", [])), "window": str(r.get("window", "")),
                      "named": ";".join(res.named) or "none", "excess_before": res.excess_before,
                      "excess_after": res.excess_after, "ar_order": res.noise["order"], "lag1": res.noise["lag1"],
