@@ -10,7 +10,10 @@ import numpy as np
 import pytest
 
 from accelcal.discrepancy import mag_loop as ML
-from accelcal.discrepancy.schema import REPORT_SCHEMA
+from accelcal.discrepancy.report import discrepancy_report
+from accelcal.discrepancy.schema import REPORT_SCHEMA, check_statuses
+from accelcal.gyro.simulate import simulate_recording
+from accelcal.recording import Recording
 from accelcal.mag.fit import FieldSamples
 from accelcal.mag.noise import fit_ar
 from accelcal_repro.mag import loop_benchmark as LB
@@ -68,3 +71,18 @@ def test_the_report_section_has_the_gyroscopes_keys_and_a_reason_when_it_cannot_
     assert d["outcome"] in REPORT_SCHEMA["properties"]["magnetometer"]["properties"]["outcome"]["enum"]
     res, err = ML.mag_layer(SimpleNamespace(mag=np.zeros((100, 3)), temp=None, source="f.csv"), None)
     assert res is None and err.startswith("magnetometer not tested: ") and "\n" not in err
+
+
+def test_the_discrepancy_report_holds_the_magnetometer_section_and_its_summary_line():
+    rng = np.random.default_rng(2)
+    sim = simulate_recording(rng, n_motions=10, angle_deg=100.0, peak_rate_dps=150.0, rest_s=3.0, init_rest_s=10.0,
+                             gyro_noise=0.003, acc_noise=0.01)
+    m, _, _ = LB.simulate(rng, design={"n_samples": len(sim["t"])})
+    rec = Recording(t=sim["t"], acc=sim["acc"], temp=None, source="s", unit="m/s^2", mag=m, mag_unit="uT")
+    rep = discrepancy_report(rec, 9.81, stochastic=None, search=True, min_poses=6)
+    d = rep.to_dict()
+    check_statuses(d)
+    assert d["magnetometer"]["outcome"] in ("none", "effect", "not_identifiable")
+    assert "magnetometer: " in rep.summary()
+    off = discrepancy_report(rec, 9.81, stochastic=None, search=True, min_poses=6, mag=False).to_dict()
+    assert off["magnetometer"] == {"outcome": "not_tested", "reason": "magnetometer left out (--no-mag)"}
