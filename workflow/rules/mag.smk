@@ -24,7 +24,9 @@ MAG_STAGE = declare_stage(
     tables=(("Real sessions: |m| spread and dip spread, raw, peers and accelcal", results("mag/sessions.csv")),
             ("Session-to-session scatter of accelcal's parameters against their s.e. (SNU good1-3)",
              results("mag/stability.csv")),
-            ("Monte Carlo: RMS error / CRLB of the ellipsoid parameters", results("mag/montecarlo.csv"))),
+            ("Monte Carlo: RMS error / CRLB of the ellipsoid parameters", results("mag/montecarlo.csv")),
+            ("Discrepancy loop: false positives and power at 3x MDE (simulated)", results("mag/loop_benchmark.csv")),
+            ("Discrepancy loop on the real sessions", results("mag/loop_sessions.csv"))),
 )
 
 
@@ -91,6 +93,45 @@ rule mag_montecarlo:
         "../scripts/mag_montecarlo.py"
 
 
+rule mag_loop_benchmark:
+    """The magnetometer loop on simulated sessions with one effect hidden: FPR and power."""
+    output:
+        cases=results("mag/loop_benchmark_cases.csv"),
+        summary=results("mag/loop_benchmark.csv"),
+    params:
+        mag=MAG,
+    log:
+        log_path("mag/loop_benchmark"),
+    benchmark:
+        bench_path("mag/loop_benchmark"),
+    threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=20,  # default config: 85 cases, about 30-60 s
+    script:
+        "../scripts/mag_loop_benchmark.py"
+
+
+rule mag_loop_sessions:
+    """Every real magnetometer session through the magnetometer loop."""
+    input:
+        manifests=expand(results("mag/data/{d}.json"), d=list(MAG_DATASETS)),
+    output:
+        results("mag/loop_sessions.csv"),
+    params:
+        mag=MAG,
+    log:
+        log_path("mag/loop_sessions"),
+    benchmark:
+        bench_path("mag/loop_sessions"),
+    threads: 1
+    resources:
+        mem_mb=2000,
+        runtime=20,
+    script:
+        "../scripts/mag_loop_sessions.py"
+
+
 rule mag_spread_figure:
     input:
         table=results("mag/sessions.csv"),
@@ -113,4 +154,6 @@ rule mag:
         results("mag/sessions.csv"),
         results("mag/stability.csv"),
         results("mag/montecarlo.csv"),
+        results("mag/loop_benchmark.csv"),
+        results("mag/loop_sessions.csv"),
         figure_files(*MAG_STAGE.figures),

@@ -38,6 +38,10 @@ discrepancy report (JSON):
                p_adjusted, mde, absorbed share; not_identifiable with the motions it
                needs), excess_before/after, estimates; outcome 'not_tested' with a
                one-line reason when the gyro cannot be calibrated from these rests
+  magnetometer the magnetometer's loop (when the recording has one and --no-mag is not
+               given), the same keys as gyroscope: named effects (soft_iron, disturbance
+               with its window of samples, temperature), per round the tests, the noise
+               model (AR order of the residuals); outcome 'not_tested' with a reason
   static       the detection settings (searched as `accelcal calibrate` does)
   The report is also a calibration: `accelcal apply REPORT.json RECORDING` applies
   its base model with the named effects.
@@ -80,6 +84,7 @@ def _discrepancy(args) -> int:
         try:
             analysis = report.discrepancy_report(rec, args.g, stochastic=report.DEFAULT_STOCHASTIC, unit=rec.unit,
                                                 static_kw=static, search=_search_static(args), gyro=with_gyro,
+                                                mag=not getattr(args, "no_mag", False),
                                                 min_poses=GYRO_MIN_RESTS if with_gyro else 0)
         except RecordingError as e:
             raise RecordingError(f"{e}{_rate_hint(rec)}") from None

@@ -36,6 +36,7 @@ from .detect import discrepancy
 from .fit import pose_data_from_static
 from .gyro_loop import gyro_layer
 from .joint_noise import describe_noise_model
+from .mag_loop import mag_layer
 from .stochastic import StochasticResult
 from .stochastic.implication import centred_pose_variance, pose_difference_variance
 from .stochastic.layer import DEFAULT_CANDIDATES, rest_segments, stochastic_layer
@@ -79,6 +80,8 @@ class DiscrepancyReport:
     static: dict | None = None  #: the detection settings and the search's record (as calibrate's provenance)
     gyro: object = None  #: the gyro loop's GyroLoopResult, or None (``gyro_error`` says why)
     gyro_error: str = "not run"
+    mag: object = None  #: the magnetometer loop's MagLoopResult, or None (``mag_error`` says why)
+    mag_error: str = "not run"
 
     def to_dict(self) -> dict:
         d = self.deterministic.to_dict()
@@ -92,6 +95,8 @@ class DiscrepancyReport:
         # one report for the whole IMU: the accelerometer's keys at the top (as before), each sensor below
         d["gyroscope"] = self.gyro.to_dict() if self.gyro is not None else {"outcome": "not_tested",
                                                                             "reason": self.gyro_error}
+        d["magnetometer"] = self.mag.to_dict() if self.mag is not None else {"outcome": "not_tested",
+                                                                             "reason": self.mag_error}
         d["poses"].update({"t_start": self.poses.t_start.tolist(), "t_end": self.poses.t_end.tolist(),
                            "mean": self.poses.means.tolist(), "mean_std": self.poses.mean_std.tolist(),
                            "n_samples": self.poses.n_samples.tolist()})
@@ -343,7 +348,7 @@ def _axis_allan_check(a, stoch, wander_avar, K: float, band: tuple, level: float
 def discrepancy_report(rec: Recording, g: float, *, rules: Rules | None = None,
                        stochastic: StochasticSettings | None = DEFAULT_STOCHASTIC, unit: str = "u",
                        static_kw: dict | None = None, search: bool = False,
-                       min_poses: int = 0, gyro: bool = True) -> DiscrepancyReport:
+                       min_poses: int = 0, gyro: bool = True, mag: bool = True) -> DiscrepancyReport:
     """The discrepancy report of a recording: static poses, both layers and their join.
 
     Finds the static poses as ``accelcal calibrate`` does (one code path,
@@ -351,7 +356,8 @@ def discrepancy_report(rec: Recording, g: float, *, rules: Rules | None = None,
     ``search`` the candidates' best when they give fewer poses than the full model needs,
     or ``min_poses`` if more), runs the deterministic layer on their means and the
     stochastic layer on the same rests (``stochastic=None`` skips it), and joins them
-    (:func:`noise_implication`).
+    (:func:`noise_implication`); the gyro's loop (``gyro``) and the magnetometer's
+    (``mag``, :func:`accelcal.discrepancy.mag_loop.mag_layer`) when the recording has them.
 
     Raises
     ------
@@ -383,7 +389,11 @@ def discrepancy_report(rec: Recording, g: float, *, rules: Rules | None = None,
         err = "not run"
     gyro_result, gyro_err = (gyro_layer(rec, g, poses, alpha=(rules or Rules()).alpha) if gyro and rec.gyro is not None
                              else (None, "no gyro in the recording" if rec.gyro is None else "gyro left out (--no-gyro)"))
-    return DiscrepancyReport(poses, det, stoch, err, impl, rec.rate, unit, static, gyro_result, gyro_err or "")
+    mag_result, mag_err = (mag_layer(rec, poses, alpha=(rules or Rules()).alpha) if mag and rec.mag is not None
+                           else (None, "no magnetometer in the recording" if rec.mag is None else
+                                 "magnetometer left out (--no-mag)"))
+    return DiscrepancyReport(poses, det, stoch, err, impl, rec.rate, unit, static, gyro_result, gyro_err or "",
+                             mag_result, mag_err or "")
 
 
 __all__ = ["DEFAULT_STOCHASTIC", "DiscrepancyReport", "StochasticSettings", "allan_check", "discrepancy_report",

@@ -52,6 +52,15 @@ STATUS: dict[str, dict[str, str]] = {
         "not_tested": "the gyro loop did not run: no gyro, or the gyro could not be calibrated from these rests "
                       "(gyroscope.reason, one line); the accelerometer's loop ran",
     },
+    "magnetometer.outcome": {
+        "effect": "the magnetometer loop named an effect beyond the hard iron (magnetometer.named: soft_iron, "
+                  "disturbance, temperature)",
+        "none": "nothing named for the magnetometer, and every applicable candidate was tested",
+        "not_identifiable": "nothing named for the magnetometer, and a candidate could not be tested (no "
+                            "temperature column, too few orientations: its row's needs says what)",
+        "not_tested": "the magnetometer loop did not run: no magnetometer, or columns no fit can use "
+                      "(magnetometer.reason, one line); the accelerometer's loop ran",
+    },
     "null": {"colored": "white pose noise times a scale plus a bias wander or per-placement offset, estimated "
                         "jointly; bootstrap likelihood-ratio tests",
              "white": "white pose noise times a common scale; F-tests (the negative control)"},
@@ -105,6 +114,10 @@ REPORT_SCHEMA: dict = {
                                                "effects, outlier poses, the noise term, a white scale above 1"},
         "gyroscope": {"type": "object", "properties": {
             "outcome": {"enum": list(STATUS["gyroscope.outcome"])},
+            "named": {"type": "array", "items": {"type": "string"}},
+            "reason": {"type": "string"}}},
+        "magnetometer": {"type": "object", "properties": {
+            "outcome": {"enum": list(STATUS["magnetometer.outcome"])},
             "named": {"type": "array", "items": {"type": "string"}},
             "reason": {"type": "string"}}},
         "noise_model": {"type": "object", "properties": {

@@ -72,6 +72,10 @@ def report_summary(report, written_to=None) -> str:
         lines.append(report.gyro.summary())
     elif report.gyro_error.startswith("gyroscope not tested"):  # a gyro that could not be calibrated
         lines.append(f"gyroscope: {report.gyro_error}")
+    if getattr(report, "mag", None) is not None:
+        lines.append(report.mag.summary())
+    elif getattr(report, "mag_error", "").startswith("magnetometer not tested"):
+        lines.append(report.mag_error)
     if written_to is not None:
         lines.append(f"  written to {written_to}")
     return "\n".join(lines)

@@ -10,14 +10,16 @@ force is close to g), and the trust lines.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from .. import distributions as dist  # scipy.stats would cost ~1 s at import
 from .align import MIN_DIRECTIONS, align
 from .errors import MagDisturbanceError
 
-from .fit import FieldSamples, fit_hard_iron
-from .model import MagModel
+from .fit import FieldSamples, fit_hard_iron, with_residual_covariance
+from .model import MagModel, sym_from_vec
 from .registry import mag_estimator
 from .result import MagCalibration, spreads
 from .trust import check_coverage, disturbed_rests, prepare, quiet_intervals, rest_noise
@@ -82,7 +84,7 @@ def calibrate_magnetometer(mag, *, raw_unit: str = "unknown", acc_cal=None, pose
     how = f"{noise_where}: {how}" if cov is not None else "no rest: the s.e. from the fit's own residual"
     samples = FieldSamples(m, noise_cov=cov, noise_source=how, n_independent=_n_independent(m, intervals))
     est = mag_estimator(estimator)
-    fit = est.fit(samples)
+    fit = with_residual_covariance(est.fit(samples), samples)
     A, b = fit.A, fit.b
     h = (m - b) @ A.T
     cover = check_coverage(h, source)
@@ -92,7 +94,7 @@ def calibrate_magnetometer(mag, *, raw_unit: str = "unknown", acc_cal=None, pose
         raise MagDisturbanceError(f"{source}: the field changes while the device rests in {len(disturbed)} of "
                                   f"{n_rests} rests (a disturbance: iron or a motor moving nearby); record again "
                                   "away from it, or pass --no-mag")
-    alignment, f_dirs, h_dirs, align_how = _alignment(m, rows, A, b, acc_cal, poses, intervals, disturbed, acc,
+    alignment, f_dirs, h_dirs, align_how = _alignment(m, rows, fit, acc_cal, poses, intervals, disturbed, acc,
                                                       g_tolerance, notes)
     R = np.eye(3) if alignment is None else alignment.R
     strength, unit = 1.0, "normalised"
@@ -138,8 +140,9 @@ def _rests_in_kept_rows(poses, rows) -> list[tuple[int, int]]:
     return out
 
 
-def _alignment(m, rows, A, b, acc_cal, poses, intervals, disturbed, acc, tol, notes):
+def _alignment(m, rows, fit, acc_cal, poses, intervals, disturbed, acc, tol, notes):
     """The alignment from the rests (or samples near g), and the directions it used."""
+    A, b = fit.A, fit.b
     if poses is not None and acc_cal is not None and intervals:
         keep = [k for k in range(len(intervals)) if k not in disturbed]
         f = np.array([acc_cal.apply(np.asarray(poses.means)[k:k + 1])[0] for k in range(len(poses.means))])
@@ -163,11 +166,27 @@ def _alignment(m, rows, A, b, acc_cal, poses, intervals, disturbed, acc, tol, no
         notes.append(f"magnetometer: {len(f)} rests/samples near g: too few to align it to the accelerometer")
         return None, None, None, f"none ({how}: too few)"
     h = (hm - b) @ A.T
-    al = align(f, h)
+    al = _with_fit_error(align(f, h), f, hm, fit)
     if al.undetermined:
         notes.append("magnetometer: the rests leave the alignment undetermined along "
                      + "; ".join(al.undetermined) + " (rotate about more axes)")
     return al, f, h, how
+
+
+def _with_fit_error(al, f, hm, fit):
+    """The dip's s.e. with the ellipsoid's error carried through (every rest's field moves
+    with ``A`` and ``b`` together, so their error does not average out over the rests):
+    ``g Σ gᵀ`` added, ``g`` the dip's derivative in the nine parameters (central differences)."""
+    if fit.cov is None or fit.n_parameters != 9:
+        return al
+    th = fit.theta
+    g = np.zeros(9)
+    for i in range(9):
+        eps = 1e-6 * max(abs(th[i]), 1e-12) + 1e-9 * np.max(np.abs(th))
+        d = [align(f, (hm - t[:3]) @ sym_from_vec(t[3:]).T).dip_deg for t in (th + eps * np.eye(9)[i],
+                                                                              th - eps * np.eye(9)[i])]
+        g[i] = (d[0] - d[1]) / (2 * eps)
+    return replace(al, se_dip_deg=float(np.sqrt(al.se_dip_deg**2 + g @ fit.cov @ g)))
 
 
 __all__ = ["G_TOLERANCE", "calibrate_magnetometer"]

@@ -14,13 +14,14 @@ the LLS bias for the accelerometer).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from .. import distributions as dist  # scipy.stats would cost ~1 s at import
 from .errors import MagDegenerateError, MagFitError, MagInputError
 from .model import PARAMETERS, sym_from_vec, vec_from_sym
+from .noise import block_covariance
 
 #: Fewest samples: nine unknowns and one more so that a residual checks the fit.
 MIN_SAMPLES = 10
@@ -183,6 +184,12 @@ def _residuals(theta, m, cov, bias_correct: bool):
     return f / w, J / w[:, None]
 
 
+def sampson_residuals(theta, samples: FieldSamples, bias_correct: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """The residuals ``(n,)`` the fits minimise and their Jacobian ``(n, 9)`` in ``theta``
+    (:data:`accelcal.mag.model.PARAMETERS`), in noise units when ``samples.noise_cov`` is known."""
+    return _residuals(np.asarray(theta, float), samples.m, samples.noise_cov, bias_correct)
+
+
 def information(theta, samples: FieldSamples) -> np.ndarray:
     """Fisher information ``JᵀJ`` of the nine parameters at ``theta`` (noise units;
     with unknown noise, per unit variance)."""
@@ -272,10 +279,32 @@ def fit_hard_iron(samples: FieldSamples) -> EllipsoidFit:
     known = samples.noise_cov is not None
     scale = 1.0 if known else float(r @ r) / max(samples.n - 4, 1)
     cov = P @ np.linalg.inv(J.T @ J) @ P.T * scale
-    from dataclasses import replace
-
     return replace(out, cov=cov, dof=samples.n - 4)
 
 
+def with_residual_covariance(fit: EllipsoidFit, samples: FieldSamples) -> EllipsoidFit:
+    """The fit with the covariance its residuals show when they scatter more than its own says.
+
+    The covariance from the rests' noise assumes independent samples; over a whole session
+    the residuals are correlated for hundreds of samples (SNU: a misfit that changes with
+    the orientation, a field that differs from place to place) and the session-to-session
+    scatter was 9-49x the s.e.  The block sandwich (:func:`accelcal.mag.noise.block_covariance`)
+    holds for any such correlation: it replaces the covariance when the median of its
+    variances exceeds the fit's own (a note says so), and the ellipsoid's 9 parameters only."""
+    if fit.n_parameters != 9 or fit.cov is None:
+        return fit
+    r, J = _residuals(fit.theta, samples.m, samples.noise_cov, True)
+    cov, info = block_covariance(J, r)
+    if cov is None:
+        return fit
+    ratio = float(np.median(np.diag(cov) / np.maximum(np.diag(fit.cov), 1e-300)))
+    if not ratio > 1.0:
+        return fit
+    note = (f"s.e. from the residuals' block sandwich ({info['blocks']} blocks; residuals correlated over "
+            f"{info['correlation_length']} samples): {np.sqrt(ratio):.3g}x the noise-only s.e.")
+    return replace(fit, cov=cov, notes=fit.notes + (note,))
+
+
 __all__ = ["EllipsoidFit", "FieldSamples", "MIN_SAMPLES", "crlb", "fit_ellipsoid_lg", "fit_ellipsoid_ml",
-           "fit_hard_iron", "information", "li_griffiths"]
+           "fit_hard_iron", "information", "li_griffiths", "sampson_residuals",
+           "with_residual_covariance"]

@@ -8,12 +8,13 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from accelcal.discrepancy.mag_loop import field_samples, mag_discrepancy
 from accelcal.mag.align import dip_angles
 from accelcal.mag.calibrate import calibrate_magnetometer
 from accelcal.mag.model import PARAMETERS
 
 from . import peers
-from .sessions import load
+from .sessions import FILES, load
 
 METHODS = ("raw", "magneto", "dorveaux", "ck_explorer", "accelcal")
 #: The published figures of the peers (tomisuarez2/MagnetometerCalibration README): the
@@ -68,8 +69,16 @@ def session_rows(name: str, data_dir, published_params=None) -> tuple[list[dict]
     return rows, mc
 
 
+def _chi2_dof(x, se) -> float:
+    """χ²/dof of the sessions' values about their weighted mean (1: the s.e. explain the scatter)."""
+    w = 1.0 / np.asarray(se, float) ** 2
+    mu = float(np.sum(w * x) / np.sum(w))
+    return float(np.sum(w * (np.asarray(x) - mu) ** 2) / max(len(x) - 1, 1))
+
+
 def stability(cals: dict) -> pd.DataFrame:
-    """Session-to-session scatter of accelcal's parameters against their standard errors."""
+    """Session-to-session scatter of accelcal's parameters against their standard errors:
+    ``ratio`` (scatter / RMS s.e.) and ``chi2_dof`` (about the weighted mean; the goal is <= 2)."""
     rows = []
     names = list(cals)
     theta = np.array([cals[n].fit.theta for n in names])
@@ -77,15 +86,34 @@ def stability(cals: dict) -> pd.DataFrame:
     for i, p in enumerate(PARAMETERS):
         rows.append({"parameter": p, **{n: theta[k, i] for k, n in enumerate(names)},
                      "scatter": float(np.std(theta[:, i], ddof=1)), "rms_se": float(np.sqrt(np.mean(se[:, i] ** 2))),
-                     "ratio": float(np.std(theta[:, i], ddof=1) / np.sqrt(np.mean(se[:, i] ** 2)))})
+                     "ratio": float(np.std(theta[:, i], ddof=1) / np.sqrt(np.mean(se[:, i] ** 2))),
+                     "chi2_dof": _chi2_dof(theta[:, i], se[:, i])})
     al = [cals[n].alignment for n in names]
     if all(a is not None for a in al):
         dips = np.array([a.dip_deg for a in al])
         se_d = np.array([a.se_dip_deg for a in al])
         rows.append({"parameter": "dip_deg", **{n: dips[k] for k, n in enumerate(names)},
                      "scatter": float(np.std(dips, ddof=1)), "rms_se": float(np.sqrt(np.mean(se_d**2))),
-                     "ratio": float(np.std(dips, ddof=1) / np.sqrt(np.mean(se_d**2)))})
+                     "ratio": float(np.std(dips, ddof=1) / np.sqrt(np.mean(se_d**2))), "chi2_dof": _chi2_dof(dips, se_d)})
     return pd.DataFrame(rows)
+
+
+def loop_rows(name: str, dirs: dict, *, alpha: float = 0.05, n_boot: int = 199, seed: int = 0) -> list[dict]:
+    """The magnetometer loop on one real session: a row per candidate of the first round,
+    with what was named, the AR noise model and the excess before and after."""
+    s = load(name, dirs[FILES[name][0]])
+    samples, _ = field_samples(np.where(np.isfinite(s.m), s.m, 0.0), s.rest_idx, name)
+    res = mag_discrepancy(samples, None, alpha=alpha, n_boot=n_boot, seed=seed)
+    rows = []
+    for c, r in res.rounds[0].items():
+        rows.append({"session": name, "candidate": c, "status": r["status"], "F": r.get("F", np.nan),
+                     "p_value": r.get("p_value", np.nan), "p_adjusted": r.get("p_adjusted", np.nan),
+                     "p_blocks_adjusted": r.get("p_blocks_adjusted", np.nan),
+                     "mde": ";".join(f"{x:.3g}" for x in r.get("mde", [])), "window": str(r.get("window", "")),
+                     "named": ";".join(res.named) or "none", "excess_before": res.excess_before,
+                     "excess_after": res.excess_after, "ar_order": res.noise["order"], "lag1": res.noise["lag1"],
+                     "n_samples": res.n_samples})
+    return rows
 
 
 def figure(table: pd.DataFrame):
@@ -114,4 +142,4 @@ def figure(table: pd.DataFrame):
     return fig
 
 
-__all__ = ["METHODS", "PUBLISHED", "figure", "session_rows", "stability"]
+__all__ = ["METHODS", "PUBLISHED", "figure", "loop_rows", "session_rows", "stability"]
