@@ -415,6 +415,12 @@ def _resolve_ambiguous(prob: C.Problem, tested: list[_Tested], alpha: float) -> 
                 drop.add(i)
             elif not j_given_i:
                 drop.add(j)
+    return _relabelled(tested, amb, drop)
+
+
+def _relabelled(tested: list[_Tested], amb: dict, drop: set) -> list[_Tested]:
+    """``tested`` with the ambiguous pairs (``amb``: index -> the effects it cannot be told
+    apart from) reported ``not_identifiable`` and the explained ones (``drop``) ``dominated``."""
     out = []
     for k, r in enumerate(tested):
         c = r.candidate

@@ -316,29 +316,21 @@ def simulate_case(truth: str, size_mde: float, replicate: int, *, seed: int, ses
     sensor = _draw_sensor(rng, ss)
     phase = rng.uniform(0, 2 * np.pi)
     effs = effects_of(truth)
-    dirs = {e: rng.standard_normal(effect(e).size) for e in effs}
-    dirs = {e: d / np.linalg.norm(d) for e, d in dirs.items()}
+    dirs = {e: _unit(rng.standard_normal(effect(e).size)) for e in effs}  # the effects' directions
     noise_rng = np.random.default_rng(rng.integers(2 ** 63))
     design = _draw_design(rng, ss, profile, rules, sensor, phase, truth)
     t, win, n_eff = design.t, design.windows, design.n_eff
 
-    # Oracle: the covariance of the pose residuals the profile implies (unit of g²).
-    w = -design.base.J[:, :3] * design.base.sigma[:, None]  # ∂r/∂z = -∂r/∂b (unweighted)
-    oracle = Oracle.build(design.data, design.p_true,
-                          pose_residual_covariance(profile, t[win[:, 0]], n_eff / ss.rate, n_eff, ss.rate, w))
+    oracle, w = _oracle(design, profile, ss)
     # the loop's first round tests the candidates and the outlier family together (Holm)
     family = len(design.candidates) + bool(rules.outlier_pose)
     params, key_eff = _effect_sizes(design, oracle, dirs, size_mde, rules, family)
 
-    temp = design.temp
-    if truth == CONSTANT_TEMPERATURE:
-        temp = np.full_like(t, ss.temp_mean + ss.temp_amplitude * np.sin(phase))
-    temp = np.round(temp / ss.temp_resolution) * ss.temp_resolution
+    temp = _temperature(design, ss, truth, phase)
     # Centre the covariates as the fitter does (mean over the poses), so that the injected
     # parameters are what the extended model estimates.
-    dt = t - design.t_mid.mean()
     dtemp = temp - (design.temp_pose.mean() if truth != CONSTANT_TEMPERATURE else ss.temp_mean)
-    z = forward(design.x, sensor.M, sensor.bias, params, dt=dt, dtemp=dtemp)
+    z = forward(design.x, sensor.M, sensor.bias, params, dt=t - design.t_mid.mean(), dtemp=dtemp)
     z = z + simulate_profile(profile, noise_rng, len(t), ss.rate, replicate=int(replicate), records=records)
     z = z + placement_offsets(profile, noise_rng, ss.rest_windows(len(t))[:, 0], len(t))
 
@@ -349,18 +341,11 @@ def simulate_case(truth: str, size_mde: float, replicate: int, *, seed: int, ses
     # Real-noise profiles reuse the windows of one record: the scoring counts independent ones.
     window = window_of(profile, replicate, len(records[profile.real]), len(t))[0] if profile.real else -1
 
-    key = {
-        "profile": profile.name, "profile_kind": profile.kind, "truth": truth, "expected": expected_outcome(truth),
-        "effects_injected": "+".join(effs) if truth != CONSTANT_TEMPERATURE else "temperature",
-        "size_mde": float(size_mde), "replicate": int(replicate), "noise_window": window, "n_poses": ss.n_poses,
-        "redraws": design.redraws,
-        **outlier, **key_eff,
-        **{f"absorbed_{e}": design.identifiability[e].absorbed for e in EFFECT_IDS if e in design.identifiability},
-        **{f"bias_{a}": float(v) for a, v in zip("xyz", sensor.bias)},
-        **{f"sensitivity_{a}": float(v) for a, v in zip("xyz", sensor.sensitivity)},
-        **{f"nonorth_deg_{k}": float(v) for k, v in zip(("xy", "zx", "zy"), np.rad2deg(sensor.nonorth))},
-        "temp_range": float(np.ptp(temp)),
-    }
+    key = {"profile": profile.name, "profile_kind": profile.kind, "truth": truth, "expected": expected_outcome(truth),
+           "effects_injected": "+".join(effs) if truth != CONSTANT_TEMPERATURE else "temperature",
+           "size_mde": float(size_mde), "replicate": int(replicate), "noise_window": window, "n_poses": ss.n_poses,
+           "redraws": design.redraws, **outlier, **key_eff, **_sensor_columns(design, sensor),
+           "temp_range": float(np.ptp(temp))}
     return rec, key
 
 
@@ -550,6 +535,35 @@ def detect_case(rec: Recording, g: float, rules: Rules) -> dict:
         return {"null": _null_of(rules), "outcome": ERROR, "effect": "", "effects": "",
                 "error": str(err).splitlines()[0]}
     return _detect(data, rules)
+
+
+def _sensor_columns(design: _Design, sensor: _Sensor) -> dict:
+    """The key's columns of the drawn sensor and of the candidates' absorbed fractions."""
+    return {**{f"absorbed_{e}": design.identifiability[e].absorbed for e in EFFECT_IDS if e in design.identifiability},
+            **{f"bias_{a}": float(v) for a, v in zip("xyz", sensor.bias)},
+            **{f"sensitivity_{a}": float(v) for a, v in zip("xyz", sensor.sensitivity)},
+            **{f"nonorth_deg_{k}": float(v) for k, v in zip(("xy", "zx", "zy"), np.rad2deg(sensor.nonorth))}}
+
+
+def _temperature(design: _Design, ss: Session, truth: str, phase: float) -> np.ndarray:
+    """The recorded temperature (constant for ``temperature_const``), at the sensor's resolution."""
+    temp = design.temp
+    if truth == CONSTANT_TEMPERATURE:
+        temp = np.full_like(design.t, ss.temp_mean + ss.temp_amplitude * np.sin(phase))
+    return np.round(temp / ss.temp_resolution) * ss.temp_resolution
+
+
+def _oracle(design: _Design, profile: NoiseProfile, ss: Session) -> tuple[Oracle, np.ndarray]:
+    """The oracle of a design: the covariance of the pose residuals the profile implies (unit
+    of g²), and the residuals' gradients ``∂r/∂z`` (unweighted)."""
+    w = -design.base.J[:, :3] * design.base.sigma[:, None]  # ∂r/∂z = -∂r/∂b
+    t, win, n_eff = design.t, design.windows, design.n_eff
+    cov = pose_residual_covariance(profile, t[win[:, 0]], n_eff / ss.rate, n_eff, ss.rate, w)
+    return Oracle.build(design.data, design.p_true, cov), w
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / np.linalg.norm(v)
 
 
 __all__ = ["CONSTANT_TEMPERATURE", "ERROR", "NONE", "NOT_IDENTIFIABLE", "NULLS", "OUTLIER", "Oracle", "Session",
