@@ -35,7 +35,7 @@ from ..summary import Summary
 from .detect import discrepancy
 from .fit import pose_data_from_static
 from .gyro_loop import gyro_layer
-from .joint_noise import describe_noise_model
+from .wander_model import describe_noise_model
 from .stochastic import StochasticResult
 from .stochastic.implication import centred_pose_variance, pose_difference_variance
 from .stochastic.layer import DEFAULT_CANDIDATES, rest_segments, stochastic_layer
@@ -210,10 +210,10 @@ def rests_implication(det: DiscrepancyResult, stoch, starts, durations, alpha: f
 def noise_implication(det: DiscrepancyResult, stoch, starts, durations, alpha: float) -> dict:
     """Does the named noise model predict the pose residuals' excess over white noise?
 
-    Under the colored null the named noise model is the rests' white per-pose noise plus the
+    Under the wander null the named noise model is the rests' white per-pose noise plus the
     bias wander estimated jointly with the calibration (``det.noise_model``): the weighted
     χ² of the final least-squares residuals is then distributed as ``Σ μ_k χ²₁``
-    (:func:`accelcal.discrepancy.colored.excess_distribution`); the verdict is
+    (:func:`accelcal.discrepancy.wander.excess_distribution`); the verdict is
     ``consistent`` when the observed χ² lies in its central ``1 − α`` interval (two-sided
     p ≥ α, gamma approximation with the exact mean and variance).  That check uses the
     same residuals the wander was fitted to, so it says that a wander of this family *can*
@@ -221,7 +221,7 @@ def noise_implication(det: DiscrepancyResult, stoch, starts, durations, alpha: f
     for the Allan deviation of the rests, compared with the measured one where the wander
     should be visible.  ``rests_only`` keeps the reading of the terms named from the rests
     alone (:func:`rests_implication`).  Under the white null, the rests-only reading is
-    the implication (as before the colored null existed).
+    the implication (as before the wander null existed).
 
     Returns
     -------
@@ -233,9 +233,9 @@ def noise_implication(det: DiscrepancyResult, stoch, starts, durations, alpha: f
     """
     rests = rests_implication(det, stoch, starts, durations, alpha) if stoch is not None else {}
     nm = det.noise_model or {}
-    if det.rules.null != "colored" or not nm.get("estimated") or not det.colored:
+    if det.rules.null != "wander" or not nm.get("estimated") or not det.wander_summary:
         return rests
-    c = det.colored
+    c = det.wander_summary
     f = det.final
     dof = int(c["dof"])
     chi2 = float(np.sum(f.weighted ** 2))
@@ -252,7 +252,7 @@ def noise_implication(det: DiscrepancyResult, stoch, starts, durations, alpha: f
         "expected_excess_short_term": rests.get("expected_excess_short_term", float("nan")),
         "observed_excess": c["excess_observed"],
         "chi2": chi2, "dof": dof, "p_value": p,
-        "gap_with_noise_terms": c["gap_colored_after"],
+        "gap_with_noise_terms": c["gap_wander_after"],
         "verdict": verdict,
         "explains_excess": bool(np.isfinite(p) and p >= alpha),
         # beyond the rests' pose noise: the white scale's share and the wander's (or offset's)

@@ -13,7 +13,7 @@ of that recording itself), added to the whole time series.
 
 Hidden effects are sized in units of their *oracle* minimum detectable effect: the size
 at which the loop's nested F-test (level ``α/m`` over the ``m`` tests of its first round:
-the candidates and, if enabled, the outlier family of the colored null; the configured
+the candidates and, if enabled, the outlier family of the wander null; the configured
 power) would detect the effect along its random direction ``d`` if it knew
 the true covariance of the pose residuals under the profile (generalised least squares
 with :func:`accelcal_repro.discrepancy.profiles.pose_mean_covariance`), computed on the
@@ -36,7 +36,7 @@ Every recording draws from its own stream, derived from the config seed, its pro
 and replicate (:func:`accelcal_repro.montecarlo.grid_seed`), so it does not depend on the
 chunking.  Detection (:func:`detect_case`) gets the recording only (time, integer counts,
 temperature: what a user's CSV holds), never the key, and runs the loop under each
-requested null hypothesis on the same pose means (``colored``, and ``white``: the loop of
+requested null hypothesis on the same pose means (``wander``, and ``white``: the loop of
 the white-noise loop, the negative control).  Scoring: :mod:`accelcal_repro.discrepancy.scoring`.
 """
 
@@ -52,7 +52,7 @@ from accelcal.discrepancy.detect import discrepancy
 from accelcal.effects import EFFECT_IDS, effect
 from accelcal.discrepancy.fit import Fit, PoseData, evaluate, fit_at, forward, pose_data, pose_data_from_static
 from accelcal.discrepancy.identifiability import Identifiability, applicable, identifiability
-from accelcal.discrepancy.rules import Rules
+from accelcal.discrepancy.rules import Rules, null_name
 from accelcal.discrepancy.statistics import critical_noncentrality
 from accelcal.errors import AccelcalError
 from accelcal.evaluation import residual_sigma
@@ -71,7 +71,7 @@ OUTLIER = "outlier_pose"
 CONSTANT_TEMPERATURE = "temperature_const"
 ERROR = "error"
 #: The null hypotheses of the loop the benchmark can compare.
-NULLS = ("colored", "white")
+NULLS = ("wander", "white")
 #: Largest number of pose designs drawn until every candidate is identifiable on the truth.
 MAX_REDRAWS = 20
 
@@ -442,8 +442,9 @@ def _effect_sizes(design: _Design, oracle: Oracle, dirs: dict, size_mde: float, 
 
 
 def null_available(null: str) -> bool:
-    """Can this library's loop test under ``null``?  ``white`` always (the white-noise loop); ``colored``
-    once :class:`~accelcal.discrepancy.rules.Rules` has the ``null`` setting."""
+    """Can this library's loop test under ``null``?  ``white`` always (the white-noise loop); ``wander``
+    once :class:`~accelcal.discrepancy.rules.Rules` has the ``null`` setting (earlier names read as their new one)."""
+    null = null_name(null)
     if null not in NULLS:
         raise AccelcalError(f"unknown null hypothesis {null!r}; known: {', '.join(NULLS)}")
     return null == "white" or "null" in {f.name for f in dataclasses.fields(Rules)}
@@ -454,7 +455,7 @@ def nulls_for(truth: str, nulls: dict) -> list[str]:
     maps each null to ``all``, ``effect_free`` (only the ``none`` rows) or ``none``; the
     nulls this library lacks are left out (:func:`null_available`)."""
     out = []
-    for null, rows in nulls.items():
+    for null, rows in ((null_name(k), v) for k, v in nulls.items()):
         if rows not in ("all", "effect_free", "none"):
             raise AccelcalError(f"benchmark.nulls.{null}: {rows!r} is not all, effect_free or none")
         if null_available(null) and (rows == "all" or (rows == "effect_free" and truth == NONE)):
@@ -467,7 +468,7 @@ def rules_with_null(rules: Rules, null: str) -> Rules:
     if not null_available(null):
         raise AccelcalError(f"the discrepancy loop of this library has no {null!r} null hypothesis")
     if "null" in {f.name for f in dataclasses.fields(Rules)}:
-        return dataclasses.replace(rules, null=null)
+        return dataclasses.replace(rules, null=null_name(null))
     return rules
 
 

@@ -14,7 +14,7 @@ fit: an effect moves a pose residual by ~1e-4 of g, the neglected terms are ~1e-
   the likelihood ratio of current vs current + effect, ``LR = χ²(X) − χ²([X, J_e])`` under
   the true covariance, exactly ``χ²_k`` without the effect;
 * outlier family: the largest studentised residual ``max_i |(P r)_i|/sqrt(P_ii)`` against
-  its exact null (:func:`accelcal.discrepancy.colored.max_null_pvalue`, known variance);
+  its exact null (:func:`accelcal.discrepancy.wander.max_null_pvalue`, known variance);
   a named outlier is a free shift of its pose (its indicator joins the columns);
 * Holm over the round's family at level α; an effect passes with ``ΔBIC = −LR + k ln n <
   −bic_threshold`` and a leave-one-pose-out PRESS (GLS, true covariance) that falls;
@@ -34,7 +34,7 @@ import math
 import numpy as np
 
 from accelcal import distributions as dist
-from accelcal.discrepancy.colored import max_null_pvalue
+from accelcal.discrepancy.wander import max_null_pvalue
 from accelcal.discrepancy.fit import PoseData, effect_columns, fit
 from accelcal.discrepancy.identifiability import applicable, identifiability
 from accelcal.discrepancy.rules import Rules
