@@ -197,8 +197,8 @@ def test_scoring_catches_a_fitter_that_ignores_the_effect(monkeypatch):
     """A fitter that returns the current model for current + effect (effect fixed at 0) never
     sees anything: accuracy at >= 1 MDE collapses and the scoring's verdict fails."""
     rows = [(e, 3.0, r) for e in EFFECT_IDS for r in range(3)]
-    # the blind fitter replaces the nonlinear fit the white null's F-test compares; the colored
-    # null tests on the linearised columns (tests/test_discrepancy_colored.py checks it)
+    # the blind fitter replaces the nonlinear fit the white null's F-test compares; the wander
+    # null tests on the linearised columns (tests/test_discrepancy_wander.py checks it)
     _, good = _benchmark(rows, WHITE_RULES)
     assert all(_verdict(good, e, "accuracy_ge_1mde").verdict == "pass" for e in EFFECT_IDS)
 

@@ -32,19 +32,19 @@ def _row(null, profile, effect, metric, k, n, n_ind=None):
 
 
 def _summary(fpr_colored=(0, 200), fpr_white=((0, 200), (0, 200)), acc=None, outlier=None, pair=None):
-    """FPR rows (colored on both profiles, white on white and gm), accuracy rows at 3 MDE:
+    """FPR rows (wander null on both profiles, white on white and gm), accuracy rows at 3 MDE:
     ``acc``/``outlier``/``pair`` are ``{profile: (k, n)}`` (default: all named, n 12)."""
-    rows = [_row("colored", p, NONE, "false_positive_rate", *fpr_colored) for p in ("white", "gm")]
+    rows = [_row("wander", p, NONE, "false_positive_rate", *fpr_colored) for p in ("white", "gm")]
     rows += [_row("white", p, NONE, "false_positive_rate", *kn) for p, kn in zip(("white", "gm"), fpr_white)]
     for effect, table in (("quadratic", acc), (OUTLIER, outlier), ("quadratic+temperature", pair)):
         for p, (k, n) in (table or {"white": (12, 12), "gm": (12, 12)}).items():
-            rows.append(_row("colored", p, effect, "accuracy_at_3mde", k, n))
+            rows.append(_row("wander", p, effect, "accuracy_at_3mde", k, n))
     return pd.DataFrame(rows, columns=SUMMARY_COLUMNS)
 
 
 def _ledger(summary, **kw):
     led = DC.discrepancy_claims(summary, PROFILES, kw.pop("adis", ADIS), alpha=ALPHA, power=POWER,
-                                nulls=("colored", "white"), **kw)
+                                nulls=("wander", "white"), **kw)
     return led.set_index("claim_id")
 
 
@@ -138,11 +138,11 @@ def test_fpr_claims_decidable():
 def test_sample_size_is_the_intervals_effective_one():
     """Real-noise windows shared by recordings: the interval's n is n_independent, and so is the test's."""
     s = _summary(fpr_colored=(0, 200))
-    s.loc[(s.null == "colored") & (s.metric == "false_positive_rate"), "n_independent"] = 20.0
+    s.loc[(s.null == "wander") & (s.metric == "false_positive_rate"), "n_independent"] = 20.0
     r = _ledger(s).loc["fpr_colored_null_every_profile"]
     assert r.verdict == NOT_TESTABLE and "n 20 (recordings per profile)" in r.evidence
     # an effective size between whole numbers: exact (0 of 35.2 puts the upper end at 0.0995 <= 0.1)
-    s.loc[(s.null == "colored") & (s.metric == "false_positive_rate"), "n_independent"] = 35.2
+    s.loc[(s.null == "wander") & (s.metric == "false_positive_rate"), "n_independent"] = 35.2
     assert DC.testable("fpr_upper", [35.0, 35.2], alpha=ALPHA)[0].tolist() == [False, True]
     assert _ledger(s).loc["fpr_colored_null_every_profile", "verdict"] == "reproduced"
 
@@ -160,7 +160,7 @@ def test_a_claim_over_some_profile_is_decided_by_one_testable_pass():
         s.loc[(s.null == "white") & (s.profile == "gm") & (s.metric == "false_positive_rate"),
               ["value", "ci_low", "ci_high", "n", "n_independent"]] = (
             [gm[0] / gm[1], *map(float, clopper_pearson(*gm)), gm[1], float(gm[1])])
-        led = DC.discrepancy_claims(s, profiles, ADIS, alpha=ALPHA, power=POWER, nulls=("colored", "white"))
+        led = DC.discrepancy_claims(s, profiles, ADIS, alpha=ALPHA, power=POWER, nulls=("wander", "white"))
         assert led.set_index("claim_id").loc["fpr_white_null_inflated_by_wander", "verdict"] == verdict, (gm, rw)
 
 

@@ -171,7 +171,7 @@ def _run(truth, size, rep, seed=20240707, rules=RULES):
     return B.detect_case(rec, SESSION.g, rules), key
 
 
-NULL_RULES = {"colored": RULES, "white": Rules(null="white")}
+NULL_RULES = {"wander": RULES, "white": Rules(null="white")}
 
 
 @pytest.mark.parametrize("null", sorted(NULL_RULES))

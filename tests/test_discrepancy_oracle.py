@@ -88,19 +88,19 @@ def test_agreement_with_the_oracle_is_scored_per_recording():
                           "size_mde": 3.0, "replicate": 0, "noise_window": -1, "outlier_t": np.nan}
                          for r, t, e in (("a", "quadratic", "quadratic"), ("b", B.NONE, ""), ("c", B.OUTLIER, ""))])
     dets = pd.DataFrame([
-        {"recording": "a", "null": "colored", "outcome": "quadratic", "effects": "quadratic",
+        {"recording": "a", "null": "wander", "outcome": "quadratic", "effects": "quadratic",
          "named_set": named_set(["quadratic"], [])},
         {"recording": "a", "null": "oracle", "outcome": "quadratic", "effects": "quadratic", "named_set": "quadratic"},
-        {"recording": "b", "null": "colored", "outcome": B.OUTLIER, "effects": B.OUTLIER,
+        {"recording": "b", "null": "wander", "outcome": B.OUTLIER, "effects": B.OUTLIER,
          "named_set": named_set([B.OUTLIER], [4])},
         {"recording": "b", "null": "oracle", "outcome": "none", "effects": "", "named_set": ""},
-        {"recording": "c", "null": "colored", "outcome": B.OUTLIER, "effects": B.OUTLIER,
+        {"recording": "c", "null": "wander", "outcome": B.OUTLIER, "effects": B.OUTLIER,
          "named_set": named_set([B.OUTLIER], [7])},
         {"recording": "c", "null": "oracle", "outcome": B.OUTLIER, "effects": B.OUTLIER,
          "named_set": named_set([B.OUTLIER], [8])},
     ])
     sc = S.score_cases(keys, dets)
-    col = sc[sc.null == "colored"].set_index("recording")
+    col = sc[sc.null == "wander"].set_index("recording")
     assert col.loc["a", "agrees_with_oracle"] and not col.loc["b", "agrees_with_oracle"]
     assert not col.loc["c", "agrees_with_oracle"]                       # another pose
     assert col.loc["b", "outlier_false"] and col.loc["b", "false_positive"]
@@ -108,5 +108,5 @@ def test_agreement_with_the_oracle_is_scored_per_recording():
     assert diff.loc[B.NONE, "loop_only"] == "outlier_pose: 1" and diff.loc[B.NONE, "oracle_only"] == ""
     assert diff.loc[B.OUTLIER, "loop_only"] == "outlier_pose: 1" and diff.loc[B.OUTLIER, "oracle_only"] == "outlier_pose: 1"
     summ = S.summary(sc, S.rates(sc), alpha=0.05, power=0.8)
-    ag = summ[(summ.null == "colored") & (summ.metric == "oracle_agreement")].iloc[0]
+    ag = summ[(summ.null == "wander") & (summ.metric == "oracle_agreement")].iloc[0]
     assert ag.value == pytest.approx(1 / 3) and ag.n == 3

@@ -106,7 +106,7 @@ def test_joint_noise_model_explains_the_excess_of_a_wandering_session():
     """Pose means with white noise and a Gauss-Markov wander twice the pose noise: the white
     reading of the rests leaves a residual excess it cannot explain, the joint model predicts
     it (verdict consistent, observed excess inside the predicted interval)."""
-    from accelcal.discrepancy.colored import simulate_interval_means
+    from accelcal.discrepancy.wander import simulate_interval_means
 
     rng = np.random.default_rng(3)
     n = 36

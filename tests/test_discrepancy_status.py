@@ -1,7 +1,7 @@
 """What a user reads in the discrepancy report: one status, one meaning; the noise between poses in words;
 the per-placement offset; the outlier family's exact null.
 
-Sessions are simulated at the pose level as in tests/test_discrepancy_colored.py (30 poses of
+Sessions are simulated at the pose level as in tests/test_discrepancy_wander.py (30 poses of
 5.5 s, 16-bit counts), with fixed seeds.
 """
 
@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from accelcal.discrepancy import colored as C
+from accelcal.discrepancy import wander as C
 from accelcal.discrepancy.detect import discrepancy
 from accelcal.discrepancy.fit import forward, pose_data
-from accelcal.discrepancy.joint_noise import describe_noise_model
-from accelcal.discrepancy.schema import REPORT_SCHEMA, STATUS, check_statuses
+from accelcal.discrepancy.wander_model import describe_noise_model
+from accelcal.discrepancy.schema import REPORT_SCHEMA, STATUS, check_statuses, upgraded_report
 from accelcal.discrepancy.rules import Rules
 from accelcal.errors import AccelcalError
 from accelcal.jsonsafe import json_safe
@@ -71,6 +71,23 @@ def test_an_undefined_status_value_is_refused():
     assert {"no excess", "explained", "not explained", "untestable"} == set(STATUS["excess_status_white"])
 
 
+def test_the_earlier_name_of_the_wander_null_is_still_read():
+    """The time-correlated noise model has one name, ``wander``; a config or report of an
+    earlier version (``colored`` null, ``gap_colored_*`` keys) still reads, as the new names.
+    An unknown null is still refused."""
+    assert Rules(null="colored").null == "wander" == Rules.from_config({None: "colored"}).null
+    old = {"outcome": "none", "null": "colored", "gap_colored_before": 2.0, "gap_colored_after": 1.5,
+           "excess_status": "explained", "excess_status_white": "not explained", "rules": {"null": "colored"}}
+    assert check_statuses(old)["null"] == "wander"
+    new = upgraded_report(old)
+    assert (new["gap_wander_before"], new["gap_wander_after"]) == (2.0, 1.5) and "gap_colored_after" not in new
+    assert new["rules"]["null"] == "wander" and old["null"] == "colored"  # a copy
+    with pytest.raises(AccelcalError, match="null must be one of"):
+        Rules(null="pink")
+    with pytest.raises(AccelcalError, match="report status null"):
+        check_statuses({**old, "null": "pink"})
+
+
 def test_a_per_placement_offset_is_named_as_such():
     """Offsets independent from pose to pose, 8x the pose noise, on rests of different
     lengths (so the offset does not follow each pose's own noise as a white scale would):
@@ -96,7 +113,7 @@ def test_repeated_placements_tell_an_offset_from_an_orientation_effect(repeats_f
     pure-error chi-square is not small); offsets that belong to the orientation (the second
     placement repeats the first's) agree far better than independent ones would."""
     from accelcal.discrepancy.fit import fit
-    from accelcal.discrepancy.joint_noise import repeated_placements
+    from accelcal.discrepancy.wander_model import repeated_placements
 
     rng = np.random.default_rng(21)
     n = 36

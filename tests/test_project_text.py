@@ -30,7 +30,7 @@ def _text_files():
 
 
 def test_the_check_sees_issue_numbers():
-    text = 'label="colored null (issue 13)"\n# Issues 7 and 13: the loop\nsee issue #8\n'
+    text = 'label="wander null (issue 13)"\n# Issues 7 and 13: the loop\nsee issue #8\n'
     assert issue_numbers(text) == ["1: issue 13", "2: Issues 7", "3: issue #8"]
     assert issue_numbers("a tissue 3 cm wide; an open issue; issue-free") == []
 

@@ -1,4 +1,4 @@
-"""False-positive rate of the colored-null loop on a real-record profile, with many replicates.
+"""False-positive rate of the wander-null loop on a real-record profile, with many replicates.
 
 The benchmark (``snakemake all``) runs ``seeds_none_real`` effect-free sessions of the
 real-record profile; they share the record's clean windows, so their interval is wide.
@@ -40,7 +40,7 @@ NOTHING = ("none", "not_identifiable", "error")
 
 
 def _run(args) -> list[dict]:
-    """Replicates ``start .. stop`` of the profile under the colored null."""
+    """Replicates ``start .. stop`` of the profile under the wander null."""
     start, stop, cfg_path, profiles_path, record_path, name = args
     cfg = yaml.safe_load(Path(cfg_path).read_text())["discrepancy"]
     bench = cfg["benchmark"]
@@ -51,7 +51,7 @@ def _run(args) -> list[dict]:
     for r in range(start, stop):
         rec, key = simulate_case("none", 0.0, r, seed=cfg["seed"], session=session, rules=rules, profile=prof,
                                  records=records)
-        (det,) = detect_nulls(rec, session.g, rules, ["colored"])
+        (det,) = detect_nulls(rec, session.g, rules, ["wander"])
         rows.append({"replicate": r, "window": key["noise_window"], "outcome": det["outcome"]})
     return rows
 

@@ -71,7 +71,7 @@ DISCREPANCY_STAGE = declare_stage(
         ("Real sessions: pose-residual excess observed and predicted by the joint model", SESSIONS_EXCESS),
         ("Real sessions re-simulated before and after what the loop names: gap to the measured residuals",
          SESSIONS_GAPS),
-        ("Discrepancy benchmark per noise profile: false-positive rate (colored and white null, and the oracle), "
+        ("Discrepancy benchmark per noise profile: false-positive rate (wander and white null, and the oracle), "
          "naming accuracy, outliers and pairs", f"{BENCH_DIR}/headline.csv"),
         ("Discrepancy benchmark: the loop against the oracle (the same tests with the true noise covariance), "
          "per profile and row", f"{BENCH_DIR}/oracle.csv"),

@@ -3,11 +3,11 @@
 Deterministic layer (pose residuals): :func:`discrepancy` fits the base model of Burkhard
 et al. (2024) and tests a library of candidate effects (:mod:`.effects`) as nested
 extensions (:mod:`.fit`, on the pose data of :mod:`.poses` and the model's residuals of
-:mod:`.residuals`), by default under the colored null: white per-pose noise plus a bias
-wander or a per-placement offset estimated jointly with the calibration (:mod:`.joint_noise`),
+:mod:`.residuals`), by default under the wander null: white per-pose noise plus a bias
+wander or a per-placement offset estimated jointly with the calibration (:mod:`.wander_model`),
 tests calibrated by a parametric bootstrap, outlier poses against the exact null of the
 largest studentised residual.  :mod:`.detect` chooses the loop of the null:
-:mod:`.wander_loop` (colored, its statistics in the subpackage :mod:`.colored`) or
+:mod:`.wander_loop` (wander, its statistics in the subpackage :mod:`.wander`) or
 :mod:`.white_loop` (white); what both share is one module per job: the decision
 :mod:`.rules`, the :mod:`.statistics` (gap, Holm, the MDE's non-centrality), the
 :mod:`.identifiability` checks before any test and the :mod:`.results` (candidate rows,
@@ -24,7 +24,7 @@ benchmark is ``accelcal_repro.discrepancy``.
 """
 
 from ..effects import EFFECT_IDS, EFFECTS
-from .colored import WanderError, WanderFit
+from .wander import WanderError, WanderFit
 from .detect import discrepancy
 from .figures import plot_allan
 from .fit import PoseData, fit, pose_data, pose_data_from_static

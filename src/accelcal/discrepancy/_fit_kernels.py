@@ -1,6 +1,6 @@
 """Compiled kernels of the discrepancy fits (numba, the optional ``fast`` extra).
 
-The white and colored loops evaluate the extended model thousands of times per
+The white and wander loops evaluate the extended model thousands of times per
 recording: every Levenberg–Marquardt iteration of every candidate fit, and every
 Gauss–Newton iteration of the leave-one-pose-out refits (a stack of ``n`` parameter
 vectors on ``n`` poses).  Each evaluation is a few thousand floating-point operations;

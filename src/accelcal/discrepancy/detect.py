@@ -1,9 +1,9 @@
 """The deterministic layer: which candidate effect do the pose residuals ask for?
 
-Two noise models for the null hypothesis (``Rules.null``).  ``colored`` (the default):
+Two noise models for the null hypothesis (``Rules.null``).  ``wander`` (the default):
 white per-pose noise times a common scale plus a bias wander estimated jointly with the
 calibration, likelihood-ratio tests calibrated by a parametric bootstrap, outlier poses,
-ambiguity between candidates and with the wander (:mod:`.colored`, :mod:`.wander_loop`).
+ambiguity between candidates and with the wander (:mod:`.wander`, :mod:`.wander_loop`).
 ``white``: white per-pose noise times a common scale and F-tests (:mod:`.white_loop`,
 the benchmark's negative control: on sessions whose bias wanders it names
 ``bias_drift`` far more often than α).  Both share the identifiability checks, the
@@ -17,15 +17,15 @@ from __future__ import annotations
 from .fit import PoseData
 from .results import DiscrepancyResult
 from .rules import Rules
-from .wander_loop import discrepancy_colored
+from .wander_loop import discrepancy_wander
 from .white_loop import discrepancy_white
 
 
 def discrepancy(data: PoseData, rules: Rules | None = None, report: bool = True) -> DiscrepancyResult:
     """Run the deterministic layer (module docstring) on one pose set.
 
-    ``report=False`` (colored null): the decisions without the final noise model's
-    intervals and excess reading (:func:`~.wander_loop.discrepancy_colored`: a benchmark's
+    ``report=False`` (wander null): the decisions without the final noise model's
+    intervals and excess reading (:func:`~.wander_loop.discrepancy_wander`: a benchmark's
     detection).
 
     Raises
@@ -35,8 +35,8 @@ def discrepancy(data: PoseData, rules: Rules | None = None, report: bool = True)
         needs at least 10).
     """
     rules = rules or Rules()
-    if rules.null == "colored":
-        return discrepancy_colored(data, rules, report)
+    if rules.null == "wander":
+        return discrepancy_wander(data, rules, report)
     return discrepancy_white(data, rules)
 
 

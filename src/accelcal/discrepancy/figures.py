@@ -61,37 +61,47 @@ def plot_allan(fig_or_axes, result: StochasticResult, title: str = "", wander_ch
                 raise StochasticError(f"{len(axs)} axes given for {n} result axes")
             fig = axs[0].figure
         for ax, a in zip(axs, result.axes):
-            t = a.taus
-            yerr = np.abs(np.vstack([a.adev_measured - a.adev_ci[:, 0], a.adev_ci[:, 1] - a.adev_measured]))
-            ax.errorbar(t, a.adev_measured, yerr=yerr, fmt="o", color="k", ms=3.5, capsize=2, lw=0.9,
-                        label="measured (all rests, 68 % CI)", zorder=4)
-            if np.any(np.isfinite(a.adev_longest_rest)):
-                ax.plot(t, a.adev_longest_rest, color="0.55", lw=0.9, label="measured, longest rest only", zorder=3)
-            ax.plot(t, a.adev_model_before, ls="--", color="C0", lw=1.2, label="white only (fit)")
-            ax.plot(t, a.adev_resim_before, ls="none", marker="s", mfc="none", color="C0", ms=4,
-                    label="white only, re-simulated")
-            named = " + ".join((TERMS[k].name if k in TERMS else k) for k in a.named) or "none"
-            if a.named:
-                ax.plot(t, a.adev_model_after, ls="-", color="C3", lw=1.4, label="white + named (fit)")
-                ax.plot(t, a.adev_resim_after, ls="none", marker="^", mfc="none", color="C3", ms=4,
-                        label="white + named, re-simulated")
-            ax.set(xscale="log", yscale="log", xlabel="averaging time τ [s]")
-            ax.set_title(f"{a.axis}: + {named}\ngap {a.gap_before:.1f} → {a.gap_after:.1f}", fontsize=8.5)
+            _allan_panel(ax, a)
             wc = (wander_check or {}).get("axes", {}).get(a.axis)
             if wc:
-                tw = np.asarray(wc["taus"], float)
-                band = np.asarray(wc["adev_predicted_band"], float)
-                ax.fill_between(tw, band[:, 0], np.minimum(band[:, 1], 10 * np.nanmax(a.adev_measured)), color="C2",
-                                alpha=0.18, lw=0, label="white + bias wander from the poses (95 %)")
-                ax.plot(tw, wc["adev_predicted"], color="C2", lw=1.2)
-                cmp = np.asarray(wc["compared"], bool)
-                ax.plot(tw[cmp], np.asarray(wc["adev_predicted"], float)[cmp], "D", color="C2", ms=3.5,
-                        mfc="none", label=f"compared: {wc['verdict']}")
+                _wander_band(ax, wc, 10 * np.nanmax(a.adev_measured))
         axs[0].set_ylabel(f"Allan deviation [{result.unit}]")
         axs[0].legend(loc="lower left", fontsize=6.5)
         if isinstance(fig_or_axes, Figure) and title:
             fig.suptitle(title, fontsize=9.5)
     return fig
+
+
+def _allan_panel(ax, a) -> None:
+    """One axis of :func:`plot_allan`: measured ADEV, the longest rest, the white-only and final models."""
+    t = a.taus
+    yerr = np.abs(np.vstack([a.adev_measured - a.adev_ci[:, 0], a.adev_ci[:, 1] - a.adev_measured]))
+    ax.errorbar(t, a.adev_measured, yerr=yerr, fmt="o", color="k", ms=3.5, capsize=2, lw=0.9,
+                label="measured (all rests, 68 % CI)", zorder=4)
+    if np.any(np.isfinite(a.adev_longest_rest)):
+        ax.plot(t, a.adev_longest_rest, color="0.55", lw=0.9, label="measured, longest rest only", zorder=3)
+    ax.plot(t, a.adev_model_before, ls="--", color="C0", lw=1.2, label="white only (fit)")
+    ax.plot(t, a.adev_resim_before, ls="none", marker="s", mfc="none", color="C0", ms=4,
+            label="white only, re-simulated")
+    named = " + ".join((TERMS[k].name if k in TERMS else k) for k in a.named) or "none"
+    if a.named:
+        ax.plot(t, a.adev_model_after, ls="-", color="C3", lw=1.4, label="white + named (fit)")
+        ax.plot(t, a.adev_resim_after, ls="none", marker="^", mfc="none", color="C3", ms=4,
+                label="white + named, re-simulated")
+    ax.set(xscale="log", yscale="log", xlabel="averaging time τ [s]")
+    ax.set_title(f"{a.axis}: + {named}\ngap {a.gap_before:.1f} → {a.gap_after:.1f}", fontsize=8.5)
+
+
+def _wander_band(ax, wc: dict, ceiling: float) -> None:
+    """What the bias wander from the poses predicts for the rests' ADEV (``allan_check`` of one axis), green."""
+    tw = np.asarray(wc["taus"], float)
+    band = np.asarray(wc["adev_predicted_band"], float)
+    ax.fill_between(tw, band[:, 0], np.minimum(band[:, 1], ceiling), color="C2",
+                    alpha=0.18, lw=0, label="white + bias wander from the poses (95 %)")
+    ax.plot(tw, wc["adev_predicted"], color="C2", lw=1.2)
+    cmp = np.asarray(wc["compared"], bool)
+    ax.plot(tw[cmp], np.asarray(wc["adev_predicted"], float)[cmp], "D", color="C2", ms=3.5,
+            mfc="none", label=f"compared: {wc['verdict']}")
 
 
 def _residual_panel(ax, det: dict, implication: dict | None, title: str):

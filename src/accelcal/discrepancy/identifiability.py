@@ -33,7 +33,7 @@ import numpy as np
 from ..effects import ADDITIVE, EFFECTS, HARMONIC, TEMPERATURE, effect
 from ..errors import AccelcalError
 from ..extended_model import harmonic_basis
-from .colored.problem import MIN_WANDER_DOF
+from .wander.problem import MIN_WANDER_DOF
 from .fit import Fit, PoseData, effect_columns, orthonormal_basis
 from .rules import Rules
 from .statistics import critical_noncentrality
@@ -102,8 +102,8 @@ def identifiability(data: PoseData, base: Fit, eid: str, rules: Rules, n_tests: 
     reasons = []
     n, q, k = len(data), base.q, e.size
     dof = n - q - k
-    # the colored null re-estimates the wander under the alternative too: it needs its dof
-    min_dof = MIN_WANDER_DOF if rules.null == "colored" else 1
+    # the wander null re-estimates the wander under the alternative too: it needs its dof
+    min_dof = MIN_WANDER_DOF if rules.null == "wander" else 1
     if e.covariate == TEMPERATURE:
         if data.temp is None:
             raise AccelcalError(f"{eid}: the recording has no temperature column (not applicable)")

@@ -42,7 +42,7 @@ class PoseData:
         Centres of the covariates (the means over the full pose set; a subset keeps them).
     t_start, t_end : ndarray, shape (n,), or None
         First and last sample time of each pose [s] (the interval its mean averages over:
-        the colored null needs them for the covariance of interval means).  None: unknown.
+        the wander null needs them for the covariance of interval means).  None: unknown.
     index : ndarray of int, shape (n,), or None
         Index of each pose in the recording's full pose set (a subset keeps it); None = ``0..n-1``.
     """

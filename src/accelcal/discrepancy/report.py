@@ -35,11 +35,11 @@ from ..summary import Summary
 from .detect import discrepancy
 from .fit import pose_data_from_static
 from .gyro_loop import gyro_layer
-from .joint_noise import describe_noise_model
 from .mag_loop import mag_layer
 from .stochastic import StochasticResult
 from .stochastic.implication import centred_pose_variance, pose_difference_variance
 from .stochastic.layer import DEFAULT_CANDIDATES, rest_segments, stochastic_layer
+from .wander_model import describe_noise_model
 from .summary import report_summary
 from .results import DiscrepancyResult
 from .rules import Rules
@@ -128,6 +128,29 @@ def _pose_mean_variance(model: dict, starts, durations) -> np.ndarray:
     return sum(centred_pose_variance(pose_difference_variance(k, v, starts, durations)) for k, v in model.items())
 
 
+def _extra_variance(stoch, w: np.ndarray, starts, durations) -> tuple[np.ndarray, np.ndarray]:
+    """Additional variance of each pose's residual (gradient rows ``w``) under the rests' named
+    terms over their white-only fit: extrapolated over the session, and short-term (each pose
+    mean carrying only the extra Allan variance at its own duration, no wander between poses:
+    the named terms not extrapolated beyond the rests' τ range, ~10 s)."""
+    dv = np.zeros_like(w)
+    dshort = np.zeros_like(w)
+    for k, a in enumerate(stoch.axes):
+        before = {t: v["value"] for t, v in a.fit_before.items()}
+        dv[:, k] = _pose_mean_variance(a.model_after, starts, durations) - _pose_mean_variance(before, starts, durations)
+        dshort[:, k] = model_avar(a.model_after, durations, stoch.fs) - model_avar(before, durations, stoch.fs)
+    return np.sum(w * w * np.clip(dv, 0, None), axis=1), np.sum(w * w * np.clip(dshort, 0, None), axis=1)
+
+
+def _two_sided(upper: float | None, alpha: float) -> tuple[float, str]:
+    """Two-sided p-value from the upper tail ``upper`` of the observed χ² and its verdict
+    (``None``: no degrees of freedom)."""
+    if upper is None:
+        return float("nan"), "no degrees of freedom"
+    p = min(1.0, 2 * min(upper, 1 - upper))
+    return p, "consistent" if p >= alpha else ("residuals exceed it" if upper < 0.5 else "it over-predicts")
+
+
 def rests_implication(det: DiscrepancyResult, stoch, starts, durations, alpha: float) -> dict:
     """What the noise terms named from the rests mean for the pose residuals of the final model
     (the terms extrapolated from the rests' τ range to the whole session).
@@ -172,26 +195,10 @@ def rests_implication(det: DiscrepancyResult, stoch, starts, durations, alpha: f
     if len(starts) != w.shape[0] or len(stoch.axes) != 3:
         raise AccelcalError(f"stochastic layer and deterministic layer disagree on the poses ({len(starts)} "
                             f"rests, {w.shape[0]} poses, {len(stoch.axes)} axes)")
-    dv = np.zeros_like(w)
-    for k, a in enumerate(stoch.axes):
-        before = {t: v["value"] for t, v in a.fit_before.items()}
-        dv[:, k] = _pose_mean_variance(a.model_after, starts, durations) - _pose_mean_variance(before, starts, durations)
-    extra = np.sum(w * w * np.clip(dv, 0, None), axis=1)
-    # Short-term reading: each pose mean only carries the extra Allan variance at its own
-    # duration (no wander between poses), i.e. the named terms without their extrapolation
-    # from the rests (τ up to ~10 s) to the whole session.
-    dshort = np.column_stack([
-        model_avar(a.model_after, durations, stoch.fs)
-        - model_avar({t: v["value"] for t, v in a.fit_before.items()}, durations, stoch.fs) for a in stoch.axes])
-    extra_short = np.sum(w * w * np.clip(dshort, 0, None), axis=1)
+    extra, extra_short = _extra_variance(stoch, w, starts, durations)
     s2 = f.sigma ** 2 + extra
     chi2 = float(np.sum(f.residuals ** 2 / s2))
-    if f.dof > 0:
-        upper = float(dist.chi2_sf(chi2, f.dof))
-        p = min(1.0, 2 * min(upper, 1 - upper))
-        verdict = "consistent" if p >= alpha else ("residuals exceed it" if upper < 0.5 else "it over-predicts")
-    else:
-        p, verdict = float("nan"), "no degrees of freedom"
+    p, verdict = _two_sided(float(dist.chi2_sf(chi2, f.dof)) if f.dof > 0 else None, alpha)
     return {
         "named_terms": {a.axis: list(a.named) if a.named else ["none"] for a in stoch.axes},
         "expected_excess": float(np.sqrt(np.mean(s2 / f.sigma ** 2))),
@@ -208,10 +215,10 @@ def rests_implication(det: DiscrepancyResult, stoch, starts, durations, alpha: f
 def noise_implication(det: DiscrepancyResult, stoch, starts, durations, alpha: float) -> dict:
     """Does the named noise model predict the pose residuals' excess over white noise?
 
-    Under the colored null the named noise model is the rests' white per-pose noise plus the
+    Under the wander null the named noise model is the rests' white per-pose noise plus the
     bias wander estimated jointly with the calibration (``det.noise_model``): the weighted
     χ² of the final least-squares residuals is then distributed as ``Σ μ_k χ²₁``
-    (:func:`accelcal.discrepancy.colored.excess_distribution`); the verdict is
+    (:func:`accelcal.discrepancy.wander.excess_distribution`); the verdict is
     ``consistent`` when the observed χ² lies in its central ``1 − α`` interval (two-sided
     p ≥ α, gamma approximation with the exact mean and variance).  That check uses the
     same residuals the wander was fitted to, so it says that a wander of this family *can*
@@ -219,7 +226,7 @@ def noise_implication(det: DiscrepancyResult, stoch, starts, durations, alpha: f
     for the Allan deviation of the rests, compared with the measured one where the wander
     should be visible.  ``rests_only`` keeps the reading of the terms named from the rests
     alone (:func:`rests_implication`).  Under the white null, the rests-only reading is
-    the implication (as before the colored null existed).
+    the implication (as before the wander null existed).
 
     Returns
     -------
@@ -231,20 +238,15 @@ def noise_implication(det: DiscrepancyResult, stoch, starts, durations, alpha: f
     """
     rests = rests_implication(det, stoch, starts, durations, alpha) if stoch is not None else {}
     nm = det.noise_model or {}
-    if det.rules.null != "colored" or not nm.get("estimated") or not det.colored:
+    if det.rules.null != "wander" or not nm.get("estimated") or not det.wander_summary:
         return rests
-    c = det.colored
+    c = det.wander_summary
     f = det.final
     dof = int(c["dof"])
     chi2 = float(np.sum(f.weighted ** 2))
     mean, var = c["chi2_mean"], c["chi2_var"]
-    if dof > 0 and var > 0:
-        k, th = mean ** 2 / var, var / mean
-        upper = float(dist.gamma_sf(chi2, k, scale=th))
-        p = min(1.0, 2 * min(upper, 1 - upper))
-        verdict = "consistent" if p >= alpha else ("residuals exceed it" if upper < 0.5 else "it over-predicts")
-    else:
-        p, verdict = float("nan"), "no degrees of freedom"
+    upper = float(dist.gamma_sf(chi2, mean ** 2 / var, scale=var / mean)) if dof > 0 and var > 0 else None
+    p, verdict = _two_sided(upper, alpha)
     term = nm.get("term", "none")
     named = {a: [term] if term != "none" else ["none"] for a in "xyz"}
     out = {
@@ -255,7 +257,7 @@ def noise_implication(det: DiscrepancyResult, stoch, starts, durations, alpha: f
         "expected_excess_short_term": rests.get("expected_excess_short_term", float("nan")),
         "observed_excess": c["excess_observed"],
         "chi2": chi2, "dof": dof, "p_value": p,
-        "gap_with_noise_terms": c["gap_colored_after"],
+        "gap_with_noise_terms": c["gap_wander_after"],
         "verdict": verdict,
         "explains_excess": bool(np.isfinite(p) and p >= alpha),
         # beyond the rests' pose noise: the white scale's share and the wander's (or offset's)

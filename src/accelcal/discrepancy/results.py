@@ -78,12 +78,12 @@ class Candidate:
 
 @dataclass(frozen=True)
 class OutlierTest:
-    """The outlier family of one round (colored null): its most outlying pose and the test.
+    """The outlier family of one round (wander null): its most outlying pose and the test.
 
     ``pose`` is the pose's index in the recording, ``t`` its mid time [s]: the pose of the
     largest studentised residual, ``studentised`` (GLS, at the round's wander); ``p_value``
     the family's p-value against the exact null of that maximum (``draws`` Monte Carlo
-    draws, :mod:`accelcal.discrepancy.colored.outliers`), ``p_adjusted`` after Holm over
+    draws, :mod:`accelcal.discrepancy.wander.outliers`), ``p_adjusted`` after Holm over
     the round; ``statistic`` the pose's mean-shift likelihood ratio (the wander
     re-estimated), ``delta_bic`` = ``−LR + 2 ln n``.
     """
@@ -152,7 +152,7 @@ class DiscrepancyResult:
     outlier_tests: tuple[OutlierTest, ...] = ()
     errors: tuple = ()
     final_data: PoseData | None = None
-    colored: dict = field(default_factory=dict)
+    wander_summary: dict = field(default_factory=dict)
 
     @property
     def effect(self) -> str:
@@ -160,14 +160,14 @@ class DiscrepancyResult:
 
     @property
     def not_identifiable(self) -> tuple[str, ...]:
-        """Candidates refused in round 1 and, under the colored null, those the last round
+        """Candidates refused in round 1 and, under the wander null, those the last round
         could not rule out against the wander (never one that was named)."""
         return tuple(self.not_identifiable_reasons)
 
     @property
     def not_identifiable_reasons(self) -> dict:
         out = {c.effect: list(c.reasons) for c in self.candidates if c.round == 1 and not c.identifiable}
-        if self.candidates and self.rules.null == "colored":
+        if self.candidates and self.rules.null == "wander":
             for c in self.candidates:
                 if c.ambiguous_with and c.effect not in self.effects:
                     out.setdefault(c.effect, list(c.reasons))
@@ -241,7 +241,7 @@ class DiscrepancyResult:
         (``no excess`` at level α: nothing to explain).  ``excess_status_white`` then asks
         the same of the final residuals: the named effects alone must bring them to the
         rests' noise.  ``excess_status`` asks it of the model the loop used: under the
-        colored null the named effects (and outlier poses) *with* the named noise terms
+        wander null the named effects (and outlier poses) *with* the named noise terms
         (white scale, bias wander or per-placement offset: ``excess_explained``, the final
         χ² inside the central 95 % of its predicted distribution); under the white null the
         two are the same.  Values: :data:`accelcal.discrepancy.schema.STATUS`.
@@ -249,17 +249,17 @@ class DiscrepancyResult:
         white = white_excess_status(p_before, p_after, self.rules.alpha)
         out = {"excess_status_white": white, "excess_status": white,
                "excess_status_model": "white per-pose noise of the rests"}
-        if self.rules.null != "colored":
+        if self.rules.null != "wander":
             return out
         nm = self.noise_model or {}
         if white in ("no excess", "untestable"):
             return out  # nothing to explain, or nothing to test it with: the same under any noise model
-        if not nm.get("estimated") or not self.colored or not self.colored.get("dof", 0) > 0:
+        if not nm.get("estimated") or not self.wander_summary or not self.wander_summary.get("dof", 0) > 0:
             return {**out, "excess_status": "untestable",
-                    "excess_status_model": "the colored null's noise model was not estimated"}
+                    "excess_status_model": "the wander null's noise model was not estimated"}
         term = nm.get("term", "none")
         model = "white per-pose noise of the rests x white scale" + ("" if term == "none" else f" + {term}")
-        status = "explained" if self.colored.get("excess_explained") else "not explained"
+        status = "explained" if self.wander_summary.get("excess_explained") else "not explained"
         by = [e for e in self.effects if e != "outlier_pose"]
         if self.outliers:
             by.append(f"{len(self.outliers)} outlier pose(s) left out")
@@ -290,7 +290,7 @@ class DiscrepancyResult:
             "noise_model": self.noise_model or _white_noise_model(self),
             "outliers": [o.to_dict() for o in self.outliers],
             "outlier_tests": [o.to_dict() for o in self.outlier_tests],
-            **self.colored,
+            **self.wander_summary,
             "not_applicable": dict(self.not_applicable),
             "candidates": [c.to_dict() for c in self.candidates],
             **self.statistics(),

@@ -1,6 +1,6 @@
 """The decision rules of the discrepancy loop (config ``discrepancy.rules``): :class:`Rules`.
 
-The loops (:mod:`.white_loop` under the white null, :mod:`.wander_loop` under the colored
+The loops (:mod:`.white_loop` under the white null, :mod:`.wander_loop` under the wander
 null; :func:`accelcal.discrepancy.detect.discrepancy` chooses) test every candidate effect
 of the library as a nested extension of the current model; what decides is here, the
 statistics in :mod:`.statistics`, the checks before any test in :mod:`.identifiability`,
@@ -17,10 +17,17 @@ from ..effects import EFFECT_IDS, effect
 from ..errors import AccelcalError
 
 CORRECTIONS = ("holm", "bonferroni", "none")
-#: The noise models of the null hypothesis: ``colored`` (white per-pose noise + a bias wander
+#: The noise models of the null hypothesis: ``wander`` (white per-pose noise + a bias wander
 #: estimated jointly, :mod:`.wander_loop`), ``white`` (white per-pose noise times a common scale:
 #: the F-test loop of this module).
-NULLS = ("colored", "white")
+NULLS = ("wander", "white")
+#: Earlier names of the nulls, still read (configs, reports): ``colored`` is the wander null.
+OLD_NULL_NAMES = {"colored": "wander"}
+
+
+def null_name(null: str) -> str:
+    """The current name of a null hypothesis (an earlier name, :data:`OLD_NULL_NAMES`, read as its new one)."""
+    return OLD_NULL_NAMES.get(null, null)
 
 
 @dataclass(frozen=True)
@@ -28,12 +35,12 @@ class Rules:
     """Decision rules of the loop (config ``discrepancy.rules``; defaults = config/config.yaml).
 
     ``null`` selects the noise model of the tests (:data:`NULLS`); ``n_boot`` and ``seed``
-    the parametric bootstrap of the colored null; ``outlier_pose`` / ``max_outliers`` the
-    outlier family (colored null only); ``max_wander_inflation`` when a candidate that did
+    the parametric bootstrap of the wander null; ``outlier_pose`` / ``max_outliers`` the
+    outlier family (wander null only); ``max_wander_inflation`` when a candidate that did
     not pass counts as not identifiable against the wander (:mod:`.wander_loop`).
     """
 
-    null: str = "colored"
+    null: str = "wander"
     alpha: float = 0.05
     correction: str = "holm"
     bic_threshold: float = 2.0
@@ -51,6 +58,7 @@ class Rules:
     max_wander_inflation: float = 3.0
 
     def __post_init__(self):
+        object.__setattr__(self, "null", null_name(self.null))
         if self.null not in NULLS:
             raise AccelcalError(f"null must be one of {', '.join(NULLS)}, got {self.null!r}")
         if int(self.n_boot) != self.n_boot or self.n_boot < 19:
@@ -58,7 +66,7 @@ class Rules:
         if self.max_outliers < 0 or not self.max_wander_inflation >= 1:
             raise AccelcalError("need max_outliers >= 0 and max_wander_inflation >= 1")
         family = len(self.candidates) + bool(self.outlier_pose)
-        if self.null == "colored" and (self.n_boot + 1) * self.alpha < family * (1 - 1e-9):
+        if self.null == "wander" and (self.n_boot + 1) * self.alpha < family * (1 - 1e-9):
             raise AccelcalError(f"n_boot = {self.n_boot} cannot reach Holm's first level alpha/{family} (the smallest "
                                 f"bootstrap p-value is 1/(n_boot + 1)): use n_boot >= {int(np.ceil(family / self.alpha)) - 1}")
         if not 0 < self.alpha < 1 or not 0 < self.power < 1:
@@ -80,4 +88,4 @@ class Rules:
         return cls(**{k: (tuple(v) if k == "candidates" else v) for k, v in cfg.items()})
 
 
-__all__ = ["CORRECTIONS", "NULLS", "Rules"]
+__all__ = ["CORRECTIONS", "NULLS", "OLD_NULL_NAMES", "Rules", "null_name"]

@@ -11,7 +11,7 @@ Two readings of the residual excess.  ``excess_status_white`` compares the resid
 the rests' white noise alone, before (base model) and after the named effects:
 ``explained`` there means the named *effects* bring the residuals down to the noise the
 rests show.  ``excess_status`` compares them with the model the loop used: under the
-colored null the named effects (and outlier poses) *with* the named noise terms (a white
+wander null the named effects (and outlier poses) *with* the named noise terms (a white
 scale, a bias wander or a per-placement offset, estimated jointly): ``explained`` there
 means that model predicts the scatter it leaves, and ``excess_explained_by`` says what
 carries it.  Under the white null the two keys agree.
@@ -23,6 +23,7 @@ import math
 
 from ..effects import EFFECT_IDS
 from ..errors import AccelcalError
+from .rules import null_name
 
 _EXCESS = {
     "no excess": "the base model's residuals are consistent with the rests' white pose noise at level alpha: "
@@ -31,7 +32,7 @@ _EXCESS = {
                  "that remains (chi-square inside the central 1 - alpha of its distribution)",
     "not explained": "the residuals exceed the rests' noise, and the model of this reading does not predict "
                      "the scatter that remains",
-    "untestable": "no residual degree of freedom, or (colored null) the noise model could not be estimated",
+    "untestable": "no residual degree of freedom, or (wander null) the noise model could not be estimated",
 }
 
 #: Every status key of the report (a dotted path into the JSON) and its values, with their meaning.
@@ -61,7 +62,7 @@ STATUS: dict[str, dict[str, str]] = {
         "not_tested": "the magnetometer loop did not run: no magnetometer, or columns no fit can use "
                       "(magnetometer.reason, one line); the accelerometer's loop ran",
     },
-    "null": {"colored": "white pose noise times a scale plus a bias wander or per-placement offset, estimated "
+    "null": {"wander": "white pose noise times a scale plus a bias wander or per-placement offset, estimated "
                         "jointly; bootstrap likelihood-ratio tests",
              "white": "white pose noise times a common scale; F-tests (the negative control)"},
     "excess_status": {k: v + " (this reading: the named effects and the named noise terms)" for k, v in
@@ -143,9 +144,27 @@ def _get(report: dict, path: str):
     return v
 
 
+#: Top-level keys of earlier reports and their current names (the time-correlated noise model
+#: was the ``colored`` null; it is the wander null now).
+OLD_REPORT_KEYS = {"gap_colored_before": "gap_wander_before", "gap_colored_after": "gap_wander_after"}
+
+
+def upgraded_report(report: dict) -> dict:
+    """``report`` (a copy) with the keys and null names of earlier versions read as the current
+    ones (:data:`OLD_REPORT_KEYS`, :data:`~accelcal.discrepancy.rules.OLD_NULL_NAMES`)."""
+    out = {OLD_REPORT_KEYS.get(k, k): v for k, v in report.items()}
+    if isinstance(out.get("null"), str):
+        out["null"] = null_name(out["null"])
+    if isinstance(out.get("rules"), dict) and isinstance(out["rules"].get("null"), str):
+        out["rules"] = {**out["rules"], "null": null_name(out["rules"]["null"])}
+    return out
+
+
 def statuses(report: dict) -> dict[str, str]:
     """The status values a report holds, by :data:`STATUS` key (missing keys left out; a
-    per-axis Allan verdict split into its axes' values)."""
+    per-axis Allan verdict split into its axes' values; a report of an earlier version read
+    through :func:`upgraded_report`)."""
+    report = upgraded_report(report)
     out = {}
     for key in STATUS:
         v = _get(report, key)
@@ -188,4 +207,5 @@ def white_excess_status(p_before: float, p_after: float, alpha: float) -> str:
     return "explained" if p_after >= alpha else "not explained"
 
 
-__all__ = ["REPORT_SCHEMA", "STATUS", "check_statuses", "statuses", "white_excess_status"]
+__all__ = ["OLD_REPORT_KEYS", "REPORT_SCHEMA", "STATUS", "check_statuses", "statuses", "upgraded_report",
+           "white_excess_status"]

@@ -16,7 +16,7 @@ import math
 
 def result_lines(det, unit: str | None = None) -> list[str]:
     """The deterministic layer: effects named, gaps, what was not identifiable, outlier poses,
-    the noise between poses of the colored null in words, the two readings of the excess,
+    the noise between poses of the wander null in words, the two readings of the excess,
     and the fits that failed (``unit``: of the data, for the noise term's sizes)."""
     s = det.statistics()
     then = f" (then {', '.join(det.effects[1:])})" if len(det.effects) > 1 else ""
@@ -29,8 +29,8 @@ def result_lines(det, unit: str | None = None) -> list[str]:
     for o in det.outliers:
         lines.append(f"  outlier pose {o.pose} at t = {o.t:.1f} s: shifted {o.shift_sigma:+.3g} sigma "
                      f"(p = {o.p:.3g}); gap {o.gap_before:.3g} -> {o.gap_after:.3g} without it")
-    if det.rules.null == "colored":
-        lines += _noise_lines(det.noise_model or {}, det.colored or {}, unit)
+    if det.rules.null == "wander":
+        lines += _noise_lines(det.noise_model or {}, det.wander_summary or {}, unit)
     by = s.get("excess_explained_by") or []
     lines.append(f"  excess: {s['excess_status']} with the named effects and noise terms"
                  + (f" ({', '.join(by)})" if by else "")
@@ -39,18 +39,18 @@ def result_lines(det, unit: str | None = None) -> list[str]:
     return lines
 
 
-def _noise_lines(nm: dict, colored: dict, unit: str | None) -> list[str]:
-    """The noise between poses estimated jointly with the calibration (colored null), in
+def _noise_lines(nm: dict, wander: dict, unit: str | None) -> list[str]:
+    """The noise between poses estimated jointly with the calibration (wander null), in
     words, and the residual excess it predicts."""
-    from .joint_noise import describe_noise_model
+    from .wander_model import describe_noise_model
 
     lines = []
     if nm:
         lines.append(f"  noise between poses: {describe_noise_model(nm, unit)}")
-    if _finite(colored.get("excess_predicted")):
-        lo, hi = colored["excess_predicted_interval"]
-        lines.append(f"  residual excess observed {colored['excess_observed']:.3g}, predicted by the noise model "
-                     f"{colored['excess_predicted']:.3g} (95 % interval {lo:.3g}-{hi:.3g})")
+    if _finite(wander.get("excess_predicted")):
+        lo, hi = wander["excess_predicted_interval"]
+        lines.append(f"  residual excess observed {wander['excess_observed']:.3g}, predicted by the noise model "
+                     f"{wander['excess_predicted']:.3g} (95 % interval {lo:.3g}-{hi:.3g})")
     return lines
 
 

@@ -1,11 +1,11 @@
-"""The deterministic layer under the colored null: the naming loop with the bias wander in the noise.
+"""The deterministic layer under the wander null: the naming loop with the bias wander in the noise.
 
-Each round (module :mod:`accelcal.discrepancy.colored` for the statistics):
+Each round (module :mod:`accelcal.discrepancy.wander` for the statistics):
 
 1. The current model (base + what has been named, without the poses named as outliers)
    is fitted by weighted least squares (:func:`accelcal.discrepancy.fit.fit`) and
    linearised; the bias wander ``(s, τ)`` and its correlation ``φ`` between the sensor
-   axes (a common-mode share, :func:`~.colored.fit_common`) are estimated by REML jointly
+   axes (a common-mode share, :func:`~.wander.fit_common`) are estimated by REML jointly
    with it; the round's tests, MDEs and LOPO stand at ``φ̂``.
 2. Every applicable candidate effect gets the identifiability checks of the white loop
    (covariate, degrees of freedom, absorbed fraction, the design's MDE below ``max_mde_g``
@@ -18,7 +18,7 @@ Each round (module :mod:`accelcal.discrepancy.colored` for the statistics):
 3. Tests: the bootstrap likelihood-ratio test of every identifiable candidate, calibrated
    on the same replicates of the fitted null, and the outlier family (the largest
    studentised residual among the poses, against its exact null under the round's
-   wander, :mod:`.colored.outliers`: thousands of draws where the decision needs them,
+   wander, :mod:`.wander.outliers`: thousands of draws where the decision needs them,
    not the bootstrap's floor of 0.005); Holm's step-down over the round's family (the
    candidates and, if enabled, the outlier family: one family, level α).
    The bootstrap has ``n_boot`` replicates; a test stops
@@ -31,7 +31,7 @@ Each round (module :mod:`accelcal.discrepancy.colored` for the statistics):
    a strong effect with one replicate above it (p = 0.01, adjusted 0.06) was missed.  Only
    the power changes: a test that passes at ``n_boot`` keeps its p-value, and the first
    ``n_boot`` replicates are the same either way.  An effect passes when its adjusted p-value is ≤ α,
-   ``ΔBIC = −LR + k ln n < −bic_threshold`` (``k`` its parameters) and the colored leave-one-pose-out PRESS
+   ``ΔBIC = −LR + k ln n < −bic_threshold`` (``k`` its parameters) and the wander leave-one-pose-out PRESS
    (GLS prediction of each pose from the others, both models under the alternative's
    REML wander) falls; the outlier family when its adjusted p-value is ≤ α.
 4. Passing candidates the data cannot tell apart (neither adds to the other: the
@@ -69,9 +69,9 @@ import numpy as np
 
 from .. import distributions as dist
 from ..errors import AccelcalError
-from . import colored as C
+from . import wander as C
 from .fit import Fit, PoseData, effect_columns, effect_slices, evaluate, fit, lopo
-from .joint_noise import colored_summary, linearise_noise, noise_model_dict, repeated_placements
+from .wander_model import linearise_noise, noise_model_dict, repeated_placements, wander_summary
 from .identifiability import applicable, identifiability
 from .results import Candidate, DiscrepancyResult, OutlierPose, OutlierTest
 from .rules import Rules
@@ -115,8 +115,8 @@ def _gls_estimate(prob: C.Problem, X1: np.ndarray, w1: C.WanderFit, aug: Fit, sl
     return est.tolist(), np.sqrt(np.clip(np.diag(cov)[-k:], 0.0, None)).tolist()
 
 
-def discrepancy_colored(data: PoseData, rules: Rules, report: bool = True) -> DiscrepancyResult:
-    """The loop of the module docstring on one pose set (``rules.null == 'colored'``).
+def discrepancy_wander(data: PoseData, rules: Rules, report: bool = True) -> DiscrepancyResult:
+    """The loop of the module docstring on one pose set (``rules.null == 'wander'``).
 
     ``report``: also the final noise model with its profile-likelihood intervals and the
     gaps and excess under it (the report's; False: the noise model of the last round on the
@@ -165,7 +165,7 @@ def discrepancy_colored(data: PoseData, rules: Rules, report: bool = True) -> Di
 @dataclass
 class _RoundNoise:
     """The noise model a round stood at: its pose set and fit, their linearised problem, the
-    :class:`~.colored.Basis` of the fit's columns and the REML noise (:func:`linearise_noise`)."""
+    :class:`~.wander.Basis` of the fit's columns and the REML noise (:func:`linearise_noise`)."""
 
     data: PoseData
     fit: Fit
@@ -229,9 +229,9 @@ def _round(st: _LoopState, prob: C.Problem, noise: tuple, remaining, test_outlie
            rng) -> tuple[list[_Tested], OutlierTest | None, C.RoundTests]:
     """One round: identifiability, the bootstrap tests, Holm, ΔBIC, LOPO, ambiguity.
 
-    ``noise``: the :class:`~.colored.Basis` of the current model and its REML noise on
+    ``noise``: the :class:`~.wander.Basis` of the current model and its REML noise on
     ``prob`` (:func:`linearise_noise`).  Returns the candidates' rows, the outlier
-    family's test (or None) and the round's :class:`~.colored.RoundTests`.
+    family's test (or None) and the round's :class:`~.wander.RoundTests`.
     """
     bas0, null = noise
     prepared = [_prepare(st.data, st.current, prob, null, eid, rules, len(remaining), rnd) for eid in remaining]
@@ -256,7 +256,7 @@ def _round(st: _LoopState, prob: C.Problem, noise: tuple, remaining, test_outlie
 
 
 def _more_replicates_could_pass(rules: Rules):
-    """``extend(counts, n, final)`` for :func:`~.colored.round_tests`: the running tests
+    """``extend(counts, n, final)`` for :func:`~.wander.round_tests`: the running tests
     that do not pass Holm at their p-value ``(1 + counts)/(n + 1)`` but would at the lower
     end of the 99 % Clopper–Pearson interval of their exceedance probability (floored at the
     smallest p-value of the grown bootstrap).  The stopped tests keep their p-value
@@ -415,6 +415,12 @@ def _resolve_ambiguous(prob: C.Problem, tested: list[_Tested], alpha: float) -> 
                 drop.add(i)
             elif not j_given_i:
                 drop.add(j)
+    return _relabelled(tested, amb, drop)
+
+
+def _relabelled(tested: list[_Tested], amb: dict, drop: set) -> list[_Tested]:
+    """``tested`` with the ambiguous pairs (``amb``: index -> the effects it cannot be told
+    apart from) reported ``not_identifiable`` and the explained ones (``drop``) ``dominated``."""
     out = []
     for k, r in enumerate(tested):
         c = r.candidate
@@ -460,11 +466,11 @@ def _prepare(data: PoseData, current: Fit, prob: C.Problem, null: C.WanderFit, e
     Xe = prob.columns(effect_columns(current.p, data, current.effects, eid))
     info = C.effect_information(prob, prob.X0, Xe, null.t, null.q_rel)
     lam = critical_noncentrality(Xe.shape[1], ident.dof, rules.alpha / max(n_tests, 1), rules.power)
-    mde = _mde(info.colored, lam) * math.sqrt(null.white_scale)
+    mde = _mde(info.wander, lam) * math.sqrt(null.white_scale)
     with np.errstate(invalid="ignore"):
         ratio = np.where(np.asarray(ident.mde) > 0, mde / np.asarray(ident.mde), np.inf)
     mde_data = np.asarray(ident.mde_data) * ratio
-    infl = _inflation(info.colored, info.scaled_white)
+    infl = _inflation(info.wander, info.scaled_white)
     # the gate stays the design's (the rests' noise, as in the white loop): the noise fitted
     # under the current model also carries the effects not yet named, which would make a
     # strong effect refuse itself
@@ -484,7 +490,7 @@ def _result(data: PoseData, rules: Rules, base: Fit, lopo_base: np.ndarray, st: 
             report: bool = True) -> DiscrepancyResult:
     cur_data, current = st.data, st.current
     lopo_final = lopo(current, cur_data) if not st.outliers else _lopo_full(current, cur_data, data)
-    wander, prob, colored = None, None, {}
+    wander, prob, summary_w = None, None, {}
     wander_error = st.wander_error
     _, skipped = applicable(data, rules.candidates)
     if not report:
@@ -507,12 +513,12 @@ def _result(data: PoseData, rules: Rules, base: Fit, lopo_base: np.ndarray, st: 
     except (AccelcalError, np.linalg.LinAlgError, ValueError) as err:
         st.errors.append(f"noise model fit failed: {err}")
     if wander is not None:
-        colored = colored_summary(data, base, prob, wander, cur_data, current)
+        summary_w = wander_summary(data, base, prob, wander, cur_data, current)
     placement = repeated_placements(cur_data, current, wander, alpha=rules.alpha) if wander is not None else None
     return DiscrepancyResult(tuple(st.named), tuple(st.rows), skipped, base, current, lopo_base, lopo_final, data,
                              rules, noise_model=noise_model_dict(wander, prob, wander_error, placement),
                              outliers=tuple(st.outliers), outlier_tests=tuple(st.outlier_tests),
-                             errors=tuple(st.errors), final_data=cur_data, colored=colored)
+                             errors=tuple(st.errors), final_data=cur_data, wander_summary=summary_w)
 
 
 def _lopo_full(current: Fit, cur_data: PoseData, data: PoseData) -> np.ndarray:

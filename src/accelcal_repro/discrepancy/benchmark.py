@@ -13,7 +13,7 @@ of that recording itself), added to the whole time series.
 
 Hidden effects are sized in units of their *oracle* minimum detectable effect: the size
 at which the loop's nested F-test (level ``α/m`` over the ``m`` tests of its first round:
-the candidates and, if enabled, the outlier family of the colored null; the configured
+the candidates and, if enabled, the outlier family of the wander null; the configured
 power) would detect the effect along its random direction ``d`` if it knew
 the true covariance of the pose residuals under the profile (generalised least squares
 with :func:`accelcal_repro.discrepancy.profiles.pose_mean_covariance`), computed on the
@@ -36,7 +36,7 @@ Every recording draws from its own stream, derived from the config seed, its pro
 and replicate (:func:`accelcal_repro.montecarlo.grid_seed`), so it does not depend on the
 chunking.  Detection (:func:`detect_case`) gets the recording only (time, integer counts,
 temperature: what a user's CSV holds), never the key, and runs the loop under each
-requested null hypothesis on the same pose means (``colored``, and ``white``: the loop of
+requested null hypothesis on the same pose means (``wander``, and ``white``: the loop of
 the white-noise loop, the negative control).  Scoring: :mod:`accelcal_repro.discrepancy.scoring`.
 """
 
@@ -52,7 +52,7 @@ from accelcal.discrepancy.detect import discrepancy
 from accelcal.effects import EFFECT_IDS, effect
 from accelcal.discrepancy.fit import Fit, PoseData, evaluate, fit_at, forward, pose_data, pose_data_from_static
 from accelcal.discrepancy.identifiability import Identifiability, applicable, identifiability
-from accelcal.discrepancy.rules import Rules
+from accelcal.discrepancy.rules import Rules, null_name
 from accelcal.discrepancy.statistics import critical_noncentrality
 from accelcal.errors import AccelcalError
 from accelcal.evaluation import residual_sigma
@@ -71,7 +71,7 @@ OUTLIER = "outlier_pose"
 CONSTANT_TEMPERATURE = "temperature_const"
 ERROR = "error"
 #: The null hypotheses of the loop the benchmark can compare.
-NULLS = ("colored", "white")
+NULLS = ("wander", "white")
 #: Largest number of pose designs drawn until every candidate is identifiable on the truth.
 MAX_REDRAWS = 20
 
@@ -316,29 +316,21 @@ def simulate_case(truth: str, size_mde: float, replicate: int, *, seed: int, ses
     sensor = _draw_sensor(rng, ss)
     phase = rng.uniform(0, 2 * np.pi)
     effs = effects_of(truth)
-    dirs = {e: rng.standard_normal(effect(e).size) for e in effs}
-    dirs = {e: d / np.linalg.norm(d) for e, d in dirs.items()}
+    dirs = {e: _unit(rng.standard_normal(effect(e).size)) for e in effs}  # the effects' directions
     noise_rng = np.random.default_rng(rng.integers(2 ** 63))
     design = _draw_design(rng, ss, profile, rules, sensor, phase, truth)
     t, win, n_eff = design.t, design.windows, design.n_eff
 
-    # Oracle: the covariance of the pose residuals the profile implies (unit of g²).
-    w = -design.base.J[:, :3] * design.base.sigma[:, None]  # ∂r/∂z = -∂r/∂b (unweighted)
-    oracle = Oracle.build(design.data, design.p_true,
-                          pose_residual_covariance(profile, t[win[:, 0]], n_eff / ss.rate, n_eff, ss.rate, w))
+    oracle, w = _oracle(design, profile, ss)
     # the loop's first round tests the candidates and the outlier family together (Holm)
     family = len(design.candidates) + bool(rules.outlier_pose)
     params, key_eff = _effect_sizes(design, oracle, dirs, size_mde, rules, family)
 
-    temp = design.temp
-    if truth == CONSTANT_TEMPERATURE:
-        temp = np.full_like(t, ss.temp_mean + ss.temp_amplitude * np.sin(phase))
-    temp = np.round(temp / ss.temp_resolution) * ss.temp_resolution
+    temp = _temperature(design, ss, truth, phase)
     # Centre the covariates as the fitter does (mean over the poses), so that the injected
     # parameters are what the extended model estimates.
-    dt = t - design.t_mid.mean()
     dtemp = temp - (design.temp_pose.mean() if truth != CONSTANT_TEMPERATURE else ss.temp_mean)
-    z = forward(design.x, sensor.M, sensor.bias, params, dt=dt, dtemp=dtemp)
+    z = forward(design.x, sensor.M, sensor.bias, params, dt=t - design.t_mid.mean(), dtemp=dtemp)
     z = z + simulate_profile(profile, noise_rng, len(t), ss.rate, replicate=int(replicate), records=records)
     z = z + placement_offsets(profile, noise_rng, ss.rest_windows(len(t))[:, 0], len(t))
 
@@ -349,18 +341,11 @@ def simulate_case(truth: str, size_mde: float, replicate: int, *, seed: int, ses
     # Real-noise profiles reuse the windows of one record: the scoring counts independent ones.
     window = window_of(profile, replicate, len(records[profile.real]), len(t))[0] if profile.real else -1
 
-    key = {
-        "profile": profile.name, "profile_kind": profile.kind, "truth": truth, "expected": expected_outcome(truth),
-        "effects_injected": "+".join(effs) if truth != CONSTANT_TEMPERATURE else "temperature",
-        "size_mde": float(size_mde), "replicate": int(replicate), "noise_window": window, "n_poses": ss.n_poses,
-        "redraws": design.redraws,
-        **outlier, **key_eff,
-        **{f"absorbed_{e}": design.identifiability[e].absorbed for e in EFFECT_IDS if e in design.identifiability},
-        **{f"bias_{a}": float(v) for a, v in zip("xyz", sensor.bias)},
-        **{f"sensitivity_{a}": float(v) for a, v in zip("xyz", sensor.sensitivity)},
-        **{f"nonorth_deg_{k}": float(v) for k, v in zip(("xy", "zx", "zy"), np.rad2deg(sensor.nonorth))},
-        "temp_range": float(np.ptp(temp)),
-    }
+    key = {"profile": profile.name, "profile_kind": profile.kind, "truth": truth, "expected": expected_outcome(truth),
+           "effects_injected": "+".join(effs) if truth != CONSTANT_TEMPERATURE else "temperature",
+           "size_mde": float(size_mde), "replicate": int(replicate), "noise_window": window, "n_poses": ss.n_poses,
+           "redraws": design.redraws, **outlier, **key_eff, **_sensor_columns(design, sensor),
+           "temp_range": float(np.ptp(temp))}
     return rec, key
 
 
@@ -457,8 +442,9 @@ def _effect_sizes(design: _Design, oracle: Oracle, dirs: dict, size_mde: float, 
 
 
 def null_available(null: str) -> bool:
-    """Can this library's loop test under ``null``?  ``white`` always (the white-noise loop); ``colored``
-    once :class:`~accelcal.discrepancy.rules.Rules` has the ``null`` setting."""
+    """Can this library's loop test under ``null``?  ``white`` always (the white-noise loop); ``wander``
+    once :class:`~accelcal.discrepancy.rules.Rules` has the ``null`` setting (earlier names read as their new one)."""
+    null = null_name(null)
     if null not in NULLS:
         raise AccelcalError(f"unknown null hypothesis {null!r}; known: {', '.join(NULLS)}")
     return null == "white" or "null" in {f.name for f in dataclasses.fields(Rules)}
@@ -469,7 +455,7 @@ def nulls_for(truth: str, nulls: dict) -> list[str]:
     maps each null to ``all``, ``effect_free`` (only the ``none`` rows) or ``none``; the
     nulls this library lacks are left out (:func:`null_available`)."""
     out = []
-    for null, rows in nulls.items():
+    for null, rows in ((null_name(k), v) for k, v in nulls.items()):
         if rows not in ("all", "effect_free", "none"):
             raise AccelcalError(f"benchmark.nulls.{null}: {rows!r} is not all, effect_free or none")
         if null_available(null) and (rows == "all" or (rows == "effect_free" and truth == NONE)):
@@ -482,7 +468,7 @@ def rules_with_null(rules: Rules, null: str) -> Rules:
     if not null_available(null):
         raise AccelcalError(f"the discrepancy loop of this library has no {null!r} null hypothesis")
     if "null" in {f.name for f in dataclasses.fields(Rules)}:
-        return dataclasses.replace(rules, null=null)
+        return dataclasses.replace(rules, null=null_name(null))
     return rules
 
 
@@ -550,6 +536,35 @@ def detect_case(rec: Recording, g: float, rules: Rules) -> dict:
         return {"null": _null_of(rules), "outcome": ERROR, "effect": "", "effects": "",
                 "error": str(err).splitlines()[0]}
     return _detect(data, rules)
+
+
+def _sensor_columns(design: _Design, sensor: _Sensor) -> dict:
+    """The key's columns of the drawn sensor and of the candidates' absorbed fractions."""
+    return {**{f"absorbed_{e}": design.identifiability[e].absorbed for e in EFFECT_IDS if e in design.identifiability},
+            **{f"bias_{a}": float(v) for a, v in zip("xyz", sensor.bias)},
+            **{f"sensitivity_{a}": float(v) for a, v in zip("xyz", sensor.sensitivity)},
+            **{f"nonorth_deg_{k}": float(v) for k, v in zip(("xy", "zx", "zy"), np.rad2deg(sensor.nonorth))}}
+
+
+def _temperature(design: _Design, ss: Session, truth: str, phase: float) -> np.ndarray:
+    """The recorded temperature (constant for ``temperature_const``), at the sensor's resolution."""
+    temp = design.temp
+    if truth == CONSTANT_TEMPERATURE:
+        temp = np.full_like(design.t, ss.temp_mean + ss.temp_amplitude * np.sin(phase))
+    return np.round(temp / ss.temp_resolution) * ss.temp_resolution
+
+
+def _oracle(design: _Design, profile: NoiseProfile, ss: Session) -> tuple[Oracle, np.ndarray]:
+    """The oracle of a design: the covariance of the pose residuals the profile implies (unit
+    of g²), and the residuals' gradients ``∂r/∂z`` (unweighted)."""
+    w = -design.base.J[:, :3] * design.base.sigma[:, None]  # ∂r/∂z = -∂r/∂b
+    t, win, n_eff = design.t, design.windows, design.n_eff
+    cov = pose_residual_covariance(profile, t[win[:, 0]], n_eff / ss.rate, n_eff, ss.rate, w)
+    return Oracle.build(design.data, design.p_true, cov), w
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / np.linalg.norm(v)
 
 
 __all__ = ["CONSTANT_TEMPERATURE", "ERROR", "NONE", "NOT_IDENTIFIABLE", "NULLS", "OUTLIER", "Oracle", "Session",

@@ -40,7 +40,7 @@ ADIS_CHECK = "results/discrepancy/adis/session_check_summary.csv"
 FPR_COLORED = Claim(
     "discrepancy", "fpr_colored_null_every_profile",
     "Goal: under every noise profile of the benchmark (white, rounding, Gauss-Markov, flicker, "
-    "random walk, the Xsens and ADIS16405 fits and the ADIS16405 record itself), the loop with the colored null "
+    "random walk, the Xsens and ADIS16405 fits and the ADIS16405 record itself), the loop with the wander null "
     "names an effect or outlier on at most alpha of effect-free sessions: reproduced iff for every profile the "
     "exact 95% interval reaches down to alpha and its upper end is at most 2 alpha (a profile with too few "
     "recordings for that, where the upper end exceeds 2 alpha even with no false positive, cannot pass: then the "
@@ -63,7 +63,7 @@ FPR_WHITE_WHITE = Claim(
 NAMING = Claim(
     "discrepancy", "naming_at_3mde_every_profile",
     "Goal: each effect hidden at 3 times its oracle minimum detectable effect is named first by the "
-    "colored-null loop with the design power under every noise profile: reproduced iff for every (profile, "
+    "wander-null loop with the design power under every noise profile: reproduced iff for every (profile, "
     "effect) the upper end of the exact 95% interval of the naming accuracy at 3 MDE is at least the power (a row "
     "with too few recordings for the rule to fail, where the upper end reaches the power even with no success, "
     "cannot fail: then the claim is not testable at this scale unless another row fails)",
@@ -71,7 +71,7 @@ NAMING = Claim(
 OUTLIERS = Claim(
     "discrepancy", "outlier_pose_named",
     "Goal: one pose shifted by 3 times the minimum detectable shift is named outlier_pose at its "
-    "pose under every noise profile (colored null): reproduced iff the upper end of the exact 95% interval of that "
+    "pose under every noise profile (wander null): reproduced iff the upper end of the exact 95% interval of that "
     "accuracy is at least the power for every profile (a profile with too few recordings for the rule to fail, "
     "where the upper end reaches the power even with no success, cannot fail: then the claim is not testable at "
     "this scale unless another profile fails)",
@@ -79,14 +79,14 @@ OUTLIERS = Claim(
 PAIRS = Claim(
     "discrepancy", "two_effects_named",
     "Goal: two effects hidden at once, each at 3 times its oracle MDE, are both named (in any order, "
-    "nothing else) under every noise profile (colored null): reproduced iff the upper end of the exact 95% "
+    "nothing else) under every noise profile (wander null): reproduced iff the upper end of the exact 95% "
     "interval of that accuracy is at least the power for every profile and pair (a row with too few recordings "
     "for the rule to fail, where the upper end reaches the power even with no success, cannot fail: then the "
     "claim is not testable at this scale unless another row fails)",
     "both named")
 ORACLE_AGREEMENT = Claim(
     "discrepancy", "oracle_agreement_every_profile",
-    "Goal: on recordings it has not seen, the colored-null loop decides as well as an oracle that knows each "
+    "Goal: on recordings it has not seen, the wander-null loop decides as well as an oracle that knows each "
     "recording's true noise covariance and runs the same nested tests with it (GLS, nothing estimated): under every "
     "noise profile the loop's named set (effects and outlier poses) equals the oracle's on at least 95% of the "
     "recordings: reproduced iff for every profile the upper end of the exact 95% interval of that agreement is at "
@@ -277,9 +277,9 @@ def _over_rows(claim: Claim, d: pd.DataFrame, passed: np.ndarray, rule: str, *, 
 
 def _fpr_rows(summary, profiles_table, alpha, nulls) -> list[dict]:
     rows = []
-    fc = _fpr(summary, "colored")
-    if "colored" not in nulls or not len(fc):
-        rows.append(_unavailable(FPR_COLORED, "colored"))
+    fc = _fpr(summary, "wander")
+    if "wander" not in nulls or not len(fc):
+        rows.append(_unavailable(FPR_COLORED, "wander"))
     else:
         keep = testable("fpr_upper", sample_sizes(fc), alpha=alpha)[0]
         ok = _fpr_passes(fc, alpha)
@@ -321,9 +321,9 @@ def _fpr_rows(summary, profiles_table, alpha, nulls) -> list[dict]:
 
 
 def _accuracy_rows(summary, power, nulls) -> list[dict]:
-    if "colored" not in nulls or not len(summary[summary.null == "colored"]):
-        return [_unavailable(c, "colored") for c in (NAMING, OUTLIERS, PAIRS)]
-    s = summary[summary.null == "colored"]
+    if "wander" not in nulls or not len(summary[summary.null == "wander"]):
+        return [_unavailable(c, "wander") for c in (NAMING, OUTLIERS, PAIRS)]
+    s = summary[summary.null == "wander"]
     out = []
     for claim, sel in ((NAMING, ~s.effect.isin((NONE, OUTLIER)) & ~s.effect.str.contains("+", regex=False)
                         & ~s.effect.str.endswith("_const")),
@@ -346,9 +346,9 @@ def _accuracy_rows(summary, power, nulls) -> list[dict]:
 
 
 def _oracle_row(summary: pd.DataFrame, nulls) -> dict:
-    d = summary[(summary.null == "colored") & (summary.metric == "oracle_agreement")]
-    if "colored" not in nulls or not len(d):
-        return ORACLE_AGREEMENT.not_reproducible("the benchmark ran no oracle beside the colored null "
+    d = summary[(summary.null == "wander") & (summary.metric == "oracle_agreement")]
+    if "wander" not in nulls or not len(d):
+        return ORACLE_AGREEMENT.not_reproducible("the benchmark ran no oracle beside the wander null "
                                                  "(discrepancy.benchmark.oracle)")
     target = 0.95
     keep = testable("power", sample_sizes(d), power=target)[0]

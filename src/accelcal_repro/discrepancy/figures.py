@@ -2,7 +2,7 @@
 Figures, :func:`accelcal.plotting.save_figure` writes them).  Each is drawn from the
 stage's tidy tables only.
 
-* :func:`plot_fpr`: false-positive rate per noise profile, colored vs white null, exact 95 % CIs.
+* :func:`plot_fpr`: false-positive rate per noise profile, wander vs white null, exact 95 % CIs.
 * :func:`plot_confusion`: one confusion matrix (row of the benchmark × outcome) per profile.
 * :func:`plot_power`: detection rate vs size (power curves) and naming accuracy per profile.
 * :func:`plot_rows`: the outlier-pose and two-effect rows per profile, both nulls.
@@ -31,7 +31,7 @@ from .benchmark import CONSTANT_TEMPERATURE, ERROR, NONE, NOT_IDENTIFIABLE, OUTL
 LABELS = {NONE: "none", NOT_IDENTIFIABLE: "not identif.", CONSTANT_TEMPERATURE: "temp. (T const)",
           ERROR: "error", OUTLIER: "outlier pose", **{e.id: e.label for e in EFFECTS.values()}}
 COLORS = {e: f"C{i}" for i, e in enumerate(EFFECT_IDS)}
-NULL_STYLE = {"colored": {"color": "C0", "marker": "o", "label": "colored null (time-correlated noise)"},
+NULL_STYLE = {"wander": {"color": "C0", "marker": "o", "label": "wander null (time-correlated noise)"},
               "white": {"color": "C3", "marker": "s", "label": "white null (negative control)"},
               "oracle": {"color": "C2", "marker": "^", "label": "oracle (the same tests, true noise covariance)"}}
 
@@ -41,7 +41,7 @@ def _label(x: str) -> str:
 
 
 def _main_null(nulls) -> str:
-    return "colored" if "colored" in set(nulls) else sorted(set(nulls))[0]
+    return "wander" if "wander" in set(nulls) else sorted(set(nulls))[0]
 
 
 def plot_fpr(summary: pd.DataFrame, profiles_table: pd.DataFrame, alpha: float, profiles):
@@ -130,9 +130,9 @@ def plot_confusion(scores: pd.DataFrame, size_mde: float, profiles, null: str | 
 
 
 def plot_power(rates: pd.DataFrame, power: float, profiles, curve_profiles, sizes):
-    """Top: detection rate vs size for the power-curve profiles (colored null solid, white
+    """Top: detection rate vs size for the power-curve profiles (wander null solid, white
     dashed where it ran, the oracle dotted); bottom: naming accuracy (effect named first) per profile at the main ``sizes``
-    (every profile has them), colored null."""
+    (every profile has them), wander null."""
     effects = [e for e in EFFECT_IDS if e in set(rates.truth)]
     main = _main_null(rates.null)
     cmap = plt.get_cmap("tab10")
@@ -141,7 +141,7 @@ def plot_power(rates: pd.DataFrame, power: float, profiles, curve_profiles, size
         for j, e in enumerate(effects):
             ax = axs[0, j]
             for k, prof in enumerate(curve_profiles):
-                for null, ls in (("colored", "-"), ("white", "--"), ("oracle", ":")):
+                for null, ls in (("wander", "-"), ("white", "--"), ("oracle", ":")):
                     r = rates[(rates.truth == e) & (rates.profile == prof) & (rates.null == null)].sort_values(
                         "size_mde")
                     if not len(r):

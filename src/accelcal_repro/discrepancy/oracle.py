@@ -14,7 +14,7 @@ fit: an effect moves a pose residual by ~1e-4 of g, the neglected terms are ~1e-
   the likelihood ratio of current vs current + effect, ``LR = χ²(X) − χ²([X, J_e])`` under
   the true covariance, exactly ``χ²_k`` without the effect;
 * outlier family: the largest studentised residual ``max_i |(P r)_i|/sqrt(P_ii)`` against
-  its exact null (:func:`accelcal.discrepancy.colored.max_null_pvalue`, known variance);
+  its exact null (:func:`accelcal.discrepancy.wander.max_null_pvalue`, known variance);
   a named outlier is a free shift of its pose (its indicator joins the columns);
 * Holm over the round's family at level α; an effect passes with ``ΔBIC = −LR + k ln n <
   −bic_threshold`` and a leave-one-pose-out PRESS (GLS, true covariance) that falls;
@@ -34,7 +34,7 @@ import math
 import numpy as np
 
 from accelcal import distributions as dist
-from accelcal.discrepancy.colored import max_null_pvalue
+from accelcal.discrepancy.wander import max_null_pvalue
 from accelcal.discrepancy.fit import PoseData, effect_columns, fit
 from accelcal.discrepancy.identifiability import applicable, identifiability
 from accelcal.discrepancy.rules import Rules
@@ -160,24 +160,7 @@ def oracle_loop(data: PoseData, cov_r: np.ndarray, rules: Rules, rng: np.random.
         test_out = rules.outlier_pose and len(outliers) < rules.max_outliers
         if not remaining and not test_out:
             break
-        chi_x = gls.chi2(X)
-        lr = {e: max(chi_x - gls.chi2(np.hstack([X, cols[e]])), 0.0) for e in remaining}
-        p = [dist.chi2_sf(lr[e], cols[e].shape[1]) for e in remaining]
-        family = len(remaining) + bool(test_out)
-        if test_out:
-            pose, t2, p_out, _ = _outlier_test(gls, X, set(outliers), rng, rules.alpha, family)
-            p.append(p_out)
-        padj = holm(p, rules.correction)
-        passing = [e for e, pa in zip(remaining, padj) if pa <= rules.alpha
-                   and -lr[e] + cols[e].shape[1] * math.log(n) < -rules.bic_threshold]
-        if passing:  # the PRESS of those that pass the test and ΔBIC (the others cannot pass)
-            press0 = gls.lopo_press(X)
-            passing = [e for e in passing if gls.lopo_press(np.hstack([X, cols[e]]))
-                       < (1 - rules.lopo_min_improvement) * press0]
-        choices = {e: -lr[e] + cols[e].shape[1] * math.log(n)
-                   for e in _resolve(gls, X, passing, cols, rules.alpha, rules.alpha / max(len(remaining), 1))}
-        if test_out and padj[-1] <= rules.alpha:
-            choices[OUTLIER] = -t2 + 2.0 * math.log(n)
+        choices, pose = _round_choices(gls, X, cols, remaining, test_out, outliers, rng, rules)
         if not choices:
             break
         best = min(choices, key=lambda k: (choices[k], k == OUTLIER, k))
@@ -194,6 +177,34 @@ def oracle_loop(data: PoseData, cov_r: np.ndarray, rules: Rules, rng: np.random.
             "outlier_poses_detected": ";".join(map(str, idx)),
             "outlier_t_detected": ";".join(f"{data.t[i]:.3f}" for i in outliers),
             "named_set": named_set(effects, idx)}
+
+
+def _round_choices(gls: _Gls, X: np.ndarray, cols: dict, remaining: list, test_out: bool, outliers: list,
+                   rng: np.random.Generator, rules: Rules) -> tuple[dict, int | None]:
+    """One round of :func:`oracle_loop`: the candidates (and the outlier family) that pass the
+    test under the true covariance (Holm), ΔBIC and PRESS, and are not ambiguous, with their
+    ΔBIC (the smallest is named); the round's most outlying pose (None: not tested)."""
+    n = X.shape[0]
+    pose = None
+    chi_x = gls.chi2(X)
+    lr = {e: max(chi_x - gls.chi2(np.hstack([X, cols[e]])), 0.0) for e in remaining}
+    p = [dist.chi2_sf(lr[e], cols[e].shape[1]) for e in remaining]
+    family = len(remaining) + bool(test_out)
+    if test_out:
+        pose, t2, p_out, _ = _outlier_test(gls, X, set(outliers), rng, rules.alpha, family)
+        p.append(p_out)
+    padj = holm(p, rules.correction)
+    passing = [e for e, pa in zip(remaining, padj) if pa <= rules.alpha
+               and -lr[e] + cols[e].shape[1] * math.log(n) < -rules.bic_threshold]
+    if passing:  # the PRESS of those that pass the test and ΔBIC (the others cannot pass)
+        press0 = gls.lopo_press(X)
+        passing = [e for e in passing if gls.lopo_press(np.hstack([X, cols[e]]))
+                   < (1 - rules.lopo_min_improvement) * press0]
+    choices = {e: -lr[e] + cols[e].shape[1] * math.log(n)
+               for e in _resolve(gls, X, passing, cols, rules.alpha, rules.alpha / max(len(remaining), 1))}
+    if test_out and padj[-1] <= rules.alpha:
+        choices[OUTLIER] = -t2 + 2.0 * math.log(n)
+    return choices, pose
 
 
 def _nothing(gate: dict) -> str:

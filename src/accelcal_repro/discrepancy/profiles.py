@@ -115,7 +115,7 @@ class NoiseProfile:
     description : str
     axis_correlation : float
         Correlation ``φ`` between the axes of every component (a common-mode share, as the
-        colored null's joint model estimates it: :func:`accelcal.discrepancy.colored.axis_gram`);
+        wander null's joint model estimates it: :func:`accelcal.discrepancy.wander.axis_gram`);
         it needs the same component on every axis.  0: independent axes.
     placement : tuple of 3 float
         Standard deviation of the per-placement offset per axis [counts] (0: none); the
@@ -445,7 +445,7 @@ def wander_axis_correlation(report: dict) -> float:
 
 
 def joint_source(report: dict, name: str) -> dict:
-    """A ``fitted`` entry of :func:`build_profiles` from a report's joint noise model (the colored
+    """A ``fitted`` entry of :func:`build_profiles` from a report's joint noise model (the wander
     null's REML bias wander, the same on every axis, with its correlation between the axes)
     with the white noise of its rests: the
     per-axis sample standard deviation whose mean over a rest has the rest's standard error
@@ -453,7 +453,7 @@ def joint_source(report: dict, name: str) -> dict:
     nm = report.get("noise_model") or {}
     if not nm.get("estimated"):
         raise ProfileError(f"the {name} report has no joint wander estimate: "
-                           + (nm.get("reason") or "the colored null did not run"))
+                           + (nm.get("reason") or "the wander null did not run"))
     p = report["poses"]
     se = np.array(p["mean_std"], float)
     n = np.array(p["n_samples"], float)

@@ -66,7 +66,7 @@ def with_disjoint_rests(rec: Recording) -> tuple[Recording, str]:
 
     WORKAROUND (remove when :func:`accelcal.static.detect_static` returns disjoint spans):
     two quiet runs separated by a blip shorter than one window minus twice the trim give
-    spans that overlap (IMU-TK fork data2: samples 35-585 and 548-809), which the colored
+    spans that overlap (IMU-TK fork data2: samples 35-585 and 548-809), which the wander
     null's :func:`accelcal.discrepancy.poses.pose_data` refuses.  The overlap is split at its
     middle; the recording then carries the rests as known intervals, so that every later
     step (both layers, the re-simulations) uses the same poses.  Returns the recording and
@@ -214,7 +214,7 @@ FEW_POSES_LIMITS = {
     "calibration (bias, scale, non-orthogonality)": "the 9-parameter model needs at least 10 distinct orientations",
     "every effect of the library": "an effect adds 3 parameters to the 9 of the model: at least 13 poses; quadratic "
                                    "and cubic are also invisible on the six faces (absorbed by the bias and the scale)",
-    "bias wander (colored null)": "the wander's size and correlation time need at least 6 residual degrees of "
+    "bias wander (wander null)": "the wander's size and correlation time need at least 6 residual degrees of "
                                   "freedom beyond the 9-parameter model: at least 15 poses",
     "outlier poses": "a pose left out must leave the 9-parameter model determined: at least 11 poses",
 }

@@ -106,13 +106,7 @@ def pose_residual_implication(terms: Mapping[str, object], starts, durations, fs
     durations = np.asarray(durations, dtype=float)
     per_term = {k: centred_pose_variance(pose_difference_variance(k, v, starts, durations))
                 for k, v in terms.items()}
-    white_like = ["white"]
-    n2_white = term_parameters("white", terms["white"])[0] ** 2 if "white" in terms else 0.0
-    if "gauss_markov" in terms:
-        sigma, tc = term_parameters("gauss_markov", terms["gauss_markov"])
-        if tc < 0.1 * durations.min():
-            white_like.append("gauss_markov")
-            n2_white += 2 * sigma**2 * tc
+    white_like, n2_white = _white_like(terms, durations.min())
     v_white = np.sum([per_term[k] for k in white_like if k in per_term] or [np.zeros(starts.shape)], axis=0)
     v_model = np.sum(list(per_term.values()), axis=0)
     T = float(np.median(durations))
@@ -133,6 +127,18 @@ def pose_residual_implication(terms: Mapping[str, object], starts, durations, fs
         "pose_mean_var_model": v_model.tolist(),
     }
 
+
+def _white_like(terms: Mapping[str, object], shortest: float) -> tuple[list[str], float]:
+    """The terms that act as white noise at the scale of the poses (white, and a Gauss–Markov
+    term with ``T_c`` below a tenth of the shortest pose) and their white level ``N²``."""
+    white_like = ["white"]
+    n2_white = term_parameters("white", terms["white"])[0] ** 2 if "white" in terms else 0.0
+    if "gauss_markov" in terms:
+        sigma, tc = term_parameters("gauss_markov", terms["gauss_markov"])
+        if tc < 0.1 * shortest:
+            white_like.append("gauss_markov")
+            n2_white += 2 * sigma**2 * tc
+    return white_like, n2_white
 
 def expected_residual_std(result: StochasticResult, directions) -> dict:
     """Expected std of each pose's scalar calibration residual from the noise models, white only and full.

@@ -134,12 +134,10 @@ def stochastic_layer(segments, fs: float, *, seed: int, alpha: float = 0.05, max
         Sampling rate [Hz].
     seed : int
         Seeds the bootstrap and the re-simulation (results are deterministic).
-    alpha : float
-        Family-wise level of each step's test.
-    max_terms : int
-        Most terms named beyond white.
+    alpha, max_terms : float, int
+        Family-wise level of each step's test; most terms named beyond white.
     candidates : sequence of str
-        Candidate terms (ids of :data:`~accelcal.noise.TERMS` other than ``white``).
+        Candidate terms (ids of :data:`~accelcal.noise.TERMS`, not ``white``).
     intervals : array_like of int, shape (n_segments, 2), optional
         Sample ranges ``[start, stop)`` of the segments in the recording, for the pose
         times of the pose-residual implication; default: the segments back to back,
@@ -164,9 +162,31 @@ def stochastic_layer(segments, fs: float, *, seed: int, alpha: float = 0.05, max
         constant data, bad settings (an unknown candidate: NoiseModelError).
     """
     segs = check_segments(segments, fs)
+    settings = _Settings.checked(candidates, alpha, max_terms, n_boot, n_resim)
+    allan, names, rests = _checked_rests(segs, fs, intervals, axis_names)
+    adev_long, homog = _longest_rest(segs, fs, allan, rests.lengths)
+    # Step 1's null (white only) is the same for every axis up to the scale N, and its
+    # statistics are scale-free: one bootstrap at N = 1 serves all axes (exact).
+    unit_white = NoiseFit(("white",), np.array([1.0]), float("nan"), 0.0)
+    shared = _bootstrap(np.random.default_rng(np.random.SeedSequence([int(seed), 1 << 20])), unit_white, rests,
+                        list(settings.candidates) if max_terms > 0 else [], n_boot)
+    axes = []
+    for j, name in enumerate(names):
+        boot_seq, resim_seq = np.random.SeedSequence([int(seed), j]).spawn(2)
+        axes.append(_one_axis(name, j, rests, settings, np.random.default_rng(boot_seq), resim_seq, adev_long[:, j],
+                              homog[j], shared))
+    notes = ("intervals not given: pose times assume the rests back to back",) if intervals is None else ()
+    return StochasticResult(fs=float(fs), seed=int(seed), alpha=float(alpha), candidates=settings.candidates,
+                            n_boot=int(n_boot), n_resim=int(n_resim), segment_lengths=rests.lengths,
+                            axes=tuple(axes),
+                            unit=unit, notes=notes)
+
+
+def _checked_rests(segs, fs, intervals, axis_names) -> tuple[AllanVariance, tuple, "_Rests"]:
+    """The rests' pooled Allan variance, the axis names and the rests (refuses too few octaves of τ,
+    a constant axis, names that do not match the columns)."""
     lengths = tuple(int(s.shape[0]) for s in segs)
     d = segs[0].shape[1]
-    settings = _Settings.checked(candidates, alpha, max_terms, n_boot, n_resim)
     allan = allan_variance(segs, fs)
     if allan.taus.size < 4:
         raise StochasticError(f"the rests reach only {allan.taus.size} octaves of tau (longest rest "
@@ -178,35 +198,24 @@ def stochastic_layer(segments, fs: float, *, seed: int, alpha: float = 0.05, max
     if len(names) != d:
         raise StochasticError(f"{len(names)} axis names for {d} columns")
     starts, durations = _pose_times(intervals, lengths, fs)
-    rests = _Rests(allan, lengths, float(fs), starts, durations)
+    return allan, names, _Rests(allan, lengths, float(fs), starts, durations)
 
+
+def _longest_rest(segs, fs, allan: AllanVariance, lengths) -> tuple[np.ndarray, list[dict]]:
+    """The longest rest's Allan deviation on the pooled τ grid (NaN beyond its reach), per axis,
+    and its homogeneity with the other rests (:func:`segment_homogeneity`), one dict per axis."""
     longest = int(np.argmax(lengths))
     m_long = allan.m[allan.m <= lengths[longest] // 2]
     allan_long = allan_variance([segs[longest]], fs, m=m_long)
     others = [s for i, s in enumerate(segs) if i != longest and s.shape[0] >= 2]
     m_oth = allan.m[allan.m <= max((s.shape[0] for s in others), default=0) // 2]
     allan_oth = allan_variance(others, fs, m=m_oth) if others and m_oth.size else None
-    homog = segment_homogeneity(allan_long, allan_oth)
-
-    # Step 1's null (white only) is the same for every axis up to the scale N, and its
-    # statistics are scale-free: one bootstrap at N = 1 serves all axes (exact).
-    unit_white = NoiseFit(("white",), np.array([1.0]), float("nan"), 0.0)
-    shared = _bootstrap(np.random.default_rng(np.random.SeedSequence([int(seed), 1 << 20])), unit_white, rests,
-                        list(settings.candidates) if max_terms > 0 else [], n_boot)
-    axes = []
-    for j in range(d):
-        boot_seq, resim_seq = np.random.SeedSequence([int(seed), j]).spawn(2)
-        adev_long = np.full(allan.taus.size, np.nan)
-        adev_long[: m_long.size] = allan_long.adev[:, j]
-        homog_j = {"taus": homog["taus"], "adev_ratio": np.asarray(homog["adev_ratio"])[:, j] if len(homog["taus"])
-                   else [], "p_value": np.asarray(homog["p_value"])[:, j] if len(homog["taus"]) else []}
-        axes.append(_one_axis(names[j], j, rests, settings, np.random.default_rng(boot_seq), resim_seq, adev_long,
-                              homog_j, shared))
-    notes = ("intervals not given: pose times assume the rests back to back",) if intervals is None else ()
-    return StochasticResult(fs=float(fs), seed=int(seed), alpha=float(alpha), candidates=settings.candidates,
-                            n_boot=int(n_boot), n_resim=int(n_resim), segment_lengths=lengths, axes=tuple(axes),
-                            unit=unit, notes=notes)
-
+    adev_long = np.full((allan.taus.size, segs[0].shape[1]), np.nan)
+    adev_long[: m_long.size] = allan_long.adev
+    h = segment_homogeneity(allan_long, allan_oth)
+    per_axis = [{"taus": h["taus"], **{k: np.asarray(h[k])[:, j] if len(h["taus"]) else []
+                                       for k in ("adev_ratio", "p_value")}} for j in range(adev_long.shape[1])]
+    return adev_long, per_axis
 
 @dataclass(frozen=True)
 class _Settings:

@@ -2,7 +2,7 @@
 
 Pose means taken minutes apart share the sensor's slowly wandering bias, so their errors
 are correlated, and a trend in them is not by itself evidence of a deterministic drift.
-This module is the statistical core of the ``colored`` null of
+This module is the statistical core of the ``wander`` null of
 :func:`accelcal.discrepancy.detect.discrepancy`: the covariance of the pose residuals
 implied by a noise model, generalised least squares (GLS) under it, restricted maximum
 likelihood (REML) of the wander jointly with the calibration, and nested tests whose
@@ -60,7 +60,7 @@ poses, of size ``σ_w`` per axis, ``D_ij = 2 σ_w²`` for ``i ≠ j``, so ``Cov 
 that it does not follow each pose's own noise (a pose with a long, quiet rest carries the
 same offset as a short, noisy one), and from a deterministic effect of the orientation
 only through repeated placements of one orientation (pure-error degrees of freedom:
-:mod:`accelcal.discrepancy.joint_noise`).
+:mod:`accelcal.discrepancy.wander_model`).
 
 ``s`` absorbs a white excess (pose-to-pose disturbances, noise faster than the poses that
 the standard errors miss); small ``τ`` (below the pose durations) makes the wander extra
@@ -134,7 +134,7 @@ update of the GLS fit) ranks the chosen pose against the candidate effects (ΔBI
 
 Leave-one-pose-out.  ``(P r)_i / P_ii`` is the error of predicting pose ``i`` from the
 others under the GLS model, including the wander's conditional mean given the
-neighbouring poses (kriging); its RMS in units of ``σ`` is the colored LOPO gap.
+neighbouring poses (kriging); its RMS in units of ``σ`` is the wander LOPO gap.
 
 Assumptions.  Gaussian errors; the per-pose standard errors of the rests are right for
 the short-term noise up to the common factor ``0.5 ≤ s ≤ 4``; one wander process (or per-placement offset), of the

@@ -1,4 +1,4 @@
-"""The colored null's noise model of the pose means and the linearised problem it is tested on.
+"""The wander null's noise model of the pose means and the linearised problem it is tested on.
 
 The kernels of the wander (interval-mean variograms, their projection through the poses'
 gradients and the axis correlation) and :class:`Problem`: the pose residuals in whitened
@@ -26,7 +26,7 @@ POINT_DURATION = 1e-3
 
 
 class WanderError(AccelcalError):
-    """The pose residuals cannot support the colored null (too few poses, degenerate design)."""
+    """The pose residuals cannot support the wander null (too few poses, degenerate design)."""
 
 
 

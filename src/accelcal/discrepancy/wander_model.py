@@ -1,9 +1,9 @@
-"""The noise model the colored null estimates jointly with the calibration, as the loop and the report use it.
+"""The noise model the wander null estimates jointly with the calibration, as the loop and the report use it.
 
-The linearised colored problem of a fit (:func:`linearise`, :func:`linearise_noise`: the
-pose residuals, their Jacobian and the wander's kernels, :mod:`.colored`), the named noise
+The linearised wander problem of a fit (:func:`linearise`, :func:`linearise_noise`: the
+pose residuals, their Jacobian and the wander's kernels, :mod:`.wander`), the named noise
 term as the report's ``noise_model`` (:func:`noise_model_dict`) and the gaps and excess
-under it (:func:`colored_summary`).
+under it (:func:`wander_summary`).
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ import numpy as np
 
 from .. import distributions as dist
 from ..errors import AccelcalError
-from . import colored as C
+from . import wander as C
 from .fit import Fit, PoseData, evaluate
 from .stochastic.implication import centred_pose_variance, pose_difference_variance
 
@@ -28,9 +28,9 @@ def intervals(data: PoseData) -> tuple[np.ndarray, np.ndarray, tuple]:
 
 
 def linearise(data: PoseData, f: Fit, taus=None, common: float | None = 0.0) -> C.Problem:
-    """The colored problem of the fit ``f`` on ``data`` (raises :class:`~.colored.WanderError`),
-    with the wander's axis correlation ``common`` (:func:`~.colored.axis_gram`; None: not yet
-    diagonalised, see :func:`~.colored.problem`)."""
+    """The wander problem of the fit ``f`` on ``data`` (raises :class:`~.wander.WanderError`),
+    with the wander's axis correlation ``common`` (:func:`~.wander.axis_gram`; None: not yet
+    diagonalised, see :func:`~.wander.problem`)."""
     J = f.J * f.sigma[:, None]  # unweighted
     grad = -J[:, :3]            # ∂r/∂z = −∂r/∂b
     starts, durations, notes = intervals(data)
@@ -39,7 +39,7 @@ def linearise(data: PoseData, f: Fit, taus=None, common: float | None = 0.0) -> 
 
 def linearise_noise(data: PoseData, f: Fit) -> tuple[C.Problem, C.Basis, C.WanderFit]:
     """:func:`linearise` at the REML estimate of the wander's axis correlation under the
-    fit's own model (:func:`~.colored.fit_common`): the problem, the :class:`~.colored.Basis`
+    fit's own model (:func:`~.wander.fit_common`): the problem, the :class:`~.wander.Basis`
     of its columns and the REML noise (test grid)."""
     prob = linearise(data, f, common=None)
     return C.fit_common(prob, prob.X0)
@@ -203,7 +203,7 @@ def repeated_placements(data: PoseData, f: Fit, w: C.WanderFit | None, max_angle
                        f"(P(lower) {p_lower:.3g}): {verdict}"}
 
 
-def colored_summary(data, base, prob, wander, cur_data, current) -> dict:
+def wander_summary(data, base, prob, wander, cur_data, current) -> dict:
     """Gaps and excess under the named noise model (white + bias wander or per-placement offset
     of the final model).  Per pose: ``wander_residual_std``, the wander's (or offset's) share
     of the residual's std (unit of g); ``noise_residual_std``, the whole model's,
@@ -236,8 +236,8 @@ def colored_summary(data, base, prob, wander, cur_data, current) -> dict:
         extra = np.zeros(len(data))
     total = np.sqrt(s_w * data.sigma ** 2 + extra ** 2)
     return {
-        "gap_colored_before": gap_before,
-        "gap_colored_after": math.sqrt(quad_a / len(cur_data)),
+        "gap_wander_before": gap_before,
+        "gap_wander_after": math.sqrt(quad_a / len(cur_data)),
         "excess_predicted": math.sqrt(mean / dof) if dof > 0 else float("nan"),
         "excess_predicted_interval": [math.sqrt(lo / dof), math.sqrt(hi / dof)] if dof > 0 else [float("nan")] * 2,
         "excess_observed": math.sqrt(chi2_obs / dof) if dof > 0 else float("nan"),
@@ -263,5 +263,5 @@ def _quad(prob: C.Problem, q: float, X) -> float:
     return float(C.profile(prob, X, prob.y[None], np.array([q])).quad[0, 0, 0])
 
 
-__all__ = ["colored_summary", "describe_noise_model", "intervals", "linearise", "linearise_noise", "noise_model_dict",
+__all__ = ["describe_noise_model", "intervals", "linearise", "linearise_noise", "noise_model_dict",
            "repeated_placements"]

@@ -1,7 +1,7 @@
-"""The colored null of the discrepancy loop: wander covariance, REML, bootstrap tests, outliers.
+"""The wander null of the discrepancy loop: wander covariance, REML, bootstrap tests, outliers.
 
 Sessions are simulated at the pose level (the exact Gaussian law of the pose means: white
-per-pose noise plus interval means of the wander, :func:`~accelcal.discrepancy.colored.
+per-pose noise plus interval means of the wander, :func:`~accelcal.discrepancy.wander.
 simulate_interval_means`), like the benchmark's session (30 poses of 5.5 s, 2 s moves,
 a 20 s initial rest, 16-bit counts), so that a test can afford tens of recordings.  The
 bounds are one-sided binomial bounds at fixed seeds: each fails if the method's rate is
@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from accelcal.discrepancy import colored as C
+from accelcal.discrepancy import wander as C
 from accelcal.discrepancy import wander_loop as W
-from accelcal.discrepancy.joint_noise import linearise
+from accelcal.discrepancy.wander_model import linearise
 from accelcal.discrepancy.detect import discrepancy
 from accelcal.discrepancy.fit import effect_columns, evaluate, fit_at, forward, pose_data
 from accelcal.discrepancy.rules import Rules
@@ -82,7 +82,7 @@ def true_mde_direction(truth, eid, wander, rules, n_tests, direction):
     prob = linearise(d0, f0)
     Xe = prob.columns(effect_columns(truth["p"], d0, (), eid))
     S = C.contrast_covariance(prob, wander or {})
-    info = C.effect_information(prob, prob.X0, Xe, sigma_c=S).colored
+    info = C.effect_information(prob, prob.X0, Xe, sigma_c=S).wander
     lam = critical_noncentrality(3, n - 12, rules.alpha / n_tests, rules.power)
     d = np.asarray(direction, float) / np.linalg.norm(direction)
     return float(np.sqrt(lam / (d @ info @ d))) * d
@@ -148,17 +148,17 @@ def _outcomes(profile, reps, seed, rules):
 FAST = Rules(candidates=("quadratic", "bias_drift", "temperature"), n_boot=79)
 
 
-def test_colored_null_keeps_false_positives_at_alpha_where_white_null_does_not():
+def test_wander_null_keeps_false_positives_at_alpha_where_white_null_does_not():
     """Effect-free sessions whose only "effect" is wander: the issue's three Gauss-Markov
     components (3, 30, 300 s, each at the pose-mean white level) and a rate random walk.
-    The colored null names something on at most 5 of 30 per profile (if its rate were 5 %,
+    The wander null names something on at most 5 of 30 per profile (if its rate were 5 %,
     more than 5 has probability 0.008); the white null on the same 60 recordings names an
     effect at least 9 times (at 5 %, probability 0.007): the inflation of the issue."""
     named = lambda o: o not in ("none", "not_identifiable", "error")  # noqa: E731
     res = _outcomes(THREE_GM, 30, 1, FAST) + _outcomes(RANDOM_WALK, 30, 2, FAST)
-    colored = [named(c) for c, _ in res]
+    wander = [named(c) for c, _ in res]
     white = [named(w) for _, w in res]
-    assert sum(colored[:30]) <= 5 and sum(colored[30:]) <= 5, (sum(colored[:30]), sum(colored[30:]))
+    assert sum(wander[:30]) <= 5 and sum(wander[30:]) <= 5, (sum(wander[:30]), sum(wander[30:]))
     assert sum(white) >= 9, sum(white)
     assert stats.binom.sf(5, 30, 0.05) < 0.01 and stats.binom.sf(8, 60, 0.05) < 0.01
 
@@ -401,13 +401,13 @@ def test_json_keeps_the_old_keys_and_adds_the_new_ones():
               "model_before", "model_after", "poses", "rules"):
         assert k in out, k
     for k in ("null", "noise_model", "outliers", "outlier_tests", "not_identifiable_reasons", "errors",
-              "gap_colored_before", "gap_colored_after", "excess_predicted", "excess_observed"):
+              "gap_wander_before", "gap_wander_after", "excess_predicted", "excess_observed"):
         assert k in out, k
     nm = out["noise_model"]
     for k in ("term", "process", "size", "size_ci", "tau_s", "tau_ci", "random_walk_K", "method",
               "axis_correlation", "axis_correlation_ci", "axis_correlation_profile"):
         assert k in nm, k
     assert 0.0 <= nm["axis_correlation"] <= 1.0 and len(nm["axis_correlation_profile"]) == len(C.COMMON_GRID)
-    assert out["rules"]["null"] == "colored"
+    assert out["rules"]["null"] == "wander"
     white = json_safe(discrepancy(d, Rules(null="white")).to_dict())
     assert white["null"] == "white" and white["noise_model"]["estimated"] is False

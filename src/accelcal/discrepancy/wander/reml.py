@@ -109,21 +109,7 @@ def fit_wander(prob: Problem, X: np.ndarray, fine: bool = True, bas: Basis | Non
     wander = inside & (qv > 0)
     # the per-placement member has no time scale: the intervals of τ and K are the wanders'
     timed = wander & ~pl
-    bound = []
-    if inside[cq == Q_REL_FINE.size - 1].any():
-        bound.append("size: upper end of the grid (q_rel 1e4)")
-    if wander[ct >= T - 2].any():
-        bound.append("tau: the interval reaches the random walk (no upper bound)")
-    if timed[ct == 1].any():
-        bound.append("tau: lower end of the grid")
-    if (wander & pl).any():
-        bound.append("tau: the interval holds the per-placement offset (no time correlation between the poses)")
-    if inside[:, 0].any() or inside[:, -1].any():
-        bound.append("white scale: end of the scanned range (x0.1 - x10 of its estimate)")
-    if np.isclose(s_hat[tf, kf], MIN_WHITE_SCALE):
-        bound.append(f"white scale: at its floor {MIN_WHITE_SCALE:g}")
-    if np.isclose(s_hat[tf, kf], MAX_WHITE_SCALE):
-        bound.append(f"white scale: at its ceiling {MAX_WHITE_SCALE:g}")
+    bound = _bounds(inside, wander, timed, wander & pl, ct, cq, T, float(s_hat[tf, kf]))
 
     def rng(a, mask):
         v = a[mask]
@@ -136,7 +122,30 @@ def fit_wander(prob: Problem, X: np.ndarray, fine: bool = True, bas: Basis | Non
     out = _wander_at(fp, int(tf), float(Q_REL_FINE[kf]), float(s_hat[tf, kf]), best)
     return WanderFit(**{**out.__dict__, "size_ci": size_ci, "tau_ci": tau_ci, "K_ci": K_ci,
                         "white_scale_ci": rng(s_full, inside), "excess_ci": rng(excess, inside),
-                        "at_bound": tuple(bound)})
+                        "at_bound": bound})
+
+
+def _bounds(inside, wander, timed, held, ct, cq, T: int, s_opt: float) -> tuple[str, ...]:
+    """Where the 95 % region of :func:`fit_wander` meets an end of its grid (``inside``: the
+    region's points; ``wander``/``timed``: those with a wander / a timed one; ``held``: the
+    per-placement member with a wander; ``ct``/``cq``: their τ and q indices; ``T``: τ
+    grid size; ``s_opt``: the white scale at the optimum)."""
+    bound = []
+    if inside[cq == Q_REL_FINE.size - 1].any():
+        bound.append("size: upper end of the grid (q_rel 1e4)")
+    if wander[ct >= T - 2].any():
+        bound.append("tau: the interval reaches the random walk (no upper bound)")
+    if timed[ct == 1].any():
+        bound.append("tau: lower end of the grid")
+    if held.any():
+        bound.append("tau: the interval holds the per-placement offset (no time correlation between the poses)")
+    if inside[:, 0].any() or inside[:, -1].any():
+        bound.append("white scale: end of the scanned range (x0.1 - x10 of its estimate)")
+    if np.isclose(s_opt, MIN_WHITE_SCALE):
+        bound.append(f"white scale: at its floor {MIN_WHITE_SCALE:g}")
+    if np.isclose(s_opt, MAX_WHITE_SCALE):
+        bound.append(f"white scale: at its ceiling {MAX_WHITE_SCALE:g}")
+    return tuple(bound)
 
 
 def _wander_at(prob: Problem, t: int, q_rel: float, s_hat: float, reml: float) -> WanderFit:

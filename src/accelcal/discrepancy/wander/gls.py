@@ -234,17 +234,17 @@ def studentised(prob: Problem, X: np.ndarray, t: int, q: float, Y=None, scale: f
 @dataclass(frozen=True)
 class EffectInformation:
     """Fisher information of an effect block profiled over the current model (k, k) under
-    three noise models: the colored one (``colored``), white noise (``white``) and white
+    three noise models: the wander one (``wander``), white noise (``white``) and white
     noise of the same mean variance (``scaled_white``: what a common scale factor would give)."""
 
-    colored: np.ndarray
+    wander: np.ndarray
     white: np.ndarray
     scaled_white: np.ndarray
 
 
 def effect_information(prob: Problem, X0: np.ndarray, Xe: np.ndarray, t: int | None = None, q: float = 0.0,
                        sigma_c: np.ndarray | None = None) -> EffectInformation:
-    """:class:`EffectInformation` of an effect block ``Xe`` profiled over ``X0``, the colored
+    """:class:`EffectInformation` of an effect block ``Xe`` profiled over ``X0``, the wander
     noise being the wander ``(t, q)`` or the contrast covariance ``sigma_c``."""
     if sigma_c is None:
         V = prob.V[t]
@@ -261,7 +261,7 @@ def effect_information(prob: Problem, X0: np.ndarray, Xe: np.ndarray, t: int | N
         return Xe.T @ P @ Xe
 
     I_white = info(np.eye(prob.m))
-    return EffectInformation(colored=info(Si), white=I_white, scaled_white=I_white / mean_var)
+    return EffectInformation(wander=info(Si), white=I_white, scaled_white=I_white / mean_var)
 
 
 
