@@ -26,7 +26,7 @@ from ..units import to_celsius, unit_in_name
 from .clock import clocked_time, is_counter_name, looks_like_counter
 from .inference import resolve_acceleration_unit, resolve_gyro_unit, time_seconds
 from .magnetic import MAG_ROLES, mag_axis, mag_unit_in_name, resolve_mag_unit
-from .numeric_block import Body, field_strings, parse_block
+from .numeric_block import Body, TextColumn, parse_block
 from .parsing import DECIMAL_COMMA, NUMBER, norm_name, parse_numbers, split_fields
 from .text import COMMENT_MARKERS, is_comment, load_text
 
@@ -144,13 +144,14 @@ class _Table(NamedTuple):
     block: np.ndarray | None = None
     raw: Body | None = None
 
-    def column(self, i: int) -> np.ndarray:
-        """The strings of column ``i`` (an object or str array)."""
+    def column(self, i: int) -> np.ndarray | TextColumn:
+        """The strings of column ``i`` (an object or str array, or a :class:`.TextColumn`
+        that cuts them out of the text when asked)."""
         if self.data is not None:
             return np.asarray([r[i] for r in self.data], dtype=object)
         if self.raw is None:  # a matrix (read_matrix): its numbers as text
             return np.asarray([repr(float(v)) for v in self.block[:, i]], dtype=object)
-        return field_strings(self.raw, i, self.delim, self.k)
+        return TextColumn(self.raw, i, self.delim, self.k, len(self.block))
 
 
 def read_table(path, *, text: str | None = None, columns=None, unit: str | None = None,
@@ -254,7 +255,9 @@ def _table_recording(tab, path, notes, columns, unit, time_unit, rate, gyro_unit
     iv, labels = (intervals_from_labels(column("pose").astype(str)) if "pose" in roles else (None, None))
     time_column = None
     if "t" in roles and rate is None:
-        time_column = (names[roles["t"]].strip() if names is not None else "t", column("t").astype(str))
+        written = column("t")  # a TextColumn stays one: cut out of the text if apply asks for it
+        time_column = (names[roles["t"]].strip() if names is not None else "t",
+                       written if isinstance(written, TextColumn) else written.astype(str))
     return Recording(t, acc, temp, str(path), intervals=iv, labels=labels, notes=tuple(n for n in notes if n),
                      unit=unit_name, time_column=time_column, gyro=gyro, gyro_unit=gyro_unit_name,
                      mag=mag, mag_unit=mag_unit_name)
