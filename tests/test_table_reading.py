@@ -12,6 +12,7 @@ Then its speed and memory against pandas' own reader on the same file, in one ru
 
 from __future__ import annotations
 
+import gzip
 import time
 
 import numpy as np
@@ -20,8 +21,11 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from accelcal.errors import RecordingError
 from accelcal.formats import numeric_block
+from accelcal.formats import text as text_module
 from accelcal.formats.table import _fast_table, _general_table, read_table
+from accelcal.formats.text import load_text
 
 from .test_reader_fuzz import JUNK, _valid_table
 
@@ -177,3 +181,24 @@ def test_time_column_is_cut_when_asked_and_as_written(tmp_path):
     assert name == "t" and isinstance(written, numeric_block.TextColumn) and written._strings is None
     assert list(written[:7]) == [v.strip() for v in general[:7]] and written._strings is None
     assert np.asarray(written).tolist() == [v.strip() for v in general] and len(written) == len(general)
+
+
+@pytest.mark.parametrize("content", [b"t,ax,ay,az\n0,1,2,3\n", b"\xef\xbb\xbft;ax\n0;1\n", b"t,ax\n\xe9,1\n",
+                                     b"", b"  \n\t\n", b"PK\x03\x04rest", b"a\x00b", gzip.compress(b"t,ax\n0,1\n"),
+                                     b"\x1f\x8bdamaged"], ids=["plain", "bom", "cp1252", "empty", "blank", "zip",
+                                                               "nul", "gzip", "bad gzip"])
+def test_a_memory_mapped_file_loads_as_a_read_one(tmp_path, monkeypatch, content):
+    """load_text maps large files instead of reading them (fewer page faults): the same
+    text, notes and refusals as reading, whatever the bytes."""
+    p = tmp_path / "f.csv"
+    p.write_bytes(content)
+
+    def outcome():
+        try:
+            return load_text(p)
+        except RecordingError as e:
+            return str(e)
+
+    read = outcome()
+    monkeypatch.setattr(text_module, "_MAP_FROM_BYTES", 1)
+    assert outcome() == read
