@@ -154,8 +154,9 @@ def test_compiled_route_agrees_on_fuzzed_tables(text):
 
 def test_a_large_table_reads_within_a_few_times_pandas(tmp_path):
     """200 000 rows of t + 6 channels: ``read_table`` (reading, units, time, checks) takes at
-    most 8x the CPU time of ``pandas.read_csv`` on the same file, both timed here, best of 2
-    (measured 2.5-3x; the line-by-line route took 12-19x)."""
+    most 4x the CPU time of ``pandas.read_csv`` on the same file, both timed here, best of 2
+    (measured 1.4-1.6x at load 20 on 2 cores, 2.3-3.2x before the time column was cut on
+    demand; a 3x slip fails it; the line-by-line route took 12-19x)."""
     rng = np.random.default_rng(0)
     tails = [",".join(f"{v:.5g}" for v in row)
              for row in rng.normal(size=(997, 6)) * 0.01 + [0.1, -0.2, 0.3, 0.0, 0.0, -1.0]]
@@ -166,7 +167,7 @@ def test_a_large_table_reads_within_a_few_times_pandas(tmp_path):
         c0 = time.process_time()
         read(path)
         cost[name] = min(cost.get(name, np.inf), time.process_time() - c0)
-    assert cost["accelcal"] < 8 * cost["pandas"], cost
+    assert cost["accelcal"] < 4 * cost["pandas"], cost
 
 
 def test_time_column_is_cut_when_asked_and_as_written(tmp_path):
