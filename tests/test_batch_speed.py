@@ -90,28 +90,44 @@ def test_the_vectorised_screen_gives_the_reference_decisions():
     assert not np.array_equal(degenerate_trials(z, clear=np.ones(len(z), bool)), ref)
 
 
-def _cpu_rate(f, z, repeats: int) -> float:
-    """Problems per CPU second of ``f(z, G)``, best of ``repeats`` (thread CPU time: a
-    wait for a core on a loaded machine does not count)."""
-    best = np.inf
+def _cpu(f, z) -> float:
+    """Thread CPU seconds of ``f(z, G)`` (a wait for a core on a loaded machine does not count)."""
+    c0 = time.thread_time()
+    f(z, G)
+    return time.thread_time() - c0
+
+
+def _interleaved_ratio(batch, single, z, problems: int = 20, chunk: int = 10_000, repeats: int = 3) -> tuple:
+    """(problems/s of ``batch`` over all of ``z`` / problems/s of ``single`` on its first
+    ``problems``, both rates).
+
+    Side by side at a fine grain: the single-problem calls and the batch chunks alternate
+    (a chunk after every few problems), each timed alone and kept at its best of
+    ``repeats`` passes.  Timed apart (the batch first, then the NLLS), one of the two met
+    another moment of the machine's load (on 2 shared cores at load 20 the SMT sibling and
+    the caches change from one tenth of a second to the next), and the ratio of
+    separate best-of timings spread from 1500x to 2400x (full) and 5400x to 9300x (bias)
+    on one machine within a minute; interleaved it spread 1460-1730x and 5800-6800x."""
+    chunks = [z[i:i + chunk] for i in range(0, len(z), chunk)]
+    per = problems // len(chunks)
+    t_single, t_batch = np.full(problems, np.inf), np.full(len(chunks), np.inf)
     for _ in range(repeats):
-        c0 = time.thread_time()
-        f(z, G)
-        best = min(best, time.thread_time() - c0)
-    return len(z) / best
-
-
-def _nlls_rate(f, z, repeats: int) -> float:
-    return _cpu_rate(lambda zz, g: [f(zt, g) for zt in zz], z, repeats)
+        for i in range(problems):
+            t_single[i] = min(t_single[i], _cpu(single, z[i]))
+            if i % per == per - 1:
+                t_batch[i // per] = min(t_batch[i // per], _cpu(batch, chunks[i // per]))
+    rate, base = len(z) / t_batch.sum(), problems / t_single.sum()
+    return rate / base, rate, base
 
 
 @pytest.mark.skipif(not HAVE_NUMBA, reason="the throughput goals are those of the compiled kernels")
 def test_batches_run_thousands_of_times_faster_than_nlls():
     """At the benchmark's headline setting (24 poses, noise 1e-3 m/s²),
     the batched full LLS solves at least 1000x, the bias-only LLS at least 4000x the
-    problems per second of the NLLS baseline, both timed here (measured 1300-1500x and
-    5300-6000x; the Python loop over the trials that once checked the geometry made them
-    300x)."""
+    problems per second of the NLLS baseline, both timed here, interleaved
+    (:func:`_interleaved_ratio`; the median of three such measurements: measured 1460-1730x
+    and 5800-6800x at load 20-26 on 2 cores; the Python loop over the trials that once
+    checked the geometry made them 300x, and a 3x slip of either kernel falls below)."""
     kernels.set_backend("numba")
     rng = np.random.default_rng(1)
     T, n = 20000, 24
@@ -121,7 +137,7 @@ def test_batches_run_thousands_of_times_faster_than_nlls():
     zb = simulate_poses(u, G, np.eye(3), tr["bias"], 1e-3, rng)
     for f, z in ((full_lls_batch, zf), (bias_lls_batch, zb), (full_nlls, zf[0]), (bias_nlls, zb[0])):
         f(z, G)  # warm-up: kernels loaded, CasADi's solver built
-    full, bias = _cpu_rate(full_lls_batch, zf, 5), _cpu_rate(bias_lls_batch, zb, 5)
-    nfull, nbias = _nlls_rate(full_nlls, zf[:20], 3), _nlls_rate(bias_nlls, zb[:20], 3)
-    assert full > 1000 * nfull, f"full_lls_batch {full:.0f}/s, {full / nfull:.0f}x NLLS ({nfull:.0f}/s)"
-    assert bias > 4000 * nbias, f"bias_lls_batch {bias:.0f}/s, {bias / nbias:.0f}x NLLS ({nbias:.0f}/s)"
+    full = sorted((_interleaved_ratio(full_lls_batch, full_nlls, zf) for _ in range(3)), key=lambda r: r[0])[1]
+    bias = sorted((_interleaved_ratio(bias_lls_batch, bias_nlls, zb) for _ in range(3)), key=lambda r: r[0])[1]
+    assert full[0] > 1000, "full_lls_batch {1:.0f}/s, {0:.0f}x NLLS ({2:.0f}/s)".format(*full)
+    assert bias[0] > 4000, "bias_lls_batch {1:.0f}/s, {0:.0f}x NLLS ({2:.0f}/s)".format(*bias)

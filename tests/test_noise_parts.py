@@ -118,3 +118,18 @@ def test_avr_reading_of_white_noise_and_the_line_that_explains_a_gap():
     lines = avr_lines("accelerometer", "m/s^2", r, [0.02 / math.sqrt(FS)] * 3, [min(r["random_walk"]) / 10] * 3)
     assert len(lines) == 1 and "+1/2 slope to every tau from 0.1 s to 999.9 s" in lines[0]
     assert avr_lines("accelerometer", "m/s^2", r, r["noise_density"], r["random_walk"]) == []
+
+
+def test_avr_adev_short_bins_one_by_one_long_bins_together_are_the_tools_loop():
+    """The short bins (>= 2000 means, computed one by one) and the long ones (batched) both
+    equal the tool's loop; τ that truncate to one bin size (1 Hz: 1.0 … 1.9 s) share it."""
+    x = np.random.default_rng(5).normal(size=(25_000, 2))
+    taus, adev = avr_adev(x, 100.0)
+    for period in (1, 2, 30, 700):  # bins of 10, 20 (one by one); 300, 7000 samples (together)
+        i = int(np.flatnonzero(np.isclose(taus, period * 0.1))[0])
+        for j in range(2):
+            assert adev[i, j] == pytest.approx(_avr_loop(x[:, j].tolist(), 100.0, period), rel=1e-12)
+    taus1, adev1 = avr_adev(x[:5000], 1.0)
+    one, two = adev1[np.isclose(taus1, 1.0)][0], adev1[np.isclose(taus1, 2.0)][0]
+    assert np.array_equal(adev1[np.isclose(taus1, 1.5)][0], one) and not np.array_equal(one, two)
+    assert one[0] == pytest.approx(_avr_loop(x[:5000, 0].tolist(), 1.0, 15), rel=1e-12)

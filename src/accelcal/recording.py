@@ -98,12 +98,12 @@ class Recording:
     mag_unit: str | None = None
 
     def __post_init__(self):
-        t = np.array(self.t, dtype=float)
+        t = _frozen_float(self.t)
         if self.acc is None and (self.gyro is None or self.unit is not None):
             raise RecordingError(f"{self.source}: a recording without accelerometer needs gyroscope data "
                                  "(and no acceleration unit)")
-        acc = None if self.acc is None else np.array(self.acc, dtype=float)
-        temp = None if self.temp is None else np.array(self.temp, dtype=float)
+        acc = None if self.acc is None else _frozen_float(self.acc)
+        temp = None if self.temp is None else _frozen_float(self.temp)
         if t.ndim != 1 or (acc is not None and acc.shape != (t.size, 3)) or (temp is not None and
                                                                               temp.shape != t.shape):
             raise RecordingError(
@@ -172,7 +172,7 @@ def _check_gyro(gyro, unit: str | None, n: int, source: str):
         if unit is not None:
             raise RecordingError(f"{source}: a gyroscope unit ({unit!r}) without gyroscope data")
         return None
-    gyro = np.array(gyro, dtype=float)
+    gyro = _frozen_float(gyro)
     if gyro.shape != (n, 3):
         raise RecordingError(f"{source}: gyroscope data of shape {gyro.shape}, expected ({n}, 3) like the "
                              "accelerometer")
@@ -193,11 +193,20 @@ def _check_runs(runs, n: int, source: str):
     return r
 
 
+def _frozen_float(a) -> np.ndarray:
+    """``a`` as a float array of its own: a copy, unless ``a`` is one already (a float array
+    that owns its data and is read-only: another Recording's, passed on by ``replace``),
+    which is shared (a replace of a 10⁶-sample recording copied 56 MB)."""
+    if isinstance(a, np.ndarray) and a.dtype == np.float64 and a.base is None and not a.flags.writeable:
+        return a
+    return np.array(a, dtype=float)
+
+
 def _check_mag(mag, unit: str | None, n: int, source: str):
     """The field as an (n, 3) float array (or None), in a unit a Recording holds."""
     if mag is None:
         return None
-    mag = np.array(mag, dtype=float)
+    mag = _frozen_float(mag)
     if mag.shape != (n, 3):
         raise RecordingError(f"{source}: magnetometer data of shape {mag.shape}, expected ({n}, 3) like the "
                              "accelerometer")

@@ -57,7 +57,7 @@ def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit
         ``'auto'`` (detect it) or a name of :data:`~accelcal.formats.registry.FORMATS`.
     columns : str or dict, optional
         Which column is which: ``'t=time,ax=AccX,ay=AccY,az=AccZ[,temp=T]'`` or a dict;
-        names or 1-based column numbers (:func:`accelcal.formats.table.parse_columns`).
+        names or 1-based column numbers (:func:`accelcal.formats.columns.parse_columns`).
     unit : str, optional
         Unit of the acceleration values (``g``, ``mg``, ``m/s2``, ``counts``); overrides
         the header.

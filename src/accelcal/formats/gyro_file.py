@@ -22,7 +22,8 @@ from .clock import clocked_time
 from .inference import resolve_gyro_unit, time_seconds
 from .parsing import parse_numbers
 from .sync import estimate_offset, shift_gyro, sphere_centre
-from .table import ACC_ROLES, GYRO_ROLES, _map_columns, _numeric_block, _split_table
+from .columns import ACC_ROLES, GYRO_ROLES, map_columns
+from .table import _numeric_block, _split_table
 from .text import load_text
 
 
@@ -31,7 +32,7 @@ def read_gyro_table(path, *, gyro_unit: str | None = None, time_unit: str | None
     path = Path(path)
     text, notes = load_text(path)
     tab = _split_table(text, path)
-    roles, units = _map_columns(tab.names, tab.k, {}, path, required=())
+    roles, units = map_columns(tab.names, tab.k, {}, path, required=())
     triad = GYRO_ROLES if all(r in roles for r in GYRO_ROLES) else ACC_ROLES  # named gx.. or plain x, y, z
     if not all(r in roles for r in triad):
         found = ", ".join(n.strip() for n in tab.names)[:150] if tab.names is not None else f"{tab.k} columns"

@@ -132,16 +132,21 @@ def time_seconds(values, rate, tu, header_unit, names, roles, dc, path, lines, p
             raise RecordingError(f"{path}: no time column (found: {found}); pass --rate HZ (the sensor's rate) to "
                                  f"time the samples {by}, or --columns t=NAME")
         return np.arange(n) / fs, note
-    s = np.char.strip(values.astype(str, copy=False))
+    # the first 1000 values decide what the column is; the whole column is looked at (a
+    # second of 10^6 strings) only where that needs it: date-times, integers
+    head = np.char.strip(np.asarray(values[:1000]).astype(str))
     label = f"time (column {names[roles['t']].strip()!r})" if names is not None else "time"
-    numeric = np.array([bool(NUMBER.match(v) or (dc and DECIMAL_COMMA.match(v))) for v in s[:1000]])
-    if not numeric.all():
-        return _datetime_time(s, path, label, lines)
-    if dc:
-        s = np.char.replace(s, ",", ".")
-    digits = np.strings.slice(s, np.isin(np.strings.slice(s, 0, 1), ("+", "-")).astype(int), None)  # sign off
-    integer = all(re.fullmatch(r"[+-]?\d+", v) for v in s[:1000]) and bool(np.all(np.strings.isdecimal(digits)))
-    if integer and bool(np.all(np.strings.str_len(digits) < 19)):
+    if not all(NUMBER.match(v) or (dc and DECIMAL_COMMA.match(v)) for v in head):
+        return _datetime_time(np.char.strip(values.astype(str, copy=False)), path, label, lines)
+    integer, exact = all(re.fullmatch(r"[+-]?\d+", v) for v in head), False
+    if integer:
+        s = np.char.strip(values.astype(str, copy=False))
+        if dc:
+            s = np.char.replace(s, ",", ".")
+        digits = np.strings.slice(s, np.isin(np.strings.slice(s, 0, 1), ("+", "-")).astype(int), None)  # sign off
+        integer = bool(np.all(np.strings.isdecimal(digits)))
+        exact = integer and bool(np.all(np.strings.str_len(digits) < 19))
+    if exact:
         ti = s.astype(np.int64)
         rel = (ti - ti[0]).astype(float)  # exact in int64, then float: epoch ns keep their digits
         x = ti.astype(float)

@@ -16,7 +16,8 @@ from ..errors import RecordingError
 from .inference import resolve_acceleration_unit, time_seconds
 from .magnetic import MAG_ROLES, resolve_mag_unit
 from .parsing import parse_numbers
-from .table import ACC_ROLES, _map_columns, _split_table, parse_columns
+from .columns import ACC_ROLES, map_columns, parse_columns
+from .table import _split_table
 from .text import load_text
 
 
@@ -39,7 +40,7 @@ def read_mag_table(path, *, columns=None, mag_unit: str | None = None, unit: str
     tab = _split_table(text, path)
     if tab.names is None and not columns:
         raise RecordingError(f"{path}: no header: name the magnetometer columns with --columns mx=..,my=..,mz=..")
-    roles, units = _map_columns(tab.names, tab.k, parse_columns(columns), path, required=MAG_ROLES)
+    roles, units = map_columns(tab.names, tab.k, parse_columns(columns), path, required=MAG_ROLES)
     block = np.array(tab.data, dtype=float) if tab.block is None and not tab.dc and _numeric(tab) else tab.block
 
     def numbers(role):

@@ -4,7 +4,7 @@ Comma, semicolon, tab, ``|`` or whitespace, decimal point or decimal comma,
 ``#``/``%``/``//`` comment lines, metadata lines above the header, gzip-compressed or
 not.  Columns are found by their usual names (``t``, ``time``, ``timestamp``, ``acc_x``,
 ``accX``, ``AX``, ``Accel. X``, ``linear_acceleration.x`` ...; a gyroscope's ``gx``,
-``gyr_x``, ``wx``, ``Gyro. X``, ``angular_velocity.x`` ...; :data:`ALIASES`) or given
+``gyr_x``, ``wx``, ``Gyro. X``, ``angular_velocity.x`` ...; :data:`.columns.ALIASES`) or given
 with ``columns=``.  The header may be written as a comment line just above the data
 (``# time tx ty tz wx wy wz ...``, ``%time,field.header.stamp,...``).  A headerless
 table of 4 numbers per row is IMU-TK's layout (t, x, y, z).  Units and time are inferred
@@ -22,73 +22,17 @@ import numpy as np
 
 from ..errors import RecordingError
 from ..recording import MIN_ROWS, Recording, intervals_from_labels
-from ..units import to_celsius, unit_in_name
-from .clock import clocked_time, is_counter_name, looks_like_counter
+from ..units import to_celsius
+from .clock import clocked_time, looks_like_counter
+from .columns import ACC_ROLES, GYRO_ROLES, map_columns, parse_columns
 from .inference import resolve_acceleration_unit, resolve_gyro_unit, time_seconds
-from .magnetic import MAG_ROLES, mag_axis, mag_unit_in_name, resolve_mag_unit
-from .numeric_block import Body, field_strings, parse_block
-from .parsing import DECIMAL_COMMA, NUMBER, norm_name, parse_numbers, split_fields
+from .magnetic import MAG_ROLES, resolve_mag_unit
+from .numeric_block import Body, TextColumn, parse_block
+from .parsing import DECIMAL_COMMA, NUMBER, parse_numbers, split_fields
 from .text import COMMENT_MARKERS, is_comment, load_text
 
-ROLES = ("t", "ax", "ay", "az", "gx", "gy", "gz", "mx", "my", "mz", "temp", "pose", "counter")
-ACC_ROLES, GYRO_ROLES = ("ax", "ay", "az"), ("gx", "gy", "gz")
 #: Delimiters tried, in order of preference when two fit equally well.
 DELIMITERS = ("\t", ";", ",", "|", " ")
-
-#: Column names (lower case, without unit, separators removed) for each role.
-_ACC = re.compile(r"^(?:field)?(?:imu)?(?:linear)?(?:acc|accel|accl|acceleration|accelerometer|acceleromter|a)"
-                  r"(?:raw|meas|measured)?(?P<axis>[xyz])$")
-_ACC_AXIS_FIRST = re.compile(r"^(?P<axis>[xyz])(?:acc|accel|acceleration|a)$")
-_GYRO = re.compile(r"^(?:field)?(?:imu)?(?:g|gyr|gyro|gyroscope|w|omega|angularvelocity|angvel|angularrate|rate)"
-                   r"(?:raw|meas|measured)?(?P<axis>[xyz])$")
-_GYRO_AXIS_FIRST = re.compile(r"^(?P<axis>[xyz])(?:gyr|gyro|g|w)$")
-_TIME = {"t", "time", "times", "timestamp", "timestamps", "ts", "stamp", "sec", "secs", "seconds", "elapsed",
-         "elapsedtime", "datetime", "date", "clock", "millis", "micros", "nanos", "tsec", "fieldheaderstamp",
-         "headerstamp", "%time", "timeus", "timems", "timens", "zeit", "zeitstempel", "tiempo", "temps", "tempo"}
-_TIME_UNIT_BY_NAME = {"millis": "ms", "micros": "us", "nanos": "ns", "timems": "ms", "timeus": "us", "timens": "ns"}
-_TEMP = {"temp", "temperature", "imutemp", "dietemp", "temperaturec", "tempc", "thermometer"}
-_POSE = {"pose", "poseid", "staticpose", "posename"}
-#: Documented for the CLI's help: what each role is found by.
-ALIASES = {
-    "t": "t, time, timestamp, ts, stamp, seconds, elapsed, datetime, millis, micros, %time, field.header.stamp",
-    "ax, ay, az": "ax, acc_x, accX, AX, accel_x, Accel. X, a_x, x_acc, acceleration_x, accelerometer_x, "
-                  "linear_acceleration.x (x, y, z alone when nothing else matches)",
-    "gx, gy, gz": "gx, gyr_x, gyro_x, gyroX, Gyro. X, wx, omega_x, angular_velocity.x (optional: the "
-                  "gyroscope)",
-    "mx, my, mz": "mx, mag_x, magX, Mag. X, magnetometer_x, compass_x, magnetic_field.x (optional: the "
-                  "magnetometer; units uT, T, mT, nT, gauss, mG or counts)",
-    "temp": "temp, temperature, imu_temp, die_temp",
-    "pose": "pose, pose_id (label of the known static pose of each sample; empty between poses)",
-    "counter": "INDEX, seq, counter, sample, n_samples, field.header.seq ... (a sample counter: the clock's "
-               "sample numbers, accelcal.formats.clock)",
-}
-
-
-def parse_columns(spec) -> dict:
-    """``'t=time,ax=AccX,...'`` (or a dict) → ``{role: name or 0-based index}``.
-
-    Numbers are 1-based column positions (as a user counts them); names match the header
-    with its whitespace stripped, case-insensitively.
-    """
-    if spec is None:
-        return {}
-    items = spec.items() if isinstance(spec, dict) else (
-        (p.split("=", 1) if "=" in p else (p, None)) for p in str(spec).split(",") if p.strip())
-    out = {}
-    for role, col in items:
-        role = str(role).strip().lower()
-        if role not in ROLES or col is None or str(col).strip() == "":
-            raise RecordingError(f"--columns: expected ROLE=COLUMN with ROLE in {', '.join(ROLES)} "
-                                 f"(e.g. t=time,ax=AccX,ay=AccY,az=AccZ), got {role!r}")
-        col = str(col).strip()
-        if col.isdigit():
-            if int(col) < 1:
-                raise RecordingError(f"--columns: column numbers start at 1, got {role}={col}")
-            out[role] = int(col) - 1
-        else:
-            out[role] = col
-    return out
-
 
 def _numeric_share(rows, decimal_comma: bool) -> float:
     cells = [c for r in rows for c in r]
@@ -144,13 +88,14 @@ class _Table(NamedTuple):
     block: np.ndarray | None = None
     raw: Body | None = None
 
-    def column(self, i: int) -> np.ndarray:
-        """The strings of column ``i`` (an object or str array)."""
+    def column(self, i: int) -> np.ndarray | TextColumn:
+        """The strings of column ``i`` (an object or str array, or a :class:`.TextColumn`
+        that cuts them out of the text when asked)."""
         if self.data is not None:
             return np.asarray([r[i] for r in self.data], dtype=object)
         if self.raw is None:  # a matrix (read_matrix): its numbers as text
             return np.asarray([repr(float(v)) for v in self.block[:, i]], dtype=object)
-        return field_strings(self.raw, i, self.delim, self.k)
+        return TextColumn(self.raw, i, self.delim, self.k, len(self.block))
 
 
 def read_table(path, *, text: str | None = None, columns=None, unit: str | None = None,
@@ -193,71 +138,94 @@ def read_matrix(path, names, block: np.ndarray, *, notes=(), columns=None, unit:
     return _table_recording(tab, Path(path), list(notes), columns, unit, time_unit, rate, gyro_unit, file_rate)
 
 
+class _Columns:
+    """The columns of a split table by role: strings (cut once), floats (from the block
+    parsed at once when the whole table converted, else column by column, which names the
+    first bad value and its line)."""
+
+    def __init__(self, tab: _Table, roles: dict, path):
+        self.tab, self.roles, self.path = tab, roles, path
+        self.block = _numeric_block(tab)
+        self._strings = {}
+
+    def column(self, role):
+        if role not in self._strings:
+            self._strings[role] = self.tab.column(self.roles[role])
+        return self._strings[role]
+
+    def parsed(self, role):
+        """The role's floats from the block, or None where its conversion failed."""
+        i = self.roles[role]
+        return self.block[:, i] if self.block is not None and np.all(np.isfinite(self.block[:, i])) else None
+
+    def numbers(self, role):
+        x = self.parsed(role)
+        tab = self.tab
+        return x if x is not None else parse_numbers(self.column(role), tab.dc, self.path, role, tab.names,
+                                                     self.roles[role], tab.lines)
+
+    def triad(self, axes):
+        return np.column_stack([self.numbers(a) for a in axes])
+
+
 def _table_recording(tab, path, notes, columns, unit, time_unit, rate, gyro_unit, file_rate=None, *,
                      clock: str = "auto", mag_unit: str | None = None) -> Recording:
     """The recording of a split table (:func:`read_table`'s second half)."""
-    names, dc, lines = tab.names, tab.dc, tab.lines
+    names, lines = tab.names, tab.lines
     what = {"\t": "tab", ";": "semicolon", ",": "comma", "|": "'|'", " ": "whitespace"}[tab.delim]
-    if tab.delim != "," or dc:
-        notes.append(f"{what}-separated" + (", decimal comma" if dc else ""))
-    roles, units = _map_columns(names, tab.k, parse_columns(columns), path)
+    if tab.delim != "," or tab.dc:
+        notes.append(f"{what}-separated" + (", decimal comma" if tab.dc else ""))
+    roles, units = map_columns(names, tab.k, parse_columns(columns), path)
     if names is None:
         notes.append("no header: columns read as " + ", ".join(
             f"{r}=column {i + 1}" for r, i in roles.items()) + " (pass --columns to change)")
-    block = _numeric_block(tab)
-    strings = {}
-
-    def column(role):
-        if role not in strings:
-            strings[role] = tab.column(roles[role])
-        return strings[role]
-
-    def parsed(role):  # the column's floats when the whole table converted (else parse_numbers names the bad value)
-        return block[:, roles[role]] if block is not None and np.all(np.isfinite(block[:, roles[role]])) else None
-
-    def numbers(role):
-        x = parsed(role)
-        return x if x is not None else parse_numbers(column(role), dc, path, role, names, roles[role], lines)
-
-    def triad(axes):
-        return np.column_stack([numbers(a) for a in axes])
-
-    acc, unit_name = None, None
-    if "ax" in roles:
-        acc, unit_name, note = resolve_acceleration_unit(triad(ACC_ROLES), units, unit, path)
-        notes.append(note)
-    elif unit is not None:
-        raise RecordingError(f"{path}: --unit {unit} given, but the table has no acceleration columns (gyro only)")
-    gyro, gyro_unit_name = None, None
-    notes.append(units.get("gyro_note", ""))
-    if "gx" in roles:
-        gyro, gyro_unit_name, note = resolve_gyro_unit(triad(GYRO_ROLES), units, gyro_unit, path)
-        notes.append(note)
-    mag, mag_unit_name = None, None
-    if "mx" in roles:
-        mag, mag_unit_name, note = resolve_mag_unit(triad(MAG_ROLES), units.get("mag_units", {}), mag_unit, path)
-        notes.append(note)
+    cols = _Columns(tab, roles, path)
+    sensors = _sensors(cols, units, unit, gyro_unit, mag_unit, notes)
     if "t" not in roles and rate is None and file_rate is not None:
         t, tnote = np.arange(len(lines)) / file_rate[0], f"t = sample index / {file_rate[0]:g} Hz ({file_rate[1]})"
     else:
-        t, tnote = time_seconds(column("t") if "t" in roles else None, rate, time_unit, units.get("t"), names, roles,
-                                dc, path, lines, tab.preamble, parsed=parsed("t") if "t" in roles else None,
-                                counter=_counter_label(names, roles))
-    t, cnotes = _sensor_clock(t, tnote, numbers, names, roles, units, clock, rate, lines, path)
+        t, tnote = time_seconds(cols.column("t") if "t" in roles else None, rate, time_unit, units.get("t"), names,
+                                roles, tab.dc, path, lines, tab.preamble,
+                                parsed=cols.parsed("t") if "t" in roles else None, counter=_counter_label(names, roles))
+    t, cnotes = _sensor_clock(t, tnote, cols.numbers, names, roles, units, clock, rate, lines, path)
     notes += cnotes
     temp = None
     if "temp" in roles:
-        temp = numbers("temp")
+        temp = cols.numbers("temp")
         if units.get("temp") in ("K", "degF"):
             temp = to_celsius(temp, units["temp"])
             notes.append(f"temperature converted from {units['temp']} to degC")
-    iv, labels = (intervals_from_labels(column("pose").astype(str)) if "pose" in roles else (None, None))
+    iv, labels = (intervals_from_labels(cols.column("pose").astype(str)) if "pose" in roles else (None, None))
     time_column = None
     if "t" in roles and rate is None:
-        time_column = (names[roles["t"]].strip() if names is not None else "t", column("t").astype(str))
-    return Recording(t, acc, temp, str(path), intervals=iv, labels=labels, notes=tuple(n for n in notes if n),
-                     unit=unit_name, time_column=time_column, gyro=gyro, gyro_unit=gyro_unit_name,
-                     mag=mag, mag_unit=mag_unit_name)
+        written = cols.column("t")  # a TextColumn stays one: cut out of the text if apply asks for it
+        time_column = (names[roles["t"]].strip() if names is not None else "t",
+                       written if isinstance(written, TextColumn) else written.astype(str))
+    return Recording(t, sensors["acc"], temp, str(path), intervals=iv, labels=labels,
+                     notes=tuple(n for n in notes if n), unit=sensors["unit"], time_column=time_column,
+                     gyro=sensors["gyro"], gyro_unit=sensors["gyro_unit"], mag=sensors["mag"],
+                     mag_unit=sensors["mag_unit"])
+
+
+def _sensors(cols: _Columns, units: dict, unit, gyro_unit, mag_unit, notes: list) -> dict:
+    """The accelerometer's, gyroscope's and magnetometer's values in their units (None
+    where the table has none), the units' notes appended to ``notes``."""
+    roles, path = cols.roles, cols.path
+    out = dict.fromkeys(("acc", "unit", "gyro", "gyro_unit", "mag", "mag_unit"))
+    if "ax" in roles:
+        out["acc"], out["unit"], note = resolve_acceleration_unit(cols.triad(ACC_ROLES), units, unit, path)
+        notes.append(note)
+    elif unit is not None:
+        raise RecordingError(f"{path}: --unit {unit} given, but the table has no acceleration columns (gyro only)")
+    notes.append(units.get("gyro_note", ""))
+    if "gx" in roles:
+        out["gyro"], out["gyro_unit"], note = resolve_gyro_unit(cols.triad(GYRO_ROLES), units, gyro_unit, path)
+        notes.append(note)
+    if "mx" in roles:
+        out["mag"], out["mag_unit"], note = resolve_mag_unit(cols.triad(MAG_ROLES), units.get("mag_units", {}),
+                                                             mag_unit, path)
+        notes.append(note)
+    return out
 
 
 def _counter_label(names, roles) -> str | None:
@@ -448,132 +416,3 @@ def _find_header(rows, k: int, dc: bool) -> tuple[int | None, int]:
     if first > 0 and len(rows[first - 1]) == k and not numeric(rows[first - 1]):
         return first - 1, first
     return None, first
-
-
-def _map_columns(names, k: int, given: dict, path, required=ACC_ROLES) -> tuple[dict, dict]:
-    """``{role: column index}`` and ``{role: unit found in the header}``; the ``required``
-    roles must be found."""
-    roles, units = {}, {}
-    if names is None:
-        if any(isinstance(v, str) for v in given.values()):
-            raise RecordingError(f"{path}: the file has no header, so --columns needs column numbers "
-                                 "(e.g. t=1,ax=2,ay=3,az=4)")
-        default = {4: ("t", "ax", "ay", "az"), 3: ("ax", "ay", "az"), 5: ("t", "ax", "ay", "az", "temp")}
-        if not given and k not in default:
-            raise RecordingError(f"{path}: no header and {k} columns: say which is which with --columns "
-                                 "(e.g. t=1,ax=2,ay=3,az=4)")
-        roles = dict(given) if given else {r: i for i, r in enumerate(default[k])}
-    else:
-        stripped = [n.strip() for n in names]
-        for role, col in given.items():
-            if isinstance(col, int):
-                if col >= k:
-                    raise RecordingError(f"{path}: --columns {role}={col + 1}: the table has {k} columns")
-                roles[role] = col
-            else:
-                hits = [i for i, n in enumerate(stripped) if n.lower() == col.lower()]
-                if not hits:
-                    raise RecordingError(f"{path}: --columns {role}={col}: no such column "
-                                         f"(found: {', '.join(stripped)[:150]})")
-                roles[role] = hits[0]
-        _find_roles(stripped, roles, path)
-    if "counter" in given:
-        units["counter_given"] = True
-    found = ", ".join(n.strip() for n in names)[:150] if names is not None else f"{k} unnamed columns"
-    missing = [r for r in required if r not in roles]
-    if missing and required == ACC_ROLES and not any(r in roles for r in ACC_ROLES) and \
-            all(r in roles for r in GYRO_ROLES):
-        missing = []  # a gyro-only table (rate-table rotations): the gyro columns named, no accelerometer
-    if missing:
-        raise RecordingError(f"{path}: no column for {', '.join(missing)} (found: {found}); "
-                             "name them with --columns t=TIME,ax=X,ay=Y,az=Z (a gyro alone: gx=..,gy=..,gz=..)")
-    gyro = [r for r in GYRO_ROLES if r in roles]
-    if 0 < len(gyro) < 3:
-        if any(r in given for r in GYRO_ROLES):
-            raise RecordingError(f"{path}: --columns names a gyro column for {', '.join(gyro)} but none for "
-                                 f"{', '.join(r for r in GYRO_ROLES if r not in roles)}: name all three "
-                                 "(gx=..,gy=..,gz=..)")
-        which = ", ".join(names[roles[r]].strip() for r in gyro)
-        units["gyro_note"] = (f"gyro: a column for {', '.join(gyro)} only ({which}): not read (name all three with "
-                              "--columns gx=..,gy=..,gz=..)")
-        for r in gyro:
-            del roles[r]
-    mag = [r for r in MAG_ROLES if r in roles]
-    if 0 < len(mag) < 3:
-        if any(r in given for r in MAG_ROLES):
-            raise RecordingError(f"{path}: --columns names a magnetometer column for {', '.join(mag)} only: name "
-                                 "all three (mx=..,my=..,mz=..)")
-        for r in mag:
-            del roles[r]
-    used = {}
-    for role, i in roles.items():
-        if i in used:
-            raise RecordingError(f"{path}: column {i + 1} given for both {used[i]} and {role}")
-        used[i] = role
-    if names is not None:
-        for role in (r for r in MAG_ROLES if r in roles):
-            u = mag_unit_in_name(names[roles[role]].strip())[1]
-            if u is not None:
-                units.setdefault("mag_units", {})[role] = u
-        for role, i in roles.items():
-            if role in MAG_ROLES:
-                continue
-            kind = {"t": "time", "temp": "temperature", "pose": None, "counter": None}.get(
-                role, "angular_rate" if role in GYRO_ROLES else "acceleration")
-            if kind:
-                base, u = unit_in_name(names[i].strip(), kind)
-                if role == "t" and u is None:
-                    u = _TIME_UNIT_BY_NAME.get(norm_name(base))
-                if u is not None:
-                    units.setdefault(role, u)
-                    if role in ACC_ROLES:
-                        units.setdefault("acc_units", {})[role] = u
-                    if role in GYRO_ROLES:
-                        units.setdefault("gyro_units", {})[role] = u
-    return roles, units
-
-
-def _find_roles(names, roles: dict, path) -> None:
-    """Fill ``roles`` (in place) from the header by the aliases, for roles not given."""
-    cand = {r: [] for r in ROLES}
-    for i, n in enumerate(names):
-        if i in roles.values():
-            continue
-        for kind in ("acceleration", "angular_rate", "time", "temperature"):
-            base, _ = unit_in_name(n, kind)
-            key = norm_name(base)
-            m = _ACC.match(key) or _ACC_AXIS_FIRST.match(key)
-            mg = _GYRO.match(key) or _GYRO_AXIS_FIRST.match(key)
-            if kind == "acceleration" and m:
-                cand["a" + m.group("axis")].append(i)
-            elif kind == "angular_rate" and mg:
-                cand["g" + mg.group("axis")].append(i)
-            elif kind == "time" and (key in _TIME or key in _TIME_UNIT_BY_NAME):
-                cand["t"].append(i)
-            elif kind == "temperature" and key in _TEMP:
-                cand["temp"].append(i)
-        axis = mag_axis(norm_name(mag_unit_in_name(n)[0]))
-        if axis is not None:
-            cand["m" + axis].append(i)
-        if norm_name(n) in _POSE:
-            cand["pose"].append(i)
-        if is_counter_name(n):
-            cand["counter"].append(i)
-    if not any(cand[a] for a in ("ax", "ay", "az")) and not any(r in roles for r in ("ax", "ay", "az")):
-        for i, n in enumerate(names):  # plain x, y, z columns (FastAhrs 'x, y, z')
-            if norm_name(n) in ("x", "y", "z") and i not in roles.values():
-                cand["a" + norm_name(n)].append(i)
-    for role, hits in cand.items():
-        hits = sorted(set(hits))
-        if role in roles or not hits:
-            continue
-        if role == "t" and len(hits) > 1 and {norm_name(names[i]) for i in hits} == {"%time", "fieldheaderstamp"}:
-            # rostopic echo -p: %time is when the message was received, the header stamp
-            # when the sensor sampled it
-            hits = [i for i in hits if norm_name(names[i]) == "fieldheaderstamp"]
-        if role == "counter":
-            hits = hits[:1]  # the first counter; --columns counter=NAME chooses another
-        if len(hits) > 1:
-            raise RecordingError(f"{path}: {len(hits)} columns could be {role} ({', '.join(names[i] for i in hits)}); "
-                                 f"choose one with --columns {role}=NAME")
-        roles[role] = hits[0]

@@ -5,7 +5,10 @@ This module imports only the standard library.
 
 from __future__ import annotations
 
+import codecs
+import contextlib
 import gzip
+import mmap
 import zlib
 from pathlib import Path
 
@@ -28,7 +31,33 @@ def load_text(path: Path) -> tuple[str, list[str]]:
         raise RecordingError(f"{path}: no such file")
     if not path.is_file():
         raise RecordingError(f"{path}: not a file")
-    raw = path.read_bytes()
+    with _file_bytes(path) as raw:
+        return _decoded(path, raw)
+
+
+#: Files from this size [bytes] are read through a memory map (:func:`_file_bytes`).
+_MAP_FROM_BYTES = 1 << 22
+
+
+@contextlib.contextmanager
+def _file_bytes(path: Path):
+    """The bytes of ``path``: a large file as a read-only memory map, whose pages come from
+    the page cache 16 at a time (a copy read into a new buffer faults in each of its pages
+    alone: 12 000 page faults, 0.1 s of system time, for a 47 MB table), else read."""
+    size = path.stat().st_size
+    if size < _MAP_FROM_BYTES or size == 0:
+        yield path.read_bytes()
+        return
+    with open(path, "rb") as f, mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as mapped:
+        view = memoryview(mapped)
+        try:
+            yield view
+        finally:
+            view.release()
+
+
+def _decoded(path: Path, raw) -> tuple[str, list[str]]:
+    """:func:`load_text` of the bytes (or a memoryview of them) ``raw``."""
     notes = []
     if raw[:2] == b"\x1f\x8b":
         try:
@@ -37,21 +66,21 @@ def load_text(path: Path) -> tuple[str, list[str]]:
             raise RecordingError(f"{path}: damaged gzip file ({' '.join(str(e).split())}); "
                                  "decompress it with gunzip to see what is left") from None
         notes.append("gzip-compressed")
-    if not raw or raw.isspace():  # (not raw.strip(): a copy of the file)
+    if not raw or (bytes(raw[:4096]).isspace() and bytes(raw).isspace()):  # (not raw.strip(): a copy of the file)
         raise RecordingError(f"{path}: empty file (expected a recording: a table of t, ax, ay, az)")
     kind = binary_kind(raw)
     if kind:
         raise RecordingError(f"{path}: {kind}, not a text table; export the recording as CSV")
     try:
-        text = raw.decode("utf-8-sig")
+        text = codecs.decode(raw, "utf-8-sig")
     except UnicodeDecodeError:
-        text = raw.decode("cp1252", errors="replace")
+        text = codecs.decode(raw, "cp1252", errors="replace")
         notes.append("not UTF-8: decoded as Windows-1252")
     return text, notes
 
 
 def binary_kind(raw: bytes) -> str | None:
-    head = raw[:65536]
+    head = bytes(raw[:65536])
     for magic, kind in ((b"PK\x03\x04", "a zip archive (or an Excel .xlsx workbook)"),
                         (b"\x89HDF", "an HDF5 file"), (b"MATLAB 5.0", "a MATLAB .mat binary file"),
                         (b"RDX", "an R data file"), (b"\xfd7zXZ", "an xz-compressed file"),

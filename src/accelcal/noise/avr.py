@@ -43,24 +43,53 @@ SOURCE = "ori-drs/allan_variance_ros@1d54b60"
 
 
 def avr_adev(x: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
-    """(τ, ADEV (k, d)) on allan_variance_ros's grid and non-overlapping bins, the τ with ≥ 2 bin means only."""
+    """(τ, ADEV (k, d)) on allan_variance_ros's grid and non-overlapping bins, the τ with ≥ 2 bin means only.
+
+    The short bins (many means each) one by one, the long ones (a few means each, nine in
+    ten of the grid) all at once: a loop over 9999 τ took 0.4 s of 10⁶ samples.  τ whose
+    bins truncate to the same size share one computation."""
     x = np.asarray(x, dtype=float)
     x = x[:, None] if x.ndim == 1 else x
     n = len(x)
     c = np.vstack([np.zeros((1, x.shape[1])), np.cumsum(x, axis=0)])
-    taus, out = [], []
-    for tau in AVR_TAUS:
-        b = int(tau * fs)  # the C++ truncates τ · rate to an int
-        if b < 1:
-            continue
-        starts = np.arange(0, n - b, b)  # for (j = 0; j < size - bin; j += bin)
-        if len(starts) < 2:
-            break
-        means = (c[starts + b] - c[starts]) / b
-        avar = np.sum(np.diff(means, axis=0) ** 2, axis=0) / (2 * (len(means) - 1))
-        taus.append(tau)
-        out.append(np.sqrt(avar))
-    return np.array(taus), np.array(out)
+    bins = (AVR_TAUS * fs).astype(int)  # the C++ truncates τ · rate to an int
+    ok = bins >= 1
+    taus, bins = AVR_TAUS[ok], bins[ok]
+    m = np.maximum(-(-(n - bins) // bins), 0)  # bin means per τ: len(range(0, n - bin, bin))
+    last = np.flatnonzero(m < 2)  # for (j = 0; j < size - bin; j += bin): stops at the first τ without two
+    stop = int(last[0]) if last.size else len(bins)
+    taus, bins = taus[:stop], bins[:stop]
+    sizes, which = np.unique(bins, return_inverse=True)
+    counts = m[:stop][np.searchsorted(bins, sizes)]
+    avar = np.empty((len(sizes), x.shape[1]))
+    few = counts < _AVR_BATCH_BELOW
+    for i in np.flatnonzero(~few):
+        b = int(sizes[i])
+        means = np.diff(c[0:(counts[i] + 1) * b:b], axis=0) / b
+        avar[i] = np.sum(np.diff(means, axis=0) ** 2, axis=0) / (2 * (counts[i] - 1))
+    if few.any():
+        avar[few] = _avr_batch(c, sizes[few], counts[few])
+    return taus, np.sqrt(avar[which]).reshape(len(taus), x.shape[1])
+
+
+#: Bin sizes with fewer means than this are computed together (:func:`_avr_batch`).
+_AVR_BATCH_BELOW = 2000
+
+
+def _avr_batch(c: np.ndarray, sizes: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """The Allan variances (k, d) of bin sizes ``sizes`` with ``counts`` means each, from the
+    cumulative sums ``c``: every bin edge in one index array, the squared differences of
+    consecutive means summed per size (in order, as the loop sums them)."""
+    seg = np.repeat(np.arange(len(sizes)), counts + 1)  # bin edges j · size, j = 0 … count, of each size
+    first = np.concatenate(([0], np.cumsum(counts + 1)[:-1]))
+    edges = (np.arange(len(seg)) - first[seg]) * sizes[seg]
+    means = np.diff(c[edges], axis=0) / sizes[seg[1:], None]  # a difference across two sizes is dropped below
+    d = np.diff(means, axis=0)
+    inside = seg[2:] == seg[:-2]  # both means of a difference from one size
+    sq = (d * d)[inside]
+    sums = np.stack([np.bincount(seg[2:][inside], weights=sq[:, j], minlength=len(sizes))
+                     for j in range(c.shape[1])], 1)
+    return sums / (2 * (counts - 1))[:, None]
 
 
 def avr_reading(x, fs: float) -> dict:
