@@ -128,7 +128,12 @@ def estimate_clock(stamps, counter=None, *, counter_name: str = "counter", where
         source = f"counter {counter_name!r}"
     else:
         k, wraps, source = stamp_numbers(s), 0, "the row index (no counter)"
-    times, h, jitter, drift = fit_clock(s, k)
+    try:
+        times, h, jitter, drift = fit_clock(s, k)
+    except np.linalg.LinAlgError:  # the kept stamps share one sample number: no line through them
+        raise RecordingError(f"{path}: the time stamps against {source} fit no clock (the stamps that agree "
+                             "sit at one sample); check the file's time column, or pass --clock stamps to keep "
+                             "the stamps as they are") from None
     steps = np.diff(k)
     gaps = int(np.sum(steps > 1))
     ds = np.diff(s)
@@ -158,12 +163,16 @@ def fit_clock(stamps, k) -> tuple[np.ndarray, float, float, float]:
         dev = np.abs(rs - np.median(rs[keep]))
         sigma = 1.4826 * float(np.median(dev[keep]))
         new = dev <= max(OUTLIER_SIGMA * sigma, 1e-9 * abs(h))
+        if np.count_nonzero(new) < 3 or np.ptp(xs[new]) == 0:  # a line needs distinct sample numbers
+            break
         changed = int(np.count_nonzero(new != keep))
         keep = new
         if changed <= 1e-3 * len(ss):  # the line moves no more than a thousandth of the stamps would move it
             break
     r = s - (a + h * x)
     keep = np.abs(r - np.median(r[::every])) <= max(OUTLIER_SIGMA * sigma, 1e-9 * abs(h))
+    if np.count_nonzero(keep) < 3 or np.ptp(x[keep]) == 0:  # too few to judge: the line through all
+        keep = np.ones(len(s), bool)
     xk, sk = (x, s) if keep.all() else (x[keep], s[keep])  # no copies of a record without outliers
     if every > 1:
         h, a = _polyfit(xk, sk, 1, mid)
