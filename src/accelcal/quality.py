@@ -43,6 +43,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from .evaluation import chi2_test, noise_standard_errors, residual_sigma
+
 #: Thresholds of the warnings (module docstring).
 RULES = {"excess": 1.5, "p_value": 1e-3, "distinct_deg": 10.0, "coverage_deg": 30.0, "hemisphere": 0.6,
          "coverage": 0.25}
@@ -152,7 +154,6 @@ def assess(z, mean_std, M, bias, residuals, n_parameters: int, model: str,
         model) in the units of :meth:`accelcal.results.CalibrationResult.standard_errors`,
         scaled by ``max(1, excess)``.
     """
-    from .evaluation import chi2_test, noise_standard_errors, residual_sigma
 
     z = np.asarray(z, float)
     r = np.asarray(residuals, float)

@@ -10,9 +10,9 @@ import numpy as np
 from ..errors import (AccelcalError, DegeneratePosesError, NotConvergedError, NotPositiveDefiniteError,
                       RecordingError, TooFewPosesError)
 from ..one_orientation import check_several_orientations
+from ..quality import assess, distinct_orientations
 from ..registry import estimator, estimators
 from ..static_auto import find_static_poses
-
 from .base import Calibration
 
 
@@ -51,7 +51,6 @@ def calibrate_poses(poses, g: float, method: str = "full_lls", *, unit: str | No
     the noise with any misfit of the model (the Xsens residuals are 2.5x the noise) and
     give a noisy value from a few dozen points.
     """
-    from ..quality import assess
 
     est = estimator(method)
     z = np.asarray(poses.means, float)
@@ -103,7 +102,6 @@ def _raw_directions(z) -> np.ndarray:
 
 def _orientation_cause(err: AccelcalError, z, est) -> AccelcalError:
     """A failed fit on poses that repeat too few orientations says so (the likely cause)."""
-    from ..quality import distinct_orientations
 
     k = distinct_orientations(_raw_directions(z))
     if k >= est.min_poses:
@@ -204,8 +202,6 @@ class _Poses:
 
 
 def _too_few_hint(rec, poses, est) -> str:
-    from ..quality import distinct_orientations
-
     k = distinct_orientations(_raw_directions(poses.means)) if len(poses) >= 4 else len(poses)
     rate = rec.rate
     if not 1.0 <= rate <= 20000.0:

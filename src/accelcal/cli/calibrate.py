@@ -5,10 +5,12 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
-from ..errors import AccelcalError
-from ..registry import estimators
+from ..atomic import write_json_atomic
+from ..errors import AccelcalError, RecordingError, TooFewPosesError
+from ..registry import estimators, min_gyro_rests
 from . import gyro, mag
 from .common import (STANDARD_GRAVITY, _gravity, _nominal, _provenance, _rate_hint, _read, _reader_options,
                      _search_static, _static_options, _static_settings, _step, fail)
@@ -44,11 +46,8 @@ def add_parser(sub, epilog: str) -> None:
 
 
 def _calibrate(args) -> int:
-    from dataclasses import replace
-
     from ..calibration import calibrate_recording
     from ..calibration.summary import STANDARD_GRAVITY_SOURCE
-    from ..errors import AccelcalError, RecordingError, TooFewPosesError
 
     t0 = time.perf_counter()
     rec = _read(args, accelerometer=False)
@@ -65,7 +64,7 @@ def _calibrate(args) -> int:
         try:
             cal, poses = calibrate_recording(rec, g, method, static=static, conversion=_nominal(args, rec),
                                              search=search,
-                                             min_poses=gyro.GYRO_MIN_RESTS if gyro.wants_gyro(args, rec) else 0)
+                                             min_poses=min_gyro_rests() if gyro.wants_gyro(args, rec) else 0)
         except RecordingError as e:
             hint = " (the magnetometer without rests: accelcal mag RECORDING)" if mag.wants_mag(args, rec) else ""
             raise RecordingError(f"{e}{_rate_hint(rec)}{hint}{_source_hint(rec)}") from None
@@ -137,7 +136,6 @@ def _source_hint(rec) -> str:
 def _calibrate_gyro_only(args, rec, t0) -> int:
     """A recording without accelerometer: the gyro from its rotations of known angle, written
     as a calibration file's ``gyroscope`` object (format 2) without the accelerometer's."""
-    from ..atomic import write_json_atomic
     from ..calibration.base import FORMAT_VERSION
     from ..jsonsafe import json_safe
 
@@ -155,8 +153,6 @@ def _calibrate_gyro_only(args, rec, t0) -> int:
 
 
 def _with_provenance(cal, extra: dict):
-    from dataclasses import replace
-
     return replace(cal, provenance={**cal.provenance, **extra})
 
 

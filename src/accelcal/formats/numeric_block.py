@@ -10,6 +10,7 @@ first data line) is found by :mod:`.table`, which reads anything else line by li
 
 from __future__ import annotations
 
+import csv
 import io
 import sys
 from typing import NamedTuple
@@ -93,7 +94,6 @@ def _pandas_block(stream, delim: str, k: int, n: int) -> np.ndarray:
     """``n`` lines of ``stream`` by pandas' C reader: no quoting, no NA spellings, no blank
     lines skipped, ``k`` columns (a row with more raises, one with fewer leaves an empty
     field, which raises); read in chunks into one array (no second copy of the table)."""
-    import csv
 
     import pandas as pd  # here: a table of 10^5 lines or more repays its import
 

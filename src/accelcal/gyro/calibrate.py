@@ -34,7 +34,9 @@ import time
 import numpy as np
 
 from .. import distributions as dist
-
+from ..model import dM_dparams, params_from_m
+from ..registry import estimators
+from ..uncertainty import residual_jacobian
 from .errors import GyroInputError, NoMotionError, SaturatedGyroError, TooFewMotionsError
 from .fit import MIN_MOTIONS, MotionSet, evaluate, initial_scale, rotation_angles_deg
 from .integrate import integrate_intervals, log_so3
@@ -184,8 +186,6 @@ def accel_direction_cov(accel, f_rest) -> np.ndarray | None:
     accelerometer's frame, so an error of that frame is an error of ``C`` common to every
     motion.  None for a calibration that is not the base model's (``M``, ``bias``, ``g``;
     'full' or 'bias'), or without a degree of freedom left."""
-    from ..model import dM_dparams, params_from_m
-    from ..uncertainty import residual_jacobian
 
     kind = getattr(accel, "model", None)
     if kind not in ("full", "bias") or not all(hasattr(accel, a) for a in ("M", "bias", "g")):
@@ -230,7 +230,6 @@ def _motion_noise(rs, best, t, starts, stops, f_rest, direction_cov=None) -> Mot
 def motion_estimator(name: str):
     """The registry's entry of a gyro estimator of motions between rests (``gyro_iterative``,
     ``gyro_one_step``, or their CLI spellings); one line naming the known ones otherwise."""
-    from ..registry import estimators
 
     known = {e.name: e for e in estimators("gyroscope", data="motions")}
     e = known.get(str(name).replace("-", "_"))

@@ -34,7 +34,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..registry import estimator
+from .calibrate import accel_directions
 from .errors import RotationAngleError, TooFewMotionsError
+from .model import GyroModel, RAW_UNITS
+from .rests import fit_bias, rest_noise, rest_statistics, sample_interval
+from .result import GyroQuality
+from .unit_evidence import unit_from_rotations
 
 #: Rotations the nine parameters need: three equations each, exactly determined (registry: ``gyro_ferraris``).
 N_ROTATIONS = 3
@@ -180,9 +186,6 @@ def calibrate_ferraris_session(t, gyro, sections: dict, *, raw_unit: str = "deg/
         Exactly determined: no residual, ``dof = 0``; the standard errors come from the
         noise (module docstring).
     """
-    from .model import RAW_UNITS
-    from .rests import fit_bias, rest_noise, rest_statistics, sample_interval
-    from .unit_evidence import unit_from_rotations
 
     missing = [k for k in (*rest_names, *rotation_names) if k not in sections]
     if missing:
@@ -204,8 +207,6 @@ def calibrate_ferraris_session(t, gyro, sections: dict, *, raw_unit: str = "deg/
                                  "rotation angles")
     axes, axis_cov = None, None
     if accel is not None and acc is not None:
-        from .calibrate import accel_directions
-
         acc = np.asarray(acc, float)
         seg_acc = [acc[slice(*sections[k])] for k in rotation_names]
         means = np.array([s.mean(axis=0) for s in seg_acc])
@@ -226,9 +227,6 @@ def ferraris_calibration(fit: FerrarisFit, bias, bias_se, raw_unit: str, nominal
                          settings: dict, motions=None, warnings=()):
     """The :class:`~accelcal.gyro.result.GyroFerrarisCalibration` of a fit: the misalignment's and
     the scale factors' standard errors from ``fit.cov``, the warnings of an exact fit."""
-    from ..registry import estimator
-    from .model import GyroModel
-    from .result import GyroQuality
 
     model = GyroModel(fit.C, np.asarray(bias, float), None, raw_unit)
     se_C = np.sqrt(np.clip(np.diag(fit.cov), 0, None)).reshape(3, 3)

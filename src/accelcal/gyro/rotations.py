@@ -35,7 +35,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .calibrate import accel_directions
 from .errors import NoMotionError, RotationAngleError, TooFewMotionsError
+from .ferraris import N_ROTATIONS, ferraris_calibration, fit_ferraris
+from .model import RAW_UNITS
+from .rests import fit_bias, rest_noise, rest_statistics, sample_interval
 
 #: Length of the quiet stretch that gives each run's first bias and noise [s].
 REFERENCE_S = 2.0
@@ -138,7 +142,6 @@ def find_rotations(t, gyro, runs=None, *, nominal: float, windows=None,
     -------
     rotations, rests per run, notes (motions too small to be rotations)
     """
-    from .rests import sample_interval
 
     t, gyro = np.asarray(t, float), np.asarray(gyro, float)
     runs = np.array([[0, len(t)]]) if runs is None else np.asarray(runs, int)
@@ -168,7 +171,6 @@ def find_rotations(t, gyro, runs=None, *, nominal: float, windows=None,
 
 def _run_rests(t, gyro, k: int, a: int, b: int, h: float, motions, given) -> RunRests:
     """One run's rests (given, or between its motions) and the bias they give (step 3)."""
-    from .rests import fit_bias, rest_noise, rest_statistics
 
     if given is not None:
         iv = np.asarray(given, dtype=np.int64).reshape(-1, 2)
@@ -207,7 +209,6 @@ def angles_for(rotations: list[Rotation], angles_deg) -> np.ndarray:
 def measured_axes(rotations: list[Rotation], accel, acc, h: float):
     """The gravity direction of each rotation about the vertical (module docstring), its
     covariance, and notes on the rotations whose axis stays nominal (None for those)."""
-    from .calibrate import accel_directions
 
     acc = np.asarray(acc, float)
     axes, covs, notes = [], [], []
@@ -259,9 +260,6 @@ def calibrate_rotations(t, gyro, *, angles_deg, runs=None, raw_unit: str = "rad/
         accelerometer's when every axis is measured; bias: the weighted mean of the runs'
         (each listed in ``settings['runs']``).
     """
-    from .ferraris import ferraris_calibration, fit_ferraris
-    from .model import RAW_UNITS
-    from .rests import sample_interval
 
     nominal = 1.0 / float(nominal_sensitivity) if nominal_sensitivity is not None else RAW_UNITS.get(raw_unit)
     if nominal is None:
@@ -304,7 +302,6 @@ def calibrate_rotations(t, gyro, *, angles_deg, runs=None, raw_unit: str = "rad/
 
 def _check_coverage(rotations: list[Rotation], source: str) -> None:
     """At least one rotation about each axis, else one line saying what was found."""
-    from .ferraris import N_ROTATIONS
 
     if not rotations:
         raise NoMotionError(f"{source}: no rotation found (the gyro turns by less than {MIN_ROTATION_DEG:g} deg "

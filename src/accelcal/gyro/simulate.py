@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .fit import MotionSet
-from .integrate import expm_so3
+from .integrate import expm_so3, log_so3
 
 _PEAK = 1.875  # max of s'(τ) for the minimum-jerk profile
 
@@ -244,7 +244,6 @@ def random_gyro_matrix(rng: np.random.Generator, scale_std: float = 0.02, misali
 
 def rotation_error_deg(R_est, R_true) -> np.ndarray:
     """Angle [deg] of ``R_trueᵀ R_est`` for stacks (m, 3, 3)."""
-    from .integrate import log_so3
 
     return np.rad2deg(np.linalg.norm(log_so3(np.swapaxes(R_true, -1, -2) @ R_est), axis=-1))
 

@@ -68,6 +68,9 @@ from ..formats.units_evidence import require_gyro_unit
 from ..summary import Summary
 from .allan import DEFAULT_MIN_EDF, AllanVariance, allan_variance
 from .allan_fit import NoiseFit, bootstrap_fits, fit_avar_model_error, model_edf
+from .avr import avr_lines
+from .export import conversions, exported_values, report_dict
+from .planner import plan_lines
 from .terms import TERMS, model_avar
 
 #: The IEEE Std 952 terms fitted, in order of the τ where they act (short to long).
@@ -144,8 +147,6 @@ class NoiseReport:
     extra: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
-        from .export import report_dict
-
         return report_dict(self)
 
 
@@ -159,9 +160,6 @@ class NoiseReport:
         allan_variance_ros reading of the same record (``allan_variance_ros``: ``{sensor:
         reading}``, :func:`accelcal.noise.avr.avr_reading`) would differ by more than 2x, why.
         """
-        from .avr import avr_lines
-        from .export import exported_values  # noise.export reads this module
-        from .planner import plan_lines
 
         avr = allan_variance_ros or {}
         lines = [f"noise: {self.n} samples, {self.duration_s / 3600:.3g} h at {self.fs:.4g} Hz"]
@@ -459,7 +457,6 @@ def needed_tau(fit: NoiseFit, term: str, fs: float, value: float | None = None) 
 
 def _quoted(s) -> str:
     """The data-sheet units of the white noise and the flicker floor (the JSON's ``conversions``), x, y, z."""
-    from .export import conversions  # noise.export reads this module
 
     c = [conversions(s.sensor, s.unit, terms) for terms in s.terms]
     if not c[0]:
