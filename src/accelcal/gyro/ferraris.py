@@ -223,12 +223,11 @@ def calibrate_ferraris_session(t, gyro, sections: dict, *, raw_unit: str = "deg/
                                 nominal_axes=axes is None, settings=settings)
 
 
-def ferraris_calibration(fit: FerrarisFit, bias, bias_se, raw_unit: str, nominal: float, *, nominal_axes: bool,
-                         settings: dict, motions=None, warnings=()):
-    """The :class:`~accelcal.gyro.result.GyroFerrarisCalibration` of a fit: the misalignment's and
-    the scale factors' standard errors from ``fit.cov``, the warnings of an exact fit."""
-
-    model = GyroModel(fit.C, np.asarray(bias, float), None, raw_unit)
+def standard_errors(fit: FerrarisFit, nominal: float) -> dict:
+    """Standard errors of ``C``, of the misalignment ``T = C K⁻¹`` and of the scale factors (per
+    ``nominal`` rad/s per raw unit), from ``fit.cov`` (row-major ``vec C``).  ``T`` by the delta
+    method: ``T_ij = C_ij / C_jj``, so ``∂T_ij/∂C_ij = 1/C_jj`` and ``∂T_ij/∂C_jj = -C_ij/C_jj²``
+    (``T_ii = 1``: no error); variances rounded below zero count as zero."""
     se_C = np.sqrt(np.clip(np.diag(fit.cov), 0, None)).reshape(3, 3)
     Jt = np.zeros((9, 9))
     for i in range(3):
@@ -236,8 +235,17 @@ def ferraris_calibration(fit: FerrarisFit, bias, bias_se, raw_unit: str, nominal
             if i != j:
                 Jt[3 * i + j, 3 * i + j] = 1.0 / fit.C[j, j]
                 Jt[3 * i + j, 4 * j] = -fit.C[i, j] / fit.C[j, j] ** 2
-    se = {"C": se_C, "T": np.sqrt(np.clip(np.diag(Jt @ fit.cov @ Jt.T), 0, None)).reshape(3, 3),
-          "scale_factors": np.diag(se_C) / abs(nominal), "bias": np.asarray(bias_se, float)}
+    return {"C": se_C, "T": np.sqrt(np.clip(np.diag(Jt @ fit.cov @ Jt.T), 0, None)).reshape(3, 3),
+            "scale_factors": np.diag(se_C) / abs(nominal)}
+
+
+def ferraris_calibration(fit: FerrarisFit, bias, bias_se, raw_unit: str, nominal: float, *, nominal_axes: bool,
+                         settings: dict, motions=None, warnings=()):
+    """The :class:`~accelcal.gyro.result.GyroFerrarisCalibration` of a fit: the misalignment's and
+    the scale factors' standard errors from ``fit.cov``, the warnings of an exact fit."""
+
+    model = GyroModel(fit.C, np.asarray(bias, float), None, raw_unit)
+    se = {**standard_errors(fit, nominal), "bias": np.asarray(bias_se, float)}
     n = len(fit.senses)
     warnings = list(warnings)
     if n == N_ROTATIONS:
@@ -256,4 +264,4 @@ def ferraris_calibration(fit: FerrarisFit, bias, bias_se, raw_unit: str, nominal
 
 
 __all__ = ["FerrarisFit", "N_ROTATIONS", "REST_SECTIONS", "ROTATION_SECTIONS", "calibrate_ferraris_session",
-           "ferraris_calibration", "fit_ferraris", "rotation_singular_values"]
+           "ferraris_calibration", "fit_ferraris", "rotation_singular_values", "standard_errors"]
