@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 
 from ..errors import AccelcalError
-from ..registry import estimators, min_gyro_rests
+from ..registry import estimators
 
 
 def add_gyro_options(c) -> None:

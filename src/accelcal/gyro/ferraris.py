@@ -64,18 +64,6 @@ class FerrarisFit:
                 "nominal_angles_deg": self.nominal_angles_deg.tolist(), "iterations": self.iterations}
 
 
-def _stack(segments):
-    """One array of the rotation segments (each (k_j, 3)), one guard sample apart, and their ranges."""
-    y, starts, stops, pos = [], [], [], 0
-    for s in segments:
-        s = np.asarray(s, float)
-        y += [s, np.zeros((1, 3))]
-        starts.append(pos)
-        stops.append(pos + len(s) - 1)
-        pos += len(s) + 1
-    return np.concatenate(y), np.array(starts), np.array(stops)
-
-
 def fit_ferraris(segments, h: float, angles_deg, axes=None, *, nominal: float = 1.0, y_var=None, bias_var=None,
                  axis_cov=None, angle_std_deg: float = 0.0, angle_tolerance: float = 0.1,
                  names=("x", "y", "z")) -> FerrarisFit:

@@ -24,7 +24,7 @@ import dataclasses
 
 from ..registry import estimator, estimators, min_gyro_rests
 from .calibrate import calibrate_gyro
-from .errors import GyroInputError, RotationAngleError
+from .errors import GyroInputError
 from .ferraris import calibrate_ferraris_session
 from .rotations import calibrate_rotations
 

@@ -153,7 +153,6 @@ def simulate_session(rng: np.random.Generator, *, n_motions: int = 20, angle_deg
     y = y_clean + gyro_noise * rng.standard_normal(y_clean.shape)
     u = np.array(u)
     P = np.eye(3)[None] - u[:, :, None] * u[:, None, :]
-    u_cov = direction_noise ** 2 * P
     u_noisy = u + direction_noise * np.einsum("pij,pj->pi", P, rng.standard_normal(u.shape))
     u_noisy /= np.linalg.norm(u_noisy, axis=1, keepdims=True)
     m = n_motions
