@@ -46,7 +46,6 @@ def add_parser(sub, epilog: str) -> None:
 
 
 def _calibrate(args) -> int:
-    from ..calibration import calibrate_recording
     from ..calibration.summary import STANDARD_GRAVITY_SOURCE
 
     t0 = time.perf_counter()
@@ -55,6 +54,26 @@ def _calibrate(args) -> int:
         return _calibrate_gyro_only(args, rec, t0)
     rec = replace(rec, notes=rec.notes + (gyro.note_gyro(args, rec), mag.note_mag(args, rec)))
     mag.field_from_args(args)  # a bad --location or --date is refused before any work
+    cal, poses = _calibrate_accelerometer(args, rec)
+    if gyro.wants_gyro(args, rec):
+        with _step("calibrating the gyroscope"):
+            cal = replace(cal, gyro=gyro.calibrate(args, rec, cal, poses))
+    if mag.wants_mag(args, rec):
+        with _step("calibrating the magnetometer"):
+            cal = replace(cal, mag=mag.calibrate(args, rec, cal, poses))
+    prov = {**_provenance(args, t0), "g_source": "--g" if args.g is not None else STANDARD_GRAVITY_SOURCE}
+    if rec.device_id is not None:  # apply warns when the calibration reaches another unit
+        prov["device_id"] = rec.device_id
+    cal = _with_provenance(cal, prov)
+    _write_and_report(cal, poses, rec, args)
+    return _strict_status(cal, args)
+
+
+def _calibrate_accelerometer(args, rec):
+    """The static poses and the accelerometer's calibration; a refusal says what the reader
+    guessed or read that may be its cause."""
+    from ..calibration import calibrate_recording
+
     g = STANDARD_GRAVITY if args.g is None else args.g
     static = _static_settings(args, rec)
     method = args.method
@@ -62,9 +81,8 @@ def _calibrate(args) -> int:
     search = _search_static(args)
     with _step(f"detecting static poses and estimating {method} from {rec.n} samples"):
         try:
-            cal, poses = calibrate_recording(rec, g, method, static=static, conversion=_nominal(args, rec),
-                                             search=search,
-                                             min_poses=min_gyro_rests() if gyro.wants_gyro(args, rec) else 0)
+            return calibrate_recording(rec, g, method, static=static, conversion=_nominal(args, rec), search=search,
+                                       min_poses=min_gyro_rests() if gyro.wants_gyro(args, rec) else 0)
         except RecordingError as e:
             hint = " (the magnetometer without rests: accelcal mag RECORDING)" if mag.wants_mag(args, rec) else ""
             raise RecordingError(f"{e}{_rate_hint(rec)}{hint}{_source_hint(rec)}") from None
@@ -80,16 +98,11 @@ def _calibrate(args) -> int:
             if not rec.precalibrated:
                 raise
             raise type(e)(f"{e}{_source_hint(rec)}") from None
-    if gyro.wants_gyro(args, rec):
-        with _step("calibrating the gyroscope"):
-            cal = replace(cal, gyro=gyro.calibrate(args, rec, cal, poses))
-    if mag.wants_mag(args, rec):
-        with _step("calibrating the magnetometer"):
-            cal = replace(cal, mag=mag.calibrate(args, rec, cal, poses))
-    prov = {**_provenance(args, t0), "g_source": "--g" if args.g is not None else STANDARD_GRAVITY_SOURCE}
-    if rec.device_id is not None:  # apply warns when the calibration reaches another unit
-        prov["device_id"] = rec.device_id
-    cal = _with_provenance(cal, prov)
+
+
+def _write_and_report(cal, poses, rec, args) -> None:
+    """The figures drawn (before anything is written: a failure leaves no file), the
+    calibration and the figures written, the summaries printed."""
     figures = []
     if args.figures is not None:
         from ..calibration_figures import coverage_figure
@@ -109,7 +122,6 @@ def _calibrate(args) -> int:
         print(cal.gyro.summary(), file=sys.stderr)
     if cal.mag is not None:
         print(cal.mag.summary(), file=sys.stderr)
-    return _strict_status(cal, args)
 
 
 def _strict_status(cal, args) -> int:
