@@ -104,13 +104,7 @@ def fit_ferraris(segments, h: float, angles_deg, axes=None, *, nominal: float = 
     A = A / np.linalg.norm(A, axis=1, keepdims=True)
     Y = np.array([h * s.sum(axis=0) for s in segs])  # (r, 3): row j = plain sum of rotation j
     nominal_deg = np.rad2deg(abs(nominal) * np.linalg.norm(Y, axis=1))
-    for j in range(len(segs)):
-        if abs(nominal_deg[j] - np.rad2deg(theta[j])) > angle_tolerance * np.rad2deg(theta[j]):
-            name = names[j] if j < len(names) else f"#{j + 1}"
-            raise RotationAngleError(
-                f"the {name} rotation turns {nominal_deg[j]:.1f} deg by the nominal gyro scale, not the stated "
-                f"{np.rad2deg(theta[j]):.1f} deg: check the rotation angle (--rotation-angle), the section of that "
-                "rotation in the section list, or the gyro unit (--gyro-unit, --gyro-sensitivity)")
+    _check_angles(nominal_deg, np.rad2deg(theta), angle_tolerance, names)
     senses = np.where(np.sum(Y * A, axis=1) * nominal >= 0, 1.0, -1.0)
     target = (senses * theta)[:, None] * A
     P = Y @ np.linalg.inv(Y.T @ Y)  # C Yᵀ = targetᵀ in least squares; three rotations: P = Y⁻ᵀ, exact
@@ -127,6 +121,18 @@ def fit_ferraris(segments, h: float, angles_deg, axes=None, *, nominal: float = 
         Jj = np.kron(np.eye(3), P[j][:, None])  # vec(δC) = Σ_j (δT_j - C δY_j) ⊗ row j of P
         cov += Jj @ (C @ covY @ C.T + covT) @ Jj.T
     return FerrarisFit("gyro_ferraris", C, cov, senses, np.rad2deg(np.linalg.norm(Y @ C.T, axis=1)), nominal_deg, 1)
+
+
+def _check_angles(nominal_deg, stated_deg, tolerance: float, names) -> None:
+    """Each rotation's angle by the nominal gyro scale within ``tolerance`` (relative) of the
+    stated one, else one line naming the rotation and what to check."""
+    for j, (turned, stated) in enumerate(zip(nominal_deg, stated_deg)):
+        if abs(turned - stated) > tolerance * stated:
+            name = names[j] if j < len(names) else f"#{j + 1}"
+            raise RotationAngleError(
+                f"the {name} rotation turns {turned:.1f} deg by the nominal gyro scale, not the stated "
+                f"{stated:.1f} deg: check the rotation angle (--rotation-angle), the section of that "
+                "rotation in the section list, or the gyro unit (--gyro-unit, --gyro-sensitivity)")
 
 
 def rotation_singular_values(segments, h: float) -> np.ndarray:
