@@ -76,16 +76,23 @@ def calibrate_poses(poses, g: float, method: str = "full_lls", *, unit: str | No
     extra = {k: getattr(r, k) for k in cls._method_field_names() if hasattr(r, k)}
     if "noise_source" in cls._method_field_names():
         extra["noise_source"] = "rests: RMS of the pose-mean standard errors"
-    labels = getattr(poses, "labels", None)
-    pose_table = {"t_start": poses.t_start, "t_end": poses.t_end, "mean": z, "mean_std": se,
-                  "n_samples": poses.n_samples, "temp": poses.temp}
-    if labels is not None:
-        pose_table["labels"] = list(labels)
     return cls(
         bias=r.bias, M=r.M, g=float(g), unit=fit_unit, input_offset=offset, input_sensitivity=sens,
         input_unit=input_unit,
         standard_errors=dict(r.standard_errors), standard_errors_noise=se_noise, quality=quality,
-        residuals=np.asarray(r.residuals), poses=pose_table, provenance=dict(provenance or {}), **extra)
+        residuals=np.asarray(r.residuals), poses=_pose_table(poses, z, se), provenance=dict(provenance or {}),
+        **extra)
+
+
+def _pose_table(poses, z, se) -> dict:
+    """The calibration's table of its poses: times, means and their standard errors (in the
+    fit's unit), samples, temperature, and the known intervals' labels when there are."""
+    table = {"t_start": poses.t_start, "t_end": poses.t_end, "mean": z, "mean_std": se,
+             "n_samples": poses.n_samples, "temp": poses.temp}
+    labels = getattr(poses, "labels", None)
+    if labels is not None:
+        table["labels"] = list(labels)
+    return table
 
 
 def _raw_directions(z) -> np.ndarray:

@@ -190,22 +190,10 @@ def calibrate_ferraris_session(t, gyro, sections: dict, *, raw_unit: str = "deg/
     rs = rest_statistics(t, gyro, np.array([sections[k] for k in rest_names]))
     best = fit_bias(rs, "all")
     segs = [gyro[slice(*sections[k])] - best.bias for k in rotation_names]
-    unit_from = "stated"
-    if raw_unit is None and nominal_sensitivity is not None:
-        raw_unit = "counts"  # a sensitivity is counts per rad/s
-    if raw_unit is None:  # not stated: the rotations of known angle decide it
-        raw_unit, unit_from = unit_from_rotations(segs, tb.h, angles_deg, gyro)
-    nominal = 1.0 / float(nominal_sensitivity) if nominal_sensitivity is not None else RAW_UNITS[raw_unit]
-    if nominal is None:
-        raise RotationAngleError("raw counts need the nominal gyro sensitivity (--gyro-sensitivity) to check the "
-                                 "rotation angles")
+    raw_unit, unit_from, nominal = _nominal_scale(raw_unit, nominal_sensitivity, segs, tb.h, angles_deg, gyro)
     axes, axis_cov = None, None
     if accel is not None and acc is not None:
-        acc = np.asarray(acc, float)
-        seg_acc = [acc[slice(*sections[k])] for k in rotation_names]
-        means = np.array([s.mean(axis=0) for s in seg_acc])
-        se = np.array([s.std(axis=0, ddof=1) / np.sqrt(len(s)) for s in seg_acc])
-        axes, axis_cov, _ = accel_directions(accel, means, se)
+        axes, axis_cov = _rotation_axes(accel, [np.asarray(acc, float)[slice(*sections[k])] for k in rotation_names])
     angles = np.broadcast_to(np.asarray(angles_deg, float), (3,))
     fit = fit_ferraris(segs, tb.h, angles, axes, nominal=nominal, y_var=rest_noise(rs),
                        bias_var=best.bias_se ** 2, axis_cov=axis_cov, angle_std_deg=angle_std_deg,
@@ -231,6 +219,30 @@ def standard_errors(fit: FerrarisFit, nominal: float) -> dict:
                 Jt[3 * i + j, 4 * j] = -fit.C[i, j] / fit.C[j, j] ** 2
     return {"C": se_C, "T": np.sqrt(np.clip(np.diag(Jt @ fit.cov @ Jt.T), 0, None)).reshape(3, 3),
             "scale_factors": np.diag(se_C) / abs(nominal)}
+
+
+def _nominal_scale(raw_unit, nominal_sensitivity, segs, h: float, angles_deg, gyro):
+    """The gyro's raw unit, who said it (``'stated'``, or the rotations of known angle) and its
+    nominal rad/s per raw unit; raw counts without a sensitivity refused in one line."""
+    unit_from = "stated"
+    if raw_unit is None and nominal_sensitivity is not None:
+        raw_unit = "counts"  # a sensitivity is counts per rad/s
+    if raw_unit is None:  # not stated: the rotations of known angle decide it
+        raw_unit, unit_from = unit_from_rotations(segs, h, angles_deg, gyro)
+    nominal = 1.0 / float(nominal_sensitivity) if nominal_sensitivity is not None else RAW_UNITS[raw_unit]
+    if nominal is None:
+        raise RotationAngleError("raw counts need the nominal gyro sensitivity (--gyro-sensitivity) to check the "
+                                 "rotation angles")
+    return raw_unit, unit_from, nominal
+
+
+def _rotation_axes(accel, seg_acc):
+    """Each rotation's axis measured by the calibrated accelerometer (the mean direction of
+    gravity during it) and its covariance."""
+    means = np.array([s.mean(axis=0) for s in seg_acc])
+    se = np.array([s.std(axis=0, ddof=1) / np.sqrt(len(s)) for s in seg_acc])
+    axes, axis_cov, _ = accel_directions(accel, means, se)
+    return axes, axis_cov
 
 
 def ferraris_calibration(fit: FerrarisFit, bias, bias_se, raw_unit: str, nominal: float, *, nominal_axes: bool,

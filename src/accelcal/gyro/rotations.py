@@ -273,22 +273,12 @@ def calibrate_rotations(t, gyro, *, angles_deg, runs=None, raw_unit: str = "rad/
     h = float(np.mean([sample_interval(t[a:b]).h for a, b in (r.run for r in rests)]))
     segs = [gyro[slice(*r.window)] - rests[r.run].bias for r in rotations]
     noise = np.mean([r.noise for r in rests], axis=0)
-    axes, axis_cov = np.eye(3)[[r.axis for r in rotations]], None
-    if accel is not None and acc is not None:
-        found, covs, axis_notes = measured_axes(rotations, accel, acc, h)
-        notes = notes + axis_notes
-        if all(a is not None for a in found):
-            axes, axis_cov = np.array(found), np.array(covs)
+    axes, axis_cov, notes = _axes(rotations, accel, acc, h, notes)
     fit = fit_ferraris(segs, h, angles, axes, nominal=nominal, y_var=noise,
                        bias_var=np.array([rests[r.run].bias_se ** 2 for r in rotations]), axis_cov=axis_cov,
                        angle_std_deg=angle_std_deg, names=tuple(f"{'xyz'[r.axis]} (run {r.run + 1})" for r in rotations))
     measured = axis_cov is not None
     bias, bias_se, warnings = session_bias(rests, raw_unit)
-    motions = {"t_start": [float(t[r.motion[0]]) for r in rotations], "t_end": [float(t[r.motion[1] - 1])
-                                                                               for r in rotations],
-               "window": [list(r.window) for r in rotations], "run": [r.run + 1 for r in rotations],
-               "axis": ["xyz"[r.axis] for r in rotations], "angle_deg": fit.angles_deg.tolist(),
-               "stated_deg": angles.tolist(), "used": [True] * len(rotations), "note": [""] * len(rotations)}
     settings = {"bias_mode": "per run" if len(rests) > 1 else "all", "angles_deg": angles.tolist(),
                 "frame": "accelerometer frame" if measured else "rotation axes",
                 "axes": axes.tolist() if measured else "nominal (each rotation's largest component)",
@@ -297,7 +287,30 @@ def calibrate_rotations(t, gyro, *, angles_deg, runs=None, raw_unit: str = "rad/
                           "bias_se": r.bias_se.tolist(), "rest_excess": r.excess} for r in rests],
                 "notes": notes}
     return ferraris_calibration(fit, bias, bias_se, raw_unit, nominal, nominal_axes=not measured, settings=settings,
-                                motions=motions, warnings=warnings)
+                                motions=_motion_table(t, rotations, fit, angles), warnings=warnings)
+
+
+def _axes(rotations: list[Rotation], accel, acc, h: float, notes):
+    """The rotation axes measured by the accelerometer when every one is (with their covariance
+    and the notes on those that are not), else the nominal ones (each rotation's largest
+    component) and no covariance."""
+    axes, axis_cov = np.eye(3)[[r.axis for r in rotations]], None
+    if accel is not None and acc is not None:
+        found, covs, axis_notes = measured_axes(rotations, accel, acc, h)
+        notes = notes + axis_notes
+        if all(a is not None for a in found):
+            axes, axis_cov = np.array(found), np.array(covs)
+    return axes, axis_cov, notes
+
+
+def _motion_table(t, rotations: list[Rotation], fit, angles) -> dict:
+    """The calibration's table of the rotations: times, integration window, run, axis, the
+    angle the fit gives and the stated one."""
+    return {"t_start": [float(t[r.motion[0]]) for r in rotations],
+            "t_end": [float(t[r.motion[1] - 1]) for r in rotations],
+            "window": [list(r.window) for r in rotations], "run": [r.run + 1 for r in rotations],
+            "axis": ["xyz"[r.axis] for r in rotations], "angle_deg": fit.angles_deg.tolist(),
+            "stated_deg": angles.tolist(), "used": [True] * len(rotations), "note": [""] * len(rotations)}
 
 
 def _check_coverage(rotations: list[Rotation], source: str) -> None:
