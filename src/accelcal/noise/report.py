@@ -218,12 +218,7 @@ def analyse_noise(rec, *, level: float = DEFAULT_LEVEL, n_boot: int = DEFAULT_N_
         A gyro whose unit neither the file nor the user states: a static record cannot
         decide it (:mod:`accelcal.formats.units_evidence`).
     """
-    if not 0 < level < 1 or n_boot < 50:
-        raise NoiseAnalysisError(f"need 0 < level < 1 and n_boot >= 50, got level={level}, n_boot={n_boot}")
-    if getattr(rec, "runs", None) is not None and len(rec.runs) > 1:
-        raise NoiseAnalysisError(f"{rec.source}: {len(rec.runs)} runs recorded apart: one Allan deviation needs one "
-                                 "uninterrupted record; analyse them one at a time (--variable NAME)")
-    require_gyro_unit(rec, "a static record")  # no motion decides rad/s from deg/s: 57x
+    _check_request(rec, level, n_boot)
     t = np.asarray(rec.t, dtype=float)
     fs = 1.0 / float(np.median(np.diff(t)))
     parts = _parts(segments, len(t))
@@ -234,6 +229,32 @@ def analyse_noise(rec, *, level: float = DEFAULT_LEVEL, n_boot: int = DEFAULT_N_
                              "sensor at rest in one orientation for the whole recording (cut the static part out: "
                              "--start/--end, or its rests: --intervals)")
     warnings += static["warnings"] + ([f"not static ({static['refuse']}): analysed anyway"] if static["refuse"] else [])
+    sensors = _sensors(rec, parts, fs, level, n_boot, seed, min_edf)
+    duration = sum(float(t[b - 1] - t[a]) + 1.0 / fs for a, b in parts)
+    if segments is not None:
+        notes.append(_stretches_note(t, parts, fs, duration))
+    for s in sensors.values():
+        warnings += resolution_warnings(s, duration)
+    return NoiseReport(source=str(rec.source), fs=fs, n=int(sum(b - a for a, b in parts)), duration_s=duration, level=float(level),
+                       n_boot=int(n_boot), seed=int(seed), sensors=sensors, static=static, warnings=tuple(warnings),
+                       notes=tuple(notes))
+
+
+
+def _check_request(rec, level: float, n_boot: int) -> None:
+    """Refuse in one line what no analysis can answer: a bad level or bootstrap size, runs
+    recorded apart, a gyro whose unit no one states."""
+    if not 0 < level < 1 or n_boot < 50:
+        raise NoiseAnalysisError(f"need 0 < level < 1 and n_boot >= 50, got level={level}, n_boot={n_boot}")
+    if getattr(rec, "runs", None) is not None and len(rec.runs) > 1:
+        raise NoiseAnalysisError(f"{rec.source}: {len(rec.runs)} runs recorded apart: one Allan deviation needs one "
+                                 "uninterrupted record; analyse them one at a time (--variable NAME)")
+    require_gyro_unit(rec, "a static record")  # no motion decides rad/s from deg/s: 57x
+
+
+def _sensors(rec, parts, fs: float, level: float, n_boot: int, seed: int, min_edf) -> dict:
+    """Each recorded sensor's analysis of the stretches ``parts``, each with its own random
+    stream from ``seed``."""
     seeds = np.random.SeedSequence(int(seed)).spawn(2)
     cut = [slice(a, b) for a, b in parts]
     sensors = {}
@@ -243,18 +264,16 @@ def analyse_noise(rec, *, level: float = DEFAULT_LEVEL, n_boot: int = DEFAULT_N_
     if rec.gyro is not None:
         sensors["gyroscope"] = _sensor("gyroscope", [rec.gyro[c] for c in cut], rec.gyro_unit, fs, level, n_boot,
                                        seeds[1], min_edf)
-    duration = sum(float(t[b - 1] - t[a]) + 1.0 / fs for a, b in parts)
-    if segments is not None:
-        longest = max(float(t[b - 1] - t[a]) + 1.0 / fs for a, b in parts)
-        notes.append(f"analysed {len(parts)} stretch(es) of the recording, {duration:.4g} s in all (the longest "
-                     f"{longest:.4g} s), their Allan variances pooled: t = " + ", ".join(
-                         f"{t[a] - t[0]:.4g}-{t[b - 1] - t[0]:.4g} s" for a, b in parts[:6])
-                     + (" ..." if len(parts) > 6 else ""))
-    for s in sensors.values():
-        warnings += resolution_warnings(s, duration)
-    return NoiseReport(source=str(rec.source), fs=fs, n=int(sum(b - a for a, b in parts)), duration_s=duration, level=float(level),
-                       n_boot=int(n_boot), seed=int(seed), sensors=sensors, static=static, warnings=tuple(warnings),
-                       notes=tuple(notes))
+    return sensors
+
+
+def _stretches_note(t, parts, fs: float, duration: float) -> str:
+    """The note saying which stretches were analysed, their Allan variances pooled."""
+    longest = max(float(t[b - 1] - t[a]) + 1.0 / fs for a, b in parts)
+    return (f"analysed {len(parts)} stretch(es) of the recording, {duration:.4g} s in all (the longest "
+            f"{longest:.4g} s), their Allan variances pooled: t = " + ", ".join(
+                f"{t[a] - t[0]:.4g}-{t[b - 1] - t[0]:.4g} s" for a, b in parts[:6])
+            + (" ..." if len(parts) > 6 else ""))
 
 
 def _parts(segments, n: int) -> list[tuple[int, int]]:
