@@ -226,6 +226,20 @@ def _run(*argv) -> tuple[int, str]:
     return code, err.getvalue()
 
 
+def test_accelcal_noise_on_a_gyro_alone(tmp_path):
+    """A recording without accelerometer: the gyro's noise alone (the static check by the gyro's
+    rate; it was an internal error, exit 4, before)."""
+    rng = np.random.default_rng(3)
+    n = 6000
+    gyro = 1e-3 * rng.standard_normal((n, 3)) + [0.01, -0.02, 0.005]
+    path = tmp_path / "gyro.csv"
+    np.savetxt(path, np.column_stack([np.arange(n) / 100.0, gyro]), delimiter=",", header="t,gx,gy,gz", comments="")
+    code, err = _run("noise", path, "--gyro-unit", "rad/s", "--out", tmp_path / "noise.json")
+    assert code == 0, err
+    out = json.loads((tmp_path / "noise.json").read_text())
+    assert list(out["sensors"]) == ["gyroscope"]
+
+
 def test_accelcal_noise_on_a_bag_writes_every_output(tmp_path):
     pytest.importorskip("rosbags")
     pytest.importorskip("matplotlib")

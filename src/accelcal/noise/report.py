@@ -294,7 +294,7 @@ def _static_parts(rec, parts, fs: float, warnings: list) -> dict:
     """:func:`static_check` of each stretch (the orientation may change between them), merged."""
     checks = []
     for k, (a, b) in enumerate(parts):
-        c = static_check(rec.acc[a:b], None if rec.gyro is None else rec.gyro[a:b], fs)
+        c = static_check(None if rec.acc is None else rec.acc[a:b], None if rec.gyro is None else rec.gyro[a:b], fs)
         tag = "" if len(parts) == 1 else f"stretch {k + 1} (t = {rec.t[a] - rec.t[0]:.4g} s): "
         c["refuse"] = c["refuse"] and tag + c["refuse"]
         c["warnings"] = [tag + w for w in c["warnings"]]
