@@ -48,30 +48,6 @@ def test_a_rotation_short_of_its_stated_angle_is_refused():
         fit_ferraris(segs, 0.01, [360, 360, 360], nominal=np.pi / 180)
 
 
-def test_imucal_example_matches_imucal():
-    """accelcal's Ferraris fit, the command line's route (the session's reader at imucal's 102.4 Hz,
-    its section list), against imucal run as a package on the same files."""
-    pytest.importorskip("imucal")
-    from accelcal_repro.gyro.ferraris_sessions import in_raw_unit, run_imucal
-    from accelcal_repro.gyro.sessions import SESSIONS, calibrate_session, local_paths
-
-    spec = SESSIONS["imucal_ferraris"]
-    paths = local_paths([spec.name])
-    r = calibrate_session(spec, paths)
-    ours = r["gyro"]
-    im = run_imucal(paths[spec.dataset][spec.acc], paths[spec.dataset][spec.intervals])
-    from accelcal.gyro.model import GyroModel
-
-    theirs = in_raw_unit(GyroModel.from_imucal(im["K_g"], im["R_g"], im["b_g"]), "rad/s")
-    z = (theirs.C - ours.model.C) / ours.standard_errors["C"]
-    # the same sums; imucal also removes its g-sensitivity K_ga a during the turns
-    assert np.abs(z).max() < 3
-    # imucal: the plain mean of all rest samples; accelcal: the rests' means weighted by their noise
-    assert np.abs((ours.model.bias - theirs.bias) / ours.standard_errors["bias"]).max() < 0.5
-    # the turns integrate to 360 deg at the rate the reader assumes (at 204.8 Hz: about 180)
-    np.testing.assert_allclose(ours.settings["nominal_angles_deg"], 360.0, rtol=0.05)
-
-
 def test_a_section_list_without_rotations_is_refused():
     with pytest.raises(RotationAngleError, match="lacks x_a, .*x_rot"):
         calibrate_ferraris_session(np.arange(100) / 100.0, np.zeros((100, 3)), {"x_p": (0, 10)})

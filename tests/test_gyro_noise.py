@@ -89,37 +89,6 @@ def test_reml_recovers_a_planted_component():
     assert np.median(est[:, 1]) < 0.5  # the absent one stays near zero
 
 
-def test_intervals_cover_in_a_small_monte_carlo_with_a_wandering_bias():
-    # the full check (0.93-0.97 over 400 trials) is the workflow's claim gyro/interval_coverage;
-    # here 10 sessions (90 draws; 300: 0.94 with the noise model, 0.78 with the rest noise alone)
-    from accelcal_repro.gyro.coverage import SESSION, coverage, summary
-
-    df = coverage(10, 4, dict(SESSION, acc_noise=0.05))
-    new = df[df.noise_model]
-    assert np.all(np.isfinite(new.se) & (new.se > 0))
-    assert np.all(new.half_width >= 1.96 * new.se)  # t quantiles at finite degrees of freedom
-    assert np.all(df[~df.noise_model].half_width <= 1.9600001 * df[~df.noise_model].se)
-    s = summary(df).set_index(["noise_model", "parameter"])
-    assert s.loc[(True, "all"), "coverage"] >= 0.85, s.loc[(True, "all")]
-    assert s.loc[(False, "all"), "coverage"] < 0.9, s.loc[(False, "all")]  # the rest noise alone: too narrow
-
-
-def test_coverage_and_stability_claims_judge_their_tables():
-    import pandas as pd
-
-    from accelcal_repro.gyro.stage import _coverage_claim, _stability_claim
-
-    def cov(c):
-        return pd.DataFrame([{"noise_model": True, "parameter": "all", "n": 3600, "coverage": c, "coverage_se": 0.004}])
-    assert _coverage_claim(cov(0.95))["verdict"] == "reproduced"
-    assert _coverage_claim(cov(0.91))["verdict"] == "not_reproduced"
-    assert _coverage_claim(cov(0.95).assign(n=90))["verdict"] == "not_testable_at_this_scale"
-    stab = pd.DataFrame([{"group": "g", "parameter": k, "chi2_per_dof": v, "noise_model": True}
-                         for k, v in (("s_*", 1.5), ("T_*", 0.7))])
-    assert _stability_claim(stab)["verdict"] == "reproduced"
-    assert _stability_claim(stab.assign(chi2_per_dof=[2.4, 0.7]))["verdict"] == "not_reproduced"
-
-
 def test_accelerometer_direction_covariance_matches_refits():
     # the rests' directions under the accelerometer calibration refitted to re-noised pose means
     import dataclasses

@@ -20,7 +20,6 @@ from accelcal.gyro.errors import NoMotionError, RotationAngleError, TooFewMotion
 from accelcal.gyro.rotations import calibrate_rotations, find_rotations
 
 CTU = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "ctu_ferraris" / "measured_angular_rates.mat"
-CTU_ANGLES = (361.338, 367.160, 363.6703)
 RATE = 100.0
 #: The true gyro of the synthetic sessions: raw = C⁻¹ ω + b (rad/s).
 C_TRUE = np.array([[1.004, 0.002, -0.001], [0.0015, 0.995, 0.003], [-0.002, 0.001, 1.002]])
@@ -155,25 +154,6 @@ def ctu():
                 gyro_unit="deg/s")
 
 
-def test_ctu_agrees_with_its_scripts_logic_and_pooling_the_biases_does_not(ctu):
-    """The repository's script: offsets from samples 1-2000, its integration windows (the data
-    README); ours: each run's rests before and after, the windows found.  Within 1.2 s.e.; with
-    the three runs' biases pooled into one, T_zx moves by more than 4 s.e."""
-    from accelcal_repro.gyro.ferraris_sessions import ctu_calibration
-
-    per = calibrate_rotations(ctu.t, ctu.gyro, angles_deg=CTU_ANGLES, runs=ctu.runs)
-    script = ctu_calibration(CTU).set_index("parameter")
-    se_s, se_T = per.standard_errors["scale_factors"], per.standard_errors["T"]
-    for a in range(3):
-        assert abs(1e6 * per.scale_factors[a] - script.loc[f"s_{'xyz'[a]}", "value"]) < 1.2 * 1e6 * se_s[a]
-        for b in range(3):
-            if a != b:
-                assert abs(1e3 * per.model.T[a, b] - script.loc[f"T_{'xyz'[a]}{'xyz'[b]}", "value"]) < 1.2e3 * se_T[a, b]
-    assert [r["samples"] for r in per.settings["runs"]] == [[0, 4001], [4001, 8002], [8002, 12003]]
-    pooled = calibrate_rotations(ctu.t, ctu.gyro, angles_deg=CTU_ANGLES)
-    assert abs(pooled.model.T[2, 0] - per.model.T[2, 0]) > 4 * se_T[2, 0]
-
-
 class _Identity:
     """An accelerometer calibration that leaves the samples as they are (m/s²)."""
 
@@ -213,33 +193,6 @@ def _rotation_onto(u, v) -> np.ndarray:
     s, d = np.linalg.norm(c), float(u @ v)
     K = np.array([[0, -c[2], c[1]], [c[2], 0, -c[0]], [-c[1], c[0], 0]])
     return np.eye(3) + K + K @ K * ((1 - d) / s ** 2 if s > 0 else 0.0)
-
-
-def test_a_section_list_gives_the_ctu_scripts_windows_and_offsets_exactly(ctu, tmp_path):
-    """--intervals with the script's offsets (samples 1-2000 of each run) and windows (*_rot,
-    the README's, in samples of the joined runs): the script's logic from the command line."""
-    from accelcal_repro.gyro.ferraris_sessions import ctu_calibration
-
-    sections = {"x_p": (0, 2000), "x_rot": (2419, 2910), "y_p": (4001, 6001), "y_rot": (6565, 7121),
-                "z_p": (8002, 10002), "z_rot": (10976, 11502)}
-    path = tmp_path / "sections.json"
-    path.write_text(json.dumps({k: {"start": a, "end": b} for k, (a, b) in sections.items()}))
-    out = tmp_path / "ctu.json"
-    code, err = _cli("calibrate", CTU, "--variable", "x_rotation,y_rotation,z_rotation", "--columns", "gx=1,gy=2,gz=3",
-                     "--rate", "100", "--gyro-unit", "deg/s", "--rotation-angle", ",".join(map(str, CTU_ANGLES)),
-                     "--intervals", path, "--out", out)
-    assert code == 0, err
-    g = json.loads(out.read_text())["gyroscope"]
-    script = ctu_calibration(CTU).set_index("parameter")
-    scale = np.diag(np.array(g["model"]["C"])) - 1.0  # nominal 1 rad/s per rad/s
-    np.testing.assert_allclose(1e6 * scale, script.loc[["s_x", "s_y", "s_z"], "value"], rtol=1e-9)
-    assert g["motions"]["window"] == [[2419, 2910], [6565, 7121], [10976, 11502]]
-    sections["y_rot"] = (6565, 8100)  # into the third run
-    path.write_text(json.dumps({k: {"start": a, "end": b} for k, (a, b) in sections.items()}))
-    code, err = _cli("calibrate", CTU, "--variable", "x_rotation,y_rotation,z_rotation", "--columns", "gx=1,gy=2,gz=3",
-                     "--rate", "100", "--gyro-unit", "deg/s", "--rotation-angle", "360", "--intervals", path, "--out",
-                     tmp_path / "bad.json")
-    assert code == 2 and "spans two runs" in err and not (tmp_path / "bad.json").exists()
 
 
 def test_a_gyro_only_table_is_calibrated_where_it_was_refused(tmp_path):

@@ -301,22 +301,6 @@ def test_filters_raise_the_same_errors():
     assert isinstance(ea, AccelcalError) and type(ea) is type(eb) and str(ea) == str(eb)
 
 
-def test_shared_gain_monte_carlo_agrees():
-    from accelcal_repro.batista2011.montecarlo import filter_montecarlo, filter_scenario, run_streams
-    from accelcal_repro.batista2011.trajectory import euler_sinusoid_attitude
-
-    t = np.arange(2001) / 100.0
-    att = euler_sinusoid_attitude(t, [0, 0, 0], [90, 45, 180], [0.03, 0.02, 0.01], [0, 45, 0], [0, 0, 0])
-    sc = filter_scenario(att, [0.1, -0.05, 0.025], 0.0013, 0.05, 0.01, 9.81, [0.05, -0.03, 0.1])
-    P0 = np.repeat([0.01**2, 0.2**2, 0.2**2], 3)
-    a, b = both(lambda: filter_montecarlo(sc, run_streams(1, "f", range(6)), P0, record_every_s=0.37,
-                                          summary_every_s=1.0, block=300, sub_block=17))
-    cols = [c for c in a.runs.columns if c.startswith("e_")]
-    np.testing.assert_array_equal(a.runs[["run", "t"]].to_numpy(), b.runs[["run", "t"]].to_numpy())
-    np.testing.assert_allclose(a.runs[cols].to_numpy(), b.runs[cols].to_numpy(), rtol=0, atol=1e-11)
-    np.testing.assert_allclose(a.moments["m2"], b.moments["m2"], rtol=1e-9, atol=1e-20)
-
-
 @pytest.mark.parametrize("variant", [{}, {"accel_formula": "eq13"}, {"accel_feedback": False},
                                      {"estimate_gyro_z": False, "update_gyro": False}])
 def test_tereshkov_estimator_agrees_also_in_chunks(variant):

@@ -1,4 +1,5 @@
-"""The peer: imucal's Ferraris calibration on its example session against accelcal."""
+"""The peers: imucal's Ferraris calibration on its example session against accelcal; allantools'
+Allan deviations of the ADIS16405 record (read by the reproduction's SMAC reader) against accelcal's."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ from accelcal_repro.measured.peer import ferraris_comparison, implied_scale, lq
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "imucal_ferraris"
 SESSION, SECTIONS = DATA / "example_ferraris_session.csv", DATA / "example_ferraris_session_list.json"
+ADIS = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "smac_adis16405" / "adis_16405_imu1.rda"
 # accelcal's static detection on this session (tests/test_measured_calibrate checks the matching)
 DETECTED = {"x_p": (421, 1340), "x_a": (1548, 2470), "y_p": (2637, 3447), "y_a": (3656, 4245),
             "z_p": (4416, 5092), "z_a": (5301, 6062)}
@@ -66,3 +68,16 @@ def test_interval_choice_matters_less_than_the_noise(peer):
     assert np.max(np.abs(a - b)) < 1e-3
     assert set(peer.poses) == {"section_list", "detected"}
     assert (peer[(peer.tool == "imucal") & (peer.poses == "section_list")].diff_to_imucal == 0).all()
+
+
+@pytest.mark.skipif(not ADIS.is_file(), reason="shared data not present")
+def test_allan_deviations_of_the_adis16405_record_equal_allantools():
+    allantools = pytest.importorskip("allantools")
+    from accelcal.noise.allan import allan_variance
+    from accelcal_repro.measured.smac import read_smac_rda
+
+    acc = read_smac_rda(ADIS).acc
+    a = allan_variance(acc, 100.0)
+    for j in range(3):
+        _, adev, _, _ = allantools.oadev(acc[:, j], rate=100.0, data_type="freq", taus=a.taus)
+        assert np.allclose(adev, a.adev[:, j], rtol=1e-9, atol=0)

@@ -7,7 +7,6 @@ import contextlib
 import io
 import json
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -24,7 +23,6 @@ from accelcal.recording import Recording
 FS = 100.0
 TRUE_ACC = {"white": 2e-3, "bias_instability": 1e-3, "random_walk": 1e-5}
 TRUE_GYRO = {"white": 1e-4, "random_walk": 5e-6}
-ADIS = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "smac_adis16405" / "adis_16405_imu1.rda"
 
 
 def _record(seed: int, n: int = 2**18, acc_terms=TRUE_ACC, gyro_terms=TRUE_GYRO, gyro=True) -> Recording:
@@ -52,19 +50,6 @@ def test_allan_deviations_equal_allantools_at_the_same_taus(report):
             taus, adev, _, _ = allantools.oadev(x[:, j], rate=s.allan.fs, data_type="freq", taus=s.allan.taus)
             assert np.allclose(taus, s.allan.taus, rtol=1e-12)
             assert np.allclose(adev, s.allan.adev[:, j], rtol=1e-9, atol=0)
-
-
-@pytest.mark.skipif(not ADIS.is_file(), reason="shared data not present")
-def test_allan_deviations_of_the_adis16405_record_equal_allantools():
-    allantools = pytest.importorskip("allantools")
-    from accelcal.noise.allan import allan_variance
-    from accelcal_repro.measured.smac import read_smac_rda
-
-    acc = read_smac_rda(ADIS).acc
-    a = allan_variance(acc, 100.0)
-    for j in range(3):
-        _, adev, _, _ = allantools.oadev(acc[:, j], rate=100.0, data_type="freq", taus=a.taus)
-        assert np.allclose(adev, a.adev[:, j], rtol=1e-9, atol=0)
 
 
 # --------------------------------------------------------------------------- fitted terms
@@ -239,6 +224,20 @@ def _run(*argv) -> tuple[int, str]:
     with contextlib.redirect_stderr(err):
         code = cli.main([str(a) for a in argv])
     return code, err.getvalue()
+
+
+def test_accelcal_noise_on_a_gyro_alone(tmp_path):
+    """A recording without accelerometer: the gyro's noise alone (the static check by the gyro's
+    rate; it was an internal error, exit 4, before)."""
+    rng = np.random.default_rng(3)
+    n = 6000
+    gyro = 1e-3 * rng.standard_normal((n, 3)) + [0.01, -0.02, 0.005]
+    path = tmp_path / "gyro.csv"
+    np.savetxt(path, np.column_stack([np.arange(n) / 100.0, gyro]), delimiter=",", header="t,gx,gy,gz", comments="")
+    code, err = _run("noise", path, "--gyro-unit", "rad/s", "--out", tmp_path / "noise.json")
+    assert code == 0, err
+    out = json.loads((tmp_path / "noise.json").read_text())
+    assert list(out["sensors"]) == ["gyroscope"]
 
 
 def test_accelcal_noise_on_a_bag_writes_every_output(tmp_path):

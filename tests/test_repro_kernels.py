@@ -1,12 +1,16 @@
 """Kernels that live in the reproductions (accelcal_repro) and call the core's compiled kernels:
-their disk cache must go stale when the core kernel they call changes."""
+their disk cache must go stale when the core kernel they call changes, and their compiled and
+reference forms agree."""
 
 import os
 import subprocess
 import sys
 import textwrap
 
+import numpy as np
 import pytest
+
+from tests.test_kernels import both
 
 pytest.importorskip("numba")
 
@@ -62,3 +66,19 @@ def test_the_shared_gain_kernel_depends_on_the_core_filter_kernels():
     if cache_file is None:
         pytest.skip("no writable numba cache folder here")
     assert cache_file._source_stamp[1] == (st.st_mtime, st.st_size)
+
+
+def test_shared_gain_monte_carlo_agrees():
+    from accelcal_repro.batista2011.montecarlo import filter_montecarlo, filter_scenario, run_streams
+    from accelcal_repro.batista2011.trajectory import euler_sinusoid_attitude
+
+    t = np.arange(2001) / 100.0
+    att = euler_sinusoid_attitude(t, [0, 0, 0], [90, 45, 180], [0.03, 0.02, 0.01], [0, 45, 0], [0, 0, 0])
+    sc = filter_scenario(att, [0.1, -0.05, 0.025], 0.0013, 0.05, 0.01, 9.81, [0.05, -0.03, 0.1])
+    P0 = np.repeat([0.01**2, 0.2**2, 0.2**2], 3)
+    a, b = both(lambda: filter_montecarlo(sc, run_streams(1, "f", range(6)), P0, record_every_s=0.37,
+                                          summary_every_s=1.0, block=300, sub_block=17))
+    cols = [c for c in a.runs.columns if c.startswith("e_")]
+    np.testing.assert_array_equal(a.runs[["run", "t"]].to_numpy(), b.runs[["run", "t"]].to_numpy())
+    np.testing.assert_allclose(a.runs[cols].to_numpy(), b.runs[cols].to_numpy(), rtol=0, atol=1e-11)
+    np.testing.assert_allclose(a.moments["m2"], b.moments["m2"], rtol=1e-9, atol=1e-20)

@@ -37,7 +37,7 @@ from .errors import (
     TooFewPosesError,
 )
 
-from .registry import ESTIMATORS
+from .registry import ESTIMATORS, resolve
 
 __version__ = "0.1.0"
 
@@ -67,8 +67,7 @@ def __getattr__(name: str):
     if name in _LAZY:
         value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
     elif name in functions:
-        module, _, attr = functions[name].partition(":")
-        value = getattr(importlib.import_module(module), attr)
+        value = resolve(functions[name])
     else:
         try:  # a submodule: accelcal.nlls, accelcal.batista, ...
             value = importlib.import_module(f".{name}", __name__)

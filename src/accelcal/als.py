@@ -98,11 +98,6 @@ def corrected_matrix_terms(N: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return _T1.dot(N[9]), N[9, 9] * _T2
 
 
-def estimate_noise_var(z: np.ndarray) -> float:
-    """σ² at which ``Ψ(σ²)`` becomes singular (Kukush et al. 2004), for scaled data."""
-    return _noise_var_from(normal_matrix(z, 1.0))
-
-
 def _noise_var_from(N: np.ndarray) -> float:
     from scipy.optimize import brentq  # here: scipy.optimize costs 0.6 s to import
 

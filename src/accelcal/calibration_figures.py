@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .evaluation import residual_sigma
 from .plotting import plt
 from .quality import RULES, directions
 
@@ -17,7 +18,6 @@ def coverage_figure(cal, title: str = ""):
     are the sphere within 30° of a pose (the coverage number).  Right: residual against
     the predicted ±2σ band, pose by pose.
     """
-    from .evaluation import residual_sigma
 
     z = np.asarray(cal.poses["mean"], float)
     u = directions(z, cal.M, cal.bias)

@@ -272,16 +272,6 @@ class EffectTerms:
     n: int
 
     @property
-    def has_polynomial(self) -> bool:
-        """Whether ``P(x) = y`` needs solving (else ``x = y``)."""
-        return any(e.kind != ADDITIVE for e in self.effects)
-
-    @property
-    def has_harmonic(self) -> bool:
-        """Whether a harmonic effect couples the axes (Newton on the three at once)."""
-        return any(e.kind == HARMONIC for e in self.effects)
-
-    @property
     def n_parameters(self) -> int:
         """Length of the flat parameter vector of the effects."""
         return sum(e.size for e in self.effects)

@@ -48,4 +48,10 @@ def json_safe(obj):
     return obj
 
 
-__all__ = ["json_safe"]
+def is_finite(x) -> bool:
+    """Whether ``x``, a number or the None that :func:`json_safe` writes for a quantity not
+    estimable, is a finite number."""
+    return x is not None and math.isfinite(x)
+
+
+__all__ = ["is_finite", "json_safe"]

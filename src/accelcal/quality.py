@@ -43,6 +43,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from .evaluation import chi2_test, noise_standard_errors, residual_sigma
+
 #: Thresholds of the warnings (module docstring).
 RULES = {"excess": 1.5, "p_value": 1e-3, "distinct_deg": 10.0, "coverage_deg": 30.0, "hemisphere": 0.6,
          "coverage": 0.25}
@@ -152,7 +154,6 @@ def assess(z, mean_std, M, bias, residuals, n_parameters: int, model: str,
         model) in the units of :meth:`accelcal.results.CalibrationResult.standard_errors`,
         scaled by ``max(1, excess)``.
     """
-    from .evaluation import chi2_test, noise_standard_errors, residual_sigma
 
     z = np.asarray(z, float)
     r = np.asarray(residuals, float)
@@ -165,27 +166,7 @@ def assess(z, mean_std, M, bias, residuals, n_parameters: int, model: str,
     hemi = float(np.linalg.norm(u.mean(axis=0)))
     q = n_parameters
     need = q + 1 if min_poses is None else min_poses
-    warnings, flags = [], []
-    if chi.dof < q:
-        flags.append("few_dof")
-        warnings.append(f"only {max(chi.dof, 0)} degree(s) of freedom ({len(z)} poses for {q} parameters): the "
-                        "residuals cannot check the fit, and the ± rest on the pose noise alone; record at least "
-                        f"{2 * q} poses in distinct orientations")
-    if chi.dof > 0 and excess > RULES["excess"] and chi.p_value < RULES["p_value"]:
-        flags.append("excess")
-        warnings.append(f"pose residuals are {excess:.3g}x what the pose noise predicts (chi2/dof = "
-                        f"{chi.reduced:.3g} on {chi.dof} dof, p = {chi.p_value:.2g}): the model misses an effect "
-                        "(nonlinearity, drift, temperature, a disturbed pose) or the noise is not white; the ± "
-                        "include this factor; run `accelcal discrepancy` on the recording")
-    if distinct < need:
-        flags.append("few_orientations")
-        warnings.append(f"only {distinct} distinct orientations among {len(z)} poses (10 deg apart), fewer than the "
-                        f"{need} this model needs: turn the sensor to new orientations between rests")
-    if hemi > RULES["hemisphere"] or cover < RULES["coverage"]:
-        flags.append("one_sided")
-        warnings.append(f"the poses cover {100 * cover:.0f}% of the sphere (within 30 deg) and lean to one side "
-                        f"(|mean direction| = {hemi:.2f}): scale and non-orthogonality are extrapolated; add poses "
-                        "on the other side")
+    flags, warnings = _warnings(chi, excess, q, len(z), distinct, need, cover, hemi)
     nse = noise_standard_errors(z, mean_std, M, bias, model) * max(1.0, excess if np.isfinite(excess) else 1.0)
     se = {"bias": nse[:3]}
     if model == "full":
@@ -197,6 +178,34 @@ def assess(z, mean_std, M, bias, residuals, n_parameters: int, model: str,
                          chi2=float(chi.chi2), p_value=float(chi.p_value), distinct_orientations=int(distinct),
                          coverage=cover, hemisphere_bias=hemi, warnings=tuple(warnings), flags=tuple(flags))
     return quality, se
+
+
+def _warnings(chi, excess: float, q: int, n_poses: int, distinct: int, need: int, cover: float,
+              hemi: float) -> tuple[list, list]:
+    """Flags and warnings of a fit: too few degrees of freedom, residuals beyond the noise, too
+    few distinct orientations, poses on one side of the sphere."""
+    warnings, flags = [], []
+    if chi.dof < q:
+        flags.append("few_dof")
+        warnings.append(f"only {max(chi.dof, 0)} degree(s) of freedom ({n_poses} poses for {q} parameters): the "
+                        "residuals cannot check the fit, and the ± rest on the pose noise alone; record at least "
+                        f"{2 * q} poses in distinct orientations")
+    if chi.dof > 0 and excess > RULES["excess"] and chi.p_value < RULES["p_value"]:
+        flags.append("excess")
+        warnings.append(f"pose residuals are {excess:.3g}x what the pose noise predicts (chi2/dof = "
+                        f"{chi.reduced:.3g} on {chi.dof} dof, p = {chi.p_value:.2g}): the model misses an effect "
+                        "(nonlinearity, drift, temperature, a disturbed pose) or the noise is not white; the ± "
+                        "include this factor; run `accelcal discrepancy` on the recording")
+    if distinct < need:
+        flags.append("few_orientations")
+        warnings.append(f"only {distinct} distinct orientations among {n_poses} poses (10 deg apart), fewer than the "
+                        f"{need} this model needs: turn the sensor to new orientations between rests")
+    if hemi > RULES["hemisphere"] or cover < RULES["coverage"]:
+        flags.append("one_sided")
+        warnings.append(f"the poses cover {100 * cover:.0f}% of the sphere (within 30 deg) and lean to one side "
+                        f"(|mean direction| = {hemi:.2f}): scale and non-orthogonality are extrapolated; add poses "
+                        "on the other side")
+    return flags, warnings
 
 
 __all__ = ["FitQuality", "RULES", "assess", "directions", "distinct_orientations", "sphere_coverage"]

@@ -364,6 +364,12 @@ def estimators(sensor: str | None = None, **where) -> tuple[Estimator, ...]:
                  if (sensor is None or e.sensor == sensor) and all(getattr(e, k, _MISSING) == v for k, v in where.items()))
 
 
+def min_gyro_rests() -> int:
+    """Rests a gyro calibration from motions needs: one more than the fewest motions of the
+    registered motion estimators (the CLI's parser reads it without importing the gyro)."""
+    return 1 + max(e.min_poses for e in estimators("gyroscope", data="motions"))
+
+
 def class_of_type(root: type, cal_type: str) -> type | None:
     """The subclass of ``root`` whose own ``CAL_TYPE`` is ``cal_type``, or None.
 
@@ -399,5 +405,5 @@ def model_of(name: str) -> str:
 
 
 __all__ = ["DATA", "ESTIMATORS", "Estimator", "FAMILIES", "MotionEstimator", "NOISE_USES", "N_PARAMETERS", "PoseEstimator",
-           "RotationEstimator", "class_of_type", "estimator", "estimators", "model_of", "register", "resolve", "subclasses",
+           "RotationEstimator", "class_of_type", "estimator", "estimators", "min_gyro_rests", "model_of", "register", "resolve", "subclasses",
            "types_of", "unregister"]

@@ -160,46 +160,59 @@ def detect_static(t, acc, *, init_duration: float | None = None, window: float =
         moves at the start), or no static pose at all.
     """
     t, acc, temp = _validate(t, acc, temp)
-    if not (window > 0 and threshold_factor > 1 and min_duration >= 0 and trim >= 0):
-        raise AccelcalError("need window > 0, threshold_factor > 1, min_duration >= 0 and trim >= 0")
     n = t.size
     fs = 1.0 / float(np.median(np.diff(t)))
-    if window * fs < 3:
-        raise RecordingError(f"the {window:g} s variance window holds {window * fs:.2g} samples at {fs:.4g} Hz; it "
-                             "needs at least 3: give a longer --window, or check the time unit (--time-unit)")
-    w = max(3, int(round(window * fs)) | 1)  # odd, so the window is centred on a sample
+    w = _window_samples(window, threshold_factor, min_duration, trim, fs, n)
     h = w // 2
-    if n < 3 * w:
-        raise RecordingError(f"recording too short: {n} samples ({n / fs:.2f} s); "
-                             f"need at least 3 windows ({3 * w} samples)")
     v = _rolling_variance_trace(acc, w)
     m = int(round(trim * fs))
     n_min = max(int(np.ceil(min_duration * fs)), 2)
-
-    if noise_reference not in ("auto", "initial", "quietest"):
-        raise AccelcalError(f"noise_reference must be 'auto', 'initial' or 'quietest', got {noise_reference!r}")
-    reference, note = "initial_rest", ""
-    if noise_reference == "quietest":
-        init, vref = _quietest_stretch(acc, v, w, fs, "")
-        reference = "quietest_stretch"
-    else:
-        try:
-            init = _initial_segment(v, init_duration, window, threshold_factor, w, h, m, n, fs)
-            vref = _check_initial_rest(acc, v, init, w, threshold_factor, fs)
-        except RecordingError as e:
-            if noise_reference == "initial" or init_duration is not None:
-                raise
-            note = str(e)
-            init, vref = _quietest_stretch(acc, v, w, fs, note)
-            reference = "quietest_stretch"
-            note = (f"{note}; noise level taken from the quietest {(init[1] - init[0]) / fs:.1f} s stretch "
-                    f"(t = {t[init[0]]:.1f}-{t[init[1] - 1]:.1f} s)")
-
+    init, vref, reference, note = _noise_reference(t, acc, v, noise_reference, init_duration, window,
+                                                   threshold_factor, w, m, fs)
     spans = _spans(_runs(v < threshold_factor * vref), h, m, n)
     spans = spans[spans[:, 1] - spans[:, 0] >= n_min]
     if len(spans) == 0:
         raise RecordingError("no static interval found: the sensor never rests long enough")
     return _pose_statistics(t, acc, temp, spans, init, reference, note)
+
+
+
+def _window_samples(window: float, threshold_factor: float, min_duration: float, trim: float, fs: float,
+                    n: int) -> int:
+    """The variance window in samples (odd, so that it is centred on a sample); the settings and
+    a recording too short for them refused in one line."""
+    if not (window > 0 and threshold_factor > 1 and min_duration >= 0 and trim >= 0):
+        raise AccelcalError("need window > 0, threshold_factor > 1, min_duration >= 0 and trim >= 0")
+    if window * fs < 3:
+        raise RecordingError(f"the {window:g} s variance window holds {window * fs:.2g} samples at {fs:.4g} Hz; it "
+                             "needs at least 3: give a longer --window, or check the time unit (--time-unit)")
+    w = max(3, int(round(window * fs)) | 1)
+    if n < 3 * w:
+        raise RecordingError(f"recording too short: {n} samples ({n / fs:.2f} s); "
+                             f"need at least 3 windows ({3 * w} samples)")
+    return w
+
+
+def _noise_reference(t, acc, v, noise_reference: str, init_duration, window: float, threshold_factor: float,
+                     w: int, m: int, fs: float):
+    """The stretch whose variance is the noise reference, that variance, which stretch it is
+    (``initial_rest`` or ``quietest_stretch``) and a note when the initial rest was not usable."""
+    if noise_reference not in ("auto", "initial", "quietest"):
+        raise AccelcalError(f"noise_reference must be 'auto', 'initial' or 'quietest', got {noise_reference!r}")
+    if noise_reference == "quietest":
+        init, vref = _quietest_stretch(acc, v, w, fs, "")
+        return init, vref, "quietest_stretch", ""
+    try:
+        init = _initial_segment(v, init_duration, window, threshold_factor, w, w // 2, m, t.size, fs)
+        return init, _check_initial_rest(acc, v, init, w, threshold_factor, fs), "initial_rest", ""
+    except RecordingError as e:
+        if noise_reference == "initial" or init_duration is not None:
+            raise
+        note = str(e)
+        init, vref = _quietest_stretch(acc, v, w, fs, note)
+        note = (f"{note}; noise level taken from the quietest {(init[1] - init[0]) / fs:.1f} s stretch "
+                f"(t = {t[init[0]]:.1f}-{t[init[1] - 1]:.1f} s)")
+        return init, vref, "quietest_stretch", note
 
 
 def _initial_segment(v, init_duration, window, k, w, h, m, n, fs) -> tuple[int, int]:

@@ -36,6 +36,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import AccelcalError, RecordingError
+from .evaluation import residual_sigma
+from .lls import bias_lls
+from .quality import assess, distinct_orientations
+from .registry import estimator
+from .static import StaticPoses, detect_static, detect_static_recording
+from .uncertainty import residual_jacobian
 
 #: Threshold multipliers tried (IMU-TK's 2-10).
 THRESHOLDS = (2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0)
@@ -65,9 +71,6 @@ class StaticChoice:
 def _score(t, acc, g, unit, kw, min_poses):
     # the registry's full LLS and the quality assessment directly, not accelcal.calibration
     # (which calls this module when the default detection finds too few poses)
-    from .quality import assess, distinct_orientations
-    from .registry import estimator
-    from .static import detect_static
 
     poses = detect_static(t, acc, **kw)
     if len(poses) >= 4:
@@ -92,8 +95,6 @@ def merge_split_rests(poses, max_deg: float = MERGE_DEG):
     than ``max_deg``: one rest split by noise crossing the threshold.  A merged pose spans
     from the first piece's start to the last piece's end; its mean and standard error
     combine the pieces' (weighted by their samples, and inversely by their variances)."""
-    from .lls import bias_lls
-    from .static import StaticPoses
 
     z = np.asarray(poses.means, float)
     d = z - bias_lls(z, 1.0).bias  # about the centre of the best sphere: unit-free, no calibration needed
@@ -131,8 +132,6 @@ def _directions(cal, poses):
 
 def _noise_covariance(poses, cal) -> np.ndarray:
     """Covariance of (b, s, θ) from the pose noise: (Jᵀ W J)⁻¹, as accelcal.evaluation does."""
-    from .evaluation import residual_sigma
-    from .uncertainty import residual_jacobian
 
     z = np.asarray(poses.means, float)
     J = residual_jacobian(z, cal.M, cal.bias, "full")
@@ -207,7 +206,6 @@ def find_static_poses(rec, g: float, static: dict | None = None, need: int = 0):
     AccelcalError
         No static pose (the defaults' own reason when the search finds nothing either).
     """
-    from .static import detect_static_recording
 
     static = dict(static or {})
     failed = None

@@ -10,11 +10,14 @@ from typing import ClassVar
 
 import numpy as np
 
-from ..errors import (AccelcalError)
+from ..atomic import write_json_atomic
 from ..effects import EFFECT_IDS, EFFECTS, TEMPERATURE, TIME, effect
+from ..errors import (AccelcalError)
 from ..extended_model import model_terms
 from ..jsonsafe import json_safe
 from ..mag.result import MagCalibration
+from ..model import m_from_params, params_from_m
+from ..quality import FitQuality
 from ..registry import ESTIMATORS, class_of_type, subclasses, types_of
 from ..summary import Summary
 from ..units import G0, acceleration_unit
@@ -160,14 +163,10 @@ class Calibration:
 
     @property
     def scale_factors(self) -> np.ndarray:
-        from ..model import params_from_m
-
         return params_from_m(self.M)[0]
 
     @property
     def nonorthogonality_deg(self) -> np.ndarray:
-        from ..model import params_from_m
-
         return np.rad2deg(params_from_m(self.M)[1])
 
     @property
@@ -348,7 +347,6 @@ class Calibration:
 
     def save(self, path) -> None:
         """Write the JSON atomically (whole or not at all)."""
-        from ..atomic import write_json_atomic
 
         write_json_atomic(path, self.to_dict())
 
@@ -487,8 +485,6 @@ def _arr(v):
 
 
 def _common(d: dict, version: int) -> dict:
-    from ..quality import FitQuality
-
     inp = d.get("input") or {}
     unit = d.get("unit")
     poses = {k: (v if k == "labels" else _arr(v)) for k, v in (d.get("poses") or {}).items()}
@@ -547,7 +543,6 @@ def _method_values(cls, d: dict) -> dict:
 
 def _from_discrepancy(d: dict) -> Calibration:
     """The base model + named effects of an ``accelcal discrepancy`` report."""
-    from ..model import m_from_params
 
     after = d["model_after"]
     p = after["parameters"]

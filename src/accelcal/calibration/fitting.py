@@ -10,9 +10,9 @@ import numpy as np
 from ..errors import (AccelcalError, DegeneratePosesError, NotConvergedError, NotPositiveDefiniteError,
                       RecordingError, TooFewPosesError)
 from ..one_orientation import check_several_orientations
+from ..quality import assess, distinct_orientations
 from ..registry import estimator, estimators
 from ..static_auto import find_static_poses
-
 from .base import Calibration
 
 
@@ -51,7 +51,6 @@ def calibrate_poses(poses, g: float, method: str = "full_lls", *, unit: str | No
     the noise with any misfit of the model (the Xsens residuals are 2.5x the noise) and
     give a noisy value from a few dozen points.
     """
-    from ..quality import assess
 
     est = estimator(method)
     z = np.asarray(poses.means, float)
@@ -77,16 +76,23 @@ def calibrate_poses(poses, g: float, method: str = "full_lls", *, unit: str | No
     extra = {k: getattr(r, k) for k in cls._method_field_names() if hasattr(r, k)}
     if "noise_source" in cls._method_field_names():
         extra["noise_source"] = "rests: RMS of the pose-mean standard errors"
-    labels = getattr(poses, "labels", None)
-    pose_table = {"t_start": poses.t_start, "t_end": poses.t_end, "mean": z, "mean_std": se,
-                  "n_samples": poses.n_samples, "temp": poses.temp}
-    if labels is not None:
-        pose_table["labels"] = list(labels)
     return cls(
         bias=r.bias, M=r.M, g=float(g), unit=fit_unit, input_offset=offset, input_sensitivity=sens,
         input_unit=input_unit,
         standard_errors=dict(r.standard_errors), standard_errors_noise=se_noise, quality=quality,
-        residuals=np.asarray(r.residuals), poses=pose_table, provenance=dict(provenance or {}), **extra)
+        residuals=np.asarray(r.residuals), poses=_pose_table(poses, z, se), provenance=dict(provenance or {}),
+        **extra)
+
+
+def _pose_table(poses, z, se) -> dict:
+    """The calibration's table of its poses: times, means and their standard errors (in the
+    fit's unit), samples, temperature, and the known intervals' labels when there are."""
+    table = {"t_start": poses.t_start, "t_end": poses.t_end, "mean": z, "mean_std": se,
+             "n_samples": poses.n_samples, "temp": poses.temp}
+    labels = getattr(poses, "labels", None)
+    if labels is not None:
+        table["labels"] = list(labels)
+    return table
 
 
 def _raw_directions(z) -> np.ndarray:
@@ -103,7 +109,6 @@ def _raw_directions(z) -> np.ndarray:
 
 def _orientation_cause(err: AccelcalError, z, est) -> AccelcalError:
     """A failed fit on poses that repeat too few orientations says so (the likely cause)."""
-    from ..quality import distinct_orientations
 
     k = distinct_orientations(_raw_directions(z))
     if k >= est.min_poses:
@@ -204,8 +209,6 @@ class _Poses:
 
 
 def _too_few_hint(rec, poses, est) -> str:
-    from ..quality import distinct_orientations
-
     k = distinct_orientations(_raw_directions(poses.means)) if len(poses) >= 4 else len(poses)
     rate = rec.rate
     if not 1.0 <= rate <= 20000.0:

@@ -6,7 +6,9 @@ import argparse
 import sys
 from pathlib import Path
 
+from ..atomic import atomic_output
 from ..errors import AccelcalError
+from . import apply_log
 from .common import _read, _reader_options, warn
 from .correct import check_source, corrected
 
@@ -58,7 +60,6 @@ def add_parser(sub, epilog: str) -> None:
 
 def _apply(args) -> int:
     from ..calibration import load_calibration
-    from . import apply_log
 
     cal = load_calibration(args.calibration)
     if apply_log.writes_log(args):
@@ -96,8 +97,6 @@ def _mag(cal, rec, args):
 
 def _write_corrected(path: Path, rec, x, w=None, m=None) -> None:
     import pandas as pd
-
-    from ..atomic import atomic_output
 
     time_name, time_values = rec.time_column if rec.time_column is not None else ("t", rec.t)
     data = {time_name: time_values, "ax": x[:, 0], "ay": x[:, 1], "az": x[:, 2]}

@@ -5,10 +5,12 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
-from ..errors import AccelcalError
-from ..registry import estimators
+from ..atomic import write_json_atomic
+from ..errors import AccelcalError, RecordingError, TooFewPosesError
+from ..registry import estimators, min_gyro_rests
 from . import gyro, mag
 from .common import (STANDARD_GRAVITY, _gravity, _nominal, _provenance, _rate_hint, _read, _reader_options,
                      _search_static, _static_options, _static_settings, _step, fail)
@@ -44,11 +46,7 @@ def add_parser(sub, epilog: str) -> None:
 
 
 def _calibrate(args) -> int:
-    from dataclasses import replace
-
-    from ..calibration import calibrate_recording
     from ..calibration.summary import STANDARD_GRAVITY_SOURCE
-    from ..errors import AccelcalError, RecordingError, TooFewPosesError
 
     t0 = time.perf_counter()
     rec = _read(args, accelerometer=False)
@@ -56,6 +54,26 @@ def _calibrate(args) -> int:
         return _calibrate_gyro_only(args, rec, t0)
     rec = replace(rec, notes=rec.notes + (gyro.note_gyro(args, rec), mag.note_mag(args, rec)))
     mag.field_from_args(args)  # a bad --location or --date is refused before any work
+    cal, poses = _calibrate_accelerometer(args, rec)
+    if gyro.wants_gyro(args, rec):
+        with _step("calibrating the gyroscope"):
+            cal = replace(cal, gyro=gyro.calibrate(args, rec, cal, poses))
+    if mag.wants_mag(args, rec):
+        with _step("calibrating the magnetometer"):
+            cal = replace(cal, mag=mag.calibrate(args, rec, cal, poses))
+    prov = {**_provenance(args, t0), "g_source": "--g" if args.g is not None else STANDARD_GRAVITY_SOURCE}
+    if rec.device_id is not None:  # apply warns when the calibration reaches another unit
+        prov["device_id"] = rec.device_id
+    cal = _with_provenance(cal, prov)
+    _write_and_report(cal, poses, rec, args)
+    return _strict_status(cal, args)
+
+
+def _calibrate_accelerometer(args, rec):
+    """The static poses and the accelerometer's calibration; a refusal says what the reader
+    guessed or read that may be its cause."""
+    from ..calibration import calibrate_recording
+
     g = STANDARD_GRAVITY if args.g is None else args.g
     static = _static_settings(args, rec)
     method = args.method
@@ -63,9 +81,8 @@ def _calibrate(args) -> int:
     search = _search_static(args)
     with _step(f"detecting static poses and estimating {method} from {rec.n} samples"):
         try:
-            cal, poses = calibrate_recording(rec, g, method, static=static, conversion=_nominal(args, rec),
-                                             search=search,
-                                             min_poses=gyro.GYRO_MIN_RESTS if gyro.wants_gyro(args, rec) else 0)
+            return calibrate_recording(rec, g, method, static=static, conversion=_nominal(args, rec), search=search,
+                                       min_poses=min_gyro_rests() if gyro.wants_gyro(args, rec) else 0)
         except RecordingError as e:
             hint = " (the magnetometer without rests: accelcal mag RECORDING)" if mag.wants_mag(args, rec) else ""
             raise RecordingError(f"{e}{_rate_hint(rec)}{hint}{_source_hint(rec)}") from None
@@ -81,16 +98,11 @@ def _calibrate(args) -> int:
             if not rec.precalibrated:
                 raise
             raise type(e)(f"{e}{_source_hint(rec)}") from None
-    if gyro.wants_gyro(args, rec):
-        with _step("calibrating the gyroscope"):
-            cal = replace(cal, gyro=gyro.calibrate(args, rec, cal, poses))
-    if mag.wants_mag(args, rec):
-        with _step("calibrating the magnetometer"):
-            cal = replace(cal, mag=mag.calibrate(args, rec, cal, poses))
-    prov = {**_provenance(args, t0), "g_source": "--g" if args.g is not None else STANDARD_GRAVITY_SOURCE}
-    if rec.device_id is not None:  # apply warns when the calibration reaches another unit
-        prov["device_id"] = rec.device_id
-    cal = _with_provenance(cal, prov)
+
+
+def _write_and_report(cal, poses, rec, args) -> None:
+    """The figures drawn (before anything is written: a failure leaves no file), the
+    calibration and the figures written, the summaries printed."""
     figures = []
     if args.figures is not None:
         from ..calibration_figures import coverage_figure
@@ -110,7 +122,6 @@ def _calibrate(args) -> int:
         print(cal.gyro.summary(), file=sys.stderr)
     if cal.mag is not None:
         print(cal.mag.summary(), file=sys.stderr)
-    return _strict_status(cal, args)
 
 
 def _strict_status(cal, args) -> int:
@@ -137,7 +148,6 @@ def _source_hint(rec) -> str:
 def _calibrate_gyro_only(args, rec, t0) -> int:
     """A recording without accelerometer: the gyro from its rotations of known angle, written
     as a calibration file's ``gyroscope`` object (format 2) without the accelerometer's."""
-    from ..atomic import write_json_atomic
     from ..calibration.base import FORMAT_VERSION
     from ..jsonsafe import json_safe
 
@@ -155,8 +165,6 @@ def _calibrate_gyro_only(args, rec, t0) -> int:
 
 
 def _with_provenance(cal, extra: dict):
-    from dataclasses import replace
-
     return replace(cal, provenance={**cal.provenance, **extra})
 
 

@@ -4,6 +4,7 @@ the one-line error and warning, the progress line, provenance."""
 from __future__ import annotations
 
 import argparse
+import hashlib
 import sys
 import threading
 import time
@@ -11,9 +12,11 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from .. import __version__
+from ..atomic import sha256_file
 from ..errors import AccelcalError
 from ..formats.registry import FORMATS, TIME_SOURCES
 from ..registry import estimators
+from ..units import G0
 
 STANDARD_GRAVITY = 9.80665
 
@@ -230,7 +233,6 @@ def _nominal(args, rec):
     import numpy as np
 
     from ..nominal import NominalConversion
-    from ..units import G0
 
     def triple(text, what):
         try:
@@ -272,10 +274,6 @@ def _provenance(args, t0: float) -> dict:
 def recording_sha256(path) -> str:
     """Hex sha256 of a recording: its file, or for a folder (a ROS 2 bag) its files' relative
     names and contents in name order."""
-    import hashlib
-
-    from ..atomic import sha256_file
-
     path = Path(path)
     if not path.is_dir():
         return sha256_file(path)

@@ -8,6 +8,7 @@ from dataclasses import replace
 
 from ..effects import TIME, effect
 from ..errors import AccelcalError
+from ..units import ANGULAR_RATE_UNITS
 from .common import recording_sha256, warn
 
 
@@ -50,8 +51,6 @@ def _gyro(cal, rec, args):
     if rec.gyro is None or args.no_gyro:
         return None, "the calibration's gyroscope not applied: the recording has no gyro (--gyro FILE)"
     import numpy as np
-
-    from ..units import ANGULAR_RATE_UNITS
 
     made = cal.gyro.model.raw_unit
     have = rec.gyro_unit

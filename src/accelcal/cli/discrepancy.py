@@ -7,9 +7,10 @@ import sys
 import time
 from pathlib import Path
 
+from ..atomic import write_json_atomic
 from ..effects import EFFECT_IDS
-from ..errors import AccelcalError
-from ..gyro.recording import MIN_RESTS as GYRO_MIN_RESTS  # imports no numerical library
+from ..errors import AccelcalError, RecordingError
+from ..registry import min_gyro_rests
 from .common import (_gravity, _provenance, _rate_hint, _read, _reader_options, _search_static, _static_options,
                      _static_settings, _step)
 
@@ -69,9 +70,7 @@ def add_parser(sub, epilog: str) -> None:
 
 
 def _discrepancy(args) -> int:
-    from ..atomic import write_json_atomic
     from ..discrepancy import report
-    from ..errors import RecordingError
     from ..jsonsafe import json_safe
 
     t0 = time.perf_counter()
@@ -85,7 +84,7 @@ def _discrepancy(args) -> int:
             analysis = report.discrepancy_report(rec, args.g, stochastic=report.DEFAULT_STOCHASTIC, unit=rec.unit,
                                                 static_kw=static, search=_search_static(args), gyro=with_gyro,
                                                 mag=not getattr(args, "no_mag", False),
-                                                min_poses=GYRO_MIN_RESTS if with_gyro else 0)
+                                                min_poses=min_gyro_rests() if with_gyro else 0)
         except RecordingError as e:
             raise RecordingError(f"{e}{_rate_hint(rec)}") from None
     figures = []

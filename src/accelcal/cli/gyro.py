@@ -14,7 +14,6 @@ from __future__ import annotations
 import math
 
 from ..errors import AccelcalError
-from ..gyro.recording import MIN_RESTS as GYRO_MIN_RESTS  # imports no numerical library
 from ..registry import estimators
 
 
@@ -136,5 +135,5 @@ def search_line(cal) -> str | None:
             "(the most precise full-model fit; --threshold, --window, --min-duration to choose yourself)")
 
 
-__all__ = ["GYRO_MIN_RESTS", "add_gyro_options", "calibrate", "calibrate_gyro_only", "nominal_sensitivity", "note_gyro", "search_line",
+__all__ = ["add_gyro_options", "calibrate", "calibrate_gyro_only", "nominal_sensitivity", "note_gyro", "search_line",
            "wants_gyro"]

@@ -16,6 +16,7 @@ import json
 import sys
 from pathlib import Path
 
+from ..atomic import atomic_output, write_json_atomic
 from ..errors import AccelcalError
 from ..mag.registry import MAG_ESTIMATORS
 from .common import _positive, warn
@@ -110,7 +111,6 @@ def _mag(args) -> int:
                                   g_tolerance=args.g_tolerance)
     doc = {"format": "accelcal-magnetometer", "format_version": 1, "recording": str(args.recording),
            "accelerometer": how, "magnetometer": mcal.to_dict()}
-    from ..atomic import atomic_output, write_json_atomic
 
     outputs = _exports(mcal, args)  # every export made (or refused) before anything is written
     write_json_atomic(args.out, json.loads(json.dumps(doc, default=_plain)))

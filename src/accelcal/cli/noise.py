@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
+from ..atomic import atomic_output, write_json_atomic
 from ..errors import AccelcalError
 from .common import _positive, _provenance, _read, _reader_options, _step, warn
 
@@ -67,7 +70,6 @@ def _noise(args) -> int:
         raise AccelcalError("--intervals chooses the rests already; give either --intervals or --start/--end")
     rec = _read(args, accelerometer=False)
     if args.no_gyro and rec.gyro is not None:  # the table's own gyro columns too, not only --gyro FILE
-        from dataclasses import replace
 
         rec = replace(rec, gyro=None, gyro_unit=None, notes=rec.notes + ("gyro columns ignored (--no-gyro)",))
     segments = _segments(args, rec)
@@ -122,8 +124,6 @@ def _avr_readings(rec, report, segments) -> dict:
 
 
 def _noise_exports(args, rec, report, cal) -> tuple[dict, list]:
-    import re
-
     from ..noise.export import calibrated_kalibr_yaml, kalibr_yaml, openvins_yaml
 
     found = next((m.group(1) for n in rec.notes if (m := re.search(r"topic (/\S+) \(sensor_msgs/Imu", n))), None)
@@ -146,8 +146,6 @@ def _noise_exports(args, rec, report, cal) -> tuple[dict, list]:
 
 
 def _noise_write(args, report, texts: dict, figure, t0: float) -> None:
-    from ..atomic import atomic_output, write_json_atomic
-
     out = report.to_dict()
     out["provenance"] = _provenance(args, t0)
     write_json_atomic(args.out, out)

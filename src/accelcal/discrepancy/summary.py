@@ -11,7 +11,7 @@ leaves open prints as ``inf``.
 
 from __future__ import annotations
 
-import math
+from ..jsonsafe import is_finite
 
 
 def result_lines(det, unit: str | None = None) -> list[str]:
@@ -47,7 +47,7 @@ def _noise_lines(nm: dict, wander: dict, unit: str | None) -> list[str]:
     lines = []
     if nm:
         lines.append(f"  noise between poses: {describe_noise_model(nm, unit)}")
-    if _finite(wander.get("excess_predicted")):
+    if is_finite(wander.get("excess_predicted")):
         lo, hi = wander["excess_predicted_interval"]
         lines.append(f"  residual excess observed {wander['excess_observed']:.3g}, predicted by the noise model "
                      f"{wander['excess_predicted']:.3g} (95 % interval {lo:.3g}-{hi:.3g})")
@@ -79,10 +79,6 @@ def report_summary(report, written_to=None) -> str:
     if written_to is not None:
         lines.append(f"  written to {written_to}")
     return "\n".join(lines)
-
-
-def _finite(x) -> bool:
-    return x is not None and math.isfinite(x)
 
 
 __all__ = ["report_summary", "result_lines"]

@@ -14,6 +14,7 @@ import numpy as np
 
 from .. import distributions as dist
 from ..errors import AccelcalError
+from ..jsonsafe import is_finite
 from . import wander as C
 from .fit import Fit, PoseData, evaluate
 from .stochastic.implication import centred_pose_variance, pose_difference_variance
@@ -100,10 +101,6 @@ def _interval(ci, what: str = "") -> str:
     return f"[{_g(lo)}, {_g(hi)}{(' ' + what) if what else ''}]"
 
 
-def _finite(x) -> bool:
-    return x is not None and bool(np.isfinite(x))
-
-
 def describe_noise_model(nm: dict, unit: str | None = None) -> str:
     """The named noise term in words, with what its numbers mean (``reading`` of the JSON and
     the command line's line): a random walk as its coefficient and its change over the
@@ -126,7 +123,7 @@ def describe_noise_model(nm: dict, unit: str | None = None) -> str:
     white = (f"; white scale {_g(ws)} {_interval(nm.get('white_scale_ci'))} (the rests' pose noise variance times "
              f"this)" if ws is not None else "")
     axes = (f"; correlation between the axes {_g(nm.get('axis_correlation'))} "
-            f"{_interval(nm.get('axis_correlation_ci'))}" if _finite(nm.get("axis_correlation")) else "")
+            f"{_interval(nm.get('axis_correlation_ci'))}" if is_finite(nm.get("axis_correlation")) else "")
     if proc == "none":
         return f"no pose-to-pose noise beyond the rests' white noise (REML estimate 0){white}"
     if proc == "random_walk":

@@ -9,7 +9,8 @@ from __future__ import annotations
 from contextlib import ExitStack
 from pathlib import Path
 
-from .base import Export, ExportError, ExportInputs, LeftOut
+from ..atomic import atomic_output
+from .base import Export, ExportError, ExportInputs, LeftOut, require_gyro, require_noise
 from .plausibility import check_plausible, trust_problems
 from .registry import CONSUMERS, add_section, consumer_named, consumers_help
 
@@ -23,7 +24,6 @@ def export(consumer: str, inputs: ExportInputs, *, exact: bool = False, plausibl
         Something the consumer needs is missing, the calibration is implausible, or
         ``exact`` and the consumer's model cannot hold a term (one line each).
     """
-    from .base import require_gyro, require_noise
 
     c = consumer_named(consumer)
     cal = inputs.calibration
@@ -50,7 +50,6 @@ def output_paths(consumer: str, path, result: Export) -> dict[Path, str]:
 
 def write_files(files: dict) -> None:
     """Write every file, each renamed into place only once all are written."""
-    from ..atomic import atomic_output
 
     with ExitStack() as stack:
         for path, text in files.items():

@@ -19,6 +19,7 @@ and checks it against ``accelcal apply``.
 
 from __future__ import annotations
 
+import textwrap
 from dataclasses import dataclass, field
 
 from ..registry import resolve
@@ -142,8 +143,6 @@ def consumer_named(name: str) -> Consumer:
 
 def consumers_help(width: int = 80) -> str:
     """The consumers as help text: name, title and what each needs."""
-    import textwrap
-
     lines = ["targets (--to):"]
     column = max(len(n) for n in CONSUMERS) + 4
     for c in CONSUMERS.values():

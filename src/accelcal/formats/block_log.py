@@ -9,6 +9,7 @@ import numpy as np
 
 from ..errors import RecordingError
 from ..recording import MIN_ROWS, Recording
+from ..units import G0, acceleration_unit
 
 #: Prompt that opens a block of a serial-monitor block log (FastAhrs' FXOS8700 calibration sketch).
 _BLOCK_START = re.compile(r">>>\s*Gathering data for\s+([0-9.]+)\s*seconds", re.IGNORECASE)
@@ -53,8 +54,6 @@ def read_block_log(path, text: str | None = None) -> Recording:
              f"{len(blocks)} blocks read as known static intervals"]
     canonical = None
     if unit:
-        from ..units import G0, acceleration_unit
-
         canonical = acceleration_unit(unit)
         if canonical in ("g", "mg"):
             acc = acc * (G0 if canonical == "g" else G0 * 1e-3)

@@ -115,6 +115,15 @@ def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit
     _check_options(unit, time_unit, rate, gyro_unit, time_source)
     if clock is not None and clock not in CLOCK_MODES:
         raise RecordingError(f"--clock must be {' or '.join(CLOCK_MODES)}, got {clock!r}")
+    fmt, text, notes = _format_and_text(path, fmt)
+    rec = _read_format(path, fmt, text, options, notes)
+    rec = replace(rec, notes=tuple(notes) + rec.notes)
+    return checked_recording(_with_side_files(rec, intervals, gyro, gyro_unit, time_unit, clock))
+
+
+def _format_and_text(path: Path, fmt: Format | None) -> tuple[Format, str | None, list[str]]:
+    """The format (``fmt``, or detected: binary signatures first, then the text), the file's
+    text for a text format, and the notes saying what was detected or undone."""
     notes: list[str] = []
     text = None
     if fmt is None:
@@ -127,8 +136,11 @@ def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit
             fmt = _sniff_text(path, text)
             if fmt.name != FALLBACK:
                 notes.append(_detected(fmt))
-    rec = _read_format(path, fmt, text, options, notes)
-    rec = replace(rec, notes=tuple(notes) + rec.notes)
+    return fmt, text, notes
+
+
+def _with_side_files(rec, intervals, gyro, gyro_unit, time_unit, clock):
+    """``rec`` with the known static intervals and the gyroscope of their own files, if given."""
     if intervals is not None:
         from .intervals import read_intervals
 
@@ -137,7 +149,7 @@ def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit
         from .gyro_file import attach_gyro
 
         rec = attach_gyro(rec, gyro, gyro_unit=gyro_unit, time_unit=time_unit, clock=clock or "auto")
-    return checked_recording(rec)
+    return rec
 
 
 def write_recording(path, rec, *, format: str = FALLBACK) -> None:

@@ -18,6 +18,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RecordingError
+from ..gyro.errors import GyroInputError
+from ..gyro.rests import check_time_base, sample_interval
 from .clock import clocked_time
 from .inference import resolve_gyro_unit, time_seconds
 from .parsing import parse_numbers
@@ -69,8 +71,6 @@ def attach_gyro(rec, path, *, gyro_unit: str | None = None, time_unit: str | Non
         The recording has gyro columns of its own, the file has no gyro columns, or its
         time base does not match the accelerometer's (:class:`accelcal.gyro.errors.GyroInputError`).
     """
-    from ..gyro.errors import GyroInputError
-    from ..gyro.rests import check_time_base, sample_interval
 
     if rec.gyro is not None:
         raise RecordingError(f"{rec.source} has gyro columns of its own and --gyro {path} gives another gyro: "

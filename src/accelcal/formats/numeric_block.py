@@ -10,6 +10,7 @@ first data line) is found by :mod:`.table`, which reads anything else line by li
 
 from __future__ import annotations
 
+import csv
 import io
 import sys
 from typing import NamedTuple
@@ -91,7 +92,6 @@ def _pandas_block(stream, delim: str, k: int, n: int) -> np.ndarray:
     field, which raises).  In one call, the frame's one float block returned as it is (no
     copy): read in chunks into an array of ours, the same table cost a fifth more page
     faults (each chunk's buffers allocated anew), 0.1-0.2 s of system time for 10⁶ lines."""
-    import csv
 
     import pandas as pd  # here: a table of 10^5 lines or more repays its import
 

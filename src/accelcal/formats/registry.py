@@ -23,6 +23,7 @@ reading without them is one line: ``... pip install accelcal[ros]``.
 from __future__ import annotations
 
 import importlib.util
+import textwrap
 from dataclasses import dataclass
 
 from ..errors import MissingExtraError, RecordingError
@@ -209,7 +210,6 @@ def format_named(name: str) -> Format:
 
 def formats_help(width: int = 80) -> str:
     """The formats as help text: a heading, then name, title, and whether auto detects it."""
-    import textwrap
 
     sniffed = [f.name for f in FORMATS.values() if f.sniff is not None]
     heading = (f"formats (--format FMT; auto: the first of {', '.join(sniffed)} that recognises the file from "

@@ -25,6 +25,8 @@ calibration estimates.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from ..errors import RecordingError
@@ -63,7 +65,6 @@ def override_gyro_unit(rec, gyro_unit: str, format_name: str):
     """``rec`` with its gyro in the unit the user states (``--gyro-unit``) instead of the one its
     format's spec fixes (:data:`SPEC_GYRO_UNITS`; a log that does not follow it: deg/s in a
     ``sensor_msgs/Imu``), and the note saying so."""
-    from dataclasses import replace
 
     user, spec = angular_rate_unit(gyro_unit), SPEC_GYRO_UNITS.get(format_name)
     if spec is None or user == spec:

@@ -26,6 +26,7 @@ import numpy as np
 
 from ..errors import RecordingError
 from ..recording import MIN_ROWS, Recording
+from .table import read_matrix
 
 #: Time [s] put between runs joined from several variables (their own times are not related).
 RUN_GAP_S = 1.0
@@ -96,7 +97,6 @@ def choose(path, found: dict[str, str], variable: str | None, kind: str) -> list
 def read_variables(path, variables: list[Variable], *, columns=None, unit=None, time_unit=None, rate=None,
                    gyro_unit=None, kind: str = "variable") -> Recording:
     """The recording of the chosen variables: one, or several joined as runs (module docstring)."""
-    from .table import read_matrix
 
     recs = []
     for v in variables:

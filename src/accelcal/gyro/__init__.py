@@ -22,26 +22,16 @@ detection settings for sessions with short still phases: :mod:`accelcal.static_a
 
 from __future__ import annotations
 
-import importlib
+from .calibrate import calibrate_gyro, evaluate_model
+from .ferraris import FerrarisFit, calibrate_ferraris_session, fit_ferraris
+from .fit import MotionSet, crlb, fit_iterative, fit_one_step
+from .integrate import integrate_intervals, integrate_sequential
+from .model import GyroModel, frame_rotation
+from .recording import calibrate_recording_gyro
+from .result import GyroCalibration, GyroQuality
+from .rotations import calibrate_rotations, find_rotations
 
-_LAZY = {
-    "GyroModel": "model", "frame_rotation": "model",
-    "calibrate_gyro": "calibrate", "evaluate_model": "calibrate",
-    "GyroCalibration": "result", "GyroQuality": "result",
-    "fit_iterative": "fit", "fit_one_step": "fit", "crlb": "fit", "MotionSet": "fit",
-    "fit_ferraris": "ferraris", "FerrarisFit": "ferraris", "calibrate_ferraris_session": "ferraris",
-    "integrate_intervals": "integrate", "integrate_sequential": "integrate",
-    "calibrate_recording_gyro": "recording",
-    "calibrate_rotations": "rotations", "find_rotations": "rotations",
-}
-
-
-def __getattr__(name: str):
-    if name in _LAZY:
-        value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-__all__ = sorted(_LAZY)
+__all__ = ["FerrarisFit", "GyroCalibration", "GyroModel", "GyroQuality", "MotionSet", "calibrate_ferraris_session",
+           "calibrate_gyro", "calibrate_recording_gyro", "calibrate_rotations", "crlb", "evaluate_model",
+           "find_rotations", "fit_ferraris", "fit_iterative", "fit_one_step", "frame_rotation",
+           "integrate_intervals", "integrate_sequential"]

@@ -34,7 +34,9 @@ import time
 import numpy as np
 
 from .. import distributions as dist
-
+from ..model import dM_dparams, params_from_m
+from ..registry import estimators
+from ..uncertainty import residual_jacobian
 from .errors import GyroInputError, NoMotionError, SaturatedGyroError, TooFewMotionsError
 from .fit import MIN_MOTIONS, MotionSet, evaluate, initial_scale, rotation_angles_deg
 from .integrate import integrate_intervals, log_so3
@@ -184,8 +186,6 @@ def accel_direction_cov(accel, f_rest) -> np.ndarray | None:
     accelerometer's frame, so an error of that frame is an error of ``C`` common to every
     motion.  None for a calibration that is not the base model's (``M``, ``bias``, ``g``;
     'full' or 'bias'), or without a degree of freedom left."""
-    from ..model import dM_dparams, params_from_m
-    from ..uncertainty import residual_jacobian
 
     kind = getattr(accel, "model", None)
     if kind not in ("full", "bias") or not all(hasattr(accel, a) for a in ("M", "bias", "g")):
@@ -230,7 +230,6 @@ def _motion_noise(rs, best, t, starts, stops, f_rest, direction_cov=None) -> Mot
 def motion_estimator(name: str):
     """The registry's entry of a gyro estimator of motions between rests (``gyro_iterative``,
     ``gyro_one_step``, or their CLI spellings); one line naming the known ones otherwise."""
-    from ..registry import estimators
 
     known = {e.name: e for e in estimators("gyroscope", data="motions")}
     e = known.get(str(name).replace("-", "_"))
@@ -458,8 +457,26 @@ def _assess(fit, all_ms: MotionSet, used, notes, t, tb, best, integrator, base_c
     alone; ``se_C`` the standard errors of ``C`` with the noise model)."""
     ev = fit.evaluation
     ms = all_ms.subset(used)
-    C = fit.C
-    omega = all_ms.y @ C.T
+    table, int_err, peak = _motion_table(fit, all_ms, used, notes, t, integrator)
+    turn = np.rad2deg(np.sum(np.abs(log_so3(ev.R)), axis=0))
+    dof = fit.dof
+    p = float(dist.chi2_sf(fit.chi2, dof)) if dof > 0 else float("nan")
+    flags, warnings = _fit_warnings(fit, p, turn, se_C)
+    more_flags, more_warnings = _data_warnings(ev, notes, tb, best, base_chi2, chosen, range_use, int_err, peak[used])
+    quality = GyroQuality(n_motions=ms.n_motions, n_parameters=9, dof=dof, chi2=fit.chi2, p_value=p,
+                          excess=fit.excess, residual_rms_deg=float(np.sqrt(np.mean(ev.angles_deg ** 2))),
+                          predicted_rms_deg=float(np.sqrt(np.mean(ev.predicted_deg ** 2))),
+                          axis_turn_deg=tuple(float(v) for v in turn), warnings=tuple(warnings + more_warnings),
+                          flags=tuple(flags + more_flags))
+    return quality, table
+
+
+def _motion_table(fit, all_ms: MotionSet, used, notes, t, integrator):
+    """The per-motion table (every motion, used or left out), the difference of the two
+    integrators on the used ones [deg] and each motion's peak rate [deg/s]."""
+    ev = fit.evaluation
+    ms = all_ms.subset(used)
+    omega = all_ms.y @ fit.C.T
     R_all = integrate_intervals(omega, all_ms.h, all_ms.starts, all_ms.stops, integrator).R
     other = "coning" if integrator == "magnus4" else "magnus4"
     R_other = integrate_intervals(omega, ms.h, ms.starts, ms.stops, other).R
@@ -475,9 +492,13 @@ def _assess(fit, all_ms: MotionSet, used, notes, t, tb, best, integrator, base_c
              "integration_deg": [None] * all_ms.n_motions, "used": used.tolist(), "note": list(notes)}
     for i, e in zip(np.flatnonzero(used), int_err):
         table["integration_deg"][i] = float(e)
-    turn = np.rad2deg(np.sum(np.abs(log_so3(ev.R)), axis=0))
-    dof = fit.dof
-    p = float(dist.chi2_sf(fit.chi2, dof)) if dof > 0 else float("nan")
+    return table, int_err, peak
+
+
+def _fit_warnings(fit, p: float, turn, se_C) -> tuple[list, list]:
+    """Flags and warnings about the fit itself: residuals beyond the noise, scales the motions
+    do not determine, motions too short."""
+    ev, dof, C = fit.evaluation, fit.dof, fit.C
     warnings, flags = [], []
     if dof > 0 and fit.excess > RULES["excess"] and p < RULES["p_value"]:
         flags.append("excess")
@@ -499,13 +520,20 @@ def _assess(fit, all_ms: MotionSet, used, notes, t, tb, best, integrator, base_c
         warnings.append(f"only {long} motions turn 30 deg or more ({short} "
                         f"turn less than {RULES['short_deg']:g} deg): short motions hardly determine the scales; "
                         "turn the sensor further between rests")
+    return flags, warnings
+
+
+def _data_warnings(ev, notes, tb, best, base_chi2, chosen, range_use, int_err, peak_used) -> tuple[list, list]:
+    """Flags and warnings about the data: the sample rate against the motions, saturation, the
+    measuring range, gaps, jittering time steps, a drifting bias."""
+    warnings, flags = [], []
     bad_int = int_err > RULES["integration_fraction"] * ev.predicted_deg
     if np.any(bad_int):
         flags.append("sample_rate")
         warnings.append(f"in {int(bad_int.sum())} motions the two integrators differ by up to {int_err.max():.2g} deg "
                         f"(noise {np.median(ev.predicted_deg):.2g} deg): the sample rate ({tb.rate:.4g} Hz) is low "
                         "for these motions (up to {:.0f} deg/s); record faster or turn more slowly".format(
-                            np.nanmax(peak[used])))
+                            np.nanmax(peak_used)))
     n_sat = sum("saturated" in n for n in notes)
     if n_sat:
         flags.append("saturated")
@@ -530,11 +558,7 @@ def _assess(fit, all_ms: MotionSet, used, notes, t, tb, best, integrator, base_c
         flags.append("bias_drift")
         warnings.append(f"the gyro's rest means scatter {best.excess:.3g}x their noise: the bias moves during the "
                         "session (warm-up, drift); bias 'interpolated' follows it")
-    quality = GyroQuality(n_motions=ms.n_motions, n_parameters=9, dof=dof, chi2=fit.chi2, p_value=p,
-                          excess=fit.excess, residual_rms_deg=float(np.sqrt(np.mean(ev.angles_deg ** 2))),
-                          predicted_rms_deg=float(np.sqrt(np.mean(ev.predicted_deg ** 2))),
-                          axis_turn_deg=tuple(float(v) for v in turn), warnings=tuple(warnings), flags=tuple(flags))
-    return quality, table
+    return flags, warnings
 
 
 def evaluate_model(t, gyro, poses, accel, C, bias_vector, *, integrator: str = "magnus4", g_sensitivity=None,

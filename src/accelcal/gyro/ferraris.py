@@ -34,7 +34,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..registry import estimator
+from .calibrate import accel_directions
 from .errors import RotationAngleError, TooFewMotionsError
+from .model import GyroModel, RAW_UNITS
+from .rests import fit_bias, rest_noise, rest_statistics, sample_interval
+from .result import GyroQuality
+from .unit_evidence import unit_from_rotations
 
 #: Rotations the nine parameters need: three equations each, exactly determined (registry: ``gyro_ferraris``).
 N_ROTATIONS = 3
@@ -56,18 +62,6 @@ class FerrarisFit:
         return {"estimator": self.estimator, "C": self.C.tolist(), "cov": self.cov.tolist(),
                 "senses": self.senses.tolist(), "angles_deg": self.angles_deg.tolist(),
                 "nominal_angles_deg": self.nominal_angles_deg.tolist(), "iterations": self.iterations}
-
-
-def _stack(segments):
-    """One array of the rotation segments (each (k_j, 3)), one guard sample apart, and their ranges."""
-    y, starts, stops, pos = [], [], [], 0
-    for s in segments:
-        s = np.asarray(s, float)
-        y += [s, np.zeros((1, 3))]
-        starts.append(pos)
-        stops.append(pos + len(s) - 1)
-        pos += len(s) + 1
-    return np.concatenate(y), np.array(starts), np.array(stops)
 
 
 def fit_ferraris(segments, h: float, angles_deg, axes=None, *, nominal: float = 1.0, y_var=None, bias_var=None,
@@ -110,13 +104,7 @@ def fit_ferraris(segments, h: float, angles_deg, axes=None, *, nominal: float = 
     A = A / np.linalg.norm(A, axis=1, keepdims=True)
     Y = np.array([h * s.sum(axis=0) for s in segs])  # (r, 3): row j = plain sum of rotation j
     nominal_deg = np.rad2deg(abs(nominal) * np.linalg.norm(Y, axis=1))
-    for j in range(len(segs)):
-        if abs(nominal_deg[j] - np.rad2deg(theta[j])) > angle_tolerance * np.rad2deg(theta[j]):
-            name = names[j] if j < len(names) else f"#{j + 1}"
-            raise RotationAngleError(
-                f"the {name} rotation turns {nominal_deg[j]:.1f} deg by the nominal gyro scale, not the stated "
-                f"{np.rad2deg(theta[j]):.1f} deg: check the rotation angle (--rotation-angle), the section of that "
-                "rotation in the section list, or the gyro unit (--gyro-unit, --gyro-sensitivity)")
+    _check_angles(nominal_deg, np.rad2deg(theta), angle_tolerance, names)
     senses = np.where(np.sum(Y * A, axis=1) * nominal >= 0, 1.0, -1.0)
     target = (senses * theta)[:, None] * A
     P = Y @ np.linalg.inv(Y.T @ Y)  # C Yᵀ = targetᵀ in least squares; three rotations: P = Y⁻ᵀ, exact
@@ -133,6 +121,18 @@ def fit_ferraris(segments, h: float, angles_deg, axes=None, *, nominal: float = 
         Jj = np.kron(np.eye(3), P[j][:, None])  # vec(δC) = Σ_j (δT_j - C δY_j) ⊗ row j of P
         cov += Jj @ (C @ covY @ C.T + covT) @ Jj.T
     return FerrarisFit("gyro_ferraris", C, cov, senses, np.rad2deg(np.linalg.norm(Y @ C.T, axis=1)), nominal_deg, 1)
+
+
+def _check_angles(nominal_deg, stated_deg, tolerance: float, names) -> None:
+    """Each rotation's angle by the nominal gyro scale within ``tolerance`` (relative) of the
+    stated one, else one line naming the rotation and what to check."""
+    for j, (turned, stated) in enumerate(zip(nominal_deg, stated_deg)):
+        if abs(turned - stated) > tolerance * stated:
+            name = names[j] if j < len(names) else f"#{j + 1}"
+            raise RotationAngleError(
+                f"the {name} rotation turns {turned:.1f} deg by the nominal gyro scale, not the stated "
+                f"{stated:.1f} deg: check the rotation angle (--rotation-angle), the section of that "
+                "rotation in the section list, or the gyro unit (--gyro-unit, --gyro-sensitivity)")
 
 
 def rotation_singular_values(segments, h: float) -> np.ndarray:
@@ -180,9 +180,6 @@ def calibrate_ferraris_session(t, gyro, sections: dict, *, raw_unit: str = "deg/
         Exactly determined: no residual, ``dof = 0``; the standard errors come from the
         noise (module docstring).
     """
-    from .model import RAW_UNITS
-    from .rests import fit_bias, rest_noise, rest_statistics, sample_interval
-    from .unit_evidence import unit_from_rotations
 
     missing = [k for k in (*rest_names, *rotation_names) if k not in sections]
     if missing:
@@ -193,24 +190,10 @@ def calibrate_ferraris_session(t, gyro, sections: dict, *, raw_unit: str = "deg/
     rs = rest_statistics(t, gyro, np.array([sections[k] for k in rest_names]))
     best = fit_bias(rs, "all")
     segs = [gyro[slice(*sections[k])] - best.bias for k in rotation_names]
-    unit_from = "stated"
-    if raw_unit is None and nominal_sensitivity is not None:
-        raw_unit = "counts"  # a sensitivity is counts per rad/s
-    if raw_unit is None:  # not stated: the rotations of known angle decide it
-        raw_unit, unit_from = unit_from_rotations(segs, tb.h, angles_deg, gyro)
-    nominal = 1.0 / float(nominal_sensitivity) if nominal_sensitivity is not None else RAW_UNITS[raw_unit]
-    if nominal is None:
-        raise RotationAngleError("raw counts need the nominal gyro sensitivity (--gyro-sensitivity) to check the "
-                                 "rotation angles")
+    raw_unit, unit_from, nominal = _nominal_scale(raw_unit, nominal_sensitivity, segs, tb.h, angles_deg, gyro)
     axes, axis_cov = None, None
     if accel is not None and acc is not None:
-        from .calibrate import accel_directions
-
-        acc = np.asarray(acc, float)
-        seg_acc = [acc[slice(*sections[k])] for k in rotation_names]
-        means = np.array([s.mean(axis=0) for s in seg_acc])
-        se = np.array([s.std(axis=0, ddof=1) / np.sqrt(len(s)) for s in seg_acc])
-        axes, axis_cov, _ = accel_directions(accel, means, se)
+        axes, axis_cov = _rotation_axes(accel, [np.asarray(acc, float)[slice(*sections[k])] for k in rotation_names])
     angles = np.broadcast_to(np.asarray(angles_deg, float), (3,))
     fit = fit_ferraris(segs, tb.h, angles, axes, nominal=nominal, y_var=rest_noise(rs),
                        bias_var=best.bias_se ** 2, axis_cov=axis_cov, angle_std_deg=angle_std_deg,
@@ -222,15 +205,11 @@ def calibrate_ferraris_session(t, gyro, sections: dict, *, raw_unit: str = "deg/
                                 nominal_axes=axes is None, settings=settings)
 
 
-def ferraris_calibration(fit: FerrarisFit, bias, bias_se, raw_unit: str, nominal: float, *, nominal_axes: bool,
-                         settings: dict, motions=None, warnings=()):
-    """The :class:`~accelcal.gyro.result.GyroFerrarisCalibration` of a fit: the misalignment's and
-    the scale factors' standard errors from ``fit.cov``, the warnings of an exact fit."""
-    from ..registry import estimator
-    from .model import GyroModel
-    from .result import GyroQuality
-
-    model = GyroModel(fit.C, np.asarray(bias, float), None, raw_unit)
+def standard_errors(fit: FerrarisFit, nominal: float) -> dict:
+    """Standard errors of ``C``, of the misalignment ``T = C K⁻¹`` and of the scale factors (per
+    ``nominal`` rad/s per raw unit), from ``fit.cov`` (row-major ``vec C``).  ``T`` by the delta
+    method: ``T_ij = C_ij / C_jj``, so ``∂T_ij/∂C_ij = 1/C_jj`` and ``∂T_ij/∂C_jj = -C_ij/C_jj²``
+    (``T_ii = 1``: no error); variances rounded below zero count as zero."""
     se_C = np.sqrt(np.clip(np.diag(fit.cov), 0, None)).reshape(3, 3)
     Jt = np.zeros((9, 9))
     for i in range(3):
@@ -238,8 +217,41 @@ def ferraris_calibration(fit: FerrarisFit, bias, bias_se, raw_unit: str, nominal
             if i != j:
                 Jt[3 * i + j, 3 * i + j] = 1.0 / fit.C[j, j]
                 Jt[3 * i + j, 4 * j] = -fit.C[i, j] / fit.C[j, j] ** 2
-    se = {"C": se_C, "T": np.sqrt(np.clip(np.diag(Jt @ fit.cov @ Jt.T), 0, None)).reshape(3, 3),
-          "scale_factors": np.diag(se_C) / abs(nominal), "bias": np.asarray(bias_se, float)}
+    return {"C": se_C, "T": np.sqrt(np.clip(np.diag(Jt @ fit.cov @ Jt.T), 0, None)).reshape(3, 3),
+            "scale_factors": np.diag(se_C) / abs(nominal)}
+
+
+def _nominal_scale(raw_unit, nominal_sensitivity, segs, h: float, angles_deg, gyro):
+    """The gyro's raw unit, who said it (``'stated'``, or the rotations of known angle) and its
+    nominal rad/s per raw unit; raw counts without a sensitivity refused in one line."""
+    unit_from = "stated"
+    if raw_unit is None and nominal_sensitivity is not None:
+        raw_unit = "counts"  # a sensitivity is counts per rad/s
+    if raw_unit is None:  # not stated: the rotations of known angle decide it
+        raw_unit, unit_from = unit_from_rotations(segs, h, angles_deg, gyro)
+    nominal = 1.0 / float(nominal_sensitivity) if nominal_sensitivity is not None else RAW_UNITS[raw_unit]
+    if nominal is None:
+        raise RotationAngleError("raw counts need the nominal gyro sensitivity (--gyro-sensitivity) to check the "
+                                 "rotation angles")
+    return raw_unit, unit_from, nominal
+
+
+def _rotation_axes(accel, seg_acc):
+    """Each rotation's axis measured by the calibrated accelerometer (the mean direction of
+    gravity during it) and its covariance."""
+    means = np.array([s.mean(axis=0) for s in seg_acc])
+    se = np.array([s.std(axis=0, ddof=1) / np.sqrt(len(s)) for s in seg_acc])
+    axes, axis_cov, _ = accel_directions(accel, means, se)
+    return axes, axis_cov
+
+
+def ferraris_calibration(fit: FerrarisFit, bias, bias_se, raw_unit: str, nominal: float, *, nominal_axes: bool,
+                         settings: dict, motions=None, warnings=()):
+    """The :class:`~accelcal.gyro.result.GyroFerrarisCalibration` of a fit: the misalignment's and
+    the scale factors' standard errors from ``fit.cov``, the warnings of an exact fit."""
+
+    model = GyroModel(fit.C, np.asarray(bias, float), None, raw_unit)
+    se = {**standard_errors(fit, nominal), "bias": np.asarray(bias_se, float)}
     n = len(fit.senses)
     warnings = list(warnings)
     if n == N_ROTATIONS:
@@ -258,4 +270,4 @@ def ferraris_calibration(fit: FerrarisFit, bias, bias_se, raw_unit: str, nominal
 
 
 __all__ = ["FerrarisFit", "N_ROTATIONS", "REST_SECTIONS", "ROTATION_SECTIONS", "calibrate_ferraris_session",
-           "ferraris_calibration", "fit_ferraris", "rotation_singular_values"]
+           "ferraris_calibration", "fit_ferraris", "rotation_singular_values", "standard_errors"]

@@ -22,11 +22,14 @@ from __future__ import annotations
 
 import dataclasses
 
-from ..registry import estimator, estimators
-from .errors import GyroInputError, RotationAngleError
+from ..registry import estimator, estimators, min_gyro_rests
+from .calibrate import calibrate_gyro
+from .errors import GyroInputError
+from .ferraris import calibrate_ferraris_session
+from .rotations import calibrate_rotations
 
 #: Rests a calibration from motions needs: one more than the fewest motions of the registry's estimators.
-MIN_RESTS = 1 + max(e.min_poses for e in estimators("gyroscope", data="motions"))
+MIN_RESTS = min_gyro_rests()
 
 
 def calibrate_recording_gyro(rec, acc_cal, poses, *, estimator: str | None = None, nominal_sensitivity=None,
@@ -102,8 +105,6 @@ def _estimator_for(rec, name: str | None, angles_given: bool):
 def _calibrate(rec, acc_cal, poses, estimator, unit, nominal_sensitivity, gyro_range, g_sensitivity, rotation_angles,
                angle_std_deg, noise_model):
     if rec.rotations:
-        from .ferraris import calibrate_ferraris_session
-
         labels = rec.labels or ()
         intervals = [] if rec.intervals is None else [tuple(int(i) for i in iv) for iv in rec.intervals]
         sections = {**dict(zip(labels, intervals)), **rec.rotations}
@@ -113,13 +114,11 @@ def _calibrate(rec, acc_cal, poses, estimator, unit, nominal_sensitivity, gyro_r
                                           angles_deg=360.0 if rotation_angles is None else rotation_angles,
                                           nominal_sensitivity=nominal_sensitivity, angle_std_deg=angle_std_deg, **accel)
     if rotation_angles is not None:  # rotations of known angle, not marked: found in the gyro, each run its bias
-        from .rotations import calibrate_rotations
 
         accel = {"accel": acc_cal, "acc": rec.acc} if acc_cal is not None and acc_cal.model == "full" else {}
         return calibrate_rotations(rec.t, rec.gyro, angles_deg=rotation_angles, runs=rec.runs, raw_unit=unit,
                                    nominal_sensitivity=nominal_sensitivity, angle_std_deg=angle_std_deg,
                                    source=str(rec.source), **accel)
-    from .calibrate import calibrate_gyro
 
     return calibrate_gyro(rec.t, rec.gyro, poses, acc_cal, raw_unit=unit, acc=rec.acc,
                           nominal_sensitivity=nominal_sensitivity, estimator=estimator, gyro_range=gyro_range,

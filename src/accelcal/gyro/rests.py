@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..static import static_poses_from_intervals
 from .errors import GyroInputError
 
 BIAS_MODES = ("all", "interpolated", "first")
@@ -90,7 +91,6 @@ class RestStatistics:
 
 def rest_statistics(t, gyro, intervals) -> RestStatistics:
     """Mean, standard error and noise of the gyro at each rest ``[start, stop)``."""
-    from ..static import static_poses_from_intervals
 
     iv = np.asarray(intervals, dtype=np.int64).reshape(-1, 2)
     # one at a time: detected rests may overlap by a few samples (a brief blip between two quiet runs)

@@ -16,6 +16,9 @@ from typing import ClassVar
 
 import numpy as np
 
+from .. import distributions as dist
+from ..errors import InputShapeError
+from ..registry import class_of_type, types_of
 from ..summary import Summary
 from .model import RAW_UNITS, GyroModel
 
@@ -122,7 +125,6 @@ class GyroCalibration:
         """Half-width of the 95 % interval of ``name`` (``C``, ``T``, ``scale_factors``):
         ``t(0.975, ν) s.e.`` with the Satterthwaite degrees of freedom ``ν`` the noise model
         gives each parameter (:mod:`accelcal.gyro.noise`); ``1.96 s.e.`` without it."""
-        from .. import distributions as dist
 
         se = np.asarray(self.standard_errors[name], float)
         dof = ((self.settings.get("noise_model") or {}).get("parameter_dof") or {}).get(name)
@@ -142,8 +144,6 @@ class GyroCalibration:
     def from_dict(cls, d: dict) -> GyroCalibration:
         """Rebuild from :meth:`to_dict`'s object, as the class of its ``cal_type``
         (:func:`accelcal.registry.class_of_type`; without one, this class)."""
-        from ..errors import InputShapeError
-        from ..registry import class_of_type, types_of
 
         kind = class_of_type(GyroCalibration, d["cal_type"]) if d.get("cal_type") else GyroCalibration
         if kind is None:

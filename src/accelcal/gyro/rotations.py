@@ -35,7 +35,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .calibrate import accel_directions
 from .errors import NoMotionError, RotationAngleError, TooFewMotionsError
+from .ferraris import N_ROTATIONS, ferraris_calibration, fit_ferraris
+from .model import RAW_UNITS
+from .rests import fit_bias, rest_noise, rest_statistics, sample_interval
 
 #: Length of the quiet stretch that gives each run's first bias and noise [s].
 REFERENCE_S = 2.0
@@ -138,7 +142,6 @@ def find_rotations(t, gyro, runs=None, *, nominal: float, windows=None,
     -------
     rotations, rests per run, notes (motions too small to be rotations)
     """
-    from .rests import sample_interval
 
     t, gyro = np.asarray(t, float), np.asarray(gyro, float)
     runs = np.array([[0, len(t)]]) if runs is None else np.asarray(runs, int)
@@ -168,7 +171,6 @@ def find_rotations(t, gyro, runs=None, *, nominal: float, windows=None,
 
 def _run_rests(t, gyro, k: int, a: int, b: int, h: float, motions, given) -> RunRests:
     """One run's rests (given, or between its motions) and the bias they give (step 3)."""
-    from .rests import fit_bias, rest_noise, rest_statistics
 
     if given is not None:
         iv = np.asarray(given, dtype=np.int64).reshape(-1, 2)
@@ -207,7 +209,6 @@ def angles_for(rotations: list[Rotation], angles_deg) -> np.ndarray:
 def measured_axes(rotations: list[Rotation], accel, acc, h: float):
     """The gravity direction of each rotation about the vertical (module docstring), its
     covariance, and notes on the rotations whose axis stays nominal (None for those)."""
-    from .calibrate import accel_directions
 
     acc = np.asarray(acc, float)
     axes, covs, notes = [], [], []
@@ -259,9 +260,6 @@ def calibrate_rotations(t, gyro, *, angles_deg, runs=None, raw_unit: str = "rad/
         accelerometer's when every axis is measured; bias: the weighted mean of the runs'
         (each listed in ``settings['runs']``).
     """
-    from .ferraris import ferraris_calibration, fit_ferraris
-    from .model import RAW_UNITS
-    from .rests import sample_interval
 
     nominal = 1.0 / float(nominal_sensitivity) if nominal_sensitivity is not None else RAW_UNITS.get(raw_unit)
     if nominal is None:
@@ -275,22 +273,12 @@ def calibrate_rotations(t, gyro, *, angles_deg, runs=None, raw_unit: str = "rad/
     h = float(np.mean([sample_interval(t[a:b]).h for a, b in (r.run for r in rests)]))
     segs = [gyro[slice(*r.window)] - rests[r.run].bias for r in rotations]
     noise = np.mean([r.noise for r in rests], axis=0)
-    axes, axis_cov = np.eye(3)[[r.axis for r in rotations]], None
-    if accel is not None and acc is not None:
-        found, covs, axis_notes = measured_axes(rotations, accel, acc, h)
-        notes = notes + axis_notes
-        if all(a is not None for a in found):
-            axes, axis_cov = np.array(found), np.array(covs)
+    axes, axis_cov, notes = _axes(rotations, accel, acc, h, notes)
     fit = fit_ferraris(segs, h, angles, axes, nominal=nominal, y_var=noise,
                        bias_var=np.array([rests[r.run].bias_se ** 2 for r in rotations]), axis_cov=axis_cov,
                        angle_std_deg=angle_std_deg, names=tuple(f"{'xyz'[r.axis]} (run {r.run + 1})" for r in rotations))
     measured = axis_cov is not None
     bias, bias_se, warnings = session_bias(rests, raw_unit)
-    motions = {"t_start": [float(t[r.motion[0]]) for r in rotations], "t_end": [float(t[r.motion[1] - 1])
-                                                                               for r in rotations],
-               "window": [list(r.window) for r in rotations], "run": [r.run + 1 for r in rotations],
-               "axis": ["xyz"[r.axis] for r in rotations], "angle_deg": fit.angles_deg.tolist(),
-               "stated_deg": angles.tolist(), "used": [True] * len(rotations), "note": [""] * len(rotations)}
     settings = {"bias_mode": "per run" if len(rests) > 1 else "all", "angles_deg": angles.tolist(),
                 "frame": "accelerometer frame" if measured else "rotation axes",
                 "axes": axes.tolist() if measured else "nominal (each rotation's largest component)",
@@ -299,12 +287,34 @@ def calibrate_rotations(t, gyro, *, angles_deg, runs=None, raw_unit: str = "rad/
                           "bias_se": r.bias_se.tolist(), "rest_excess": r.excess} for r in rests],
                 "notes": notes}
     return ferraris_calibration(fit, bias, bias_se, raw_unit, nominal, nominal_axes=not measured, settings=settings,
-                                motions=motions, warnings=warnings)
+                                motions=_motion_table(t, rotations, fit, angles), warnings=warnings)
+
+
+def _axes(rotations: list[Rotation], accel, acc, h: float, notes):
+    """The rotation axes measured by the accelerometer when every one is (with their covariance
+    and the notes on those that are not), else the nominal ones (each rotation's largest
+    component) and no covariance."""
+    axes, axis_cov = np.eye(3)[[r.axis for r in rotations]], None
+    if accel is not None and acc is not None:
+        found, covs, axis_notes = measured_axes(rotations, accel, acc, h)
+        notes = notes + axis_notes
+        if all(a is not None for a in found):
+            axes, axis_cov = np.array(found), np.array(covs)
+    return axes, axis_cov, notes
+
+
+def _motion_table(t, rotations: list[Rotation], fit, angles) -> dict:
+    """The calibration's table of the rotations: times, integration window, run, axis, the
+    angle the fit gives and the stated one."""
+    return {"t_start": [float(t[r.motion[0]]) for r in rotations],
+            "t_end": [float(t[r.motion[1] - 1]) for r in rotations],
+            "window": [list(r.window) for r in rotations], "run": [r.run + 1 for r in rotations],
+            "axis": ["xyz"[r.axis] for r in rotations], "angle_deg": fit.angles_deg.tolist(),
+            "stated_deg": angles.tolist(), "used": [True] * len(rotations), "note": [""] * len(rotations)}
 
 
 def _check_coverage(rotations: list[Rotation], source: str) -> None:
     """At least one rotation about each axis, else one line saying what was found."""
-    from .ferraris import N_ROTATIONS
 
     if not rotations:
         raise NoMotionError(f"{source}: no rotation found (the gyro turns by less than {MIN_ROTATION_DEG:g} deg "

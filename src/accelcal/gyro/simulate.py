@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .fit import MotionSet
-from .integrate import expm_so3
+from .integrate import expm_so3, log_so3
 
 _PEAK = 1.875  # max of s'(τ) for the minimum-jerk profile
 
@@ -153,7 +153,6 @@ def simulate_session(rng: np.random.Generator, *, n_motions: int = 20, angle_deg
     y = y_clean + gyro_noise * rng.standard_normal(y_clean.shape)
     u = np.array(u)
     P = np.eye(3)[None] - u[:, :, None] * u[:, None, :]
-    u_cov = direction_noise ** 2 * P
     u_noisy = u + direction_noise * np.einsum("pij,pj->pi", P, rng.standard_normal(u.shape))
     u_noisy /= np.linalg.norm(u_noisy, axis=1, keepdims=True)
     m = n_motions
@@ -199,6 +198,28 @@ def simulate_recording(rng: np.random.Generator, *, n_motions: int = 24, angle_d
     R_world = np.linalg.qr(rng.standard_normal((3, 3)))[0]
     R_world *= np.sign(np.linalg.det(R_world))
     n0, nr = int(round(init_rest_s * fs)), int(round(rest_s * fs))
+    R, w, rests = _trajectory(rng, R_world, n0, nr, fs, n_motions, angle_deg, peak_rate_dps, axis, motion_rel_std)
+    f = g * np.einsum("nji,j->ni", R, up)  # specific force in the body frame
+    acc = f @ M.T + ab + acc_noise * rng.standard_normal(f.shape)
+    if rest_offset_std:
+        for a, b in rests:
+            acc[a:b] += g * rest_offset_std * rng.standard_normal(3)
+    gyro = w @ np.linalg.inv(C).T + gb + gyro_noise * rng.standard_normal(w.shape)
+    if bias_walk_psd:
+        walk = np.cumsum(np.sqrt(bias_walk_psd * h) * rng.standard_normal(w.shape), axis=0)
+        gyro = gyro + walk @ np.linalg.inv(C).T
+    if g_sensitivity is not None:
+        gyro = gyro + f @ np.asarray(g_sensitivity, float).T
+    return {"t": np.arange(len(f)) * h, "acc": acc, "gyro": gyro, "rates": w, "C": C, "M": M, "acc_bias": ab,
+            "gyro_bias": gb, "g_sensitivity": g_sensitivity, "g": g, "rest_intervals": np.array(rests)}
+
+
+def _trajectory(rng, R_world, n0: int, nr: int, fs: float, n_motions: int, angle_deg: float, peak_rate_dps: float,
+                axis, motion_rel_std: float):
+    """The session's orientations (n, 3, 3) and body rates (n, 3), sample by sample, and its
+    rests' ``[start, stop)``: ``n0`` samples of initial rest, then each motion and ``nr``
+    samples of rest (:func:`simulate_recording`)."""
+    h = 1.0 / fs
     Rs, ws, rests, pos = [np.broadcast_to(R_world, (n0, 3, 3))], [np.zeros((n0, 3))], [(0, n0)], n0
     for i in range(n_motions):
         if axis is None:
@@ -217,21 +238,7 @@ def simulate_recording(rng: np.random.Generator, *, n_motions: int = 24, angle_d
         pos += len(tt)
         rests.append((pos, pos + nr))
         pos += nr
-    R = np.concatenate(Rs)
-    w = np.concatenate(ws)
-    f = g * np.einsum("nji,j->ni", R, up)  # specific force in the body frame
-    acc = f @ M.T + ab + acc_noise * rng.standard_normal(f.shape)
-    if rest_offset_std:
-        for a, b in rests:
-            acc[a:b] += g * rest_offset_std * rng.standard_normal(3)
-    gyro = w @ np.linalg.inv(C).T + gb + gyro_noise * rng.standard_normal(w.shape)
-    if bias_walk_psd:
-        walk = np.cumsum(np.sqrt(bias_walk_psd * h) * rng.standard_normal(w.shape), axis=0)
-        gyro = gyro + walk @ np.linalg.inv(C).T
-    if g_sensitivity is not None:
-        gyro = gyro + f @ np.asarray(g_sensitivity, float).T
-    return {"t": np.arange(len(f)) * h, "acc": acc, "gyro": gyro, "rates": w, "C": C, "M": M, "acc_bias": ab,
-            "gyro_bias": gb, "g_sensitivity": g_sensitivity, "g": g, "rest_intervals": np.array(rests)}
+    return np.concatenate(Rs), np.concatenate(ws), rests
 
 
 def random_gyro_matrix(rng: np.random.Generator, scale_std: float = 0.02, misalignment_std_deg: float = 1.0,
@@ -244,7 +251,6 @@ def random_gyro_matrix(rng: np.random.Generator, scale_std: float = 0.02, misali
 
 def rotation_error_deg(R_est, R_true) -> np.ndarray:
     """Angle [deg] of ``R_trueᵀ R_est`` for stacks (m, 3, 3)."""
-    from .integrate import log_so3
 
     return np.rad2deg(np.linalg.norm(log_so3(np.swapaxes(R_true, -1, -2) @ R_est), axis=-1))
 

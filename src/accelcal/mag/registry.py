@@ -18,10 +18,10 @@ name               parameters  family       what
 
 from __future__ import annotations
 
-import importlib
 from dataclasses import dataclass
 
 from ..errors import AccelcalError
+from ..registry import resolve
 
 #: What the magnetometer's estimators fit.
 DATA = "field_samples"
@@ -52,8 +52,7 @@ class MagEstimator:
         return self.n_parameters + 1
 
     def load(self):
-        module, _, attr = self.function.partition(":")
-        return getattr(importlib.import_module(module), attr)
+        return resolve(self.function)
 
     def fit(self, samples):
         """Fit ``samples`` (:class:`~accelcal.mag.fit.FieldSamples`): an ``EllipsoidFit``."""

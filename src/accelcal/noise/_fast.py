@@ -21,6 +21,8 @@ as it does every other kernel; without numba the callers use their numpy version
 
 from __future__ import annotations
 
+from itertools import combinations
+
 import numpy as np
 
 from ..kernels import jit
@@ -276,7 +278,6 @@ _ar1 = _jit(_ar1)
 def supports(p: int) -> tuple[np.ndarray, np.ndarray]:
     """Every non-empty support of ``p`` columns, in the order the numpy solver tries them
     (by size, then lexicographic): rows padded with -1, and their sizes."""
-    from itertools import combinations
 
     rows = [idx for s in range(1, p + 1) for idx in combinations(range(p), s)]
     out = np.full((len(rows), p), -1, dtype=np.int64)

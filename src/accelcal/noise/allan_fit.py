@@ -31,9 +31,11 @@ from dataclasses import dataclass
 from itertools import combinations
 
 import numpy as np
+from scipy.special import ndtr
 
-from .. import kernels
+from .. import distributions as dist, kernels
 from .allan import AllanVariance, allan_variance
+from .simulation import simulate_noise
 from .terms import TERMS, NoiseModelError, model_avar, noise_term
 
 
@@ -318,9 +320,7 @@ def bootstrap_fits(fit: NoiseFit, allan: AllanVariance, edf, model_error: float,
     Draws: a Gaussian copula with the correlation of :func:`log_avar_covariance` and Gamma
     marginals ``A_j χ²_ν/ν`` with ``ν = 2 / var(ln Â_j)``; refitted with the fit's weights ``edf``.
     """
-    from scipy.special import ndtr
 
-    from .. import distributions as dist
 
     taus, fs = allan.taus, allan.fs
     a = fit.avar(taus, fs)
@@ -337,7 +337,6 @@ def bootstrap_fits(fit: NoiseFit, allan: AllanVariance, edf, model_error: float,
 
 def octave_correlations(rng, term: str, n: int = 2**16, reps: int = 1000, batch: int = 100) -> np.ndarray:
     """Measure :data:`OCTAVE_CORRELATION` for one term: mean correlation of ``ln Â`` 1…6 octaves apart."""
-    from .simulation import simulate_noise
 
     m = 2 ** np.arange(13)
     la = np.hstack([np.log(allan_variance(simulate_noise(rng, n, 1.0, {term: 1.0}, size=batch), 1.0, m=m).avar)

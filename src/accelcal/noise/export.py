@@ -37,6 +37,8 @@ import math
 
 import numpy as np
 
+from ..export import kalibr, openvins
+from ..export.api import export
 from ..export.base import ExportError, ExportInputs
 from ..jsonsafe import json_safe
 
@@ -118,26 +120,22 @@ def conversions(sensor: str, unit: str, terms: dict) -> dict:
 
 def kalibr_yaml(report, *, rostopic: str = "/imu0", inflate: float = 1.0) -> str:
     """Kalibr's ``imu.yaml`` of the noise alone (:mod:`accelcal.export.kalibr`)."""
-    from ..export.kalibr import write
 
-    return write(ExportInputs(None, report_dict(report), {"rostopic": rostopic, "inflate": inflate})).files[""]
+    return kalibr.write(ExportInputs(None, report_dict(report), {"rostopic": rostopic, "inflate": inflate})).files[""]
 
 
 def openvins_yaml(report, *, rostopic: str = "/imu0", inflate: float = 1.0, calibration=None,
                  model: str = "kalibr") -> tuple[str, list]:
     """OpenVINS's ``kalibr_imu_chain.yaml`` (:mod:`accelcal.export.openvins`); returns (text, warnings):
     the terms the file leaves out."""
-    from ..export.api import export
-    from ..export.openvins import write
 
     inputs = ExportInputs(calibration, report_dict(report), {"rostopic": rostopic, "inflate": inflate, "model": model})
-    out = write(inputs) if calibration is None else export("openvins", inputs)
+    out = openvins.write(inputs) if calibration is None else export("openvins", inputs)
     return out.files[""], [x.line() for x in out.left_out]
 
 
 def calibrated_kalibr_yaml(report, calibration, *, rostopic: str = "/imu0", inflate: float = 1.0) -> tuple[str, list]:
     """Kalibr's ``imu.yaml`` with the calibration's intrinsics (:mod:`accelcal.export.kalibr`); (text, warnings)."""
-    from ..export.api import export
 
     out = export("kalibr", ExportInputs(calibration, report_dict(report), {"rostopic": rostopic, "inflate": inflate}))
     return out.files[""], [x.line() for x in out.left_out]

@@ -9,10 +9,14 @@ reference values (a datasheet's white noise and bias stability) as grey dash-dot
 
 from __future__ import annotations
 
+import matplotlib
 import numpy as np
+from matplotlib.figure import Figure
 
+from ..plotting import RC
+from .export import exported_values
+from .report import IEEE_TERMS
 from .terms import TERMS
-
 
 
 def noise_figure(report, title: str | None = None, references: dict | None = None,
@@ -23,12 +27,6 @@ def noise_figure(report, title: str | None = None, references: dict | None = Non
     the Allan deviation ``N/√τ`` of a white-noise density and a horizontal level (a bias
     stability), labelled with ``reference_label``.
     """
-    import matplotlib
-    from matplotlib.figure import Figure
-
-    from .export import exported_values
-    from ..plotting import RC
-
     sensors = list(report.sensors.values())
     with matplotlib.rc_context(RC):
         fig = Figure(figsize=(11, 3.4 * len(sensors) + 0.5))
@@ -84,8 +82,6 @@ def _references(ax, grid, ref: dict, label: str) -> None:
 
 def _band(s, j: int, grid, level: float) -> np.ndarray:
     """(2, len(grid)): percentiles of the Allan deviation of the bootstrap's refitted models."""
-    from .report import IEEE_TERMS
-
     boot = s.boot_fits[j]
     basis = np.array([TERMS[k].basis(grid, s.allan.fs) for k in IEEE_TERMS])
     adev = np.sqrt(boot**2 @ basis)

@@ -68,6 +68,9 @@ from ..formats.units_evidence import require_gyro_unit
 from ..summary import Summary
 from .allan import DEFAULT_MIN_EDF, AllanVariance, allan_variance
 from .allan_fit import NoiseFit, bootstrap_fits, fit_avar_model_error, model_edf
+from .avr import avr_lines
+from .export import conversions, exported_values, report_dict
+from .planner import plan_lines
 from .terms import TERMS, model_avar
 
 #: The IEEE Std 952 terms fitted, in order of the τ where they act (short to long).
@@ -144,8 +147,6 @@ class NoiseReport:
     extra: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
-        from .export import report_dict
-
         return report_dict(self)
 
 
@@ -159,9 +160,6 @@ class NoiseReport:
         allan_variance_ros reading of the same record (``allan_variance_ros``: ``{sensor:
         reading}``, :func:`accelcal.noise.avr.avr_reading`) would differ by more than 2x, why.
         """
-        from .avr import avr_lines
-        from .export import exported_values  # noise.export reads this module
-        from .planner import plan_lines
 
         avr = allan_variance_ros or {}
         lines = [f"noise: {self.n} samples, {self.duration_s / 3600:.3g} h at {self.fs:.4g} Hz"]
@@ -220,12 +218,7 @@ def analyse_noise(rec, *, level: float = DEFAULT_LEVEL, n_boot: int = DEFAULT_N_
         A gyro whose unit neither the file nor the user states: a static record cannot
         decide it (:mod:`accelcal.formats.units_evidence`).
     """
-    if not 0 < level < 1 or n_boot < 50:
-        raise NoiseAnalysisError(f"need 0 < level < 1 and n_boot >= 50, got level={level}, n_boot={n_boot}")
-    if getattr(rec, "runs", None) is not None and len(rec.runs) > 1:
-        raise NoiseAnalysisError(f"{rec.source}: {len(rec.runs)} runs recorded apart: one Allan deviation needs one "
-                                 "uninterrupted record; analyse them one at a time (--variable NAME)")
-    require_gyro_unit(rec, "a static record")  # no motion decides rad/s from deg/s: 57x
+    _check_request(rec, level, n_boot)
     t = np.asarray(rec.t, dtype=float)
     fs = 1.0 / float(np.median(np.diff(t)))
     parts = _parts(segments, len(t))
@@ -236,6 +229,32 @@ def analyse_noise(rec, *, level: float = DEFAULT_LEVEL, n_boot: int = DEFAULT_N_
                              "sensor at rest in one orientation for the whole recording (cut the static part out: "
                              "--start/--end, or its rests: --intervals)")
     warnings += static["warnings"] + ([f"not static ({static['refuse']}): analysed anyway"] if static["refuse"] else [])
+    sensors = _sensors(rec, parts, fs, level, n_boot, seed, min_edf)
+    duration = sum(float(t[b - 1] - t[a]) + 1.0 / fs for a, b in parts)
+    if segments is not None:
+        notes.append(_stretches_note(t, parts, fs, duration))
+    for s in sensors.values():
+        warnings += resolution_warnings(s, duration)
+    return NoiseReport(source=str(rec.source), fs=fs, n=int(sum(b - a for a, b in parts)), duration_s=duration, level=float(level),
+                       n_boot=int(n_boot), seed=int(seed), sensors=sensors, static=static, warnings=tuple(warnings),
+                       notes=tuple(notes))
+
+
+
+def _check_request(rec, level: float, n_boot: int) -> None:
+    """Refuse in one line what no analysis can answer: a bad level or bootstrap size, runs
+    recorded apart, a gyro whose unit no one states."""
+    if not 0 < level < 1 or n_boot < 50:
+        raise NoiseAnalysisError(f"need 0 < level < 1 and n_boot >= 50, got level={level}, n_boot={n_boot}")
+    if getattr(rec, "runs", None) is not None and len(rec.runs) > 1:
+        raise NoiseAnalysisError(f"{rec.source}: {len(rec.runs)} runs recorded apart: one Allan deviation needs one "
+                                 "uninterrupted record; analyse them one at a time (--variable NAME)")
+    require_gyro_unit(rec, "a static record")  # no motion decides rad/s from deg/s: 57x
+
+
+def _sensors(rec, parts, fs: float, level: float, n_boot: int, seed: int, min_edf) -> dict:
+    """Each recorded sensor's analysis of the stretches ``parts``, each with its own random
+    stream from ``seed``."""
     seeds = np.random.SeedSequence(int(seed)).spawn(2)
     cut = [slice(a, b) for a, b in parts]
     sensors = {}
@@ -245,18 +264,16 @@ def analyse_noise(rec, *, level: float = DEFAULT_LEVEL, n_boot: int = DEFAULT_N_
     if rec.gyro is not None:
         sensors["gyroscope"] = _sensor("gyroscope", [rec.gyro[c] for c in cut], rec.gyro_unit, fs, level, n_boot,
                                        seeds[1], min_edf)
-    duration = sum(float(t[b - 1] - t[a]) + 1.0 / fs for a, b in parts)
-    if segments is not None:
-        longest = max(float(t[b - 1] - t[a]) + 1.0 / fs for a, b in parts)
-        notes.append(f"analysed {len(parts)} stretch(es) of the recording, {duration:.4g} s in all (the longest "
-                     f"{longest:.4g} s), their Allan variances pooled: t = " + ", ".join(
-                         f"{t[a] - t[0]:.4g}-{t[b - 1] - t[0]:.4g} s" for a, b in parts[:6])
-                     + (" ..." if len(parts) > 6 else ""))
-    for s in sensors.values():
-        warnings += resolution_warnings(s, duration)
-    return NoiseReport(source=str(rec.source), fs=fs, n=int(sum(b - a for a, b in parts)), duration_s=duration, level=float(level),
-                       n_boot=int(n_boot), seed=int(seed), sensors=sensors, static=static, warnings=tuple(warnings),
-                       notes=tuple(notes))
+    return sensors
+
+
+def _stretches_note(t, parts, fs: float, duration: float) -> str:
+    """The note saying which stretches were analysed, their Allan variances pooled."""
+    longest = max(float(t[b - 1] - t[a]) + 1.0 / fs for a, b in parts)
+    return (f"analysed {len(parts)} stretch(es) of the recording, {duration:.4g} s in all (the longest "
+            f"{longest:.4g} s), their Allan variances pooled: t = " + ", ".join(
+                f"{t[a] - t[0]:.4g}-{t[b - 1] - t[0]:.4g} s" for a, b in parts[:6])
+            + (" ..." if len(parts) > 6 else ""))
 
 
 def _parts(segments, n: int) -> list[tuple[int, int]]:
@@ -277,7 +294,7 @@ def _static_parts(rec, parts, fs: float, warnings: list) -> dict:
     """:func:`static_check` of each stretch (the orientation may change between them), merged."""
     checks = []
     for k, (a, b) in enumerate(parts):
-        c = static_check(rec.acc[a:b], None if rec.gyro is None else rec.gyro[a:b], fs)
+        c = static_check(None if rec.acc is None else rec.acc[a:b], None if rec.gyro is None else rec.gyro[a:b], fs)
         tag = "" if len(parts) == 1 else f"stretch {k + 1} (t = {rec.t[a] - rec.t[0]:.4g} s): "
         c["refuse"] = c["refuse"] and tag + c["refuse"]
         c["warnings"] = [tag + w for w in c["warnings"]]
@@ -459,7 +476,6 @@ def needed_tau(fit: NoiseFit, term: str, fs: float, value: float | None = None) 
 
 def _quoted(s) -> str:
     """The data-sheet units of the white noise and the flicker floor (the JSON's ``conversions``), x, y, z."""
-    from .export import conversions  # noise.export reads this module
 
     c = [conversions(s.sensor, s.unit, terms) for terms in s.terms]
     if not c[0]:

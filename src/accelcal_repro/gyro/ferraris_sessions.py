@@ -24,7 +24,7 @@ import time
 import numpy as np
 import pandas as pd
 
-from accelcal.gyro.ferraris import calibrate_ferraris_session, fit_ferraris
+from accelcal.gyro.ferraris import calibrate_ferraris_session, fit_ferraris, standard_errors
 from accelcal.gyro.model import RAW_UNITS, GyroModel
 from accelcal.gyro.rests import rest_noise, rest_statistics
 
@@ -124,15 +124,8 @@ def ctu_calibration(rates_mat) -> pd.DataFrame:
     fit = fit_ferraris(segs, 1.0 / CTU_RATE_HZ, CTU_ANGLES, nominal=np.pi / 180, y_var=np.mean(yv, axis=0),
                        bias_var=np.mean(bv, axis=0))
     model = GyroModel(fit.C, np.zeros(3), raw_unit="deg/s")
-    se_C = np.sqrt(np.diag(fit.cov)).reshape(3, 3)
-    Jt = np.zeros((9, 9))
-    for i in range(3):
-        for j in range(3):
-            if i != j:
-                Jt[3 * i + j, 3 * i + j] = 1.0 / fit.C[j, j]
-                Jt[3 * i + j, 4 * j] = -fit.C[i, j] / fit.C[j, j] ** 2
-    se = {"scale_factors": np.diag(se_C) / (np.pi / 180),
-          "T": np.sqrt(np.diag(Jt @ fit.cov @ Jt.T)).reshape(3, 3)}
+    se = standard_errors(fit, np.pi / 180)
+    se = {"scale_factors": se["scale_factors"], "T": se["T"]}
     out = pd.DataFrame(_params("accelcal_ctu", model, se))
     out["nominal_angle_deg"] = np.nan
     for j, ax in enumerate("xyz"):
