@@ -87,19 +87,28 @@ def test_a_gyro_that_cannot_be_calibrated_is_one_line_and_the_accelerometer_loop
     assert "gyroscope: gyroscope not tested" in rep.summary()
 
 
-def test_an_effect_repeats_only_when_named_on_every_tested_session_of_the_unit():
-    import pandas as pd
+def test_an_effect_repeats_when_named_twice_and_its_estimates_agree(monkeypatch):
+    """Repeats: named on two or more sessions of the unit and the estimates, fitted on every
+    tested session, agree within their standard errors (χ² test); named once, or estimates
+    that disagree, does not repeat."""
+    from types import SimpleNamespace
 
-    from accelcal_repro.gyro.loop_sessions import repeats
+    from accelcal_repro.gyro import loop_sessions as LS
 
-    rows = pd.DataFrame([{"session": "a1", "named": "g_sensitivity", "reason": ""},
-                         {"session": "a2", "named": "g_sensitivity,motion_bias", "reason": ""},
-                         {"session": "a3", "named": "", "reason": "gyroscope not tested: too few poses"},
-                         {"session": "b1", "named": "scale_asymmetry", "reason": ""},
-                         {"session": "b2", "named": "none", "reason": ""}])
-    r = repeats(rows, {"a": ("a1", "a2", "a3"), "b": ("b1", "b2")}).set_index(["unit", "effect"])
-    assert r.loc[("a", "g_sensitivity"), "repeats"] and r.loc[("a", "g_sensitivity"), "sessions_tested"] == 2
-    assert not r.loc[("a", "motion_bias"), "repeats"] and not r.loc[("b", "scale_asymmetry"), "repeats"]
+    est = {"a1": (0.010, 0.001), "a2": (0.011, 0.001), "a3": (0.0105, 0.001),  # agree
+           "b1": (0.010, 0.001), "b2": (0.030, 0.001),  # disagree
+           "c1": (0.010, 0.001), "c2": (0.010, 0.001)}  # agree, but named once
+    monkeypatch.setattr(LS, "estimate_effects", lambda gm, names: {names[0]: {"a_x": est[gm]}})
+    named = {"a1": ("scale_asymmetry",), "a2": ("scale_asymmetry",), "a3": (), "b1": ("scale_asymmetry",),
+             "b2": ("scale_asymmetry",), "c1": ("scale_asymmetry",), "c2": ()}
+    results = {n: (SimpleNamespace(named=v, motions=n), "") for n, v in named.items()}
+    results["a4"] = (None, "gyroscope not tested: too few poses")
+    r = LS.repeat_table(results, {"a": ("a1", "a2", "a3", "a4"), "b": ("b1", "b2"), "c": ("c1", "c2")})
+    r = r.set_index("unit")
+    assert r.loc["a", "repeats"] and r.loc["a", "sessions_tested"] == 3 and r.loc["a", "sessions_named"] == 2
+    assert r.loc["a", "dof"] == 2 and r.loc["a", "p_agree"] > 0.5
+    assert not r.loc["b", "repeats"] and r.loc["b", "p_agree"] < 1e-6
+    assert not r.loc["c", "repeats"] and r.loc["c", "p_agree"] > 0.5
 
 
 def test_a_wandering_sample_clock_is_named_and_its_share_estimated():

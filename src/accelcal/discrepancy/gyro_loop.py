@@ -261,6 +261,7 @@ class GyroLoopResult:
     notes: tuple[str, ...] = field(default_factory=tuple)
     dC: np.ndarray | None = None  #: the refit's change of ``C`` with the named effects
     calibration: dict | None = None  #: the gyro calibration with the named effects (``apply`` reads it)
+    motions: GyroMotions | None = field(default=None, repr=False)  #: the data tested (not in :meth:`to_dict`)
 
     @property
     def outcome(self) -> str:
@@ -387,6 +388,25 @@ def gyro_discrepancy(gm: GyroMotions, *, alpha: float = 0.05, n_boot: int = 999,
                           n_boot, tuple(notes), dC)
 
 
+def estimate_effects(gm: GyroMotions, names) -> dict:
+    """The effects ``names`` fitted together on these motions, named or not: ``{name: {param:
+    (value, se)}}`` (for comparing one effect across sessions of a unit); an effect that
+    cannot be formed or is absorbed on them is left out."""
+    ev = evaluate(gm.ms, gm.C, gm.integrator)
+    Jw, rw = ev.whitened()
+    keep, Xs = [], []
+    for c in names:
+        X = candidate_jacobian(c, gm)
+        if X is None:
+            continue
+        Xw = ev.whiten(X)
+        if _test(np.column_stack([Jw, *Xs]), Xw, rw, np.zeros((len(rw), 0)), 0.05)["status"] != "tested":
+            continue
+        keep.append(c)
+        Xs.append(Xw)
+    return _refit(Jw, rw, Xs, keep, len(rw))[0]
+
+
 def _refit(Jw, rw, Xs, named, n):
     """One Gauss-Newton step in (vec C, β of the named): estimates, standard errors, excess after."""
     if not named:
@@ -479,10 +499,10 @@ def gyro_layer(rec, g: float, poses, *, alpha: float = 0.05, n_boot: int = 999, 
         gcal = calibrate_recording_gyro(rec, acc, poses, g_sensitivity=False)
         gm = gyro_motions(rec, acc, poses, gcal)
         res = gyro_discrepancy(gm, alpha=alpha, n_boot=n_boot, seed=seed)
-        return replace(res, calibration=with_effects(gcal, gm, res)), None
+        return replace(res, calibration=with_effects(gcal, gm, res), motions=gm), None
     except AccelcalError as e:
         return None, f"gyroscope not tested: {str(e).splitlines()[0]}"
 
 
 __all__ = ["CANDIDATES", "CANDIDATE_NAMES", "GyroCandidate", "GyroLoopResult", "GyroMotions", "candidate_jacobian",
-           "compact", "effect_constants", "gyro_discrepancy", "gyro_layer", "gyro_motions", "rest_noise_problem", "with_effects"]
+           "compact", "effect_constants", "estimate_effects", "gyro_discrepancy", "gyro_layer", "gyro_motions", "rest_noise_problem", "with_effects"]
