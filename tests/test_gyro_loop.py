@@ -153,3 +153,13 @@ def test_the_motions_alone_give_the_same_residuals():
     idx, small = GL.compact(ses.data)
     assert len(idx) < len(ses.data.y)
     np.testing.assert_array_equal(motion_residuals(small, ses.C, "magnus4"), motion_residuals(ses.data, ses.C, "magnus4"))
+
+
+def test_too_few_bootstrap_draws_to_name_anything_is_said():
+    from accelcal.gyro.simulate import simulate_session
+
+    ses = simulate_session(np.random.default_rng(5), n_motions=12, angle_deg=90.0, peak_rate_dps=100.0)
+    gm = GL.GyroMotions(ses.data, ses.C, "magnus4", None, 1.0, False)
+    assert not GL.gyro_discrepancy(gm, n_boot=999).notes
+    note = GL.gyro_discrepancy(gm, n_boot=59).notes
+    assert len(note) == 1 and note[0].startswith("59 bootstrap draws cannot name anything")

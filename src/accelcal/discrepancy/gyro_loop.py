@@ -353,6 +353,10 @@ def gyro_discrepancy(gm: GyroMotions, *, alpha: float = 0.05, n_boot: int = 999,
     Xws = {c: (ev.whiten(X) if X is not None else None) for c, X in cols.items()}
     E = np.random.default_rng(seed).standard_normal((n, n_boot))
     named, rounds, base, notes = [], [], Jw, []
+    formed = sum(X is not None for X in Xws.values())
+    if formed and formed / (n_boot + 1) >= alpha:  # Holm's first step needs p_min * candidates < alpha
+        notes.append(f"{n_boot} bootstrap draws cannot name anything: the smallest p-value 1/{n_boot + 1} times "
+                     f"{formed} candidates is not below alpha = {alpha:g}; use n_boot >= {int(np.ceil(formed / alpha))}")
     wrong_way = _sign_coverage(gm)
     for _ in range(max_rounds):
         rows = {}
