@@ -163,3 +163,21 @@ def test_too_few_bootstrap_draws_to_name_anything_is_said():
     assert not GL.gyro_discrepancy(gm, n_boot=999).notes
     note = GL.gyro_discrepancy(gm, n_boot=59).notes
     assert len(note) == 1 and note[0].startswith("59 bootstrap draws cannot name anything")
+
+
+def test_the_benchmark_claims_judge_its_summary():
+    import pandas as pd
+
+    def summary(n_null, k_null, n_effect, power):
+        lo, hi = LB.clopper_pearson(k_null, n_null)
+        return pd.DataFrame([{"candidate": c, "multiple": 3.0, "fpr_any": k_null / n_null, "fpr_lo": float(lo),
+                              "fpr_hi": float(hi), "n_null": n_null, "n_effect": n_effect, "power": p}
+                             for c, p in zip(("g_sensitivity", "time_offset"), power)])
+
+    size, power = LB.loop_claims(summary(200, 9, 20, (1.0, 0.85)))
+    assert size["verdict"] == "reproduced" and power["verdict"] == "reproduced", (size, power)
+    size, power = LB.loop_claims(summary(200, 16, 20, (1.0, 0.6)))  # 0.08 [0.046, 0.127]; power 0.6
+    assert size["verdict"] == "not_reproduced" and power["verdict"] == "not_reproduced"
+    assert "time_offset 0.60" in power["evidence"]
+    size, power = LB.loop_claims(summary(2, 0, 1, (1.0, 1.0)))
+    assert size["verdict"] == power["verdict"] == "not_testable_at_this_scale"

@@ -102,3 +102,15 @@ def test_too_few_motions_leave_a_candidate_not_identifiable_with_the_motions_it_
     assert rows["scale_asymmetry"]["status"] == "tested" and rows["motion_bias"]["status"] == "tested"
     assert rows["clock_rate"]["status"] == "not_identifiable" and "time reference" in rows["clock_rate"]["needs"]
     assert all(r["status"] in ("tested", "not_identifiable") and r["needs"] for r in rows.values())
+
+
+def test_an_export_lists_the_gyro_effects_it_leaves_out():
+    from types import SimpleNamespace
+
+    from accelcal.export.base import effects_left_out
+
+    gyro = SimpleNamespace(effects=[{"id": "scale_asymmetry", "params": ["a_x", "a_y", "a_z"],
+                                     "values": [-0.0103, 0.0002, 0.0001]},
+                                    {"id": "g_sensitivity", "params": ["G_xx"], "values": [1e-3]}])
+    left = effects_left_out(SimpleNamespace(effects=(), gyro=gyro), "PX4")
+    assert len(left) == 1 and "scale_asymmetry" in str(left[0]) and "a_x -0.0103" in str(left[0])

@@ -228,6 +228,7 @@ rule gyro_claims:
         imucal_parameters=results("gyro/sessions/imucal_parameters.csv"),
         coverage=results("gyro/coverage_summary.csv"),
         stability=results("gyro/sessions/stability.csv"),
+        loop=results("gyro/loop/benchmark_summary.csv"),
     output:
         results("claims/gyro.csv"),
     log:

@@ -30,11 +30,23 @@ from accelcal.gyro.recording import MIN_RESTS, calibrate_recording_gyro
 from accelcal.gyro.simulate import simulate_recording
 from accelcal.recording import Recording
 
+from ..claims import Claim, MinimumSample
 from ..discrepancy.scoring import clopper_pearson
 
 #: The parameter each hidden effect sets (first of its candidate's on the x gyro).
 HIDDEN = {"g_sensitivity": "G_xz", "scale_asymmetry": "a_x", "rate_nonlinearity": "q_x", "time_offset": "delta_t",
           "motion_bias": "db_x", "sample_clock": "w_stamps"}
+LOOP_SIZE = Claim("gyro", "loop_false_positives", "On effect-free simulated sessions the gyro loop names an effect "
+                  "at a family-wise rate no larger than alpha = 0.05: the upper end of its 95 % Clopper-Pearson "
+                  "interval is at most 2 alpha", "upper bound <= 0.10")
+LOOP_POWER = Claim("gyro", "loop_power_3x_mde", "At 3 times its minimum detectable effect every hidden gyro effect "
+                   "is named on at least 80 % of simulated sessions", ">= 0.8")
+#: Effect-free sessions before the size rule can pass: at a true rate of alpha, the interval's upper end is <= 2 alpha.
+SIZE_MINIMUM = MinimumSample(150, "effect-free sessions", "with fewer, the interval's upper end exceeds 2 alpha even "
+                             "at a true rate of alpha")
+#: Sessions per candidate at 3x MDE: the power's binomial s.e. at 0.8 below 0.09.
+POWER_MINIMUM = MinimumSample(20, "sessions per candidate at 3x MDE", "with fewer, the power's binomial standard "
+                              "error exceeds 0.09")
 #: The stamps' clock-rate wander of the ``sample_clock`` cases: amplitude (relative) and period [s].
 CLOCK = {"amplitude": 0.01, "period_s": 45.0}
 DESIGN = {"n_motions": 24, "angle_deg": 100.0, "peak_rate_dps": 150.0, "rest_s": 3.0, "init_rest_s": 10.0,
@@ -146,6 +158,26 @@ def run_benchmark(n_null: int = 20, n_effect: int = 10, multiples=(0.5, 1.0, 3.0
     return pd.DataFrame(rows), pd.DataFrame(summary)
 
 
+def loop_claims(summary: pd.DataFrame | None) -> list[dict]:
+    """The benchmark's two ledger rows (:data:`LOOP_SIZE`, :data:`LOOP_POWER`) from its summary."""
+    if summary is None or not len(summary) or "fpr_hi" not in summary:
+        why = "no gyro loop benchmark (gyro/loop/benchmark_summary.csv)"
+        return [LOOP_SIZE.not_reproducible(why), LOOP_POWER.not_reproducible(why)]
+    src = "results/gyro/loop/benchmark_summary.csv"
+    first = summary.iloc[0]
+    size = LOOP_SIZE.judge(float(first.fpr_hi), float(first.fpr_hi) <= 0.10,
+                           f"{src}: fpr_any {first.fpr_any:.3f} [{first.fpr_lo:.3f}, {first.fpr_hi:.3f}]",
+                           scale=SIZE_MINIMUM.at(float(first.n_null)))
+    at3 = summary[(summary.multiple == 3.0) & (summary.n_effect > 0)]
+    if not len(at3):
+        return [size, LOOP_POWER.not_reproducible("no candidate identifiable on the simulated sessions")]
+    worst = float(at3.power.min())
+    shown = ", ".join(f"{r.candidate} {r.power:.2f}" for r in at3.itertuples())
+    power = LOOP_POWER.judge(worst, worst >= 0.8, f"{src}: power at multiple 3 ({shown})",
+                             scale=POWER_MINIMUM.at(float(at3.n_effect.min())))
+    return [size, power]
+
+
 def benchmark_tables(config: dict) -> tuple[pd.DataFrame, pd.DataFrame]:
     """The workflow's gyro loop benchmark (config ``gyro.loop.benchmark``): cases and summary."""
     c = config["loop"]["benchmark"]
@@ -158,4 +190,4 @@ def benchmark_tables(config: dict) -> tuple[pd.DataFrame, pd.DataFrame]:
     return cases, summary
 
 
-__all__ = ["CLOCK", "DESIGN", "HIDDEN", "benchmark_tables", "clock_recording", "run_benchmark", "run_case"]
+__all__ = ["CLOCK", "DESIGN", "HIDDEN", "LOOP_POWER", "LOOP_SIZE", "benchmark_tables", "clock_recording", "loop_claims", "run_benchmark", "run_case"]
