@@ -43,7 +43,12 @@ GYRO_STAGE = declare_stage(
             ("Session-to-session stability (IMU-TK fork data1-4, SNU good1-3)", results("gyro/sessions/stability.csv")),
             ("Monte Carlo: median RMS error / CRLB per configuration", results("gyro/montecarlo_summary.csv")),
             ("Coverage of the 95 % intervals with a wandering bias", results("gyro/coverage_summary.csv")),
-            ("Monte Carlo: time per problem (wall times)", results("gyro/montecarlo_timing.csv"))),
+            ("Monte Carlo: time per problem (wall times)", results("gyro/montecarlo_timing.csv")),
+            ("The gyro loop's benchmark: false positives and power per candidate at multiples of its MDE",
+             results("gyro/loop/benchmark_summary.csv")),
+            ("The gyro loop on the real sessions: effects named, excess before/after", results("gyro/loop/sessions.csv")),
+            ("Named gyro effects across sessions of one unit: do their estimates agree?",
+             results("gyro/loop/repeats.csv"))),
 )
 
 
@@ -170,6 +175,48 @@ rule gyro_sessions:
         "../scripts/gyro_sessions.py"
 
 
+rule gyro_loop_benchmark:
+    """The gyro loop on simulated sessions: FPR (anything named on effect-free sessions) with its
+    interval, and power per candidate at the configured multiples of its MDE."""
+    output:
+        cases=results("gyro/loop/benchmark_cases.csv"),
+        summary=results("gyro/loop/benchmark_summary.csv"),
+    params:
+        gyro=GYRO,
+    log:
+        log_path("gyro/loop_benchmark"),
+    benchmark:
+        bench_path("gyro/loop_benchmark"),
+    threads: 1
+    resources:
+        mem_mb=1000,
+        runtime=30,  # default config: about 10 s of CPU; paper scale (200 / 20): about 10 min
+    script:
+        "../scripts/gyro_loop_benchmark.py"
+
+
+rule gyro_loop_sessions:
+    """Every configured real gyro session through the gyro loop; which named effects repeat
+    across sessions of one unit (their estimates agree within their standard errors)."""
+    input:
+        manifests=expand(GYRO_MANIFEST, dataset=list(GYRO_DATASETS)),
+    output:
+        sessions=results("gyro/loop/sessions.csv"),
+        repeats=results("gyro/loop/repeats.csv"),
+    params:
+        gyro=GYRO,
+    log:
+        log_path("gyro/loop_sessions"),
+    benchmark:
+        bench_path("gyro/loop_sessions"),
+    threads: 1
+    resources:
+        mem_mb=1500,
+        runtime=15,
+    script:
+        "../scripts/gyro_loop_sessions.py"
+
+
 rule gyro_claims:
     """Ledger rows of the gyro stage, each verdict computed from its tables."""
     input:
@@ -181,6 +228,7 @@ rule gyro_claims:
         imucal_parameters=results("gyro/sessions/imucal_parameters.csv"),
         coverage=results("gyro/coverage_summary.csv"),
         stability=results("gyro/sessions/stability.csv"),
+        loop=results("gyro/loop/benchmark_summary.csv"),
     output:
         results("claims/gyro.csv"),
     log:
@@ -256,5 +304,7 @@ rule gyro:
         results("gyro/montecarlo_summary.csv"),
         results("gyro/coverage_summary.csv"),
         results("gyro/ipopt_check.csv"),
+        results("gyro/loop/benchmark_summary.csv"),
+        results("gyro/loop/sessions.csv"),
         results("claims/gyro.csv"),
         figure_files(*GYRO_STAGE.figures),

@@ -20,7 +20,8 @@ if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_
 log = configure_logging(snakemake)
 i = snakemake.input
 rows = claims(_read(i.integrators), _read(i.montecarlo), _read(i.ipopt), _read(i.figure_of_merit),
-              _read(i.peer_parameters), _read(i.imucal_parameters), _read(i.coverage), _read(i.stability))
+              _read(i.peer_parameters), _read(i.imucal_parameters), _read(i.coverage), _read(i.stability),
+              _read(i.loop))
 for r in rows.itertuples():
     log.info("%s/%s: %s (%s)", r.paper, r.claim_id, r.verdict, r.reproduced_value)
 log.info("verdicts: %s", verdict_counts(rows))

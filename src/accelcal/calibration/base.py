@@ -281,7 +281,7 @@ class Calibration:
         y = np.asarray(raw_gyro, dtype=float)
         if y.ndim != 2 or y.shape[1] != 3 or not np.all(np.isfinite(y)):
             raise CalibrationFileError(f"apply_gyro needs finite raw samples of shape (n, 3), got {y.shape}")
-        return model.correct(y, f)
+        return self.gyro.correct(y, f, t=t)  # with the effects `accelcal discrepancy` named, if any
 
     def _to_fit_unit(self, z: np.ndarray, unit: str | None) -> np.ndarray:
         given = self.input_unit if unit is None else acceleration_unit(unit)
@@ -579,4 +579,5 @@ def _from_discrepancy(d: dict) -> Calibration:
                          "nonorthogonality_deg": np.rad2deg([se[k] for k in ("theta_xy", "theta_zx", "theta_zy")])},
         residuals=_arr((poses.get("residual_after"))),
         poses={"t_mid": _arr(poses.get("t")), "temp": _arr(poses.get("temp"))} if poses.get("t") else {},
-        provenance=keep, base_effects_named=tuple(after.get("effects", [])))
+        provenance=keep, base_effects_named=tuple(after.get("effects", [])),
+        gyro=_gyro((d.get("gyroscope") or {}).get("calibration")))

@@ -64,4 +64,9 @@ def _gyro(cal, rec, args):
         raise AccelcalError(f"the recording's gyro is read as {have} but {args.calibration}'s gyroscope was made from "
                             f"{made}: pass --gyro-unit {made}")
     raw = rec.gyro if made == have else np.asarray(rec.gyro) * (ANGULAR_RATE_UNITS[have] / ANGULAR_RATE_UNITS[made])
-    return cal.apply_gyro(raw, rec.acc, t=rec.t, temp=rec.temp, unit=rec.unit), ""
+    named = [e["id"] for e in cal.gyro.effects]
+    if named and args.no_effects:  # the model only (a g-sensitivity named stays: it is the model's G)
+        cal = replace(cal, gyro=replace(cal.gyro, settings={**cal.gyro.settings, "effects": []}))
+        named = []
+    w = cal.apply_gyro(raw, rec.acc, t=rec.t, temp=rec.temp, unit=rec.unit)
+    return w, f"gyroscope effects applied: {', '.join(named)}" if named else ""

@@ -35,17 +35,20 @@ discrepancy report (JSON):
                the pose residuals
   gyroscope    the gyro's loop (when the recording has a gyro and --no-gyro is not given):
                named effects (g_sensitivity, scale_asymmetry, rate_nonlinearity,
-               time_offset, motion_bias), per round and candidate the test (F, p_value,
-               p_adjusted, mde, absorbed share; not_identifiable with the motions it
-               needs), excess_before/after, estimates; outcome 'not_tested' with a
-               one-line reason when the gyro cannot be calibrated from these rests
+               time_offset, motion_bias, sample_clock; clock_rate is always
+               not_identifiable between rests), per round and candidate the test (F,
+               p_value, p_adjusted, mde, absorbed share; not_identifiable with why and
+               the motions it needs), excess_before/after, estimates, calibration (the
+               gyro refitted with the named effects: `apply` corrects with them);
+               outcome 'not_tested' with a one-line reason when the gyro cannot be
+               calibrated from these rests or they do not measure its noise
   magnetometer the magnetometer's loop (when the recording has one and --no-mag is not
                given), the same keys as gyroscope: named effects (soft_iron, disturbance
                with its window of samples, temperature), per round the tests, the noise
                model (AR order of the residuals); outcome 'not_tested' with a reason
   static       the detection settings (searched as `accelcal calibrate` does)
   The report is also a calibration: `accelcal apply REPORT.json RECORDING` applies
-  its base model with the named effects.
+  its base model with the named effects, the gyroscope's too (--no-effects: the models only).
 
 """
 

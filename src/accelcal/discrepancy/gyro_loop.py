@@ -13,7 +13,17 @@ nested extension of that model, a perturbation of the bias-free gyro samples
 ``rate_nonlinearity`` 3 ``q_k y_k |y_k| / s``: a scale that grows with the rate
 ``time_offset``      1  ``δ ẏ``: the gyro's clock ``δ`` seconds off the accelerometer's
 ``motion_bias``      3  ``- Δb``: a bias that shifts while the sensor moves
+``sample_clock``     1  ``w y (Δt_i/h - 1)``: the rotation integrated over each sample's stamp
+                        rather than the nominal rate (or the reverse, when the fit used the stamps)
+``clock_rate``       1  ``κ y``: a common clock-rate error; C absorbs it between rests, so it is
+                        always ``not_identifiable`` here and says what would fix time
 ==================  ==  ==========================================================
+
+The directions and their use in ``apply`` are one table: :mod:`accelcal.gyro.effects`.
+An integration error from the sample clock is identifiable only where the clock is not
+uniform: jittering or late stamps inside the motions (a dropped sample is a time gap, and
+the fit leaves its motion out).  A common rate error needs time fixed by something
+independent of the gyro (known angles or rates).
 
 Linearised at the fit: the residuals' Jacobian in ``β`` is a central difference of the
 integrated residuals (each column one re-integration).  With ``L`` the Cholesky factor of
@@ -40,8 +50,10 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..gyro.calibrate import _motions, accel_directions
-from ..gyro.fit import MotionSet, _residuals, evaluate
+from ..gyro.calibrate import accel_directions, motion_intervals
+from ..gyro.effects import directions as effect_directions
+from ..gyro.fit import MotionSet, evaluate, motion_residuals
+from ..gyro.model import GyroModel
 from ..gyro.rests import (RestStatistics, bias_series, fit_bias, motion_bias_variance, rest_noise, rest_statistics,
                           sample_interval, saturated_samples)
 from .statistics import critical_noncentrality, holm
@@ -50,6 +62,12 @@ from .statistics import critical_noncentrality, holm
 MAX_ABSORBED = 0.99
 #: Fewest degrees of freedom left after a candidate (2 per motion, 9 for C).
 MIN_DOF = 4
+#: Samples kept on either side of a motion when its columns are integrated (magnus4's cubic reads one).
+MARGIN = 3
+#: Fewest samples in every rest for the gyro's noise (and its autocorrelation) to be measured.
+MIN_REST_SAMPLES = 30
+#: "Moving" (the motion bias's samples): a rate above this many times the rest noise on some axis.
+MOVING_SIGMAS = 5.0
 
 
 @dataclass(frozen=True)
@@ -76,6 +94,14 @@ CANDIDATES = (
     GyroCandidate("motion_bias", ("db_x", "db_y", "db_z"), "raw",
                   "long motions about each axis at differing orientations (the bias change integrates over the "
                   "motion's duration)"),
+    GyroCandidate("sample_clock", ("w_stamps",), "share",
+                  "sample times that differ from the nominal rate inside the motions (jittering or late stamps, a "
+                  "clock that skips): with uniform stamps integrating over them or over the nominal rate is the "
+                  "same; a dropped sample is a time gap and its motion is left out of the fit"),
+    GyroCandidate("clock_rate", ("kappa",), "relative",
+                  "an independent time reference: rotations of known angle (a turntable, a Ferraris session with "
+                  "--rotation-angle) or a known rate; between rests a common clock-rate error multiplies every "
+                  "angle as the scales do and C absorbs it"),
 )
 CANDIDATE_NAMES = tuple(c.name for c in CANDIDATES)
 
@@ -112,25 +138,13 @@ def gyro_motions(rec, acc_cal, poses, gcal) -> GyroMotions:
     y = gyro - bias_series(best, rs, t)
     if gs:
         y = y - f @ best.g_sensitivity.T
-    starts, stops, before, after, _ = _motions(poses.intervals, tb.gaps, saturated_samples(gyro, None))
+    starts, stops, before, after, _ = motion_intervals(poses.intervals, tb.gaps, saturated_samples(gyro, None))
     h = tb.h if s.get("time_base", {}).get("used", "index") == "index" else t
     ms = MotionSet(y, h, starts, stops, before, after, u, u_cov, rest_noise(rs),
                    motion_bias_variance(best, rs, before, after))
     used = np.asarray(gcal.motions.get("used", [True] * ms.n_motions), bool)
     return GyroMotions(ms.subset(used), np.asarray(gcal.model.C, float), s.get("integrator", "magnus4"), f,
                        float(s.get("nominal", 1.0)), gs, np.asarray(t, float), rs, s.get("bias_mode", "interpolated"))
-
-
-def _moving(gm: GyroMotions, k: float = 5.0) -> np.ndarray:
-    """1 where the sensor turns (rate above ``k`` times the rest noise on some axis, inside a
-    motion), else 0: the samples a bias change "while moving" acts on (a motion's interval
-    also holds the still ends its rests' trim left out)."""
-    y = gm.ms.y
-    inside = np.zeros(len(y), bool)
-    for a, b in zip(gm.ms.starts, gm.ms.stops):
-        inside[a:b + 1] = True
-    noise = np.sqrt(np.asarray(gm.ms.y_var, float))
-    return (inside & np.any(np.abs(y) > k * noise, axis=1)).astype(float)
 
 
 def _through_bias(gm: GyroMotions, d: np.ndarray) -> np.ndarray:
@@ -151,23 +165,35 @@ def _through_bias(gm: GyroMotions, d: np.ndarray) -> np.ndarray:
     return d - bias_series(fit_bias(rs, gm.bias_mode), rs, gm.t)
 
 
-def _directions(name: str, gm: GyroMotions) -> list[np.ndarray] | None:
-    """The perturbations ``d_j(y)`` (n, 3) of a candidate, or None when it cannot be formed."""
-    y, e = gm.ms.y, np.eye(3)
-    if name == "g_sensitivity":
-        if gm.f is None or gm.g_sensitivity_in_base:
-            return None
-        return [-np.outer(gm.f[:, b], e[a]) for a in range(3) for b in range(3)]
-    if name == "scale_asymmetry":
-        return [np.outer(np.where(y[:, k] < 0, y[:, k], 0.0), e[k]) for k in range(3)]
+def _integrated_over(gm: GyroMotions) -> str:
+    return "index" if np.ndim(gm.ms.h) == 0 else "timestamps"
+
+
+def effect_constants(name: str, gm: GyroMotions) -> dict:
+    """What fixed a candidate's direction at the fit, for ``apply`` (:func:`accelcal.gyro.effects.correct`)."""
+    h = float(gm.ms.h) if np.ndim(gm.ms.h) == 0 else float(np.mean(np.diff(gm.ms.h)))
+    c = {"h": h, "integrated_over": _integrated_over(gm)}
     if name == "rate_nonlinearity":
-        return [np.outer(y[:, k] * np.abs(y[:, k]) * abs(gm.nominal), e[k]) for k in range(3)]
-    if name == "time_offset":
-        h = gm.ms.h if np.ndim(gm.ms.h) == 0 else np.gradient(gm.ms.h)[:, None]
-        return [np.gradient(y, axis=0) / h]
+        c["nominal"] = abs(gm.nominal)
     if name == "motion_bias":
-        return [-np.outer(_moving(gm), e[k]) for k in range(3)]
-    raise KeyError(name)
+        c["threshold"] = (MOVING_SIGMAS * np.sqrt(np.asarray(gm.ms.y_var, float))).tolist()
+    return c
+
+
+def _directions(name: str, gm: GyroMotions) -> list[np.ndarray] | None:
+    """The perturbations ``d_j(y)`` (n, 3) of a candidate (:func:`accelcal.gyro.effects.directions`),
+    or None when it cannot be formed."""
+    if name == "g_sensitivity" and gm.g_sensitivity_in_base:
+        return None
+    c = effect_constants(name, gm)
+    inside = None
+    if name == "motion_bias":  # a motion's interval also holds the still ends its rests' trim left out
+        inside = np.zeros(len(gm.ms.y), bool)
+        for a, b in zip(gm.ms.starts, gm.ms.stops):
+            inside[a:b + 1] = True
+    t = gm.t if name == "sample_clock" else (None if np.ndim(gm.ms.h) == 0 else gm.ms.h)
+    return effect_directions(name, gm.ms.y, f=gm.f, t=t, h=c["h"], nominal=gm.nominal, threshold=c.get("threshold"),
+                             integrated_over=c["integrated_over"], inside=inside)
 
 
 def candidate_jacobian(name: str, gm: GyroMotions) -> np.ndarray | None:
@@ -175,18 +201,32 @@ def candidate_jacobian(name: str, gm: GyroMotions) -> np.ndarray | None:
     dirs = _directions(name, gm)
     if dirs is None:
         return None
-    cols = []
+    idx, small = compact(gm.ms)
+    cols, ymax = [], np.max(np.abs(gm.ms.y))
     for d in dirs:
         d = _through_bias(gm, d)
         scale = np.max(np.abs(d))
         if not scale > 0:
             cols.append(np.zeros(2 * gm.ms.n_motions))
             continue
-        eps = 1e-4 * np.max(np.abs(gm.ms.y)) / scale
-        rp = _residuals(_with_y(gm.ms, gm.ms.y + eps * d), gm.C, gm.integrator)
-        rm = _residuals(_with_y(gm.ms, gm.ms.y - eps * d), gm.C, gm.integrator)
+        eps = 1e-4 * ymax / scale
+        rp = motion_residuals(_with_y(small, small.y + eps * d[idx]), gm.C, gm.integrator)
+        rm = motion_residuals(_with_y(small, small.y - eps * d[idx]), gm.C, gm.integrator)
         cols.append((rp - rm) / (2 * eps))
     return np.column_stack(cols)
+
+
+def compact(ms: MotionSet) -> tuple[np.ndarray, MotionSet]:
+    """The motions' samples alone, with :data:`MARGIN` neighbours (what the integration reads):
+    ``(index into the recording, the same motions on those samples)``.  A 10-minute recording
+    is mostly rests; its columns integrate ~10x fewer samples this way, to the same residuals."""
+    n = len(ms.y)
+    lo, hi = np.maximum(ms.starts - MARGIN, 0), np.minimum(ms.stops + MARGIN + 1, n)
+    idx = np.concatenate([np.arange(a, b) for a, b in zip(lo, hi)]) if len(lo) else np.zeros(0, np.int64)
+    offset = np.concatenate([[0], np.cumsum(hi - lo)[:-1]]).astype(np.int64)
+    h = ms.h if np.ndim(ms.h) == 0 else np.asarray(ms.h)[idx]
+    return idx, MotionSet(ms.y[idx], h, offset + ms.starts - lo, offset + ms.stops - lo, ms.rest_before,
+                          ms.rest_after, ms.u, ms.u_cov, ms.y_var, ms.bias_var)
 
 
 def _with_y(ms: MotionSet, y) -> MotionSet:
@@ -219,6 +259,9 @@ class GyroLoopResult:
     alpha: float
     n_boot: int
     notes: tuple[str, ...] = field(default_factory=tuple)
+    dC: np.ndarray | None = None  #: the refit's change of ``C`` with the named effects
+    calibration: dict | None = None  #: the gyro calibration with the named effects (``apply`` reads it)
+    motions: GyroMotions | None = field(default=None, repr=False)  #: the data tested (not in :meth:`to_dict`)
 
     @property
     def outcome(self) -> str:
@@ -236,12 +279,22 @@ class GyroLoopResult:
                 "noise_model": "the gyro fit's weights (rest noise integrated over each motion, the bias error, the "
                                "gravity directions' noise) times one common scale estimated from the residuals "
                                "(what wanders between rests)",
-                "notes": list(self.notes)}
+                "notes": list(self.notes), "calibration": self.calibration}
 
     def summary(self) -> str:
         named = ", ".join(self.named) or "none"
         return (f"gyroscope: {self.n_motions} motions; effect named: {named}; excess {self.excess_before:.3g} -> "
                 f"{self.excess_after:.3g}")
+
+
+def _unformed(name: str, gm: GyroMotions) -> str:
+    """Why a candidate's direction could not be formed on these data."""
+    if name == "g_sensitivity":
+        return "in the base model" if gm.g_sensitivity_in_base else "no accelerometer samples (specific force)"
+    if name == "sample_clock":
+        return ("no sample times" if gm.t is None else
+                "the sample times are uniform: integrating over them or over the nominal rate is the same")
+    return "its direction cannot be formed from these samples"
 
 
 def _sign_coverage(gm: GyroMotions, min_deg: float = 30.0) -> list[str]:
@@ -267,8 +320,13 @@ def _test(base_w: np.ndarray, Xw: np.ndarray, rw: np.ndarray, E: np.ndarray, alp
     Z = _orth(Xp)
     k, dof = Z.shape[1], n - Qb.shape[1] - Z.shape[1]
     row = {"absorbed": absorbed.tolist(), "k": int(Xw.shape[1]), "dof": int(dof)}
-    if k < Xw.shape[1] or np.any(absorbed > MAX_ABSORBED) or dof < MIN_DOF:
-        return {**row, "status": "not_identifiable"}
+    if dof < MIN_DOF:  # too few motions: two residuals each, 9 for C, k for the candidate
+        need = int(np.ceil((n - dof + MIN_DOF) / 2))
+        return {**row, "status": "not_identifiable", "motions_needed": need,
+                "why": f"too few motions: {n // 2} here, at least {need} needed for {Xw.shape[1]} parameter(s)"}
+    if k < Xw.shape[1] or np.any(absorbed > MAX_ABSORBED):
+        return {**row, "status": "not_identifiable",
+                "why": "the motions cannot tell it from C (its columns absorbed by the base model)"}
     r0 = _resid(Qb, rw)
     num = float(np.sum((Z.T @ r0) ** 2))
     den = float(r0 @ r0) - num
@@ -295,6 +353,10 @@ def gyro_discrepancy(gm: GyroMotions, *, alpha: float = 0.05, n_boot: int = 999,
     Xws = {c: (ev.whiten(X) if X is not None else None) for c, X in cols.items()}
     E = np.random.default_rng(seed).standard_normal((n, n_boot))
     named, rounds, base, notes = [], [], Jw, []
+    formed = sum(X is not None for X in Xws.values())
+    if formed and formed / (n_boot + 1) >= alpha:  # Holm's first step needs p_min * candidates < alpha
+        notes.append(f"{n_boot} bootstrap draws cannot name anything: the smallest p-value 1/{n_boot + 1} times "
+                     f"{formed} candidates is not below alpha = {alpha:g}; use n_boot >= {int(np.ceil(formed / alpha))}")
     wrong_way = _sign_coverage(gm)
     for _ in range(max_rounds):
         rows = {}
@@ -305,11 +367,14 @@ def gyro_discrepancy(gm: GyroMotions, *, alpha: float = 0.05, n_boot: int = 999,
             info = next(x for x in CANDIDATES if x.name == c)
             if Xws[c] is None:
                 rows[c] = {"status": "in_base_model" if c == "g_sensitivity" and gm.g_sensitivity_in_base else
-                           "not_identifiable", "needs": info.needs, "params": list(info.params), "unit": info.unit}
+                           "not_identifiable", "why": _unformed(c, gm), "needs": info.needs,
+                           "params": list(info.params), "unit": info.unit}
                 continue
             row = _test(base, Xws[c], rw, E, alpha / max(1, n_candidates))
             if c == "scale_asymmetry" and wrong_way and row["status"] == "tested":
                 row = {**row, "status": "not_identifiable", "axes_lacking": wrong_way}
+            if c == "scale_asymmetry" and row["status"] == "not_identifiable" and "axes_lacking" in row:
+                row["why"] = f"no turns of 30 deg both ways about {', '.join(row['axes_lacking'])}"
             rows[c] = {**row, "needs": info.needs, "params": list(info.params), "unit": info.unit}
         tested = [c for c, r in rows.items() if r["status"] == "tested"]
         adj = holm([rows[c]["p_value"] for c in tested])
@@ -322,15 +387,34 @@ def gyro_discrepancy(gm: GyroMotions, *, alpha: float = 0.05, n_boot: int = 999,
         best = min(sig, key=lambda c: (rows[c]["p_value"], -rows[c]["F"]))
         named.append(best)
         base = np.column_stack([base, Xws[best]])
-    est, excess1 = _refit(Jw, rw, [Xws[c] for c in named], named, n)
+    est, excess1, dC = _refit(Jw, rw, [Xws[c] for c in named], named, n)
     return GyroLoopResult(tuple(named), rounds, excess0, excess1 if named else excess0, est, gm.ms.n_motions, alpha,
-                          n_boot, tuple(notes))
+                          n_boot, tuple(notes), dC)
+
+
+def estimate_effects(gm: GyroMotions, names) -> dict:
+    """The effects ``names`` fitted together on these motions, named or not: ``{name: {param:
+    (value, se)}}`` (for comparing one effect across sessions of a unit); an effect that
+    cannot be formed or is absorbed on them is left out."""
+    ev = evaluate(gm.ms, gm.C, gm.integrator)
+    Jw, rw = ev.whitened()
+    keep, Xs = [], []
+    for c in names:
+        X = candidate_jacobian(c, gm)
+        if X is None:
+            continue
+        Xw = ev.whiten(X)
+        if _test(np.column_stack([Jw, *Xs]), Xw, rw, np.zeros((len(rw), 0)), 0.05)["status"] != "tested":
+            continue
+        keep.append(c)
+        Xs.append(Xw)
+    return _refit(Jw, rw, Xs, keep, len(rw))[0]
 
 
 def _refit(Jw, rw, Xs, named, n):
     """One Gauss-Newton step in (vec C, β of the named): estimates, standard errors, excess after."""
     if not named:
-        return {}, float(np.sqrt(rw @ rw / max(n - 9, 1)))
+        return {}, float(np.sqrt(rw @ rw / max(n - 9, 1))), np.zeros((3, 3))
     A = np.column_stack([Jw, *Xs])
     step, *_ = np.linalg.lstsq(A, -rw, rcond=None)
     res = rw + A @ step
@@ -342,9 +426,57 @@ def _refit(Jw, rw, Xs, named, n):
         info = next(x for x in CANDIDATES if x.name == c)
         out[c] = {p: (float(step[j + i]), float(np.sqrt(cov[j + i, j + i]))) for i, p in enumerate(info.params)}
         j += X.shape[1]
-    return out, float(np.sqrt(s2))
+    return out, float(np.sqrt(s2)), step[:9].reshape(3, 3)
 
 
+
+
+def with_effects(gcal, gm: GyroMotions, res: GyroLoopResult) -> dict:
+    """``gcal`` refitted with the named effects, as a calibration's ``gyroscope`` object: ``C``
+    after the refit, the g-sensitivity (when named) as the model's ``G``, the bias moved by what
+    the rests see of the effects (the rests' bias took it in), and ``settings["effects"]``
+    (id, values, standard errors, constants) that ``apply`` corrects with
+    (:func:`accelcal.gyro.effects.correct`)."""
+    m = gcal.model
+    G, effects, shift = m.g_sensitivity, [], np.zeros((len(gm.ms.y), 3))
+    for c in res.named:
+        est = res.estimates[c]
+        values = [est[p][0] for p in est]
+        effects.append({"id": c, "values": values, "se": [est[p][1] for p in est], "params": list(est),
+                        "constants": effect_constants(c, gm)})
+        shift = shift + sum(b * dj for b, dj in zip(values, _directions(c, gm)))
+        if c == "g_sensitivity":
+            G = np.reshape(values, (3, 3))
+    bias = m.bias
+    if gm.rests is not None and res.named:
+        bias = bias + np.mean([shift[a:b].mean(axis=0) for a, b in gm.rests.intervals], axis=0)
+    dC = res.dC if res.dC is not None else np.zeros((3, 3))
+    d = gcal.to_dict()
+    d["model"] = GyroModel(m.C + dC, bias, G, m.raw_unit).to_dict()
+    d["settings"] = {**d["settings"], "effects": effects, "source": "accelcal discrepancy (gyro loop refit)"}
+    return d
+
+
+def rest_noise_problem(gyro, intervals, rate: float) -> str | None:
+    """Why the rests cannot measure the gyro's noise (the weights of every test), in one line; None
+    when they can.  Too short a rest, or a gyro quantised so coarsely that it reads one level at
+    rest (its noise below half a step: what the rests show is not the noise the motions carry)."""
+    iv = np.asarray(intervals, dtype=np.int64).reshape(-1, 2)
+    n = iv[:, 1] - iv[:, 0]
+    if n.min() < MIN_REST_SAMPLES:
+        return (f"the rests are too short to measure the gyro's noise: the shortest holds {int(n.min())} samples "
+                f"(< {MIN_REST_SAMPLES}, {MIN_REST_SAMPLES / rate:.2g} s at {rate:.4g} Hz); record rests of a few "
+                "seconds each")
+    g = np.asarray(gyro, float)
+    std = np.median([g[a:b].std(axis=0) for a, b in iv], axis=0)
+    for k in range(3):
+        levels = np.unique(g[: min(len(g), 200_000), k])
+        q = float(np.min(np.diff(levels))) if len(levels) > 1 else float("inf")
+        if std[k] < 0.5 * q:
+            return (f"the rests do not measure the gyro's noise: its {'xyz'[k]} axis reads steps of {q:.3g} and "
+                    f"varies by {std[k]:.2g} at rest (below half a step: quantised, the noise hidden); give the gyro "
+                    "at a finer resolution")
+    return None
 
 
 def gyro_layer(rec, g: float, poses, *, alpha: float = 0.05, n_boot: int = 999, seed: int = 20240708):
@@ -363,13 +495,18 @@ def gyro_layer(rec, g: float, poses, *, alpha: float = 0.05, n_boot: int = 999, 
         return None, "no gyro in the recording"
     if rec.rotations:
         return None, "a Ferraris session (rotations of known angle): the gyro loop tests motions between rests"
+    problem = rest_noise_problem(rec.gyro, poses.intervals, rec.rate)
+    if problem is not None:
+        return None, f"gyroscope not tested: {problem}"
     try:
         acc = calibrate_poses(poses, g, "full_lls", unit=rec.unit)
         gcal = calibrate_recording_gyro(rec, acc, poses, g_sensitivity=False)
-        return gyro_discrepancy(gyro_motions(rec, acc, poses, gcal), alpha=alpha, n_boot=n_boot, seed=seed), None
+        gm = gyro_motions(rec, acc, poses, gcal)
+        res = gyro_discrepancy(gm, alpha=alpha, n_boot=n_boot, seed=seed)
+        return replace(res, calibration=with_effects(gcal, gm, res), motions=gm), None
     except AccelcalError as e:
         return None, f"gyroscope not tested: {str(e).splitlines()[0]}"
 
 
 __all__ = ["CANDIDATES", "CANDIDATE_NAMES", "GyroCandidate", "GyroLoopResult", "GyroMotions", "candidate_jacobian",
-           "gyro_discrepancy", "gyro_layer", "gyro_motions"]
+           "compact", "effect_constants", "estimate_effects", "gyro_discrepancy", "gyro_layer", "gyro_motions", "rest_noise_problem", "with_effects"]

@@ -205,9 +205,13 @@ def g_sensitivity_cost_dps(CG, g: float = G0) -> float:
 
 
 def effects_left_out(cal, consumer: str) -> list[LeftOut]:
-    """The fitted effects (temperature, drift ...), which no consumer's model holds."""
-    return [LeftOut(f"the fitted effect {e.id}", f"{consumer} has no such term; its size follows its covariate: "
-                    f"parameters {', '.join(f'{v:.3g}' for v in np.ravel(e.values))}") for e in cal.effects]
+    """The fitted effects (temperature, drift ...; the gyroscope's named by ``accelcal discrepancy``), which no
+    consumer's model holds."""
+    out = [LeftOut(f"the fitted effect {e.id}", f"{consumer} has no such term; its size follows its covariate: "
+                   f"parameters {', '.join(f'{v:.3g}' for v in np.ravel(e.values))}") for e in cal.effects]
+    gyro = [] if cal.gyro is None else [e for e in cal.gyro.effects if e["id"] != "g_sensitivity"]  # G: the model's
+    return out + [LeftOut(f"the gyroscope's fitted effect {e['id']}", f"{consumer} has no such term: parameters "
+                          f"{', '.join(f'{p} {v:.3g}' for p, v in zip(e['params'], e['values']))}") for e in gyro]
 
 
 def diagonal_left_out(cal, consumer: str, *, gyro_scale: bool) -> list[LeftOut]:

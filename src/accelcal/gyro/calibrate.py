@@ -72,7 +72,7 @@ def accel_directions(accel, means, mean_std):
     return u, P @ cov_f @ np.swapaxes(P, -1, -2), f
 
 
-def _motions(intervals, gaps, saturated):
+def motion_intervals(intervals, gaps, saturated):
     """Consecutive rests -> motions: (starts, stops, before, after, notes)."""
     iv = np.asarray(intervals)
     starts, stops = iv[:-1, 1] - 1, iv[1:, 0]
@@ -407,7 +407,7 @@ def _usable_motions(y, t, tb, poses, rs, best, u, u_cov, f_rest, accel, gyro, gy
     """Every motion between the rests (bias removed from ``y``) with its noise, which are usable
     and why the others are not; one line when too few are."""
     sat = saturated_samples(gyro, gyro_range)
-    starts, stops, before, after, notes = _motions(poses.intervals, tb.gaps, sat)
+    starts, stops, before, after, notes = motion_intervals(poses.intervals, tb.gaps, sat)
     all_ms = MotionSet(y, tb.h, starts, stops, before, after, u, u_cov, rest_noise(rs),
                        motion_bias_variance(best, rs, before, after),
                        _motion_noise(rs, best, t, starts, stops, f_rest, accel_direction_cov(accel, f_rest)))
@@ -573,9 +573,10 @@ def evaluate_model(t, gyro, poses, accel, C, bias_vector, *, integrator: str = "
     y = np.asarray(gyro, float) - np.asarray(bias_vector, float)
     if g_sensitivity is not None:
         y = y - np.asarray(accel.apply(np.asarray(acc, float)), float) @ np.asarray(g_sensitivity).T
-    starts, stops, before, after, _ = _motions(poses.intervals, tb.gaps, np.zeros(len(t), bool))
+    starts, stops, before, after, _ = motion_intervals(poses.intervals, tb.gaps, np.zeros(len(t), bool))
     ms = MotionSet(y, tb.h, starts, stops, before, after, u, u_cov, rest_noise(rs), np.zeros((len(starts), 3)))
     return evaluate(ms, C, integrator), ms
 
 
-__all__ = ["MIN_MOTIONS", "accel_direction_cov", "accel_directions", "calibrate_gyro", "evaluate_model", "motion_estimator"]
+__all__ = ["MIN_MOTIONS", "accel_direction_cov", "accel_directions", "calibrate_gyro", "evaluate_model", "motion_estimator",
+           "motion_intervals"]

@@ -276,7 +276,7 @@ def fit_one_step(ms: MotionSet, C0, method: str = "magnus4") -> GyroFit:
     return GyroFit("gyro_one_step", method, C, cov, ev.chi2, 2 * ms.n_motions - 9, 1, seconds, ev)
 
 
-def _residuals(ms: MotionSet, C, method: str) -> np.ndarray:
+def motion_residuals(ms: MotionSet, C, method: str) -> np.ndarray:
     """The stacked residuals (2m,) at ``C``, without Jacobian or covariance (line search)."""
     R = integrate_intervals(ms.y @ np.asarray(C, float).T, ms.h, ms.starts, ms.stops, method).R
     w = np.einsum("mji,mj->mi", R, ms.u[ms.rest_before])
@@ -305,7 +305,7 @@ def fit_iterative(ms: MotionSet, C0, method: str = "magnus4", max_iter: int = MA
         se = np.sqrt(np.diag(cov))
         cost, lam = ev.chi2, 1.0
         while lam >= 1e-4:
-            z = ev.whiten(_residuals(ms, C + lam * d.reshape(3, 3), method))
+            z = ev.whiten(motion_residuals(ms, C + lam * d.reshape(3, 3), method))
             if z @ z <= cost * (1 + 1e-12):
                 break
             lam *= 0.5
@@ -393,4 +393,4 @@ def rotation_angles_deg(R) -> np.ndarray:
 
 
 __all__ = ["CovarianceParts", "Evaluation", "GyroFit", "covariance_parts", "MIN_MOTIONS", "MotionSet", "crlb", "evaluate", "fit_iterative", "fit_one_step",
-           "initial_scale", "motion_singular_values", "rotation_angles_deg", "tangent_basis"]
+           "initial_scale", "motion_residuals", "motion_singular_values", "rotation_angles_deg", "tangent_basis"]

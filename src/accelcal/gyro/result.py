@@ -20,7 +20,9 @@ from .. import distributions as dist
 from ..errors import InputShapeError
 from ..registry import class_of_type, types_of
 from ..summary import Summary
+from .effects import correct as correct_effects
 from .model import RAW_UNITS, GyroModel
+
 
 #: Thresholds of the warnings (:mod:`accelcal.gyro.calibrate`).
 RULES = {"excess": 1.5, "p_value": 1e-3, "scale_rel_se": 0.01, "min_axis_turn_deg": 90.0, "short_deg": 10.0,
@@ -134,6 +136,23 @@ class GyroCalibration:
         q = np.where(np.isfinite(nu) & (nu > 0), dist.t_ppf(0.975, np.where(np.isfinite(nu) & (nu > 0), nu, 1.0)),
                      1.959963984540054)
         return q * se
+
+    @property
+    def effects(self) -> list:
+        """The effects beyond the model that ``accelcal discrepancy`` named (``settings["effects"]``)."""
+        return list(self.settings.get("effects") or ())
+
+    def correct(self, raw, specific_force=None, *, t=None) -> np.ndarray:
+        """Angular rate [rad/s]: :meth:`GyroModel.correct` with the named :attr:`effects`
+        applied to the bias-free samples first (:func:`accelcal.gyro.effects.correct`; ``t``
+        the sample times [s], needed by the clock's and the time offset's effects)."""
+        if not self.effects:
+            return self.model.correct(raw, specific_force)
+        m = self.model
+        y = np.asarray(raw, dtype=float) - m.bias
+        if m.g_sensitivity is not None:
+            y = y - np.asarray(specific_force, float) @ m.g_sensitivity.T
+        return correct_effects(y, self.effects, t=t) @ m.C.T
 
     def to_dict(self) -> dict:
         return _f({"sensor": "gyroscope", "cal_type": self.CAL_TYPE or None, "model": self.model.to_dict(),

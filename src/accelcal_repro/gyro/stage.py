@@ -81,10 +81,13 @@ IMUCAL_AGREES = Claim("gyro", "imucal_agrees", "On imucal's example session acce
 
 def claims(integ: pd.DataFrame, mc: pd.DataFrame, ipopt: pd.DataFrame, fom: pd.DataFrame,
            peer_parameters: pd.DataFrame, imucal_parameters: pd.DataFrame | None = None,
-           coverage: pd.DataFrame | None = None, stability: pd.DataFrame | None = None) -> pd.DataFrame:
+           coverage: pd.DataFrame | None = None, stability: pd.DataFrame | None = None,
+           loop: pd.DataFrame | None = None) -> pd.DataFrame:
     """The stage's claims (module docstring) from its tables (``coverage``: the summary of
-    :mod:`.coverage`; ``stability``: the sessions' table of :mod:`.report`)."""
+    :mod:`.coverage`; ``stability``: the sessions' table of :mod:`.report`; ``loop``: the gyro
+    loop benchmark's summary, :mod:`.loop_benchmark`)."""
     from .integrators import choose
+    from .loop_benchmark import loop_claims
     from .montecarlo import summary
 
     rows = []
@@ -124,6 +127,7 @@ def claims(integ: pd.DataFrame, mc: pd.DataFrame, ipopt: pd.DataFrame, fom: pd.D
         rows.append(IMUCAL_AGREES.not_reproducible("imucal's session was not calibrated (gyro/sessions/sessions.csv)"))
     rows.append(_coverage_claim(coverage))
     rows.append(_stability_claim(stability))
+    rows += loop_claims(loop)
     return pd.DataFrame(rows, columns=COLUMNS)
 
 
