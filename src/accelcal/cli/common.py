@@ -4,6 +4,7 @@ the one-line error and warning, the progress line, provenance."""
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import hashlib
 import sys
 import threading
@@ -178,11 +179,9 @@ def _read(args, *, accelerometer: bool = True):
                    mag_unit=args.mag_unit, mag_topic=getattr(args, "mag_topic", None),
                    mag_instance=getattr(args, "mag_instance", None))
     if getattr(args, "no_mag", False):  # a log's magnetometer left out: no warning about it either
-        from dataclasses import replace
-
         from ..formats.mag_logs import MAG_WARNING
 
-        rec = replace(rec, notes=tuple(n for n in rec.notes if not n.startswith(MAG_WARNING)))
+        rec = dataclasses.replace(rec, notes=tuple(n for n in rec.notes if not n.startswith(MAG_WARNING)))
     if accelerometer and rec.acc is None:
         raise AccelcalError(f"{args.recording}: no accelerometer in this recording (a gyro alone), which "
                             f"'accelcal {args.command}' needs; name its columns with --columns ax=..,ay=..,az=..")

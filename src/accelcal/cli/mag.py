@@ -18,6 +18,7 @@ from pathlib import Path
 
 from ..atomic import atomic_output, write_json_atomic
 from ..errors import AccelcalError
+from ..mag.errors import MagInputError
 from ..mag.registry import MAG_ESTIMATORS
 from .common import _positive, warn
 
@@ -134,7 +135,6 @@ def _read_session(args):
     from ..formats import detect_format, read
     from ..formats.mag_logs import mag_problem
     from ..formats.mag_table import MagTable, read_mag_table
-    from ..mag.errors import MagInputError
 
     path = args.recording
     if not path.exists() or detect_format(path) not in LOG_FORMATS:

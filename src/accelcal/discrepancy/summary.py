@@ -12,6 +12,7 @@ leaves open prints as ``inf``.
 from __future__ import annotations
 
 from ..jsonsafe import is_finite
+from .wander_model import describe_noise_model
 
 
 def result_lines(det, unit: str | None = None) -> list[str]:
@@ -42,8 +43,6 @@ def result_lines(det, unit: str | None = None) -> list[str]:
 def _noise_lines(nm: dict, wander: dict, unit: str | None) -> list[str]:
     """The noise between poses estimated jointly with the calibration (wander null), in
     words, and the residual excess it predicts."""
-    from .wander_model import describe_noise_model
-
     lines = []
     if nm:
         lines.append(f"  noise between poses: {describe_noise_model(nm, unit)}")
