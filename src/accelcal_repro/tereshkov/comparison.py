@@ -30,9 +30,11 @@ import time
 import numpy as np
 import pandas as pd
 
+from accelcal.batista.filter import PAPER_THETA, PAPER_XI, kalman_filter
 from accelcal.tereshkov.errors import InvalidParameterError
 from accelcal.tereshkov.estimator import run_estimator, run_estimator_scalar
-from .montecarlo import AXES, ScenarioBatch, build_scenario, estimator_params
+
+from .montecarlo import AXES, ScenarioBatch, build_scenario, convergence_summary, estimator_params
 from .vehicle import DEG, sensor_chunks, vehicle_state
 
 METHODS = ("tereshkov", "batista", "batista_ideal_gyro")
@@ -83,7 +85,6 @@ def run_comparison(cfg: dict, batista_cfg: dict | None = None, record_every_s: f
     (table, cost) : tidy table (``scenario`` = method, run, t, sensor, axis, estimate,
         truth, error, update_time) and one row per method with the compute cost.
     """
-    from accelcal.batista.filter import PAPER_THETA, PAPER_XI, kalman_filter
 
     c = cfg.get("comparison", {})
     bcfg = batista_cfg or {}
@@ -156,7 +157,6 @@ def comparison_summary(table: pd.DataFrame, cost: pd.DataFrame, steady_state_fro
                        fraction: float = 0.05, nonconvergence_ratio: float = 0.5) -> pd.DataFrame:
     """Per method × sensor (x, y axes; Batista's z accelerometer separately as ``accel_z``):
     convergence time, steady-state RMS and mean |error|, and the compute cost."""
-    from .montecarlo import convergence_summary
 
     xy = table[table["axis"].isin(AXES)]
     s = convergence_summary(xy, steady_state_from_s, fraction, nonconvergence_ratio)

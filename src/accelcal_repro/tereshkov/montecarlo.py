@@ -35,9 +35,11 @@ import numpy as np
 import pandas as pd
 
 from accelcal.tereshkov.errors import InvalidParameterError
-from accelcal.tereshkov.estimator import TereshkovParams, TereshkovResult, concat_results, run_estimator
-from .vehicle import (DEG, G, Path, SensorSpec, VehicleBatch, field_path, installation_dcm,
-                      sensor_chunks, stack_paths, straight_path, vehicle_state)
+from accelcal.tereshkov.estimator import (TereshkovParams, TereshkovResult, concat_results, run_estimator,
+                                          steady_state_torque)
+
+from .vehicle import (DEG, G, Path, SensorSpec, VehicleBatch, field_path, installation_dcm, sensor_chunks, stack_paths,
+                      straight_path, vehicle_state)
 
 SENSORS = ("gyro", "accel")
 AXES = ("x", "y")
@@ -534,7 +536,6 @@ def observability_table(cfg: dict) -> tuple[pd.DataFrame, dict]:
     C_sb = np.swapaxes(sb.batch.C_bs[plain], -1, -2)
     w = np.einsum("rij,rnj->rni", C_sb, st.omega_b)
     w[..., :2] = 0.0  # eq. (14) setting: only the vertical rate
-    from accelcal.tereshkov.estimator import steady_state_torque
     pred = steady_state_torque(np.zeros_like(w), np.broadcast_to(delta[:, None, :], w.shape), w, params)[..., :2]
     mode, mt = res.mode[plain], res.mode_time[plain]
     rows = []
