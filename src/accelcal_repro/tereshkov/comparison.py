@@ -104,7 +104,15 @@ def run_comparison(cfg: dict, batista_cfg: dict | None = None, record_every_s: f
     params = estimator_params(ccfg)
     frames, cost = [], []
 
-    # Tereshkov, batched over runs, then one run alone for the per-run cost
+    _tereshkov_rows(data, b, dt, n, rec, params, frames, cost)
+    for method in ("batista", "batista_ideal_gyro"):  # one Kalman filter per run
+        _batista_rows(method, data, b, n, rec, P0, xi, theta, frames, cost)
+    table = pd.concat(frames, ignore_index=True)
+    return table, pd.DataFrame(cost)
+
+
+def _tereshkov_rows(data, b, dt, n, rec, params, frames, cost):
+    """Tereshkov, batched over runs, then one run alone for the per-run cost (appends to ``frames``, ``cost``)."""
     t0 = time.perf_counter()
     res, _ = run_estimator(data["gyro"], data["accel"], data["f_ext"], data["course"], data["speed"], dt, params,
                            record_every=rec)
@@ -123,26 +131,26 @@ def run_comparison(cfg: dict, batista_cfg: dict | None = None, record_every_s: f
         for a, ax in enumerate(AXES):
             frames.append(_frame("tereshkov", res.t, est[:, :, a] * scale, truth[:, a] * scale, sensor, ax, upd))
 
-    # Batista, one Kalman filter per run
-    for method in ("batista", "batista_ideal_gyro"):
-        gyro = data["gyro"] - (b.gyro_bias[:, None, :] if method == "batista_ideal_gyro" else 0.0)
-        est, per_run = [], []
-        for r in range(b.n_runs):
-            x0 = np.concatenate([data["velocity"][r, 0], -data["accel"][r, 0], np.zeros(3)])
-            t0 = time.perf_counter()
-            fr = kalman_filter(data["t"], data["accel"][r], gyro[r], data["velocity"][r], x0, P0, xi, theta, rec)
-            per_run.append(time.perf_counter() - t0)
-            est.append(fr.bias)
-        est = np.stack(est)
-        cost.append({"method": method, "us_per_step_single_run": 1e6 * float(np.median(per_run)) / n,
-                     "us_per_run_step_batched": 1e6 * float(np.sum(per_run)) / (n * b.n_runs), "steps": n,
-                     "runs": b.n_runs, "states": 9, "covariance": True})
-        t_rec = fr.t
-        elapsed = np.broadcast_to(t_rec, est.shape[:2])
-        for a, ax in enumerate(("x", "y", "z")):
-            frames.append(_frame(method, t_rec, est[:, :, a], b.accel_bias[:, a], "accel", ax, elapsed))
-    table = pd.concat(frames, ignore_index=True)
-    return table, pd.DataFrame(cost)
+
+def _batista_rows(method, data, b, n, rec, P0, xi, theta, frames, cost):
+    """Batista's filter (``batista_ideal_gyro``: on bias-free gyro data), one per run (appends to
+    ``frames``, ``cost``)."""
+    gyro = data["gyro"] - (b.gyro_bias[:, None, :] if method == "batista_ideal_gyro" else 0.0)
+    est, per_run = [], []
+    for r in range(b.n_runs):
+        x0 = np.concatenate([data["velocity"][r, 0], -data["accel"][r, 0], np.zeros(3)])
+        t0 = time.perf_counter()
+        fr = kalman_filter(data["t"], data["accel"][r], gyro[r], data["velocity"][r], x0, P0, xi, theta, rec)
+        per_run.append(time.perf_counter() - t0)
+        est.append(fr.bias)
+    est = np.stack(est)
+    cost.append({"method": method, "us_per_step_single_run": 1e6 * float(np.median(per_run)) / n,
+                 "us_per_run_step_batched": 1e6 * float(np.sum(per_run)) / (n * b.n_runs), "steps": n,
+                 "runs": b.n_runs, "states": 9, "covariance": True})
+    t_rec = fr.t
+    elapsed = np.broadcast_to(t_rec, est.shape[:2])
+    for a, ax in enumerate(("x", "y", "z")):
+        frames.append(_frame(method, t_rec, est[:, :, a], b.accel_bias[:, a], "accel", ax, elapsed))
 
 
 def _frame(method, t, est, truth, sensor, axis, upd):
