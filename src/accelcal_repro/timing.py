@@ -101,6 +101,16 @@ def make_problems(rng: np.random.Generator, n_problems: int, n_poses: int, g: fl
     return simulate_poses(u, g, truth["M"], truth["bias"], noise_std, rng)
 
 
+def _schedule(keys: list, T: int, repeats: int, interleave: str) -> list[tuple]:
+    """``(repeat, problem, order, method)`` in the order :func:`time_interleaved` runs them."""
+    if interleave == "block":
+        return [(r, p, k, m) for r in range(repeats)
+                for k, m in enumerate(keys[r % len(keys):] + keys[:r % len(keys)])
+                for p in range(T)]
+    return [(r, p, k, m) for r in range(repeats) for p in range(T)
+            for k, m in enumerate(keys[(r + p) % len(keys):] + keys[:(r + p) % len(keys)])]
+
+
 def time_interleaved(problems: Mapping, g: float, methods: Mapping, repeats: int, interleave: str = "block",
                      clock: Callable[[], float] = time.perf_counter) -> pd.DataFrame:
     """Per-problem wall time of every method, interleaved on identical data.
@@ -140,13 +150,7 @@ def time_interleaved(problems: Mapping, g: float, methods: Mapping, repeats: int
     for m in keys:  # warm-up (solver build, kernels, caches), untimed
         _switch(_label(m)[1])
         _call(methods[m], problems[m][0], g)
-    if interleave == "block":
-        schedule = [(r, p, k, m) for r in range(repeats)
-                    for k, m in enumerate(keys[r % len(keys):] + keys[:r % len(keys)])
-                    for p in range(T)]
-    else:
-        schedule = [(r, p, k, m) for r in range(repeats) for p in range(T)
-                    for k, m in enumerate(keys[(r + p) % len(keys):] + keys[:(r + p) % len(keys)])]
+    schedule = _schedule(keys, T, repeats, interleave)
     rows = []
     was_enabled = gc.isenabled()
     gc.disable()
