@@ -226,6 +226,26 @@ def plot_calibration(params: pd.DataFrame, peer: pd.DataFrame | None = None, nom
     return fig
 
 
+def _orientation_panel(fig, ax, d: pd.DataFrame):
+    """The reference estimator's residuals against the pose's orientation (azimuth, elevation)."""
+    refe = _reference(d)
+    x = d[d.estimator == refe]
+    lon = np.degrees(np.arctan2(x.u_y, x.u_x))
+    lat = np.degrees(np.arcsin(np.clip(x.u_z, -1, 1)))
+    lim = float(np.nanmax(np.abs(1e3 * x.residual))) or 1.0
+    sc = ax.scatter(lon, lat, c=1e3 * x.residual, cmap="coolwarm", vmin=-lim, vmax=lim, s=28,
+                    edgecolors="k", linewidths=0.4)
+    cb = fig.colorbar(sc, ax=ax, shrink=0.9, pad=0.01)
+    cb.set_label(f"residual [mm/s²]\n{style(refe)['label']}", fontsize=6.5)
+    cb.ax.tick_params(labelsize=6.5)
+    ax.set(xlim=(-190, 190), ylim=(-97, 97))
+    ax.set_xticks([-180, -90, 0, 90, 180])
+    ax.set_yticks([-90, -45, 0, 45, 90])
+    ax.set_xlabel("azimuth atan2(uy, ux) [deg]", fontsize=7)
+    ax.set_ylabel("elevation asin(uz) [deg]", fontsize=7)
+    ax.set_title("residual vs orientation", fontsize=8, loc="left")
+
+
 def plot_residuals(pose_errors: pd.DataFrame):
     """Figure ``measured_residuals``: per recording, residuals of the full and the bias-only
     models against time, and the reference estimator's residuals against orientation."""
@@ -268,23 +288,7 @@ def plot_residuals(pose_errors: pd.DataFrame):
             axes[-1, 0].set_xlabel("time [s]")
             axes[-1, 1].set_xlabel("time [s]")
 
-            ax = axes[row, 2]
-            refe = _reference(d)
-            x = d[d.estimator == refe]
-            lon = np.degrees(np.arctan2(x.u_y, x.u_x))
-            lat = np.degrees(np.arcsin(np.clip(x.u_z, -1, 1)))
-            lim = float(np.nanmax(np.abs(1e3 * x.residual))) or 1.0
-            sc = ax.scatter(lon, lat, c=1e3 * x.residual, cmap="coolwarm", vmin=-lim, vmax=lim, s=28,
-                            edgecolors="k", linewidths=0.4)
-            cb = fig.colorbar(sc, ax=ax, shrink=0.9, pad=0.01)
-            cb.set_label(f"residual [mm/s²]\n{style(refe)['label']}", fontsize=6.5)
-            cb.ax.tick_params(labelsize=6.5)
-            ax.set(xlim=(-190, 190), ylim=(-97, 97))
-            ax.set_xticks([-180, -90, 0, 90, 180])
-            ax.set_yticks([-90, -45, 0, 45, 90])
-            ax.set_xlabel("azimuth atan2(uy, ux) [deg]", fontsize=7)
-            ax.set_ylabel("elevation asin(uz) [deg]", fontsize=7)
-            ax.set_title("residual vs orientation", fontsize=8, loc="left")
+            _orientation_panel(fig, axes[row, 2], d)
         _figure_legend(fig, axes[:, :2].ravel(), ncol=4)
     return fig
 
