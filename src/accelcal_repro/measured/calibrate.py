@@ -277,9 +277,7 @@ def calibrate_recording(name: str, rec: Recording, *, g: float, estimators, sect
     """
     src = source(name)
     conv = src.conversion
-    unknown = [e for e in estimators if e not in ESTIMATORS]
-    if unknown:
-        raise AccelcalError(f"{name}: unknown estimator(s) {', '.join(unknown)}; known: {', '.join(ESTIMATORS)}")
+    _check_estimators(name, estimators)
     detected = detect_static_recording(rec, **(static_kw or {}))
     used, labels = select_poses(name, detected, sections, pose_selection)
     ps = pose_set(name, detected, used, labels)
@@ -289,12 +287,7 @@ def calibrate_recording(name: str, rec: Recording, *, g: float, estimators, sect
     param_rows, pose_rows, summary_rows = [], [], []
     boot, results = {}, {}
     for est in estimators:
-        t0 = time.perf_counter()
-        try:  # the CLI's calibration of the same poses (accelcal.calibration)
-            r = calibrate_poses(ps, g, est, unit=src.unit, conversion=conversion_for(est, conv))
-        except AccelcalError as err:  # e.g. too few poses for the full model: name the recording
-            raise type(err)(f"{name}, {est}: {err}") from None
-        seconds = time.perf_counter() - t0
+        r, seconds = _calibrate_timed(name, est, ps, g, src.unit, conv)
         results[est] = r
         fit = _EstimatorFit(name, est, r, ps, g, src.unit)
         params_e, boot[est], interval = _parameter_rows(fit, idx, level, min_valid_fraction)
@@ -308,6 +301,22 @@ def calibrate_recording(name: str, rec: Recording, *, g: float, estimators, sect
         pose_errors=pd.DataFrame(pose_rows), summary=pd.DataFrame(summary_rows),
         agreement=agreement_table(name, params, boot, level), nominal=nominal_table(name, params, conv, src.unit),
         results=results, pose_set=ps, detected=detected)
+
+
+def _check_estimators(name: str, estimators) -> None:
+    unknown = [e for e in estimators if e not in ESTIMATORS]
+    if unknown:
+        raise AccelcalError(f"{name}: unknown estimator(s) {', '.join(unknown)}; known: {', '.join(ESTIMATORS)}")
+
+
+def _calibrate_timed(name: str, est: str, ps, g: float, unit: str, conv):
+    """The CLI's calibration of the poses (accelcal.calibration) and its wall time [s]."""
+    t0 = time.perf_counter()
+    try:
+        r = calibrate_poses(ps, g, est, unit=unit, conversion=conversion_for(est, conv))
+    except AccelcalError as err:  # e.g. too few poses for the full model: name the recording
+        raise type(err)(f"{name}, {est}: {err}") from None
+    return r, time.perf_counter() - t0
 
 
 class _EstimatorFit:
