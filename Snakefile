@@ -47,6 +47,7 @@ check_config(config, "workflow/schemas/config.schema.yaml")
 # figures, each also a target of its own, claims, report tables).  The rules that gather
 # them (claims, report, all) read the declarations in functions, once every file is
 # included, so the order of the includes does not matter.
+include: "workflow/rules/kernels.smk"
 include: "workflow/rules/burkhard2024.smk"
 include: "workflow/rules/batista2011.smk"
 include: "workflow/rules/tereshkov.smk"

@@ -150,8 +150,6 @@ BROKEN = {
     # ----------------------------------------------------------------------- gyro
     "gyro_unknown_session": (changed({"gyro.sessions": ["xsens", "ctu"]}),
                              "gyro.sessions.1: 'ctu' is not a gyro session; known: xsens, fork_data1"),
-    "gyro_imutk_run_missing": (changed({"gyro.imutk_run": "results/gyro/peers/none.json"}),
-                               "gyro.imutk_run: results/gyro/peers/none.json: no such file"),
     "gyro_too_few_motions": (changed({"gyro.ipopt_check.motions": 4}),
                              "gyro.ipopt_check.motions: 4 is less than the minimum of 5"),
     "gyro_unknown_key": (changed({"gyro.monte_carlo.chunks": 2}),
@@ -200,6 +198,19 @@ def test_broken_stage_config_fails_the_dry_run_before_any_job(tmp_path, case):
     assert "Traceback" not in out
     assert "Job stats" not in out, "the DAG was built despite the broken config"
     assert not (workdir / "results").exists()
+
+
+def test_a_missing_imutk_run_is_the_gyro_jobs_missing_input_not_a_parse_check(tmp_path):
+    """IMU-TK's run from source is an input of the gyro sessions job: a config naming a file
+    that does not exist plans no job and names the file (Snakemake's own missing-input
+    error), while the workflow's parse reads no file system."""
+    cfg = changed({"gyro.imutk_run": "results/gyro/peers/none.json"})
+    assert config_error(cfg, tmp_path / "config.yaml") is None  # the parse accepts it
+    _, workdir, proc = dry_run(tmp_path, cfg)
+    out = proc.stdout + proc.stderr
+    assert proc.returncode != 0, out[-2000:]
+    assert "Missing input files" in out and "results/gyro/peers/none.json" in out, out[-2000:]
+    assert "Traceback" not in out and not (workdir / "results").exists()
 
 
 # Valid configs at the edges of the rules above (the same checks must let them through).

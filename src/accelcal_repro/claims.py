@@ -31,14 +31,19 @@ Adding a claim is a few lines::
 
     SPEED = Claim("burkhard2024", "speed_full", "Full LLS is about 35x faster ...", "≈35×")
     row = SPEED.judge(value, passed=value >= 10, evidence="results/...: how", fmt="{:.1f}×")
+
+A stage's builder is a table of :class:`ClaimRule` entries (one claim, one entry: its id,
+its rule's text, the inputs it reads, its verdict function) judged on one context by
+:func:`judge_rules`; a claim is added as one entry.
 """
 
 from __future__ import annotations
 
 import math
 import re
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 from pathlib import Path
 
 import numpy as np
@@ -239,6 +244,36 @@ class Claim:
         return self.row("not_reproducible", "", reason)
 
 
+@dataclass(frozen=True)
+class ClaimRule:
+    """One claim of a stage as an entry of its builder's table.
+
+    ``rule(ctx)`` is the claim's text with its rule (thresholds and grid from ``ctx``);
+    ``paper_value`` the paper's value (text, or a function of ``ctx``); ``inputs`` the names
+    of ``ctx`` the entry reads (a builder that does not provide one is refused, not judged
+    on a default); ``verdict(ctx, claim)`` the ledger row, or None when the configuration
+    runs nothing for this claim (e.g. an installation sweep left out).
+    """
+
+    claim_id: str
+    paper_value: str | Callable[[Any], str]
+    rule: Callable[[Any], str]
+    inputs: tuple[str, ...]
+    verdict: Callable[[Any, Claim], dict | None]
+
+    def judge(self, paper: str, ctx: Any) -> dict | None:
+        missing = [k for k in self.inputs if not hasattr(ctx, k)]
+        if missing:
+            raise LedgerError(f"claim {self.claim_id!r} reads {', '.join(missing)}, which its builder does not give")
+        value = self.paper_value(ctx) if callable(self.paper_value) else self.paper_value
+        return self.verdict(ctx, Claim(paper, self.claim_id, self.rule(ctx), value))
+
+
+def judge_rules(paper: str, rules: Sequence[ClaimRule], ctx: Any) -> list[dict]:
+    """The ledger rows of ``rules`` (in their order) judged on ``ctx``."""
+    return [row for rule in rules if (row := rule.judge(paper, ctx)) is not None]
+
+
 # --------------------------------------------------------------------------- checks
 def at_least(claim: Claim, value: float, threshold: float, evidence: str, fmt: str = "{:.3g}") -> dict:
     """``reproduced`` iff ``value >= threshold``."""
@@ -342,6 +377,7 @@ def verdict_counts(ledger: pd.DataFrame) -> dict[str, int]:
 __all__ = [
     "COLUMNS",
     "Claim",
+    "ClaimRule",
     "EXPECTED_COLUMNS",
     "LedgerError",
     "MinimumSample",
@@ -353,6 +389,7 @@ __all__ = [
     "at_least",
     "bootstrap_rule_minimum",
     "expected_verdicts",
+    "judge_rules",
     "lower_end_with_all_successes",
     "power_rule_minimum",
     "rank_rule_minimum",

@@ -260,50 +260,68 @@ def mc_point(seed: int, n_poses: int, noise_std: float, cases: Iterable, trials:
         Monte Carlo runs.
     """
     cases = normalise_cases(cases)
-    told = {"correction": als_known_noise, "stopping": nlls_known_noise}
+    table = _batch_estimators(cases, {"correction": als_known_noise, "stopping": nlls_known_noise}, estimators)
+    data = simulate_trials(grid_seed(seed, stage, int(n_poses), float(noise_std)), trials, int(n_poses), g,
+                           noise_std, truth_ranges)
+    bound = _Bounds(data, g, noise_std, trials)
+    frames, timings = [], []
+    for data_model, g_error, methods in cases:
+        z = data["z"][data_model]
+        g_assumed = g + g_error
+        for method in methods:
+            table[method](z[:1], g_assumed, noise_std)  # untimed warm-up: kernels loaded, solver built
+            t0 = time.perf_counter()
+            est = table[method](z, g_assumed, noise_std)
+            timings.append((int(n_poses), float(noise_std), data_model, g_error, method, trials,
+                            time.perf_counter() - t0))
+            frames.append(_method_rows(est, data["truth"], bound, trials, int(n_poses), float(noise_std),
+                                       data_model, g_error, method))
+    timing = pd.DataFrame(timings, columns=["n_poses", "noise_std", "data_model", "g_error", "method", "trials",
+                                            "seconds"])
+    return pd.concat(frames, ignore_index=True), timing
+
+
+def _batch_estimators(cases, told: dict, estimators: Mapping | None) -> dict:
+    """``{method: batch estimator}`` of every method the cases run (the registry's, told the
+    noise level as ``told`` says, then ``estimators``); unknown methods raise KeyError."""
     wanted = {m for _, _, ms in cases for m in ms}
     table = {m: batch_estimator(m, told) for m in wanted if m in ESTIMATORS}
     table.update(estimators or {})
     unknown = sorted(wanted - set(table))
     if unknown:
         raise KeyError(f"unknown method(s) {unknown}; known: {sorted(set(ESTIMATORS) | set(table))}")
-    data = simulate_trials(grid_seed(seed, stage, int(n_poses), float(noise_std)), trials, int(n_poses), g,
-                           noise_std, truth_ranges)
-    truth = data["truth"]
-    bounds: dict[tuple[str, str], dict] = {}
+    return table
 
-    def bound(data_model, model):
+
+class _Bounds:
+    """The per-trial Cramér-Rao bounds of each (data set, model), computed once each."""
+
+    def __init__(self, data: dict, g: float, noise_std: float, trials: int):
+        self.data, self.g, self.noise_std, self.trials, self.bounds = data, g, noise_std, trials, {}
+
+    def __call__(self, data_model: str, model: str) -> dict:
         if model == "bias" and data_model == "full":  # misspecified: no bound for this model
-            return {k: np.full(trials, np.nan) for k in ("bias_crlb_rms", "scale_crlb_rms", "nonorth_crlb_rms")}
-        if (data_model, model) not in bounds:
-            M = truth["M"] if data_model == "full" else None
-            bounds[data_model, model] = crlb_per_trial(data["directions"], g, noise_std, M, model)
-        return bounds[data_model, model]
+            return {k: np.full(self.trials, np.nan) for k in ("bias_crlb_rms", "scale_crlb_rms", "nonorth_crlb_rms")}
+        if (data_model, model) not in self.bounds:
+            M = self.data["truth"]["M"] if data_model == "full" else None
+            self.bounds[data_model, model] = crlb_per_trial(self.data["directions"], self.g, self.noise_std, M, model)
+        return self.bounds[data_model, model]
 
-    frames, timings = [], []
-    for data_model, g_error, methods in cases:
-        z = data["z"][data_model]
-        g_assumed = g + g_error
-        for method in methods:
-            model = method_model(method)
-            table[method](z[:1], g_assumed, noise_std)  # untimed warm-up: kernels loaded, solver built
-            t0 = time.perf_counter()
-            est = table[method](z, g_assumed, noise_std)
-            timings.append((int(n_poses), float(noise_std), data_model, g_error, method, trials,
-                            time.perf_counter() - t0))
-            cols = {"n_poses": np.full(trials, int(n_poses)), "noise_std": np.full(trials, float(noise_std)),
-                    "data_model": np.full(trials, data_model, dtype=object), "g_error": np.full(trials, g_error),
-                    "trial": np.arange(trials), "method": np.full(trials, method, dtype=object),
-                    "model": np.full(trials, model, dtype=object),
-                    "valid": np.asarray(est["valid"], bool), "status": np.asarray(est["status"], dtype=object),
-                    "iterations": np.asarray(est.get("iterations", np.zeros(trials, int)), int)}
-            cols.update(error_columns(est, truth, model, data_model))
-            cols.update(truth_columns(truth, data_model))
-            cols.update(bound(data_model, model))
-            frames.append(pd.DataFrame(cols))
-    timing = pd.DataFrame(timings, columns=["n_poses", "noise_std", "data_model", "g_error", "method", "trials",
-                                            "seconds"])
-    return pd.concat(frames, ignore_index=True), timing
+
+def _method_rows(est: dict, truth: dict, bound: _Bounds, trials: int, n_poses: int, noise_std: float,
+                 data_model: str, g_error: float, method: str) -> pd.DataFrame:
+    """The table's rows of one method on one case: one per trial (columns in the module docstring)."""
+    model = method_model(method)
+    cols = {"n_poses": np.full(trials, n_poses), "noise_std": np.full(trials, noise_std),
+            "data_model": np.full(trials, data_model, dtype=object), "g_error": np.full(trials, g_error),
+            "trial": np.arange(trials), "method": np.full(trials, method, dtype=object),
+            "model": np.full(trials, model, dtype=object),
+            "valid": np.asarray(est["valid"], bool), "status": np.asarray(est["status"], dtype=object),
+            "iterations": np.asarray(est.get("iterations", np.zeros(trials, int)), int)}
+    cols.update(error_columns(est, truth, model, data_model))
+    cols.update(truth_columns(truth, data_model))
+    cols.update(bound(data_model, model))
+    return pd.DataFrame(cols)
 
 
 def mc_grid(seed: int, points: Iterable[tuple[int, float]], cases: Iterable, trials: int,

@@ -19,12 +19,16 @@ import gzip
 import io
 import json
 import sys
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
 import pandas as pd
+
+from accelcal import cli
+from accelcal.simulation import random_directions, sample_truth, simulate_recording
 
 G0 = 9.80665
 #: Counts per g of the raw-count variant (MPU-6050, ±2 g) and its zero offsets.
@@ -48,7 +52,6 @@ class Variant:
 
 def session(seed: int = 11) -> dict:
     """The simulated session: t, acc [m/s²], temp, truth (bias [m/s²], M)."""
-    from accelcal.simulation import random_directions, sample_truth, simulate_recording
 
     rng = np.random.default_rng(seed)
     tr = {k: v[0] for k, v in sample_truth(rng, 1).items()}
@@ -236,7 +239,6 @@ VARIANTS: tuple[Variant, ...] = (
 
 def run_variant(v: Variant, s: dict, folder: Path) -> dict:
     """Write variant ``v`` of session ``s`` into ``folder`` and run ``accelcal calibrate`` on it (in-process)."""
-    from accelcal import cli
 
     suffix = ".csv.gz" if v.name == "gzip" else ".csv"
     path = v.write(folder / f"{v.name}{suffix}", s)
@@ -271,7 +273,6 @@ def run_variants(folder, seed: int = 11) -> pd.DataFrame:
 
 
 def main(argv=None) -> int:
-    import tempfile
 
     argv = sys.argv[1:] if argv is None else argv
     with tempfile.TemporaryDirectory() as tmp:

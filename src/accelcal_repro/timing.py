@@ -50,9 +50,13 @@ from accelcal import kernels
 from accelcal.errors import AccelcalError
 from accelcal.registry import estimators
 from accelcal.simulation import random_directions, sample_truth, simulate_poses
+from accelcal.tereshkov.estimator import run_estimator
 
 from .first_calls import FIRST_CALLS, SCRIPT
 from .montecarlo import grid_seed
+from .report import read_benchmarks, stage_times
+from .tereshkov.montecarlo import build_scenario, estimator_params
+from .tereshkov.vehicle import sensor_chunks
 
 #: The estimators timed: the registry's accelerometer estimators.
 _TIMED = estimators("accelerometer")
@@ -97,6 +101,16 @@ def make_problems(rng: np.random.Generator, n_problems: int, n_poses: int, g: fl
     return simulate_poses(u, g, truth["M"], truth["bias"], noise_std, rng)
 
 
+def _schedule(keys: list, T: int, repeats: int, interleave: str) -> list[tuple]:
+    """``(repeat, problem, order, method)`` in the order :func:`time_interleaved` runs them."""
+    if interleave == "block":
+        return [(r, p, k, m) for r in range(repeats)
+                for k, m in enumerate(keys[r % len(keys):] + keys[:r % len(keys)])
+                for p in range(T)]
+    return [(r, p, k, m) for r in range(repeats) for p in range(T)
+            for k, m in enumerate(keys[(r + p) % len(keys):] + keys[:(r + p) % len(keys)])]
+
+
 def time_interleaved(problems: Mapping, g: float, methods: Mapping, repeats: int, interleave: str = "block",
                      clock: Callable[[], float] = time.perf_counter) -> pd.DataFrame:
     """Per-problem wall time of every method, interleaved on identical data.
@@ -136,13 +150,7 @@ def time_interleaved(problems: Mapping, g: float, methods: Mapping, repeats: int
     for m in keys:  # warm-up (solver build, kernels, caches), untimed
         _switch(_label(m)[1])
         _call(methods[m], problems[m][0], g)
-    if interleave == "block":
-        schedule = [(r, p, k, m) for r in range(repeats)
-                    for k, m in enumerate(keys[r % len(keys):] + keys[:r % len(keys)])
-                    for p in range(T)]
-    else:
-        schedule = [(r, p, k, m) for r in range(repeats) for p in range(T)
-                    for k, m in enumerate(keys[(r + p) % len(keys):] + keys[:(r + p) % len(keys)])]
+    schedule = _schedule(keys, T, repeats, interleave)
     rows = []
     was_enabled = gc.isenabled()
     gc.disable()
@@ -361,7 +369,6 @@ def filter_timing(batista_cost: Callable[[], pd.DataFrame], tereshkov_data: Mapp
     Returns ``filter, implementation, backend, runs, steps, seconds, us_per_step,
     us_per_run_step``.
     """
-    from accelcal.tereshkov.estimator import run_estimator
 
     backends = tuple(backends or available_backends())
     previous = kernels.choice()
@@ -396,8 +403,6 @@ def tereshkov_inputs(cfg: Mapping, runs: int, duration_s: float) -> dict:
     config (:func:`accelcal_repro.tereshkov.montecarlo.build_scenario`): ``gyro``,
     ``accel``, ``f_ext`` (R, n, 3), ``course``, ``speed`` (R, n), ``dt``, and the
     estimator ``params``."""
-    from .tereshkov.montecarlo import build_scenario, estimator_params
-    from .tereshkov.vehicle import sensor_chunks
 
     c = {k: (dict(v) if isinstance(v, dict) else v) for k, v in cfg.items()}
     c["scenarios"] = dict(c.get("scenarios", {})) | {"field": {"runs": int(runs), "duration_s": float(duration_s)}}
@@ -441,12 +446,25 @@ def compile_timing(calls: Sequence[str] | str = "all", python: str = sys.executa
                          "cached_s": [runs["cached"][c] for c in runs["cold"]]})
 
 
+def fill_kernel_cache(python: str = sys.executable) -> pd.DataFrame:
+    """Every first call of :data:`FIRST_CALLS` once, compiled (``ACCELCAL_KERNELS=numba``),
+    in a fresh process that writes the project's own numba disk cache (unlike
+    :func:`compile_timing`): the processes started after it load the kernels instead of
+    compiling them, or of waiting for one another's compilation
+    (:func:`accelcal.kernels.njit`'s lock).  Returns ``call, first_s`` (empty without numba)."""
+    if "numba" not in available_backends():
+        return pd.DataFrame(columns=["call", "first_s"])
+    out = subprocess.run([python, "-c", SCRIPT, json.dumps("all")], env=dict(os.environ, ACCELCAL_KERNELS="numba"),
+                         capture_output=True, text=True, check=True)
+    rows = json.loads(out.stdout.strip().splitlines()[-1])["rows"]
+    return pd.DataFrame(rows, columns=["call", "first_s"])
+
+
 # ----------------------------------------------------------------------------- stages
 def stage_job_seconds(benchmarks_dir) -> pd.DataFrame:
     """Per workflow stage: jobs, summed wall seconds and CPU seconds, largest peak memory,
     from Snakemake's benchmark files (:func:`accelcal_repro.report.read_benchmarks`) as
     they are now: the last run of each job."""
-    from .report import read_benchmarks, stage_times
 
     return stage_times(read_benchmarks(benchmarks_dir))
 
@@ -460,6 +478,7 @@ __all__ = [
     "SINGLE_METHODS",
     "available_backends",
     "compile_timing",
+    "fill_kernel_cache",
     "filter_timing",
     "make_problems",
     "preferred_backend",

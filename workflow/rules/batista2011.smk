@@ -8,6 +8,33 @@ SMALL; config["batista2011"] (section batista2011 of config/config.yaml)."""
 BATISTA = config["batista2011"]
 
 
+# The stage's config rules that its schema cannot express (one line naming the key).
+def _check_batista2011(b, cfg):
+    s = b["calibration"]["schedule"]
+    # accelcal_repro.batista2011.trajectory.StepSchedule: the window must miss the transition
+    if not s["transition_s"] <= s["window_start_s"] <= s["step_s"] - s["window_s"]:
+        raise _config_error("batista2011.calibration.schedule.window_start_s",
+                            f"the data window {s['window_start_s']}-{s['window_start_s'] + s['window_s']} s "
+                            f"must lie in the static part {s['transition_s']}-{s['step_s']} s of each step")
+    for part in ("calibration", "filter"):
+        if b[part]["jobs"] > b[part]["runs"]:
+            raise _config_error(f"batista2011.{part}.jobs",
+                                f"{b[part]['jobs']} jobs for {b[part]['runs']} runs would leave a job without runs")
+    f = b["filter"]
+    if f["steady_from_s"] >= f["duration_s"]:
+        raise _config_error("batista2011.filter.steady_from_s",
+                            f"{f['steady_from_s']} s leaves no steady state in a run of filter.duration_s = "
+                            f"{f['duration_s']} s")
+    # the observability runs use the filter's time grid; a longer window would be cut silently
+    if b["observability"]["gramian_window_s"] > f["duration_s"]:
+        raise _config_error("batista2011.observability.gramian_window_s",
+                            f"{b['observability']['gramian_window_s']} s exceeds the run, filter.duration_s = "
+                            f"{f['duration_s']} s")
+
+
+check_section("batista2011", _check_batista2011)
+
+
 def batista_cfg(*sections):
     """The stage config restricted to seed, g and ``sections`` (:func:`config_keys`)."""
     return config_keys(BATISTA, "seed", "g", *sections)
@@ -55,6 +82,8 @@ def batista_chunks(section, pattern):
 rule batista2011_calibration_mc:
     """One chunk of the Table I Monte Carlo (and the linear-only variant and the full LLS
     on the same simulated noise): the error of every run, data set, method and parameter."""
+    input:
+        kernel_cache=KERNEL_CACHE,
     output:
         f"{BATISTA_OUT}/chunks/calibration_errors_{{chunk}}.csv.gz",
     params:
@@ -101,6 +130,8 @@ rule batista2011_calibration_merge:
 rule batista2011_filter_mc:
     """One chunk of the filter Monte Carlo (shared gain sequence, per-run gyro readings):
     per-run errors and the mergeable statistics over its runs."""
+    input:
+        kernel_cache=KERNEL_CACHE,
     output:
         runs=f"{BATISTA_OUT}/chunks/filter_runs_{{chunk}}.csv.gz",
         moments=f"{BATISTA_OUT}/chunks/filter_moments_{{chunk}}.csv.gz",
@@ -143,6 +174,8 @@ rule batista2011_filter_merge:
 
 rule batista2011_filter_example:
     """One run of the exact filter (its own covariance): Figs. 4 and 5."""
+    input:
+        kernel_cache=KERNEL_CACHE,
     output:
         f"{BATISTA_OUT}/filter_example.csv.gz",
     params:
@@ -161,6 +194,8 @@ rule batista2011_filter_example:
 
 rule batista2011_error_budget:
     """Steady-state filter errors with one noise source at a time."""
+    input:
+        kernel_cache=KERNEL_CACHE,
     output:
         f"{BATISTA_OUT}/filter_error_budget.csv",
     params:
@@ -179,6 +214,8 @@ rule batista2011_error_budget:
 
 rule batista2011_filter_cost:
     """Wall time per filter step. threads = all cores: Snakemake runs it alone (clean clock)."""
+    input:
+        kernel_cache=KERNEL_CACHE,
     output:
         f"{BATISTA_OUT}/filter_cost.csv",
     params:
@@ -197,6 +234,8 @@ rule batista2011_filter_cost:
 
 rule batista2011_observability_mc:
     """The filter with ω along a fixed axis and with a changing axis; observability Gramian."""
+    input:
+        kernel_cache=KERNEL_CACHE,
     output:
         table=f"{BATISTA_OUT}/observability.csv",
         gramian=f"{BATISTA_OUT}/gramian.csv",

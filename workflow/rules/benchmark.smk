@@ -12,7 +12,18 @@ Needs from common.smk: declare_stage, results, figure_ids, log_path, bench_path,
 figure_outputs, SMALL.
 """
 
+from accelcal_repro.first_calls import FIRST_CALLS
+
 BENCHMARK = config["benchmark"]
+
+
+# The stage's config rules that its schema cannot express (one line naming the key).
+def _check_benchmark(b, cfg):
+    if b["compile_calls"] != "all":
+        _check_names(b["compile_calls"], FIRST_CALLS, "benchmark.compile_calls", "a first call of a compiled kernel")
+
+
+check_section("benchmark", _check_benchmark)
 TIMING_DIR = results("timing")
 BENCHMARK_FIGURE = "timing_benchmark"
 BENCHMARK_STAGE = declare_stage(
@@ -29,6 +40,8 @@ rule timing_filters:
 
     threads = all cores: Snakemake then runs it alone, so no other job perturbs the clock.
     """
+    input:
+        kernel_cache=KERNEL_CACHE,
     output:
         f"{TIMING_DIR}/filters.csv",
     params:

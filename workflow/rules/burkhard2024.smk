@@ -17,6 +17,24 @@ import re
 from accelcal_repro.burkhard2024.grid import experiments_from_config, grid_points
 
 BURKHARD = config["burkhard2024"]
+
+
+# The stage's config rules that its schema cannot express (one line naming the key).
+def _check_burkhard2024(b, cfg):
+    for name, exp in b["experiments"].items():
+        _check_estimators(exp["methods"], f"burkhard2024.experiments.{name}.methods")
+    timing = b["timing"]
+    for key, among in (("headline_interleave", "interleavings"), ("headline_n_poses", "n_poses")):
+        if timing[key] not in timing[among]:
+            raise _config_error(f"burkhard2024.timing.{key}", f"{timing[key]!r} is not in {among} {timing[among]}")
+    # the Fig. 1(a) claims are judged over the paper's noise range: it must hold a grid level
+    lo, hi = b["claims"]["paper_noise_range"]
+    if not any(lo <= s <= hi for s in b["experiments"]["fig1a"]["noise_std"]):
+        raise _config_error("burkhard2024.experiments.fig1a.noise_std",
+                            f"no noise level in claims.paper_noise_range [{lo}, {hi}]")
+
+
+check_section("burkhard2024", _check_burkhard2024)
 #: Monte Carlo jobs: point key (e.g. n24_s0.0001) -> {n_poses, noise_std, cases}
 BURKHARD_POINTS = grid_points(experiments_from_config(BURKHARD["experiments"]))
 BURKHARD_DIR = results("burkhard2024")
@@ -56,6 +74,8 @@ wildcard_constraints:
 
 rule burkhard2024_mc:
     """Monte Carlo of one grid point: every case (data set, g error, methods) on its data."""
+    input:
+        kernel_cache=KERNEL_CACHE,
     output:
         table=f"{BURKHARD_DIR}/mc/{{bk_point}}.csv.gz",
         timing=f"{BURKHARD_DIR}/mc_timing/{{bk_point}}.csv",
@@ -122,6 +142,8 @@ rule burkhard2024_timing_run:
 
     threads = all cores: Snakemake then runs it alone, so no other job perturbs the clock.
     """
+    input:
+        kernel_cache=KERNEL_CACHE,
     output:
         single=f"{BURKHARD_DIR}/timing.csv",
         batch=f"{BURKHARD_DIR}/timing_batch.csv",

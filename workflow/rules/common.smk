@@ -9,6 +9,10 @@ import jsonschema
 import yaml
 from snakemake.exceptions import WorkflowError
 
+# The core's estimator registry names the estimators a config may list; the reproductions
+# (accelcal_repro) are never imported while the workflow is parsed, only by its jobs.
+from accelcal.registry import ESTIMATORS, estimators
+
 
 # --------------------------------------------------------------------------- output paths
 # As pypsa-eur's resources()/logs(): the folder layout is decided here, the rules name files.
@@ -62,6 +66,12 @@ def config_keys(section, *paths):
 #: Outputs one stage makes and another reads (measured -> discrepancy).
 MEASURED_CSV = results("measured/{recording}.csv")  # a recording as the canonical CSV of the CLI
 MEASURED_SUMMARY = results("measured/summary.csv")
+
+
+#: The numba disk cache filled once (rule kernel_cache, workflow/rules/kernels.smk): an input
+#: of every job that calls compiled kernels, so that they load them instead of each
+#: compiling them (or waiting for one another's compilation) at the start of a fresh clone.
+KERNEL_CACHE = results("timing/kernel_cache.csv")
 
 
 def measured_data_dir():
@@ -168,8 +178,9 @@ def _validate(cfg, schema_path, prefix=""):
 
 def check_config(cfg, schema):
     """Validate ``cfg`` against the JSON schema, each stage's section against the stage's
-    own schema (``workflow/schemas/<key>.schema.yaml``, where one exists), then the rules a
-    schema cannot express (which may compare sections, so they run once all are valid)."""
+    own schema (``workflow/schemas/<key>.schema.yaml``, where one exists).  The rules a
+    schema cannot express are the stages' own (:func:`check_section`, in each rule file),
+    run when the file is included, once every section passed its schema."""
     _validate(cfg, schema)
     schemas = os.path.join(workflow.basedir, "workflow", "schemas")
     for key in sorted(cfg):
@@ -177,9 +188,12 @@ def check_config(cfg, schema):
         if os.path.exists(stage_schema):
             _validate(cfg[key], stage_schema, prefix=key)
             _check_ranges(cfg[key], stage_schema, prefix=key)
-    for key in sorted(cfg):
-        if key in STAGE_RULES:
-            STAGE_RULES[key](cfg[key], cfg)
+
+
+def check_section(key, check):
+    """A stage's rules that its schema cannot express: ``check(section, config)`` raises a
+    one-line ConfigError naming the key (:func:`_config_error`)."""
+    check(config[key], config)
 
 
 def _ranges(schema, defs, path=()):
@@ -206,56 +220,6 @@ def _check_ranges(section, schema_path, prefix):
             raise _config_error(".".join((prefix, *path)), f"low end {lo} exceeds high end {hi}")
 
 
-def _check_batista2011(b, cfg):
-    s = b["calibration"]["schedule"]
-    # accelcal_repro.batista2011.trajectory.StepSchedule: the window must miss the transition
-    if not s["transition_s"] <= s["window_start_s"] <= s["step_s"] - s["window_s"]:
-        raise _config_error("batista2011.calibration.schedule.window_start_s",
-                            f"the data window {s['window_start_s']}-{s['window_start_s'] + s['window_s']} s "
-                            f"must lie in the static part {s['transition_s']}-{s['step_s']} s of each step")
-    for part in ("calibration", "filter"):
-        if b[part]["jobs"] > b[part]["runs"]:
-            raise _config_error(f"batista2011.{part}.jobs",
-                                f"{b[part]['jobs']} jobs for {b[part]['runs']} runs would leave a job without runs")
-    f = b["filter"]
-    if f["steady_from_s"] >= f["duration_s"]:
-        raise _config_error("batista2011.filter.steady_from_s",
-                            f"{f['steady_from_s']} s leaves no steady state in a run of filter.duration_s = "
-                            f"{f['duration_s']} s")
-    # the observability runs use the filter's time grid; a longer window would be cut silently
-    if b["observability"]["gramian_window_s"] > f["duration_s"]:
-        raise _config_error("batista2011.observability.gramian_window_s",
-                            f"{b['observability']['gramian_window_s']} s exceeds the run, filter.duration_s = "
-                            f"{f['duration_s']} s")
-
-
-def _check_tereshkov(t, cfg):
-    for part in ("monte_carlo", "sweep", "comparison"):
-        start, duration = t[part]["steady_state_from_s"], t[part]["duration_s"]
-        if start >= duration:
-            raise _config_error(f"tereshkov.{part}.steady_state_from_s",
-                                f"{start} s leaves no steady state in a run of {part}.duration_s = {duration} s")
-    # a job holds the runs r with r % jobs == job of every scenario it simulates
-    for part, scenarios in (("monte_carlo", ("field", "straight", "artificial")), ("sweep", None)):
-        runs = {sc: t["scenarios"][sc]["runs"] for sc in scenarios} if scenarios else {"sweep": t["sweep"]["runs"]}
-        fewest = min(runs, key=runs.get)
-        if t[part]["jobs"] > runs[fewest]:
-            raise _config_error(f"tereshkov.{part}.jobs",
-                                f"{t[part]['jobs']} jobs for the {runs[fewest]} runs of {fewest} would leave a job "
-                                "without runs")
-    e = t["estimator"]
-    if e["turn_rate_dps"] <= e["straight_rate_dps"]:
-        raise _config_error("tereshkov.estimator.turn_rate_dps",
-                            f"{e['turn_rate_dps']} must exceed straight_rate_dps = {e['straight_rate_dps']}")
-    # the external specific force is differenced GNSS velocity interpolated to the IMU samples
-    for where in ("imu.rate_hz", "comparison.imu_rate_hz"):
-        part, key = where.split(".")
-        rate = t[part][key]
-        if t["gnss"]["rate_hz"] > rate:
-            raise _config_error("tereshkov.gnss.rate_hz",
-                                f"{t['gnss']['rate_hz']} Hz exceeds the IMU rate {where} = {rate} Hz")
-
-
 def _check_names(names, known, where, what):
     """Every name of a config list is one of ``known`` (the schemas do not restate the
     registries: the names are checked here, against the code)."""
@@ -266,105 +230,7 @@ def _check_names(names, known, where, what):
 
 def _check_estimators(names, where):
     """Every name is a registered accelerometer estimator (accelcal.registry)."""
-    from accelcal.registry import estimators
-
     _check_names(names, [e.name for e in estimators("accelerometer")], where, "a registered estimator")
-
-
-def _check_measured(m, cfg):
-    for name, rec in m["recordings"].items():
-        _check_estimators(rec["estimators"], f"measured.recordings.{name}.estimators")
-    # The six static positions of the Ferraris session list (accelcal_repro.measured.sources.
-    # FERRARIS_STATIC) are fewer than the full models need (accelcal.registry: min_poses).
-    from accelcal.registry import ESTIMATORS
-    from accelcal_repro.measured.sources import FERRARIS_STATIC
-
-    ferraris = m["recordings"].get("imucal_ferraris")
-    if ferraris and ferraris["pose_selection"] == "section_list":
-        short = [e for e in ferraris["estimators"] if ESTIMATORS[e].min_poses > len(FERRARIS_STATIC)]
-        if short:
-            need = max(ESTIMATORS[e].min_poses for e in short)
-            raise _config_error("measured.recordings.imucal_ferraris.estimators",
-                                f"{', '.join(short)} need at least {need} poses, pose_selection 'section_list' "
-                                f"gives the session's {len(FERRARIS_STATIC)} static positions (bias-only "
-                                "estimators only)")
-
-
-def _check_burkhard2024(b, cfg):
-    for name, exp in b["experiments"].items():
-        _check_estimators(exp["methods"], f"burkhard2024.experiments.{name}.methods")
-    timing = b["timing"]
-    for key, among in (("headline_interleave", "interleavings"), ("headline_n_poses", "n_poses")):
-        if timing[key] not in timing[among]:
-            raise _config_error(f"burkhard2024.timing.{key}", f"{timing[key]!r} is not in {among} {timing[among]}")
-    # the Fig. 1(a) claims are judged over the paper's noise range: it must hold a grid level
-    lo, hi = b["claims"]["paper_noise_range"]
-    if not any(lo <= s <= hi for s in b["experiments"]["fig1a"]["noise_std"]):
-        raise _config_error("burkhard2024.experiments.fig1a.noise_std",
-                            f"no noise level in claims.paper_noise_range [{lo}, {hi}]")
-
-
-def fitted_to_xsens(bench):
-    """Whether a discrepancy benchmark profile is fitted to the Xsens session (its stochastic layer)."""
-    return any(p.get("fitted") in ("xsens_mti", "xsens_mti_joint") for p in bench["profiles"])
-
-
-def _check_discrepancy(d, cfg):
-    bench, sessions = d["benchmark"], d["sessions"]
-    if not any(abs(s - bench["confusion_size_mde"]) < 1e-12 for s in bench["sizes_mde"]):
-        raise _config_error("discrepancy.benchmark.confusion_size_mde",
-                            f"{bench['confusion_size_mde']} is not in sizes_mde {bench['sizes_mde']}")
-    measured = cfg["measured"]["recordings"]
-    missing = [r for r in d["recordings"] if r not in measured]
-    if missing:
-        raise _config_error("discrepancy.recordings", f"{', '.join(missing)} not in measured.recordings")
-    profiles = [p["name"] for p in bench["profiles"]]
-    if len(set(profiles)) != len(profiles):
-        raise _config_error("discrepancy.benchmark.profiles", "profile names must be distinct")
-    unknown = [p for p in bench["power_curve"]["profiles"] if p not in profiles]
-    if unknown:
-        raise _config_error("discrepancy.benchmark.power_curve.profiles", f"{', '.join(unknown)} not in profiles")
-    few = [r for r in sessions["few_poses"] if r not in measured]
-    if few:
-        raise _config_error("discrepancy.sessions.few_poses", f"{', '.join(few)} not in measured.recordings")
-    for group, members in sessions["same_imu"].items():
-        missing = [m for m in members if m not in d["recordings"]]
-        if missing:
-            raise _config_error(f"discrepancy.sessions.same_imu.{group}",
-                                f"{', '.join(missing)} not in discrepancy.recordings")
-    if fitted_to_xsens(bench) and "xsens_mti" not in d["recordings"]:
-        raise _config_error("discrepancy.benchmark.profiles",
-                            "a profile is fitted to xsens_mti, which is not in discrepancy.recordings")
-
-
-def _check_benchmark(b, cfg):
-    if b["compile_calls"] != "all":
-        from accelcal_repro.first_calls import FIRST_CALLS
-
-        _check_names(b["compile_calls"], FIRST_CALLS, "benchmark.compile_calls", "a first call of a compiled kernel")
-
-
-def _check_gyro(g, cfg):
-    # IMU-TK's run from source is read, never made, by the workflow: the file must exist
-    if g["imutk_run"] and not os.path.isfile(os.path.join(workflow.basedir, g["imutk_run"])):
-        raise _config_error("gyro.imutk_run", f"{g['imutk_run']}: no such file (tools/gyro_peers.py run-imutk "
-                            "writes it; null compares with IMU-TK's published results only)")
-    from accelcal_repro.gyro.sessions import SESSIONS
-
-    _check_names(g["sessions"], list(SESSIONS), "gyro.sessions", "a gyro session")
-
-
-def _check_noise(n, cfg):
-    names = [c["name"] for c in n["coverage"]["configurations"]]
-    if len(set(names)) != len(names):
-        raise _config_error("noise.coverage.configurations", "configuration names must be distinct")
-
-
-#: Rules a stage's schema cannot express, run once every section passed its schema:
-#: ``rule(section, config)``, a one-line ConfigError naming the key.
-STAGE_RULES = {"batista2011": _check_batista2011, "tereshkov": _check_tereshkov, "measured": _check_measured,
-               "burkhard2024": _check_burkhard2024, "discrepancy": _check_discrepancy,
-               "benchmark": _check_benchmark, "gyro": _check_gyro, "noise": _check_noise}
 
 
 def figure_outputs(figure_id, caption, category):

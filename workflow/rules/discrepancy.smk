@@ -23,6 +23,43 @@ recording), read from the config only, so that the includes work in any order.
 """
 
 DISCREPANCY = config["discrepancy"]
+
+
+# The stage's config rules that its schema cannot express (one line naming the key).
+def fitted_to_xsens(bench):
+    """Whether a discrepancy benchmark profile is fitted to the Xsens session (its stochastic layer)."""
+    return any(p.get("fitted") in ("xsens_mti", "xsens_mti_joint") for p in bench["profiles"])
+
+
+def _check_discrepancy(d, cfg):
+    bench, sessions = d["benchmark"], d["sessions"]
+    if not any(abs(s - bench["confusion_size_mde"]) < 1e-12 for s in bench["sizes_mde"]):
+        raise _config_error("discrepancy.benchmark.confusion_size_mde",
+                            f"{bench['confusion_size_mde']} is not in sizes_mde {bench['sizes_mde']}")
+    measured = cfg["measured"]["recordings"]
+    missing = [r for r in d["recordings"] if r not in measured]
+    if missing:
+        raise _config_error("discrepancy.recordings", f"{', '.join(missing)} not in measured.recordings")
+    profiles = [p["name"] for p in bench["profiles"]]
+    if len(set(profiles)) != len(profiles):
+        raise _config_error("discrepancy.benchmark.profiles", "profile names must be distinct")
+    unknown = [p for p in bench["power_curve"]["profiles"] if p not in profiles]
+    if unknown:
+        raise _config_error("discrepancy.benchmark.power_curve.profiles", f"{', '.join(unknown)} not in profiles")
+    few = [r for r in sessions["few_poses"] if r not in measured]
+    if few:
+        raise _config_error("discrepancy.sessions.few_poses", f"{', '.join(few)} not in measured.recordings")
+    for group, members in sessions["same_imu"].items():
+        missing = [m for m in members if m not in d["recordings"]]
+        if missing:
+            raise _config_error(f"discrepancy.sessions.same_imu.{group}",
+                                f"{', '.join(missing)} not in discrepancy.recordings")
+    if fitted_to_xsens(bench) and "xsens_mti" not in d["recordings"]:
+        raise _config_error("discrepancy.benchmark.profiles",
+                            "a profile is fitted to xsens_mti, which is not in discrepancy.recordings")
+
+
+check_section("discrepancy", _check_discrepancy)
 DISCREPANCY_SESSIONS = DISCREPANCY["sessions"]
 DISCREPANCY_BENCH = DISCREPANCY["benchmark"]
 DISCREPANCY_CHUNKS = list(range(DISCREPANCY_BENCH["chunks"]))
@@ -170,6 +207,7 @@ rule discrepancy_profiles:
         models=ADIS_MODELS,
         xsens=per_recording(RECORDING_REPORT, ["xsens_mti"]) if DISCREPANCY_NEEDS_XSENS else [],
         record=[ADIS_NOISE] if DISCREPANCY_NEEDS_RECORD else [],
+        kernel_cache=KERNEL_CACHE,
     output:
         profiles=f"{BENCH_DIR}/profiles.json",
         table=BENCH_PROFILES,
@@ -193,6 +231,7 @@ rule discrepancy_chunk:
     input:
         profiles=f"{BENCH_DIR}/profiles.json",
         record=[ADIS_NOISE] if DISCREPANCY_NEEDS_RECORD else [],
+        kernel_cache=KERNEL_CACHE,
     output:
         key=BENCH_KEY,
         detections=BENCH_DETECTIONS,
@@ -291,6 +330,7 @@ rule discrepancy_session:
     input:
         report=RECORDING_REPORT,
         csv=MEASURED_CSV,
+        kernel_cache=KERNEL_CACHE,
     output:
         sims=SESSION_RESIM,
         gap=SESSION_GAP,
@@ -313,6 +353,7 @@ rule discrepancy_few_poses:
     input:
         csv=MEASURED_CSV,
         measured_summary=MEASURED_SUMMARY,
+        kernel_cache=KERNEL_CACHE,
     output:
         f"{SESSIONS_DIR}/{{recording}}_few_poses.json",
     params:

@@ -19,9 +19,17 @@ figure_outputs, measured_data_dir, SMALL; the `measured` config's resources_dir.
 
 import os
 
-from accelcal_repro.gyro.sessions import files_needed
+from accelcal_repro.gyro.sessions import SESSIONS, files_needed
 
 GYRO = config["gyro"]
+
+
+# The stage's config rules that its schema cannot express (one line naming the key).
+def _check_gyro(g, cfg):
+    _check_names(g["sessions"], list(SESSIONS), "gyro.sessions", "a gyro session")
+
+
+check_section("gyro", _check_gyro)
 GYRO_DIR = results("gyro")
 #: {dataset: files} of the configured sessions (and the CTU rotations).
 GYRO_DATASETS = files_needed(GYRO["sessions"])

@@ -12,7 +12,29 @@ MEASURED_CSV, MEASURED_SUMMARY, measured_data_dir, SMALL.
 
 import re
 
+from accelcal_repro.measured.sources import FERRARIS_STATIC
+
 MEASURED = config["measured"]
+
+
+# The stage's config rules that its schema cannot express (one line naming the key).
+def _check_measured(m, cfg):
+    for name, rec in m["recordings"].items():
+        _check_estimators(rec["estimators"], f"measured.recordings.{name}.estimators")
+    # The six static positions of the Ferraris session list (accelcal_repro.measured.sources.
+    # FERRARIS_STATIC) are fewer than the full models need (accelcal.registry: min_poses).
+    ferraris = m["recordings"].get("imucal_ferraris")
+    if ferraris and ferraris["pose_selection"] == "section_list":
+        short = [e for e in ferraris["estimators"] if ESTIMATORS[e].min_poses > len(FERRARIS_STATIC)]
+        if short:
+            need = max(ESTIMATORS[e].min_poses for e in short)
+            raise _config_error("measured.recordings.imucal_ferraris.estimators",
+                                f"{', '.join(short)} need at least {need} poses, pose_selection 'section_list' "
+                                f"gives the session's {len(FERRARIS_STATIC)} static positions (bias-only "
+                                "estimators only)")
+
+
+check_section("measured", _check_measured)
 MEASURED_RECORDINGS = list(MEASURED["recordings"])
 MEASURED_TABLES = ("poses", "params", "pose_errors", "summary", "agreement", "nominal")
 #: The manifest of one recording's files (measured_fetch), read by every job on the recording.
@@ -79,6 +101,7 @@ rule measured_calibrate:
     the original file, read with the readers of `accelcal calibrate`."""
     input:
         manifest=MEASURED_MANIFEST,
+        kernel_cache=KERNEL_CACHE,
     output:
         **{t: results(f"measured/{{recording}}/{t}.csv") for t in MEASURED_TABLES},
     params:

@@ -18,6 +18,16 @@ figure_files, SMALL.
 import re
 
 NOISE = config["noise"]
+
+
+# The stage's config rules that its schema cannot express (one line naming the key).
+def _check_noise(n, cfg):
+    names = [c["name"] for c in n["coverage"]["configurations"]]
+    if len(set(names)) != len(names):
+        raise _config_error("noise.coverage.configurations", "configuration names must be distinct")
+
+
+check_section("noise", _check_noise)
 NOISE_DIR = results("noise")
 NOISE_ADIS_DIR = f"{NOISE_DIR}/adis16405"
 NOISE_DATASHEET = f"{NOISE_ADIS_DIR}/datasheet.csv"

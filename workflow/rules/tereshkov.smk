@@ -8,6 +8,37 @@ SMALL.
 """
 
 TERESHKOV = config["tereshkov"]
+
+
+# The stage's config rules that its schema cannot express (one line naming the key).
+def _check_tereshkov(t, cfg):
+    for part in ("monte_carlo", "sweep", "comparison"):
+        start, duration = t[part]["steady_state_from_s"], t[part]["duration_s"]
+        if start >= duration:
+            raise _config_error(f"tereshkov.{part}.steady_state_from_s",
+                                f"{start} s leaves no steady state in a run of {part}.duration_s = {duration} s")
+    # a job holds the runs r with r % jobs == job of every scenario it simulates
+    for part, scenarios in (("monte_carlo", ("field", "straight", "artificial")), ("sweep", None)):
+        runs = {sc: t["scenarios"][sc]["runs"] for sc in scenarios} if scenarios else {"sweep": t["sweep"]["runs"]}
+        fewest = min(runs, key=runs.get)
+        if t[part]["jobs"] > runs[fewest]:
+            raise _config_error(f"tereshkov.{part}.jobs",
+                                f"{t[part]['jobs']} jobs for the {runs[fewest]} runs of {fewest} would leave a job "
+                                "without runs")
+    e = t["estimator"]
+    if e["turn_rate_dps"] <= e["straight_rate_dps"]:
+        raise _config_error("tereshkov.estimator.turn_rate_dps",
+                            f"{e['turn_rate_dps']} must exceed straight_rate_dps = {e['straight_rate_dps']}")
+    # the external specific force is differenced GNSS velocity interpolated to the IMU samples
+    for where in ("imu.rate_hz", "comparison.imu_rate_hz"):
+        part, key = where.split(".")
+        rate = t[part][key]
+        if t["gnss"]["rate_hz"] > rate:
+            raise _config_error("tereshkov.gnss.rate_hz",
+                                f"{t['gnss']['rate_hz']} Hz exceeds the IMU rate {where} = {rate} Hz")
+
+
+check_section("tereshkov", _check_tereshkov)
 TERESHKOV_DIR = results("tereshkov")
 TERESHKOV_STAGE = declare_stage(
     name="tereshkov",
@@ -28,6 +59,8 @@ rule tereshkov_simulate:
     """One job's share of the field, straight-only and artificial-bias Monte Carlo runs
     (run r in job r mod monte_carlo.jobs) through one estimator loop: tidy tables
     (run × time × sensor × axis) and the wall times."""
+    input:
+        kernel_cache=KERNEL_CACHE,
     output:
         **{sc: f"{TERESHKOV_DIR}/chunks/{sc}_{{job}}.csv.gz" for sc in TERESHKOV_MAIN},
         timing=f"{TERESHKOV_DIR}/chunks/timing_main_{{job}}.csv",
@@ -53,6 +86,8 @@ rule tereshkov_simulate:
 rule tereshkov_sweep:
     """One job's share of the installation-angle sweep (same paths, biases and noise at
     every angle)."""
+    input:
+        kernel_cache=KERNEL_CACHE,
     output:
         sweep=f"{TERESHKOV_DIR}/chunks/sweep_{{job}}.csv.gz",
         timing=f"{TERESHKOV_DIR}/chunks/timing_sweep_{{job}}.csv",
@@ -280,6 +315,8 @@ rule tereshkov_installation_figure:
 rule tereshkov_comparison:
     """Same runs, same IMU data: Tereshkov (GNSS specific force) vs the Batista filter
     (body-frame velocity), bias errors and compute cost per step."""
+    input:
+        kernel_cache=KERNEL_CACHE,
     output:
         table=f"{TERESHKOV_DIR}/comparison.csv.gz",
         summary=f"{TERESHKOV_DIR}/comparison_summary.csv",

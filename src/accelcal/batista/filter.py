@@ -263,6 +263,30 @@ def _initial_covariance(P0) -> np.ndarray:
     return _check_shape("P0", P, (9, 9))
 
 
+def _kalman_numpy(dt, a_m, omega_m, y, x, P, xi, Rd, keep, xs, ss):
+    """The numpy reference of the compiled filter kernel: :func:`kalman_filter`'s recursion
+    from ``(x, P)`` at ``t[0]``, writing the kept estimates and their σ into ``xs``, ``ss``
+    (row 0 already holds ``t[0]``'s)."""
+    n = len(a_m)
+    wbar = 0.5 * (omega_m[1:] + omega_m[:-1])
+    Phi_all, G0_all, G1_all = transition(wbar, dt)
+    Q_all = process_noise(wbar, dt, xi)
+    j = 1
+    for k in range(n - 1):
+        Phi = Phi_all[k]
+        x = Phi @ x + G0_all[k] @ a_m[k] + G1_all[k] @ a_m[k + 1]
+        P = Phi @ P @ Phi.T + Q_all[k]
+        S = P[:3, :3] + Rd
+        K = np.linalg.solve(S, P[:3, :]).T  # P Cᵀ S⁻¹ (S symmetric)
+        x = x + K @ (y[k + 1] - x[:3])
+        IKC = np.eye(9)
+        IKC[:, :3] -= K
+        P = IKC @ P @ IKC.T + K @ Rd @ K.T  # Joseph form
+        if j < len(keep) and keep[j] == k + 1:
+            xs[j], ss[j] = x, np.sqrt(np.diag(P))
+            j += 1
+
+
 def kalman_filter(t, a_m, omega_m, y, x0, P0, xi=PAPER_XI, theta=PAPER_THETA, record_every: int = 1) -> FilterResult:
     """The time-varying Kalman filter of Sec. IV for one run (its own covariance).
 
@@ -308,23 +332,7 @@ def kalman_filter(t, a_m, omega_m, y, x0, P0, xi=PAPER_XI, theta=PAPER_THETA, re
         c = np.ascontiguousarray
         K.kalman_filter(dt, c(a_m), c(omega_m), c(y), x, c(P), c(Rd, dtype=float), qv, qg, qb, mask, xs, ss)
         return FilterResult(t=t[keep], x=xs, sigma=ss)
-    wbar = 0.5 * (omega_m[1:] + omega_m[:-1])
-    Phi_all, G0_all, G1_all = transition(wbar, dt)
-    Q_all = process_noise(wbar, dt, xi)
-    j = 1
-    for k in range(n - 1):
-        Phi = Phi_all[k]
-        x = Phi @ x + G0_all[k] @ a_m[k] + G1_all[k] @ a_m[k + 1]
-        P = Phi @ P @ Phi.T + Q_all[k]
-        S = P[:3, :3] + Rd
-        K = np.linalg.solve(S, P[:3, :]).T  # P Cᵀ S⁻¹ (S symmetric)
-        x = x + K @ (y[k + 1] - x[:3])
-        IKC = np.eye(9)
-        IKC[:, :3] -= K
-        P = IKC @ P @ IKC.T + K @ Rd @ K.T  # Joseph form
-        if j < len(keep) and keep[j] == k + 1:
-            xs[j], ss[j] = x, np.sqrt(np.diag(P))
-            j += 1
+    _kalman_numpy(dt, a_m, omega_m, y, x, P, xi, Rd, keep, xs, ss)
     return FilterResult(t=t[keep], x=xs, sigma=ss)
 
 

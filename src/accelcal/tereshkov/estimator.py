@@ -57,6 +57,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -256,96 +257,117 @@ def run_estimator(gyro, accel, f_ext, course, speed, dt: float, params: Tereshko
         if state.C.shape != (R, 3, 3):
             raise InputShapeError(f"state is for {state.C.shape[0]} runs, data for {R}")
 
-    p = params
-    k, g, tau = p.k, p.g, p.tau
-    kh = 1.0 / p.heading_tau
-    cg, ca, aw = dt / p.gyro_filter_s, dt / p.accel_filter_s, dt / p.rate_filter_s
-    thr_s, thr_t = p.straight_rate_dps * DEG, p.turn_rate_dps * DEG
-    settle_s, settle_t, vmin = p.straight_settle_s, p.turn_settle_s, p.min_speed
-    ng = 3 if p.estimate_gyro_z else 2
-    fb = p.accel_feedback
-    eq13 = p.accel_formula == "eq13"
     K = compiled(_KERNELS)
     if K is not None:
-        return _run_compiled(K, gyro, accel, f_ext, course, speed > vmin, dt, p, state, record_every)
+        return _run_compiled(K, gyro, accel, f_ext, course, speed > params.min_speed, dt, params, state, record_every)
+    return _run_numpy(gyro, accel, f_ext, course, speed > params.min_speed, dt, params, state, record_every)
 
-    # Structure of arrays, runs last: every per-step operation is one numpy call on
-    # (3, R) or (3, 3, R) blocks (the loop cost is the number of calls, not the runs).
+
+def _run_numpy(gyro, accel, f_ext, course, moving, dt, p: TereshkovParams, state: EstimatorState,
+               record_every: int):
+    """The numpy reference of the compiled kernel (:func:`run_estimator`'s arguments, checked).
+
+    Structure of arrays, runs last: every per-step operation is one numpy call on (3, R) or
+    (3, 3, R) blocks (the loop cost is the number of calls, not the runs)."""
+    R, n, _ = gyro.shape
     W_in = np.ascontiguousarray(gyro.transpose(1, 2, 0))
     F_in = np.ascontiguousarray(accel.transpose(1, 2, 0))
     E_in = np.ascontiguousarray(f_ext.transpose(1, 2, 0))
     CO = np.ascontiguousarray(course.T)
-    MOV = np.ascontiguousarray((speed > vmin).T)
+    MOV = np.ascontiguousarray(moving.T)
     C = np.ascontiguousarray(state.C.transpose(1, 2, 0))
-    bg = state.gyro_bias.T.copy()
-    ba = state.accel_bias.T.copy()
-    wzf, mode, mtime = state.rate_z.copy(), state.mode.copy(), state.mode_time.copy()
-    gtime, atime = state.gyro_time.copy(), state.accel_time.copy()
-
+    v = SimpleNamespace(bg=state.gyro_bias.T.copy(), ba=state.accel_bias.T.copy(), wzf=state.rate_z.copy(),
+                        mode=state.mode.copy(), mtime=state.mode_time.copy(), gtime=state.gyro_time.copy(),
+                        atime=state.accel_time.copy())
     rec_idx = [i for i in range(n) if (state.k + i) % record_every == 0]
-    m = len(rec_idx)
-    out_bg = np.empty((m, 3, R)); out_ba = np.empty((m, 3, R)); out_u = np.empty((m, 3, R))
-    out_mode = np.empty((m, R), dtype=np.int8); out_C = np.empty((m, 3, 3, R)); out_mt = np.empty((m, R))
-    out_gt = np.empty((m, R)); out_at = np.empty((m, R))
-    wp = np.zeros((3, R))
-    r = 0
+    out = _NumpyRecord(len(rec_idx), R)
+    kh = 1.0 / p.heading_tau
     for i in range(n):
-        w = W_in[i] - bg
-        f = F_in[i] - ba if fb else F_in[i]
+        w = W_in[i] - v.bg
+        f = F_in[i] - v.ba if p.accel_feedback else F_in[i]
         fp = (C * f).sum(1)  # (2)  f_p = C f
         d = E_in[i] - fp
         herr = np.arctan2(C[1, 0], C[0, 0]) - CO[i]
         herr = (herr + np.pi) % (2 * np.pi) - np.pi
-        wp[0] = -k * d[1]  # (3)  ω_p = -k̃_p (f_ext - f_p)
-        wp[1] = k * d[0]
+        wp = np.empty((3, R))
+        wp[0] = -p.k * d[1]  # (3)  ω_p = -k̃_p (f_ext - f_p)
+        wp[1] = p.k * d[0]
         wp[2] = np.where(MOV[i], kh * herr, 0.0)  # heading held by the GNSS course
         u = (C * wp[:, None]).sum(0)  # u = Cᵀ δω_p
-        if r < m and rec_idx[r] == i:
-            out_bg[r] = bg; out_ba[r] = ba; out_u[r] = u; out_mode[r] = mode; out_mt[r] = mtime
-            out_C[r] = C; out_gt[r] = gtime; out_at[r] = atime
-            r += 1
-        # gating on the low-passed compensated body z rate
-        wzf += aw * (w[2] - wzf)
-        awz = np.abs(wzf)
-        straight = MOV[i] & (awz < thr_s)
-        turn = MOV[i] & (awz > thr_t)
-        new_mode = np.where(straight, STRAIGHT, np.where(turn, TURN, OTHER))
-        mtime = np.where(new_mode == mode, mtime + dt, 0.0)
-        mode = new_mode
-        upd_g = straight & (mtime >= settle_s) & p.update_gyro
-        upd_a = turn & (mtime >= settle_t) & p.update_accel
-        if upd_g.any():
-            bg[:ng] += (cg * upd_g) * u[:ng]  # (12) through the low-pass filter
-            gtime += dt * upd_g
-        if upd_a.any():
-            if eq13:
-                est = _accel_eq13(w, wp, C, u, p)
-            else:
-                est = _eq14(u, np.where(upd_a, wzf, 1.0), g, tau)
-            step = est if fb else est - ba[:2]
-            ba[:2] += (ca * upd_a) * step
-            atime += dt * upd_a
-        # (1): C <- exp(-ω̃_p dt) C exp(ω̃_b dt); body rotation to 4th order in the angle,
-        # the platform rotation (|ω_p dt| < 1e-3 rad) to first order, re-orthonormalised
-        # every RENORMALISE_EVERY steps.
-        a = w * dt
-        A = (_SKEW @ a).reshape(3, 3, R)
-        th2 = (a * a).sum(0)
-        CA = (C[:, :, None] * A[None]).sum(1)
-        C = C + (1 - th2 * (1 / 6 - th2 / 120)) * CA + (0.5 - th2 * (1 / 24 - th2 / 720)) * (CA[:, :, None] * A[None]).sum(1)
-        P = (_SKEW @ (-wp * dt)).reshape(3, 3, R)
-        C = C + (P[:, :, None] * C[None]).sum(1)
-        if (state.k + i + 1) % RENORMALISE_EVERY == 0:
-            C = np.ascontiguousarray(_orthonormalise(C.transpose(2, 0, 1)).transpose(1, 2, 0))
+        if out.r < len(rec_idx) and rec_idx[out.r] == i:
+            out.take(v, u, C)
+        _update_biases(v, w, wp, C, u, MOV[i], dt, p)
+        C = _propagate(C, w, wp, dt, (state.k + i + 1) % RENORMALISE_EVERY == 0)
     C = C.transpose(2, 0, 1).copy()
-
-    new_state = EstimatorState(C=C, gyro_bias=bg.T.copy(), accel_bias=ba.T.copy(), rate_z=wzf, mode=mode,
-                               mode_time=mtime, gyro_time=gtime, accel_time=atime, k=state.k + n)
+    new_state = EstimatorState(C=C, gyro_bias=v.bg.T.copy(), accel_bias=v.ba.T.copy(), rate_z=v.wzf, mode=v.mode,
+                               mode_time=v.mtime, gyro_time=v.gtime, accel_time=v.atime, k=state.k + n)
     t_rec = (state.k + np.array(rec_idx, dtype=float)) * dt
-    res = TereshkovResult(t=t_rec, gyro_bias=out_bg.transpose(2, 0, 1), accel_bias=out_ba.transpose(2, 0, 1),
-                          u=out_u.transpose(2, 0, 1), mode=out_mode.T, mode_time=out_mt.T, gyro_time=out_gt.T, accel_time=out_at.T,
-                          C=out_C.transpose(3, 0, 1, 2), params=params)
-    return res, new_state
+    return out.result(t_rec, p), new_state
+
+
+class _NumpyRecord:
+    """The recorded states of :func:`_run_numpy`, runs last until :meth:`result`."""
+
+    def __init__(self, m: int, R: int):
+        self.r = 0
+        self.bg, self.ba, self.u = np.empty((m, 3, R)), np.empty((m, 3, R)), np.empty((m, 3, R))
+        self.mode, self.C = np.empty((m, R), dtype=np.int8), np.empty((m, 3, 3, R))
+        self.mt, self.gt, self.at = np.empty((m, R)), np.empty((m, R)), np.empty((m, R))
+
+    def take(self, v, u, C):
+        r = self.r
+        self.bg[r] = v.bg; self.ba[r] = v.ba; self.u[r] = u; self.mode[r] = v.mode; self.mt[r] = v.mtime
+        self.C[r] = C; self.gt[r] = v.gtime; self.at[r] = v.atime
+        self.r += 1
+
+    def result(self, t_rec, params) -> TereshkovResult:
+        return TereshkovResult(t=t_rec, gyro_bias=self.bg.transpose(2, 0, 1), accel_bias=self.ba.transpose(2, 0, 1),
+                               u=self.u.transpose(2, 0, 1), mode=self.mode.T, mode_time=self.mt.T,
+                               gyro_time=self.gt.T, accel_time=self.at.T, C=self.C.transpose(3, 0, 1, 2),
+                               params=params)
+
+
+def _update_biases(v, w, wp, C, u, moving, dt: float, p: TereshkovParams):
+    """One step of the motion gating and the bias updates of :func:`_run_numpy` (``v`` in place)."""
+    # gating on the low-passed compensated body z rate
+    v.wzf += (dt / p.rate_filter_s) * (w[2] - v.wzf)
+    awz = np.abs(v.wzf)
+    straight = moving & (awz < p.straight_rate_dps * DEG)
+    turn = moving & (awz > p.turn_rate_dps * DEG)
+    new_mode = np.where(straight, STRAIGHT, np.where(turn, TURN, OTHER))
+    v.mtime = np.where(new_mode == v.mode, v.mtime + dt, 0.0)
+    v.mode = new_mode
+    upd_g = straight & (v.mtime >= p.straight_settle_s) & p.update_gyro
+    upd_a = turn & (v.mtime >= p.turn_settle_s) & p.update_accel
+    if upd_g.any():
+        ng = 3 if p.estimate_gyro_z else 2
+        v.bg[:ng] += ((dt / p.gyro_filter_s) * upd_g) * u[:ng]  # (12) through the low-pass filter
+        v.gtime += dt * upd_g
+    if upd_a.any():
+        if p.accel_formula == "eq13":
+            est = _accel_eq13(w, wp, C, u, p)
+        else:
+            est = _eq14(u, np.where(upd_a, v.wzf, 1.0), p.g, p.tau)
+        step = est if p.accel_feedback else est - v.ba[:2]
+        v.ba[:2] += ((dt / p.accel_filter_s) * upd_a) * step
+        v.atime += dt * upd_a
+
+
+def _propagate(C, w, wp, dt: float, renormalise: bool):
+    """(1): C <- exp(-ω̃_p dt) C exp(ω̃_b dt); body rotation to 4th order in the angle, the
+    platform rotation (|ω_p dt| < 1e-3 rad) to first order, re-orthonormalised when asked
+    (every RENORMALISE_EVERY steps)."""
+    R = C.shape[-1]
+    a = w * dt
+    A = (_SKEW @ a).reshape(3, 3, R)
+    th2 = (a * a).sum(0)
+    CA = (C[:, :, None] * A[None]).sum(1)
+    C = C + (1 - th2 * (1 / 6 - th2 / 120)) * CA + (0.5 - th2 * (1 / 24 - th2 / 720)) * (CA[:, :, None] * A[None]).sum(1)
+    P = (_SKEW @ (-wp * dt)).reshape(3, 3, R)
+    C = C + (P[:, :, None] * C[None]).sum(1)
+    if renormalise:
+        C = np.ascontiguousarray(_orthonormalise(C.transpose(2, 0, 1)).transpose(1, 2, 0))
+    return C
 
 
 def _run_compiled(K, gyro, accel, f_ext, course, moving, dt, p: TereshkovParams, state: EstimatorState,
@@ -441,6 +463,21 @@ def accel_bias_from_torque(u, rate_z, params: TereshkovParams | None = None) -> 
                          np.zeros_like(u[..., 0])], axis=-1)
 
 
+def _propagate_scalar(C, a0, a1, a2, q0, q1, q2):
+    """C <- (I + P) C (I + s A + c A²), A = skew(a) (a = ω_b dt), P = skew(q) (q = -ω_p dt): the
+    attitude step of :func:`run_estimator_scalar` in plain floats (lists of rows)."""
+    th2 = a0 * a0 + a1 * a1 + a2 * a2
+    s = 1 - th2 * (1 / 6 - th2 / 120)
+    c = 0.5 - th2 * (1 / 24 - th2 / 720)
+    B = [[1 - c * (a1 * a1 + a2 * a2), -s * a2 + c * a0 * a1, s * a1 + c * a0 * a2],
+         [s * a2 + c * a0 * a1, 1 - c * (a0 * a0 + a2 * a2), -s * a0 + c * a1 * a2],
+         [-s * a1 + c * a0 * a2, s * a0 + c * a1 * a2, 1 - c * (a0 * a0 + a1 * a1)]]
+    CB = [[C[r][0] * B[0][j] + C[r][1] * B[1][j] + C[r][2] * B[2][j] for j in range(3)] for r in range(3)]
+    return [[CB[0][j] - q2 * CB[1][j] + q1 * CB[2][j] for j in range(3)],
+            [q2 * CB[0][j] + CB[1][j] - q0 * CB[2][j] for j in range(3)],
+            [-q1 * CB[0][j] + q0 * CB[1][j] + CB[2][j] for j in range(3)]]
+
+
 def run_estimator_scalar(gyro, accel, f_ext, course, speed, dt: float, params: TereshkovParams | None = None,
                          record_every: int = 100) -> TereshkovResult:
     """The same estimator for one run in plain Python floats (no numpy in the loop).
@@ -452,11 +489,7 @@ def run_estimator_scalar(gyro, accel, f_ext, course, speed, dt: float, params: T
     first order, re-orthonormalised every :data:`RENORMALISE_EVERY` steps).
     """
     p = params or TereshkovParams()
-    W = np.asarray(gyro, float)
-    F = np.asarray(accel, float)
-    E = np.asarray(f_ext, float)
-    CO = np.asarray(course, float)
-    SP = np.asarray(speed, float)
+    W, F, E, CO, SP = (np.asarray(x, float) for x in (gyro, accel, f_ext, course, speed))
     n = len(W)
     if W.shape != (n, 3) or F.shape != (n, 3) or E.shape != (n, 3) or CO.shape != (n,) or SP.shape != (n,):
         raise InputShapeError("scalar estimator: gyro, accel, f_ext must be (n, 3), course and speed (n,)")
@@ -506,19 +539,7 @@ def run_estimator_scalar(gyro, accel, f_ext, course, speed, dt: float, params: T
             ba[0] += ca * ex
             ba[1] += ca * ey
             atime += dt
-        # C <- (I + P) C (I + s A + c A²), A = skew(w dt), P = skew(-ω_p dt)
-        a0, a1, a2 = w0 * dt, w1 * dt, w2 * dt
-        th2 = a0 * a0 + a1 * a1 + a2 * a2
-        s = 1 - th2 * (1 / 6 - th2 / 120)
-        c = 0.5 - th2 * (1 / 24 - th2 / 720)
-        B = [[1 - c * (a1 * a1 + a2 * a2), -s * a2 + c * a0 * a1, s * a1 + c * a0 * a2],
-             [s * a2 + c * a0 * a1, 1 - c * (a0 * a0 + a2 * a2), -s * a0 + c * a1 * a2],
-             [-s * a1 + c * a0 * a2, s * a0 + c * a1 * a2, 1 - c * (a0 * a0 + a1 * a1)]]
-        CB = [[C[r][0] * B[0][j] + C[r][1] * B[1][j] + C[r][2] * B[2][j] for j in range(3)] for r in range(3)]
-        q0, q1, q2 = -p0 * dt, -p1 * dt, -p2 * dt
-        C = [[CB[0][j] - q2 * CB[1][j] + q1 * CB[2][j] for j in range(3)],
-             [q2 * CB[0][j] + CB[1][j] - q0 * CB[2][j] for j in range(3)],
-             [-q1 * CB[0][j] + q0 * CB[1][j] + CB[2][j] for j in range(3)]]
+        C = _propagate_scalar(C, w0 * dt, w1 * dt, w2 * dt, -p0 * dt, -p1 * dt, -p2 * dt)
         if (i + 1) % RENORMALISE_EVERY == 0:
             C = _orthonormalise(np.array(C)[None])[0].tolist()
     a = lambda key: np.array(rec[key])[None]

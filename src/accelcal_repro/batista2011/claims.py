@@ -23,10 +23,12 @@ exceeds it: then the claim fails at any number of runs.
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 import pandas as pd
 
-from ..claims import COLUMNS, Claim, MinimumSample, resolution_minimum
+from ..claims import COLUMNS, Claim, ClaimRule, MinimumSample, judge_rules, resolution_minimum
 from accelcal.batista.filter import STATES
 
 PAPER = "batista2011"
@@ -110,22 +112,8 @@ def _largest(values: pd.Series):
 
 
 
-def calibration_claims(summary: pd.DataFrame, *, mean_threshold: float = 1e-9, std_threshold: float = 1e-7,
-                       t_max: float = 4.0, bias_vs_crlb: float = 0.1, method: str = "batista2011",
-                       data: str = "quadratic", source: str = "results/batista2011/calibration_summary.csv"
-                       ) -> list[dict]:
-    """Rows for Sec. V-A: mean error below 1e-9, unbiased, standard deviation below 1e-7.
-
-    Uses the 18 estimated parameters (F⁻¹, b', f2, ᵀg) of ``method`` on ``data``.
-    """
-    s = summary[(summary["method"] == method) & (summary["data"] == data)
-                & summary["group"].isin(["F_inv", "b_prime", "f2", "g_table"])]
-    if s.empty:
-        raise ValueError(f"calibration summary has no rows for method {method!r} on data {data!r}")
-    n = int(s["n_runs"].min())
-    nc = int(s["n_converged"].min())
-    rows = []
-
+def _cal_mean(x, claim):
+    s, n, thr = x.s, x.n, x.mean_threshold
     i = _largest(s["mean_error"].abs())
     worst_mean, worst_name = float(abs(s.loc[i, "mean_error"])), s.loc[i, "parameter"]
     ab = s["asymptotic_bias"].abs()
@@ -133,64 +121,167 @@ def calibration_claims(summary: pd.DataFrame, *, mean_threshold: float = 1e-9, s
     expected = float(ab.max()) if ab.notna().any() else float("nan")
     k = _largest(s["se_mean"])
     se_max = float(s.loc[k, "se_mean"])
-    claim = Claim(
-        PAPER, "cal_mean_error_below_1e9",
-        "Sec. V-A: the Monte Carlo mean of the error of every calibration parameter (F⁻¹, b', F2, gravity in "
-        "table frame) is below 1e-9. Rule: reproduced if max |mean error| over the 18 parameters is < "
-        f"{mean_threshold:g}; not reproduced at any number of runs if the estimator's deterministic O(σ²) bias "
-        "(computed from the design: the mean the Monte Carlo converges to) is not below it; otherwise not testable "
-        f"at this scale until {t_max:g} standard errors of every Monte Carlo mean fit below {mean_threshold:g}",
-        "< 1e-9")
-    resolve = resolution_minimum(n, se_max, mean_threshold, t_max, _RUNS)
-    evidence = (f"{source}: {n} runs ({nc} converged); max |mean error| {worst_mean:.2g} ({worst_name}); the "
+    resolve = resolution_minimum(n, se_max, thr, x.t_max, _RUNS)
+    evidence = (f"{x.source}: {n} runs ({x.nc} converged); max |mean error| {worst_mean:.2g} ({worst_name}); the "
                 f"Monte Carlo standard error of a mean is up to {se_max:.2g} ({s.loc[k, 'parameter']}), so resolving "
-                f"{mean_threshold:g} takes {resolve.needed:.2g} runs; Table I's deterministic errors-in-variables bias "
+                f"{thr:g} takes {resolve.needed:.2g} runs; Table I's deterministic errors-in-variables bias "
                 f"(noisy a_m inside X), computed from the expected window statistics, is up to {expected:.2g} "
                 f"({s.loc[j, 'parameter']})")
-    if expected >= mean_threshold:
-        rows.append(claim.judge(expected, False, evidence + f" >= {mean_threshold:g}: the mean error converges above "
-                                "the threshold at any number of runs",
-                                shown=f"{expected:.2g} (deterministic bias; Monte Carlo {worst_mean:.2g})"))
-    else:
-        rows.append(claim.judge(worst_mean, worst_mean < mean_threshold, evidence, fmt="{:.2g}",
-                                scale=resolve.at(n)))
+    if expected >= thr:
+        return claim.judge(expected, False, evidence + f" >= {thr:g}: the mean error converges above the threshold "
+                           "at any number of runs", shown=f"{expected:.2g} (deterministic bias; Monte Carlo "
+                                                          f"{worst_mean:.2g})")
+    return claim.judge(worst_mean, worst_mean < thr, evidence, fmt="{:.2g}", scale=resolve.at(n))
 
+
+def _cal_unbiased(x, claim):
+    s = x.s
     t_abs = s["t_mean"].abs()
     k = _largest(t_abs)
-    ratio = (ab / s["crlb_std"]).max()
-    claim = Claim(
-        PAPER, "cal_unbiased",
-        "Sec. V-A: the calibration estimates are unbiased. Rule: reproduced if every parameter's Monte Carlo mean "
-        f"error is within {t_max:g} standard errors of zero and the estimator's deterministic O(σ²) bias is below "
-        f"{bias_vs_crlb:g} x its CRLB standard deviation (negligible against the spread)",
-        "unbiased")
-    evidence = (f"{source}: max |mean/s.e.| = {float(t_abs.max()):.2f} ({s.loc[k, 'parameter']}) over 18 parameters, "
-                f"{n} runs; max |asymptotic bias| / CRLB std = {float(ratio):.2g}")
-    rows.append(claim.judge(float(t_abs.max()), bool(t_abs.max() <= t_max and ratio <= bias_vs_crlb), evidence,
-                            fmt="max |t| = {:.2f}", scale=MINIMUM_RUNS["cal_unbiased"].at(n)))
+    ratio = (s["asymptotic_bias"].abs() / s["crlb_std"]).max()
+    evidence = (f"{x.source}: max |mean/s.e.| = {float(t_abs.max()):.2f} ({s.loc[k, 'parameter']}) over 18 "
+                f"parameters, {x.n} runs; max |asymptotic bias| / CRLB std = {float(ratio):.2g}")
+    return claim.judge(float(t_abs.max()), bool(t_abs.max() <= x.t_max and ratio <= x.bias_vs_crlb), evidence,
+                       fmt="max |t| = {:.2f}", scale=MINIMUM_RUNS["cal_unbiased"].at(x.n))
 
+
+def _cal_std(x, claim):
+    s, thr = x.s, x.std_threshold
     m = _largest(s["std_error"])
     worst_std = float(s.loc[m, "std_error"])
     crlb_max, crlb_min = float(s["crlb_std"].max()), float(s["crlb_std"].min())
-    below = s.loc[s["crlb_std"] >= std_threshold, "parameter"]
+    below = s.loc[s["crlb_std"] >= thr, "parameter"]
     eff = s["std_over_crlb"]
-    claim = Claim(
-        PAPER, "cal_std_below_1e7",
-        "Sec. V-A: the standard deviation of the error of every calibration parameter stays below 1e-7. "
-        f"Rule: reproduced if max Monte Carlo std over the 18 parameters is < {std_threshold:g} "
-        "(judged beside the Cramér–Rao bound of the same design)",
-        "< 1e-7")
-    evidence = (f"{source}: max std {worst_std:.2g} ({s.loc[m, 'parameter']}); measured std / CRLB in "
+    evidence = (f"{x.source}: max std {worst_std:.2g} ({s.loc[m, 'parameter']}); measured std / CRLB in "
                 f"[{float(eff.min()):.2f}, {float(eff.max()):.2f}] (Table I is efficient); the CRLB itself is "
                 f"{crlb_min:.2g}..{crlb_max:.2g} and exceeds 1e-7 for {len(below)} of 18 parameters: no unbiased "
                 f"estimator reaches 1e-7 with noise 0.0013 m/s² on this design; it would take "
-                f"{(crlb_max / std_threshold) ** 2:.2g}x more static samples")
-    rows.append(claim.judge(worst_std, worst_std < std_threshold, evidence, fmt="{:.2g}",
-                            scale=MINIMUM_RUNS["cal_std_below_1e7"].at(n)))
-    return rows
+                f"{(crlb_max / thr) ** 2:.2g}x more static samples")
+    return claim.judge(worst_std, worst_std < thr, evidence, fmt="{:.2g}",
+                       scale=MINIMUM_RUNS["cal_std_below_1e7"].at(x.n))
+
+
+#: Sec. V-A's claims, in the ledger's order (:class:`accelcal_repro.claims.ClaimRule`).
+CALIBRATION_RULES = (
+    ClaimRule(
+        "cal_mean_error_below_1e9", "< 1e-9",
+        lambda x: "Sec. V-A: the Monte Carlo mean of the error of every calibration parameter (F⁻¹, b', F2, gravity "
+                  "in table frame) is below 1e-9. Rule: reproduced if max |mean error| over the 18 parameters is < "
+                  f"{x.mean_threshold:g}; not reproduced at any number of runs if the estimator's deterministic "
+                  "O(σ²) bias (computed from the design: the mean the Monte Carlo converges to) is not below it; "
+                  f"otherwise not testable at this scale until {x.t_max:g} standard errors of every Monte Carlo mean "
+                  f"fit below {x.mean_threshold:g}",
+        ("s", "mean_threshold", "t_max"), _cal_mean),
+    ClaimRule(
+        "cal_unbiased", "unbiased",
+        lambda x: "Sec. V-A: the calibration estimates are unbiased. Rule: reproduced if every parameter's Monte "
+                  f"Carlo mean error is within {x.t_max:g} standard errors of zero and the estimator's deterministic "
+                  f"O(σ²) bias is below {x.bias_vs_crlb:g} x its CRLB standard deviation (negligible against the "
+                  "spread)",
+        ("s", "t_max", "bias_vs_crlb"), _cal_unbiased),
+    ClaimRule(
+        "cal_std_below_1e7", "< 1e-7",
+        lambda x: "Sec. V-A: the standard deviation of the error of every calibration parameter stays below 1e-7. "
+                  f"Rule: reproduced if max Monte Carlo std over the 18 parameters is < {x.std_threshold:g} "
+                  "(judged beside the Cramér–Rao bound of the same design)",
+        ("s", "std_threshold"), _cal_std),
+)
+
+
+def calibration_claims(summary: pd.DataFrame, *, mean_threshold: float = 1e-9, std_threshold: float = 1e-7,
+                       t_max: float = 4.0, bias_vs_crlb: float = 0.1, method: str = "batista2011",
+                       data: str = "quadratic", source: str = "results/batista2011/calibration_summary.csv"
+                       ) -> list[dict]:
+    """Rows for Sec. V-A (:data:`CALIBRATION_RULES`): mean error below 1e-9, unbiased, standard
+    deviation below 1e-7.
+
+    Uses the 18 estimated parameters (F⁻¹, b', f2, ᵀg) of ``method`` on ``data``.
+    """
+    s = summary[(summary["method"] == method) & (summary["data"] == data)
+                & summary["group"].isin(["F_inv", "b_prime", "f2", "g_table"])]
+    if s.empty:
+        raise ValueError(f"calibration summary has no rows for method {method!r} on data {data!r}")
+    ctx = SimpleNamespace(s=s, n=int(s["n_runs"].min()), nc=int(s["n_converged"].min()), source=source,
+                          mean_threshold=mean_threshold, std_threshold=std_threshold, t_max=t_max,
+                          bias_vs_crlb=bias_vs_crlb)
+    return judge_rules(PAPER, CALIBRATION_RULES, ctx)
 
 
 # ------------------------------------------------------------------------------- filter
+
+
+def _bias_converges(x, claim):
+    tc = bias_convergence_time(x.summary, x.bias, x.conv_fraction)
+    tn = bias_convergence_time(x.summary, x.bias, x.noise_acc / np.linalg.norm(x.bias))
+    evidence = (f"{x.source}: {x.n} runs, |b| = {np.linalg.norm(x.bias):.3g} m/s²; RMS |b̂ - b| stays below "
+                f"{100 * x.conv_fraction:g}% of |b| from t = {tc:.1f} s and below the accelerometer noise "
+                f"({x.noise_acc:g} m/s²) from t = {tn:.1f} s")
+    return claim.judge(tc, bool(np.isfinite(tc) and tc <= x.conv_max_s), evidence, fmt="{:.1f} s",
+                       scale=MINIMUM_RUNS["filter_bias_converges_quickly"].at(x.n))
+
+
+def _mean_errors_zero(x, claim):
+    sm = steady_mean(x.runs, x.steady_from_s)
+    k = _largest(sm["t_stat"].abs())
+    evidence = (f"{x.runs_source}: {x.n} runs; max |mean/s.e.| = {float(sm['t_stat'].abs().max()):.2f} "
+                f"({sm.loc[k, 'state']}); |mean| per state: "
+                + ", ".join(f"{r.state} {abs(r.mean):.1e}" for r in sm.itertuples()))
+    return claim.judge(float(sm["t_stat"].abs().max()), bool((sm["t_stat"].abs() <= x.t_max).all()), evidence,
+                       fmt="max |t| = {:.2f}", scale=MINIMUM_RUNS["filter_mean_errors_converge_to_zero"].at(x.n))
+
+
+def _budget(error_budget: pd.DataFrame | None, name: str) -> str:
+    """The error budget's RMS per noise source over ``name``'s components (empty without a budget)."""
+    if error_budget is None or not len(error_budget):
+        return ""
+    eb = error_budget.set_index(["source", "state"])["rms_error"]
+    return f"; error budget (RMS over {name}_x,y,z, one noise source at a time): " + ", ".join(
+        f"{src} {float(np.sqrt(np.mean([eb.get((src, f'{name}_{a}'), np.nan) ** 2 for a in 'xyz']))):.2g}"
+        for src in error_budget["source"].unique())
+
+
+def _below_noise_rule(name: str, label: str) -> ClaimRule:
+    """The steady-state RMS error of every ``name`` component well below the accelerometer noise."""
+    comp = [f"{name}_{a}" for a in "xyz"]
+
+    def rule(x):
+        return (f"Sec. V-B, Figs. 7-8: the {label} estimation errors stay well below the accelerometer noise "
+                f"({x.noise_acc:g} m/s²). Rule: reproduced if the steady-state (t >= {x.steady_from_s:g} s) RMS "
+                f"error of every {label} component is below {x.well_below:g} x the accelerometer noise std")
+
+    def verdict(x, claim):
+        ss = steady_state(x.summary, x.steady_from_s).set_index("state")
+        worst = float(ss.loc[comp, "rms_error"].max())
+        evidence = (f"{x.source}: {x.n} runs; steady RMS "
+                    + ", ".join(f"{c} {ss.loc[c, 'rms_error']:.2g}" for c in comp)
+                    + f" m/s² ({worst / x.noise_acc:.2f} x noise); the filter's own σ is "
+                    f"{float(ss.loc[comp, 'filter_sigma'].mean()):.2g} "
+                    f"({float(ss.loc[comp, 'sigma_over_rms'].mean()):.0f}"
+                    "x the actual RMS: Θ = 0.1 I is far above the true velocity noise intensity)"
+                    + _budget(x.error_budget, name))
+        return claim.judge(worst, worst < x.well_below * x.noise_acc, evidence, fmt="{:.2g} m/s² RMS",
+                           scale=MINIMUM_RUNS[claim.claim_id].at(x.n))
+    return ClaimRule(f"filter_{label}_error_below_accel_noise", "well below 0.0013 m/s²", rule,
+                     ("summary", "noise_acc", "steady_from_s", "well_below", "error_budget"), verdict)
+
+
+#: Sec. V-B's claims, in the ledger's order (:class:`accelcal_repro.claims.ClaimRule`).
+FILTER_RULES = (
+    ClaimRule(
+        "filter_bias_converges_quickly", "quickly",
+        lambda x: "Sec. V-B, Fig. 5: the bias estimate converges quickly to the true value. Rule: reproduced if the "
+                  f"Monte Carlo RMS of |b̂ - b| falls and stays below {100 * x.conv_fraction:g}% of |b| within "
+                  f"{x.conv_max_s:g} s",
+        ("summary", "bias", "noise_acc", "conv_fraction", "conv_max_s"), _bias_converges),
+    ClaimRule(
+        "filter_mean_errors_converge_to_zero", "→ 0",
+        lambda x: "Sec. V-B, Figs. 6-8: the mean errors of v, g and b converge to zero. Rule: reproduced if, for "
+                  f"every component, the Monte Carlo mean of the error averaged over t >= {x.steady_from_s:g} s is "
+                  f"within {x.t_max:g} standard errors of zero",
+        ("runs", "steady_from_s", "t_max"), _mean_errors_zero),
+    _below_noise_rule("b", "bias"),
+    _below_noise_rule("g", "gravity"),
+)
 
 
 def filter_claims(summary: pd.DataFrame, runs: pd.DataFrame, bias, noise_acc: float, *, steady_from_s: float,
@@ -198,65 +289,13 @@ def filter_claims(summary: pd.DataFrame, runs: pd.DataFrame, bias, noise_acc: fl
                   t_max: float = 4.0, error_budget: pd.DataFrame | None = None,
                   source: str = "results/batista2011/filter_summary.csv",
                   runs_source: str = "results/batista2011/filter_runs.csv.gz") -> list[dict]:
-    """Rows for Sec. V-B: quick bias convergence, zero mean errors, errors below the accelerometer noise."""
-    bias = np.asarray(bias, float)
-    n = int(runs["run"].nunique())
-    rows = []
-
-    tc = bias_convergence_time(summary, bias, conv_fraction)
-    tn = bias_convergence_time(summary, bias, noise_acc / np.linalg.norm(bias))
-    claim = Claim(
-        PAPER, "filter_bias_converges_quickly",
-        "Sec. V-B, Fig. 5: the bias estimate converges quickly to the true value. Rule: reproduced if the Monte "
-        f"Carlo RMS of |b̂ - b| falls and stays below {100 * conv_fraction:g}% of |b| within {conv_max_s:g} s",
-        "quickly")
-    evidence = (f"{source}: {n} runs, |b| = {np.linalg.norm(bias):.3g} m/s²; RMS |b̂ - b| stays below "
-                f"{100 * conv_fraction:g}% of |b| from t = {tc:.1f} s and below the accelerometer noise "
-                f"({noise_acc:g} m/s²) from t = {tn:.1f} s")
-    rows.append(claim.judge(tc, bool(np.isfinite(tc) and tc <= conv_max_s), evidence, fmt="{:.1f} s",
-                            scale=MINIMUM_RUNS["filter_bias_converges_quickly"].at(n)))
-
-    sm = steady_mean(runs, steady_from_s)
-    k = _largest(sm["t_stat"].abs())
-    claim = Claim(
-        PAPER, "filter_mean_errors_converge_to_zero",
-        "Sec. V-B, Figs. 6-8: the mean errors of v, g and b converge to zero. Rule: reproduced if, for every "
-        f"component, the Monte Carlo mean of the error averaged over t >= {steady_from_s:g} s is within {t_max:g} "
-        "standard errors of zero",
-        "→ 0")
-    evidence = (f"{runs_source}: {n} runs; max |mean/s.e.| = {float(sm['t_stat'].abs().max()):.2f} "
-                f"({sm.loc[k, 'state']}); |mean| per state: "
-                + ", ".join(f"{r.state} {abs(r.mean):.1e}" for r in sm.itertuples()))
-    rows.append(claim.judge(float(sm["t_stat"].abs().max()), bool((sm["t_stat"].abs() <= t_max).all()), evidence,
-                            fmt="max |t| = {:.2f}", scale=MINIMUM_RUNS["filter_mean_errors_converge_to_zero"].at(n)))
-
-    ss = steady_state(summary, steady_from_s).set_index("state")
-
-    def budget(name):
-        if error_budget is None or not len(error_budget):
-            return ""
-        eb = error_budget.set_index(["source", "state"])["rms_error"]
-        return f"; error budget (RMS over {name}_x,y,z, one noise source at a time): " + ", ".join(
-            f"{src} {float(np.sqrt(np.mean([eb.get((src, f'{name}_{a}'), np.nan) ** 2 for a in 'xyz']))):.2g}"
-            for src in error_budget["source"].unique())
-
-    for name, label in (("b", "bias"), ("g", "gravity")):
-        comp = [f"{name}_{a}" for a in "xyz"]
-        worst = float(ss.loc[comp, "rms_error"].max())
-        claim = Claim(
-            PAPER, f"filter_{label}_error_below_accel_noise",
-            f"Sec. V-B, Figs. 7-8: the {label} estimation errors stay well below the accelerometer noise "
-            f"({noise_acc:g} m/s²). Rule: reproduced if the steady-state (t >= {steady_from_s:g} s) RMS error of "
-            f"every {label} component is below {well_below:g} x the accelerometer noise std",
-            "well below 0.0013 m/s²")
-        evidence = (f"{source}: {n} runs; steady RMS " + ", ".join(f"{c} {ss.loc[c, 'rms_error']:.2g}" for c in comp)
-                    + f" m/s² ({worst / noise_acc:.2f} x noise); the filter's own σ is "
-                    f"{float(ss.loc[comp, 'filter_sigma'].mean()):.2g} "
-                    f"({float(ss.loc[comp, 'sigma_over_rms'].mean()):.0f}"
-                    "x the actual RMS: Θ = 0.1 I is far above the true velocity noise intensity)" + budget(name))
-        rows.append(claim.judge(worst, worst < well_below * noise_acc, evidence, fmt="{:.2g} m/s² RMS",
-                                scale=MINIMUM_RUNS[claim.claim_id].at(n)))
-    return rows
+    """Rows for Sec. V-B (:data:`FILTER_RULES`): quick bias convergence, zero mean errors, errors
+    below the accelerometer noise."""
+    ctx = SimpleNamespace(summary=summary, runs=runs, bias=np.asarray(bias, float), noise_acc=noise_acc,
+                          n=int(runs["run"].nunique()), steady_from_s=steady_from_s, conv_fraction=conv_fraction,
+                          conv_max_s=conv_max_s, well_below=well_below, t_max=t_max, error_budget=error_budget,
+                          source=source, runs_source=runs_source)
+    return judge_rules(PAPER, FILTER_RULES, ctx)
 
 
 def observability_claims(observability: pd.DataFrame, gramian: pd.DataFrame, *, steady_from_s: float,
@@ -349,6 +388,8 @@ def batista_claims(calibration_summary: pd.DataFrame, filter_summary: pd.DataFra
 
 
 __all__ = [
+    "CALIBRATION_RULES",
+    "FILTER_RULES",
     "MINIMUM_RUNS",
     "batista_claims",
     "bias_convergence_time",

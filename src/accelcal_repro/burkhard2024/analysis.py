@@ -15,6 +15,7 @@ from collections.abc import Iterable, Sequence
 import numpy as np
 import pandas as pd
 
+from accelcal.nlls import solver_tol
 from accelcal.registry import ESTIMATORS, estimators
 
 from ..montecarlo import AXES, FULL_METHODS, QUANTITIES, rms_and_se
@@ -29,7 +30,6 @@ def efficiency(summary: pd.DataFrame, experiments: Iterable[Experiment], g: floa
     over the grid points of ``experiments`` (the Fig. 1(a) noise range: full methods on
     M != I data, bias-only methods on M = I data, where their bounds hold).
     """
-    from accelcal.nlls import solver_tol
 
     parts = []
     for exp in experiments:

@@ -25,6 +25,7 @@ import pandas as pd
 from accelcal.registry import model_of
 
 from ..montecarlo import min_poses
+from ..timing import preferred_backend
 from .grid import Experiment, select
 
 
@@ -285,7 +286,6 @@ def speedup(timing_summary: pd.DataFrame, method: str, n_poses: int, interleave:
     ratios t_NLLS / t_LLS at ``n_poses`` (``interleave`` timings), of the ``backend``
     (default: the library's default, the compiled kernels if they were timed).  Rule:
     ≥ ``min_ratio``."""
-    from ..timing import preferred_backend
 
     t = timing_summary
     if "backend" in t:

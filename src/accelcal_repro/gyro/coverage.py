@@ -24,6 +24,12 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from accelcal.calibration.fitting import calibrate_poses
+from accelcal.gyro.calibrate import calibrate_gyro
+from accelcal.gyro.model import GyroModel
+from accelcal.gyro.simulate import random_gyro_matrix, simulate_recording
+from accelcal.static import static_poses_from_intervals
+
 #: The simulated sessions (sizes from the real ones, module docstring).
 SESSION = {"n_motions": 16, "angle_deg": 90.0, "peak_rate_dps": 150.0, "fs": 100.0, "rest_s": 1.5,
            "init_rest_s": 5.0, "acc_noise": 0.03, "gyro_noise": 7e-4, "bias_walk_psd": 1e-7,
@@ -53,10 +59,6 @@ def _ses(cal, half=False):
 
 def trial(rng: np.random.Generator, session: dict = SESSION) -> list[dict]:
     """One simulated session calibrated with and without the noise model (module docstring)."""
-    from accelcal.gyro.calibrate import calibrate_gyro
-    from accelcal.gyro.simulate import random_gyro_matrix, simulate_recording
-    from accelcal.gyro.model import GyroModel
-    from accelcal.static import static_poses_from_intervals
 
     session = dict(session)
     fitted = session.pop("fitted_accelerometer", False)
@@ -68,7 +70,6 @@ def trial(rng: np.random.Generator, session: dict = SESSION) -> list[dict]:
     poses = static_poses_from_intervals(sim["t"], sim["acc"], sim["rest_intervals"])
     accel = _Identity()
     if fitted:
-        from accelcal.calibration.fitting import calibrate_poses
 
         accel = calibrate_poses(poses, sim["g"], "full_lls", unit="m/s^2")
     truth = _values(GyroModel(C, np.zeros(3)))

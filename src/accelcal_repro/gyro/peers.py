@@ -40,6 +40,7 @@ import pandas as pd
 
 from accelcal.gyro.calibrate import evaluate_model
 from accelcal.gyro.model import GyroModel, frame_rotation
+from accelcal.gyro.rests import bias_series, fit_bias, rest_statistics
 
 #: Xsens MTi data-sheet values (data README): raw = S M x + offset.
 XSENS_FACTORY = {
@@ -140,7 +141,6 @@ def figure_of_merit(session: str, rec, poses, ours_acc, ours, peers: dict,
                     integrator: str = "magnus4") -> pd.DataFrame:
     """Per calibration: RMS and median per-motion angle [deg] on the session's rests (module
     docstring); ``rec`` the session's Recording (its gyro in the peers' raw unit)."""
-    from accelcal.gyro.rests import bias_series, fit_bias, rest_statistics
 
     rs = rest_statistics(rec.t, rec.gyro, poses.intervals)
     rest_b = bias_series(fit_bias(rs, "interpolated"), rs, rec.t)

@@ -31,8 +31,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from accelcal.errors import AccelcalError
+
+from .ferraris_sessions import ctu_calibration, imucal_comparison, run_imucal
 from .peers import compare_parameters, figure_of_merit, peer_calibrations
-from .sessions import SESSIONS, calibrate_session
+from .sessions import CTU, SESSIONS, calibrate_session
 
 GROUPS = {"imutk_fork": ("fork_data1", "fork_data2", "fork_data3", "fork_data4"),
           "snu": ("snu_good1", "snu_good2", "snu_good3")}
@@ -101,10 +104,6 @@ def run(out: Path, paths: dict, sessions=tuple(SESSIONS), imutk_run: dict | None
     ``paths``: ``{dataset: {file: path}}`` (:func:`.sessions.local_paths`, or the workflow's
     manifests); ``imutk_run``: the ``runs`` of ``tools/gyro_peers.py``'s ``imutk.json``, or None.
     A session that cannot be calibrated is a row with its one-line error (a finding)."""
-    from accelcal.errors import AccelcalError
-
-    from .ferraris_sessions import ctu_calibration, imucal_comparison, run_imucal
-    from .sessions import CTU
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)

@@ -28,7 +28,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from . import coverage, integrators, montecarlo, report
 from ..claims import COLUMNS, Claim, MinimumSample
+from .integrators import choose, integrator_study
+from .ipopt_check import crosscheck
+from .loop_benchmark import loop_claims
+from .montecarlo import monte_carlo, summary
 
 #: Standard deviation of the median of m independent unit normals (order statistics: m = 3
 #: the middle one, m = 6 the mean of the middle two), relative to one of them.
@@ -86,9 +91,6 @@ def claims(integ: pd.DataFrame, mc: pd.DataFrame, ipopt: pd.DataFrame, fom: pd.D
     """The stage's claims (module docstring) from its tables (``coverage``: the summary of
     :mod:`.coverage`; ``stability``: the sessions' table of :mod:`.report`; ``loop``: the gyro
     loop benchmark's summary, :mod:`.loop_benchmark`)."""
-    from .integrators import choose
-    from .loop_benchmark import loop_claims
-    from .montecarlo import summary
 
     rows = []
     best = choose(integ)
@@ -174,7 +176,6 @@ def _fom_claim(fom: pd.DataFrame) -> dict:
 
 # ----------------------------------------------------------------------------- pieces
 def integrator_table(config: dict) -> pd.DataFrame:
-    from .integrators import integrator_study
 
     c = config["integrators"]
     return integrator_study(tuple(c["rates_dps"]), tuple(c["fs_hz"]), angle_deg=float(c["angle_deg"]),
@@ -182,7 +183,6 @@ def integrator_table(config: dict) -> pd.DataFrame:
 
 
 def monte_carlo_tables(config: dict) -> tuple[pd.DataFrame, pd.DataFrame]:
-    from .montecarlo import monte_carlo
 
     return monte_carlo(n_trials=int(config["monte_carlo"]["trials"]), seed=int(config["seed"]))
 
@@ -193,7 +193,6 @@ IPOPT_TIMES = ("gauss_newton_s", "ipopt_build_s", "ipopt_solve_s")
 
 def ipopt_table(config: dict) -> tuple[pd.DataFrame, pd.DataFrame]:
     """The cross-check's result and, apart, its wall times."""
-    from .ipopt_check import crosscheck
 
     c = config["ipopt_check"]
     df = crosscheck(seed=int(config["seed"]), n_motions=int(c["motions"]), fs=float(c["fs_hz"]))
@@ -202,7 +201,6 @@ def ipopt_table(config: dict) -> tuple[pd.DataFrame, pd.DataFrame]:
 
 def coverage_tables(config: dict) -> tuple[pd.DataFrame, pd.DataFrame]:
     """The coverage Monte Carlo of the 95 % intervals (:mod:`.coverage`) and its summary."""
-    from . import coverage
 
     df = coverage.coverage(int(config["coverage"]["trials"]), int(config["seed"]))
     return df, coverage.summary(df)
@@ -210,7 +208,6 @@ def coverage_tables(config: dict) -> tuple[pd.DataFrame, pd.DataFrame]:
 
 def monte_carlo_summary(mc: pd.DataFrame) -> pd.DataFrame:
     """Median RMS error / CRLB per configuration, estimator and kind of parameter (the report's table)."""
-    from .montecarlo import summary
 
     s = summary(mc)
     s.columns = [f"{e}_{k}" for e, k in s.columns]
@@ -220,8 +217,6 @@ def monte_carlo_summary(mc: pd.DataFrame) -> pd.DataFrame:
 def run(out: Path, config: dict, paths: dict, imutk_run: dict | None = None) -> dict[str, pd.DataFrame]:
     """Every piece in one process (tests; the workflow runs them as jobs): tables, figures, claims into ``out``."""
     from accelcal.plotting import save_figure
-
-    from . import integrators, montecarlo, report
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)

@@ -277,9 +277,7 @@ def calibrate_recording(name: str, rec: Recording, *, g: float, estimators, sect
     """
     src = source(name)
     conv = src.conversion
-    unknown = [e for e in estimators if e not in ESTIMATORS]
-    if unknown:
-        raise AccelcalError(f"{name}: unknown estimator(s) {', '.join(unknown)}; known: {', '.join(ESTIMATORS)}")
+    _check_estimators(name, estimators)
     detected = detect_static_recording(rec, **(static_kw or {}))
     used, labels = select_poses(name, detected, sections, pose_selection)
     ps = pose_set(name, detected, used, labels)
@@ -289,79 +287,13 @@ def calibrate_recording(name: str, rec: Recording, *, g: float, estimators, sect
     param_rows, pose_rows, summary_rows = [], [], []
     boot, results = {}, {}
     for est in estimators:
-        e = estimator(est)
-        model = e.model
-        t0 = time.perf_counter()
-        try:  # the CLI's calibration of the same poses (accelcal.calibration)
-            r = calibrate_poses(ps, g, est, unit=src.unit, conversion=conversion_for(est, conv))
-        except AccelcalError as err:  # e.g. too few poses for the full model: name the recording
-            raise type(err)(f"{name}, {est}: {err}") from None
-        seconds = time.perf_counter() - t0
+        r, seconds = _calibrate_timed(name, est, ps, g, src.unit, conv)
         results[est] = r
-        fr = frame(r)
-        fit = make_fit(est, fr)
-        names = parameter_names(est)
-        q = e.n_parameters
-        values = parameter_vector(r, fr)
-        se = r.standard_errors
-        se_v = _se_vector(se["bias"], se.get("scale_factors"), se.get("nonorthogonality_deg"), fr, model)
-        nse = ev.noise_standard_errors(fr.z, fr.mean_std, r.M, r.bias, model)
-        nse_v = _se_vector(nse[:3], nse[3:6], np.rad2deg(nse[6:9]), fr, model)
-
-        # residuals against the noise (the calibration's quality: accelcal.quality)
-        sigma = ev.residual_sigma(fr.z, fr.mean_std, r.M, r.bias)
-        qa = r.quality
-        chi = ev.Chi2(qa.chi2, qa.dof, qa.p_value)
-        n = len(ps)
-        lo, lo_note = ev.lopo(fit, fr.z, g, e.min_poses)
-
-        # bootstrap over poses
-        t1 = time.perf_counter()
-        samples, valid = ev.bootstrap(fit, lambda res, fr=fr: parameter_vector(res, fr), fr.z, idx,
-                                      e.min_poses, len(names))
-        boot_seconds = time.perf_counter() - t1
-        frac = float(valid.mean()) if len(valid) else 0.0
-        if len(valid) and frac >= min_valid_fraction:
-            ci_lo, ci_hi = ev.percentile_ci(samples[valid], level)
-            method = "bootstrap_percentile"
-        else:
-            ci_lo, ci_hi = ev.noise_interval(values, nse_v, chi, level)
-            method = "linearised_noise"
-        boot[est] = (samples, valid, method)
-        boot_se = np.nanstd(samples[valid], axis=0, ddof=1) if valid.sum() > 1 else np.full(len(names), np.nan)
-
-        units = parameter_units(est, src.unit)
-        for k, p in enumerate(names):
-            param_rows.append({"recording": name, "estimator": est, "model": model, "parameter": p,
-                               "unit": units[k], "value": values[k], "se": se_v[k], "se_noise": nse_v[k],
-                               "boot_se": boot_se[k], "ci_low": ci_lo[k], "ci_high": ci_hi[k],
-                               "ci_method": method, "ci_level": level})
-
-        u = np.linalg.solve(r.M, (fr.z - r.bias).T).T
-        u /= np.linalg.norm(u, axis=1, keepdims=True)
-        for i in range(n):
-            pose_rows.append({"recording": name, "estimator": est, "pose": i, "label": ps.labels[i],
-                              "detected_pose": int(ps.detected[i]), "t_start": ps.t_start[i],
-                              "t_end": ps.t_end[i], "t_mid": ps.t_mid[i], "u_x": u[i, 0], "u_y": u[i, 1],
-                              "u_z": u[i, 2], "residual": r.residuals[i], "sigma_pred": sigma[i],
-                              "z_score": r.residuals[i] / sigma[i], "lopo_error": lo[i]})
-
-        dof_share = max(chi.dof, 0) / n
-        pred_rms = float(np.sqrt(np.mean(sigma ** 2)))
-        finite_lo = lo[np.isfinite(lo)]
-        summary_rows.append({
-            "recording": name, "estimator": est, "model": model, "g": g, "unit": src.unit,
-            "n_poses": n, "n_params": q, "dof": chi.dof,
-            "residual_rms": r.residual_rms, "predicted_rms": pred_rms,
-            "rms_ratio": r.residual_rms / (pred_rms * np.sqrt(dof_share)) if dof_share > 0 else np.nan,
-            "chi2": chi.chi2, "reduced_chi2": chi.reduced, "p_value": chi.p_value, "excess": chi.excess,
-            "lopo_n": int(finite_lo.size),
-            "lopo_rms": float(np.sqrt(np.mean(finite_lo ** 2))) if finite_lo.size else np.nan,
-            "lopo_max_abs": float(np.max(np.abs(finite_lo))) if finite_lo.size else np.nan,
-            "lopo_note": lo_note, "n_boot": int(n_boot), "boot_valid_fraction": frac, "ci_method": method,
-            "distinct_orientations": qa.distinct_orientations, "coverage": qa.coverage,
-            "warnings": " ".join(qa.flags), "fit_seconds": seconds, "boot_seconds": boot_seconds,
-        })
+        fit = _EstimatorFit(name, est, r, ps, g, src.unit)
+        params_e, boot[est], interval = _parameter_rows(fit, idx, level, min_valid_fraction)
+        param_rows += params_e
+        pose_rows += _pose_rows(fit)
+        summary_rows.append(_summary_row(fit, n_boot, interval, seconds))
 
     params = pd.DataFrame(param_rows)
     return MeasuredCalibration(
@@ -369,6 +301,102 @@ def calibrate_recording(name: str, rec: Recording, *, g: float, estimators, sect
         pose_errors=pd.DataFrame(pose_rows), summary=pd.DataFrame(summary_rows),
         agreement=agreement_table(name, params, boot, level), nominal=nominal_table(name, params, conv, src.unit),
         results=results, pose_set=ps, detected=detected)
+
+
+def _check_estimators(name: str, estimators) -> None:
+    unknown = [e for e in estimators if e not in ESTIMATORS]
+    if unknown:
+        raise AccelcalError(f"{name}: unknown estimator(s) {', '.join(unknown)}; known: {', '.join(ESTIMATORS)}")
+
+
+def _calibrate_timed(name: str, est: str, ps, g: float, unit: str, conv):
+    """The CLI's calibration of the poses (accelcal.calibration) and its wall time [s]."""
+    t0 = time.perf_counter()
+    try:
+        r = calibrate_poses(ps, g, est, unit=unit, conversion=conversion_for(est, conv))
+    except AccelcalError as err:  # e.g. too few poses for the full model: name the recording
+        raise type(err)(f"{name}, {est}: {err}") from None
+    return r, time.perf_counter() - t0
+
+
+class _EstimatorFit:
+    """One estimator's calibration of a recording's poses, with what every table of it reads:
+    the fit as a function of poses, the noise-predicted residual sigma, the χ² and the
+    leave-one-pose-out errors."""
+
+    def __init__(self, name: str, est: str, r, ps, g: float, unit: str):
+        self.name, self.est, self.r, self.ps, self.g, self.unit = name, est, r, ps, g, unit
+        self.e = estimator(est)
+        self.fr = frame(r)
+        self.fit = make_fit(est, self.fr)
+        self.names = parameter_names(est)
+        self.values = parameter_vector(r, self.fr)
+        # residuals against the noise (the calibration's quality: accelcal.quality)
+        self.sigma = ev.residual_sigma(self.fr.z, self.fr.mean_std, r.M, r.bias)
+        self.chi = ev.Chi2(r.quality.chi2, r.quality.dof, r.quality.p_value)
+        self.lo, self.lo_note = ev.lopo(self.fit, self.fr.z, g, self.e.min_poses)
+
+
+def _parameter_rows(f: _EstimatorFit, idx, level: float, min_valid_fraction: float):
+    """The parameter table's rows of one estimator, its bootstrap (samples, valid, interval
+    method) and ``(valid fraction, interval method, seconds)`` of the bootstrap over poses."""
+    r, fr, model = f.r, f.fr, f.e.model
+    se = r.standard_errors
+    se_v = _se_vector(se["bias"], se.get("scale_factors"), se.get("nonorthogonality_deg"), fr, model)
+    nse = ev.noise_standard_errors(fr.z, fr.mean_std, r.M, r.bias, model)
+    nse_v = _se_vector(nse[:3], nse[3:6], np.rad2deg(nse[6:9]), fr, model)
+    t1 = time.perf_counter()
+    samples, valid = ev.bootstrap(f.fit, lambda res, fr=fr: parameter_vector(res, fr), fr.z, idx,
+                                  f.e.min_poses, len(f.names))
+    boot_seconds = time.perf_counter() - t1
+    frac = float(valid.mean()) if len(valid) else 0.0
+    if len(valid) and frac >= min_valid_fraction:
+        ci_lo, ci_hi = ev.percentile_ci(samples[valid], level)
+        method = "bootstrap_percentile"
+    else:
+        ci_lo, ci_hi = ev.noise_interval(f.values, nse_v, f.chi, level)
+        method = "linearised_noise"
+    boot_se = np.nanstd(samples[valid], axis=0, ddof=1) if valid.sum() > 1 else np.full(len(f.names), np.nan)
+    units = parameter_units(f.est, f.unit)
+    rows = [{"recording": f.name, "estimator": f.est, "model": model, "parameter": p,
+             "unit": units[k], "value": f.values[k], "se": se_v[k], "se_noise": nse_v[k],
+             "boot_se": boot_se[k], "ci_low": ci_lo[k], "ci_high": ci_hi[k],
+             "ci_method": method, "ci_level": level} for k, p in enumerate(f.names)]
+    return rows, (samples, valid, method), (frac, method, boot_seconds)
+
+
+def _pose_rows(f: _EstimatorFit) -> list[dict]:
+    """The pose-error table's rows of one estimator: direction, residual, its prediction, LOPO."""
+    r, ps = f.r, f.ps
+    u = np.linalg.solve(r.M, (f.fr.z - r.bias).T).T
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    return [{"recording": f.name, "estimator": f.est, "pose": i, "label": ps.labels[i],
+             "detected_pose": int(ps.detected[i]), "t_start": ps.t_start[i],
+             "t_end": ps.t_end[i], "t_mid": ps.t_mid[i], "u_x": u[i, 0], "u_y": u[i, 1],
+             "u_z": u[i, 2], "residual": r.residuals[i], "sigma_pred": f.sigma[i],
+             "z_score": r.residuals[i] / f.sigma[i], "lopo_error": f.lo[i]} for i in range(len(ps))]
+
+
+def _summary_row(f: _EstimatorFit, n_boot: int, interval: tuple, seconds: float) -> dict:
+    """The summary table's row of one estimator (fit quality, LOPO, bootstrap, times)."""
+    r, chi, qa, n = f.r, f.chi, f.r.quality, len(f.ps)
+    frac, method, boot_seconds = interval
+    dof_share = max(chi.dof, 0) / n
+    pred_rms = float(np.sqrt(np.mean(f.sigma ** 2)))
+    finite_lo = f.lo[np.isfinite(f.lo)]
+    return {
+        "recording": f.name, "estimator": f.est, "model": f.e.model, "g": f.g, "unit": f.unit,
+        "n_poses": n, "n_params": f.e.n_parameters, "dof": chi.dof,
+        "residual_rms": r.residual_rms, "predicted_rms": pred_rms,
+        "rms_ratio": r.residual_rms / (pred_rms * np.sqrt(dof_share)) if dof_share > 0 else np.nan,
+        "chi2": chi.chi2, "reduced_chi2": chi.reduced, "p_value": chi.p_value, "excess": chi.excess,
+        "lopo_n": int(finite_lo.size),
+        "lopo_rms": float(np.sqrt(np.mean(finite_lo ** 2))) if finite_lo.size else np.nan,
+        "lopo_max_abs": float(np.max(np.abs(finite_lo))) if finite_lo.size else np.nan,
+        "lopo_note": f.lo_note, "n_boot": int(n_boot), "boot_valid_fraction": frac, "ci_method": method,
+        "distinct_orientations": qa.distinct_orientations, "coverage": qa.coverage,
+        "warnings": " ".join(qa.flags), "fit_seconds": seconds, "boot_seconds": boot_seconds,
+    }
 
 
 def agreement_table(name: str, params: pd.DataFrame, boot: dict, level: float) -> pd.DataFrame:

@@ -109,6 +109,81 @@ def _reference(params_r: pd.DataFrame) -> str:
     return ests[0]
 
 
+def _bias_panel(ax, p, rec, ests, ref, cpu, pe, dodge):
+    """Bias: deviation from the reference estimator, mm/s² through the nominal sensitivity."""
+    refv = p[(p.estimator == ref) & p.parameter.str.startswith("bias")].set_index("parameter")["value"]
+    unit = p.unit.iloc[0]
+    for k, e in enumerate(ests):
+        d = p[(p.estimator == e) & p.parameter.str.startswith("bias")]
+        x = np.array(["xyz".index(s[-1]) for s in d.parameter]) + dodge(k)
+        dev = (d.value.to_numpy() - refv[d.parameter].to_numpy()) / cpu * 1e3
+        lo = (d.value.to_numpy() - d.ci_low.to_numpy()) / cpu * 1e3
+        hi = (d.ci_high.to_numpy() - d.value.to_numpy()) / cpu * 1e3
+        st = style(e)
+        ax.errorbar(x, dev, yerr=[lo, hi], fmt=st["marker"], color=st["color"], ms=4, capsize=2,
+                    elinewidth=0.8, mfc="none", label=st["label"])
+    if pe is not None:
+        d = pe[(pe.tool == "imucal") & (pe.parameter == "bias")]
+        dev = (d.value.to_numpy() - refv[[f"bias_{a}" for a in d.axis]].to_numpy()) * 1e3
+        ax.plot(np.arange(3) + dodge(len(ests)), dev, ls="none", ms=7, **PEER_STYLE)
+    ax.axhline(0, color="k", lw=0.6)
+    ax.set_xticks(range(3), [f"b{a}\n{refv.get(f'bias_{a}', np.nan):.6g}" for a in "xyz"], fontsize=7)
+    via = "\n(counts via nominal sensitivity)" if unit == "counts" else ""
+    ax.set_ylabel(f"bias − {style(ref)['label']} [mm/s²]{via}", fontsize=7)
+    ax.set_xlabel(f"{style(ref)['label']} value [{unit.replace('^2', '²')}]", fontsize=6.5, labelpad=1)
+    ax.set_title(f"{_title(rec)}: bias", fontsize=8, loc="left")
+
+
+def _not_estimated(ax):
+    ax.text(0.5, 0.5, "not estimated\n(bias-only model)", transform=ax.transAxes, ha="center",
+            va="center", fontsize=8, color="0.4")
+
+
+def _sensitivity_panel(ax, p, full, cpu, pe, dodge):
+    """Sensitivity relative to the nominal one, with imucal's and the bias-only residuals' scale factors."""
+    for k, e in enumerate(full):
+        d = p[(p.estimator == e) & p.parameter.str.startswith("sens")]
+        x = np.array(["xyz".index(s[-1]) for s in d.parameter]) + dodge(k)
+        v = 100 * (d.value.to_numpy() / cpu - 1)
+        lo = 100 * (d.value.to_numpy() - d.ci_low.to_numpy()) / cpu
+        hi = 100 * (d.ci_high.to_numpy() - d.value.to_numpy()) / cpu
+        st = style(e)
+        ax.errorbar(x, v, yerr=[lo, hi], fmt=st["marker"], color=st["color"], ms=4, capsize=2,
+                    elinewidth=0.8, mfc="none")
+    if pe is not None:
+        d = pe[(pe.tool == "imucal") & (pe.parameter == "scale_factor")]
+        ax.plot(np.arange(3) + dodge(0), 100 * d.value.to_numpy(), ls="none", ms=7, **PEER_STYLE)
+        d = pe[(pe.method == "bias_lls residuals") & (pe.parameter == "scale_factor")]
+        ax.plot(np.arange(3) + dodge(1), 100 * d.value.to_numpy(), ls="none", ms=5, mfc="none",
+                **RESID_STYLE)
+    if not full and pe is None:
+        _not_estimated(ax)
+    ax.axhline(0, color="k", lw=0.6)
+    ax.set_xticks(range(3), [f"{a}" for a in "xyz"])
+    ax.set_ylabel("sensitivity / nominal − 1 [%]", fontsize=7.5)
+    ax.set_title("sensitivity vs nominal", fontsize=8, loc="left")
+
+
+def _nonorth_panel(ax, p, full, pe, dodge):
+    """Non-orthogonality angles, with imucal's."""
+    names = ("nonorth_xy", "nonorth_zx", "nonorth_zy")
+    for k, e in enumerate(full):
+        d = p[(p.estimator == e) & p.parameter.isin(names)]
+        x = np.array([names.index(s) for s in d.parameter]) + dodge(k)
+        st = style(e)
+        ax.errorbar(x, d.value, yerr=[d.value - d.ci_low, d.ci_high - d.value], fmt=st["marker"],
+                    color=st["color"], ms=4, capsize=2, elinewidth=0.8, mfc="none")
+    if pe is not None:
+        d = pe[(pe.tool == "imucal") & (pe.parameter == "nonorth")]
+        ax.plot(np.arange(3) + dodge(0), d.value.to_numpy(), ls="none", ms=7, **PEER_STYLE)
+    if not full and pe is None:
+        _not_estimated(ax)
+    ax.axhline(0, color="k", lw=0.6)
+    ax.set_xticks(range(3), ["θxy", "θzx", "θzy"])
+    ax.set_ylabel("non-orthogonality [deg]", fontsize=7.5)
+    ax.set_title("non-orthogonality", fontsize=8, loc="left")
+
+
 def plot_calibration(params: pd.DataFrame, peer: pd.DataFrame | None = None, nominal_sens: dict | None = None):
     """Figure ``measured_calibration``: rows recordings, columns bias / sensitivity / non-orthogonality.
 
@@ -141,79 +216,34 @@ def plot_calibration(params: pd.DataFrame, peer: pd.DataFrame | None = None, nom
             def dodge(k):
                 return (k - (n_series - 1) / 2) * width / max(n_series, 1)
 
-            # --- bias: deviation from the reference estimator, mm/s² through the nominal sensitivity
-            ax = axes[row, 0]
-            refv = p[(p.estimator == ref) & p.parameter.str.startswith("bias")].set_index("parameter")["value"]
-            unit = p.unit.iloc[0]
-            for k, e in enumerate(ests):
-                d = p[(p.estimator == e) & p.parameter.str.startswith("bias")]
-                x = np.array(["xyz".index(s[-1]) for s in d.parameter]) + dodge(k)
-                dev = (d.value.to_numpy() - refv[d.parameter].to_numpy()) / cpu * 1e3
-                lo = (d.value.to_numpy() - d.ci_low.to_numpy()) / cpu * 1e3
-                hi = (d.ci_high.to_numpy() - d.value.to_numpy()) / cpu * 1e3
-                st = style(e)
-                ax.errorbar(x, dev, yerr=[lo, hi], fmt=st["marker"], color=st["color"], ms=4, capsize=2,
-                            elinewidth=0.8, mfc="none", label=st["label"])
-            if pe is not None:
-                d = pe[(pe.tool == "imucal") & (pe.parameter == "bias")]
-                dev = (d.value.to_numpy() - refv[[f"bias_{a}" for a in d.axis]].to_numpy()) * 1e3
-                ax.plot(np.arange(3) + dodge(len(ests)), dev, ls="none", ms=7, **PEER_STYLE)
-            ax.axhline(0, color="k", lw=0.6)
-            ax.set_xticks(range(3), [f"b{a}\n{refv.get(f'bias_{a}', np.nan):.6g}" for a in "xyz"], fontsize=7)
-            via = "\n(counts via nominal sensitivity)" if unit == "counts" else ""
-            ax.set_ylabel(f"bias − {style(ref)['label']} [mm/s²]{via}", fontsize=7)
-            ax.set_xlabel(f"{style(ref)['label']} value [{unit.replace('^2', '²')}]", fontsize=6.5, labelpad=1)
-            ax.set_title(f"{_title(rec)}: bias", fontsize=8, loc="left")
-
-            # --- sensitivity relative to nominal
-            ax = axes[row, 1]
             full = [e for e in ests if p[p.estimator == e].parameter.str.startswith("sens").any()]
-            for k, e in enumerate(full):
-                d = p[(p.estimator == e) & p.parameter.str.startswith("sens")]
-                x = np.array(["xyz".index(s[-1]) for s in d.parameter]) + dodge(k)
-                v = 100 * (d.value.to_numpy() / cpu - 1)
-                lo = 100 * (d.value.to_numpy() - d.ci_low.to_numpy()) / cpu
-                hi = 100 * (d.ci_high.to_numpy() - d.value.to_numpy()) / cpu
-                st = style(e)
-                ax.errorbar(x, v, yerr=[lo, hi], fmt=st["marker"], color=st["color"], ms=4, capsize=2,
-                            elinewidth=0.8, mfc="none")
-            if pe is not None:
-                d = pe[(pe.tool == "imucal") & (pe.parameter == "scale_factor")]
-                ax.plot(np.arange(3) + dodge(0), 100 * d.value.to_numpy(), ls="none", ms=7, **PEER_STYLE)
-                d = pe[(pe.method == "bias_lls residuals") & (pe.parameter == "scale_factor")]
-                ax.plot(np.arange(3) + dodge(1), 100 * d.value.to_numpy(), ls="none", ms=5, mfc="none",
-                        **RESID_STYLE)
-            if not full and pe is None:
-                ax.text(0.5, 0.5, "not estimated\n(bias-only model)", transform=ax.transAxes, ha="center",
-                        va="center", fontsize=8, color="0.4")
-            ax.axhline(0, color="k", lw=0.6)
-            ax.set_xticks(range(3), [f"{a}" for a in "xyz"])
-            ax.set_ylabel("sensitivity / nominal − 1 [%]", fontsize=7.5)
-            ax.set_title("sensitivity vs nominal", fontsize=8, loc="left")
-
-            # --- non-orthogonality
-            ax = axes[row, 2]
-            names = ("nonorth_xy", "nonorth_zx", "nonorth_zy")
-            for k, e in enumerate(full):
-                d = p[(p.estimator == e) & p.parameter.isin(names)]
-                x = np.array([names.index(s) for s in d.parameter]) + dodge(k)
-                st = style(e)
-                ax.errorbar(x, d.value, yerr=[d.value - d.ci_low, d.ci_high - d.value], fmt=st["marker"],
-                            color=st["color"], ms=4, capsize=2, elinewidth=0.8, mfc="none")
-            if pe is not None:
-                d = pe[(pe.tool == "imucal") & (pe.parameter == "nonorth")]
-                ax.plot(np.arange(3) + dodge(0), d.value.to_numpy(), ls="none", ms=7, **PEER_STYLE)
-            if not full and pe is None:
-                ax.text(0.5, 0.5, "not estimated\n(bias-only model)", transform=ax.transAxes, ha="center",
-                        va="center", fontsize=8, color="0.4")
-            ax.axhline(0, color="k", lw=0.6)
-            ax.set_xticks(range(3), ["θxy", "θzx", "θzy"])
-            ax.set_ylabel("non-orthogonality [deg]", fontsize=7.5)
-            ax.set_title("non-orthogonality", fontsize=8, loc="left")
+            _bias_panel(axes[row, 0], p, rec, ests, ref, cpu, pe, dodge)
+            _sensitivity_panel(axes[row, 1], p, full, cpu, pe, dodge)
+            _nonorth_panel(axes[row, 2], p, full, pe, dodge)
         for ax in axes.ravel():
             ax.set_xlim(-0.6, 2.6)
         _figure_legend(fig, axes.ravel(), ncol=4)
     return fig
+
+
+def _orientation_panel(fig, ax, d: pd.DataFrame):
+    """The reference estimator's residuals against the pose's orientation (azimuth, elevation)."""
+    refe = _reference(d)
+    x = d[d.estimator == refe]
+    lon = np.degrees(np.arctan2(x.u_y, x.u_x))
+    lat = np.degrees(np.arcsin(np.clip(x.u_z, -1, 1)))
+    lim = float(np.nanmax(np.abs(1e3 * x.residual))) or 1.0
+    sc = ax.scatter(lon, lat, c=1e3 * x.residual, cmap="coolwarm", vmin=-lim, vmax=lim, s=28,
+                    edgecolors="k", linewidths=0.4)
+    cb = fig.colorbar(sc, ax=ax, shrink=0.9, pad=0.01)
+    cb.set_label(f"residual [mm/s²]\n{style(refe)['label']}", fontsize=6.5)
+    cb.ax.tick_params(labelsize=6.5)
+    ax.set(xlim=(-190, 190), ylim=(-97, 97))
+    ax.set_xticks([-180, -90, 0, 90, 180])
+    ax.set_yticks([-90, -45, 0, 45, 90])
+    ax.set_xlabel("azimuth atan2(uy, ux) [deg]", fontsize=7)
+    ax.set_ylabel("elevation asin(uz) [deg]", fontsize=7)
+    ax.set_title("residual vs orientation", fontsize=8, loc="left")
 
 
 def plot_residuals(pose_errors: pd.DataFrame):
@@ -258,23 +288,7 @@ def plot_residuals(pose_errors: pd.DataFrame):
             axes[-1, 0].set_xlabel("time [s]")
             axes[-1, 1].set_xlabel("time [s]")
 
-            ax = axes[row, 2]
-            refe = _reference(d)
-            x = d[d.estimator == refe]
-            lon = np.degrees(np.arctan2(x.u_y, x.u_x))
-            lat = np.degrees(np.arcsin(np.clip(x.u_z, -1, 1)))
-            lim = float(np.nanmax(np.abs(1e3 * x.residual))) or 1.0
-            sc = ax.scatter(lon, lat, c=1e3 * x.residual, cmap="coolwarm", vmin=-lim, vmax=lim, s=28,
-                            edgecolors="k", linewidths=0.4)
-            cb = fig.colorbar(sc, ax=ax, shrink=0.9, pad=0.01)
-            cb.set_label(f"residual [mm/s²]\n{style(refe)['label']}", fontsize=6.5)
-            cb.ax.tick_params(labelsize=6.5)
-            ax.set(xlim=(-190, 190), ylim=(-97, 97))
-            ax.set_xticks([-180, -90, 0, 90, 180])
-            ax.set_yticks([-90, -45, 0, 45, 90])
-            ax.set_xlabel("azimuth atan2(uy, ux) [deg]", fontsize=7)
-            ax.set_ylabel("elevation asin(uz) [deg]", fontsize=7)
-            ax.set_title("residual vs orientation", fontsize=8, loc="left")
+            _orientation_panel(fig, axes[row, 2], d)
         _figure_legend(fig, axes[:, :2].ravel(), ncol=4)
     return fig
 

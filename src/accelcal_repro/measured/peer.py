@@ -107,6 +107,32 @@ def implied_scale(residuals, keys, g: float) -> np.ndarray:
     return out
 
 
+def _pose_set_rows(data: pd.DataFrame, acc: np.ndarray, sections: pd.DataFrame, poses: str, iv: dict,
+                   grav: float, rate_hz: float) -> list[dict]:
+    """:func:`ferraris_comparison`'s rows of one set of static intervals ``iv``: imucal's
+    Ferraris calibration and accelcal's bias-only estimators on the same poses."""
+    rows = []
+
+    def add(parameter, unit, tool, method, values, axes=AXES):
+        for i, a in enumerate(axes):
+            rows.append({"parameter": parameter, "axis": a, "unit": unit, "tool": tool, "method": method,
+                         "poses": poses, "value": float(values[i])})
+
+    sec = sections.copy()
+    for k, (a, b) in iv.items():
+        sec.loc[k, ["start", "end"]] = (a, b)
+    fm = run_imucal(data, sec, grav, rate_hz)
+    add("bias", "m/s^2", "imucal", "ferraris", fm.b_a)
+    add("scale_factor", "1", "imucal", "ferraris", fm.scale_factors)
+    add("nonorth", "deg", "imucal", "ferraris (LQ to accelcal frame)", fm.nonorthogonality_deg, axes=NONORTH)
+    z = np.array([acc[a:b].mean(axis=0) for a, b in (iv[k] for k in FERRARIS_STATIC)])
+    for name, est in (("bias_lls", bias_lls), ("bias_nlls", bias_nlls)):
+        r = est(z, grav)
+        add("bias", "m/s^2", "accelcal", name, r.bias)
+        add("scale_factor", "1", "accelcal", f"{name} residuals", implied_scale(r.residuals, FERRARIS_STATIC, grav))
+    return rows
+
+
 def ferraris_comparison(session_csv, section_list_json, *, grav: float = 9.81, rate_hz: float = IMUCAL_RATE_HZ,
                         detected: dict[str, tuple[int, int]] | None = None) -> pd.DataFrame:
     """Run imucal's Ferraris calibration and accelcal's bias-only estimators on the same poses.
@@ -143,28 +169,8 @@ def ferraris_comparison(session_csv, section_list_json, *, grav: float = 9.81, r
         pose_sets["detected"] = {k: tuple(int(v) for v in detected[k]) for k in FERRARIS_STATIC}
 
     rows = []
-
-    def add(parameter, unit, tool, method, poses, values, axes=AXES):
-        for i, a in enumerate(axes):
-            rows.append({"parameter": parameter, "axis": a, "unit": unit, "tool": tool, "method": method,
-                         "poses": poses, "value": float(values[i])})
-
     for poses, iv in pose_sets.items():
-        sec = sections.copy()
-        for k, (a, b) in iv.items():
-            sec.loc[k, ["start", "end"]] = (a, b)
-        fm = run_imucal(data, sec, grav, rate_hz)
-        add("bias", "m/s^2", "imucal", "ferraris", poses, fm.b_a)
-        add("scale_factor", "1", "imucal", "ferraris", poses, fm.scale_factors)
-        add("nonorth", "deg", "imucal", "ferraris (LQ to accelcal frame)", poses, fm.nonorthogonality_deg,
-            axes=NONORTH)
-        z = np.array([acc[a:b].mean(axis=0) for a, b in (iv[k] for k in FERRARIS_STATIC)])
-        for name, est in (("bias_lls", bias_lls), ("bias_nlls", bias_nlls)):
-            r = est(z, grav)
-            add("bias", "m/s^2", "accelcal", name, poses, r.bias)
-            add("scale_factor", "1", "accelcal", f"{name} residuals", poses,
-                implied_scale(r.residuals, FERRARIS_STATIC, grav))
-
+        rows += _pose_set_rows(data, acc, sections, poses, iv, grav, rate_hz)
     df = pd.DataFrame(rows)
     ref = df[(df.tool == "imucal") & (df.poses == "section_list")].set_index(["parameter", "axis"])["value"]
     df["diff_to_imucal"] = [v - ref.get((p, a), np.nan) for p, a, v in zip(df.parameter, df.axis, df.value)]

@@ -30,9 +30,11 @@ import time
 import numpy as np
 import pandas as pd
 
+from accelcal.batista.filter import PAPER_THETA, PAPER_XI, kalman_filter
 from accelcal.tereshkov.errors import InvalidParameterError
 from accelcal.tereshkov.estimator import run_estimator, run_estimator_scalar
-from .montecarlo import AXES, ScenarioBatch, build_scenario, estimator_params
+
+from .montecarlo import AXES, ScenarioBatch, build_scenario, convergence_summary, estimator_params
 from .vehicle import DEG, sensor_chunks, vehicle_state
 
 METHODS = ("tereshkov", "batista", "batista_ideal_gyro")
@@ -83,7 +85,6 @@ def run_comparison(cfg: dict, batista_cfg: dict | None = None, record_every_s: f
     (table, cost) : tidy table (``scenario`` = method, run, t, sensor, axis, estimate,
         truth, error, update_time) and one row per method with the compute cost.
     """
-    from accelcal.batista.filter import PAPER_THETA, PAPER_XI, kalman_filter
 
     c = cfg.get("comparison", {})
     bcfg = batista_cfg or {}
@@ -103,7 +104,15 @@ def run_comparison(cfg: dict, batista_cfg: dict | None = None, record_every_s: f
     params = estimator_params(ccfg)
     frames, cost = [], []
 
-    # Tereshkov, batched over runs, then one run alone for the per-run cost
+    _tereshkov_rows(data, b, dt, n, rec, params, frames, cost)
+    for method in ("batista", "batista_ideal_gyro"):  # one Kalman filter per run
+        _batista_rows(method, data, b, n, rec, P0, xi, theta, frames, cost)
+    table = pd.concat(frames, ignore_index=True)
+    return table, pd.DataFrame(cost)
+
+
+def _tereshkov_rows(data, b, dt, n, rec, params, frames, cost):
+    """Tereshkov, batched over runs, then one run alone for the per-run cost (appends to ``frames``, ``cost``)."""
     t0 = time.perf_counter()
     res, _ = run_estimator(data["gyro"], data["accel"], data["f_ext"], data["course"], data["speed"], dt, params,
                            record_every=rec)
@@ -122,26 +131,26 @@ def run_comparison(cfg: dict, batista_cfg: dict | None = None, record_every_s: f
         for a, ax in enumerate(AXES):
             frames.append(_frame("tereshkov", res.t, est[:, :, a] * scale, truth[:, a] * scale, sensor, ax, upd))
 
-    # Batista, one Kalman filter per run
-    for method in ("batista", "batista_ideal_gyro"):
-        gyro = data["gyro"] - (b.gyro_bias[:, None, :] if method == "batista_ideal_gyro" else 0.0)
-        est, per_run = [], []
-        for r in range(b.n_runs):
-            x0 = np.concatenate([data["velocity"][r, 0], -data["accel"][r, 0], np.zeros(3)])
-            t0 = time.perf_counter()
-            fr = kalman_filter(data["t"], data["accel"][r], gyro[r], data["velocity"][r], x0, P0, xi, theta, rec)
-            per_run.append(time.perf_counter() - t0)
-            est.append(fr.bias)
-        est = np.stack(est)
-        cost.append({"method": method, "us_per_step_single_run": 1e6 * float(np.median(per_run)) / n,
-                     "us_per_run_step_batched": 1e6 * float(np.sum(per_run)) / (n * b.n_runs), "steps": n,
-                     "runs": b.n_runs, "states": 9, "covariance": True})
-        t_rec = fr.t
-        elapsed = np.broadcast_to(t_rec, est.shape[:2])
-        for a, ax in enumerate(("x", "y", "z")):
-            frames.append(_frame(method, t_rec, est[:, :, a], b.accel_bias[:, a], "accel", ax, elapsed))
-    table = pd.concat(frames, ignore_index=True)
-    return table, pd.DataFrame(cost)
+
+def _batista_rows(method, data, b, n, rec, P0, xi, theta, frames, cost):
+    """Batista's filter (``batista_ideal_gyro``: on bias-free gyro data), one per run (appends to
+    ``frames``, ``cost``)."""
+    gyro = data["gyro"] - (b.gyro_bias[:, None, :] if method == "batista_ideal_gyro" else 0.0)
+    est, per_run = [], []
+    for r in range(b.n_runs):
+        x0 = np.concatenate([data["velocity"][r, 0], -data["accel"][r, 0], np.zeros(3)])
+        t0 = time.perf_counter()
+        fr = kalman_filter(data["t"], data["accel"][r], gyro[r], data["velocity"][r], x0, P0, xi, theta, rec)
+        per_run.append(time.perf_counter() - t0)
+        est.append(fr.bias)
+    est = np.stack(est)
+    cost.append({"method": method, "us_per_step_single_run": 1e6 * float(np.median(per_run)) / n,
+                 "us_per_run_step_batched": 1e6 * float(np.sum(per_run)) / (n * b.n_runs), "steps": n,
+                 "runs": b.n_runs, "states": 9, "covariance": True})
+    t_rec = fr.t
+    elapsed = np.broadcast_to(t_rec, est.shape[:2])
+    for a, ax in enumerate(("x", "y", "z")):
+        frames.append(_frame(method, t_rec, est[:, :, a], b.accel_bias[:, a], "accel", ax, elapsed))
 
 
 def _frame(method, t, est, truth, sensor, axis, upd):
@@ -156,7 +165,6 @@ def comparison_summary(table: pd.DataFrame, cost: pd.DataFrame, steady_state_fro
                        fraction: float = 0.05, nonconvergence_ratio: float = 0.5) -> pd.DataFrame:
     """Per method × sensor (x, y axes; Batista's z accelerometer separately as ``accel_z``):
     convergence time, steady-state RMS and mean |error|, and the compute cost."""
-    from .montecarlo import convergence_summary
 
     xy = table[table["axis"].isin(AXES)]
     s = convergence_summary(xy, steady_state_from_s, fraction, nonconvergence_ratio)

@@ -205,6 +205,45 @@ METHOD_STYLE = {"tereshkov": ("C0", "Tereshkov (GNSS specific force + course)"),
                 "batista_ideal_gyro": ("C2", "Batista KF (body velocity; gyro bias removed)")}
 
 
+def _cost_panel(ax_d, summary: pd.DataFrame, methods: list):
+    """(d) of :func:`plot_comparison`: compute cost per filter step, one run and batched."""
+    cost = summary.drop_duplicates("method").set_index("method")
+    xs = np.arange(len(methods))
+    single = [float(cost.loc[m, "us_per_step_single_run"]) for m in methods]
+    batched = [float(cost.loc[m, "us_per_run_step_batched"]) for m in methods]
+    ax_d.bar(xs - 0.2, single, 0.4, color=[METHOD_STYLE[m][0] for m in methods], label="one run")
+    ax_d.bar(xs + 0.2, batched, 0.4, color=[METHOD_STYLE[m][0] for m in methods], alpha=0.45,
+             label="per run, runs batched")
+    ax_d.set_xticks(xs, [m.replace("_ideal_gyro", "\n(ideal gyro)") for m in methods], fontsize=7)
+    ax_d.set(ylabel="wall time per step [µs]", yscale="log", title="(d) compute cost per filter step")
+    ax_d.set_ylim(0.5 * min(single + batched), 3 * max(single + batched))
+    ax_d.legend(loc="upper right", fontsize=6.5)
+
+
+def _comparison_table(ax_t, summary: pd.DataFrame, methods: list):
+    """The table under :func:`plot_comparison`: settling time, steady-state RMS and cost per method and bias."""
+    ax_t.axis("off")
+    rows = []
+    for m in methods:
+        for sensor, unit in (("accel", "m/s²"), ("accel_z", "m/s²"), ("gyro", "°/s")):
+            s = summary[(summary["method"] == m) & (summary["sensor"] == sensor)]
+            if not len(s):
+                continue
+            s = s.iloc[0]
+            tc = f"{s['t_conv']:.0f} s" if np.isfinite(s["t_conv"]) else "no convergence"
+            short = {"tereshkov": "Tereshkov", "batista": "Batista KF, raw gyro",
+                     "batista_ideal_gyro": "Batista KF, gyro bias removed"}[m]
+            rows.append([short, {"accel": "accel x/y", "accel_z": "accel z", "gyro": "gyro x/y"}[sensor],
+                         tc, f"{s['ss_rms']:.4f} {unit}", f"{s['us_per_step_single_run']:.0f}"])
+    tab = ax_t.table(cellText=rows, colLabels=["method", "bias", "95% settling", "steady-state RMS",
+                                               "µs/step (1 run)"], loc="center", cellLoc="left")
+    tab.auto_set_font_size(False)
+    tab.set_fontsize(6.5)
+    tab.scale(1, 1.15)
+    for (r, c_), cell in tab.get_celld().items():
+        cell.set_width([0.3, 0.14, 0.18, 0.2, 0.16][c_])
+
+
 def plot_comparison(table: pd.DataFrame, summary: pd.DataFrame, example_run: int = 0):
     """``bias_convergence_comparison``: accelerometer (x, y) bias error vs time of the three
     methods on the same runs, gyro bias error (Tereshkov only), an example run, and a
@@ -243,39 +282,8 @@ def plot_comparison(table: pd.DataFrame, summary: pd.DataFrame, example_run: int
         ax_b.set(xlabel="time [s]", ylabel="mean |error| [°/s]", yscale="log", title="(b) roll/pitch gyro bias error")
         ax_c.set(xlabel="time [s]", ylabel="bias [m/s²]",
                  title=f"(c) run {example_run}: x (solid), y (dashed) estimates; truth black")
-        # (d) compute cost
-        cost = summary.drop_duplicates("method").set_index("method")
-        xs = np.arange(len(methods))
-        single = [float(cost.loc[m, "us_per_step_single_run"]) for m in methods]
-        batched = [float(cost.loc[m, "us_per_run_step_batched"]) for m in methods]
-        ax_d.bar(xs - 0.2, single, 0.4, color=[METHOD_STYLE[m][0] for m in methods], label="one run")
-        ax_d.bar(xs + 0.2, batched, 0.4, color=[METHOD_STYLE[m][0] for m in methods], alpha=0.45,
-                 label="per run, runs batched")
-        ax_d.set_xticks(xs, [m.replace("_ideal_gyro", "\n(ideal gyro)") for m in methods], fontsize=7)
-        ax_d.set(ylabel="wall time per step [µs]", yscale="log", title="(d) compute cost per filter step")
-        ax_d.set_ylim(0.5 * min(single + batched), 3 * max(single + batched))
-        ax_d.legend(loc="upper right", fontsize=6.5)
-        # table
-        ax_t.axis("off")
-        rows = []
-        for m in methods:
-            for sensor, unit in (("accel", "m/s²"), ("accel_z", "m/s²"), ("gyro", "°/s")):
-                s = summary[(summary["method"] == m) & (summary["sensor"] == sensor)]
-                if not len(s):
-                    continue
-                s = s.iloc[0]
-                tc = f"{s['t_conv']:.0f} s" if np.isfinite(s["t_conv"]) else "no convergence"
-                short = {"tereshkov": "Tereshkov", "batista": "Batista KF, raw gyro",
-                         "batista_ideal_gyro": "Batista KF, gyro bias removed"}[m]
-                rows.append([short, {"accel": "accel x/y", "accel_z": "accel z", "gyro": "gyro x/y"}[sensor],
-                             tc, f"{s['ss_rms']:.4f} {unit}", f"{s['us_per_step_single_run']:.0f}"])
-        tab = ax_t.table(cellText=rows, colLabels=["method", "bias", "95% settling", "steady-state RMS",
-                                                   "µs/step (1 run)"], loc="center", cellLoc="left")
-        tab.auto_set_font_size(False)
-        tab.set_fontsize(6.5)
-        tab.scale(1, 1.15)
-        for (r, c_), cell in tab.get_celld().items():
-            cell.set_width([0.3, 0.14, 0.18, 0.2, 0.16][c_])
+        _cost_panel(ax_d, summary, methods)
+        _comparison_table(ax_t, summary, methods)
     return fig
 
 

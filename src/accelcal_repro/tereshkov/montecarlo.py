@@ -35,9 +35,11 @@ import numpy as np
 import pandas as pd
 
 from accelcal.tereshkov.errors import InvalidParameterError
-from accelcal.tereshkov.estimator import TereshkovParams, TereshkovResult, concat_results, run_estimator
-from .vehicle import (DEG, G, Path, SensorSpec, VehicleBatch, field_path, installation_dcm,
-                      sensor_chunks, stack_paths, straight_path, vehicle_state)
+from accelcal.tereshkov.estimator import (TereshkovParams, TereshkovResult, concat_results, run_estimator,
+                                          steady_state_torque)
+
+from .vehicle import (DEG, G, Path, SensorSpec, VehicleBatch, field_path, installation_dcm, sensor_chunks, stack_paths,
+                      straight_path, vehicle_state)
 
 SENSORS = ("gyro", "accel")
 AXES = ("x", "y")
@@ -160,28 +162,7 @@ def build_scenario(cfg: dict, scenario: str) -> ScenarioBatch:
     mc = cfg.get("monte_carlo", {})
     sens = sensor_spec(cfg)
     if scenario == "sweep":
-        sw = cfg.get("sweep", {})
-        n = int(sw.get("runs", 10))
-        duration = float(sw.get("duration_s", mc.get("duration_s", 1800)))
-        seeds0 = _run_seeds(cfg, "sweep", n)
-        angles = [float(a) for a in sw.get("angles_deg", (0, 5, 10, 15, 20))]
-        kinds = list(sw.get("kinds", ("roll_pitch", "yaw")))
-        rows, seeds, mis = [], [], []
-        for kind in kinds:
-            if kind not in ("roll_pitch", "yaw", "all"):
-                raise InvalidParameterError(f"sweep kind must be roll_pitch, yaw or all, not {kind!r}")
-            for a in angles:
-                for i, s in enumerate(seeds0):
-                    rp = a if kind in ("roll_pitch", "all") else 0.0
-                    y = a if kind in ("yaw", "all") else 0.0
-                    rows.append({"kind": kind, "angle_deg": a, "run": i})
-                    seeds.append(s)
-                    mis.append(installation_dcm(rp, rp, y))
-        seeds = np.array(seeds)
-        bg, ba = _truth_biases(cfg, seeds)
-        path = _paths(cfg, sw.get("path", "field"), seeds, duration)
-        batch = VehicleBatch(path, sens, np.array(mis), bg, ba, seeds)
-        return ScenarioBatch(batch, pd.DataFrame(rows))
+        return _sweep_scenario(cfg, sens, mc)
     sc = cfg.get("scenarios", {}).get(scenario)
     if sc is None:
         raise InvalidParameterError(f"no scenario {scenario!r} in the config")
@@ -189,33 +170,71 @@ def build_scenario(cfg: dict, scenario: str) -> ScenarioBatch:
     duration = float(sc.get("duration_s", mc.get("duration_s", 1800)))
     seeds = _run_seeds(cfg, scenario, n)
     if scenario == "artificial":
-        bg, ba = _truth_biases(cfg, seeds, accel_range=sc.get("intrinsic_accel_bias_mps2", (0.0, 0.04)))
-        ba[:, 2] = _truth_biases(cfg, seeds)[1][:, 2]
-        lim = float(sc.get("installation_deg", 2.0))
-        mis = np.array([installation_dcm(*np.random.default_rng([int(s), 4]).uniform(-lim, lim, 3)) for s in seeds])
-        art = np.zeros(3)
-        art[:2] = sc.get("artificial_accel_bias_mps2", (0.2, -0.2))
-        path = _paths(cfg, sc.get("path", "field"), np.concatenate([seeds, seeds]), duration)
-        batch = VehicleBatch(path, sens, np.concatenate([mis, mis]), np.concatenate([bg, bg]),
-                             np.concatenate([ba, ba + art]), np.concatenate([seeds, seeds]))
-        groups = pd.DataFrame({"variant": ["plain"] * n + ["artificial"] * n, "run": list(range(n)) * 2,
-                               "artificial_x": [0.0] * n + [art[0]] * n, "artificial_y": [0.0] * n + [art[1]] * n})
-        return ScenarioBatch(batch, groups)
+        return _artificial_scenario(cfg, sc, sens, seeds, duration)
     if scenario == "observability":
-        bg, ba = _truth_biases(cfg, seeds)
-        shift = np.zeros(3)
-        shift[:2] = sc.get("accel_shift_mps2", (0.2, -0.2))
-        path = _paths(cfg, sc.get("path", "field"), np.concatenate([seeds, seeds]), duration)
-        eye = np.repeat(np.eye(3)[None], 2 * n, axis=0)
-        batch = VehicleBatch(path, sens, eye, np.concatenate([bg, bg]), np.concatenate([ba, ba + shift]),
-                             np.concatenate([seeds, seeds]))
-        groups = pd.DataFrame({"variant": ["plain"] * n + ["shifted"] * n, "run": list(range(n)) * 2})
-        return ScenarioBatch(batch, groups)
+        return _observability_scenario(cfg, sc, sens, seeds, duration)
     bg, ba = _truth_biases(cfg, seeds)
     ang = np.asarray(sc.get("installation_deg", (0.0, 0.0, 0.0)), dtype=float) * np.ones(3)
     mis = np.repeat(installation_dcm(*ang)[None], n, axis=0)
     path = _paths(cfg, sc.get("path", scenario), seeds, duration)
     return ScenarioBatch(VehicleBatch(path, sens, mis, bg, ba, seeds), pd.DataFrame({"run": range(n)}))
+
+
+def _sweep_scenario(cfg: dict, sens, mc: dict) -> ScenarioBatch:
+    """:func:`build_scenario`'s ``sweep``: the same runs at every installation angle and kind."""
+    sw = cfg.get("sweep", {})
+    n = int(sw.get("runs", 10))
+    duration = float(sw.get("duration_s", mc.get("duration_s", 1800)))
+    seeds0 = _run_seeds(cfg, "sweep", n)
+    angles = [float(a) for a in sw.get("angles_deg", (0, 5, 10, 15, 20))]
+    kinds = list(sw.get("kinds", ("roll_pitch", "yaw")))
+    rows, seeds, mis = [], [], []
+    for kind in kinds:
+        if kind not in ("roll_pitch", "yaw", "all"):
+            raise InvalidParameterError(f"sweep kind must be roll_pitch, yaw or all, not {kind!r}")
+        for a in angles:
+            for i, s in enumerate(seeds0):
+                rp = a if kind in ("roll_pitch", "all") else 0.0
+                y = a if kind in ("yaw", "all") else 0.0
+                rows.append({"kind": kind, "angle_deg": a, "run": i})
+                seeds.append(s)
+                mis.append(installation_dcm(rp, rp, y))
+    seeds = np.array(seeds)
+    bg, ba = _truth_biases(cfg, seeds)
+    path = _paths(cfg, sw.get("path", "field"), seeds, duration)
+    batch = VehicleBatch(path, sens, np.array(mis), bg, ba, seeds)
+    return ScenarioBatch(batch, pd.DataFrame(rows))
+
+
+def _artificial_scenario(cfg: dict, sc: dict, sens, seeds, duration: float) -> ScenarioBatch:
+    """:func:`build_scenario`'s ``artificial``: each run without and with the known biases added."""
+    n = len(seeds)
+    bg, ba = _truth_biases(cfg, seeds, accel_range=sc.get("intrinsic_accel_bias_mps2", (0.0, 0.04)))
+    ba[:, 2] = _truth_biases(cfg, seeds)[1][:, 2]
+    lim = float(sc.get("installation_deg", 2.0))
+    mis = np.array([installation_dcm(*np.random.default_rng([int(s), 4]).uniform(-lim, lim, 3)) for s in seeds])
+    art = np.zeros(3)
+    art[:2] = sc.get("artificial_accel_bias_mps2", (0.2, -0.2))
+    path = _paths(cfg, sc.get("path", "field"), np.concatenate([seeds, seeds]), duration)
+    batch = VehicleBatch(path, sens, np.concatenate([mis, mis]), np.concatenate([bg, bg]),
+                         np.concatenate([ba, ba + art]), np.concatenate([seeds, seeds]))
+    groups = pd.DataFrame({"variant": ["plain"] * n + ["artificial"] * n, "run": list(range(n)) * 2,
+                           "artificial_x": [0.0] * n + [art[0]] * n, "artificial_y": [0.0] * n + [art[1]] * n})
+    return ScenarioBatch(batch, groups)
+
+
+def _observability_scenario(cfg: dict, sc: dict, sens, seeds, duration: float) -> ScenarioBatch:
+    """:func:`build_scenario`'s ``observability``: pairs of runs apart only by a known accelerometer-bias shift."""
+    n = len(seeds)
+    bg, ba = _truth_biases(cfg, seeds)
+    shift = np.zeros(3)
+    shift[:2] = sc.get("accel_shift_mps2", (0.2, -0.2))
+    path = _paths(cfg, sc.get("path", "field"), np.concatenate([seeds, seeds]), duration)
+    eye = np.repeat(np.eye(3)[None], 2 * n, axis=0)
+    batch = VehicleBatch(path, sens, eye, np.concatenate([bg, bg]), np.concatenate([ba, ba + shift]),
+                         np.concatenate([seeds, seeds]))
+    groups = pd.DataFrame({"variant": ["plain"] * n + ["shifted"] * n, "run": list(range(n)) * 2})
+    return ScenarioBatch(batch, groups)
 
 
 # ----------------------------------------------------------------------------- running
@@ -534,7 +553,6 @@ def observability_table(cfg: dict) -> tuple[pd.DataFrame, dict]:
     C_sb = np.swapaxes(sb.batch.C_bs[plain], -1, -2)
     w = np.einsum("rij,rnj->rni", C_sb, st.omega_b)
     w[..., :2] = 0.0  # eq. (14) setting: only the vertical rate
-    from accelcal.tereshkov.estimator import steady_state_torque
     pred = steady_state_torque(np.zeros_like(w), np.broadcast_to(delta[:, None, :], w.shape), w, params)[..., :2]
     mode, mt = res.mode[plain], res.mode_time[plain]
     rows = []

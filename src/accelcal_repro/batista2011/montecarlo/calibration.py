@@ -117,21 +117,28 @@ def calibration_montecarlo(design: CalibrationDesign, rngs, tol: float = 1e-10, 
         T = min(chunk, runs - start)
         noise = design.noise_std * np.stack([g.standard_normal((K, n, 3)) for g in rngs[start:start + T]])
         run_ids = all_ids[start:start + T]
-        for data, quad in DATASETS.items():
+        for data in DATASETS:
             stats = WindowStatistics.from_samples(mus[data][None, :, None, :] + noise)
-            for method, quadratic in (("batista2011", True), ("batista2011_linear", False)):
-                r = calibrate_batch(stats, R, design.g, tol=tol, max_iter=max_iter, quadratic=quadratic)
-                est = r.vectors()
-                der = np.array([derived_quantities(v) for v in est])
-                keep = _estimated(method)
-                frames.append(_rows(run_ids, data, method, tuple(np.array(PARAMETERS + DERIVED)[keep]),
-                                    np.hstack([est, der])[:, keep],
-                                    np.concatenate([truths[data], dtruth[data]])[keep], r.converged, r.iterations))
-            lls = full_lls_batch(stats.means, design.g)
-            der = np.hstack([lls.bias, lls.M[:, _LOWER[0], _LOWER[1]]])
-            frames.append(_rows(run_ids, data, "full_lls", DERIVED, der, dtruth[data], lls.valid,
-                                np.zeros(T, int)))
+            frames += _dataset_rows(design, stats, data, truths[data], dtruth[data], run_ids, tol, max_iter)
     return pd.concat(frames, ignore_index=True)
+
+
+def _dataset_rows(design: CalibrationDesign, stats, data: str, truth, dtruth, run_ids, tol: float,
+                  max_iter: int) -> list[pd.DataFrame]:
+    """The three estimators' rows of one chunk of runs on one data set (``stats``: its windows)."""
+    frames = []
+    for method, quadratic in (("batista2011", True), ("batista2011_linear", False)):
+        r = calibrate_batch(stats, design.R, design.g, tol=tol, max_iter=max_iter, quadratic=quadratic)
+        est = r.vectors()
+        der = np.array([derived_quantities(v) for v in est])
+        keep = _estimated(method)
+        frames.append(_rows(run_ids, data, method, tuple(np.array(PARAMETERS + DERIVED)[keep]),
+                            np.hstack([est, der])[:, keep], np.concatenate([truth, dtruth])[keep], r.converged,
+                            r.iterations))
+    lls = full_lls_batch(stats.means, design.g)
+    der = np.hstack([lls.bias, lls.M[:, _LOWER[0], _LOWER[1]]])
+    frames.append(_rows(run_ids, data, "full_lls", DERIVED, der, dtruth, lls.valid, np.zeros(len(run_ids), int)))
+    return frames
 
 
 def _estimated(method: str) -> np.ndarray:

@@ -130,7 +130,13 @@ def filter_montecarlo(sc: FilterScenario, rngs, P0_diag, xi=PAPER_XI, theta=PAPE
         for j0 in range(0, len(idx), sub_block):  # small sub-blocks keep the (B, 3, 3, T) arrays in cache
             sl = slice(j0, j0 + sub_block)
             st.run_block(a[:, sl], w[:, sl], y[:, sl], gains, k0 + j0)
-    err = st.out - sc.x_true()[both][None]  # (T, n_both, 9)
+    return _filter_tables(st.out - sc.x_true()[both][None], ids, t, rec, summ, both, P_all)
+
+
+def _filter_tables(err, ids, t, rec, summ, both, P_all) -> FilterMonteCarlo:
+    """:func:`filter_montecarlo`'s tables from the errors ``err`` (runs, times ``both``, 9):
+    the recorded errors per run, and the moments and summary at the summary times."""
+    runs = len(ids)
     pos = {k: i for i, k in enumerate(both)}
     ri = [pos[k] for k in rec]
     si = [pos[k] for k in summ]
