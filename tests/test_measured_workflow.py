@@ -30,6 +30,7 @@ def workflow(tmp_path, data_dir) -> Path:
     snakefile = tmp_path / "Snakefile"
     snakefile.write_text("import os, re\n"
                          f"include: {str(REPO / 'workflow' / 'rules' / 'common.smk')!r}\n"
+                         f"include: {str(REPO / 'workflow' / 'rules' / 'kernels.smk')!r}\n"  # the compile job
                          f"include: {str(REPO / 'workflow' / 'rules' / 'measured.smk')!r}\n")
     return snakefile
 

@@ -18,7 +18,8 @@ rule kernel_cache:
         log_path("benchmark/kernel_cache"),
     benchmark:
         bench_path("benchmark/kernel_cache"),
-    priority: 100
+    priority: 90  # right after a download (100): a failing fetch still stops the run first
+    localrule: True  # on a cluster: the login node fills the cache on the shared disk once
     threads: 1
     resources:
         mem_mb=2000,

@@ -56,12 +56,9 @@ from ..gyro.fit import MotionSet, evaluate, motion_residuals
 from ..gyro.model import GyroModel
 from ..gyro.rests import (RestStatistics, bias_series, fit_bias, motion_bias_variance, rest_noise, rest_statistics,
                           sample_interval, saturated_samples)
-from .statistics import critical_noncentrality, holm
+from .nested import MAX_ABSORBED, LoopOutcome, nested_f_test
+from .statistics import holm
 
-#: A candidate whose whitened columns the base model absorbs beyond this share is not identifiable.
-MAX_ABSORBED = 0.99
-#: Fewest degrees of freedom left after a candidate (2 per motion, 9 for C).
-MIN_DOF = 4
 #: Samples kept on either side of a motion when its columns are integrated (magnus4's cubic reads one).
 MARGIN = 3
 #: Fewest samples in every rest for the gyro's noise (and its autocorrelation) to be measured.
@@ -234,20 +231,8 @@ def _with_y(ms: MotionSet, y) -> MotionSet:
                      ms.bias_var)
 
 
-def _orth(A: np.ndarray) -> np.ndarray:
-    """Orthonormal basis of the columns of ``A`` (rank-revealing SVD)."""
-    if A.shape[1] == 0:
-        return A
-    U, s, _ = np.linalg.svd(A, full_matrices=False)
-    return U[:, s > s[0] * 1e-10] if s.size and s[0] > 0 else U[:, :0]
-
-
-def _resid(Q: np.ndarray, A: np.ndarray) -> np.ndarray:
-    return A - Q @ (Q.T @ A)
-
-
 @dataclass(frozen=True)
-class GyroLoopResult:
+class GyroLoopResult(LoopOutcome):
     """The gyro loop's decisions: per round and candidate, the test; named effects; gaps."""
 
     named: tuple[str, ...]
@@ -262,13 +247,6 @@ class GyroLoopResult:
     dC: np.ndarray | None = None  #: the refit's change of ``C`` with the named effects
     calibration: dict | None = None  #: the gyro calibration with the named effects (``apply`` reads it)
     motions: GyroMotions | None = field(default=None, repr=False)  #: the data tested (not in :meth:`to_dict`)
-
-    @property
-    def outcome(self) -> str:
-        if self.named:
-            return "effect"
-        rows = self.rounds[0].values() if self.rounds else []
-        return "not_identifiable" if any(r["status"] == "not_identifiable" for r in rows) else "none"
 
     def to_dict(self) -> dict:
         return {"named": list(self.named) or ["none"], "outcome": self.outcome, "candidates": self.rounds,
@@ -308,40 +286,6 @@ def _sign_coverage(gm: GyroMotions, min_deg: float = 30.0) -> list[str]:
     return ["xyz"[k] for k in range(3) if min(ang[ang[:, k] > 0, k].sum(), -ang[ang[:, k] < 0, k].sum()) < min_deg]
 
 
-def _test(base_w: np.ndarray, Xw: np.ndarray, rw: np.ndarray, E: np.ndarray, alpha: float) -> dict:
-    """F test of the whitened columns ``Xw`` on top of ``base_w``, bootstrap p-value (null draws ``E``).
-
-    ``alpha``: the level the MDE is computed at (the caller passes α over the number of
-    candidates, the Bonferroni level Holm's first rejection needs)."""
-    n = len(rw)
-    Qb = _orth(base_w)
-    Xp = _resid(Qb, Xw)
-    absorbed = 1.0 - np.sum(Xp ** 2, axis=0) / np.maximum(np.sum(Xw ** 2, axis=0), 1e-300)
-    Z = _orth(Xp)
-    k, dof = Z.shape[1], n - Qb.shape[1] - Z.shape[1]
-    row = {"absorbed": absorbed.tolist(), "k": int(Xw.shape[1]), "dof": int(dof)}
-    if dof < MIN_DOF:  # too few motions: two residuals each, 9 for C, k for the candidate
-        need = int(np.ceil((n - dof + MIN_DOF) / 2))
-        return {**row, "status": "not_identifiable", "motions_needed": need,
-                "why": f"too few motions: {n // 2} here, at least {need} needed for {Xw.shape[1]} parameter(s)"}
-    if k < Xw.shape[1] or np.any(absorbed > MAX_ABSORBED):
-        return {**row, "status": "not_identifiable",
-                "why": "the motions cannot tell it from C (its columns absorbed by the base model)"}
-    r0 = _resid(Qb, rw)
-    num = float(np.sum((Z.T @ r0) ** 2))
-    den = float(r0 @ r0) - num
-    F = (num / k) / (den / dof)
-    E0 = _resid(Qb, E)
-    nb = np.sum((Z.T @ E0) ** 2, axis=0)
-    Fb = (nb / k) / ((np.sum(E0 ** 2, axis=0) - nb) / dof)
-    p = (1.0 + np.sum(Fb >= F)) / (1.0 + E.shape[1])
-    s = np.sqrt(den / dof)  # the noise scale under the extended model
-    lam = critical_noncentrality(k, dof, alpha, 0.8)
-    mde = s * np.sqrt(lam) / np.linalg.norm(Xp, axis=0)
-    return {**row, "status": "tested", "F": F, "p_value": float(p), "mde": mde.tolist(), "noise_scale": float(s),
-            "excess_after": float(np.sqrt(den / dof))}
-
-
 def gyro_discrepancy(gm: GyroMotions, *, alpha: float = 0.05, n_boot: int = 999, seed: int = 20240708,
                      candidates=CANDIDATE_NAMES, max_rounds: int = 3) -> GyroLoopResult:
     """Run the gyro loop (module docstring) on the motions of a gyro fit."""
@@ -370,7 +314,7 @@ def gyro_discrepancy(gm: GyroMotions, *, alpha: float = 0.05, n_boot: int = 999,
                            "not_identifiable", "why": _unformed(c, gm), "needs": info.needs,
                            "params": list(info.params), "unit": info.unit}
                 continue
-            row = _test(base, Xws[c], rw, E, alpha / max(1, n_candidates))
+            row = nested_f_test(base, Xws[c], rw, E, alpha / max(1, n_candidates))
             if c == "scale_asymmetry" and wrong_way and row["status"] == "tested":
                 row = {**row, "status": "not_identifiable", "axes_lacking": wrong_way}
             if c == "scale_asymmetry" and row["status"] == "not_identifiable" and "axes_lacking" in row:
@@ -404,7 +348,7 @@ def estimate_effects(gm: GyroMotions, names) -> dict:
         if X is None:
             continue
         Xw = ev.whiten(X)
-        if _test(np.column_stack([Jw, *Xs]), Xw, rw, np.zeros((len(rw), 0)), 0.05)["status"] != "tested":
+        if nested_f_test(np.column_stack([Jw, *Xs]), Xw, rw, np.zeros((len(rw), 0)), 0.05)["status"] != "tested":
             continue
         keep.append(c)
         Xs.append(Xw)

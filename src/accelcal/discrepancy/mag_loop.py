@@ -18,7 +18,7 @@ place to place), so residuals and columns are whitened by an AR(1) model (:data:
 to the residuals of the largest fixed model (the ellipsoid, with temperature when a column exists;
 :mod:`accelcal.mag.noise`), and the common scale of the innovations is estimated, not
 assumed.  Tests, MDE and identifiability are the gyro loop's
-(``accelcal.discrepancy.gyro_loop._test``: ``F`` with a parametric-bootstrap
+(``accelcal.discrepancy.nested.nested_f_test``: ``F`` with a parametric-bootstrap
 p-value, Holm over a round's candidates).  The disturbance's stretch is searched over the
 windows between :data:`N_GRID` + 1 boundaries; its p-value is that of the largest ``F`` over
 all windows (the bootstrap repeats the search), its MDE is at the Bonferroni level over them.
@@ -42,10 +42,11 @@ from ..errors import AccelcalError
 from ..mag.fit import FieldSamples, fit_ellipsoid_ml, fit_hard_iron, sampson_residuals
 from ..mag.noise import ARNoise, block_covariance, fit_ar
 from ..mag.trust import prepare, quiet_intervals, rest_noise
-from .gyro_loop import _orth as orth
-from .gyro_loop import _resid as project_out
-from .gyro_loop import _test as nested_test
+from .nested import LoopOutcome, nested_f_test, orthonormal_basis, project_out
 from .statistics import holm
+
+#: What the magnetometer's residuals come in (one per sample), for the nested test's reasons.
+SAMPLES = {"unit": "samples", "rows_per_unit": 1, "base": "the model fitted so far"}
 
 #: The noise model's AR order.  Fitted to residuals from which the candidates' directions were
 #: projected out, a finer spectrum under-states the noise exactly there: on 100 effect-free
@@ -82,7 +83,7 @@ CANDIDATE_NAMES = tuple(c.name for c in CANDIDATES)
 
 
 @dataclass(frozen=True)
-class MagLoopResult:
+class MagLoopResult(LoopOutcome):
     """The magnetometer loop's decisions: the same keys as the gyroscope's (``to_dict``)."""
 
     named: tuple[str, ...]
@@ -95,13 +96,6 @@ class MagLoopResult:
     n_boot: int
     noise: dict = field(default_factory=dict)
     notes: tuple[str, ...] = ()
-
-    @property
-    def outcome(self) -> str:
-        if self.named:
-            return "effect"
-        rows = self.rounds[0].values() if self.rounds else []
-        return "not_identifiable" if any(r["status"] == "not_identifiable" for r in rows) else "none"
 
     def to_dict(self) -> dict:
         return {"named": list(self.named) or ["none"], "outcome": self.outcome, "candidates": self.rounds,
@@ -155,12 +149,12 @@ def window_columns(J: np.ndarray, window) -> np.ndarray:
 
 def _scan(base_w, J, rw, E, ar: ARNoise, n_grid: int) -> dict:
     """The disturbance: the window of largest F, its p-value from the bootstrap of the largest F."""
-    Qb = orth(base_w)
+    Qb = orthonormal_basis(base_w)
     r0, E0 = project_out(Qb, rw), project_out(Qb, E)
     wins = _windows(len(J), n_grid)
     best, F_max, Fb_max = None, -np.inf, np.full(E.shape[1], -np.inf)
     for w in wins:
-        Z = orth(project_out(Qb, ar.whiten(window_columns(J, w))))
+        Z = orthonormal_basis(project_out(Qb, ar.whiten(window_columns(J, w))))
         dof = len(rw) - Qb.shape[1] - Z.shape[1]
         if Z.shape[1] < 3 or dof < 4:
             continue
@@ -192,7 +186,8 @@ def _disturbance_row(c, base_w, J, rw, E, ar, level, n_grid) -> dict:
     scan = _scan(base_w, J, rw, E, ar, n_grid)
     if not scan:
         return _row(c, status="not_identifiable")
-    row = nested_test(base_w, ar.whiten(window_columns(J, scan["window"])), rw, E, level / scan["n_windows"])
+    row = nested_f_test(base_w, ar.whiten(window_columns(J, scan["window"])), rw, E, level / scan["n_windows"],
+                        **SAMPLES)
     if row["status"] == "tested":
         row.update(p_value=scan["p_scan"], F=scan["F_max"], window=list(scan["window"]), n_windows=scan["n_windows"])
     return _row(c, **row)
@@ -238,7 +233,7 @@ def _round(samples, temp, named: dict, ar, E, alpha, n_grid, candidates) -> tupl
         if X is None:
             rows[c.name] = _row(c, status="not_identifiable", reason="no temperature column (or a constant one)")
             continue
-        rows[c.name] = _row(c, **nested_test(base_w, ar.whiten(X), rw, E, level))
+        rows[c.name] = _row(c, **nested_f_test(base_w, ar.whiten(X), rw, E, level, **SAMPLES))
     state = {"theta": theta, "r": r, "J": J, "Jb": Jb}
     _with_block_p(rows, state, named, temp)
     return rows, state
