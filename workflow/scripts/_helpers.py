@@ -11,6 +11,7 @@ and use the rule's paths relative to the current directory.
 from __future__ import annotations
 
 import gzip
+import json
 import logging
 import os
 import sys
@@ -133,3 +134,14 @@ def write_csv(df, path: str | os.PathLike, **kwargs) -> Path:
         else:
             df.to_csv(tmp, index=False, **kwargs)
     return path
+
+
+def dataset_dirs(manifests) -> dict[str, Path]:
+    """``{dataset: folder}`` from fetch manifests: each dataset's files sit in
+    ``<folder>/<dataset>/`` (the shared copy or the verified download)."""
+    dirs = {}
+    for path in manifests:
+        m = json.loads(Path(path).read_text())
+        first = next(iter(m["files"].values()))["path"]
+        dirs[m["dataset"]] = Path(first).parent.parent
+    return dirs

@@ -1,10 +1,7 @@
 """Every real magnetometer session through the magnetometer's discrepancy loop."""
 
-import json
-from pathlib import Path
-
 import pandas as pd
-from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
+from _helpers import configure_logging, dataset_dirs, mock_snakemake_from_argv, write_csv
 
 from accelcal_repro.mag.stage import loop_rows
 
@@ -12,11 +9,7 @@ if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_
     snakemake = mock_snakemake_from_argv("mag_loop_sessions")
 
 log = configure_logging(snakemake)
-dirs = {}
-for path in snakemake.input.manifests:
-    m = json.loads(Path(path).read_text())
-    first = next(iter(m["files"].values()))["path"]
-    dirs[m["dataset"]] = Path(first).parent.parent
+dirs = dataset_dirs(snakemake.input.manifests)
 p = snakemake.params.mag["loop"]
 rows = []
 for name in snakemake.params.mag["sessions"]:

@@ -1,11 +1,8 @@
 """Every magnetometer method on every configured session; the SNU session-to-session table."""
 
-import json
-from pathlib import Path
-
 import numpy as np
 import pandas as pd
-from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
+from _helpers import configure_logging, dataset_dirs, mock_snakemake_from_argv, write_csv
 
 from accelcal_repro.mag.sessions import FILES
 from accelcal_repro.mag.stage import session_rows, stability
@@ -14,12 +11,7 @@ if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_
     snakemake = mock_snakemake_from_argv("mag_sessions")
 
 log = configure_logging(snakemake)
-# every dataset's files sit in <dir>/<dataset>/ (the shared copy or the verified download)
-dirs = {}
-for path in snakemake.input.manifests:
-    m = json.loads(Path(path).read_text())
-    first = next(iter(m["files"].values()))["path"]
-    dirs[m["dataset"]] = Path(first).parent.parent
+dirs = dataset_dirs(snakemake.input.manifests)
 published = None
 if "mag_qmc5883l_suarez" in dirs:
     published = np.loadtxt(dirs["mag_qmc5883l_suarez"] / "mag_qmc5883l_suarez" / "paramters_mag.csv")
