@@ -92,7 +92,7 @@ def assert_same(fast, general) -> None:
     assert fast.names == general.names and fast.preamble == general.preamble
     assert (fast.delim, fast.dc, fast.k) == (general.delim, general.dc, general.k)
     assert list(fast.lines) == list(general.lines)
-    np.testing.assert_array_equal(fast.block, np.array(general.data, dtype=float))
+    np.testing.assert_array_equal(np.column_stack(fast.numbers), np.array(general.data, dtype=float))
     for i in range(fast.k):
         assert fast.column(i).tolist() == general.column(i).tolist()
 

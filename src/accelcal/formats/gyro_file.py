@@ -25,7 +25,7 @@ from .inference import resolve_gyro_unit, time_seconds
 from .parsing import parse_numbers
 from .sync import estimate_offset, shift_gyro, sphere_centre
 from .columns import ACC_ROLES, GYRO_ROLES, map_columns
-from .table import _numeric_block, _split_table
+from .table import _split_table, numeric_columns
 from .text import load_text
 
 
@@ -43,16 +43,16 @@ def read_gyro_table(path, *, gyro_unit: str | None = None, time_unit: str | None
     def column(role):
         return tab.column(roles[role])
 
-    block = _numeric_block(tab)
-    if block is not None and np.all(np.isfinite(block[:, [roles[r] for r in triad]])):
-        raw = block[:, [roles[r] for r in triad]]
+    floats = numeric_columns(tab)
+    if floats is not None and all(np.all(np.isfinite(floats[roles[r]])) for r in triad):
+        raw = np.column_stack([floats[roles[r]] for r in triad])
     else:  # column by column: names the first bad value and its line
         raw = np.column_stack([parse_numbers(column(r), tab.dc, path, r, tab.names, roles[r], tab.lines)
                                for r in triad])
     gyro, unit, note = resolve_gyro_unit(raw, units, gyro_unit, path)
     t = None
     if "t" in roles:
-        tcol = block[:, roles["t"]] if block is not None and np.all(np.isfinite(block[:, roles["t"]])) else None
+        tcol = floats[roles["t"]] if floats is not None and np.all(np.isfinite(floats[roles["t"]])) else None
         t, _ = time_seconds(column("t"), None, time_unit, units.get("t"), tab.names, roles, tab.dc, path, tab.lines,
                             tab.preamble, parsed=tcol)
         t, _ = clocked_time(t, None, counter_name="", mode=clock, timed_by_rate=False,

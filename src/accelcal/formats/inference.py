@@ -166,7 +166,8 @@ def time_seconds(values, rate, tu, header_unit, names, roles, dc, path, lines, p
     epoch = abs(t0) * f >= 1e6  # clock or epoch time: seconds from the first sample keep the digits
     t = rel * f if epoch else x * f
     steps = np.diff(t)
-    rate_hz = 1.0 / float(np.median(steps[steps > 0]))
+    steps = steps if steps.size and steps.min() > 0 else steps[steps > 0]
+    rate_hz = 1.0 / float(np.median(steps, overwrite_input=True))  # a temporary: no copy of it
     note = f"time unit: {unit} ({how}): {rate_hz:.4g} Hz over {t[-1] - t[0]:.4g} s"
     if how.startswith("inferred") or not 1.0 <= rate_hz <= 20000.0:
         note += "; pass --time-unit if wrong"
@@ -182,7 +183,7 @@ def _infer_time_unit(rel, t0: float, integer: bool) -> tuple[str, str]:
         for u, f in factors.items():
             if 1e8 <= abs(t0) * f < 1e10:
                 return u, f"inferred from the epoch time stamp {t0:.6g}"
-    dt = float(np.median(np.diff(rel)))
+    dt = float(np.median(np.diff(rel), overwrite_input=True))
     cands = ("ms", "us", "ns", "s") if integer else ("s", "ms")
     best = min(cands, key=lambda u: abs(np.log10(1.0 / (dt * factors[u]) / TYPICAL_RATE_HZ)))
     why = "integer steps" if integer else "fractional values"

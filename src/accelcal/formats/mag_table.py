@@ -41,11 +41,13 @@ def read_mag_table(path, *, columns=None, mag_unit: str | None = None, unit: str
     if tab.names is None and not columns:
         raise RecordingError(f"{path}: no header: name the magnetometer columns with --columns mx=..,my=..,mz=..")
     roles, units = map_columns(tab.names, tab.k, parse_columns(columns), path, required=MAG_ROLES)
-    block = np.array(tab.data, dtype=float) if tab.block is None and not tab.dc and _numeric(tab) else tab.block
+    floats = tab.numbers
+    if floats is None and not tab.dc and _numeric(tab):
+        floats = list(np.array(tab.data, dtype=float).T)
 
     def numbers(role):
-        if block is not None:
-            return block[:, roles[role]]
+        if floats is not None:
+            return floats[roles[role]]
         return parse_numbers(tab.column(roles[role]), tab.dc, path, role, tab.names, roles[role], tab.lines)
 
     mag, mu, note = resolve_mag_unit(np.column_stack([numbers(r) for r in MAG_ROLES]), units.get("mag_units", {}),

@@ -55,8 +55,8 @@ class _AsciiStream(io.TextIOBase):
         return piece
 
 
-def parse_block(text: str, offset: int, delim: str, k: int) -> tuple[np.ndarray, Body] | None:
-    """``(floats (n, k), the lines)`` when each line of ``text`` from ``offset`` on holds
+def parse_block(text: str, offset: int, delim: str, k: int) -> tuple[list[np.ndarray], Body] | None:
+    """``(the k columns' floats (n each), the lines)`` when each line of ``text`` from ``offset`` on holds
     ``k`` plain numbers (trailing blank lines aside), else None.  The C parsers are strict
     (a comment, a blank line, text, an empty or a quoted field, a row of another length
     fails them; their numbers are Python's ``float`` of the field) and counted: ``n`` must
@@ -71,34 +71,37 @@ def parse_block(text: str, offset: int, delim: str, k: int) -> tuple[np.ndarray,
     stream = _AsciiStream(body)
     try:
         if use_pandas(end - offset):
-            block = _pandas_block(stream, delim, k, n)
+            columns = _pandas_columns(stream, delim, k, n)
         else:
             block = np.loadtxt(io.StringIO(stream.read()), delimiter=None if delim == " " else delim, ndmin=2,
                                comments=None, dtype=float)
+            columns = list(block.T) if block.shape[1] == k else []
     except ValueError:  # pandas' ParserError is a ValueError
         return None
-    if stream.pos != end or block.shape != (n, k):
+    if stream.pos != end or len(columns) != k or len(columns[0]) != n:
         return None
     if stream.controls > n - 1:  # carriage returns (of CRLF only), tabs, nothing else
         cr = text.count("\r", offset, end)
         if stream.controls != n - 1 + cr + text.count("\t", offset, end) or cr != text.count("\r\n", offset, end):
             return None
-    return block, body
+    return columns, body
 
 
-def _pandas_block(stream, delim: str, k: int, n: int) -> np.ndarray:
+def _pandas_columns(stream, delim: str, k: int, n: int) -> list[np.ndarray]:
     """``n`` lines of ``stream`` by pandas' C reader: no quoting, no NA spellings, no blank
     lines skipped, ``k`` columns (a row with more raises, one with fewer leaves an empty
-    field, which raises).  In one call, the frame's one float block returned as it is (no
-    copy): read in chunks into an array of ours, the same table cost a fifth more page
-    faults (each chunk's buffers allocated anew), 0.1-0.2 s of system time for 10⁶ lines."""
+    field, which raises).  In one call (read in chunks into an array of ours, the same table
+    cost a fifth more page faults: each chunk's buffers allocated anew, 0.1-0.2 s of system
+    time for 10⁶ lines), each column's array returned as pandas made it: the frame read
+    with ``nrows`` keeps one block per column, and a (n, k) matrix of them would be a copy
+    (0.1 s and 8 MB per 10⁶ rows and column, a fifth of the read)."""
 
     import pandas as pd  # here: a table of 10^5 lines or more repays its import
 
     frame = pd.read_csv(stream, sep=r"\s+" if delim == " " else delim, header=None, names=range(k), index_col=False,
                         dtype=np.float64, quoting=csv.QUOTE_NONE, na_filter=False, skip_blank_lines=False, engine="c",
                         nrows=n)
-    return frame.to_numpy()
+    return [frame[c].to_numpy() for c in range(k)]
 
 
 def field_strings(body: Body, i: int, delim: str, k: int) -> np.ndarray:

@@ -21,7 +21,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import RecordingError
-from ..recording import MIN_ROWS, Recording, intervals_from_labels
+from ..recording import MIN_ROWS, Recording, handed_over, intervals_from_labels
 from ..units import to_celsius
 from .clock import clocked_time, looks_like_counter
 from .columns import ACC_ROLES, GYRO_ROLES, map_columns, parse_columns
@@ -75,8 +75,9 @@ def sniff(lines: list[str]) -> tuple[str, bool, int]:
 class _Table(NamedTuple):
     """The rows of a table: header names (or None), data rows, their file line numbers, the
     lines above the header (line number, fields), delimiter, decimal comma, field count;
-    a plain numeric table (:func:`_fast_table`) has ``block`` (its floats) and its data
-    lines in ``raw`` instead of ``data``, and ``lines`` a range."""
+    a plain numeric table (:func:`_fast_table`) or a matrix (:func:`read_matrix`) has
+    ``numbers`` (each column's floats) instead of ``data`` (and the table its data lines in
+    ``raw``), and ``lines`` a range."""
 
     names: list[str] | None
     data: list[list[str]] | None
@@ -85,7 +86,7 @@ class _Table(NamedTuple):
     delim: str
     dc: bool
     k: int
-    block: np.ndarray | None = None
+    numbers: list[np.ndarray] | None = None
     raw: Body | None = None
 
     def column(self, i: int) -> np.ndarray | TextColumn:
@@ -94,8 +95,8 @@ class _Table(NamedTuple):
         if self.data is not None:
             return np.asarray([r[i] for r in self.data], dtype=object)
         if self.raw is None:  # a matrix (read_matrix): its numbers as text
-            return np.asarray([repr(float(v)) for v in self.block[:, i]], dtype=object)
-        return TextColumn(self.raw, i, self.delim, self.k, len(self.block))
+            return np.asarray([repr(float(v)) for v in self.numbers[i]], dtype=object)
+        return TextColumn(self.raw, i, self.delim, self.k, len(self.numbers[0]))
 
 
 def read_table(path, *, text: str | None = None, columns=None, unit: str | None = None,
@@ -134,18 +135,18 @@ def read_matrix(path, names, block: np.ndarray, *, notes=(), columns=None, unit:
     if block.ndim != 2 or len(block) < MIN_ROWS:
         raise RecordingError(f"{path}: only {len(block)} rows; need at least {MIN_ROWS}")
     tab = _Table(None if names is None else [str(n) for n in names], None, range(1, len(block) + 1), [], ",", False,
-                 block.shape[1], block, None)
+                 block.shape[1], list(block.T), None)
     return _table_recording(tab, Path(path), list(notes), columns, unit, time_unit, rate, gyro_unit, file_rate)
 
 
 class _Columns:
-    """The columns of a split table by role: strings (cut once), floats (from the block
+    """The columns of a split table by role: strings (cut once), floats (from the table
     parsed at once when the whole table converted, else column by column, which names the
     first bad value and its line)."""
 
     def __init__(self, tab: _Table, roles: dict, path):
         self.tab, self.roles, self.path = tab, roles, path
-        self.block = _numeric_block(tab)
+        self.floats = numeric_columns(tab)
         self._strings = {}
 
     def column(self, role):
@@ -154,9 +155,9 @@ class _Columns:
         return self._strings[role]
 
     def parsed(self, role):
-        """The role's floats from the block, or None where its conversion failed."""
-        i = self.roles[role]
-        return self.block[:, i] if self.block is not None and np.all(np.isfinite(self.block[:, i])) else None
+        """The role's floats from the table parsed at once, or None where its conversion failed."""
+        x = None if self.floats is None else self.floats[self.roles[role]]
+        return x if x is not None and np.all(np.isfinite(x)) else None
 
     def numbers(self, role):
         x = self.parsed(role)
@@ -201,9 +202,10 @@ def _table_recording(tab, path, notes, columns, unit, time_unit, rate, gyro_unit
         written = cols.column("t")  # a TextColumn stays one: cut out of the text if apply asks for it
         time_column = (names[roles["t"]].strip() if names is not None else "t",
                        written if isinstance(written, TextColumn) else written.astype(str))
-    return Recording(t, sensors["acc"], temp, str(path), intervals=iv, labels=labels,
+    made = {k: handed_over(sensors[k]) for k in ("acc", "gyro", "mag")}  # arrays of ours: kept, not copied
+    return Recording(handed_over(t), made["acc"], temp, str(path), intervals=iv, labels=labels,
                      notes=tuple(n for n in notes if n), unit=sensors["unit"], time_column=time_column,
-                     gyro=sensors["gyro"], gyro_unit=sensors["gyro_unit"], mag=sensors["mag"],
+                     gyro=made["gyro"], gyro_unit=sensors["gyro_unit"], mag=made["mag"],
                      mag_unit=sensors["mag_unit"])
 
 
@@ -251,16 +253,17 @@ def _sensor_clock(t, tnote, numbers, names, roles, units, clock, rate, lines, pa
     return t_new, [tnote, *notes]
 
 
-def _numeric_block(tab: _Table):
-    """Every data field as a float, in one conversion (a third of the time of column by
-    column), or None when a field is not a plain number (text, empty, decimal comma): the
-    columns are then converted one by one, which names the first bad value and its line."""
-    if tab.block is not None:
-        return tab.block
+def numeric_columns(tab: _Table) -> list[np.ndarray] | None:
+    """Every column's data fields as floats, in one conversion (a third of the time of
+    column by column), or None when a field is not a plain number (text, empty, decimal
+    comma): the columns are then converted one by one, which names the first bad value and
+    its line."""
+    if tab.numbers is not None:
+        return tab.numbers
     if tab.dc:
         return None
     try:
-        return np.array(tab.data, dtype=float)
+        return list(np.array(tab.data, dtype=float).T)
     except ValueError:
         return None
 
@@ -351,12 +354,12 @@ def _fast_table(text: str) -> _Table | None:
         return None
     start_line = numbered[first][0]
     parsed = parse_block(text, sum(len(ln) for ln in head[:start_line - 1]), delim, k)
-    if parsed is None or len(parsed[0]) < MIN_ROWS:
+    if parsed is None or len(parsed[0][0]) < MIN_ROWS:
         return None
-    block, body = parsed
+    numbers, body = parsed
     preamble = [(numbered[i][0], rows[i]) for i in range(first if header is None else header)]
-    return _Table(rows[header] if header is not None else None, None, range(start_line, start_line + len(block)),
-                  preamble, delim, dc, k, block, body)
+    return _Table(rows[header] if header is not None else None, None,
+                  range(start_line, start_line + len(numbers[0])), preamble, delim, dc, k, numbers, body)
 
 
 def _after_lines(text: str, n: int) -> int:

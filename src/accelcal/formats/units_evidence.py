@@ -81,6 +81,8 @@ def override_gyro_unit(rec, gyro_unit: str, format_name: str):
 REST_BAND_G = (0.75, 1.25)
 #: Samples per block of the rest magnitude (the quietest half of the blocks are the rests).
 REST_BLOCK = 100
+#: Blocks whose variances are taken at once (a few MB of temporaries).
+_REST_CHUNK = 1000
 
 
 def rest_magnitude(acc) -> float:
@@ -89,10 +91,17 @@ def rest_magnitude(acc) -> float:
     m = len(acc) // REST_BLOCK
     if m < 2:
         return float(np.median(np.linalg.norm(acc, axis=1)))
-    blocks = acc[: m * REST_BLOCK].reshape(m, REST_BLOCK, 3)
-    var = blocks.var(axis=1).sum(axis=1)
+    # axis by axis, each block's samples contiguous (3-4x faster than over the middle axis of
+    # (m, REST_BLOCK, 3), equal to 1e-15: the order of the sums), _REST_CHUNK blocks at a time
+    # (no copy of the record)
+    var, means = np.empty(m), np.empty((3, m))
+    for a in range(0, m, _REST_CHUNK):
+        b = min(a + _REST_CHUNK, m)
+        blocks = np.ascontiguousarray(acc[a * REST_BLOCK: b * REST_BLOCK].T).reshape(3, b - a, REST_BLOCK)
+        var[a:b] = blocks.var(axis=2).sum(axis=0)
+        means[:, a:b] = blocks.mean(axis=2)
     quiet = var <= np.median(var)
-    return float(np.median(np.linalg.norm(blocks[quiet].mean(axis=1), axis=1)))
+    return float(np.median(np.linalg.norm(means[:, quiet], axis=0)))
 
 
 def acceleration_unit_from_rests(acc) -> tuple[str, str]:
