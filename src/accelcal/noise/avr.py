@@ -51,7 +51,9 @@ def avr_adev(x: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
     x = np.asarray(x, dtype=float)
     x = x[:, None] if x.ndim == 1 else x
     n = len(x)
-    c = np.vstack([np.zeros((1, x.shape[1])), np.cumsum(x, axis=0)])
+    c = np.empty((n + 1, x.shape[1]))
+    c[0] = 0.0
+    np.cumsum(x, axis=0, out=c[1:])  # in place: no second copy of the record
     bins = (AVR_TAUS * fs).astype(int)  # the C++ truncates τ · rate to an int
     ok = bins >= 1
     taus, bins = AVR_TAUS[ok], bins[ok]
@@ -79,16 +81,19 @@ _AVR_BATCH_BELOW = 2000
 def _avr_batch(c: np.ndarray, sizes: np.ndarray, counts: np.ndarray) -> np.ndarray:
     """The Allan variances (k, d) of bin sizes ``sizes`` with ``counts`` means each, from the
     cumulative sums ``c``: every bin edge in one index array, the squared differences of
-    consecutive means summed per size (in order, as the loop sums them)."""
+    consecutive means summed per size (in order, as the loop sums them), one column at a time
+    (temporaries of one column: a 10⁶-sample triad's peak memory was 50 MB higher)."""
     seg = np.repeat(np.arange(len(sizes)), counts + 1)  # bin edges j · size, j = 0 … count, of each size
     first = np.concatenate(([0], np.cumsum(counts + 1)[:-1]))
     edges = (np.arange(len(seg)) - first[seg]) * sizes[seg]
-    means = np.diff(c[edges], axis=0) / sizes[seg[1:], None]  # a difference across two sizes is dropped below
-    d = np.diff(means, axis=0)
-    inside = seg[2:] == seg[:-2]  # both means of a difference from one size
-    sq = (d * d)[inside]
-    sums = np.stack([np.bincount(seg[2:][inside], weights=sq[:, j], minlength=len(sizes))
-                     for j in range(c.shape[1])], 1)
+    width = sizes[seg[1:]].astype(float)
+    inside = seg[2:] == seg[:-2]  # both means of a difference from one size (the others are dropped)
+    which = seg[2:][inside]
+    sums = np.empty((len(sizes), c.shape[1]))
+    for j in range(c.shape[1]):
+        d = np.diff(np.diff(c[edges, j]) / width)
+        d *= d
+        sums[:, j] = np.bincount(which, weights=d[inside], minlength=len(sizes))
     return sums / (2 * (counts - 1))[:, None]
 
 
