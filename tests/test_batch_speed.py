@@ -120,14 +120,31 @@ def _interleaved_ratio(batch, single, z, problems: int = 20, chunk: int = 10_000
     return rate / base, rate, base
 
 
+#: Interleaved measurements whose median the throughput test compares with its bars.
+ROUNDS = 5
+
+
+def _median_ratio(batch, single, z) -> tuple:
+    """The median of :data:`ROUNDS` :func:`_interleaved_ratio` measurements (ratio, rates).
+
+    A test that catches a 3x slip of a ratio it bars at B passes a ratio r only if
+    B < r < 3B: the widest margin either way is sqrt(3) = 1.73x, at r = 1.73 B.  The batches
+    sit at 1.4-1.9x their bars, so what keeps the test from flaking is the spread of the
+    measurement, not its level: the median of 5 rounds (2.5 s more than of 3) falls below
+    a bar only if 3 of 5 rounds do, where the median of 3 needed 2 of 3 (single rounds
+    measured 1277-2051x for the full LLS, 4807-8525x for the bias-only LLS at load 17-26)."""
+    return sorted((_interleaved_ratio(batch, single, z) for _ in range(ROUNDS)), key=lambda r: r[0])[ROUNDS // 2]
+
+
 @pytest.mark.skipif(not HAVE_NUMBA, reason="the throughput goals are those of the compiled kernels")
 def test_batches_run_thousands_of_times_faster_than_nlls():
     """At the benchmark's headline setting (24 poses, noise 1e-3 m/s²),
     the batched full LLS solves at least 1000x, the bias-only LLS at least 4000x the
     problems per second of the NLLS baseline, both timed here, interleaved
-    (:func:`_interleaved_ratio`; the median of three such measurements: measured 1460-1730x
-    and 5800-6800x at load 20-26 on 2 cores; the Python loop over the trials that once
-    checked the geometry made them 300x, and a 3x slip of either kernel falls below)."""
+    (:func:`_median_ratio`, the median of five interleaved measurements; medians of three
+    measured 1416-1899x and 5375-7251x at load 17-26 on 2 cores; the Python loop over the
+    trials that once checked the geometry made them 300x, and a 3x slip of either kernel
+    falls below: 472-633x and 1792-2417x)."""
     kernels.set_backend("numba")
     rng = np.random.default_rng(1)
     T, n = 20000, 24
@@ -137,7 +154,7 @@ def test_batches_run_thousands_of_times_faster_than_nlls():
     zb = simulate_poses(u, G, np.eye(3), tr["bias"], 1e-3, rng)
     for f, z in ((full_lls_batch, zf), (bias_lls_batch, zb), (full_nlls, zf[0]), (bias_nlls, zb[0])):
         f(z, G)  # warm-up: kernels loaded, CasADi's solver built
-    full = sorted((_interleaved_ratio(full_lls_batch, full_nlls, zf) for _ in range(3)), key=lambda r: r[0])[1]
-    bias = sorted((_interleaved_ratio(bias_lls_batch, bias_nlls, zb) for _ in range(3)), key=lambda r: r[0])[1]
+    full = _median_ratio(full_lls_batch, full_nlls, zf)
+    bias = _median_ratio(bias_lls_batch, bias_nlls, zb)
     assert full[0] > 1000, "full_lls_batch {1:.0f}/s, {0:.0f}x NLLS ({2:.0f}/s)".format(*full)
     assert bias[0] > 4000, "bias_lls_batch {1:.0f}/s, {0:.0f}x NLLS ({2:.0f}/s)".format(*bias)
