@@ -99,13 +99,3 @@ def test_the_toy_runs_from_the_command_line(toy, tmp_path, capsys):
     np.testing.assert_allclose(cal.bias, tr["bias"], atol=3e-3)
 
 
-def test_the_toy_runs_in_the_monte_carlo(toy):
-    from accelcal_repro.montecarlo import compare_methods, mc_point, summarize
-
-    df, timing = mc_point(7, 12, 1e-3, [("bias", 0.0, ["bias_nlls", "bias_gn"])], 4)
-    assert set(df["method"]) == {"bias_nlls", "bias_gn"} and df["valid"].all()
-    s = summarize(df)
-    assert s.set_index("method").loc["bias_gn", "model"] == "bias"
-    # Gauss-Newton and IPOPT minimise the same cost: the same estimate to the solvers' accuracy
-    c = compare_methods(df, pairs=[("bias_gn", toy.baseline)])
-    assert abs(c.loc[0, "bias_ratio"] - 1) < 1e-3

@@ -5,8 +5,9 @@ not either, so that the library's tests say what the library does, and a change 
 reproduction cannot break or carry them.  A test file may import ``accelcal_repro`` only if
 its name says it tests a reproduction (:data:`REPRODUCTION_TESTS`: the papers, the measured
 stage, the claims, the Monte Carlo, the workflow's stages and report; new ones:
-``test_repro_*.py``).  :data:`NOT_YET` lists the core test files that still import it (for a
-simulator or a table the core lacks); it may only shrink.  Files are parsed, not imported.
+``test_repro_*.py``), with no exception: the tests that ran on a reproduction's simulated
+sessions live in ``test_repro_<the core file's name>.py`` beside the core file that keeps the
+rest.  Files are parsed, not imported.
 """
 
 from __future__ import annotations
@@ -29,20 +30,6 @@ REPRODUCTION_TESTS = (
     "test_reader_variants.py",                                                # accelcal_repro.reader_variants
 )
 
-#: Core test files that still import a reproduction, and what for (may only shrink).
-NOT_YET = {
-    "test_add_estimator.py": "the toy estimator run through accelcal_repro.montecarlo",
-    "test_cli_apply_and_options.py": "a simulated session from accelcal_repro.discrepancy.benchmark",
-    "test_discrepancy_cli.py": "simulated sessions from accelcal_repro.discrepancy.benchmark",
-    "test_discrepancy_loop.py": "simulated sessions from accelcal_repro.discrepancy.benchmark",
-    "test_effects.py": "the discrepancy figures' labels (accelcal_repro.discrepancy.figures)",
-    "test_gyro_loop.py": "simulated sessions from accelcal_repro.gyro.loop_benchmark",
-    "test_gyro_loop_cli.py": "simulated sessions from accelcal_repro.gyro.loop_benchmark",
-    "test_mag_loop.py": "simulated sessions from accelcal_repro.mag.loop_benchmark",
-    "test_mag_noise.py": "AR(1) sessions from accelcal_repro.mag.loop_benchmark",
-    "test_summaries.py": "a simulated session from accelcal_repro.discrepancy.benchmark",
-}
-
 
 def imports_the_reproductions(path: Path) -> bool:
     """Whether ``path`` imports ``accelcal_repro`` anywhere (top level or inside a function)."""
@@ -60,15 +47,9 @@ def is_reproduction_test(name: str) -> bool:
 
 def test_core_tests_import_no_reproduction():
     offenders = sorted(p.name for p in TESTS.glob("*.py")
-                       if imports_the_reproductions(p) and not is_reproduction_test(p.name) and p.name not in NOT_YET)
+                       if imports_the_reproductions(p) and not is_reproduction_test(p.name))
     assert not offenders, ("core test files import accelcal_repro: move those tests to a test_repro_*.py file "
                            f"(or a reproduction's test file): {offenders}")
-
-
-def test_the_not_yet_list_only_shrinks():
-    """A file listed that no longer imports a reproduction (or is gone) must leave the list."""
-    done = sorted(name for name in NOT_YET if not (TESTS / name).is_file() or not imports_the_reproductions(TESTS / name))
-    assert not done, f"remove from NOT_YET in tests/test_core_tests.py: {done}"
 
 
 def test_the_checker_finds_an_import_in_a_function(tmp_path):

@@ -242,13 +242,6 @@ def test_the_command_line_help_lists_the_table(capsys):
     assert f"candidate effects ({', '.join(EFFECT_IDS)})" in text
 
 
-def test_the_figures_label_every_effect_of_the_table():
-    pytest.importorskip("matplotlib")
-    from accelcal_repro.discrepancy.figures import LABELS
-
-    assert {e: LABELS[e] for e in EFFECT_IDS} == {e: EFFECTS[e].label for e in EFFECT_IDS}
-
-
 @pytest.mark.parametrize("eid", ALL)
 def test_the_detectable_size_in_the_data_unit_is_the_model_s_own_sensitivity(eid):
     """The identifiability check's data-unit size per unit parameter (the MDE's scale) is
