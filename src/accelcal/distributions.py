@@ -22,7 +22,9 @@ import numpy as np
 class _LazySpecial:
     """``scipy.special``, imported at first use: the command line's calibration needs only
     :func:`chi2_sf` at a whole number of degrees of freedom (math below), and importing
-    scipy.special costs ~0.25 s, half of ``accelcal calibrate`` on the Xsens session."""
+    scipy.special costs ~0.25 s, half of ``accelcal calibrate`` on the Xsens session
+    (measured again: importing the calibration and this module 0.189 s of CPU, with
+    scipy.special 0.447 s, medians of 5 fresh processes)."""
 
     def __getattr__(self, name):
         from scipy import special as module

