@@ -16,7 +16,10 @@ nested extension of that model, a perturbation of the bias-free gyro samples
 ``g_sensitivity``    9  ``- G f``: a bias proportional to the specific force
 ``scale_asymmetry``  3  ``a_k y_k [y_k < 0]``: another scale for negative rates
 ``rate_nonlinearity`` 3 ``q_k y_k |y_k| / s``: a scale that grows with the rate
-``time_offset``      1  ``δ ẏ``: the gyro's clock ``δ`` seconds off the accelerometer's
+``time_offset``      1  ``δ ẏ``: the gyro's clock ``δ`` seconds off the accelerometer's; between
+                        the gyro's still rests a shift of its samples leaves every rotation as it
+                        is, so ``not_identifiable`` here (it needs rates that do not vanish at the
+                        ends of the intervals: a turntable against a reference)
 ``motion_bias``      3  ``- Δb``: a bias that shifts while the sensor moves
 ``sample_clock``     1  ``w y (Δt_i/h - 1)``: the rotation integrated over each sample's stamp
                         rather than the nominal rate (or the reverse, when the fit used the stamps)
@@ -122,6 +125,7 @@ class GyroMotions:
     t: np.ndarray | None = None  #: sample times [s] (for the bias the rests take from a perturbation)
     rests: RestStatistics | None = None  #: the gyro's rests (their weights for that bias)
     bias_mode: str = "interpolated"
+    still_rests: bool = False  #: the rests are the gyro's still samples: every motion starts and ends at rest
 
 
 def gyro_motions(rec, acc_cal, poses, gcal) -> GyroMotions:
@@ -160,7 +164,7 @@ def gyro_motions(rec, acc_cal, poses, gcal) -> GyroMotions:
     except NotConvergedError:
         pass  # the calibration's C: the tests project out its change to first order anyway
     return GyroMotions(ms, C, integrator, f, float(s.get("nominal", 1.0)), gs, np.asarray(t, float), rs,
-                       s.get("bias_mode", "interpolated"))
+                       s.get("bias_mode", "interpolated"), still_rests=True)
 
 
 def _through_bias(gm: GyroMotions, d: np.ndarray) -> np.ndarray:
@@ -259,7 +263,7 @@ def effect_constants(name: str, gm: GyroMotions) -> dict:
 def _directions(name: str, gm: GyroMotions) -> list[np.ndarray] | None:
     """The perturbations ``d_j(y)`` (n, 3) of a candidate (:func:`accelcal.gyro.effects.directions`),
     or None when it cannot be formed."""
-    if name == "g_sensitivity" and gm.g_sensitivity_in_base:
+    if (name == "g_sensitivity" and gm.g_sensitivity_in_base) or (name == "time_offset" and gm.still_rests):
         return None
     c = effect_constants(name, gm)
     inside = None
@@ -349,6 +353,9 @@ def _unformed(name: str, gm: GyroMotions) -> str:
     """Why a candidate's direction could not be formed on these data."""
     if name == "g_sensitivity":
         return "in the base model" if gm.g_sensitivity_in_base else "no accelerometer samples (specific force)"
+    if name == "time_offset" and gm.still_rests:
+        return ("every motion starts and ends with the gyro still: a shift of its samples leaves each rest-to-rest "
+                "rotation as it is (the column left is the noise's derivative)")
     if name == "sample_clock":
         return ("no sample times" if gm.t is None else
                 "the sample times are uniform: integrating over them or over the nominal rate is the same")
