@@ -3,7 +3,12 @@
 The gyro is fitted to the motions between rests (:mod:`accelcal.gyro.fit`): per motion, the
 gravity direction of the rest before, carried over by the integrated gyro, must meet the
 direction of the rest after; two residuals per motion, weighted by the covariance the
-rests' noise predicts (the fit's own weights, used as they are).  Each candidate is a
+rests' noise predicts.  Two things make that null hold (:func:`gyro_motions`,
+:func:`loop_evaluation`): the rests are the gyro's still samples, not the accelerometer's
+(whose rests take in the slow ends of the turns: a rotation the motions lack, which a time
+offset, a g-sensitivity or a motion bias would otherwise "explain"), and the error of each
+rest's mean reaches every motion that subtracts it (consecutive motions share a rest), not
+only one.  Each candidate is a
 nested extension of that model, a perturbation of the bias-free gyro samples
 ``y → y + Σ_j β_j d_j(y)`` (:data:`CANDIDATES`):
 
@@ -11,7 +16,10 @@ nested extension of that model, a perturbation of the bias-free gyro samples
 ``g_sensitivity``    9  ``- G f``: a bias proportional to the specific force
 ``scale_asymmetry``  3  ``a_k y_k [y_k < 0]``: another scale for negative rates
 ``rate_nonlinearity`` 3 ``q_k y_k |y_k| / s``: a scale that grows with the rate
-``time_offset``      1  ``δ ẏ``: the gyro's clock ``δ`` seconds off the accelerometer's
+``time_offset``      1  ``δ ẏ``: the gyro's clock ``δ`` seconds off the accelerometer's; between
+                        the gyro's still rests a shift of its samples leaves every rotation as it
+                        is, so ``not_identifiable`` here (it needs rates that do not vanish at the
+                        ends of the intervals: a turntable against a reference)
 ``motion_bias``      3  ``- Δb``: a bias that shifts while the sensor moves
 ``sample_clock``     1  ``w y (Δt_i/h - 1)``: the rotation integrated over each sample's stamp
                         rather than the nominal rate (or the reverse, when the fit used the stamps)
@@ -50,12 +58,13 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from ..errors import NotConvergedError
 from ..gyro.calibrate import accel_directions, motion_intervals
 from ..gyro.effects import directions as effect_directions
-from ..gyro.fit import MotionSet, evaluate, motion_residuals
+from ..gyro.fit import MotionSet, evaluate, fit_iterative, motion_residuals
 from ..gyro.model import GyroModel
 from ..gyro.rests import (RestStatistics, bias_series, fit_bias, motion_bias_variance, rest_noise, rest_statistics,
-                          sample_interval, saturated_samples)
+                          sample_interval, saturated_samples, still_intervals)
 from .nested import MAX_ABSORBED, LoopOutcome, nested_f_test
 from .statistics import holm
 
@@ -116,32 +125,46 @@ class GyroMotions:
     t: np.ndarray | None = None  #: sample times [s] (for the bias the rests take from a perturbation)
     rests: RestStatistics | None = None  #: the gyro's rests (their weights for that bias)
     bias_mode: str = "interpolated"
+    still_rests: bool = False  #: the rests are the gyro's still samples: every motion starts and ends at rest
 
 
 def gyro_motions(rec, acc_cal, poses, gcal) -> GyroMotions:
-    """Rebuild the motion set :func:`accelcal.gyro.calibrate.calibrate_gyro` fitted ``gcal`` to.
+    """The motion set of :func:`accelcal.gyro.calibrate.calibrate_gyro`'s fit ``gcal``, on the gyro's
+    own still rests, with ``C`` refitted there.
 
-    Same rests, bias mode, g-sensitivity, time base and used motions (its table), so that
-    the loop tests the calibration the user gets, with its weights.
+    Same bias mode, g-sensitivity, time base and used motions (its table) as the calibration
+    the user gets; but each rest is shrunk to where the gyro is still
+    (:func:`accelcal.gyro.rests.still_intervals`, the gravity directions averaged over the same
+    samples): the accelerometer's rests take in the slow ends of the turns, whose rotation the
+    motions then lack, and the loop would name that as an effect of the gyro.
     """
     s = gcal.settings
     t, gyro = rec.t, np.asarray(rec.gyro, float)
     tb = sample_interval(t)
-    rs = rest_statistics(t, gyro, poses.intervals)
-    u, u_cov, f_rest = accel_directions(acc_cal, poses.means, poses.mean_std)
+    iv = still_intervals(gyro, poses.intervals, MIN_REST_SAMPLES)
+    rs = rest_statistics(t, gyro, iv)
+    acc_rests = rest_statistics(t, np.asarray(rec.acc, float), iv)
+    u, u_cov, f_rest = accel_directions(acc_cal, acc_rests.means, acc_rests.mean_std)
     gs = bool(s.get("g_sensitivity"))
     best = fit_bias(rs, s.get("bias_mode", "interpolated"), f_rest if gs else None)
     f = np.asarray(acc_cal.apply(np.asarray(rec.acc, float)), float)
     y = gyro - bias_series(best, rs, t)
     if gs:
         y = y - f @ best.g_sensitivity.T
-    starts, stops, before, after, _ = motion_intervals(poses.intervals, tb.gaps, saturated_samples(gyro, None))
+    starts, stops, before, after, _ = motion_intervals(iv, tb.gaps, saturated_samples(gyro, None))
     h = tb.h if s.get("time_base", {}).get("used", "index") == "index" else t
     ms = MotionSet(y, h, starts, stops, before, after, u, u_cov, rest_noise(rs),
                    motion_bias_variance(best, rs, before, after))
     used = np.asarray(gcal.motions.get("used", [True] * ms.n_motions), bool)
-    return GyroMotions(ms.subset(used), np.asarray(gcal.model.C, float), s.get("integrator", "magnus4"), f,
-                       float(s.get("nominal", 1.0)), gs, np.asarray(t, float), rs, s.get("bias_mode", "interpolated"))
+    integrator = s.get("integrator", "magnus4")
+    ms = ms.subset(used)
+    C = np.asarray(gcal.model.C, float)
+    try:
+        C = fit_iterative(ms, C, integrator).C
+    except NotConvergedError:
+        pass  # the calibration's C: the tests project out its change to first order anyway
+    return GyroMotions(ms, C, integrator, f, float(s.get("nominal", 1.0)), gs, np.asarray(t, float), rs,
+                       s.get("bias_mode", "interpolated"), still_rests=True)
 
 
 def _through_bias(gm: GyroMotions, d: np.ndarray) -> np.ndarray:
@@ -162,6 +185,66 @@ def _through_bias(gm: GyroMotions, d: np.ndarray) -> np.ndarray:
     return d - bias_series(fit_bias(rs, gm.bias_mode), rs, gm.t)
 
 
+def _bias_weights(gm: GyroMotions, times) -> np.ndarray:
+    """``W`` (len(times), p, 3): the bias removed at ``times`` per unit of rest ``k``'s mean on each
+    axis.  The bias is linear in the rests' means (a weighted mean, or interpolated between
+    rest centres), axis by axis, so one unit mean per rest gives every weight."""
+    rs = gm.rests
+    p = len(rs.means)
+    W = np.empty((len(times), p, 3))
+    for k in range(p):
+        unit = replace(rs, means=np.eye(p)[k][:, None] * np.ones(3))
+        W[:, k, :] = bias_series(fit_bias(unit, gm.bias_mode), unit, times)
+    return W
+
+
+def bias_error_jacobian(gm: GyroMotions) -> np.ndarray | None:
+    """∂r/∂(rest means) (2m, 3p): how the error of each rest's mean reaches the motions' residuals.
+
+    Every motion subtracts a bias made of the rests' means, and consecutive motions share a
+    rest (interpolated bias) or all share all of them (a constant bias): the errors of the
+    means are common to several motions, and a covariance that keeps only each motion's own
+    share of them (block diagonal) makes every effect integrated over several motions (a bias
+    during motion, a g-sensitivity) look better measured than it is.  On a motion the bias is
+    linear in time, so two responses per axis, to a constant and to a ramp over the motion
+    (central differences of the integrated residuals), give every column exactly to first order."""
+    if gm.rests is None or gm.t is None:
+        return None
+    ms = gm.ms
+    t = np.asarray(gm.t, float)
+    idx, small = compact(ms)
+    lo = np.maximum(ms.starts - MARGIN, 0)
+    owner = np.repeat(np.arange(ms.n_motions), np.minimum(ms.stops + MARGIN + 1, len(ms.y)) - lo)
+    ramp = t[idx] - t[ms.starts][owner]  # time from its motion's start, per compact sample
+    eps = 1e-4 * max(float(np.max(np.abs(ms.y))), 1e-300)
+    resp = np.empty((2, 3, ms.n_motions, 2))  # (constant | ramp, axis, motion, residual)
+    for j, shape in enumerate((np.ones_like(ramp), ramp)):
+        for a in range(3):
+            d = np.zeros_like(small.y)
+            d[:, a] = shape * (eps / max(float(np.max(np.abs(shape))), 1e-300))
+            rp = motion_residuals(_with_y(small, small.y + d), gm.C, gm.integrator)
+            rm = motion_residuals(_with_y(small, small.y - d), gm.C, gm.integrator)
+            resp[j, a] = ((rp - rm) / (2 * eps / max(float(np.max(np.abs(shape))), 1e-300))).reshape(-1, 2)
+    W0, W1 = _bias_weights(gm, t[ms.starts]), _bias_weights(gm, t[ms.stops])  # (m, p, 3)
+    slope = (W1 - W0) / (t[ms.stops] - t[ms.starts])[:, None, None]
+    # δy = -δb(t) = -(W0 + slope (t - t_start)) δmean on each motion
+    B = -(np.einsum("mpa,amk->mkpa", W0, resp[0]) + np.einsum("mpa,amk->mkpa", slope, resp[1]))
+    return B.reshape(2 * ms.n_motions, -1)
+
+
+def loop_evaluation(gm: GyroMotions):
+    """The fit's residuals and Jacobian with the covariance the loop tests under: the rests' noise
+    integrated over each motion, the gravity directions' noise and the errors of the rests' means
+    shared by the motions that subtract them (:func:`bias_error_jacobian`), in place of the
+    fit's per-motion share of the bias error."""
+    B = bias_error_jacobian(gm)
+    if B is None:
+        return evaluate(gm.ms, gm.C, gm.integrator)
+    ev = evaluate(replace(gm.ms, bias_var=np.zeros_like(gm.ms.bias_var)), gm.C, gm.integrator)
+    cov = ev.cov + (B * (gm.rests.mean_std ** 2).reshape(-1)) @ B.T
+    return replace(ev, cov=cov, chol=np.linalg.cholesky(cov))
+
+
 def _integrated_over(gm: GyroMotions) -> str:
     return "index" if np.ndim(gm.ms.h) == 0 else "timestamps"
 
@@ -180,7 +263,7 @@ def effect_constants(name: str, gm: GyroMotions) -> dict:
 def _directions(name: str, gm: GyroMotions) -> list[np.ndarray] | None:
     """The perturbations ``d_j(y)`` (n, 3) of a candidate (:func:`accelcal.gyro.effects.directions`),
     or None when it cannot be formed."""
-    if name == "g_sensitivity" and gm.g_sensitivity_in_base:
+    if (name == "g_sensitivity" and gm.g_sensitivity_in_base) or (name == "time_offset" and gm.still_rests):
         return None
     c = effect_constants(name, gm)
     inside = None
@@ -254,9 +337,10 @@ class GyroLoopResult(LoopOutcome):
                 "estimates": {k: {p: {"value": v, "se": s} for p, (v, s) in e.items()}
                               for k, e in self.estimates.items()},
                 "n_motions": self.n_motions, "alpha": self.alpha, "n_boot": self.n_boot,
-                "noise_model": "the gyro fit's weights (rest noise integrated over each motion, the bias error, the "
-                               "gravity directions' noise) times one common scale estimated from the residuals "
-                               "(what wanders between rests)",
+                "noise_model": "rest noise integrated over each motion, the rests' mean errors shared by the motions "
+                               "that subtract them, the gravity directions' noise (rests shrunk to the gyro's still "
+                               "samples) times one common scale estimated from the residuals (what wanders between "
+                               "rests)",
                 "notes": list(self.notes), "calibration": self.calibration}
 
     def summary(self) -> str:
@@ -269,6 +353,9 @@ def _unformed(name: str, gm: GyroMotions) -> str:
     """Why a candidate's direction could not be formed on these data."""
     if name == "g_sensitivity":
         return "in the base model" if gm.g_sensitivity_in_base else "no accelerometer samples (specific force)"
+    if name == "time_offset" and gm.still_rests:
+        return ("every motion starts and ends with the gyro still: a shift of its samples leaves each rest-to-rest "
+                "rotation as it is (the column left is the noise's derivative)")
     if name == "sample_clock":
         return ("no sample times" if gm.t is None else
                 "the sample times are uniform: integrating over them or over the nominal rate is the same")
@@ -289,7 +376,7 @@ def _sign_coverage(gm: GyroMotions, min_deg: float = 30.0) -> list[str]:
 def gyro_discrepancy(gm: GyroMotions, *, alpha: float = 0.05, n_boot: int = 999, seed: int = 20240708,
                      candidates=CANDIDATE_NAMES, max_rounds: int = 3) -> GyroLoopResult:
     """Run the gyro loop (module docstring) on the motions of a gyro fit."""
-    ev = evaluate(gm.ms, gm.C, gm.integrator)
+    ev = loop_evaluation(gm)
     Jw, rw = ev.whitened()
     n = len(rw)
     excess0 = float(np.sqrt(ev.chi2 / max(n - 9, 1)))
@@ -340,7 +427,7 @@ def estimate_effects(gm: GyroMotions, names) -> dict:
     """The effects ``names`` fitted together on these motions, named or not: ``{name: {param:
     (value, se)}}`` (for comparing one effect across sessions of a unit); an effect that
     cannot be formed or is absorbed on them is left out."""
-    ev = evaluate(gm.ms, gm.C, gm.integrator)
+    ev = loop_evaluation(gm)
     Jw, rw = ev.whitened()
     keep, Xs = [], []
     for c in names:
@@ -396,7 +483,7 @@ def with_effects(gcal, gm: GyroMotions, res: GyroLoopResult) -> dict:
         bias = bias + np.mean([shift[a:b].mean(axis=0) for a, b in gm.rests.intervals], axis=0)
     dC = res.dC if res.dC is not None else np.zeros((3, 3))
     d = gcal.to_dict()
-    d["model"] = GyroModel(m.C + dC, bias, G, m.raw_unit).to_dict()
+    d["model"] = GyroModel(gm.C + dC, bias, G, m.raw_unit).to_dict()
     d["settings"] = {**d["settings"], "effects": effects, "source": "accelcal discrepancy (gyro loop refit)"}
     return d
 
@@ -453,4 +540,5 @@ def gyro_layer(rec, g: float, poses, *, alpha: float = 0.05, n_boot: int = 999, 
 
 
 __all__ = ["CANDIDATES", "CANDIDATE_NAMES", "GyroCandidate", "GyroLoopResult", "GyroMotions", "candidate_jacobian",
-           "compact", "effect_constants", "estimate_effects", "gyro_discrepancy", "gyro_layer", "gyro_motions", "rest_noise_problem", "with_effects"]
+           "bias_error_jacobian", "compact", "effect_constants", "estimate_effects", "gyro_discrepancy", "gyro_layer",
+           "gyro_motions", "loop_evaluation", "rest_noise_problem", "with_effects"]

@@ -99,6 +99,88 @@ def rest_statistics(t, gyro, intervals) -> RestStatistics:
                           np.concatenate([e.noise_std for e in each]), np.concatenate([e.t_mid for e in each]), iv)
 
 
+#: Samples averaged when a rest's ends are checked for rotation (:func:`still_intervals`): a short
+#: window for a turn's sharp start, longer ones for a slow one.
+STILL_WINDOWS = (5, 25)
+#: A rest ends where the averaged rate leaves the rest's median by this many of its own standard deviations.
+STILL_SIGMAS = 5.0
+
+
+def _still_run(seg: np.ndarray, w: int, floor=None) -> tuple[int, int, np.ndarray]:
+    """``[start, stop)`` inside one rest's samples where no ``w``-sample mean of the rate moves
+    (:func:`still_intervals`), and that mean's spread."""
+    n = len(seg)
+    core = slice(n // 4, n - n // 4 - w + 1)
+    avg = np.cumsum(np.vstack([np.zeros((1, 3)), seg]), axis=0)
+    avg = (avg[w:] - avg[:-w]) / w  # avg[j]: samples j .. j+w-1
+    mid = np.median(avg[core], axis=0)
+    spread = 1.4826 * np.median(np.abs(avg[core] - mid), axis=0)
+    if floor is not None:
+        spread = np.maximum(spread, floor)
+    if not np.all(spread > 0):
+        return 0, n, spread  # quantised to one level at rest: nothing to measure the ends against
+    bad = np.flatnonzero(np.any(np.abs(avg - mid) > STILL_SIGMAS * spread, axis=1))
+    c = n // 2
+    lo, hi = bad[bad + w - 1 < c], bad[bad + w - 1 >= c]
+    return (int(lo.max()) + w if len(lo) else 0), (int(hi.min()) if len(hi) else n), spread
+
+
+#: Per axis, the squared rate (in the rest's noise) above which an edge sample counts as moving.
+EDGE_ENERGY = 2.0
+
+
+def _edge_trim(seg: np.ndarray, start: int, stop: int) -> tuple[int, int]:
+    """The tails of a turn that no window flags (a rate of a few noise levels over a few samples):
+    from each end of ``[start, stop)`` inwards, the prefix that maximises ``Σ (|z|² -
+    3 EDGE_ENERGY)`` (``z`` the rate in its per-sample noise) goes.  On noise alone the sum
+    drifts down, so it removes a sample or two at most; at a turn's tail it takes the tail."""
+    n = stop - start
+    core = seg[start + n // 4:stop - n // 4]
+    sd = 1.4826 * np.median(np.abs(core), axis=0)
+    if n < 8 or not np.all(sd > 0):
+        return start, stop
+    e = np.sum((seg[start:stop] / sd) ** 2, axis=1) - 3 * EDGE_ENERGY
+    head, tail = np.cumsum(e[: n // 4]), np.cumsum(e[::-1][: n // 4])
+    cut_a = int(np.argmax(head)) + 1 if head.max() > 0 else 0
+    cut_b = int(np.argmax(tail)) + 1 if tail.max() > 0 else 0
+    return start + cut_a, stop - cut_b
+
+
+def still_intervals(gyro, intervals, min_samples: int = 2) -> np.ndarray:
+    """The rests ``[start, stop)`` shrunk to where the gyro is still.
+
+    Rests found on the accelerometer begin too early and end too late: gravity's direction
+    hardly moves in the first and last hundredths of a degree of a turn, the gyro sees them.
+    Those samples' rotation is lost to the motion and lands in the rest's mean (the bias):
+    a systematic error of up to tenths of a degree on some motions, which the loop's
+    candidates then explain (a time offset above all: its direction is the rate at the
+    motion's ends).  From the rest's centre outwards, a rest ends before the first mean of
+    the rate over :data:`STILL_WINDOWS` samples that leaves the rest's median by more than
+    :data:`STILL_SIGMAS` times that mean's own spread (median absolute deviation over the
+    rest's central half, so coloured noise counts as it is; a longer window's spread is at
+    least the white noise's share of the shortest's).  At least ``min_samples`` around the
+    centre are kept."""
+    g = np.asarray(gyro, float)
+    iv = np.asarray(intervals, dtype=np.int64).reshape(-1, 2).copy()
+    w0 = STILL_WINDOWS[0]
+    for i, (a, b) in enumerate(iv):
+        n = b - a
+        seg = g[a:b] - np.median(g[a + n // 4:b - n // 4], axis=0) if n >= 4 * w0 else None
+        if seg is None:
+            continue
+        start, stop, spread = _still_run(seg, w0)
+        for w in STILL_WINDOWS[1:]:
+            if n >= 4 * w and np.all(spread > 0):
+                s2, e2, _ = _still_run(seg, w, spread * np.sqrt(w0 / w))
+                start, stop = max(start, s2), min(stop, e2)
+        start, stop = _edge_trim(seg, start, stop)
+        if stop - start < min_samples:
+            c = n // 2
+            start, stop = max(0, c - min_samples // 2), min(n, c - min_samples // 2 + min_samples)
+        iv[i] = a + start, a + stop
+    return iv
+
+
 def rest_noise(rs: RestStatistics) -> np.ndarray:
     """Per-axis variance of one sample *for sums* (σ² τ), pooled over the rests (raw unit²)."""
     n = (rs.intervals[:, 1] - rs.intervals[:, 0])[:, None]
@@ -212,4 +294,5 @@ def saturated_samples(gyro, gyro_range=None) -> np.ndarray:
 
 
 __all__ = ["BIAS_MODES", "BiasEstimate", "RestStatistics", "TimeBase", "bias_series", "check_time_base", "fit_bias",
-           "measuring_range", "motion_bias_variance", "rest_noise", "rest_statistics", "sample_interval", "saturated_samples"]
+           "measuring_range", "motion_bias_variance", "rest_noise", "rest_statistics", "sample_interval", "saturated_samples",
+           "still_intervals"]

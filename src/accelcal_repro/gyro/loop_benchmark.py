@@ -12,7 +12,8 @@ effect named).
 The hidden effects (one parameter each, on the x gyro): ``g_sensitivity`` ``G_xz`` (the
 x gyro reads ``G f_z``), ``scale_asymmetry`` (negative x rates read ``1 + a`` times),
 ``rate_nonlinearity`` (x reads ``q ω|ω|``), ``motion_bias`` (x reads ``Δb`` while moving),
-``time_offset`` (the gyro ``δ`` late, whole samples), ``sample_clock`` (a sample clock whose
+``time_offset`` (the gyro ``δ`` late, whole samples; the loop calls it not identifiable between
+the gyro's still rests, so it has no MDE and no power row), ``sample_clock`` (a sample clock whose
 rate wanders, ``1 + A sin(2π t/P)``, as the stamps record it, while the samples were taken
 ``1 + w A sin(2π t/P)``: ``w = 1`` stamps right, the nominal rate wrong; simulated at 1 kHz
 without noise, interpolated onto the sample times, noise added after).  ``clock_rate`` is
@@ -41,9 +42,10 @@ LOOP_SIZE = Claim("gyro", "loop_false_positives", "On effect-free simulated sess
                   "interval is at most 2 alpha", "upper bound <= 0.10")
 LOOP_POWER = Claim("gyro", "loop_power_3x_mde", "At 3 times its minimum detectable effect every hidden gyro effect "
                    "is named on at least 80 % of simulated sessions", ">= 0.8")
-#: Effect-free sessions before the size rule can pass: at a true rate of alpha, the interval's upper end is <= 2 alpha.
-SIZE_MINIMUM = MinimumSample(150, "effect-free sessions", "with fewer, the interval's upper end exceeds 2 alpha even "
-                             "at a true rate of alpha")
+#: Effect-free sessions before the size rule decides: at a true rate of 0.035 the interval's upper end
+#: exceeds 2 alpha with probability 0.005 on 300 (0.050 on 200, 0.16 on 150: binomial, Clopper-Pearson).
+SIZE_MINIMUM = MinimumSample(300, "effect-free sessions", "with fewer, a loop whose true rate is 0.035 fails the "
+                             "rule with probability 1 % or more (the interval's upper end above 2 alpha)")
 #: Sessions per candidate at 3x MDE: the power's binomial s.e. at 0.8 below 0.09.
 POWER_MINIMUM = MinimumSample(20, "sessions per candidate at 3x MDE", "with fewer, the power's binomial standard "
                               "error exceeds 0.09")
