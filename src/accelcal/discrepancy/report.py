@@ -373,7 +373,7 @@ def discrepancy_report(rec: Recording, g: float, *, rules: Rules | None = None,
     static = {**(static_kw or {}), "known_intervals": rec.intervals is not None}
     if searched is not None:
         static.update({**searched["settings"], "search": searched})
-    det = discrepancy(pose_data_from_static(poses, g), rules or Rules())
+    det = discrepancy(pose_data_from_static(poses, g, rec.acc, rec.rate), rules or Rules())
     stoch, err, impl = None, "", {}
     if stochastic is not None:
         try:
