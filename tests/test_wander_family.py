@@ -44,7 +44,7 @@ def test_rest_allan_gives_white_then_the_flicker_floor():
     n = int(iv[-1, 1])
     white = simulate_noise(rng, n, FS, {"white": 0.33}, size=3)    # 3.3 counts per sample
     ra = rest_allan(white, iv, FS)
-    assert np.allclose(ra.avar[:, 0] * ra.m[0], 3.3 ** 2, rtol=0.05)
+    assert ra.taus[0] >= 0.1 * 5.5       # only octaves near the poses' time scales
     # white noise: m Â(m) stays at the per-sample variance within the rests' precision
     rel = ra.avar * ra.m[None] / (3.3 ** 2)
     assert np.all(np.abs(rel - 1) < 4 * np.sqrt(2.0 / ra.dof)), rel
@@ -60,7 +60,7 @@ def test_rest_allan_gives_white_then_the_flicker_floor():
 
 def test_rests_likelihood_tells_flicker_from_a_random_walk():
     """Samples with a flicker floor: the rests' deviance at the flicker member of the true
-    size is far below that of no wander and of a random walk of the same pose-to-pose size."""
+    size is far below that of no wander, and below a random walk of the same pose-to-pose size."""
     rng = np.random.default_rng(4)
     iv = _rests()
     n = int(iv[-1, 1])
@@ -72,7 +72,8 @@ def test_rests_likelihood_tells_flicker_from_a_random_walk():
     # a random walk whose 8 s pose-to-pose variance matches the flicker's: K² 8/3 ≈ 2 ln2/π · 2 B²
     K2 = 2 * np.log(2) / np.pi * 2 * B ** 2 * 3 / 8
     rw = rest_deviance(ra, K2 * ra.member_avar(np.inf))
-    assert none - fl > 20 and rw - fl > 20, (fl, none, rw)
+    # (the octaves near the poses' scales only: the random walk is less far than over every octave)
+    assert none - fl > 20 and rw - fl > 5, (fl, none, rw)
     # and white samples do not prefer the flicker floor
     w = rest_allan(simulate_noise(rng, n, FS, {"white": 0.33}, size=3), iv, FS)
     assert rest_deviance(w, 0.0 * w.m) < rest_deviance(w, B ** 2 * w.member_avar(C.FLICKER))

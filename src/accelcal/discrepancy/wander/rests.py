@@ -10,14 +10,15 @@ members apart that the pose means alone cannot: a flicker floor and a random wal
 same size between the poses differ by a factor of ten or more within the rests.
 
 Statistic (:func:`rest_allan`).  Per axis and octave ``m = 1, 2, 4, …`` samples (``τ =
-m/f_s``, at least four blocks in a rest), the non-overlapping Allan variance pooled over
+m/f_s``, at least four blocks in a rest, and at least a tenth of the median rest:
+:data:`MIN_TAU_SHARE`), the non-overlapping Allan variance pooled over
 the rests: ``Â(τ) = Σ ½ (ȳ_{j+1} − ȳ_j)² / c`` over the ``c`` consecutive block pairs
 inside each rest (none across a motion), each rest's blocks about its own samples (the
 rest's level, whatever it is, cancels in the differences).
 
 Likelihood (:func:`rest_deviance`).  ``Â(τ_k) ~ A(τ_k) χ²_ν/ν`` with ``A = N_a² /m_k +
-q_abs A_M(τ_k)`` (``N_a²`` the per-sample white variance of axis ``a``, profiled on a grid
-around its one-sample estimate) and ``ν = 2c/3`` (adjacent differences share a block:
+q_abs A_M(τ_k)`` (``N_a²`` the white variance of axis ``a`` at the octaves used, profiled
+on a grid around ``m Â`` of the first of them) and ``ν = 2c/3`` (adjacent differences share a block:
 the white-noise correlation of their squares, 1/4, counted on both sides).  ``−2ℓ =
 Σ_k ν_k (log A_k + Â_k/A_k)`` summed over the axes, the same wander size on every axis
 (the pose model's).  The octaves are treated as independent (they are nearly so for white
@@ -45,10 +46,17 @@ from ...noise.terms import model_avar
 
 #: Fewest blocks of one octave a rest must hold for that octave (three differences).
 MIN_BLOCKS = 4
-#: Grid of the per-sample white variance, relative to its one-sample estimate, that the
-#: rests' deviance is profiled over (the one-sample Allan variance carries the white noise
-#: and a little of every wander: the white level sits at or below it).
-WHITE_FACTORS = np.geomspace(0.5, 1.05, 45)
+#: Only octaves of at least this share of the median rest enter the deviance: the time
+#: scales near the poses'.  Shorter ones carry what a real sensor's filter and vibration do
+#: within a fraction of a second (the IMU-TK fork sessions' rests show an Allan bump at
+#: 0.08 s, 1.4-4.4 times white noise), which no wander member extrapolates to minutes:
+#: with every octave in, those sessions' joint fit chose a flicker the pose residuals do not
+#: show and named two outlier poses the pose residuals alone did not.
+MIN_TAU_SHARE = 0.1
+#: Grid of the per-sample white variance, relative to ``m Â`` at the first octave used,
+#: that the rests' deviance is profiled over (free: the white level is not taken from the
+#: shortest octaves).
+WHITE_FACTORS = np.geomspace(0.3, 1.5, 61)
 
 
 @dataclass(frozen=True)
@@ -56,7 +64,8 @@ class RestAllan:
     """The rests' pooled non-overlapping Allan variances (module docstring).
 
     ``m`` (K,) block lengths [samples], ``taus`` (K,) = ``m/fs`` [s], ``avar`` (3, K) per
-    axis [data unit²], ``dof`` (3, K) the χ² degrees of freedom ``ν`` of each.
+    axis [data unit²], ``dof`` (3, K) the χ² degrees of freedom ``ν`` of each; only the
+    octaves of at least :data:`MIN_TAU_SHARE` of the median rest are kept.
     """
 
     m: np.ndarray
@@ -116,14 +125,17 @@ def rest_allan(samples, intervals, fs: float) -> RestAllan | None:
             s2[:, k] += 0.5 * np.sum(d * d, axis=0)
             cnt[k] += nb - 1
     ms_arr = np.asarray(ms, float)
-    return RestAllan(ms_arr, ms_arr / fs, s2 / cnt[None], np.broadcast_to(2.0 * cnt / 3.0, (3, len(ms))).copy(),
-                     float(fs))
+    keep = (ms_arr >= MIN_TAU_SHARE * float(np.median(iv[:, 1] - iv[:, 0]))) & (cnt > 0)
+    if not keep.any():
+        return None
+    return RestAllan(ms_arr[keep], ms_arr[keep] / fs, s2[:, keep] / cnt[None, keep],
+                     np.broadcast_to(2.0 * cnt[keep] / 3.0, (3, int(keep.sum()))).copy(), float(fs))
 
 
 def rest_deviance(ra: RestAllan, wander_avar: np.ndarray) -> np.ndarray:
     """``−2ℓ`` of the rests (module docstring), summed over the axes, for the wander's Allan
     variances ``wander_avar`` (..., K) [data unit²], the white level of each axis profiled
-    over :data:`WANDER_FACTORS` × its one-sample estimate."""
+    over :data:`WHITE_FACTORS` × ``m Â`` of the first octave."""
     out = 0.0
     for a in range(ra.avar.shape[0]):
         A_hat, nu = ra.avar[a], ra.dof[a]
