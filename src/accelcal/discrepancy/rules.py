@@ -67,7 +67,7 @@ class Rules:
     outlier_pose: bool = True
     max_outliers: int = 3
     max_wander_inflation: float = 3.0
-    wander_family: str = "flicker_rests"
+    wander_family: str = "flicker"
 
     def __post_init__(self):
         if self.wander_family not in WANDER_FAMILIES:
