@@ -102,6 +102,16 @@ def test_allan_check_compares_the_wander_with_the_rests():
     assert out["verdict"] == "consistent" and out["axes"]["x"]["more_at"]
 
 
+def test_allan_check_reads_a_flicker_wander_as_its_floor():
+    """A flicker wander (B = 0.5: Allan floor 0.33) is checked against its flat floor: rests
+    that show it are consistent, white-only rests contradict it (before: 'no wander named')."""
+    floor = lambda taus, b=0.5: 2 * np.log(2) / np.pi * b ** 2 + 0 * taus  # noqa: E731
+    nm = {"term": "bias_wander", "process": "flicker", "tau_s": float("nan"), "random_walk_K": float("nan"),
+          "size": 0.5, "size_ci": [0.45, 0.55]}
+    assert allan_check(nm, _allan_stoch(0.35, floor))["verdict"] == "consistent"
+    assert allan_check(nm, _allan_stoch(0.35, lambda t: 0 * t))["verdict"] == "rests show less"
+
+
 def test_joint_noise_model_explains_the_excess_of_a_wandering_session():
     """Pose means with white noise and a Gauss-Markov wander twice the pose noise: the white
     reading of the rests leaves a residual excess it cannot explain, the joint model predicts

@@ -11,13 +11,14 @@ recording is fitted to, and compared on, the same weighted data.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from ..effects import COVARIATES, TEMPERATURE, TIME
 from ..errors import AccelcalError
 from ..extended_model import EffectTerms, effect_terms
+from .wander.rests import RestAllan, rest_allan
 
 
 @dataclass(frozen=True)
@@ -45,6 +46,10 @@ class PoseData:
         the wander null needs them for the covariance of interval means).  None: unknown.
     index : ndarray of int, shape (n,), or None
         Index of each pose in the recording's full pose set (a subset keeps it); None = ``0..n-1``.
+    rests : RestAllan or None
+        The rests' pooled Allan variances (:mod:`.wander.rests`: what the wander null borrows
+        from the rests' own samples); None when the samples were not given.  A subset keeps
+        it (the noise is the recording's).
     """
 
     z: np.ndarray
@@ -58,6 +63,7 @@ class PoseData:
     t_start: np.ndarray | None = None
     t_end: np.ndarray | None = None
     index: np.ndarray | None = None
+    rests: RestAllan | None = None
     _terms: dict = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __len__(self) -> int:
@@ -101,7 +107,8 @@ class PoseData:
             return None if a is None else a[keep]
 
         return PoseData(self.z[keep], self.g, self.sigma[keep], self.t[keep], sel(self.temp), self.mean_std[keep],
-                        self.t_ref, self.temp_ref, sel(self.t_start), sel(self.t_end), self.pose_index[keep])
+                        self.t_ref, self.temp_ref, sel(self.t_start), sel(self.t_end), self.pose_index[keep],
+                        self.rests)
 
 
 def pose_data(z, g: float, mean_std, t, temp=None, sigma=None, t_start=None, t_end=None) -> PoseData:
@@ -147,10 +154,15 @@ def pose_data(z, g: float, mean_std, t, temp=None, sigma=None, t_start=None, t_e
                     float(temp.mean()) if temp is not None else float("nan"), t_start, t_end, None)
 
 
-def pose_data_from_static(poses, g: float) -> PoseData:
-    """:class:`PoseData` of the poses found by :func:`accelcal.static.detect_static`."""
-    return pose_data(poses.means, g, poses.mean_std, poses.t_mid, poses.temp, t_start=poses.t_start,
+def pose_data_from_static(poses, g: float, samples=None, fs: float | None = None) -> PoseData:
+    """:class:`PoseData` of the poses found by :func:`accelcal.static.detect_static`; with
+    the recording's ``samples`` (n, 3) [data unit] at ``fs`` [Hz], also the rests' Allan
+    variances (:func:`~.wander.rests.rest_allan` over the poses' sample intervals)."""
+    data = pose_data(poses.means, g, poses.mean_std, poses.t_mid, poses.temp, t_start=poses.t_start,
                      t_end=poses.t_end)
+    if samples is None or fs is None:
+        return data
+    return replace(data, rests=rest_allan(samples, poses.intervals, fs))
 
 
 __all__ = ["PoseData", "pose_data", "pose_data_from_static"]

@@ -290,6 +290,9 @@ def allan_check(noise_model: dict, stoch, level: float = 0.95, min_share: float 
     """
     tau_c = noise_model.get("tau_s")
     K, K_ci = noise_model.get("random_walk_K"), noise_model.get("random_walk_K_ci") or [np.nan, np.nan]
+    flicker = noise_model.get("process") == "flicker"
+    if flicker:  # a flat floor (2 ln 2/π) B², its band from B's interval
+        K, K_ci = noise_model.get("size"), noise_model.get("size_ci") or [np.nan, np.nan]
     if noise_model.get("term") == "per_placement_offset":
         return {"verdict": "not visible in the rests",
                 "reason": "a per-placement offset is constant within each rest: the rests' Allan deviation "
@@ -299,6 +302,8 @@ def allan_check(noise_model: dict, stoch, level: float = 0.95, min_share: float 
     fs = stoch.fs
 
     def wander_avar(taus, k):
+        if flicker:
+            return k ** 2 * TERMS["bias_instability"].basis(taus, fs, None)
         if tau_c is None or not np.isfinite(tau_c):
             return k ** 2 * taus / 3.0
         s2 = k ** 2 * tau_c / 2.0
@@ -373,7 +378,7 @@ def discrepancy_report(rec: Recording, g: float, *, rules: Rules | None = None,
     static = {**(static_kw or {}), "known_intervals": rec.intervals is not None}
     if searched is not None:
         static.update({**searched["settings"], "search": searched})
-    det = discrepancy(pose_data_from_static(poses, g), rules or Rules())
+    det = discrepancy(pose_data_from_static(poses, g, rec.acc, rec.rate), rules or Rules())
     stoch, err, impl = None, "", {}
     if stochastic is not None:
         try:

@@ -30,6 +30,16 @@ def null_name(null: str) -> str:
     return OLD_NULL_NAMES.get(null, null)
 
 
+#: The members the wander null's noise model is chosen from (REML, by likelihood: one size
+#: parameter each): ``one_process`` a per-placement offset, one Gauss–Markov process or a
+#: random walk (the earlier model); ``flicker`` those and a flicker (1/f) bias, which
+#: stands for a sum of processes spread over the decades (:data:`.wander.FLICKER`);
+#: ``flicker_rests`` the same members chosen by the joint likelihood of the pose residuals
+#: and the rests' own samples (:mod:`.wander.rests`; as ``flicker`` when the pose data do
+#: not carry the rests).
+WANDER_FAMILIES = ("one_process", "flicker", "flicker_rests")
+
+
 @dataclass(frozen=True)
 class Rules:
     """Decision rules of the loop (config ``discrepancy.rules``; defaults = config/config.yaml).
@@ -37,7 +47,8 @@ class Rules:
     ``null`` selects the noise model of the tests (:data:`NULLS`); ``n_boot`` and ``seed``
     the parametric bootstrap of the wander null; ``outlier_pose`` / ``max_outliers`` the
     outlier family (wander null only); ``max_wander_inflation`` when a candidate that did
-    not pass counts as not identifiable against the wander (:mod:`.wander_loop`).
+    not pass counts as not identifiable against the wander (:mod:`.wander_loop`);
+    ``wander_family`` the members the wander is chosen from by REML (:data:`WANDER_FAMILIES`).
     """
 
     null: str = "wander"
@@ -56,8 +67,11 @@ class Rules:
     outlier_pose: bool = True
     max_outliers: int = 3
     max_wander_inflation: float = 3.0
+    wander_family: str = "flicker"
 
     def __post_init__(self):
+        if self.wander_family not in WANDER_FAMILIES:
+            raise AccelcalError(f"wander_family must be one of {', '.join(WANDER_FAMILIES)}, got {self.wander_family!r}")
         object.__setattr__(self, "null", null_name(self.null))
         if self.null not in NULLS:
             raise AccelcalError(f"null must be one of {', '.join(NULLS)}, got {self.null!r}")
@@ -88,4 +102,4 @@ class Rules:
         return cls(**{k: (tuple(v) if k == "candidates" else v) for k, v in cfg.items()})
 
 
-__all__ = ["CORRECTIONS", "NULLS", "OLD_NULL_NAMES", "Rules", "null_name"]
+__all__ = ["CORRECTIONS", "NULLS", "OLD_NULL_NAMES", "Rules", "WANDER_FAMILIES", "null_name"]

@@ -70,7 +70,7 @@ STATUS: dict[str, dict[str, str]] = {
     "excess_status_white": {k: v + " (this reading: the named effects against the rests' white noise alone)"
                             for k, v in _EXCESS.items()},
     "noise_model.term": {
-        "bias_wander": "a slowly wandering bias shared by neighbouring poses (Gauss-Markov or random walk)",
+        "bias_wander": "a slowly wandering bias shared by neighbouring poses (Gauss-Markov, random walk or flicker)",
         "per_placement_offset": "an offset constant within each pose and independent between poses (placement by "
                                 "hand, a mount that settles differently each time)",
         "none": "the pose-to-pose noise beyond the rests' is estimated at zero",
@@ -81,6 +81,8 @@ STATUS: dict[str, dict[str, str]] = {
         "random_walk": "random walk: no stationary size and no correlation time; random_walk_K, its change over "
                        "t seconds having std K sqrt(t)",
         "per_placement": "independent between poses: size (std per axis), no time scale",
+        "flicker": "flicker (1/f) bias: a flat Allan floor 0.664 B at every averaging time, no single correlation "
+                   "time; size is B",
         "none": "no second term",
     },
     "noise_implication.verdict": {

@@ -136,7 +136,7 @@ def discrepancy_wander(data: PoseData, rules: Rules, report: bool = True) -> Dis
         if not remaining and not test_outliers:
             break
         try:
-            prob, bas0, null = linearise_noise(st.data, st.current)
+            prob, bas0, null = linearise_noise(st.data, st.current, rules.wander_family)
         except C.WanderError as err:
             st.wander_error = str(err)
             for eid in remaining:
@@ -505,7 +505,7 @@ def _result(data: PoseData, rules: Rules, base: Fit, lopo_base: np.ndarray, st: 
         if last is not None and last.data is cur_data and last.fit is current:
             prob, coarse = last.problem, last.wander
         else:
-            prob, _, coarse = linearise_noise(cur_data, current)
+            prob, _, coarse = linearise_noise(cur_data, current, rules.wander_family)
         wander = replace(C.fit_wander(prob, prob.X0, fine=True), common_ci=coarse.common_ci,
                          common_profile=coarse.common_profile)
     except C.WanderError as err:

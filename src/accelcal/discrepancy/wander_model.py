@@ -28,21 +28,26 @@ def intervals(data: PoseData) -> tuple[np.ndarray, np.ndarray, tuple]:
         "pose intervals not given: the pose means are treated as instantaneous samples of the wander",)
 
 
-def linearise(data: PoseData, f: Fit, taus=None, common: float | None = 0.0) -> C.Problem:
+def linearise(data: PoseData, f: Fit, taus=None, common: float | None = 0.0, rests: bool = False) -> C.Problem:
     """The wander problem of the fit ``f`` on ``data`` (raises :class:`~.wander.WanderError`),
     with the wander's axis correlation ``common`` (:func:`~.wander.axis_gram`; None: not yet
-    diagonalised, see :func:`~.wander.problem`)."""
+    diagonalised, see :func:`~.wander.problem`); ``rests``: its likelihood joined by the
+    rests' (``data.rests``, if the data carry them)."""
     J = f.J * f.sigma[:, None]  # unweighted
     grad = -J[:, :3]            # ∂r/∂z = −∂r/∂b
     starts, durations, notes = intervals(data)
-    return C.problem(f.residuals, J, f.sigma, grad, starts, durations, taus=taus, notes=notes, common=common)
+    return C.problem(f.residuals, J, f.sigma, grad, starts, durations, taus=taus, notes=notes, common=common,
+                     rests=data.rests if rests else None)
 
 
-def linearise_noise(data: PoseData, f: Fit) -> tuple[C.Problem, C.Basis, C.WanderFit]:
+def linearise_noise(data: PoseData, f: Fit, family: str = "flicker") -> tuple[C.Problem, C.Basis, C.WanderFit]:
     """:func:`linearise` at the REML estimate of the wander's axis correlation under the
     fit's own model (:func:`~.wander.fit_common`): the problem, the :class:`~.wander.Basis`
-    of its columns and the REML noise (test grid)."""
-    prob = linearise(data, f, common=None)
+    of its columns and the REML noise (test grid), the wander chosen from the members of
+    ``family`` (:data:`~.rules.WANDER_FAMILIES`)."""
+    starts, durations, _ = intervals(data)
+    taus = C.tau_grid(durations, float(np.max(starts + durations) - np.min(starts)), flicker=family != "one_process")
+    prob = linearise(data, f, taus=taus, common=None, rests=family == "flicker_rests")
     return C.fit_common(prob, prob.X0)
 
 
@@ -51,7 +56,8 @@ def noise_model_dict(w: C.WanderFit | None, prob: C.Problem | None, reason: str 
     """The ``noise_model`` key: the named stochastic term of the joint fit, with ``reading``
     (:func:`describe_noise_model`) and ``placement`` (:func:`repeated_placements`)."""
     base = {"method": "REML of the pose residuals' noise s (white + one of: a per-placement offset, a Gauss-Markov "
-                      "bias wander, tau -> inf: a random walk; the same size on every axis, correlated between the "
+                      "bias wander, tau -> inf: a random walk, a flicker (1/f) bias; chosen by likelihood; the same "
+                      "size on every axis, correlated between the "
                       "axes by axis_correlation, a common-mode share), jointly with the calibration; 95 % "
                       "profile-likelihood intervals",
             "white": "per-pose standard errors of the rests (static detection) times the white scale"}
@@ -60,17 +66,19 @@ def noise_model_dict(w: C.WanderFit | None, prob: C.Problem | None, reason: str 
         return {**out, "reading": describe_noise_model(out)}
     shortest = float(np.min(prob.durations)) if prob is not None else float("nan")
     span = prob.span if prob is not None else float("nan")
-    white_like = bool(w.present and np.isfinite(w.tau) and w.tau < 0.5 * shortest)
+    white_like = bool(w.present and not w.flicker and np.isfinite(w.tau) and w.tau < 0.5 * shortest)
     process = "none" if not w.present else (
-        "per_placement" if w.placement else ("random_walk" if np.isinf(w.tau) else "gauss_markov"))
+        "per_placement" if w.placement else "flicker" if w.flicker else (
+            "random_walk" if np.isinf(w.tau) else "gauss_markov"))
     # the wander is time-correlated beyond doubt when its τ interval stays above the poses
     lo = w.tau_ci[0] if w.tau_ci else float("nan")
-    correlated = bool(w.present and not w.placement and np.isfinite(lo) and lo >= 0.5 * shortest)
+    correlated = bool(w.present and not w.placement and (w.flicker or (np.isfinite(lo) and lo >= 0.5 * shortest)))
     term = "none" if not w.present else ("per_placement_offset" if w.placement else "bias_wander")
     out = {**base, "term": term, "process": process, "estimated": True,
            "white_like": white_like, "time_correlation_established": correlated,
            "white_excess_N": math.sqrt(2 * w.q_abs * w.tau) if white_like and not w.placement else float("nan"),
-           "size": w.size, "size_ci": list(w.size_ci), "tau_s": w.tau if w.present else float("nan"),
+           "size": w.size, "size_ci": list(w.size_ci),
+           "tau_s": w.tau if w.present and not w.flicker else float("nan"),
            "tau_ci": list(w.tau_ci),
            "white_scale": w.white_scale, "white_scale_ci": list(w.white_scale_ci),
            "random_walk_K": w.K, "random_walk_K_ci": list(w.K_ci), "q_rel": w.q_rel,
@@ -82,8 +90,8 @@ def noise_model_dict(w: C.WanderFit | None, prob: C.Problem | None, reason: str 
            "notes": list(prob.notes) if prob is not None else [],
            "placement": placement or {},
            "unit": "size: data unit (std of the wander or of the per-placement offset, per axis; null for a random "
-                   "walk, which has no stationary size); tau_s: s (0: the per-placement offset, null: a random "
-                   "walk); random_walk_K: data unit / sqrt(s) (change_over_session = K sqrt(session_s)); "
+                   "walk, which has no stationary size; for flicker its coefficient B, Allan floor 0.664 B); "
+                   "tau_s: s (0: the per-placement offset, null: a random walk or flicker); random_walk_K: data unit / sqrt(s) (change_over_session = K sqrt(session_s)); "
                    "white_scale: variance of the white part over the rests' prediction; "
                    "axis_correlation: correlation of the wander between any two sensor axes (its common-mode share; "
                    "interval and -2 log REML likelihood on the grid of the tests); "
@@ -132,6 +140,9 @@ def describe_noise_model(nm: dict, unit: str | None = None) -> str:
                 f"K {_g(K)} {u}/sqrt(s) {_interval([klo, khi])}: its change over t seconds has standard deviation "
                 f"K sqrt(t), {size(nm.get('change_over_session'))} over the {_g(nm.get('session_s'))} s session"
                 f"{axes}{white}")
+    if proc == "flicker":
+        return (f"bias wander: flicker (1/f, a flat Allan floor: no single correlation time), B {size(nm.get('size'))} "
+                f"{_interval(nm.get('size_ci'))}, Allan floor 0.664 B{axes}{white}")
     if proc == "per_placement":
         pl = nm.get("placement") or {}
         return (f"per-placement offset: {size(nm.get('size'))} per axis {_interval(nm.get('size_ci'))}, independent "
@@ -250,6 +261,8 @@ def _difference_variance(w: C.WanderFit, starts, durations) -> np.ndarray:
     """``D_ij = Var(β̄_i − β̄_j)`` of the fitted wander or per-placement offset (data unit²)."""
     if w.placement:
         return 2.0 * w.q_abs * (1.0 - np.eye(len(starts)))
+    if w.flicker:
+        return pose_difference_variance("bias_instability", math.sqrt(w.q_abs), starts, durations)
     if np.isinf(w.tau):
         return pose_difference_variance("random_walk", math.sqrt(w.q_abs), starts, durations)
     return pose_difference_variance("gauss_markov", (math.sqrt(w.q_abs), w.tau), starts, durations)

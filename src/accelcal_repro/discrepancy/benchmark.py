@@ -519,7 +519,7 @@ def detect_nulls(rec: Recording, g: float, rules: Rules, nulls=("white",), oracl
     the loop's rows (:func:`accelcal_repro.discrepancy.oracle.oracle_detection`), one row more.
     """
     try:
-        data = pose_data_from_static(detect_static_recording(rec), g)
+        data = pose_data_from_static(detect_static_recording(rec), g, rec.acc, rec.rate)
     except AccelcalError as err:
         names = [*nulls, *(["oracle"] if oracle is not None else [])]
         return [{"null": n, "outcome": ERROR, "effect": "", "effects": "", "error": str(err).splitlines()[0]}
@@ -531,7 +531,7 @@ def detect_nulls(rec: Recording, g: float, rules: Rules, nulls=("white",), oracl
 def detect_case(rec: Recording, g: float, rules: Rules) -> dict:
     """:func:`detect_nulls` under the null of ``rules`` itself: one row."""
     try:
-        data = pose_data_from_static(detect_static_recording(rec), g)
+        data = pose_data_from_static(detect_static_recording(rec), g, rec.acc, rec.rate)
     except AccelcalError as err:
         return {"null": _null_of(rules), "outcome": ERROR, "effect": "", "effects": "",
                 "error": str(err).splitlines()[0]}

@@ -25,6 +25,14 @@ fit: an effect moves a pose residual by ~1e-4 of g, the neglected terms are ~1e-
 
 Real-record profiles have no known truth: their "true" covariance is the record's fitted
 model, so there the oracle is the loop given the right model family and its parameters.
+No oracle in the strict sense exists for them: the record's noise is one realisation of
+an unknown process, and any covariance handed to the oracle is itself an estimate (for
+``adis_real``, the model fitted to 2.78 h of the same record: the loop's disagreement with
+it mixes what estimating the noise costs with where that model is wrong).  The profile
+whose oracle deserves the name is its simulated twin, ``adis_model``: recordings whose
+true noise *is* the fitted model, so the oracle knows it exactly; ``adis_real`` then
+measures what the real noise adds beyond the model (transients screened out), and its
+agreement is a comparison with a reference, not with an oracle.
 """
 
 from __future__ import annotations

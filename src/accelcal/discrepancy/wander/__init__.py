@@ -170,6 +170,7 @@ from .gls import (
     studentised,
 )
 from .problem import (
+    FLICKER,
     MIN_WANDER_DOF,
     PLACEMENT,
     POINT_DURATION,
@@ -180,15 +181,18 @@ from .problem import (
     axis_gram,
     axis_weight,
     gm_variance,
+    is_timed,
     problem,
     tau_grid,
     wander_kernel,
     wander_kernels,
 )
 from .reml import CHI2_95, COMMON_GRID, Q_REL_FINE, S_FACTORS, WanderFit, at, fit_common, fit_wander
+from .rests import RestAllan, rest_allan
 from .simulation import contrast_covariance, simulate_interval_means
 
-__all__ = ["BATCHES", "Basis", "CHI2_95", "COMMON_GRID", "EffectInformation", "MAX_WHITE_SCALE", "MIN_WANDER_DOF",
+__all__ = ["BATCHES", "Basis", "CHI2_95", "COMMON_GRID", "EffectInformation", "FLICKER", "MAX_WHITE_SCALE",
+           "MIN_WANDER_DOF", "RestAllan", "is_timed", "rest_allan",
            "MIN_WHITE_SCALE", "PLACEMENT", "POINT_DURATION", "Problem", "Q_REL_FINE", "Q_REL_GRID", "RoundTests",
            "S_FACTORS", "Surface", "TAU_PER_DECADE", "TAU_PER_DECADE_FINE", "WanderError", "WanderFit", "at",
            "axis_gram", "axis_weight", "basis", "contrast_covariance", "directions", "effect_information",

@@ -59,9 +59,11 @@ def _neg2ll_min(quad, nu, logdet):
     ld = logdet.reshape(-1)
     floored = quad < MIN_WHITE_SCALE * nu
     capped = quad > MAX_WHITE_SCALE * nu
-    prod = np.where(floored | capped, np.inf, quad * np.exp(ld / nu)[None]).min(axis=1)
+    ld0 = float(ld.min())  # the rests' deviance (:mod:`.rests`) can make logdet large: scaled
+    with np.errstate(over="ignore"):
+        prod = np.where(floored | capped, np.inf, quad * np.exp((ld - ld0) / nu)[None]).min(axis=1)
     with np.errstate(divide="ignore"):
-        out = nu * (np.log(prod / nu) + 1.0)
+        out = nu * (np.log(prod / nu) + 1.0) + ld0
     for end, mask in ((MIN_WHITE_SCALE, floored), (MAX_WHITE_SCALE, capped)):
         if mask.any():
             lin = np.where(mask, quad / end + ld[None], np.inf).min(axis=1) + nu * math.log(end)
@@ -162,7 +164,8 @@ def basis(prob: Problem, X: np.ndarray) -> Basis:
 def profile(prob: Problem, X: np.ndarray, Y: np.ndarray, qrel, shifts: bool = False,
             best_shift: bool = False, bas: Basis | None = None) -> Surface:
     """The likelihood :class:`Surface` of data sets ``Y`` (B, m) under the model with columns
-    ``X`` (m, p), over the grid ``prob.taus`` × ``qrel`` ((Q,), or (T, Q): one row per τ).
+    ``X`` (m, p), over the grid ``prob.taus`` × ``qrel`` ((Q,), or (T, Q): one row per τ);
+    with ``prob.rests``, the rests' deviance joins ``logdet`` (:mod:`.rests`).
 
     The quadratic forms are taken in the model's own contrasts (:class:`Basis`, computed
     here unless given as ``bas``): ``yᵀ P y = Σ_j ỹ_j² / (1 + q μ_j)`` with ``ỹ = Uᵀ Kᵀ y``,
@@ -185,6 +188,8 @@ def profile(prob: Problem, X: np.ndarray, Y: np.ndarray, qrel, shifts: bool = Fa
     quad = ((Yt * Yt) @ w.transpose(0, 2, 1)).transpose(1, 0, 2)   # (B, T, Q)
     logdet = np.log(1.0 + q[:, :, None] * prob.lam[:, None, :]).sum(axis=2)
     logdet_a = np.log(one).sum(axis=2) + bas.logdet_xx - logdet if p else np.zeros(q.shape)
+    if prob.rests is not None:  # the joint likelihood: the rests' deviance rides on log|Σ| (:mod:`.rests`)
+        logdet = logdet + prob.rests.deviance_grid(prob.taus, prob.scale, q)
     shift_quad = best = None
     if shifts or best_shift:
         M = (prob.L @ bas.K)[None] @ bas.U                      # (T, n, r): poses from rotated contrasts

@@ -14,6 +14,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ...errors import AccelcalError
+from ...noise.terms import IntervalPairs, noise_term
+from .rests import RestAllan
 
 #: Correlation times per decade of the grid of the tests, and of the report's profile.
 TAU_PER_DECADE = 5
@@ -36,16 +38,34 @@ class WanderError(AccelcalError):
 #: The member of the grid of correlation times that stands for the per-placement offset: an
 #: offset independent from pose to pose and constant within each (``τ = 0`` on the grid).
 PLACEMENT = 0.0
+#: The member that stands for a flicker bias (1/f: a flat Allan floor ``0.664 B`` at every
+#: averaging time; the limit of Gauss–Markov components of equal Allan share spread evenly
+#: over the decades).  Its generalised covariance is ``−(B²/π) ln|t − t'|``
+#: (:class:`accelcal.noise.terms.BiasInstability`), a unit member has ``B = 1``, so its
+#: ``q_abs`` is ``B²``.  A sum of processes from seconds to minutes (the "flicker-like
+#: floor" of many MEMS records) is nearer to it than to any one Gauss–Markov process or
+#: random walk: with it in the grid, REML chooses between them by their likelihood (the
+#: same number of parameters).  Coded as ``τ = −1`` (no correlation time).
+FLICKER = -1.0
 
 
-def tau_grid(durations, span: float, per_decade: int = TAU_PER_DECADE) -> np.ndarray:
-    """The wander's members: the per-placement offset (:data:`PLACEMENT`), then correlation
-    times [s], ``per_decade`` per decade from a tenth of the shortest pose to ten session
-    lengths, then ``inf`` (the random walk)."""
+def is_timed(taus) -> np.ndarray:
+    """Whether each member of a grid has a correlation time (Gauss–Markov or random walk,
+    not the per-placement offset nor flicker)."""
+    taus = np.asarray(taus, float)
+    return (taus != PLACEMENT) & (taus != FLICKER)
+
+
+def tau_grid(durations, span: float, per_decade: int = TAU_PER_DECADE, flicker: bool = True) -> np.ndarray:
+    """The wander's members: flicker (:data:`FLICKER`, unless ``flicker`` is False), the
+    per-placement offset (:data:`PLACEMENT`), then correlation times [s], ``per_decade``
+    per decade from a tenth of the shortest pose to ten session lengths, then ``inf`` (the
+    random walk)."""
     lo = 0.1 * max(float(np.min(durations)), POINT_DURATION)
     hi = 10.0 * max(span, 10 * lo)
     k = int(math.ceil(math.log10(hi / lo) * per_decade))
-    return np.concatenate([[PLACEMENT], np.geomspace(lo, hi, k + 1), [np.inf]])
+    head = [FLICKER, PLACEMENT] if flicker else [PLACEMENT]
+    return np.concatenate([head, np.geomspace(lo, hi, k + 1), [np.inf]])
 
 
 def axis_gram(grad, common: float = 0.0) -> np.ndarray:
@@ -93,7 +113,7 @@ def wander_kernels(taus, starts, durations, grad, common: float = 0.0) -> np.nda
 def _variograms(taus, starts, durations) -> np.ndarray:
     """``D_ij = Var(β̄_i − β̄_j)`` of a unit wander for every ``τ`` of ``taus`` (T, n, n);
     ``τ = 0`` (:data:`PLACEMENT`): unit offsets independent between poses, ``D = 2`` off the
-    diagonal."""
+    diagonal; ``τ = −1`` (:data:`FLICKER`): flicker of ``B = 1``."""
     taus = np.asarray(taus, float)
     a, T = np.asarray(starts, float), np.asarray(durations, float)
     first_end = np.where(a[:, None] <= a[None, :], (a + T)[:, None], (a + T)[None, :])
@@ -103,21 +123,34 @@ def _variograms(taus, starts, durations) -> np.ndarray:
     D[rw] = gap + (T[:, None] + T[None, :]) / 3
     pl = taus == PLACEMENT
     D[pl] = 2.0
-    tc = taus[~rw & ~pl][:, None]                                                # (T', 1)
+    fl = taus == FLICKER
+    if fl.any():
+        D[fl] = flicker_variogram(a, T)
+    tc = taus[~rw & ~pl & ~fl][:, None]                                          # (T', 1)
     W = 2 * (tc * T + tc**2 * np.expm1(-T / tc)) / T**2                          # (T', n)
     E = -np.expm1(-T / tc) / T                                                   # (T', n)
     cov = tc[:, :, None] ** 2 * E[:, :, None] * E[:, None, :] * np.exp(-gap / tc[:, :, None])
-    D[~rw & ~pl] = W[:, :, None] + W[:, None, :] - 2 * cov
+    D[~rw & ~pl & ~fl] = W[:, :, None] + W[:, None, :] - 2 * cov
     idx = np.arange(gap.shape[0])
     D[:, idx, idx] = 0.0
+    return D
+
+
+def flicker_variogram(starts, durations) -> np.ndarray:
+    """``D_ij`` of the interval means of a unit flicker (``B = 1``, :data:`FLICKER`)."""
+    a, T = np.asarray(starts, float), np.asarray(durations, float)
+    D = np.asarray(noise_term("bias_instability").interval_difference_variance(1.0, None, IntervalPairs(a, T)),
+                   float).copy()
+    np.fill_diagonal(D, 0.0)
     return D
 
 
 def gm_variance(q_abs: float, tau: float) -> tuple[float, float]:
     """``(s, K)`` of a wander: Gauss–Markov std ``s`` and its short-lag random-walk
     coefficient ``K = sqrt(2 s²/τ)``; for ``tau = inf``, ``q_abs`` is ``K²`` and ``s = inf``;
-    for the per-placement offset (``tau = 0``) ``s`` its std and ``K`` NaN (no time scale)."""
-    if tau == PLACEMENT:
+    for the per-placement offset (``tau = 0``) ``s`` its std and ``K`` NaN (no time scale);
+    for flicker (``tau = −1``) ``s`` its coefficient ``B`` and ``K`` NaN."""
+    if tau in (PLACEMENT, FLICKER):
         return math.sqrt(max(q_abs, 0.0)), float("nan")
     if np.isinf(tau):
         return float("inf") if q_abs > 0 else 0.0, math.sqrt(max(q_abs, 0.0))
@@ -152,6 +185,8 @@ class Problem:
     common : float
         Correlation ``φ`` of the wander between the axes the kernels are built with
         (:func:`axis_gram`).
+    rests : RestAllan or None
+        The rests' own samples, when the likelihood borrows from them (:mod:`.rests`).
     """
 
     y: np.ndarray
@@ -167,6 +202,7 @@ class Problem:
     scale: np.ndarray
     notes: tuple = field(default_factory=tuple)
     common: float = 0.0
+    rests: RestAllan | None = None
 
     @property
     def m(self) -> int:
@@ -197,7 +233,7 @@ class Problem:
     def _rebuilt(self, taus, common):
         lam, V, scale = kernel_eigensystems(self, taus, common)
         return Problem(self.y, self.X0, self.L, self.sigma, self.grad, self.starts, self.durations,
-                       taus, lam, V, scale, self.notes, common)
+                       taus, lam, V, scale, self.notes, common, self.rests)
 
     def sigma_c(self, t: int, q: float) -> np.ndarray:
         """Contrast covariance ``I + q K_τ`` at grid point ``(t, q)`` (relative ``q``)."""
@@ -225,11 +261,13 @@ def kernel_eigensystems(prob, taus, common):
     return ev / scale[:, None], V, scale
 
 
-def problem(r, J, sigma, grad, starts, durations, taus=None, notes=(), common: float | None = 0.0) -> Problem:
+def problem(r, J, sigma, grad, starts, durations, taus=None, notes=(), common: float | None = 0.0,
+            rests: RestAllan | None = None) -> Problem:
     """Build the :class:`Problem` of a fit: residuals ``r`` (n,), Jacobian ``J`` (n, q) whose
     first three columns are the bias, ``σ`` (n,), gradients ``∇`` (n, 3), pose intervals,
     the wander's axis correlation ``common`` (:func:`axis_gram`; None: the kernels are not
-    diagonalised, for :func:`fit_common`, which does it for every ``φ`` of its grid).
+    diagonalised, for :func:`fit_common`, which does it for every ``φ`` of its grid), and
+    the rests' Allan variances ``rests`` if the likelihood borrows from them.
 
     Raises
     ------
@@ -252,12 +290,12 @@ def problem(r, J, sigma, grad, starts, durations, taus=None, notes=(), common: f
     y = L.T @ (r / sigma)
     taus = tau_grid(durations, float(np.max(starts + durations) - np.min(starts))) if taus is None else taus
     prob = Problem(y, X0, L, sigma, grad, starts, durations, np.asarray(taus, float),
-                   np.zeros((0, 0)), np.zeros((0, 0, 0)), np.zeros(0), tuple(notes), float("nan"))
+                   np.zeros((0, 0)), np.zeros((0, 0, 0)), np.zeros(0), tuple(notes), float("nan"), rests)
     return prob if common is None else prob._rebuilt(prob.taus, float(common))
 
 
 
-__all__ = ["MIN_WANDER_DOF", "PLACEMENT", "POINT_DURATION", "TAU_PER_DECADE", "TAU_PER_DECADE_FINE", "Problem",
+__all__ = ["FLICKER", "MIN_WANDER_DOF", "PLACEMENT", "flicker_variogram", "is_timed", "POINT_DURATION", "TAU_PER_DECADE", "TAU_PER_DECADE_FINE", "Problem",
            "WanderError", "axis_gram", "axis_weight", "gm_variance", "kernel_eigensystems", "problem", "tau_grid",
            "wander_kernel",
            "wander_kernels"]

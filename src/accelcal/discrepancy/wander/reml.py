@@ -11,7 +11,7 @@ import numpy as np
 
 from ... import distributions as dist
 from .gls import MAX_WHITE_SCALE, MIN_WHITE_SCALE, Q_REL_GRID, Basis, basis, profile
-from .problem import PLACEMENT, TAU_PER_DECADE_FINE, Problem, gm_variance, kernel_eigensystems, tau_grid
+from .problem import FLICKER, PLACEMENT, TAU_PER_DECADE_FINE, Problem, gm_variance, kernel_eigensystems, tau_grid
 
 #: ``χ²₁`` quantile of the 95 % profile-likelihood intervals.
 CHI2_95 = float(dist.chi2_isf(0.05, 1))
@@ -62,6 +62,11 @@ class WanderFit:
         """Whether the estimate is the per-placement offset (``τ = 0``: :data:`~.problem.PLACEMENT`)."""
         return self.present and self.tau == PLACEMENT
 
+    @property
+    def flicker(self) -> bool:
+        """Whether the estimate is the flicker member (``τ = −1``: :data:`~.problem.FLICKER`)."""
+        return self.present and self.tau == FLICKER
+
 
 #: Relative variances of the report's grid: 0, then ten per decade.
 Q_REL_FINE = np.concatenate([[0.0], np.logspace(-3.0, 4.0, 71)])
@@ -81,7 +86,8 @@ def fit_wander(prob: Problem, X: np.ndarray, fine: bool = True, bas: Basis | Non
         reml = sf.reml[0]
         t, k = np.unravel_index(int(np.argmin(reml)), reml.shape)
         return _wander_at(prob, int(t), float(Q_REL_GRID[k]), float(sf.white_scale()[0, t, k]), float(reml[t, k]))
-    fp = prob.with_taus(tau_grid(prob.durations, prob.span, TAU_PER_DECADE_FINE))
+    fp = prob.with_taus(tau_grid(prob.durations, prob.span, TAU_PER_DECADE_FINE, flicker=bool(np.any(
+        prob.taus == FLICKER))))
     sf = profile(fp, X, fp.y[None], Q_REL_FINE)
     nu = max(sf.m - sf.p, 1)
     quad = sf.quad[0]                                           # (T, Q)
@@ -100,23 +106,26 @@ def fit_wander(prob: Problem, X: np.ndarray, fine: bool = True, bas: Basis | Non
     taus, T = fp.taus, fp.taus.size
     tv, qv = taus[ct][:, None], Q_REL_FINE[cq][:, None]
     q_abs = s_full * qv / fp.scale[ct][:, None]
-    rw, pl = np.isinf(tv), tv == PLACEMENT
+    rw, pl, fl = np.isinf(tv), tv == PLACEMENT, tv == FLICKER
     with np.errstate(divide="ignore", invalid="ignore"):
         size = np.where(rw, np.inf, np.sqrt(q_abs))
-        K = np.where(rw, np.sqrt(q_abs), np.sqrt(2 * q_abs / np.where(rw | pl, 1.0, tv)))
+        K = np.where(rw, np.sqrt(q_abs), np.sqrt(2 * q_abs / np.where(rw | pl | fl, 1.0, tv)))
     # the residual excess the model predicts on average: sqrt(s (1 + q)) (mean eigenvalue 1)
     excess = np.sqrt(s_full * (1.0 + qv))
     wander = inside & (qv > 0)
-    # the per-placement member has no time scale: the intervals of τ and K are the wanders'
-    timed = wander & ~pl
-    bound = _bounds(inside, wander, timed, wander & pl, ct, cq, T, float(s_hat[tf, kf]))
+    # the per-placement and flicker members have no time scale: the intervals of τ and K are
+    # the timed wanders' (the flicker member's size is its B, not a std: the size interval
+    # is of the member chosen)
+    timed = wander & ~pl & ~fl
+    bound = _bounds(inside, wander, timed, wander & pl, ct, cq, taus, float(s_hat[tf, kf]), wander & fl)
 
     def rng(a, mask):
         v = a[mask]
         return (float(np.min(v)), float(np.max(v))) if v.size else (float("nan"), float("nan"))
 
-    tau_ci = rng(np.broadcast_to(tv, inside.shape), wander)
-    size_ci, K_ci = rng(size, inside), rng(K, inside & ~(pl & (qv > 0)))
+    tau_ci = rng(np.broadcast_to(tv, inside.shape), wander & ~fl)
+    same = inside & ((fl == (taus[tf] == FLICKER)) | (qv == 0))
+    size_ci, K_ci = rng(size, same), rng(K, inside & ~((pl | fl) & (qv > 0)))
     if inside[cq == 0].any():  # q = 0 inside the region: the lower ends are 0
         size_ci, K_ci = (0.0, size_ci[1]), (0.0, K_ci[1])
     out = _wander_at(fp, int(tf), float(Q_REL_FINE[kf]), float(s_hat[tf, kf]), best)
@@ -125,20 +134,24 @@ def fit_wander(prob: Problem, X: np.ndarray, fine: bool = True, bas: Basis | Non
                         "at_bound": bound})
 
 
-def _bounds(inside, wander, timed, held, ct, cq, T: int, s_opt: float) -> tuple[str, ...]:
+def _bounds(inside, wander, timed, held, ct, cq, taus, s_opt: float, flick=None) -> tuple[str, ...]:
     """Where the 95 % region of :func:`fit_wander` meets an end of its grid (``inside``: the
     region's points; ``wander``/``timed``: those with a wander / a timed one; ``held``: the
-    per-placement member with a wander; ``ct``/``cq``: their τ and q indices; ``T``: τ
-    grid size; ``s_opt``: the white scale at the optimum)."""
+    per-placement member with a wander; ``ct``/``cq``: their τ and q indices; ``taus``: the
+    grid; ``s_opt``: the white scale at the optimum; ``flick``: the flicker member with a
+    wander)."""
     bound = []
+    finite = taus[np.isfinite(taus) & (taus > 0)]
     if inside[cq == Q_REL_FINE.size - 1].any():
         bound.append("size: upper end of the grid (q_rel 1e4)")
-    if wander[ct >= T - 2].any():
+    if timed[(taus[ct] >= finite.max())[:, None] & timed].any():
         bound.append("tau: the interval reaches the random walk (no upper bound)")
-    if timed[ct == 1].any():
+    if timed[(taus[ct] == finite.min())[:, None] & timed].any():
         bound.append("tau: lower end of the grid")
     if held.any():
         bound.append("tau: the interval holds the per-placement offset (no time correlation between the poses)")
+    if flick is not None and flick.any():
+        bound.append("the 95 % region holds the flicker member (a 1/f floor: no single correlation time)")
     if inside[:, 0].any() or inside[:, -1].any():
         bound.append("white scale: end of the scanned range (x0.1 - x10 of its estimate)")
     if np.isclose(s_opt, MIN_WHITE_SCALE):
@@ -193,13 +206,13 @@ def fit_common(prob: Problem, X: np.ndarray, grid=None) -> tuple[Problem, Basis,
     T = prob.taus.size
     lam, V, scale = kernel_eigensystems(prob, prob.taus, grid)
     stack = Problem(prob.y, prob.X0, prob.L, prob.sigma, prob.grad, prob.starts, prob.durations,
-                    np.tile(prob.taus, grid.size), lam, V, scale, prob.notes, float("nan"))
+                    np.tile(prob.taus, grid.size), lam, V, scale, prob.notes, float("nan"), prob.rests)
     bas = basis(stack, X)
     dev = profile(stack, X, prob.y[None], Q_REL_GRID, bas=bas).reml[0].reshape(grid.size, -1).min(axis=1)
     k = int(np.argmin(dev))
     sl = slice(k * T, (k + 1) * T)
     p = Problem(prob.y, prob.X0, prob.L, prob.sigma, prob.grad, prob.starts, prob.durations, prob.taus,
-                lam[sl], V[sl], scale[sl], prob.notes, float(grid[k]))
+                lam[sl], V[sl], scale[sl], prob.notes, float(grid[k]), prob.rests)
     b = Basis(bas.K, bas.U[sl], bas.mu[sl], bas.logdet_xx)
     w = fit_wander(p, X, fine=False, bas=b)
     inside = grid[dev <= dev[k] + CHI2_95]
