@@ -162,9 +162,12 @@ def test_broken_config_overlay_on_the_default_also_fails(tmp_path):
 
 
 def test_dry_run_on_the_default_config(tmp_path):
+    """The Snakefile's default config (config/config.yaml) passes its checks and plans the
+    whole workflow (also the default-config case of tests/test_config_schemas.py)."""
     proc = snakemake(tmp_path, "-n", "all", timeout=120)
     assert proc.returncode == 0, proc.stderr
     out = " ".join((proc.stdout + proc.stderr).split())
+    assert "invalid config" not in out
     assert "claims 1" in out  # the ledger job
     assert not (tmp_path / "results").exists()
 
