@@ -216,24 +216,9 @@ def monte_carlo_outputs(workdir: Path) -> dict:
 
 
 @pytest.fixture(scope="module")
-def time_limit_run(slurm, tmp_path_factory):
-    """The time-limit fault's run, started before the profile run and beside it: TARGETS
-    from an empty working directory, the gather job held, with 1 min for it
-    (TIME_LIMIT_ARGS).  It is the module's longest run (SLURM's shortest time limit is
-    1 min from the job's start, and the plugin's status checks back off while nothing
-    finishes), so it does not wait for the profile run as the scancel run does."""
-    run = start_held_run(slurm, tmp_path_factory.mktemp("time_limit") / "work", *TIME_LIMIT_ARGS)
-    yield run
-    if run["proc"].poll() is None:  # a test failed before the fault: no run outlives the module
-        os.killpg(run["proc"].pid, 9)
-        run["proc"].wait()
-
-
-@pytest.fixture(scope="module")
-def profile_run(slurm, time_limit_run, tmp_path_factory):
+def profile_run(slurm, tmp_path_factory):
     """TARGETS through the profile as the README says to use it, with the partition and
-    account set by uncommenting its two lines: (working directory, Snakemake's output).
-    (The time-limit fault's run is started first, and runs beside it.)"""
+    account set by uncommenting its two lines: (working directory, Snakemake's output)."""
     tmp = tmp_path_factory.mktemp("profile_run")
     profile = profile_copy(tmp / "profile", partition="other", account="accelcal_test")
     workdir = tmp / "work"
@@ -299,26 +284,35 @@ FAULTS = {  # fault: (what the test does to the held job's SLURM job, SLURM's st
 TIME_LIMIT_ARGS = ("--set-resources", f"{HELD_RULE}:runtime=1")
 
 
-@pytest.fixture(scope="module")
-def faulted_runs(slurm, profile_run, time_limit_run, tmp_path_factory):
-    """For every fault, side by side (one SLURM CPU each), a run with the gather job held:
-    for ``scancel`` a copy of the profile run without the gather job's outputs, for
-    ``time_limit`` the run started from scratch beside the profile run
-    (:func:`time_limit_run`).  The fault hits the held job's SLURM job; when the run has
-    ended, the same command runs again, without the hold (and with the profile's time
-    limit).  Returns per fault the working directory, the Monte Carlo outputs (sha256,
-    mtime) before the rerun, the faulted run's output and return code, the SLURM job id,
-    and the rerun's output and return code.  The
-    time-limit run's held job is never released: SLURM ends it, whenever the test gets
-    there (no timing decides the outcome)."""
-    tmp = tmp_path_factory.mktemp("scancel")
-    workdir = tmp / "work"
+def without_gather_outputs(profile_run, workdir: Path) -> dict:
+    """A copy of the profile run in ``workdir`` without the gather job's outputs (the
+    Monte Carlo's, in mc/, are kept): {path: (sha256, mtime)} of the Monte Carlo outputs."""
     shutil.copytree(profile_run[0], workdir, symlinks=True, ignore=shutil.ignore_patterns("locks"))
     for path in (workdir / "results" / "burkhard2024").iterdir():
         if path.is_file():  # the gather job's outputs (not the Monte Carlo's, in mc/)
             path.unlink()
-    finished = monte_carlo_outputs(workdir)
-    runs = {"time_limit": time_limit_run, "scancel": dict(start_held_run(slurm, workdir), finished=finished)}
+    return monte_carlo_outputs(workdir)
+
+
+@pytest.fixture(scope="module")
+def faulted_runs(slurm, profile_run, tmp_path_factory):
+    """For every fault, side by side (one SLURM CPU each), a run with the gather job held,
+    each on its own copy of the profile run without the gather job's outputs (the Monte
+    Carlo jobs that ran in SLURM are the profile run's; making them again from scratch for
+    a fault run cost a third of the module's CPU and checked nothing more).  The fault hits
+    the held job's SLURM job: ``scancel`` by the test, the time limit by SLURM (that run
+    asks for 1 min for the held job, TIME_LIMIT_ARGS).  When the run has ended, the same
+    command runs again, without the hold (and with the profile's time limit).  Returns per
+    fault the working directory, the Monte Carlo outputs (sha256, mtime) before the rerun,
+    the faulted run's output and return code, the SLURM job id, and the rerun's output and
+    return code.  The time-limit run's held job is never released: SLURM ends it, whenever
+    the test gets there (no timing decides the outcome)."""
+    runs = {}
+    for fault in sorted(FAULTS, key=lambda f: FAULTS[f][0] is not None):  # the time limit first: it waits longest
+        workdir = tmp_path_factory.mktemp(fault) / "work"
+        finished = without_gather_outputs(profile_run, workdir)
+        args = TIME_LIMIT_ARGS if FAULTS[fault][0] is None else ()
+        runs[fault] = dict(start_held_run(slurm, workdir, *args), finished=finished)
     try:
         for fault, run in runs.items():
             if FAULTS[fault][0] is None:  # the time limit: SLURM ends the held job by itself

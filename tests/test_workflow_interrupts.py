@@ -1,8 +1,11 @@
 """An interrupted run (hard kill or Ctrl-C) leaves only whole files behind and resumes
 without redoing finished jobs (the helpers are tests/test_resilience.py's).
 
-A module of its own, dispatched after the CI run is made (tests/conftest.py): its
-reference is the session's CI run, and the other resilience tests need none.
+A module of its own, dispatched after the CI run is made (tests/conftest.py): every test
+starts from a copy of the session's CI run with part of TARGET's jobs undone (the outputs
+of REDONE Monte Carlo jobs and of their gather job removed), so the interrupted run is a
+multi-job stage (the Monte Carlo jobs two at a time on two cores, then the gather job) and
+its reference is the CI run itself, with no run from scratch.
 
 No test here depends on timing: the run is interrupted while a job is held mid-way by
 tests/hold_hook, and the subprocess timeouts are safety nets against a hung run (10 min),
@@ -16,12 +19,14 @@ import time
 
 import pytest
 
+from tests.conftest import copy_of_ci_workflow
 from tests.test_resilience import (
     CI,
     HELD_OUTPUT,
     HELD_RULE,
     REPO,
     TARGET,
+    TEMPORARY,
     comparable,
     finished_jobs,
     hold_env,
@@ -34,15 +39,44 @@ from tests.test_resilience import (
 )
 
 
+#: Monte Carlo jobs of TARGET undone in the copy: more than the two cores run at once, so
+#: one waits for a core, and the gather job waits for all of them.
+REDONE = 3
+
+
 @pytest.fixture(scope="module")
 def uninterrupted(ci_workflow, tmp_path_factory):
     """The reference: the session's CI run (tests/conftest.py; the same config, so the same
-    outputs of TARGET) and the jobs TARGET takes from scratch (a dry run in an empty folder)."""
+    outputs of TARGET) and the jobs TARGET takes from scratch (a dry run in an empty folder),
+    of which the tests undo the gather job and REDONE Monte Carlo jobs."""
     workdir = tmp_path_factory.mktemp("plan")
     proc = snakemake(workdir, "--dry-run", TARGET, "--configfile", CI, "--cores", "1")
     assert proc.returncode == 0, proc.stderr[-3000:]
-    return ci_workflow[0], jobs_in(proc.stdout + proc.stderr)
+    return ci_workflow, jobs_in(proc.stdout + proc.stderr)
 
+
+def partly_undone(ci_workflow, ref_jobs, dest):
+    """A copy of the CI run without the outputs of the gather job and of the first REDONE
+    Monte Carlo jobs of TARGET: {jobid: (rule, outputs)} of the jobs this leaves to do."""
+    workdir = copy_of_ci_workflow(ci_workflow, dest)
+    mc = sorted(j for j, (rule, _) in ref_jobs.items() if rule == "burkhard2024_mc")
+    undone = {j: ref_jobs[j] for j in mc[:REDONE]}
+    undone.update({j: job for j, job in ref_jobs.items() if job[0] == HELD_RULE})
+    for _, outputs in undone.values():
+        for o in outputs:
+            (workdir / o).unlink()
+    return undone
+
+
+#: Where TARGET's jobs write (outputs, logs, benchmarks): the rest of the copy is the CI run's.
+WRITTEN = ("burkhard2024", "logs/burkhard2024", "benchmarks/burkhard2024")
+
+
+def survey_run(results):
+    """:func:`survey` of the folders TARGET's jobs write (every file whole), and the
+    temporary leftovers anywhere under results/."""
+    files = [f for sub in WRITTEN for f in survey(results / sub)[0]]
+    return files, [p for p in sorted(results.rglob("*")) if p.is_file() and TEMPORARY.match(p.name)]
 
 
 def interrupt(workdir, sig):
@@ -87,18 +121,22 @@ def interrupt(workdir, sig):
 
 @pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGINT], ids=["SIGKILL", "SIGINT"])
 def test_interrupted_run_resumes_without_redoing_finished_jobs(tmp_path, uninterrupted, sig):
-    ref_dir, ref_jobs = uninterrupted
+    ci_workflow, ref_jobs = uninterrupted
+    ref_dir = ci_workflow[0]
     workdir = tmp_path / "work"
-    workdir.mkdir()
+    undone = partly_undone(ci_workflow, ref_jobs, workdir)
     t0 = time.perf_counter()
     text, done, running, jobs = interrupt(workdir, sig)
     results = workdir / "results"
     # the held job was running; every Monte Carlo job had finished before it could start
     assert [jobs[j][0] for j in running] == [HELD_RULE], text
-    assert sum(jobs[j][0] == "burkhard2024_mc" for j in done) == 8, text
+    assert sum(jobs[j][0] == "burkhard2024_mc" for j in done) == REDONE, text
+    # the run did what was undone and nothing else
+    assert sorted(o for _, outputs in jobs.values() for o in outputs) == \
+        sorted(o for _, outputs in undone.values() for o in outputs), text
 
     # (a) only whole files; list what the interruption left
-    files, temporaries = survey(results)
+    files, temporaries = survey_run(results)
     finished = {o: (sha256(results.parent / o), (results.parent / o).stat().st_mtime_ns)
                 for j in done for o in jobs[j][1]}
     assert all((results.parent / o).is_file() for o in finished)
@@ -109,7 +147,7 @@ def test_interrupted_run_resumes_without_redoing_finished_jobs(tmp_path, uninter
     proc = snakemake(workdir, "--dry-run", TARGET, "--configfile", CI, "--cores", "1", timeout=600)
     assert proc.returncode == 0, proc.stderr[-3000:]
     planned = {o for _, outputs in jobs_in(proc.stdout + proc.stderr).values() for o in outputs}
-    every = {o for _, outputs in ref_jobs.values() for o in outputs}
+    every = {o for _, outputs in undone.values() for o in outputs}
     assert not planned & set(finished), f"finished jobs planned again: {sorted(planned & set(finished))}"
     assert planned == every - set(finished), sorted(planned ^ (every - set(finished)))
     assert {o for j in running for o in jobs[j][1]} <= planned  # the interrupted job is redone
@@ -128,7 +166,7 @@ def test_interrupted_run_resumes_without_redoing_finished_jobs(tmp_path, uninter
     for o, (digest, mtime) in finished.items():
         p = results.parent / o
         assert (sha256(p), p.stat().st_mtime_ns) == (digest, mtime), f"{o} was rewritten"
-    _, temporaries = survey(results)
+    _, temporaries = survey_run(results)
     assert not temporaries, f"temporary files left after the resumed run: {temporaries}"
     mine, ref = comparable(results), comparable(ref_dir / "results")
     assert mine and set(mine) <= set(ref), sorted(set(mine) - set(ref))  # the CI run made more

@@ -143,8 +143,9 @@ def test_mock_snakemake_gives_the_rules_paths():
 
 
 def test_a_script_run_standalone_rebuilds_the_workflows_output(ci_workflow, tmp_path):
-    """claims_ledger.py outside Snakemake, on a copy of the CI run, rewrites results/claims.csv
-    byte for byte."""
+    """claims_ledger.py outside Snakemake (mock `snakemake` object: the rule's inputs, in the
+    stages' order), on a copy of the CI run without results/claims.csv, rewrites it byte for
+    byte (the same rows in the same order)."""
     work = copy_of_ci_workflow(ci_workflow, tmp_path)
     target = work / "results" / "claims.csv"
     want = target.read_bytes()
