@@ -31,7 +31,7 @@ def _row(null, profile, effect, metric, k, n, n_ind=None):
                                       FPR_RULE if verdict else "")))
 
 
-def _summary(fpr_colored=(0, 200), fpr_white=((0, 200), (0, 200)), acc=None, outlier=None, pair=None):
+def _summary(fpr_colored=(0, 280), fpr_white=((0, 200), (0, 200)), acc=None, outlier=None, pair=None):
     """FPR rows (wander null on both profiles, white on white and gm), accuracy rows at 3 MDE:
     ``acc``/``outlier``/``pair`` are ``{profile: (k, n)}`` (default: all named, n 12)."""
     rows = [_row("wander", p, NONE, "false_positive_rate", *fpr_colored) for p in ("white", "gm")]
@@ -49,7 +49,7 @@ def _ledger(summary, **kw):
 
 
 def test_testable_sample_sizes():
-    assert [DC.minimum(r, alpha=ALPHA, power=POWER).needed for r in DC.RULES] == [3, 36, 2]
+    assert [DC.minimum(r, alpha=ALPHA, power=POWER).needed for r in DC.RULES] == [3, 36, 2, 280]
     for rule in DC.RULES:  # for whole n, exactly n >= the rule's minimum
         n = np.arange(1, 60)
         assert np.array_equal(DC.testable(rule, n, alpha=ALPHA, power=POWER)[0],
@@ -63,6 +63,21 @@ def test_testable_sample_sizes():
     assert n[ok].min() == 2 and lo[0] == pytest.approx(0.025)
     with pytest.raises(ValueError):
         DC.testable("nonsense", n)
+
+
+def test_fpr_sessions_decided_by_the_loop():
+    """The wander null's rule needs enough sessions that a sound loop (true rate 0.035) fails it
+    with probability below 1 %: 280 at alpha 0.05 (279 gives 0.0102, 200 gives 0.050; 255 is
+    below 1 % but 258 is not: the exact interval's steps), checked against Clopper-Pearson
+    directly and by simulation."""
+    assert DC.fpr_sessions_needed(ALPHA) == 280 and "280 sessions" in DC.FPR_COLORED.claim
+    p = DC.fpr_fail_probability([200, 255, 258, 279, 280, 400], ALPHA)
+    assert p[0] == pytest.approx(0.0502, abs=1e-3) and p[1] < 0.01 < p[2] and p[3] > 0.01 > p[4] > p[5]
+    k = np.random.default_rng(1).binomial(280, 0.035, 200_000)
+    lo, hi = clopper_pearson(k, 280)
+    assert np.mean((lo > ALPHA) | (hi > 2 * ALPHA)) == pytest.approx(p[4], abs=1e-3)
+    ok, bound = DC.testable("fpr_decided", [279.0, 279.5, 280.0], alpha=ALPHA)
+    assert ok.tolist() == [False, False, True] and bound[0] == pytest.approx(p[3])
 
 
 def test_power_claims_at_one_recording_per_row_are_not_testable():
@@ -104,23 +119,30 @@ def test_fpr_claims_at_six_recordings_are_not_testable():
     for cid in ("fpr_colored_null_every_profile", "fpr_white_null_white_noise"):
         r = led.loc[cid]
         assert r.verdict == NOT_TESTABLE, r
-        assert ("not testable at this scale: n 6 (recordings per profile), needs n >= 36: with fewer, the exact "
-                "95 % interval's upper end exceeds 0.1 even with no event") in r.evidence
-        assert "(upper end 0.459 at the largest such n)" in r.evidence
+        needs = ("needs n >= 280: with fewer, a loop whose true rate is 0.035 fails the rule with probability 0.01 or"
+                 if cid.startswith("fpr_colored") else "needs n >= 36: with fewer, the exact 95 % interval's upper "
+                                                        "end exceeds 0.1 even with no event")
+        assert f"not testable at this scale: n 6 (recordings per profile), {needs}" in r.evidence, r.evidence
+        assert ("(chance that a sound loop fails 1.000 at the largest such n)" if cid.startswith("fpr_colored")
+                else "(upper end 0.459 at the largest such n)") in r.evidence
     # the lower-end rule is decidable at 6: 6/6 on the wander profile -> lower end 0.54 > alpha
     assert led.loc["fpr_white_null_inflated_by_wander", "verdict"] == "reproduced"
     led = _ledger(_summary(fpr_colored=(0, 35), fpr_white=((0, 36), (0, 36))))
     assert led.loc["fpr_colored_null_every_profile", "verdict"] == NOT_TESTABLE
     assert led.loc["fpr_white_null_white_noise", "verdict"] == "reproduced"
-    assert _ledger(_summary(fpr_colored=(2, 36))).loc["fpr_colored_null_every_profile", "verdict"] == "not_reproduced"
+    # the wander null's rule asks for the sessions that let the loop, not sampling noise, decide
+    r = _ledger(_summary(fpr_colored=(2, 36))).loc["fpr_colored_null_every_profile"]
+    assert r.verdict == NOT_TESTABLE and "needs n >= 280" in r.evidence
+    assert _ledger(_summary(fpr_colored=(30, 280))).loc["fpr_colored_null_every_profile",
+                                                        "verdict"] == "not_reproduced"
 
 
 def test_fpr_claims_decidable():
-    led = _ledger(_summary(fpr_colored=(6, 200), fpr_white=((9, 200), (0, 200))))
+    led = _ledger(_summary(fpr_colored=(9, 280), fpr_white=((9, 200), (0, 200))))
     assert led.loc["fpr_colored_null_every_profile", "verdict"] == "reproduced"
     assert led.loc["fpr_white_null_white_noise", "verdict"] == "reproduced"
     assert led.loc["fpr_white_null_inflated_by_wander", "verdict"] == "not_reproduced"   # 0/200 on gm
-    led = _ledger(_summary(fpr_colored=(30, 200), fpr_white=((30, 200), (40, 200))))
+    led = _ledger(_summary(fpr_colored=(30, 280), fpr_white=((30, 200), (40, 200))))
     assert led.loc["fpr_colored_null_every_profile", "verdict"] == "not_reproduced"
     assert led.loc["fpr_white_null_white_noise", "verdict"] == "not_reproduced"
     assert led.loc["fpr_white_null_inflated_by_wander", "verdict"] == "reproduced"
@@ -137,13 +159,13 @@ def test_fpr_claims_decidable():
 
 def test_sample_size_is_the_intervals_effective_one():
     """Real-noise windows shared by recordings: the interval's n is n_independent, and so is the test's."""
-    s = _summary(fpr_colored=(0, 200))
-    s.loc[(s.null == "wander") & (s.metric == "false_positive_rate"), "n_independent"] = 20.0
+    s = _summary(fpr_colored=(0, 576))
+    s.loc[(s.null == "wander") & (s.metric == "false_positive_rate"), "n_independent"] = 200.0
     r = _ledger(s).loc["fpr_colored_null_every_profile"]
-    assert r.verdict == NOT_TESTABLE and "n 20 (recordings per profile)" in r.evidence
+    assert r.verdict == NOT_TESTABLE and "n 200 (recordings per profile)" in r.evidence
     # an effective size between whole numbers: exact (0 of 35.2 puts the upper end at 0.0995 <= 0.1)
-    s.loc[(s.null == "wander") & (s.metric == "false_positive_rate"), "n_independent"] = 35.2
     assert DC.testable("fpr_upper", [35.0, 35.2], alpha=ALPHA)[0].tolist() == [False, True]
+    s.loc[(s.null == "wander") & (s.metric == "false_positive_rate"), "n_independent"] = 480.5
     assert _ledger(s).loc["fpr_colored_null_every_profile", "verdict"] == "reproduced"
 
 

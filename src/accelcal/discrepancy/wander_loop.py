@@ -126,7 +126,7 @@ def discrepancy_wander(data: PoseData, rules: Rules, report: bool = True) -> Dis
     base = fit(data)
     lopo_base = lopo(base, data)
     rng_seq = np.random.SeedSequence([int(rules.seed), 13])
-    st = _LoopState(data, base)
+    st = _LoopState(data, base, report=report)
     rnd = 0
     while True:
         rnd += 1
@@ -189,6 +189,7 @@ class _LoopState:
     n_effects: int = 0
     wander_error: str = ""
     noise: _RoundNoise | None = None   # of the last round's current model
+    report: bool = True                # False: the decisions only (:func:`_tested_candidate`)
 
 
 @dataclass(frozen=True)
@@ -277,7 +278,35 @@ def _more_replicates_could_pass(rules: Rules):
 
 def _tested_candidate(st: _LoopState, prob: C.Problem, r: _Prepared, rt: C.RoundTests, k_test: int, p_adj: float,
                       lo0: np.ndarray, rules: Rules) -> _Tested:
-    """The :class:`Candidate` row of a tested effect, with its augmented weighted fit."""
+    """The :class:`Candidate` row of a tested effect, with its augmented weighted fit.
+
+    Without ``st.report`` (the decisions only, :func:`discrepancy_wander`), a candidate whose
+    adjusted p-value is above α cannot pass whatever its ΔBIC and LOPO, so its estimate,
+    LOPO and the alternative's noise are not computed (NaN): every decision and p-value
+    is the same, at a fifth of the cost of such a row."""
+    n = len(st.data)
+    lr = float(rt.lr[k_test])
+    size = r.columns.shape[1]  # the effect's parameters
+    dbic = -lr + size * math.log(n)
+    can_pass = bool(np.isfinite(p_adj) and p_adj <= rules.alpha)
+    c = replace(r.row, statistic=lr, dof=(size, n - st.current.q - size), p_value=float(rt.p_values[k_test]),
+                bartlett=float(rt.bartlett[k_test]), p_adjusted=float(p_adj), delta_bic=dbic,
+                passed_test=False, passed_bic=bool(dbic < -rules.bic_threshold), passed_lopo=False,
+                test="likelihood ratio, parametric bootstrap under the fitted noise",
+                mde_white=r.mde_white, wander_inflation=r.inflation)
+    aug, err = None, ""
+    if st.report or can_pass:
+        c, aug, err = _fitted_alternative(st, prob, r, rt, k_test, lo0, c, can_pass, rules)
+    confounded = not c.passed and r.inflation > rules.max_wander_inflation
+    c = replace(c, reasons=(*c.reasons, *([err] if err else [])), confounded_with_wander=confounded)
+    return _Tested(c, aug, r.columns)
+
+
+def _fitted_alternative(st: _LoopState, prob: C.Problem, r: _Prepared, rt: C.RoundTests, k_test: int,
+                        lo0: np.ndarray, c: Candidate, can_pass: bool, rules: Rules) -> tuple[Candidate, Fit | None, str]:
+    """The row ``c`` completed with what the alternative's fit gives: its REML noise, the
+    LOPO comparison, the weighted nonlinear fit, the GLS estimate; the fit (None if it
+    failed) and the failure's message."""
     X1 = np.hstack([prob.X0, r.columns])
     w1 = C.fit_wander(prob, X1, fine=False, bas=rt.bases[k_test + 1])
     # leave-one-pose-out under one covariance for both models (the alternative's REML noise):
@@ -285,11 +314,7 @@ def _tested_candidate(st: _LoopState, prob: C.Problem, r: _Prepared, rt: C.Round
     # wander's kriging
     lo1 = C.studentised(prob, X1, w1.t, w1.q_rel)[1][0]
     lo0c = C.studentised(prob, prob.X0, w1.t, w1.q_rel)[1][0]
-    n = len(st.data)
-    lr = float(rt.lr[k_test])
-    size = r.columns.shape[1]  # the effect's parameters
-    dbic = -lr + size * math.log(n)
-    nan = [float("nan")] * size
+    nan = [float("nan")] * r.columns.shape[1]
     est, se, se_noise, aug, err = nan, nan, nan, None, ""
     try:
         aug = fit(st.data, (*st.current.effects, r.row.effect), p0=st.current.p)
@@ -300,17 +325,11 @@ def _tested_candidate(st: _LoopState, prob: C.Problem, r: _Prepared, rt: C.Round
         sl = effect_slices(aug.effects)[r.row.effect]
         est, se = _gls_estimate(prob, X1, w1, aug, sl)
         se_noise = aug.standard_errors(False)[sl].tolist()
-    c = replace(r.row, statistic=lr, dof=(size, n - st.current.q - size), p_value=float(rt.p_values[k_test]),
-                bartlett=float(rt.bartlett[k_test]), p_adjusted=float(p_adj), delta_bic=dbic,
-                lopo_gap_current=gap(lo0), lopo_gap=gap(lo1), estimate=est, se=se, se_noise=se_noise,
-                passed_test=bool(np.isfinite(p_adj) and p_adj <= rules.alpha and aug is not None),
-                passed_bic=bool(dbic < -rules.bic_threshold),
+    c = replace(c, lopo_gap_current=gap(lo0), lopo_gap=gap(lo1), estimate=est, se=se, se_noise=se_noise,
+                passed_test=bool(can_pass and aug is not None),
                 passed_lopo=bool(np.sum(lo1 ** 2) < (1 - rules.lopo_min_improvement) * np.sum(lo0c ** 2)),
-                test="likelihood ratio, parametric bootstrap under the fitted noise",
-                mde_white=r.mde_white, wander_inflation=r.inflation, wander_alt=_wander_dict(w1))
-    confounded = not c.passed and r.inflation > rules.max_wander_inflation
-    c = replace(c, reasons=(*c.reasons, *([err] if err else [])), confounded_with_wander=confounded)
-    return _Tested(c, aug, r.columns)
+                wander_alt=_wander_dict(w1))
+    return c, aug, err
 
 
 def _choose(tested: list[_Tested], out_test: OutlierTest | None) -> _Tested | OutlierTest | None:

@@ -26,13 +26,18 @@ re-simulations enough to resolve a central 95 %, two sessions for a heterogeneit
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 import pandas as pd
+
+from accelcal import distributions as dist
 
 from ..claims import (COLUMNS, Claim, MinimumSample, Scale, bootstrap_rule_minimum, lower_end_with_all_successes,
                       power_rule_minimum, rank_rule_minimum, rate_lower_rule_minimum, rate_upper_rule_minimum,
                       upper_end_with_no_success, validate_rows)
 from .benchmark import NONE, OUTLIER
+from .scoring import clopper_pearson
 
 SUMMARY = "results/discrepancy/benchmark/summary.csv"
 ADIS_CHECK = "results/discrepancy/adis/session_check_summary.csv"
@@ -42,9 +47,10 @@ FPR_COLORED = Claim(
     "Goal: under every noise profile of the benchmark (white, rounding, Gauss-Markov, flicker, "
     "random walk, the Xsens and ADIS16405 fits and the ADIS16405 record itself), the loop with the wander null "
     "names an effect or outlier on at most alpha of effect-free sessions: reproduced iff for every profile the "
-    "exact 95% interval reaches down to alpha and its upper end is at most 2 alpha (a profile with too few "
-    "recordings for that, where the upper end exceeds 2 alpha even with no false positive, cannot pass: then the "
-    "claim is not testable at this scale unless another profile fails)",
+    "exact 95% interval reaches down to alpha and its upper end is at most 2 alpha, on enough effect-free "
+    "sessions per profile that the verdict is the loop's and not sampling noise's: a loop whose true rate is 0.035 "
+    "fails this rule with probability below 1 % (280 sessions at alpha 0.05: fpr_sessions_needed); a profile with "
+    "fewer is not decided, and the claim is then not testable at this scale unless a decided profile fails",
     "FPR <= alpha, upper bound <= 2 alpha")
 FPR_WHITE = Claim(
     "discrepancy", "fpr_white_null_inflated_by_wander",
@@ -206,7 +212,41 @@ def sample_sizes(d: pd.DataFrame) -> np.ndarray:
 
 
 #: The rules of the benchmark's claims, by what they compare (module docstring).
-RULES = ("power", "fpr_upper", "fpr_lower")
+RULES = ("power", "fpr_upper", "fpr_lower", "fpr_decided")
+#: The false-positive rate a sound loop may have (a little below α = 0.05), and the chance
+#: with which such a loop may fail the false-positive rule at the sample size the rule
+#: asks for (``fpr_decided``, :func:`fpr_sessions_needed`).
+SOUND_RATE_OF_ALPHA, FAIL_RISK = 0.7, 0.01
+
+
+def fpr_fail_probability(n, alpha: float = 0.05, rate: float | None = None) -> np.ndarray:
+    """Probability that a loop whose true false-positive rate is ``rate`` (default 0.7 α:
+    0.035) fails the rule "the exact 95 % interval reaches down to α and its upper end is at
+    most 2α" on ``n`` effect-free sessions (whole ``n``, array-like).
+
+    The exact interval's ends through the binomial distribution (Clopper–Pearson's duality):
+    ``k`` of ``n`` keeps the upper end at or below 2α iff ``P(Bin(n, 2α) ≤ k) ≤ 0.025``, and
+    the lower end at or below α iff ``P(Bin(n, α) ≥ k) ≥ 0.025``; both sets are ``0..k_max``."""
+    rate = SOUND_RATE_OF_ALPHA * alpha if rate is None else rate
+    out = []
+    for m in np.atleast_1d(np.asarray(n, int)):
+        k = np.arange(m + 1)
+        upper_ok = dist.special.bdtr(k, m, 2 * alpha) <= 0.025
+        lower_ok = (k == 0) | (dist.special.bdtrc(k - 1, m, alpha) >= 0.025)
+        passing = k[upper_ok & lower_ok]
+        out.append(1.0 - float(dist.special.bdtr(passing.max(), m, rate)) if passing.size else 1.0)
+    return np.asarray(out)
+
+
+def fpr_sessions_needed(alpha: float = 0.05, rate: float | None = None, risk: float = FAIL_RISK,
+                        n_max: int = 2000) -> int:
+    """Effect-free sessions per profile at which a loop of true rate ``rate`` (0.7 α) fails the
+    false-positive rule with probability below ``risk``, there and at every larger size up to
+    ``n_max`` (the exact interval's steps make that probability a sawtooth in ``n``: 255 is
+    below 1 %, 258-266 and 279 are not).  280 at α = 0.05."""
+    n = np.arange(rate_upper_rule_minimum(2 * alpha, "").needed, n_max + 1)
+    bad = n[fpr_fail_probability(n, alpha, rate) >= risk]
+    return int(bad.max()) + 1 if bad.size else int(n[0])
 
 
 def minimum(rule: str, *, alpha: float = 0.05, power: float = 0.8, unit: str = "recordings") -> MinimumSample:
@@ -218,6 +258,10 @@ def minimum(rule: str, *, alpha: float = 0.05, power: float = 0.8, unit: str = "
         return rate_upper_rule_minimum(2 * alpha, unit)
     if rule == "fpr_lower":
         return rate_lower_rule_minimum(alpha, unit)
+    if rule == "fpr_decided":
+        return MinimumSample(_sessions_needed(alpha), unit,
+                             f"with fewer, a loop whose true rate is {SOUND_RATE_OF_ALPHA * alpha:g} fails the rule "
+                             f"with probability {FAIL_RISK:g} or more: sampling noise, not the loop, decides")
     raise ValueError(f"unknown rule {rule!r} (known: {', '.join(RULES)})")
 
 
@@ -243,10 +287,18 @@ def testable(rule: str, n, *, alpha: float = 0.05, power: float = 0.8) -> tuple[
         elif rule == "fpr_upper":
             bound = upper_end_with_no_success(n)
             ok = bound <= 2 * alpha
+        elif rule == "fpr_decided":
+            bound = fpr_fail_probability(np.clip(np.floor(np.nan_to_num(n)), 1, None), alpha).reshape(n.shape)
+            ok = n >= _sessions_needed(alpha)
         else:
             bound = lower_end_with_all_successes(n)
             ok = bound > alpha
     return np.asarray(ok & (n >= 1), bool), bound
+
+
+@lru_cache(maxsize=8)
+def _sessions_needed(alpha: float) -> int:
+    return fpr_sessions_needed(alpha)
 
 
 def _label(r) -> str:
@@ -265,7 +317,7 @@ def _over_rows(claim: Claim, d: pd.DataFrame, passed: np.ndarray, rule: str, *, 
         float(n[~keep].max()) if (~keep).any() else float(np.min(n, initial=np.nan)),
         testable=decided or bool(keep.all()))
     if not scale.testable:
-        which = "upper end" if rule != "fpr_lower" else "lower end"
+        which = {"fpr_lower": "lower end", "fpr_decided": "chance that a sound loop fails"}.get(rule, "upper end")
         b = float(bound[~keep][np.argmax(n[~keep])])
         evidence += (f"; not testable ({which} {b:.3f} at the largest such n): "
                      + ", ".join(f"{_label(r)} (n {k:g})" for r, k, ok in zip(d.itertuples(), n, keep) if not ok))
@@ -281,12 +333,12 @@ def _fpr_rows(summary, profiles_table, alpha, nulls) -> list[dict]:
     if "wander" not in nulls or not len(fc):
         rows.append(_unavailable(FPR_COLORED, "wander"))
     else:
-        keep = testable("fpr_upper", sample_sizes(fc), alpha=alpha)[0]
+        keep = testable("fpr_decided", sample_sizes(fc), alpha=alpha)[0]
         ok = _fpr_passes(fc, alpha)
         bad = fc[keep & ~ok]
         worst = fc.loc[fc.ci_high.idxmax()]
         rows.append(_over_rows(
-            FPR_COLORED, fc, ok, "fpr_upper", every=True, alpha=alpha, power=np.nan,
+            FPR_COLORED, fc, ok, "fpr_decided", every=True, alpha=alpha, power=np.nan,
             per="profile", value=float(fc.value.max()), fmt="max {:.3f}",
             evidence=f"{SUMMARY}: {int(keep.sum()) - len(bad)}/{int(keep.sum())} testable profiles pass; highest rate "
                      f"{fc.value.max():.3f} ({fc.loc[fc.value.idxmax(), 'profile']}); highest upper bound "
@@ -405,4 +457,5 @@ def discrepancy_claims(summary: pd.DataFrame, profiles_table: pd.DataFrame, adis
     return validate_rows(pd.DataFrame(rows, columns=list(COLUMNS)), source="discrepancy claims")
 
 
-__all__ = ["GAP_RESIMULATIONS", "LAYER_ALPHA", "RULES", "discrepancy_claims", "minimum", "sample_sizes", "testable"]
+__all__ = ["GAP_RESIMULATIONS", "LAYER_ALPHA", "RULES", "discrepancy_claims", "fpr_fail_probability",
+           "fpr_sessions_needed", "minimum", "sample_sizes", "testable"]

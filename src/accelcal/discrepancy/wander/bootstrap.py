@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .gls import Q_REL_GRID, Basis, basis, profile, studentised
+from .gls import Q_REL_GRID, Basis, Surface, basis, profile, studentised
 from .outliers import directions, max_null_pvalue, studentised_max
 from .problem import Problem
 from .reml import WanderFit, fit_wander
@@ -185,13 +185,34 @@ class _Sequential:
 
 def _bootstrap_batch(prob: Problem, bases: list, Xs: list, Ystar: np.ndarray, running: np.ndarray) -> np.ndarray:
     """Replicates ``Ystar`` (B, m) drawn under the null, refitted as the data: per replicate
-    the LR of each candidate, NaN for the tests no longer ``running``."""
+    the LR of each candidate, NaN for the tests no longer ``running``.  The candidates with
+    as many free contrasts are refitted together (:func:`_stacked_ml_min`)."""
     out = np.full((Ystar.shape[0], len(running)), np.nan)
-    m0s = profile(prob, prob.X0, Ystar, Q_REL_GRID, bas=bases[0]).ml_min()
-    for k, (X1, b) in enumerate(zip(Xs, bases[1:])):
-        if running[k]:
-            out[:, k] = np.maximum(m0s - profile(prob, X1, Ystar, Q_REL_GRID, bas=b).ml_min(), 0.0)
+    sf0 = profile(prob, prob.X0, Ystar, Q_REL_GRID, bas=bases[0])
+    m0s = sf0.ml_min()
+    todo = np.flatnonzero(running[:len(Xs)])
+    for r in sorted({bases[k + 1].K.shape[1] for k in todo}):
+        group = [k for k in todo if bases[k + 1].K.shape[1] == r]
+        m1s = _stacked_ml_min([bases[k + 1] for k in group], Ystar, sf0)
+        out[:, group] = np.maximum(m0s[:, None] - m1s.T, 0.0)
     return out
+
+
+def _stacked_ml_min(bases: list, Y: np.ndarray, sf0: Surface) -> np.ndarray:
+    """Grid minimum of ``−2ℓ`` (G, B) of data sets ``Y`` (B, m) under each of ``G`` models of
+    as many free contrasts (their :class:`Basis`), in one pass: :func:`profile`'s quadratic
+    forms with the models stacked; ``log|Σ|`` is the models' common one, ``sf0``'s (a
+    surface on the same problem and grid)."""
+    K = np.stack([b.K for b in bases])                              # (G, m, r)
+    U = np.stack([b.U for b in bases])                              # (G, T, r, r)
+    mu = np.stack([b.mu for b in bases])                            # (G, T, r)
+    q = np.broadcast_to(Q_REL_GRID, (U.shape[1], Q_REL_GRID.size))  # (T, Q)
+    Yt = (Y[None] @ K)[:, None] @ U                                 # (G, T, B, r)
+    w = 1.0 / (1.0 + q[None, :, :, None] * mu[:, :, None, :])       # (G, T, Q, r)
+    quad = ((Yt * Yt) @ w.transpose(0, 1, 3, 2)).transpose(0, 2, 1, 3)   # (G, B, T, Q)
+    G, B = quad.shape[:2]
+    sf = Surface(quad.reshape((G * B,) + quad.shape[2:]), sf0.logdet, sf0.logdet_a, sf0.m, 0)
+    return sf.ml_min().reshape(G, B)
 
 
 
