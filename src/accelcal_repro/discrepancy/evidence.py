@@ -95,7 +95,7 @@ def _num(v) -> float:
 def _noise_evidence(name: str, report: dict) -> dict:
     """The session's named noise term between the poses as an evidence row."""
     nm = report.get("noise_model") or {}
-    size = nm.get("size") if nm.get("process") in ("per_placement", "gauss_markov") else None
+    size = nm.get("size") if nm.get("process") in ("per_placement", "gauss_markov", "flicker") else None
     lo, hi = (list(nm.get("size_ci") or []) + [None, None])[:2]
     return {"recording": name, "item": "noise", "candidate": nm.get("term", "not_estimated"),
             "identifiable": bool(nm.get("estimated")), "reasons": nm.get("reason", ""),

@@ -467,6 +467,8 @@ def joint_source(report: dict, name: str) -> dict:
         if nm.get("term") not in (None, "none") and nm.get("process") != "per_placement":
             if nm.get("process") == "random_walk":
                 m["random_walk"] = float(nm["random_walk_K"])
+            elif nm.get("process") == "flicker":  # size is B, the library's bias_instability coefficient
+                m["bias_instability"] = float(nm["size"])
             else:
                 m["gauss_markov"] = (float(nm["size"]), float(nm["tau_s"]))
         models.append(m)

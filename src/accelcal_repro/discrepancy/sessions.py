@@ -117,6 +117,8 @@ def wander_components(report: dict) -> tuple[tuple[str, tuple], ...]:
         return ()
     if nm.get("process") == "random_walk":
         return (("random_walk", (float(nm["random_walk_K"]),) * 3),)
+    if nm.get("process") == "flicker":  # size is the flicker coefficient B, the noise library's bias_instability
+        return (("bias_instability", (float(nm["size"]),) * 3),)
     return (("gauss_markov", ((float(nm["size"]), float(nm["tau_s"])),) * 3),)
 
 
@@ -165,6 +167,8 @@ def named_rows(name: str, report: dict) -> list[dict]:
                 ci = f"K [{', '.join(map(_g, nm.get('random_walk_K_ci') or [None, None]))}]"
             elif proc == "per_placement":
                 value, ci = f"size {_g(nm.get('size'))} per axis, no time correlation", size_ci
+            elif proc == "flicker":
+                value, ci = f"flicker B {_g(nm.get('size'))} (Allan floor 0.664 B), no single tau", size_ci
             else:
                 value = f"size {_g(nm.get('size'))}, tau {_g(nm.get('tau_s'))} s"
                 ci = f"{size_ci}, tau [{', '.join(map(_g, nm.get('tau_ci') or [None, None]))}] s"
