@@ -105,6 +105,49 @@ def test_compile_timing_refuses_unknown_calls():
         timing.compile_timing(["full_lls", "warp_drive"])
 
 
+COPY_CHECK = """
+import json, os, sys
+from accelcal_repro import first_calls, timing
+if sys.argv[1] == "copy":
+    print(timing.copy_kernel_cache(sys.argv[2]))
+else:
+    sys.argv[1:] = [json.dumps(["bias_lls"])]
+    exec(first_calls.SCRIPT)
+"""
+
+
+def _cache_files(folder):
+    return sorted(p.relative_to(folder) for p in folder.rglob("*") if p.suffix in (".nbi", ".nbc"))
+
+
+@pytest.mark.skipif("numba" not in BACKENDS, reason="numba not installed")
+def test_a_copied_kernel_cache_loads_without_compiling(tmp_path):
+    """The compile job compiles once, in an empty folder of its own, and copies that cache
+    into the project's (copy_kernel_cache): the copy holds every file, no lock, and a fresh
+    process with it compiles nothing (it would write new files)."""
+    import os
+    import subprocess
+    import sys
+
+    timed, project = tmp_path / "timed", tmp_path / "project"
+    env = dict(os.environ, ACCELCAL_KERNELS="numba")
+
+    def run(cache, *args):
+        out = subprocess.run([sys.executable, "-c", COPY_CHECK, *args], env=dict(env, NUMBA_CACHE_DIR=str(cache)),
+                             capture_output=True, text=True, timeout=300)
+        assert out.returncode == 0, out.stderr[-2000:]
+        return out.stdout.strip().splitlines()[-1]
+
+    run(timed, "first")  # compiles bias_lls into the empty folder
+    written = _cache_files(timed)
+    assert written and any(p.suffix == ".nbc" for p in written)
+    assert int(run(project, "copy", str(timed))) == len(written)
+    assert _cache_files(project) == written
+    assert not [p for p in project.rglob("*") if p.name.endswith("compile-lock")]
+    run(project, "first")  # loads: a compilation would add files
+    assert _cache_files(project) == written
+
+
 def test_first_call_script_names_every_call_and_defines_what_they_use():
     """The script run in fresh processes by compile_timing: its calls are FIRST_CALLS and
     every name they use is defined (checked without running them: that compiles)."""

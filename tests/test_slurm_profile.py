@@ -23,7 +23,7 @@ SNAKEMAKE = Path(sys.executable).with_name("snakemake")
 PROFILE = REPO / "profiles" / "slurm"
 SLURM_COMMANDS = ("sbatch", "squeue", "sacct", "sinfo", "scancel", "sacctmgr", "srun", "scontrol", "sshare")
 #: The timing benchmarks: alone in their allocation, never grouped.
-TIMING_RULES = {"burkhard2024_timing_run", "batista2011_filter_cost", "timing_filters", "timing_compile"}
+TIMING_RULES = {"burkhard2024_timing_run", "batista2011_filter_cost", "timing_filters"}
 
 
 def profile_settings():

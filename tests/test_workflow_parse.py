@@ -33,8 +33,9 @@ print(json.dumps({"modules": sorted(m for m in sys.modules if m.startswith("acce
 PARSE_IMPORTS = {"accelcal_repro.burkhard2024.grid", "accelcal_repro.gyro.sessions", "accelcal_repro.mag.sessions",
                  "accelcal_repro.measured.sources", "accelcal_repro.first_calls"}
 
-#: The jobs that call compiled kernels (each waits for the numba cache to be filled).
-KERNEL_USERS = {"burkhard2024_mc", "burkhard2024_timing_run", "timing_filters", "batista2011_calibration_mc",
+#: The jobs that call compiled kernels (each waits for the numba cache to be filled); the
+#: Burkhard Monte Carlo runs the numpy implementations (`mc_kernels: numpy`) and does not wait.
+KERNEL_USERS = {"burkhard2024_timing_run", "timing_filters", "batista2011_calibration_mc",
                 "batista2011_filter_mc", "batista2011_error_budget", "batista2011_filter_example",
                 "batista2011_filter_cost", "batista2011_observability_mc", "tereshkov_simulate", "tereshkov_sweep",
                 "tereshkov_comparison", "measured_calibrate", "discrepancy_chunk", "discrepancy_session",

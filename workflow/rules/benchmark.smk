@@ -61,29 +61,6 @@ rule timing_filters:
         "../scripts/timing_filters.py"
 
 
-rule timing_compile:
-    """First-call time of the compiled kernels in fresh processes, empty and filled disk cache.
-
-    High priority: one thread and nothing depends on it, so left to the end it ran alone
-    (18 s with a core idle); early, it runs beside another job (on its own core).
-    """
-    output:
-        f"{TIMING_DIR}/compile.csv",
-    params:
-        calls=BENCHMARK["compile_calls"],
-    log:
-        log_path("benchmark/compile"),
-    benchmark:
-        bench_path("benchmark/compile"),
-    priority: 50
-    threads: 1
-    resources:
-        mem_mb=2000,
-        runtime=20,
-    script:
-        "../scripts/timing_compile.py"
-
-
 def _other_figures(wildcards):
     """Every figure but this target's: the stage table is read once every other job is done."""
     return [path for path in figure_files(*figure_ids()) if path.endswith(".png") and BENCHMARK_FIGURE not in path]
