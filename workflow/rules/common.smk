@@ -12,7 +12,7 @@ from snakemake.exceptions import WorkflowError
 
 # The core's estimator registry names the estimators a config may list; the reproductions
 # (accelcal_repro) are never imported while the workflow is parsed, only by its jobs.
-from accelcal.registry import ESTIMATORS, estimators
+from accelcal.registry import estimators
 
 
 
