@@ -98,4 +98,5 @@ def check_calls(calls, where: str = "benchmark.compile_calls") -> None:
                                 f"known: {', '.join(FIRST_CALLS)}")
 
 
-__all__ = ["FILTER_CALLS", "FIRST_CALLS", "SCRIPT", "check_calls", "compiled_estimators", "estimator_calls", "first_call_names"]
+__all__ = ["FILTER_CALLS", "FIRST_CALLS", "SCRIPT", "check_calls", "compiled_estimators", "estimator_calls",
+           "first_call_names"]
