@@ -119,9 +119,6 @@ BROKEN = {
     # ------------------------------------------- names checked against the registry (no enums)
     "burkhard_bad_method": (changed({"burkhard2024.experiments.fig1b.methods": ["full_lls", "full_lsq"]}),
                             "burkhard2024.experiments.fig1b.methods.1: 'full_lsq' is not a registered estimator"),
-    "benchmark_bad_first_call": (changed({"benchmark.compile_calls": ["bias_lls", "full_nlls"]}),
-                                 "benchmark.compile_calls.1: 'full_nlls' is not a first call of a compiled kernel; "
-                                 "known: full_lls, bias_lls, full_als"),
     "measured_missing_key": (changed({"measured.bootstrap.level": DELETE}),
                              "measured.bootstrap: 'level' is a required property"),
     "measured_unknown_key": (changed({"measured.recordings.mpu6050.pose_selection": "all"}),
@@ -133,10 +130,6 @@ BROKEN = {
                             "measured.static.window: '1s' is not of type 'number'"),
     "measured_g_in_g_units": (changed({"measured.recordings.mpu6050.g": 1.0}),
                               "measured.recordings.mpu6050.g: 1.0 is less than the minimum of 9.7"),
-    "measured_full_model_on_six_poses": (changed({"measured.recordings.imucal_ferraris.estimators":
-                                                  ["full_lls", "bias_lls"]}),
-                                         "measured.recordings.imucal_ferraris.estimators: full_lls need at least 10 "
-                                         "poses"),
     # ---------------------------------------------------------------- discrepancy
     "discrepancy_confusion_size_not_scored": (changed({"discrepancy.benchmark.confusion_size_mde": 2.0}),
                                               "discrepancy.benchmark.confusion_size_mde: 2.0 is not in sizes_mde "
@@ -182,7 +175,7 @@ def test_broken_stage_config_is_rejected_with_its_key_and_what_is_wrong(tmp_path
 
 
 #: One broken config per stage through the command line (the rest differ only in the message).
-CLI_CASES = ("batista_window_in_transition", "tereshkov_inverted_range", "measured_full_model_on_six_poses",
+CLI_CASES = ("batista_window_in_transition", "tereshkov_inverted_range", "measured_bad_estimator",
              "discrepancy_confusion_size_not_scored", "noise_duplicate_configuration")
 
 
@@ -310,3 +303,29 @@ def test_named_choices_match_the_library():
         TereshkovParams(accel_formula=f)
     with pytest.raises(InvalidParameterError):
         TereshkovParams(accel_formula="eq15")
+
+
+# The two rules that need the reproductions' code are checked by their jobs (parsing the
+# Snakefile imports no reproduction), with the same one-line message naming the key.
+def test_first_call_names_are_checked_by_the_compile_job():
+    from accelcal.errors import AccelcalError
+    from accelcal_repro.first_calls import check_calls
+
+    check_calls("all")
+    check_calls(["bias_lls", "full_lls"])
+    with pytest.raises(AccelcalError, match=r"^benchmark.compile_calls.1: 'full_nlls' is not a first call of a "
+                                            r"compiled kernel; known: full_lls, bias_lls, full_als"):
+        check_calls(["bias_lls", "full_nlls"])
+
+
+def test_full_models_on_a_section_list_are_refused_by_the_measured_job():
+    from accelcal.errors import TooFewPosesError
+    from accelcal_repro.measured.calibrate import check_section_list_estimators
+
+    sections = {"x_p": (0, 10)}
+    check_section_list_estimators("imucal_ferraris", ["bias_lls", "bias_nlls"], sections, "section_list")
+    check_section_list_estimators("imucal_ferraris", ["full_lls"], sections, "all")
+    check_section_list_estimators("mpu6050", ["full_lls"], None, "section_list")
+    with pytest.raises(TooFewPosesError, match=r"^measured.recordings.imucal_ferraris.estimators: full_lls need at "
+                                               r"least 10 poses, pose_selection 'section_list' gives the session's 6"):
+        check_section_list_estimators("imucal_ferraris", ["full_lls", "bias_lls"], sections, "section_list")

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from functools import partial
 
+from accelcal.errors import AccelcalError
 from accelcal.registry import estimators
 
 #: Calls that trigger every compiled kernel once, in the order of the table (run in a
@@ -85,4 +86,17 @@ def first_call_names() -> tuple[str, ...]:
 FIRST_CALLS = first_call_names()
 
 
-__all__ = ["FILTER_CALLS", "FIRST_CALLS", "SCRIPT", "compiled_estimators", "estimator_calls", "first_call_names"]
+def check_calls(calls, where: str = "benchmark.compile_calls") -> None:
+    """``calls`` is ``'all'`` or names of :data:`FIRST_CALLS`, else one-line
+    :class:`~accelcal.errors.AccelcalError` naming the config key (the benchmark job checks
+    this, so that parsing the Snakefile imports no reproduction)."""
+    if calls == "all":
+        return
+    for i, name in enumerate(calls):
+        if name not in FIRST_CALLS:
+            raise AccelcalError(f"{where}.{i}: {name!r} is not a first call of a compiled kernel; "
+                                f"known: {', '.join(FIRST_CALLS)}")
+
+
+__all__ = ["FILTER_CALLS", "FIRST_CALLS", "SCRIPT", "check_calls", "compiled_estimators", "estimator_calls",
+           "first_call_names"]

@@ -12,18 +12,10 @@ Needs from common.smk: declare_stage, results, figure_ids, log_path, bench_path,
 figure_outputs, SMALL.
 """
 
-from accelcal_repro.first_calls import FIRST_CALLS
-
 BENCHMARK = config["benchmark"]
-
-
-# The stage's config rules that its schema cannot express (one line naming the key).
-def _check_benchmark(b, cfg):
-    if b["compile_calls"] != "all":
-        _check_names(b["compile_calls"], FIRST_CALLS, "benchmark.compile_calls", "a first call of a compiled kernel")
-
-
-check_section("benchmark", _check_benchmark)
+# benchmark.compile_calls names first calls of the compiled kernels: checked by the
+# kernel_cache job (accelcal_repro.first_calls.check_calls), so that parsing imports no
+# reproduction.
 TIMING_DIR = results("timing")
 BENCHMARK_FIGURE = "timing_benchmark"
 BENCHMARK_STAGE = declare_stage(

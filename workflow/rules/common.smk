@@ -1,6 +1,7 @@
 """Shared helpers of the workflow: config validation, output paths, what each stage adds
 to the final targets, and default resources."""
 
+import json
 import os
 import re
 from dataclasses import dataclass
@@ -11,8 +12,30 @@ from snakemake.exceptions import WorkflowError
 
 # The core's estimator registry names the estimators a config may list; the reproductions
 # (accelcal_repro) are never imported while the workflow is parsed, only by its jobs.
-from accelcal.registry import ESTIMATORS, estimators
+from accelcal.registry import estimators
 
+
+
+# --------------------------------------------------------------------------- reproduction tables
+# The tables of the reproductions that the DAG needs (datasets and files of the sessions)
+# live as data files in src/accelcal_repro/data/, read by their modules and, here, as plain
+# JSON: parsing the workflow (every snakemake call, every SLURM job) imports no reproduction.
+REPRO_DATA = os.path.join(workflow.basedir, "src", "accelcal_repro", "data")
+
+
+def repro_table(name):
+    """A table of src/accelcal_repro/data (the file its module reads)."""
+    with open(os.path.join(REPRO_DATA, name), encoding="utf-8") as f:
+        return json.load(f)
+
+
+def dataset_files(pairs):
+    """``{dataset: [files]}`` of ``(dataset, files)`` pairs: each file once, in first-seen order."""
+    out = {}
+    for dataset, files in pairs:
+        have = out.setdefault(dataset, [])
+        have += [f for f in files if f and f not in have]
+    return out
 
 # --------------------------------------------------------------------------- output paths
 # As pypsa-eur's resources()/logs(): the folder layout is decided here, the rules name files.

@@ -19,20 +19,23 @@ figure_outputs, measured_data_dir, SMALL; the `measured` config's resources_dir.
 
 import os
 
-from accelcal_repro.gyro.sessions import SESSIONS, files_needed
-
 GYRO = config["gyro"]
+#: The sessions' table of accelcal_repro.gyro.sessions (its data file, read without importing it).
+GYRO_TABLE = repro_table("gyro_sessions.json")
 
 
 # The stage's config rules that its schema cannot express (one line naming the key).
 def _check_gyro(g, cfg):
-    _check_names(g["sessions"], list(SESSIONS), "gyro.sessions", "a gyro session")
+    _check_names(g["sessions"], list(GYRO_TABLE["sessions"]), "gyro.sessions", "a gyro session")
 
 
 check_section("gyro", _check_gyro)
 GYRO_DIR = results("gyro")
 #: {dataset: files} of the configured sessions (and the CTU rotations).
-GYRO_DATASETS = files_needed(GYRO["sessions"])
+# (a session's files as accelcal_repro.gyro.sessions.SessionSpec.files orders them)
+GYRO_DATASETS = dataset_files([(GYRO_TABLE["ctu"][0], GYRO_TABLE["ctu"][1:])] + [
+    (s["dataset"], [s.get(k) for k in ("acc", "gyro", "intervals")] + s.get("calib", []))
+    for s in map(GYRO_TABLE["sessions"].get, GYRO["sessions"])])
 GYRO_MANIFEST = results("gyro/data/{dataset}.json")
 GYRO_SESSION_TABLES = ("sessions", "sessions_timing", "parameters", "peer_parameters", "figure_of_merit", "stability",
                        "imucal_parameters", "imucal_figure_of_merit", "ctu_parameters")

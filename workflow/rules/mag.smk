@@ -13,10 +13,11 @@ Needs from common.smk: declare_stage, results, log_path, bench_path, figure_file
 figure_outputs, measured_data_dir, SMALL; the `measured` config's resources_dir.
 """
 
-from accelcal_repro.mag.sessions import files_needed as mag_files_needed
-
 MAG = config["mag"]
-MAG_DATASETS = mag_files_needed(MAG["sessions"])
+#: {dataset: files} of the configured sessions (accelcal_repro.mag.sessions.FILES: its data
+#: file, read without importing it).
+MAG_TABLE = repro_table("mag_sessions.json")
+MAG_DATASETS = dataset_files((MAG_TABLE[s]["dataset"], MAG_TABLE[s]["files"]) for s in MAG["sessions"])
 MAG_STAGE = declare_stage(
     name="mag",
     figures=("mag_spread",),

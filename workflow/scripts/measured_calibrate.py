@@ -2,7 +2,8 @@
 
 from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 
-from accelcal_repro.measured.calibrate import TABLES, calibrate_recording
+from accelcal.errors import TooFewPosesError
+from accelcal_repro.measured.calibrate import TABLES, calibrate_recording, check_section_list_estimators
 from accelcal_repro.measured.sources import read_manifest, read_source, section_list
 
 if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
@@ -12,6 +13,11 @@ log = configure_logging(snakemake)
 name = snakemake.wildcards.recording
 s, b = snakemake.params.settings, snakemake.params.bootstrap
 paths = read_manifest(snakemake.input.manifest)
+try:  # a config rule checked here, not while the Snakefile is parsed (no reproduction imported there)
+    check_section_list_estimators(name, s["estimators"], section_list(name, paths),
+                                  s.get("pose_selection", "section_list"))
+except TooFewPosesError as e:
+    raise SystemExit(f"invalid config: {e}") from None
 mc = calibrate_recording(  # the original file, read as `accelcal calibrate` reads it
     name, read_source(name, paths), g=float(s["g"]), estimators=list(s["estimators"]),
     sections=section_list(name, paths),

@@ -26,6 +26,7 @@ the workflow's numbers are what a user gets.  The files come from manifests
 
 from __future__ import annotations
 
+import json
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -52,24 +53,14 @@ class SessionSpec:
         return tuple(f for f in (self.acc, self.gyro, self.intervals, *self.calib) if f)
 
 
-def _fork(k: int) -> SessionSpec:
-    d = f"data{k}"
-    return SessionSpec(f"fork_{d}", "imutk_fork_sessions", f"{d}/acc_data.txt", 9.81, gyro=f"{d}/gyro_data.txt",
-                       calib=(f"{d}/test_imu_acc.calib", f"{d}/test_imu_gyro.calib"))
-
-
-SESSIONS: dict[str, SessionSpec] = {s.name: s for s in (
-    SessionSpec("xsens", "imu_tk_xsens", "xsens_acc.mat", 9.81744, gyro="xsens_gyro.mat"),
-    *(_fork(k) for k in (1, 2, 3, 4)),
-    *(SessionSpec(f"snu_good{k}", "snu_static3", f"imu_good{k}.txt", 9.79871, read={"columns": "ax=tx,ay=ty,az=tz"})
-      for k in (1, 2, 3)),
-    SessionSpec("mpu6050", "mpu6050_suarez", "example_data_calibration.csv", 9.80665),
-    SessionSpec("imucal_ferraris", "imucal_ferraris", "example_ferraris_session.csv", 9.81,
-                intervals="example_ferraris_session_list.json", method="bias_lls"),
-    SessionSpec("imucal_annotated", "imucal_ferraris", "annotated_session.csv", 9.81, method="bias_lls"),
-)}
-#: The CTU rig's gyro-only rotations (:mod:`.ferraris_sessions`).
-CTU = ("ctu_ferraris", "measured_angular_rates.mat")
+#: The sessions' table (one source with the workflow, which reads it while the Snakefile
+#: is parsed to plan the fetch jobs, without importing this package).
+TABLE = json.loads((Path(__file__).resolve().parents[1] / "data" / "gyro_sessions.json").read_text())
+SESSIONS: dict[str, SessionSpec] = {
+    name: SessionSpec(name, **{k: tuple(v) if k == "calib" else v for k, v in spec.items()})
+    for name, spec in TABLE["sessions"].items()}
+#: The CTU rig's gyro-only rotations (:mod:`.ferraris_sessions`): (dataset, file).
+CTU = tuple(TABLE["ctu"])
 
 
 def files_needed(names) -> dict[str, tuple[str, ...]]:

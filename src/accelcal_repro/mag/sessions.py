@@ -13,6 +13,7 @@ session            file (``../shared/data``)                   directions for th
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -24,12 +25,12 @@ from accelcal.formats import read
 from accelcal.formats.mag_table import read_mag_table
 from accelcal.mag.calibrate import G_TOLERANCE
 
-SESSIONS = ("snu_good1", "snu_good2", "snu_good3", "ck_explorer", "qmc_noisy", "qmc_filtered")
-#: The dataset (of :data:`accelcal_repro.measured.data.DATASETS`) and files of each session.
-FILES = {**{f"snu_good{k}": ("snu_static3", (f"imu_good{k}.txt",)) for k in (1, 2, 3)},
-         "ck_explorer": ("mag_ck_explorer", ("acc_mag_log.csv",)),
-         "qmc_noisy": ("mag_qmc5883l_suarez", ("noisy_raw_data.csv", "paramters_mag.csv")),
-         "qmc_filtered": ("mag_qmc5883l_suarez", ("filtered_raw_data.csv", "paramters_mag.csv"))}
+#: The dataset (of :data:`accelcal_repro.measured.data.DATASETS`) and files of each session:
+#: one table with the workflow, which reads it while the Snakefile is parsed (to plan the
+#: fetch jobs) without importing this package.
+TABLE = json.loads((Path(__file__).resolve().parents[1] / "data" / "mag_sessions.json").read_text())
+FILES = {name: (e["dataset"], tuple(e["files"])) for name, e in TABLE.items()}
+SESSIONS = tuple(FILES)
 
 
 def files_needed(sessions) -> dict:

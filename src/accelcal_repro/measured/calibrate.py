@@ -31,7 +31,7 @@ import pandas as pd
 
 from accelcal import evaluation as ev
 from accelcal.calibration import calibrate_poses, pose_noise_std
-from accelcal.errors import AccelcalError, RecordingError
+from accelcal.errors import AccelcalError, RecordingError, TooFewPosesError
 from accelcal.recording import Recording
 from accelcal.registry import ESTIMATORS, estimator
 from accelcal.static import StaticPoses, detect_static_recording
@@ -301,6 +301,22 @@ def calibrate_recording(name: str, rec: Recording, *, g: float, estimators, sect
         pose_errors=pd.DataFrame(pose_rows), summary=pd.DataFrame(summary_rows),
         agreement=agreement_table(name, params, boot, level), nominal=nominal_table(name, params, conv, src.unit),
         results=results, pose_set=ps, detected=detected)
+
+
+def check_section_list_estimators(name: str, estimators, sections, pose_selection: str) -> None:
+    """A section list's six static positions (:data:`FERRARIS_STATIC`) allow bias-only
+    estimators only: the configured estimators that need more poses raise
+    :class:`~accelcal.errors.TooFewPosesError` naming the config key, before any work (the
+    workflow's job checks this first, so that parsing the Snakefile imports no reproduction;
+    :func:`calibrate_recording` refuses such a fit too, naming the recording)."""
+    if sections is None or pose_selection != "section_list":
+        return
+    short = [e for e in estimators if e in ESTIMATORS and ESTIMATORS[e].min_poses > len(FERRARIS_STATIC)]
+    if short:
+        need = max(ESTIMATORS[e].min_poses for e in short)
+        raise TooFewPosesError(f"measured.recordings.{name}.estimators: {', '.join(short)} need at least {need} "
+                               f"poses, pose_selection 'section_list' gives the session's {len(FERRARIS_STATIC)} "
+                               "static positions (bias-only estimators only)")
 
 
 def _check_estimators(name: str, estimators) -> None:
