@@ -206,7 +206,7 @@ rule gyro_loop_benchmark:
     threads: 1
     resources:
         mem_mb=1000,
-        runtime=30,  # default config: about 10 s of CPU; paper scale (200 / 20): about 10 min
+        runtime=30,  # default config: about 10 s of CPU; paper scale (300 / 20): about 20 min
     script:
         "../scripts/gyro_loop_benchmark.py"
 
