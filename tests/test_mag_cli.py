@@ -9,46 +9,18 @@ import pandas as pd
 import pytest
 
 from accelcal.cli import main
-from accelcal.mag.model import rotvec_to_matrix
-
-A_INV = np.array([[35.0, 1.0, -0.5], [1.0, 33.0, 0.8], [-0.5, 0.8, 38.0]])  # µT per unit field
-B = np.array([12.0, -25.0, 5.0])
+from tests.mag_sessions import simulate_session
 
 
 def _session(path, *, zero_mag=False, planar=False, seed=0):
-    """Fourteen rests of 2 s at 100 Hz (a rotation of 0.6 s between them), exact accelerometer."""
-    rng = np.random.default_rng(seed)
-    dip = np.radians(60)
-    field = np.array([0, np.cos(dip), -np.sin(dip)])
-    R = rotvec_to_matrix([0.02, 0.04, -0.03])
-    acc, mag = [], []
-    Q = np.eye(3)
-    for k in range(14):
-        Qn = rotvec_to_matrix([0, 0, rng.uniform(0.5, 1.5)] if planar else rng.normal(size=3) * 1.5) @ Q
-        for s in np.linspace(0, 1, 60):  # the turn from Q to Qn
-            q = rotvec_to_matrix(s * _log(Qn @ Q.T)) @ Q
-            acc.append(q @ [0, 0, 9.81])
-            mag.append(R.T @ q @ field)
-        Q = Qn
-        acc += [Q @ [0, 0, 9.81]] * 200
-        mag += [R.T @ Q @ field] * 200
-    acc = np.array(acc) + rng.normal(size=(len(acc), 3)) * 0.01
-    m = B + np.array(mag) @ A_INV.T + rng.normal(size=(len(mag), 3)) * 0.1
+    """tests/mag_sessions' session as a table with magnetometer columns (mag_y zero with ``zero_mag``)."""
+    t, acc, m = simulate_session(seed, planar=planar)
     if zero_mag:
         m[:, 1] = 0.0
-    n = len(acc)
-    df = pd.DataFrame({"t": np.arange(n) / 100.0, "ax": acc[:, 0], "ay": acc[:, 1], "az": acc[:, 2],
+    df = pd.DataFrame({"t": t, "ax": acc[:, 0], "ay": acc[:, 1], "az": acc[:, 2],
                        "mag_x_uT": m[:, 0], "mag_y_uT": m[:, 1], "mag_z_uT": m[:, 2]})
     df.to_csv(path, index=False)
     return path
-
-
-def _log(Rm):
-    ang = np.arccos(np.clip((np.trace(Rm) - 1) / 2, -1, 1))
-    if ang < 1e-9:
-        return np.zeros(3)
-    w = np.array([Rm[2, 1] - Rm[1, 2], Rm[0, 2] - Rm[2, 0], Rm[1, 0] - Rm[0, 1]])
-    return w * ang / (2 * np.sin(ang))
 
 
 def test_calibrate_writes_the_aligned_magnetometer_and_apply_uses_it(tmp_path, capsys):

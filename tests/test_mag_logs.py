@@ -11,44 +11,10 @@ import pytest
 from accelcal.cli import main
 from accelcal.formats import read
 from accelcal.formats.mag_logs import MAG_WARNING, place
-from accelcal.mag.model import rotvec_to_matrix
+from tests.mag_sessions import A_INV, B, DIP, R_TRUE, simulate_session
 
-A_INV = np.array([[35.0, 1.0, -0.5], [1.0, 33.0, 0.8], [-0.5, 0.8, 38.0]])  # µT per unit field
-B = np.array([12.0, -25.0, 5.0])  # µT
-R_TRUE = rotvec_to_matrix([0.02, 0.04, -0.03])  # magnetometer axes -> accelerometer axes
-DIP = 60.0
 T0 = 1_700_000_000.0  # header stamps: Unix time
 EVERY = 4  # magnetometer at 25 Hz beside a 100 Hz IMU
-
-
-def _log(Rm):
-    ang = np.arccos(np.clip((np.trace(Rm) - 1) / 2, -1, 1))
-    if ang < 1e-9:
-        return np.zeros(3)
-    w = np.array([Rm[2, 1] - Rm[1, 2], Rm[0, 2] - Rm[2, 0], Rm[1, 0] - Rm[0, 1]])
-    return w * ang / (2 * np.sin(ang))
-
-
-def _session(seed=0, rests=14):
-    """Rests of 2 s at 100 Hz with turns of 0.6 s between them; the field in µT (noise 0.1 µT)."""
-    rng = np.random.default_rng(seed)
-    dip = np.radians(DIP)
-    field = np.array([0, np.cos(dip), -np.sin(dip)])
-    acc, mag = [], []
-    Q = np.eye(3)
-    for _ in range(rests):
-        Qn = rotvec_to_matrix(rng.normal(size=3) * 1.5) @ Q
-        for s in np.linspace(0, 1, 60):
-            q = rotvec_to_matrix(s * _log(Qn @ Q.T)) @ Q
-            acc.append(q @ [0, 0, 9.81])
-            mag.append(R_TRUE.T @ q @ field)
-        Q = Qn
-        acc += [Q @ [0, 0, 9.81]] * 200
-        mag += [R_TRUE.T @ Q @ field] * 200
-    acc = np.array(acc) + rng.normal(size=(len(acc), 3)) * 0.01
-    m = B + np.array(mag) @ A_INV.T + rng.normal(size=(len(mag), 3)) * 0.1
-    t = np.arange(len(acc)) / 100.0
-    return t, acc, m
 
 
 def _check_model(d):
@@ -88,7 +54,7 @@ def _bag(tmp_path, kind, *, mags=None, latency=0.002, seed=0):
     pytest.importorskip("rosbags")
     from tests.ros_synthetic import write_imu_bag
 
-    t, acc, m = _session(seed)
+    t, acc, m = simulate_session(seed)
     tm = t[::EVERY] + 0.003
     mags = {"/mag": (T0 + tm, m[::EVERY] * 1e-6, latency)} if mags is None else mags(T0 + tm, m[::EVERY] * 1e-6)
     name = {"ros1": "s.bag", "mcap": "s.mcap"}.get(kind, "s")
@@ -103,7 +69,7 @@ def test_ros_magnetic_field_in_tesla_recovers_hard_and_soft_iron(tmp_path, kind,
     rec = read(bag)
     k = np.isfinite(rec.mag[:, 0])
     assert rec.mag_unit == "uT" and k.sum() == len(rec.t[::EVERY])
-    t, acc, m = _session(0)
+    t, acc, m = simulate_session(0)
     assert np.allclose(rec.mag[k], m[::EVERY], atol=1e-6)  # tesla -> µT, on the nearest rows
     out = tmp_path / "m.json"
     assert main(["mag", str(bag), "--out", str(out)]) == 0
@@ -154,7 +120,7 @@ def _ulog(tmp_path, *, mags=(0,), raw=True, vehicle=False, seed=0, spoil=None, m
     pytest.importorskip("pyulog")
     from tests.log_fixtures import write_ulog
 
-    t, acc, m = _session(seed)
+    t, acc, m = simulate_session(seed)
     us = (1_000_000 + t * 1e6).astype(np.int64)
     imu = {"timestamp": us + 300, "timestamp_sample": us, "device_id": np.full(len(t), 7, np.uint32)}
     topics = {("sensor_accel", 0): {**imu, "x": acc[:, 0].astype(np.float32), "y": acc[:, 1].astype(np.float32),
@@ -183,7 +149,7 @@ def test_px4_sensor_mag_in_gauss_recovers_hard_and_soft_iron(tmp_path, capsys):
     p = _ulog(tmp_path)
     rec = read(p)
     k = np.isfinite(rec.mag[:, 0])
-    t, acc, m = _session(0)
+    t, acc, m = simulate_session(0)
     assert rec.mag_unit == "uT" and np.allclose(rec.mag[k], m[::EVERY], atol=1e-3)
     assert any("CAL_MAG0_XOFF=0.12" in n for n in rec.notes)
     out = tmp_path / "m.json"
@@ -220,7 +186,7 @@ def _dataflash(tmp_path, *, scale=SCALE, mo=0, params=True, seed=0):
     pytest.importorskip("pymavlink")
     from tests.log_fixtures import write_dataflash
 
-    t, acc, m = _session(seed)
+    t, acc, m = simulate_session(seed)
     us = (1_000_000 + t * 1e6).astype(np.int64)
     mat = np.array([[DIA[0], ODI[0], ODI[1]], [ODI[0], DIA[1], ODI[2]], [ODI[1], ODI[2], DIA[2]]])
     raw_mg = m[::EVERY] * 10.0  # µT -> milligauss
@@ -241,7 +207,7 @@ def test_ardupilot_mag_milligauss_with_its_correction_undone(tmp_path, capsys):
     p = _dataflash(tmp_path)
     rec = read(p)
     k = np.isfinite(rec.mag[:, 0])
-    t, acc, m = _session(0)
+    t, acc, m = simulate_session(0)
     assert rec.mag_unit == "uT" and k.sum() == len(m[::EVERY])  # each sample once, though logged twice
     assert np.abs(rec.mag[k] - m[::EVERY]).max() < 0.25  # whole milligauss: 0.1 µT, through mat^-1 / scale
     assert any("repeated samples" in n for n in rec.notes)
