@@ -444,6 +444,19 @@ def wander_axis_correlation(report: dict) -> float:
     return float(nm.get("axis_correlation") or 0.0) if named else 0.0
 
 
+def wander_components(report: dict) -> tuple[tuple[str, tuple], ...]:
+    """The joint model's named bias wander as profile components (same on every axis, data
+    unit; a per-placement offset is not a component of the time series: sessions.placement_of)."""
+    nm = report.get("noise_model") or {}
+    if not nm.get("estimated") or nm.get("term") in (None, "none") or nm.get("process") == "per_placement":
+        return ()
+    if nm.get("process") == "random_walk":
+        return (("random_walk", (float(nm["random_walk_K"]),) * 3),)
+    if nm.get("process") == "flicker":  # size is the flicker coefficient B, the noise library's bias_instability
+        return (("bias_instability", (float(nm["size"]),) * 3),)
+    return (("gauss_markov", ((float(nm["size"]), float(nm["tau_s"])),) * 3),)
+
+
 def joint_source(report: dict, name: str) -> dict:
     """A ``fitted`` entry of :func:`build_profiles` from a report's joint noise model (the wander
     null's REML bias wander, the same on every axis, with its correlation between the axes)
@@ -464,13 +477,7 @@ def joint_source(report: dict, name: str) -> dict:
     models = []
     for a in range(3):
         m = {"white": float(white[a]) / math.sqrt(fs)}
-        if nm.get("term") not in (None, "none") and nm.get("process") != "per_placement":
-            if nm.get("process") == "random_walk":
-                m["random_walk"] = float(nm["random_walk_K"])
-            elif nm.get("process") == "flicker":  # size is B, the library's bias_instability coefficient
-                m["bias_instability"] = float(nm["size"])
-            else:
-                m["gauss_markov"] = (float(nm["size"]), float(nm["tau_s"]))
+        m.update({term: values[a] for term, values in wander_components(report)})
         models.append(m)
     placement = float(nm["size"]) if nm.get("process") == "per_placement" else 0.0
     return {"models": models, "fs": fs, "unit_to_counts": 1.0, "white_match": False, "placement": placement,
@@ -512,5 +519,5 @@ def profile_table(profiles: dict, session) -> list[dict]:
 __all__ = ["AXIS_PERMUTATIONS", "FITTED_SOURCES", "FLICKER_FLOOR", "NoiseProfile", "ProfileError", "REAL_RECORDS",
            "build_profiles", "centred", "independent_recordings", "joint_source", "placement_offsets",
            "pose_mean_covariance", "pose_mean_white", "pose_residual_covariance", "profile_table", "residual_covariance", "rounding_bias_variance", "screened_windows",
-           "session_length", "simulate_profile", "usable_windows", "wander_axis_correlation", "window_of",
+           "session_length", "simulate_profile", "usable_windows", "wander_axis_correlation", "wander_components", "window_of",
            "xsens_source"]

@@ -53,7 +53,7 @@ from accelcal.model import m_from_params
 from accelcal.recording import Recording
 from accelcal.static import detect_static_recording
 
-from .profiles import NoiseProfile, placement_offsets, simulate_profile, wander_axis_correlation
+from .profiles import NoiseProfile, placement_offsets, simulate_profile, wander_axis_correlation, wander_components
 
 BASE_PARAMETERS = ("b_x", "b_y", "b_z", "s_x", "s_y", "s_z", "theta_xy", "theta_zx", "theta_zy")
 
@@ -107,19 +107,6 @@ def pose_data_of(report: dict):
     temp = p.get("temp")
     return pose_data(np.array(p["mean"], float), report["g"], np.array(p["mean_std"], float), np.array(p["t"], float),
                      None if temp is None else np.array(temp, float), sigma=np.array(p["sigma"], float))
-
-
-def wander_components(report: dict) -> tuple[tuple[str, tuple], ...]:
-    """The joint model's named bias wander as profile components (same on every axis, data
-    unit; a per-placement offset is not a component of the time series: :func:`placement_of`)."""
-    nm = report.get("noise_model") or {}
-    if not nm.get("estimated") or nm.get("term") in (None, "none") or nm.get("process") == "per_placement":
-        return ()
-    if nm.get("process") == "random_walk":
-        return (("random_walk", (float(nm["random_walk_K"]),) * 3),)
-    if nm.get("process") == "flicker":  # size is the flicker coefficient B, the noise library's bias_instability
-        return (("bias_instability", (float(nm["size"]),) * 3),)
-    return (("gauss_markov", ((float(nm["size"]), float(nm["tau_s"])),) * 3),)
 
 
 def placement_of(report: dict) -> tuple[float, float, float]:
@@ -515,5 +502,5 @@ def estimates_of(name: str, report: dict, which: str = "before") -> list[dict]:
 
 __all__ = ["BASE_PARAMETERS", "FEW_POSES_LIMITS", "GAP_COLUMNS", "diagnostics_row", "few_poses_rows", "poses_of",
            "with_disjoint_rests", "base_residuals", "estimates_of", "excess_rows", "gap_rows", "named_rows",
-           "placement_of", "pose_data_of", "resimulate", "simulate_session", "stability_rows", "wander_components",
+           "placement_of", "pose_data_of", "resimulate", "simulate_session", "stability_rows",
            "white_scale_of"]
