@@ -79,6 +79,11 @@ def survey_run(results):
     return files, [p for p in sorted(results.rglob("*")) if p.is_file() and TEMPORARY.match(p.name)]
 
 
+def default_sigint():
+    """Run in the child before Snakemake starts: SIGINT back to its default disposition."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def interrupt(workdir, sig):
     """Start the run in its own process group with the gather job held mid-way (all Monte
     Carlo jobs finished by then), send `sig` to the whole group (a hard crash or a Ctrl-C)
@@ -90,8 +95,12 @@ def interrupt(workdir, sig):
     with open(console, "w") as sink:
         # two cores: the Monte Carlo jobs two at a time; the held gather job needs them all,
         # so it alone runs when the signal comes
+        # Ctrl-C as a terminal delivers it: a test run started in the background of a shell
+        # without job control inherits SIGINT ignored (POSIX), and so would every process of
+        # the run, which then never ends on the signal (the run hung 600 s that way)
         proc = subprocess.Popen(snakemake_cmd(workdir, TARGET, "--configfile", CI, "--cores", "2"), cwd=REPO,
-                                stdout=sink, stderr=subprocess.STDOUT, start_new_session=True, env=env)
+                                stdout=sink, stderr=subprocess.STDOUT, start_new_session=True, env=env,
+                                preexec_fn=default_sigint)
     held = None
     try:
         held = open_when_held(fifo, lambda: proc.poll() is None, console.read_text)
