@@ -8,6 +8,7 @@ replaces one method at the points of the experiment it is meant to break (every 
 keeps its own random stream, so right and wrong tables share their data).
 """
 
+import sys
 from functools import lru_cache
 from pathlib import Path
 
@@ -19,7 +20,7 @@ from accelcal import bias_lls_batch, full_lls_batch
 from accelcal_repro.burkhard2024 import checks
 from accelcal_repro.burkhard2024.analysis import limit_onsets, lls_limit, relative_errors
 from accelcal_repro.burkhard2024.claims import MINIMUM, burkhard2024_claims
-from accelcal_repro.burkhard2024.grid import experiments_from_config, grid_points
+from accelcal_repro.burkhard2024.grid import experiments_from_config
 from accelcal_repro.claims import NOT_TESTABLE, validate_rows
 from accelcal_repro.montecarlo import compare_methods, mc_point, summarize
 from accelcal_repro.timing import summarize_timing
@@ -27,6 +28,8 @@ from accelcal_repro.timing import summarize_timing
 from tests.configs import ci_config
 
 REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO / "workflow" / "scripts"))
+from _burkhard2024_points import grid_points  # noqa: E402  (the workflow's split of the grid into jobs)
 CFG = ci_config()["burkhard2024"]
 EXPS = experiments_from_config(CFG["experiments"])
 R = CFG["claims"]
@@ -35,7 +38,7 @@ RANGE = tuple(R["paper_noise_range"])
 
 def run(names, estimators=None):
     """Tidy table, summary and comparisons of the experiments ``names`` (CI config)."""
-    pts = grid_points({n: EXPS[n] for n in names})
+    pts = grid_points({n: CFG["experiments"][n] for n in names})
     tidy = pd.concat([mc_point(CFG["seed"], p["n_poses"], p["noise_std"], p["cases"], CFG["trials"], g=CFG["g"],
                                truth_ranges={k: tuple(v) for k, v in CFG["truth"].items()},
                                als_known_noise=CFG["als_known_noise"], estimators=estimators)[0]

@@ -1,19 +1,47 @@
 """Experiments of the Burkhard stage merged into one Monte Carlo job per grid point."""
 
+import dataclasses
+import json
+import sys
 from pathlib import Path
 
 import pandas as pd
 import pytest
 
-from accelcal_repro.burkhard2024.grid import EXPERIMENTS, Experiment, experiments_from_config, grid_points, point_key, select
+from accelcal.registry import TABLE_PATH, entry_from_table, estimators
+from accelcal_repro.burkhard2024.grid import EXPERIMENTS, Experiment, experiments_from_config, select
+from accelcal_repro.montecarlo import DATA_MODELS, METHODS
 
 from tests.configs import load_config
 
 REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO / "workflow" / "scripts"))
+import _burkhard2024_points as points  # noqa: E402  (the workflow's split of the grid into jobs)
+from _burkhard2024_points import grid_points, point_key  # noqa: E402
+from _registry_table import ESTIMATOR_TABLE, accelerometer_estimators  # noqa: E402
 
 
 def exp(name, data_model="full", n=(24,), s=(1e-4,), g=(0.0,), methods=("full_lls", "bias_lls")):
-    return Experiment(name, data_model, tuple(n), tuple(s), tuple(g), tuple(methods))
+    """An experiment as the config gives it (checked by Experiment, as the jobs check it)."""
+    e = Experiment(name, data_model, tuple(n), tuple(s), tuple(g), tuple(methods))
+    return {k: v for k, v in dataclasses.asdict(e).items() if k != "name"}
+
+
+def test_the_workflow_reads_the_registrys_own_table(tmp_path):
+    """The parse-time split reads src/accelcal/estimators.json, the file the registry is built
+    from: the same methods in the same order, the same minima and data models; and a row
+    changed in the file changes both readers alike (one source, no copy)."""
+    assert ESTIMATOR_TABLE.resolve() == TABLE_PATH.resolve()
+    assert points.FEWEST == {e.name: e.min_poses for e in estimators("accelerometer")}
+    assert list(points.FEWEST) == list(METHODS) and points.DATA_MODELS == DATA_MODELS
+    table = json.loads(TABLE_PATH.read_text(encoding="utf-8"))
+    for row in table["estimators"]:
+        row["redundancy"] += 3
+    (tmp_path / "estimators.json").write_text(json.dumps(table), encoding="utf-8")
+    read = accelerometer_estimators(tmp_path / "estimators.json")
+    assert read == {r["name"]: {"model": r["model"], "fewest": entry_from_table(r).min_poses}
+                    for r in table["estimators"] if r["sensor"] == "accelerometer"}
+    assert read["full_lls"]["fewest"] == 13 and read["bias_lls"]["fewest"] == 7
 
 
 def test_shared_points_run_once_with_the_union_of_cases():
@@ -44,7 +72,7 @@ def test_config_experiments_and_the_default_size(config):
     cfg = load_config(config)["burkhard2024"]
     exps = experiments_from_config(cfg["experiments"])
     assert tuple(exps) == EXPERIMENTS
-    pts = grid_points(exps)
+    pts = grid_points(cfg["experiments"])
     if config == "config.yaml":  # the issue's floor: at least 1000 Monte Carlo runs per grid point
         assert cfg["trials"] >= 1000
         assert min(exps["fig1b"].n_poses) == 4 and max(exps["fig1b"].n_poses) >= 100

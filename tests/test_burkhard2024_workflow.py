@@ -10,13 +10,14 @@ import pandas as pd
 import pytest
 import yaml
 
-from accelcal_repro.burkhard2024.grid import experiments_from_config, grid_points
 
 from tests.configs import ci_config
 
 from .conftest import copy_of_ci_workflow
 
 REPO = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(REPO / "workflow" / "scripts"))
+from _burkhard2024_points import grid_points  # noqa: E402  (the workflow's split of the grid into jobs)
 SNAKEMAKE = Path(sys.executable).with_name("snakemake")
 CI = REPO / "config" / "ci.yaml"
 CFG = ci_config()["burkhard2024"]
@@ -37,7 +38,7 @@ def stage(ci_workflow, tmp_path_factory):
 
 
 def test_one_monte_carlo_job_per_grid_point(stage):
-    points = grid_points(experiments_from_config(CFG["experiments"]))
+    points = grid_points(CFG["experiments"])
     logs = sorted(p.name for p in (stage / "results" / "logs" / "burkhard2024").glob("mc_*.log"))
     assert logs == sorted(f"mc_{k}.log" for k in points)
     assert len(list((stage / "results" / "benchmarks" / "burkhard2024").glob("mc_*.tsv"))) == len(points)
@@ -46,7 +47,7 @@ def test_one_monte_carlo_job_per_grid_point(stage):
 def test_tidy_table_one_row_per_trial_method_and_grid_point(stage):
     d = stage / "results" / "burkhard2024"
     mc = pd.read_csv(d / "mc.csv.gz")
-    points = grid_points(experiments_from_config(CFG["experiments"]))
+    points = grid_points(CFG["experiments"])
     expected = CFG["trials"] * sum(len(ms) for p in points.values() for _, _, ms in p["cases"])
     assert len(mc) == expected
     assert not mc.duplicated(["data_model", "n_poses", "noise_std", "g_error", "method", "trial"]).any()
@@ -117,6 +118,6 @@ def test_default_config_dry_run_splits_the_grid_into_jobs(tmp_path):
                           timeout=120)
     assert proc.returncode == 0, proc.stderr[-3000:]
     default = yaml.safe_load((REPO / "config" / "config.yaml").read_text())["burkhard2024"]
-    n = len(grid_points(experiments_from_config(default["experiments"])))
+    n = len(grid_points(default["experiments"]))
     assert f"burkhard2024_mc {n}" in " ".join((proc.stdout + proc.stderr).split())
     assert not (tmp_path / "results").exists()

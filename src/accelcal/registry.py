@@ -41,8 +41,8 @@ One protocol per kind of data: an entry is a :class:`PoseEstimator`, a
 something for its data and a ``fit`` that takes that data, so that no entry raises when
 called through its kind's API (:func:`estimators` ``(data=...)`` lists one kind).
 
-Adding an estimator is one entry (a line of :data:`ESTIMATORS`, or :func:`register` at
-run time) naming its function and its calibration class; the CLI, the calibration
+Adding an estimator is one entry (a row of ``estimators.json`` beside this module, read
+into :data:`ESTIMATORS`, or :func:`register` at run time) naming its function and its calibration class; the CLI, the calibration
 files, the Monte Carlo, the timing benchmark, its cost table and the workflow's config
 check follow, and ``tests/test_estimator_conformance.py`` checks it like every other
 (``tests/test_add_estimator.py`` does it with a toy).
@@ -51,18 +51,27 @@ check follow, and ``tests/test_estimator_conformance.py`` checks it like every o
 from __future__ import annotations
 
 import importlib
+import json
 from dataclasses import dataclass
+from pathlib import Path
 from typing import ClassVar
 
 from .errors import AccelcalError
 
+#: The registry's table as data (estimators.json beside this module): the workflow reads the
+#: same file as plain JSON while it is parsed (the Burkhard grid's pose minima and method
+#: order, the config's estimator names), so that parsing imports no accelcal module.
+TABLE_PATH = Path(__file__).with_name("estimators.json")
+with TABLE_PATH.open(encoding="utf-8") as _f:
+    _TABLE = json.load(_f)
+
 #: Unknowns of each model (bias; bias + scale + non-orthogonality; the gyro's scale and
 #: misalignment, ``C`` of :mod:`accelcal.gyro.model`, its bias taken from the rests).
-N_PARAMETERS = {"full": 9, "bias": 3, "scale_misalignment": 9}
+N_PARAMETERS: dict[str, int] = _TABLE["n_parameters"]
 #: What an estimator fits, and how many equations each of them gives: a pose mean one
 #: (its norm), a motion between two rests two (the tangent components of gravity carried
 #: over), a rotation of known angle three (its rotation vector).
-DATA = {"poses": 1, "motions": 2, "rotations": 3}
+DATA: dict[str, int] = _TABLE["equations"]
 #: What an estimator may use the noise level of the pose means for.
 NOISE_USES = ("correction", "stopping")
 #: Families: closed forms (microseconds, a batch form that vectorises) and iterative solvers.
@@ -278,57 +287,22 @@ def resolve(path: str):
     return getattr(importlib.import_module(module), name)
 
 
-_CAL = "accelcal.calibration"
 _MISSING = object()  # a field another kind of entry does not have
+#: The class of each kind of entry (its :attr:`Estimator.data`).
+KINDS = {cls.data: cls for cls in (PoseEstimator, MotionEstimator, RotationEstimator)}
 
-#: The estimators, by name, in the order tables and help list them.
-ESTIMATORS: dict[str, Estimator] = {e.name: e for e in (
-    PoseEstimator(name="full_lls", model="full", algorithm="lls", label="full LLS", family="closed_form",
-                  function="accelcal.lls:full_lls", batch="accelcal.lls_batch:full_lls_batch",
-                  calibration=f"{_CAL}:FullLLSCalibration", baseline="full_nlls", compiled=True,
-                  conditioning="accelcal.lls:design_singular_values",
-                  description="closed form (SVD), bias + scale + non-orthogonality (Burkhard et al. 2024)"),
-    PoseEstimator(name="full_als", model="full", algorithm="als", label="full ALS", family="closed_form",
-                  function="accelcal.als:full_als", batch="accelcal.als:full_als_batch",
-                  calibration=f"{_CAL}:FullALSCalibration", baseline="full_nlls", corrects="full_lls", compiled=True,
-                  noise_use="correction", conditioning="accelcal.als:moment_singular_values",
-                  conditioning_uses_noise=True,
-                  description="full LLS with its O(noise^2) bias removed (adjusted least squares)"),
-    PoseEstimator(name="full_nlls", model="full", algorithm="nlls", label="full NLLS", family="iterative",
-                  function="accelcal.nlls:full_nlls", batch="accelcal.nlls:full_nlls_batch",
-                  calibration=f"{_CAL}:FullNLLSCalibration", noise_use="stopping",
-                  conditioning="accelcal.lls:design_singular_values",
-                  description="iterative (CasADi/IPOPT) from b = 0, M = I"),
-    PoseEstimator(name="bias_lls", model="bias", algorithm="lls", label="bias-only LLS", family="closed_form",
-                  function="accelcal.lls:bias_lls", batch="accelcal.lls_batch:bias_lls_batch",
-                  calibration=f"{_CAL}:BiasLLSCalibration", baseline="bias_nlls", compiled=True, needs_g=False,
-                  conditioning="accelcal.lls:design_singular_values",
-                  description="closed form with M = I; the bias does not depend on g"),
-    PoseEstimator(name="bias_nlls", model="bias", algorithm="nlls", label="bias-only NLLS", family="iterative",
-                  function="accelcal.nlls:bias_nlls", batch="accelcal.nlls:bias_nlls_batch",
-                  calibration=f"{_CAL}:BiasNLLSCalibration", noise_use="stopping",
-                  conditioning="accelcal.lls:design_singular_values",
-                  description="iterative with M = I"),
-    MotionEstimator(name="gyro_iterative", model="scale_misalignment", algorithm="iterative",
-                    label="gyro iterative", family="iterative",
-                    function="accelcal.gyro.fit:fit_iterative",
-                    calibration="accelcal.gyro.result:GyroIterativeCalibration",
-                    conditioning="accelcal.gyro.fit:motion_singular_values",
-                    description="weighted Gauss-Newton on the gravity directions carried between rests "
-                                "(IMU-TK's protocol)"),
-    MotionEstimator(name="gyro_one_step", model="scale_misalignment", algorithm="one_step",
-                    label="gyro one-step", family="closed_form", baseline="gyro_iterative",
-                    function="accelcal.gyro.fit:fit_one_step",
-                    calibration="accelcal.gyro.result:GyroOneStepCalibration",
-                    conditioning="accelcal.gyro.fit:motion_singular_values",
-                    description="one linearised solve about the nominal gyro model"),
-    RotationEstimator(name="gyro_ferraris", model="scale_misalignment", algorithm="sum",
-                      label="gyro Ferraris", family="closed_form",
-                      function="accelcal.gyro.ferraris:fit_ferraris",
-                      calibration="accelcal.gyro.result:GyroFerrarisCalibration",
-                      conditioning="accelcal.gyro.ferraris:rotation_singular_values",
-                      description="three rotations of known angle, the rate summed (Ferraris, imucal's protocol)"),
-)}
+
+def entry_from_table(row: dict) -> Estimator:
+    """The registry entry of one row of the table: its ``data`` names the class, the other keys are its fields."""
+    fields = dict(row)
+    kind = fields.pop("data")
+    if kind not in KINDS:
+        raise ValueError(f"{fields.get('name')}: data {kind!r} is not one of {', '.join(KINDS)}")
+    return KINDS[kind](**fields)
+
+
+#: The estimators, by name, in the order tables and help list them (the rows of estimators.json).
+ESTIMATORS: dict[str, Estimator] = {e.name: e for e in map(entry_from_table, _TABLE["estimators"])}
 
 
 def register(entry: Estimator) -> Estimator:
@@ -404,6 +378,6 @@ def model_of(name: str) -> str:
     return estimator(name).model
 
 
-__all__ = ["DATA", "ESTIMATORS", "Estimator", "FAMILIES", "MotionEstimator", "NOISE_USES", "N_PARAMETERS", "PoseEstimator",
-           "RotationEstimator", "class_of_type", "estimator", "estimators", "min_gyro_rests", "model_of", "register", "resolve", "subclasses",
+__all__ = ["DATA", "ESTIMATORS", "Estimator", "FAMILIES", "KINDS", "MotionEstimator", "NOISE_USES", "N_PARAMETERS",
+           "PoseEstimator", "RotationEstimator", "TABLE_PATH", "class_of_type", "entry_from_table", "estimator", "estimators", "min_gyro_rests", "model_of", "register", "resolve", "subclasses",
            "types_of", "unregister"]

@@ -62,8 +62,10 @@ BatchEstimator = Callable[[np.ndarray, float, float], dict]
 METHODS = tuple(e.name for e in estimators("accelerometer"))
 FULL_METHODS = tuple(m for m in METHODS if ESTIMATORS[m].model == "full")
 BIAS_METHODS = tuple(m for m in METHODS if ESTIMATORS[m].model == "bias")
-#: The two data sets of a grid point (see the module docstring).
-DATA_MODELS = ("full", "bias")
+#: The data sets of a grid point (see the module docstring), one per model of the methods:
+#: ``full`` (the drawn M != I), ``bias`` (M = I).  The workflow derives the same tuple from
+#: the registry's table (workflow/scripts/_burkhard2024_points.py).
+DATA_MODELS = tuple(dict.fromkeys(ESTIMATORS[m].model for m in METHODS))
 #: Axis labels of the error columns.
 AXES = {"bias": ("x", "y", "z"), "scale": ("x", "y", "z"), "nonorth": ("xy", "zx", "zy")}
 QUANTITIES = tuple(AXES)

@@ -3,7 +3,7 @@ compute-time claim, and where the closed form stops being enough.  Config: the
 `burkhard2024` mapping (workflow/schemas/burkhard2024.schema.yaml).
 
 The experiments of the config (one per panel) are merged into one Monte Carlo job per grid
-point (pose count, noise std, g error; accelcal_repro.burkhard2024.grid.grid_points); the data
+point (pose count, noise std, g error; workflow/scripts/_burkhard2024_points.py); the data
 come from the random stream of (pose count, noise std), so the g errors of a point share
 their trials.  A gather job writes the tidy table and its summaries, from which the
 figures and the claims are computed.
@@ -14,7 +14,9 @@ SMALL.
 
 import re
 
-from accelcal_repro.burkhard2024.grid import experiments_from_config, grid_points
+# The grid split into jobs reads the registry's table as JSON (standard library only), so
+# that parsing imports no accelcal module (tests/test_workflow_parse.py).
+from _burkhard2024_points import grid_points, unusable_methods
 
 BURKHARD = config["burkhard2024"]
 
@@ -23,6 +25,10 @@ BURKHARD = config["burkhard2024"]
 def _check_burkhard2024(b, cfg):
     for name, exp in b["experiments"].items():
         _check_estimators(exp["methods"], f"burkhard2024.experiments.{name}.methods")
+        if unusable_methods(exp):
+            raise _config_error(f"burkhard2024.experiments.{name}.methods",
+                                f"{', '.join(unusable_methods(exp))} need more poses than any of n_poses "
+                                f"{exp['n_poses']}")
     timing = b["timing"]
     for key, among in (("headline_interleave", "interleavings"), ("headline_n_poses", "n_poses")):
         if timing[key] not in timing[among]:
@@ -36,7 +42,7 @@ def _check_burkhard2024(b, cfg):
 
 check_section("burkhard2024", _check_burkhard2024)
 #: Monte Carlo jobs: point key (e.g. n24_s0.0001) -> {n_poses, noise_std, cases}
-BURKHARD_POINTS = grid_points(experiments_from_config(BURKHARD["experiments"]))
+BURKHARD_POINTS = grid_points(BURKHARD["experiments"])
 BURKHARD_DIR = results("burkhard2024")
 #: Figures by job: the panels of Fig. 1 and the limit come from the gathered tables (one
 #: job: a plotting job costs more to start than to draw), the timing figure from the benchmark.

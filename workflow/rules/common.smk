@@ -4,15 +4,19 @@ to the final targets, and default resources."""
 import json
 import os
 import re
+import sys
 from dataclasses import dataclass
 
 import jsonschema
 import yaml
 from snakemake.exceptions import WorkflowError
 
-# The core's estimator registry names the estimators a config may list; the reproductions
-# (accelcal_repro) are never imported while the workflow is parsed, only by its jobs.
-from accelcal.registry import estimators
+# Neither accelcal nor the reproductions (accelcal_repro) are imported while the workflow is
+# parsed, only by its jobs: the estimator names a config may list come from the registry's
+# table read as JSON (workflow/scripts/_registry_table.py, standard library only), which the
+# stage files import from the scripts' folder (tests/test_workflow_parse.py holds this).
+sys.path.insert(0, os.path.join(workflow.basedir, "workflow", "scripts"))
+from _registry_table import accelerometer_estimators
 
 
 
@@ -252,8 +256,8 @@ def _check_names(names, known, where, what):
 
 
 def _check_estimators(names, where):
-    """Every name is a registered accelerometer estimator (accelcal.registry)."""
-    _check_names(names, [e.name for e in estimators("accelerometer")], where, "a registered estimator")
+    """Every name is a registered accelerometer estimator (accelcal.registry's table)."""
+    _check_names(names, list(accelerometer_estimators()), where, "a registered estimator")
 
 
 def figure_outputs(figure_id, caption, category):

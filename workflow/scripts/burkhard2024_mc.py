@@ -9,9 +9,9 @@ from accelcal import kernels
 from accelcal_repro.montecarlo import mc_point
 
 if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
-    from accelcal_repro.burkhard2024.grid import experiments_from_config, grid_points
+    from _burkhard2024_points import grid_points
 
-    _first = next(iter(grid_points(experiments_from_config(load_config()["burkhard2024"]["experiments"]))))
+    _first = next(iter(grid_points(load_config()["burkhard2024"]["experiments"])))
     snakemake = mock_snakemake_from_argv("burkhard2024_mc", bk_point=_first)
 
 log = configure_logging(snakemake)

@@ -1,4 +1,4 @@
-"""The simulation grids of Burkhard et al. (2024), Fig. 1, as experiments over grid points.
+"""The simulation grids of Burkhard et al. (2024), Fig. 1, as experiments.
 
 An *experiment* (one panel of Fig. 1, or an analysis beyond the paper) is a product
 grid: one data set (``data_model``: ``'full'`` = generated with the drawn ``M â‰  I``,
@@ -6,13 +6,10 @@ grid: one data set (``data_model``: ``'full'`` = generated with the drawn ``M â‰
 g and the methods to run.  Experiments share grid points: the Fig. 1(a) point at
 24 poses and the noise of Fig. 1(b)-(e) is the same data-generating setting.
 
-:func:`grid_points` merges the experiments into one job per grid point
-``(n_poses, noise_std, g_error)``, each with the union of the cases
-``(data_model, g_error, methods)`` the experiments need there.  The data of a job come
-from the stream of ``(n_poses, noise_std)`` (:mod:`accelcal_repro.montecarlo`): the jobs of one
-noise level and pose count at different g errors see the same data (common random
-numbers), and splitting them into jobs changes no number.  A method is left out at a
-pose count below its minimum q + 1 (10 full, 4 bias-only).
+The workflow merges the experiments into one Monte Carlo job per grid point
+``(n_poses, noise_std, g_error)`` (``workflow/scripts/_burkhard2024_points.py``, which
+reads the registry's table as data so that parsing imports nothing); a method is left out
+at a pose count below its minimum q + 1 (10 full, 4 bias-only).
 :func:`select` picks an experiment's rows back out of a summary table.
 """
 
@@ -66,38 +63,6 @@ def experiments_from_config(cfg: Mapping) -> dict[str, Experiment]:
     return out
 
 
-def noise_key(x: float) -> str:
-    """File-name key of a noise level, e.g. 1e-07, 0.001 (exact: 12 significant digits)."""
-    return format(float(x), ".12g")
-
-
-def point_key(n_poses: int, noise_std: float, g_error: float = 0.0) -> str:
-    """Job key of a grid point, e.g. ``n24_s0.0001_g0`` or ``n24_s0.0001_g0.01``."""
-    return f"n{int(n_poses)}_s{noise_key(noise_std)}_g{noise_key(g_error)}"
-
-
-def grid_points(experiments: Mapping[str, Experiment]) -> dict[str, dict]:
-    """One entry per grid point ``(n_poses, noise_std, g_error)``, sorted by pose count,
-    noise and g error: ``{key: {"n_poses", "noise_std", "g_error", "cases":
-    [[data_model, g_error, [methods]], ...]}}`` with the union of what every experiment
-    needs there."""
-    need: dict[tuple[int, float, float], dict[str, set]] = {}
-    for e in experiments.values():
-        for n in e.n_poses:
-            methods = {m for m in e.methods if n >= min_poses(m)}
-            if not methods:
-                continue
-            for s in e.noise_std:
-                for dg in e.g_error:
-                    need.setdefault((n, s, dg), {}).setdefault(e.data_model, set()).update(methods)
-    out = {}
-    for (n, s, dg) in sorted(need):
-        cases = [[dm, dg, [m for m in METHODS if m in need[n, s, dg][dm]]]
-                 for dm in DATA_MODELS if dm in need[n, s, dg]]
-        out[point_key(n, s, dg)] = {"n_poses": n, "noise_std": s, "g_error": dg, "cases": cases}
-    return out
-
-
 def select(table: pd.DataFrame, experiment: Experiment) -> pd.DataFrame:
     """The rows of a summary (or tidy) table that belong to ``experiment``."""
     e = experiment
@@ -108,4 +73,4 @@ def select(table: pd.DataFrame, experiment: Experiment) -> pd.DataFrame:
     return table[sel].reset_index(drop=True)
 
 
-__all__ = ["EXPERIMENTS", "Experiment", "experiments_from_config", "grid_points", "noise_key", "point_key", "select"]
+__all__ = ["EXPERIMENTS", "Experiment", "experiments_from_config", "select"]
