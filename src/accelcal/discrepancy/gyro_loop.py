@@ -59,19 +59,20 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..errors import NotConvergedError
-from ..gyro.calibrate import accel_directions, motion_intervals
+from ..gyro.calibrate import motion_intervals
 from ..gyro.effects import directions as effect_directions
 from ..gyro.fit import MotionSet, evaluate, fit_iterative, motion_residuals
 from ..gyro.model import GyroModel
-from ..gyro.rests import (RestStatistics, bias_series, fit_bias, motion_bias_variance, rest_noise, rest_statistics,
-                          sample_interval, saturated_samples, still_intervals)
+from ..gyro.rests import (MIN_STILL_SAMPLES, RestStatistics, bias_series, fit_bias, gyro_rests, motion_bias_variance,
+                          rest_noise, sample_interval, saturated_samples)
 from .nested import MAX_ABSORBED, LoopOutcome, nested_f_test
 from .statistics import holm
 
 #: Samples kept on either side of a motion when its columns are integrated (magnus4's cubic reads one).
 MARGIN = 3
-#: Fewest samples in every rest for the gyro's noise (and its autocorrelation) to be measured.
-MIN_REST_SAMPLES = 30
+#: Fewest samples in every rest for the gyro's noise (and its autocorrelation) to be measured:
+#: as many as a rest keeps when it is shrunk to where the gyro is still.
+MIN_REST_SAMPLES = MIN_STILL_SAMPLES
 #: "Moving" (the motion bias's samples): a rate above this many times the rest noise on some axis.
 MOVING_SIGMAS = 5.0
 
@@ -130,21 +131,19 @@ class GyroMotions:
 
 def gyro_motions(rec, acc_cal, poses, gcal) -> GyroMotions:
     """The motion set of :func:`accelcal.gyro.calibrate.calibrate_gyro`'s fit ``gcal``, on the gyro's
-    own still rests, with ``C`` refitted there.
+    own still rests, with ``C`` refitted there under the rests' noise alone.
 
-    Same bias mode, g-sensitivity, time base and used motions (its table) as the calibration
-    the user gets; but each rest is shrunk to where the gyro is still
-    (:func:`accelcal.gyro.rests.still_intervals`, the gravity directions averaged over the same
-    samples): the accelerometer's rests take in the slow ends of the turns, whose rotation the
-    motions then lack, and the loop would name that as an effect of the gyro.
+    The same rests (:func:`accelcal.gyro.rests.gyro_rests`: the accelerometer's shrunk to where
+    the gyro is still, the gravity directions averaged over the same samples), bias mode,
+    g-sensitivity, time base and used motions (its table) as the calibration the user gets: the
+    accelerometer's rests take in the slow ends of the turns, whose rotation the motions then
+    lack, and the loop would name that as an effect of the gyro.
     """
     s = gcal.settings
     t, gyro = rec.t, np.asarray(rec.gyro, float)
     tb = sample_interval(t)
-    iv = still_intervals(gyro, poses.intervals, MIN_REST_SAMPLES)
-    rs = rest_statistics(t, gyro, iv)
-    acc_rests = rest_statistics(t, np.asarray(rec.acc, float), iv)
-    u, u_cov, f_rest = accel_directions(acc_cal, acc_rests.means, acc_rests.mean_std)
+    rests = gyro_rests(t, gyro, poses, acc_cal, rec.acc)  # the calibration's own rests
+    iv, rs, u, u_cov, f_rest = rests.intervals, rests.stats, rests.u, rests.u_cov, rests.f
     gs = bool(s.get("g_sensitivity"))
     best = fit_bias(rs, s.get("bias_mode", "interpolated"), f_rest if gs else None)
     f = np.asarray(acc_cal.apply(np.asarray(rec.acc, float)), float)

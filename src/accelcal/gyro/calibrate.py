@@ -7,8 +7,9 @@ calibration (anything with ``apply(raw) -> m/s²``, e.g. :class:`accelcal.calibr
 
 1. checks the time base (same rows as the accelerometer; jitter: the sample index is
    used; gaps: the motions across them are left out);
-2. takes the bias from the rests (:mod:`accelcal.gyro.rests`; all rests by default) and
-   the noise that every motion integrates;
+2. shrinks the accelerometer's rests to where the gyro is still (:func:`accelcal.gyro.rests.gyro_rests`: the
+   ends of a turn are still rotation) and takes the bias from them (:mod:`accelcal.gyro.rests`)
+   and the noise that every motion integrates;
 3. turns each pair of consecutive rests into a motion; leaves out motions in which the gyro
    reaches its range (saturation) or samples are missing, saying which;
 4. fits ``C`` (:mod:`accelcal.gyro.fit`: iterative by default, or the one-step estimate)
@@ -42,8 +43,8 @@ from .fit import MIN_MOTIONS, MotionSet, evaluate, initial_scale, rotation_angle
 from .integrate import integrate_intervals, log_so3
 from .model import RAW_UNITS, GyroModel
 from .noise import MotionNoise, bias_wander, fit_with_noise, g_sensitivity_test, wander_variance
-from .rests import (bias_series, check_time_base, fit_bias, measuring_range, motion_bias_variance, rest_noise,
-                    rest_statistics, sample_interval, saturated_samples)
+from .rests import (GyroRests, bias_series, check_time_base, fit_bias, gyro_rests, measuring_range,
+                    motion_bias_variance, rest_noise, sample_interval, saturated_samples)
 from .result import RULES, GyroCalibration, GyroQuality
 from .unit_evidence import unit_from_motions
 
@@ -55,21 +56,6 @@ MIN_RESTS_G = 10
 G_SENSITIVITY_P = 1e-3
 #: Integrated rotation below this many noise standard deviations: the gyro saw no motion.
 NO_MOTION_SIGMAS = 5.0
-
-
-def accel_directions(accel, means, mean_std):
-    """Unit gravity directions of the poses (p, 3), their covariance (p, 3, 3) and the
-    calibrated specific force (p, 3) [m/s²], from an accelerometer calibration's ``apply``."""
-    z = np.asarray(means, float)
-    f = np.asarray(accel.apply(z), float)
-    eps = 1e-3 * np.maximum(np.abs(z), 1.0)
-    J = np.stack([(np.asarray(accel.apply(z + eps[:, [k]] * np.eye(3)[k]), float) - f) / eps[:, [k]]
-                  for k in range(3)], axis=2)  # (p, 3, 3): ∂f/∂z (apply is affine)
-    cov_f = np.einsum("pik,pk,pjk->pij", J, np.asarray(mean_std, float) ** 2, J)
-    norm = np.linalg.norm(f, axis=1)
-    u = f / norm[:, None]
-    P = (np.eye(3)[None] - u[:, :, None] * u[:, None, :]) / norm[:, None, None]
-    return u, P @ cov_f @ np.swapaxes(P, -1, -2), f
 
 
 def motion_intervals(intervals, gaps, saturated):
@@ -341,16 +327,16 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
     tb = sample_interval(t)
     if t_gyro is not None:
         check_time_base(t, t_gyro, tb.h)
-    rs = rest_statistics(t, gyro, poses.intervals)
-    u, u_cov, f_rest = accel_directions(accel, poses.means, poses.mean_std)
     if g_sensitivity is True and acc is None:
         raise GyroInputError("the g-sensitivity needs the raw accelerometer samples (acc=)")
+    rests = gyro_rests(t, gyro, poses, accel, acc)
+    rs, u, u_cov, f_rest = rests.stats, rests.u, rests.u_cov, rests.f
     g_sensitivity, g_test = _use_g_sensitivity(g_sensitivity, rs, bias, f_rest, acc)
     best = fit_bias(rs, bias, f_rest if g_sensitivity else None)
     y = gyro - bias_series(best, rs, t)
     if g_sensitivity:
         y = y - np.asarray(accel.apply(np.asarray(acc, float)), float) @ best.g_sensitivity.T
-    all_ms, used, notes = _usable_motions(y, t, tb, poses, rs, best, u, u_cov, f_rest, accel, gyro, gyro_range)
+    all_ms, used, notes = _usable_motions(y, t, tb, rests, best, accel, gyro, gyro_range)
     ms = all_ms.subset(used)
     raw_unit, nominal, nominal_from = _unit_and_nominal(raw_unit, nominal_sensitivity, ms, u, integrator, gyro)
     _check_axes(ms, nominal, tb.h)
@@ -403,11 +389,12 @@ def _unit_and_nominal(raw_unit, nominal_sensitivity, ms, u, integrator, gyro):
     return raw_unit, nominal, nominal_from
 
 
-def _usable_motions(y, t, tb, poses, rs, best, u, u_cov, f_rest, accel, gyro, gyro_range):
-    """Every motion between the rests (bias removed from ``y``) with its noise, which are usable
-    and why the others are not; one line when too few are."""
+def _usable_motions(y, t, tb, rests: GyroRests, best, accel, gyro, gyro_range):
+    """Every motion between the gyro's rests (bias removed from ``y``) with its noise, which are
+    usable and why the others are not; one line when too few are."""
+    rs, u, u_cov, f_rest = rests.stats, rests.u, rests.u_cov, rests.f
     sat = saturated_samples(gyro, gyro_range)
-    starts, stops, before, after, notes = motion_intervals(poses.intervals, tb.gaps, sat)
+    starts, stops, before, after, notes = motion_intervals(rests.intervals, tb.gaps, sat)
     all_ms = MotionSet(y, tb.h, starts, stops, before, after, u, u_cov, rest_noise(rs),
                        motion_bias_variance(best, rs, before, after),
                        _motion_noise(rs, best, t, starts, stops, f_rest, accel_direction_cov(accel, f_rest)))
@@ -565,18 +552,19 @@ def evaluate_model(t, gyro, poses, accel, C, bias_vector, *, integrator: str = "
                    acc=None):
     """Per-motion misfit [deg] of *any* gyro calibration (a peer's) on a session: the angle between
     each rest's gravity direction and the previous rest's carried over by the calibrated,
-    integrated gyro — the figure of merit no calibration optimises.  Returns the
+    integrated gyro — the figure of merit no calibration optimises — on the gyro's own rests
+    (:func:`accelcal.gyro.rests.gyro_rests`, as the calibration's).  Returns the
     :class:`~accelcal.gyro.fit.Evaluation` and the motion set."""
     tb = sample_interval(t)
-    u, u_cov, _ = accel_directions(accel, poses.means, poses.mean_std)
-    rs = rest_statistics(t, gyro, poses.intervals)
+    rests = gyro_rests(t, gyro, poses, accel, acc)
     y = np.asarray(gyro, float) - np.asarray(bias_vector, float)
     if g_sensitivity is not None:
         y = y - np.asarray(accel.apply(np.asarray(acc, float)), float) @ np.asarray(g_sensitivity).T
-    starts, stops, before, after, _ = motion_intervals(poses.intervals, tb.gaps, np.zeros(len(t), bool))
-    ms = MotionSet(y, tb.h, starts, stops, before, after, u, u_cov, rest_noise(rs), np.zeros((len(starts), 3)))
+    starts, stops, before, after, _ = motion_intervals(rests.intervals, tb.gaps, np.zeros(len(t), bool))
+    ms = MotionSet(y, tb.h, starts, stops, before, after, rests.u, rests.u_cov, rest_noise(rests.stats),
+                   np.zeros((len(starts), 3)))
     return evaluate(ms, C, integrator), ms
 
 
-__all__ = ["MIN_MOTIONS", "accel_direction_cov", "accel_directions", "calibrate_gyro", "evaluate_model", "motion_estimator",
+__all__ = ["MIN_MOTIONS", "accel_direction_cov", "calibrate_gyro", "evaluate_model", "motion_estimator",
            "motion_intervals"]

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..registry import estimator
-from .calibrate import accel_directions
+from .rests import accel_directions
 from .errors import RotationAngleError, TooFewMotionsError
 from .model import GyroModel, RAW_UNITS
 from .rests import fit_bias, rest_noise, rest_statistics, sample_interval

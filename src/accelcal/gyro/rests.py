@@ -1,5 +1,8 @@
 """What the rests tell about the gyro: its bias (from all of them), its noise, its time base.
 
+Rests.  The gyro's rests are the accelerometer's shrunk to where the gyro is still
+(:func:`gyro_rests`, :func:`still_intervals`): every fit, evaluation and test of the gyro uses them.
+
 Bias.  Every rest measures ``b + G f_i + (Earth rate)``: the bias, the g-sensitivity
 times the rest's specific force, and the Earth's rotation projected on the sensor
 (7.3e-5 rad/s at most, ≈ 0.004 °/s).  Three ways to take ``b`` (``bias=``):
@@ -181,6 +184,55 @@ def still_intervals(gyro, intervals, min_samples: int = 2) -> np.ndarray:
     return iv
 
 
+#: Fewest samples a rest keeps when it is shrunk to where the gyro is still (its noise is measured on them).
+MIN_STILL_SAMPLES = 30
+
+
+def accel_directions(accel, means, mean_std):
+    """Unit gravity directions of the poses (p, 3), their covariance (p, 3, 3) and the
+    calibrated specific force (p, 3) [m/s²], from an accelerometer calibration's ``apply``."""
+    z = np.asarray(means, float)
+    f = np.asarray(accel.apply(z), float)
+    eps = 1e-3 * np.maximum(np.abs(z), 1.0)
+    J = np.stack([(np.asarray(accel.apply(z + eps[:, [k]] * np.eye(3)[k]), float) - f) / eps[:, [k]]
+                  for k in range(3)], axis=2)  # (p, 3, 3): ∂f/∂z (apply is affine)
+    cov_f = np.einsum("pik,pk,pjk->pij", J, np.asarray(mean_std, float) ** 2, J)
+    norm = np.linalg.norm(f, axis=1)
+    u = f / norm[:, None]
+    P = (np.eye(3)[None] - u[:, :, None] * u[:, None, :]) / norm[:, None, None]
+    return u, P @ cov_f @ np.swapaxes(P, -1, -2), f
+
+
+@dataclass(frozen=True)
+class GyroRests:
+    """The gyro's own rests and what the accelerometer says at them (:func:`gyro_rests`)."""
+
+    intervals: np.ndarray  #: (p, 2) [start, stop): the accelerometer's rests shrunk to where the gyro is still
+    stats: RestStatistics  #: the gyro's statistics on them
+    u: np.ndarray  #: (p, 3) unit gravity directions
+    u_cov: np.ndarray  #: (p, 3, 3) their covariance
+    f: np.ndarray  #: (p, 3) calibrated specific force [m/s²]
+
+
+def gyro_rests(t, gyro, poses, accel, acc=None, min_samples: int = MIN_STILL_SAMPLES) -> GyroRests:
+    """The rests every gyro fit, evaluation and test uses: the accelerometer's ``poses`` shrunk
+    to where the gyro is still (:func:`still_intervals`).
+
+    At the start and end of a turn gravity's direction hardly moves, so the accelerometer
+    counts those samples as rest while the gyro still turns: their rotation is lost to the
+    motion and lands in the rest's mean (the bias), tenths of a degree on some motions.
+    The gravity directions are averaged over the same samples when the raw accelerometer
+    samples ``acc`` are given (else the poses' means, over the longer rests)."""
+    iv = still_intervals(gyro, poses.intervals, min_samples)
+    if acc is None:
+        means, mean_std = poses.means, poses.mean_std
+    else:
+        at = rest_statistics(t, np.asarray(acc, float), iv)
+        means, mean_std = at.means, at.mean_std
+    u, u_cov, f = accel_directions(accel, means, mean_std)
+    return GyroRests(iv, rest_statistics(t, gyro, iv), u, u_cov, f)
+
+
 def rest_noise(rs: RestStatistics) -> np.ndarray:
     """Per-axis variance of one sample *for sums* (σ² τ), pooled over the rests (raw unit²)."""
     n = (rs.intervals[:, 1] - rs.intervals[:, 0])[:, None]
@@ -293,6 +345,6 @@ def saturated_samples(gyro, gyro_range=None) -> np.ndarray:
     return sat
 
 
-__all__ = ["BIAS_MODES", "BiasEstimate", "RestStatistics", "TimeBase", "bias_series", "check_time_base", "fit_bias",
-           "measuring_range", "motion_bias_variance", "rest_noise", "rest_statistics", "sample_interval", "saturated_samples",
-           "still_intervals"]
+__all__ = ["BIAS_MODES", "BiasEstimate", "GyroRests", "MIN_STILL_SAMPLES", "RestStatistics", "TimeBase", "accel_directions",
+           "bias_series", "check_time_base", "fit_bias", "gyro_rests", "measuring_range", "motion_bias_variance",
+           "rest_noise", "rest_statistics", "sample_interval", "saturated_samples", "still_intervals"]

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .calibrate import accel_directions
+from .rests import accel_directions
 from .errors import NoMotionError, RotationAngleError, TooFewMotionsError
 from .ferraris import N_ROTATIONS, ferraris_calibration, fit_ferraris
 from .model import RAW_UNITS

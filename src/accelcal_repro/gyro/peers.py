@@ -25,9 +25,9 @@ difference is given in accelcal's standard errors.
 
 Figure of merit: the angle between each rest's gravity direction and the previous rest's
 carried over by the calibrated, integrated gyro (Magnus-4), per motion, RMS over a session,
-on the same rests for everyone, each calibration with its own accelerometer and either its
-own bias (``own_bias``: as published) or the session's rest bias (``rest_bias``: the scale
-and misalignment alone).
+on the same rests for everyone (the gyro's own, :func:`accelcal.gyro.rests.gyro_rests`), each
+calibration with its own accelerometer and either its own bias (``own_bias``: as published)
+or the session's rest bias (``rest_bias``: the scale and misalignment alone).
 """
 
 from __future__ import annotations
@@ -40,7 +40,7 @@ import pandas as pd
 
 from accelcal.gyro.calibrate import evaluate_model
 from accelcal.gyro.model import GyroModel, frame_rotation
-from accelcal.gyro.rests import bias_series, fit_bias, rest_statistics
+from accelcal.gyro.rests import bias_series, fit_bias, gyro_rests
 
 #: Xsens MTi data-sheet values (data README): raw = S M x + offset.
 XSENS_FACTORY = {
@@ -142,7 +142,7 @@ def figure_of_merit(session: str, rec, poses, ours_acc, ours, peers: dict,
     """Per calibration: RMS and median per-motion angle [deg] on the session's rests (module
     docstring); ``rec`` the session's Recording (its gyro in the peers' raw unit)."""
 
-    rs = rest_statistics(rec.t, rec.gyro, poses.intervals)
+    rs = gyro_rests(rec.t, rec.gyro, poses, ours_acc, rec.acc).stats  # the rests evaluate_model uses
     rest_b = bias_series(fit_bias(rs, "interpolated"), rs, rec.t)
     cals = {"accelcal": (ours_acc, ours.model), **peers}
     rows = []
