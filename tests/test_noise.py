@@ -7,6 +7,8 @@ import contextlib
 import io
 import json
 import math
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -286,3 +288,24 @@ def test_a_calibration_with_a_gyroscope_reaches_both_files(report):
     assert "not calibrated" not in text and "no gyroscope" not in text
     k = _yaml(calibrated_kalibr_yaml(report, cal)[0])
     assert k["model"] == "scale-misalignment" and np.allclose(k["gyroscopes"]["M"], y["Tw"])
+
+
+def test_accelcal_noise_pays_for_neither_the_gyro_package_nor_the_tables_text(tmp_path):
+    """`accelcal noise` writes no gyro model and no time column: the package accelcal.gyro cost it
+    0.12 s of CPU to import (of ~2.4 s on the 10⁶-row ADIS CSV), and the time column as written
+    kept the table's whole text alive (45 MB of the 287 MB pandas + allantools peak it is held to)."""
+    rng = np.random.default_rng(4)
+    n = 6000
+    gyro = 1e-3 * rng.standard_normal((n, 3)) + [0.01, -0.02, 0.005]
+    path = tmp_path / "gyro.csv"
+    np.savetxt(path, np.column_stack([np.arange(n) / 100.0, gyro]), delimiter=",", header="t,gx,gy,gz", comments="")
+    code = ("import sys\nfrom accelcal import cli\nimport accelcal.noise.report as report\nseen = []\n"
+            "analyse = report.analyse_noise\n"
+            "def spy(rec, **kw):\n    seen.append(rec.time_column)\n    return analyse(rec, **kw)\n"
+            "report.analyse_noise = spy\n"
+            "cli.main(sys.argv[1:])\n"
+            "print(sorted(m for m in sys.modules if m.startswith('accelcal.gyro')), seen)\n")
+    out = subprocess.run([sys.executable, "-c", code, "noise", str(path), "--gyro-unit", "rad/s", "--out",
+                          str(tmp_path / "noise.json")], capture_output=True, text=True, timeout=120)
+    assert (tmp_path / "noise.json").is_file(), out.stderr
+    assert out.stdout.strip().splitlines()[-1] == "[] [None]", out.stdout

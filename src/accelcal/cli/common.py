@@ -166,9 +166,11 @@ def _step(what: str, after_s: float = 2.0):
         timer.cancel()
 
 
-def _read(args, *, accelerometer: bool = True):
+def _read(args, *, accelerometer: bool = True, time_column: bool = True):
     """The recording of ``args``; ``accelerometer``: the command needs one (a gyro alone is
-    refused in one line)."""
+    refused in one line); ``time_column``: keep the time column as written (what ``apply``
+    writes back; a table's is cut from the file's text, which it keeps alive: 45 MB of a
+    10⁶-row CSV that a command without it frees)."""
     from ..formats import read
 
     with _step(f"reading {args.recording}"):
@@ -182,6 +184,8 @@ def _read(args, *, accelerometer: bool = True):
         from ..formats.mag_logs import MAG_WARNING
 
         rec = dataclasses.replace(rec, notes=tuple(n for n in rec.notes if not n.startswith(MAG_WARNING)))
+    if not time_column and rec.time_column is not None:
+        rec = dataclasses.replace(rec, time_column=None)
     if accelerometer and rec.acc is None:
         raise AccelcalError(f"{args.recording}: no accelerometer in this recording (a gyro alone), which "
                             f"'accelcal {args.command}' needs; name its columns with --columns ax=..,ay=..,az=..")

@@ -68,7 +68,7 @@ def _noise(args) -> int:
         raise AccelcalError(f"--level must be between 0 and 1, got {args.level}")
     if args.intervals is not None and (args.start is not None or args.end is not None):
         raise AccelcalError("--intervals chooses the rests already; give either --intervals or --start/--end")
-    rec = _read(args, accelerometer=False)
+    rec = _read(args, accelerometer=False, time_column=False)  # no time column is written back
     if args.no_gyro and rec.gyro is not None:  # the table's own gyro columns too, not only --gyro FILE
 
         rec = replace(rec, gyro=None, gyro_unit=None, notes=rec.notes + ("gyro columns ignored (--no-gyro)",))
