@@ -24,9 +24,10 @@ from .white_loop import discrepancy_white
 def discrepancy(data: PoseData, rules: Rules | None = None, report: bool = True) -> DiscrepancyResult:
     """Run the deterministic layer (module docstring) on one pose set.
 
-    ``report=False`` (wander null): the decisions without the final noise model's
-    intervals and excess reading (:func:`~.wander_loop.discrepancy_wander`: a benchmark's
-    detection).
+    ``report=False``: the decisions without what only a report shows (wander null: the
+    final noise model's intervals and excess reading, :func:`~.wander_loop.discrepancy_wander`;
+    white null: the LOPO gaps and estimates of candidates that cannot pass,
+    :func:`~.white_loop.discrepancy_white`): a benchmark's detection.
 
     Raises
     ------
@@ -37,7 +38,7 @@ def discrepancy(data: PoseData, rules: Rules | None = None, report: bool = True)
     rules = rules or Rules()
     if rules.null == "wander":
         return discrepancy_wander(data, rules, report)
-    return discrepancy_white(data, rules)
+    return discrepancy_white(data, rules, report)
 
 
 __all__ = ["discrepancy"]

@@ -424,8 +424,11 @@ def _effect_sizes(design: _Design, oracle: Oracle, dirs: dict, size_mde: float, 
     params, key_eff = {}, {}
     for e, d in dirs.items():
         a = oracle.effect_mde(design.data, design.p_true, e, d, rules, family)
-        # the white loop's MDE at the same level (its own check above is at α/len(cands))
-        a_white = identifiability(design.data, design.base, e, rules, family).mde_along(d)
+        # the white loop's MDE at the same level (its own check above is at α/len(cands)): the
+        # same information, the critical non-centrality of the round's family
+        ident = design.identifiability[e]
+        lam = critical_noncentrality(effect(e).size, ident.dof, rules.alpha / max(family, 1), rules.power)
+        a_white = dataclasses.replace(ident, lambda_crit=lam).mde_along(d)
         params[e] = size_mde * a * d
         key_eff.update({f"mde_along_{e}": a, f"mde_along_white_{e}": a_white,
                         **{f"param_{e}_{ax}": float(v) for ax, v in zip(suffixes(e), params[e])},

@@ -108,28 +108,40 @@ def rest_allan(samples, intervals, fs: float) -> RestAllan | None:
     :data:`MIN_BLOCKS` samples."""
     x = np.asarray(samples, float)
     iv = np.asarray(intervals, int)
-    longest = int(np.max(iv[:, 1] - iv[:, 0])) if len(iv) else 0
+    lengths = iv[:, 1] - iv[:, 0]
+    longest = int(np.max(lengths)) if len(iv) else 0
     ms = [1 << j for j in range(int(math.log2(max(longest // MIN_BLOCKS, 1))) + 1)]
     ms = [m for m in ms if longest // m >= MIN_BLOCKS]
     if not ms or not np.all(np.isfinite(x)) or not fs > 0:
         return None
-    s2, cnt = np.zeros((3, len(ms))), np.zeros(len(ms))
-    for a0, a1 in iv:
-        seg = x[a0:a1]
-        for k, m in enumerate(ms):
-            nb = len(seg) // m
-            if nb < MIN_BLOCKS:
-                break
-            y = seg[:nb * m].reshape(nb, m, 3).mean(axis=1)
-            d = np.diff(y, axis=0)
-            s2[:, k] += 0.5 * np.sum(d * d, axis=0)
-            cnt[k] += nb - 1
-    ms_arr = np.asarray(ms, float)
-    keep = (ms_arr >= MIN_TAU_SHARE * float(np.median(iv[:, 1] - iv[:, 0]))) & (cnt > 0)
-    if not keep.any():
+    # only the octaves the deviance keeps (the longest rest has blocks at every one of ms);
+    # the short ones cost most and were dropped
+    ms = [m for m in ms if m >= MIN_TAU_SHARE * float(np.median(lengths))]
+    if not ms:
         return None
-    return RestAllan(ms_arr[keep], ms_arr[keep] / fs, s2[:, keep] / cnt[None, keep],
-                     np.broadcast_to(2.0 * cnt[keep] / 3.0, (3, int(keep.sum()))).copy(), float(fs))
+    s2, cnt = np.zeros((3, len(ms))), np.zeros(len(ms))
+    for k, m in enumerate(ms):
+        parts = _octave_sums(x, iv, lengths, m)          # (n_rests, 3), zero where a rest has too few blocks
+        for part in parts:  # summed in rest order, as one rest after another
+            s2[:, k] += part
+        cnt[k] = float(np.sum(np.where(lengths // m >= MIN_BLOCKS, lengths // m - 1, 0)))
+    ms_arr = np.asarray(ms, float)
+    return RestAllan(ms_arr, ms_arr / fs, s2 / cnt[None, :], np.broadcast_to(2.0 * cnt / 3.0, (3, len(ms))).copy(),
+                     float(fs))
+
+
+def _octave_sums(x: np.ndarray, iv: np.ndarray, lengths: np.ndarray, m: int) -> np.ndarray:
+    """``½ Σ (ȳ_{j+1} − ȳ_j)²`` (n_rests, 3) over the blocks of ``m`` samples of each rest, the
+    rests of one length at once (zero for a rest of fewer than :data:`MIN_BLOCKS` blocks)."""
+    out = np.zeros((len(iv), 3))
+    nbs = lengths // m
+    for nb in np.unique(nbs[nbs >= MIN_BLOCKS]):
+        idx = np.flatnonzero(nbs == nb)
+        seg = x[iv[idx, 0][:, None] + np.arange(nb * m)[None, :]]         # (g, nb m, 3)
+        y = seg.reshape(len(idx), nb, m, 3).mean(axis=2)
+        d = np.diff(y, axis=1)
+        out[idx] = 0.5 * np.sum(d * d, axis=1)
+    return out
 
 
 def rest_deviance(ra: RestAllan, wander_avar: np.ndarray) -> np.ndarray:
