@@ -53,6 +53,12 @@ def run_snakemake(workdir, *args, timeout=1800):
     return subprocess.run(cmd, cwd=REPO, capture_output=True, text=True, timeout=timeout)
 
 
+def session_shared_dir(tmp_path_factory, worker_id) -> Path:
+    """The test session's temporary folder that every xdist worker sees."""
+    base = tmp_path_factory.getbasetemp()
+    return base if worker_id == "master" else base.parent
+
+
 @pytest.fixture(scope="session")
 def ci_workflow(tmp_path_factory, worker_id):
     """`snakemake all` on the CI config, once per test session (the most expensive step of
@@ -63,7 +69,7 @@ def ci_workflow(tmp_path_factory, worker_id):
     needs the run makes it while holding a lock in the session's shared temporary folder,
     and the others wait for it and reuse it (the run itself uses both cores).
     """
-    shared = tmp_path_factory.getbasetemp() if worker_id == "master" else tmp_path_factory.getbasetemp().parent
+    shared = session_shared_dir(tmp_path_factory, worker_id)
     workdir, record = shared / "ci_workflow", shared / "ci_workflow.json"
     with open(shared / "ci_workflow.lock", "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
@@ -81,6 +87,24 @@ def ci_workflow(tmp_path_factory, worker_id):
         run = json.loads(record.read_text())
     assert run["returncode"] == 0, run["stderr"][-4000:]
     return workdir, run["stderr"], run["elapsed"]
+
+
+@pytest.fixture(scope="session")
+def default_dry_run(tmp_path_factory, worker_id):
+    """`snakemake -n all` on the default config (config/config.yaml) in an empty folder,
+    once per test session (~3 s of CPU a process): ``(workdir, returncode, stdout + stderr)``.
+    Its job table is what tests of the default config read (the checks pass, the grid's
+    job count); the first worker that needs it runs it under a lock, the others reuse it."""
+    shared = session_shared_dir(tmp_path_factory, worker_id)
+    workdir, record = shared / "default_dry_run", shared / "default_dry_run.json"
+    with open(shared / "default_dry_run.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
+        if not record.exists():
+            workdir.mkdir()
+            proc = run_snakemake(workdir, "-n", "all", timeout=300)
+            record.write_text(json.dumps({"returncode": proc.returncode, "out": proc.stdout + proc.stderr}))
+        run = json.loads(record.read_text())
+    return workdir, run["returncode"], run["out"]
 
 
 def copy_of_ci_workflow(ci_workflow, dest: Path) -> Path:

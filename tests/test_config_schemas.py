@@ -206,34 +206,48 @@ def test_a_missing_imutk_run_is_the_gyro_jobs_missing_input_not_a_parse_check(tm
     assert "Traceback" not in out and not (workdir / "results").exists()
 
 
-# Valid configs at the edges of the rules above (the same checks must let them through).
-EDGES = {
-    "batista2011": changed({"batista2011.calibration.runs": 2, "batista2011.filter.runs": 2,
-                            "batista2011.calibration.schedule.window_start_s": 2.0,  # = transition_s
-                            "batista2011.calibration.schedule.window_s": 20.0,  # ends with the step
-                            "batista2011.filter.steady_from_s": 0.0,
-                            "batista2011.observability.gramian_window_s": 150.0}),  # = filter.duration_s
-    "tereshkov": changed({"tereshkov.vehicle.cruise_mps": [3.0, 3.0], "tereshkov.imu.gyro_bias_dps": [0.0, 0.0],
-                         "tereshkov.vehicle.terrain_terms": 0, "tereshkov.vehicle.first_straight_s": 45.0,
-                         "tereshkov.estimator.accel_formula": "eq13", "tereshkov.estimator.turn_rate_dps": 1.01,
-                         "tereshkov.gnss.rate_hz": 10, "tereshkov.comparison.imu_rate_hz": 10,
-                         "tereshkov.sweep.kinds": ["all"], "tereshkov.sweep.steady_state_from_s": 699}),
-    "measured": changed({"measured.recordings.imucal_ferraris": {
-        "g": 9.81, "estimators": ["full_lls", "bias_lls"], "pose_selection": "all"}}),
-    "gyro": changed({"gyro.sessions": ["imucal_ferraris"], "gyro.monte_carlo.trials": 2,
-                     "gyro.ipopt_check.motions": 5, "gyro.integrators.angle_deg": 360}),
+# Valid configs at the edges of the rules above (the same checks must let them through):
+# the changes of each stage to the CI config.
+EDGE_CHANGES = {
+    "batista2011": {"batista2011.calibration.runs": 2, "batista2011.filter.runs": 2,
+                    "batista2011.calibration.schedule.window_start_s": 2.0,  # = transition_s
+                    "batista2011.calibration.schedule.window_s": 20.0,  # ends with the step
+                    "batista2011.filter.steady_from_s": 0.0,
+                    "batista2011.observability.gramian_window_s": 150.0},  # = filter.duration_s
+    "tereshkov": {"tereshkov.vehicle.cruise_mps": [3.0, 3.0], "tereshkov.imu.gyro_bias_dps": [0.0, 0.0],
+                  "tereshkov.vehicle.terrain_terms": 0, "tereshkov.vehicle.first_straight_s": 45.0,
+                  "tereshkov.estimator.accel_formula": "eq13", "tereshkov.estimator.turn_rate_dps": 1.01,
+                  "tereshkov.gnss.rate_hz": 10, "tereshkov.comparison.imu_rate_hz": 10,
+                  "tereshkov.sweep.kinds": ["all"], "tereshkov.sweep.steady_state_from_s": 699},
+    "measured": {"measured.recordings.imucal_ferraris": {
+        "g": 9.81, "estimators": ["full_lls", "bias_lls"], "pose_selection": "all"}},
+    "gyro": {"gyro.sessions": ["imucal_ferraris"], "gyro.monte_carlo.trials": 2,
+             "gyro.ipopt_check.motions": 5, "gyro.integrators.angle_deg": 360},
     # one record (3 axes: the coverage rule can fail from 2), the least factor above 1, 50 draws
-    "noise": changed({"noise.coverage.records": 1, "noise.claims.datasheet_factor": 1.001, "noise.adis.n_boot": 50,
-                      "noise.coverage.samples": 4096, "noise.claims.coverage_floor": 0.99}),
+    "noise": {"noise.coverage.records": 1, "noise.claims.datasheet_factor": 1.001, "noise.adis.n_boot": 50,
+              "noise.coverage.samples": 4096, "noise.claims.coverage_floor": 0.99},
 }
 
 
 @pytest.mark.parametrize("stage", STAGES)
-def test_valid_configs_at_the_edges_pass_the_dry_run(tmp_path, stage):
-    _, workdir, proc = dry_run(tmp_path, EDGES[stage])
+def test_valid_configs_at_the_edges_pass_the_checks(tmp_path, stage):
+    """Each stage's edges alone pass every check of the parse (check_config and the
+    schemas, in this process as for the broken configs above)."""
+    assert config_error(changed(EDGE_CHANGES[stage]), tmp_path / "config.yaml") is None
+
+
+def test_valid_configs_at_the_edges_pass_the_dry_run(tmp_path):
+    """Every stage's edges at once (they change disjoint keys) through `snakemake -n all`:
+    the command line accepts them and builds the DAG.  One process for the five stages (a
+    dry run costs ~3 s of CPU); which stage's edge a failure comes from, the message names
+    (its key) and the per-stage parse test above tells apart."""
+    changes = {k: v for stage in STAGES for k, v in EDGE_CHANGES[stage].items()}
+    assert len(changes) == sum(map(len, EDGE_CHANGES.values()))  # disjoint: no stage's edge overwritten
+    _, workdir, proc = dry_run(tmp_path, changed(changes))
     out = proc.stdout + proc.stderr
     assert proc.returncode == 0, out[-3000:]
     assert "invalid config" not in out
+    assert "Job stats" in out  # the DAG was built
     assert not (workdir / "results").exists()
 
 

@@ -43,16 +43,16 @@ def run(tmp_path, data_dir, *targets):
 
 
 def test_dag_has_every_figure_target_and_the_claims(tmp_path):
-    p = run(tmp_path, DATA, "-n", "measured")
+    # the figure targets by name in the same dry run: a name that is not a rule without
+    # wildcards (what --list-target-rules lists) fails it ("No rule to produce ...")
+    p = run(tmp_path, DATA, "-n", "measured", "measured_static_detection", "measured_calibration",
+            "measured_residuals")
     assert p.returncode == 0, p.stderr[-3000:]
     out = p.stdout + p.stderr
     for rule in ("measured_fetch", "measured_convert", "measured_calibrate", "measured_peer", "measured_tables",
                  "measured_claims", "measured_static_detection_figure", "measured_calibration_figure",
                  "measured_residuals_figure"):
         assert rule in out, rule
-    p = run(tmp_path, DATA, "--list-target-rules")
-    targets = set(p.stdout.split())
-    assert {"measured_static_detection", "measured_calibration", "measured_residuals", "measured"} <= targets
 
 
 def test_truncated_recording_fails_the_fetch_with_one_line(tmp_path):
