@@ -74,6 +74,9 @@ class RestAllan:
     dof: np.ndarray
     fs: float
     _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+    #: The same statistics at every octave from one sample up (what :mod:`.sums` fits the
+    #: short part of a sum of processes to); None on a restricted copy.
+    full: RestAllan | None = field(default=None, repr=False, compare=False)
 
     def member_avar(self, tau: float) -> np.ndarray:
         """``A_M(τ_k)`` (K,) of a unit member of the wander's grid (``tau``: its code,
@@ -125,11 +128,14 @@ def rest_allan(samples, intervals, fs: float) -> RestAllan | None:
             s2[:, k] += 0.5 * np.sum(d * d, axis=0)
             cnt[k] += nb - 1
     ms_arr = np.asarray(ms, float)
-    keep = (ms_arr >= MIN_TAU_SHARE * float(np.median(iv[:, 1] - iv[:, 0]))) & (cnt > 0)
+    some = cnt > 0
+    full = RestAllan(ms_arr[some], ms_arr[some] / fs, s2[:, some] / cnt[None, some],
+                     np.broadcast_to(2.0 * cnt[some] / 3.0, (3, int(some.sum()))).copy(), float(fs))
+    keep = (ms_arr >= MIN_TAU_SHARE * float(np.median(iv[:, 1] - iv[:, 0]))) & some
     if not keep.any():
         return None
     return RestAllan(ms_arr[keep], ms_arr[keep] / fs, s2[:, keep] / cnt[None, keep],
-                     np.broadcast_to(2.0 * cnt[keep] / 3.0, (3, int(keep.sum()))).copy(), float(fs))
+                     np.broadcast_to(2.0 * cnt[keep] / 3.0, (3, int(keep.sum()))).copy(), float(fs), full=full)
 
 
 def rest_deviance(ra: RestAllan, wander_avar: np.ndarray) -> np.ndarray:
