@@ -84,7 +84,7 @@ def main(prof_name="flicker_1x", eid="bias_drift", n_designs=6, draws=2000, boot
         a = np.sqrt(lam / float(d @ info @ d)) * d
         Z0 = rng.standard_normal((draws, m)) @ Lc.T
         Z1 = Z0 + (Xe @ a)[None, :] * 1.0
-        info, s_true = information(prof, data, prob, Sc, Lw, w, session)
+        info, s_true, Sw = information(prof, data, prob, Sc, Lw, w, session)
         out = {"design": rep, "m": m, **info, "s_true": round(s_true, 3)}
         # oracle / shape
         for name in ("oracle", "shape"):
@@ -107,6 +107,13 @@ def main(prof_name="flicker_1x", eid="bias_drift", n_designs=6, draws=2000, boot
             # the same with the white scale known (its true value: what the rests could pin)
             st1 = [ml_known_s(p, X0, Y / np.sqrt(s_true)) - ml_known_s(p, X1, Y / np.sqrt(s_true)) for Y in (Z0, Z1)]
             out[f"{name}_s_known"] = power(*st1, level)
+            # and with the true per-pose white variances too (the oracle's white part): the
+            # problem rewritten in the contrasts that whiten it, s = 1
+            pw = whitened(p, Sw)
+            R = np.linalg.cholesky(np.linalg.inv(Sw)).T
+            X1w = np.hstack([pw.X0, R @ Xe])
+            st2 = [ml_known_s(pw, pw.X0, Y @ R.T) - ml_known_s(pw, X1w, Y @ R.T) for Y in (Z0, Z1)]
+            out[f"{name}_white_known"] = power(*st2, level)
             if boot:
                 for under in (0, 1):
                     pv = [boot_p(p, X0, X1, Y[:boot], under, rng) for Y in (Z0, Z1)]
@@ -118,6 +125,13 @@ def main(prof_name="flicker_1x", eid="bias_drift", n_designs=6, draws=2000, boot
     keys = [k for k in rows[0] if k not in ("design", "m")]
     print(prof_name, eid, "mean size-adjusted power at 1x oracle MDE over", len(rows), "designs, ", draws,
           "draws each:", {k: round(float(np.mean([r[k] for r in rows])), 3) for k in keys})
+
+
+def whitened(p, Sw):
+    """``p`` in the contrasts ``R y`` that whiten the true white part ``Sw`` (``RᵀR = Sw⁻¹``)."""
+    R = np.linalg.cholesky(np.linalg.inv(Sw)).T
+    q = dataclasses.replace(p, y=R @ p.y, X0=R @ p.X0, L=p.L @ R.T)
+    return q.with_taus(p.taus) if p.common == p.common else q
 
 
 def ml_known_s(p, X, Y):
@@ -179,7 +193,7 @@ def information(prof, data, prob, Sc, Lw, w, session):
         A = (prof.white[a] ** 2 + 1.0 / 12.0) / ra.m + A_w
         i_rest += float(np.sum(ra.dof[a] / 2 * (A_w / A) ** 2))
     # the true white scale of these contrasts (the detection's standard errors are not exact)
-    return {"info_pose": round(i_pose, 2), "info_rest": round(i_rest, 2)}, float(np.trace(Sw)) / Sw.shape[0]
+    return {"info_pose": round(i_pose, 2), "info_rest": round(i_rest, 2)}, float(np.trace(Sw)) / Sw.shape[0], Sw
 
 
 def power(s0, s1, level):
