@@ -90,6 +90,12 @@ def fit_short(ra: RestAllan | None) -> ShortPart | None:
     (no rests, too few octaves, or no evidence beyond white noise: :data:`SHORT_EVIDENCE`)."""
     if ra is None or ra.taus.size < 3:
         return None
+    if "short" not in ra._cache:  # the rests are the same in every round of the loop
+        ra._cache["short"] = _fit_short(ra)
+    return ra._cache["short"]
+
+
+def _fit_short(ra: RestAllan) -> ShortPart | None:
     from_white = float(rest_deviance(ra, np.zeros(ra.taus.size)))
     taus = short_taus(ra)
     unit = np.stack([ra.member_avar(t) for t in taus])                             # (T, K)
