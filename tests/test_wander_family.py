@@ -96,7 +96,7 @@ def test_too_short_rests_give_no_statistic():
 def test_wander_family_is_checked_and_the_old_one_stays_selectable():
     with pytest.raises(AccelcalError, match="wander_family"):
         Rules(wander_family="two_gm")
-    assert set(WANDER_FAMILIES) == {"one_process", "flicker", "flicker_rests"}
+    assert set(WANDER_FAMILIES) == {"one_process", "flicker", "flicker_rests", "sum"}
     assert dataclasses.replace(Rules(), wander_family="one_process").wander_family == "one_process"
     assert isinstance(rest_allan(np.ones((400, 3)), np.array([[0, 400]]), FS), RestAllan)
 

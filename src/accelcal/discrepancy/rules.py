@@ -36,8 +36,10 @@ def null_name(null: str) -> str:
 #: stands for a sum of processes spread over the decades (:data:`.wander.FLICKER`);
 #: ``flicker_rests`` the same members chosen by the joint likelihood of the pose residuals
 #: and the rests' own samples (:mod:`.wander.rests`; as ``flicker`` when the pose data do
-#: not carry the rests).
-WANDER_FAMILIES = ("one_process", "flicker", "flicker_rests")
+#: not carry the rests); ``sum`` a sum of processes: ``flicker``'s members for the long
+#: part, plus a short Gauss–Markov component pinned by the rests' Allan variances when they
+#: show one (:mod:`.wander.sums`).
+WANDER_FAMILIES = ("one_process", "flicker", "flicker_rests", "sum")
 
 
 @dataclass(frozen=True)

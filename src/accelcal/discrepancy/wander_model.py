@@ -17,6 +17,7 @@ from ..errors import AccelcalError
 from ..jsonsafe import is_finite
 from . import wander as C
 from .fit import Fit, PoseData, evaluate
+from .wander.sums import fit_short, pinned
 from .stochastic.implication import centred_pose_variance, pose_difference_variance
 
 
@@ -48,6 +49,9 @@ def linearise_noise(data: PoseData, f: Fit, family: str = "flicker") -> tuple[C.
     starts, durations, _ = intervals(data)
     taus = C.tau_grid(durations, float(np.max(starts + durations) - np.min(starts)), flicker=family != "one_process")
     prob = linearise(data, f, taus=taus, common=None, rests=family == "flicker_rests")
+    if family == "sum":  # the short part pinned by the rests (:mod:`.wander.sums`)
+        short = fit_short(data.rests.full if data.rests is not None else None)
+        prob = pinned(prob, short) if short is not None else prob
     return C.fit_common(prob, prob.X0)
 
 

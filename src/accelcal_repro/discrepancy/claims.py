@@ -37,7 +37,7 @@ from ..claims import (COLUMNS, Claim, MinimumSample, Scale, bootstrap_rule_minim
                       power_rule_minimum, rank_rule_minimum, rate_lower_rule_minimum, rate_upper_rule_minimum,
                       upper_end_with_no_success, validate_rows)
 from .benchmark import NONE, OUTLIER
-from .scoring import clopper_pearson
+from .scoring import REFERENCE, clopper_pearson
 
 SUMMARY = "results/discrepancy/benchmark/summary.csv"
 ADIS_CHECK = "results/discrepancy/adis/session_check_summary.csv"
@@ -399,6 +399,7 @@ def _accuracy_rows(summary, power, nulls) -> list[dict]:
 
 def _oracle_row(summary: pd.DataFrame, nulls) -> dict:
     d = summary[(summary.null == "wander") & (summary.metric == "oracle_agreement")]
+    d = d[d.verdict != REFERENCE]  # real-record profiles: their "oracle" is a fitted model (scoring.REFERENCE_RULE)
     if "wander" not in nulls or not len(d):
         return ORACLE_AGREEMENT.not_reproducible("the benchmark ran no oracle beside the wander null "
                                                  "(discrepancy.benchmark.oracle)")

@@ -74,6 +74,21 @@ class RestAllan:
     dof: np.ndarray
     fs: float
     _cache: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+    #: ``(samples, intervals)`` the statistics came from: :attr:`full` computes its octaves
+    #: from them on first use (only the ``sum`` family needs them, and the short octaves
+    #: cost the most); None on a copy that has no source.
+    source: tuple | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def full(self) -> RestAllan | None:
+        """The same statistics at every octave from one sample up (what :mod:`.sums` fits
+        the short part of a sum of processes to); computed once, on first use."""
+        if self.source is None:
+            return None
+        if "full" not in self._cache:
+            x, iv = self.source
+            self._cache["full"] = _allan_at(x, iv, _octaves(iv), self.fs)
+        return self._cache["full"]
 
     def member_avar(self, tau: float) -> np.ndarray:
         """``A_M(τ_k)`` (K,) of a unit member of the wander's grid (``tau``: its code,
@@ -109,9 +124,7 @@ def rest_allan(samples, intervals, fs: float) -> RestAllan | None:
     x = np.asarray(samples, float)
     iv = np.asarray(intervals, int)
     lengths = iv[:, 1] - iv[:, 0]
-    longest = int(np.max(lengths)) if len(iv) else 0
-    ms = [1 << j for j in range(int(math.log2(max(longest // MIN_BLOCKS, 1))) + 1)]
-    ms = [m for m in ms if longest // m >= MIN_BLOCKS]
+    ms = _octaves(iv)
     if not ms or not np.all(np.isfinite(x)) or not fs > 0:
         return None
     # only the octaves the deviance keeps (the longest rest has blocks at every one of ms);
@@ -119,6 +132,20 @@ def rest_allan(samples, intervals, fs: float) -> RestAllan | None:
     ms = [m for m in ms if m >= MIN_TAU_SHARE * float(np.median(lengths))]
     if not ms:
         return None
+    return _allan_at(x, iv, ms, float(fs), source=(x, iv))
+
+
+def _octaves(iv: np.ndarray) -> list[int]:
+    """Every octave ``m`` (a power of two) at which the longest rest has :data:`MIN_BLOCKS` blocks."""
+    longest = int(np.max(iv[:, 1] - iv[:, 0])) if len(iv) else 0
+    ms = [1 << j for j in range(int(math.log2(max(longest // MIN_BLOCKS, 1))) + 1)]
+    return [m for m in ms if longest // m >= MIN_BLOCKS]
+
+
+def _allan_at(x: np.ndarray, iv: np.ndarray, ms, fs: float, source: tuple | None = None) -> RestAllan:
+    """:class:`RestAllan` of ``x`` over the rests ``iv`` at the octaves ``ms`` (each held by
+    the longest rest)."""
+    lengths = iv[:, 1] - iv[:, 0]
     s2, cnt = np.zeros((3, len(ms))), np.zeros(len(ms))
     for k, m in enumerate(ms):
         parts = _octave_sums(x, iv, lengths, m)          # (n_rests, 3), zero where a rest has too few blocks
@@ -127,7 +154,7 @@ def rest_allan(samples, intervals, fs: float) -> RestAllan | None:
         cnt[k] = float(np.sum(np.where(lengths // m >= MIN_BLOCKS, lengths // m - 1, 0)))
     ms_arr = np.asarray(ms, float)
     return RestAllan(ms_arr, ms_arr / fs, s2 / cnt[None, :], np.broadcast_to(2.0 * cnt / 3.0, (3, len(ms))).copy(),
-                     float(fs))
+                     float(fs), source=source)
 
 
 def _octave_sums(x: np.ndarray, iv: np.ndarray, lengths: np.ndarray, m: int) -> np.ndarray:
