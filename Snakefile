@@ -3,7 +3,8 @@ project's own stages (measured data, discrepancy, gyroscope, noise, benchmark).
 
     .venv/bin/snakemake all                               # paper scale (profiles/default)
     .venv/bin/snakemake all --configfile config/ci.yaml   # reduced sizes (tests, CI)
-    .venv/bin/snakemake burkhard2024_fig1a                # one figure (every figure id is a target)
+    .venv/bin/snakemake burkhard2024_fig1a                # a figure (every figure id is a target; one job
+                                                          # per stage draws it with the stage's other figures)
 
 Layout (snakemake-workflows style): this file loads and validates the config, then
 includes one rule file per stage from workflow/rules/; the final targets are gathered from

@@ -2,7 +2,7 @@
 against the CRLB and the full LLS, the online bias/gravity Kalman filter (Figs. 4-8), its
 observability condition, its cost per step, and the paper's claims.
 
-Needs from common.smk: declare_stage, results, log_path, bench_path, figure_files, figure_outputs,
+Needs from common.smk: declare_stage, stage_figures, results, log_path, bench_path, figure_files, figure_outputs,
 SMALL; config["batista2011"] (section batista2011 of config/config.yaml)."""
 
 BATISTA = config["batista2011"]
@@ -253,30 +253,16 @@ rule batista2011_observability_mc:
         "../scripts/batista2011_observability.py"
 
 
-# One plotting rule per figure (rule name <id>_plot): results/figures/<id>.png|pdf.
-for _fid in BATISTA_STAGE.figures:
-
-    rule:
-        name:
-            f"{_fid}_plot"
-        input:
-            **BATISTA_FIGURE_INPUTS[_fid],
-        output:
-            **figure_outputs(_fid, f"../report/{_fid}.rst", "Batista 2011"),
-        params:
-            # what the figures read: the designs and filters they draw, the thresholds of the calibration figure
-            cfg=config_keys(BATISTA, "seed", "g", "calibration", "filter", "observability", "claims.mean_threshold",
-                            "claims.std_threshold"),
-            figure=_fid,
-        log:
-            log_path(f"batista2011/figure_{_fid}"),
-        benchmark:
-            bench_path(f"batista2011/figure_{_fid}"),
-        threads: 1
-        resources:
-            **SMALL,
-        script:
-            "../scripts/batista2011_figures.py"
+# One job draws every figure (rule batista2011_figures, common.smk's stage_figures).
+stage_figures(
+    BATISTA_STAGE,
+    BATISTA_FIGURE_INPUTS,
+    "Batista 2011",
+    "../scripts/batista2011_figures.py",
+    # what the figures read: the designs and filters they draw, the thresholds of the calibration figure
+    params=dict(cfg=config_keys(BATISTA, "seed", "g", "calibration", "filter", "observability",
+                                "claims.mean_threshold", "claims.std_threshold")),
+)
 
 
 rule batista2011_claims:

@@ -270,3 +270,37 @@ def figure_outputs(figure_id, caption, category):
 
 #: Resources of small jobs (plots, gathering tables): mem_mb [MB], runtime [min].
 SMALL = {"mem_mb": 1000, "runtime": 10}
+
+
+def stage_figures(stage, inputs, category, script_path, params=None, captions=None, resources=SMALL):
+    """Rule ``<stage>_figures``: one job draws every figure of ``stage``.
+
+    A figure takes well under a second to draw but about 2 s of CPU to start (Python, pandas,
+    pyplot, the stage's package): one job per figure spent most of its time starting.  Each
+    figure id stays a target (declare_stage), as does its PNG or PDF path; asking for one
+    runs this job, which draws its siblings too.  ``inputs`` maps each figure id to its named
+    inputs; the job's input keys are ``<id>__<key>`` and its outputs ``<id>__png`` and
+    ``<id>__pdf``, which the script takes apart with _helpers.stage_figures.  ``captions``:
+    a figure's caption file where it is not ../report/<id>.rst."""
+    captions = captions or {}
+
+    rule:
+        name:
+            f"{stage.name}_figures"
+        input:
+            **{f"{fid}__{key}": path for fid in stage.figures for key, path in inputs[fid].items()},
+        output:
+            **{f"{fid}__{ext}": path for fid in stage.figures
+               for ext, path in figure_outputs(fid, captions.get(fid, f"../report/{fid}.rst"), category).items()},
+        params:
+            figures=list(stage.figures),
+            **(params or {}),
+        log:
+            log_path(f"{stage.name}/figures"),
+        benchmark:
+            bench_path(f"{stage.name}/figures"),
+        threads: 1
+        resources:
+            **resources,
+        script:
+            script_path  # not `script`: Snakemake's rule body calls a function of that name

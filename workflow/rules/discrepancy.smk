@@ -11,14 +11,14 @@ term is missing, and a benchmark under realistic noise that scores it.
   key); ``discrepancy_score`` joins detections and key; ``discrepancy_timing`` records
   the benchmark's job-seconds.
 * Measured: ``discrepancy_measured_report`` runs both layers (what ``accelcal
-  discrepancy`` does) on the canonical CSV of a measured recording (rule measured_convert).
+  discrepancy`` does) on the canonical CSV of a measured recording (rule measured_fetch writes it).
 * results/discrepancy/summary.csv: the benchmark's findings and those on the real
   recordings; results/claims/discrepancy.csv: the claims.
 
 Config: section ``discrepancy`` (its cross-key rules: _check_discrepancy, common.smk).
-Needs from common.smk: declare_stage, results, log_path, bench_path, figure_files,
+Needs from common.smk: declare_stage, stage_figures, results, log_path, bench_path, figure_files,
 figure_outputs, MEASURED_CSV, MEASURED_SUMMARY, measured_data_dir, fitted_to_xsens, SMALL;
-from measured.smk: rule measured_convert and the ``measured`` config (g of each
+from measured.smk: rule measured_fetch (the canonical CSV) and the ``measured`` config (g of each
 recording), read from the config only, so that the includes work in any order.
 """
 
@@ -284,9 +284,8 @@ rule discrepancy_timing:
     benchmark files: not byte-identical on a rerun (hence 'timing' in the name)."""
     input:
         chunks=expand(bench_path("discrepancy/chunk_{chunk}"), chunk=DISCREPANCY_CHUNKS),
-        other=[bench_path(f"discrepancy/{j}") for j in ("adis", "profiles", "score", "discrepancy_fpr_figure",
-                                                        "discrepancy_confusion_figure", "discrepancy_power_figure",
-                                                        "discrepancy_rows_figure")],
+        # the stage's one figure job draws the benchmark's four figures and six others
+        other=[bench_path(f"discrepancy/{j}") for j in ("adis", "profiles", "score", "figures")],
     output:
         f"{BENCH_DIR}/timing.csv",
     params:
@@ -450,7 +449,7 @@ rule discrepancy_claims:
 
 
 # --------------------------------------------------------------------------- figures
-# One script draws every figure of the stage; the figure id is a param.  Inputs per figure:
+# One job draws every figure of the stage (common.smk's stage_figures).  Inputs per figure:
 DISCREPANCY_FIGURE_INPUTS = {
     "discrepancy_fpr": {"summary": BENCH_SUMMARY, "profiles": BENCH_PROFILES},
     "discrepancy_confusion": {"scores": f"{BENCH_DIR}/scores.csv.gz"},
@@ -467,32 +466,20 @@ DISCREPANCY_FIGURE_INPUTS = {
 }
 
 
-for _fid in DISCREPANCY_STAGE.figures:
-
-    rule:
-        name:
-            f"{_fid}_figure"
-        input:
-            **DISCREPANCY_FIGURE_INPUTS[_fid],
-        output:
-            **figure_outputs(_fid, f"../report/{_fid}.rst", "Discrepancy"),
-        params:
-            figure=_fid,
-            rules=DISCREPANCY["rules"],
-            confusion_size=DISCREPANCY_BENCH["confusion_size_mde"],
-            profiles=DISCREPANCY_PROFILES,
-            curve_profiles=DISCREPANCY_BENCH["power_curve"]["profiles"],
-            sizes=DISCREPANCY_BENCH["sizes_mde"],
-            recordings=DISCREPANCY_RECORDINGS,
-        log:
-            log_path(f"discrepancy/{_fid}_figure"),
-        benchmark:
-            bench_path(f"discrepancy/{_fid}_figure"),
-        threads: 1
-        resources:
-            **SMALL,
-        script:
-            "../scripts/discrepancy_figure.py"
+stage_figures(
+    DISCREPANCY_STAGE,
+    DISCREPANCY_FIGURE_INPUTS,
+    "Discrepancy",
+    "../scripts/discrepancy_figure.py",
+    params=dict(
+        rules=DISCREPANCY["rules"],
+        confusion_size=DISCREPANCY_BENCH["confusion_size_mde"],
+        profiles=DISCREPANCY_PROFILES,
+        curve_profiles=DISCREPANCY_BENCH["power_curve"]["profiles"],
+        sizes=DISCREPANCY_BENCH["sizes_mde"],
+        recordings=DISCREPANCY_RECORDINGS,
+    ),
+)
 
 
 rule discrepancy_benchmark:

@@ -13,7 +13,7 @@ Config: the `gyro` mapping (workflow/schemas/gyro.schema.yaml).
 The data are fetched by a job per dataset (gyro_fetch: the shared copy, else a verified
 download), as the measured stage's.
 
-Needs from common.smk: declare_stage, results, log_path, bench_path, figure_files,
+Needs from common.smk: declare_stage, stage_figures, results, log_path, bench_path, figure_files,
 figure_outputs, measured_data_dir, SMALL; the `measured` config's resources_dir.
 """
 
@@ -258,59 +258,18 @@ rule gyro_claims:
         "../scripts/gyro_claims.py"
 
 
-rule gyro_integrator_bias_figure:
-    input:
-        table=results("gyro/integrators.csv"),
-    output:
-        **figure_outputs("gyro_integrator_bias", "../report/gyro_integrator_bias.rst", "Gyroscope"),
-    params:
-        figure="gyro_integrator_bias",
-    log:
-        log_path("gyro/integrator_bias_figure"),
-    benchmark:
-        bench_path("gyro/integrator_bias_figure"),
-    threads: 1
-    resources:
-        **SMALL,
-    script:
-        "../scripts/gyro_figure.py"
-
-
-rule gyro_crlb_figure:
-    input:
-        table=results("gyro/montecarlo.csv"),
-    output:
-        **figure_outputs("gyro_crlb", "../report/gyro_crlb.rst", "Gyroscope"),
-    params:
-        figure="gyro_crlb",
-    log:
-        log_path("gyro/crlb_figure"),
-    benchmark:
-        bench_path("gyro/crlb_figure"),
-    threads: 1
-    resources:
-        **SMALL,
-    script:
-        "../scripts/gyro_figure.py"
-
-
-rule gyro_figure_of_merit_figure:
-    input:
-        table=results("gyro/sessions/figure_of_merit.csv"),
-        imucal=results("gyro/sessions/imucal_figure_of_merit.csv"),
-    output:
-        **figure_outputs("gyro_figure_of_merit", "../report/gyro_figure_of_merit.rst", "Gyroscope"),
-    params:
-        figure="gyro_figure_of_merit",
-    log:
-        log_path("gyro/figure_of_merit_figure"),
-    benchmark:
-        bench_path("gyro/figure_of_merit_figure"),
-    threads: 1
-    resources:
-        **SMALL,
-    script:
-        "../scripts/gyro_figure.py"
+# One job draws every figure (rule gyro_figures, common.smk's stage_figures).
+stage_figures(
+    GYRO_STAGE,
+    {
+        "gyro_integrator_bias": {"table": results("gyro/integrators.csv")},
+        "gyro_crlb": {"table": results("gyro/montecarlo.csv")},
+        "gyro_figure_of_merit": {"table": results("gyro/sessions/figure_of_merit.csv"),
+                                 "imucal": results("gyro/sessions/imucal_figure_of_merit.csv")},
+    },
+    "Gyroscope",
+    "../scripts/gyro_figure.py",
+)
 
 
 rule gyro:

@@ -6,7 +6,7 @@ a peer).  Config: the `measured` mapping (section `measured` of config/config.ya
 The data are fetched by a job (measured_fetch: the shared copy, else a verified download),
 run first; stages that do not need them plan and run without them.
 
-Needs from common.smk: declare_stage, results, log_path, bench_path, figure_files, figure_outputs,
+Needs from common.smk: declare_stage, stage_figures, results, log_path, bench_path, figure_files, figure_outputs,
 MEASURED_CSV, MEASURED_SUMMARY, measured_data_dir, SMALL.
 """
 
@@ -47,13 +47,17 @@ wildcard_constraints:
 
 rule measured_fetch:
     """Locate (shared copy) or download and verify (sha256) every file of one recording;
-    the manifest records which path was used.  No data file enters the repository.
+    the manifest records which path was used.  No data file enters the repository.  The
+    same job writes the recording as the canonical CSV of the CLI (t,ax,ay,az; file units),
+    which the discrepancy stage and the figures read: a job of its own spent most of its
+    CPU starting (0.3 s to read and write against ~1 s of Python and Snakemake per job).
     High priority: when a download is needed it runs first, before the long Monte Carlo
     jobs, so that a failing download stops the run early."""
     priority: 100
-    localrule: True  # on a cluster: the login node (internet access; a checksum when the data is local)
+    localrule: True  # on a cluster: the login node (internet access; a checksum and one read when the data is local)
     output:
-        MEASURED_MANIFEST,
+        manifest=MEASURED_MANIFEST,
+        csv=MEASURED_CSV,
     params:
         data_dir=measured_data_dir(),
         resources_dir=MEASURED["resources_dir"],
@@ -67,23 +71,6 @@ rule measured_fetch:
         runtime=10,  # a download of at most 3.3 MB
     script:
         "../scripts/measured_fetch.py"
-
-
-rule measured_convert:
-    """The recording in the canonical CSV of the CLI (t,ax,ay,az; file units)."""
-    input:
-        manifest=MEASURED_MANIFEST,
-    output:
-        MEASURED_CSV,
-    log:
-        log_path("measured/convert_{recording}"),
-    benchmark:
-        bench_path("measured/convert_{recording}"),
-    threads: 1
-    resources:
-        **SMALL,
-    script:
-        "../scripts/measured_convert.py"
 
 
 rule measured_calibrate:
@@ -169,63 +156,19 @@ rule measured_claims:
         "../scripts/measured_claims.py"
 
 
-rule measured_static_detection_figure:
-    input:
-        csv=expand(MEASURED_CSV, recording=MEASURED_RECORDINGS),
-        poses=results("measured/poses.csv"),
-    output:
-        **figure_outputs("measured_static_detection", "../report/measured_static_detection.rst", "Measured data"),
-    params:
-        figure="measured_static_detection",
-        recordings=MEASURED_RECORDINGS,
-    log:
-        log_path("measured/static_detection_figure"),
-    benchmark:
-        bench_path("measured/static_detection_figure"),
-    threads: 1
-    resources:
-        **SMALL,
-    script:
-        "../scripts/measured_figure.py"
-
-
-rule measured_calibration_figure:
-    input:
-        params=results("measured/params.csv"),
-        peer=MEASURED_PEER,
-    output:
-        **figure_outputs("measured_calibration", "../report/measured_calibration.rst", "Measured data"),
-    params:
-        figure="measured_calibration",
-        recordings=MEASURED_RECORDINGS,
-    log:
-        log_path("measured/calibration_figure"),
-    benchmark:
-        bench_path("measured/calibration_figure"),
-    threads: 1
-    resources:
-        **SMALL,
-    script:
-        "../scripts/measured_figure.py"
-
-
-rule measured_residuals_figure:
-    input:
-        pose_errors=results("measured/pose_errors.csv"),
-    output:
-        **figure_outputs("measured_residuals", "../report/measured_residuals.rst", "Measured data"),
-    params:
-        figure="measured_residuals",
-        recordings=MEASURED_RECORDINGS,
-    log:
-        log_path("measured/residuals_figure"),
-    benchmark:
-        bench_path("measured/residuals_figure"),
-    threads: 1
-    resources:
-        **SMALL,
-    script:
-        "../scripts/measured_figure.py"
+# One job draws every figure (rule measured_figures, common.smk's stage_figures).
+stage_figures(
+    MEASURED_STAGE,
+    {
+        "measured_static_detection": {"csv": expand(MEASURED_CSV, recording=MEASURED_RECORDINGS),
+                                      "poses": results("measured/poses.csv")},
+        "measured_calibration": {"params": results("measured/params.csv"), "peer": MEASURED_PEER},
+        "measured_residuals": {"pose_errors": results("measured/pose_errors.csv")},
+    },
+    "Measured data",
+    "../scripts/measured_figure.py",
+    params=dict(recordings=MEASURED_RECORDINGS),
+)
 
 
 rule measured:

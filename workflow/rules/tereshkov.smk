@@ -3,7 +3,7 @@ estimator on simulated tractor runs — Monte Carlo convergence and accuracy, st
 turning observability, the artificial-bias test, an installation-angle sweep, the
 stage's claims and figures.  Config: the `tereshkov` mapping (section `tereshkov` of config/config.yaml).
 
-Needs from common.smk: declare_stage, results, log_path, bench_path, figure_files, figure_outputs,
+Needs from common.smk: declare_stage, stage_figures, results, log_path, bench_path, figure_files, figure_outputs,
 SMALL.
 """
 
@@ -225,89 +225,6 @@ rule tereshkov_claims:
         "../scripts/tereshkov_claims.py"
 
 
-rule tereshkov_fig2_figure:
-    input:
-        headings=f"{TERESHKOV_DIR}/headings.csv",
-    output:
-        **figure_outputs("tereshkov_fig2", "../report/tereshkov_fig2.rst", "Tereshkov"),
-    params:
-        figure="fig2",
-        cfg=config_keys(TERESHKOV, *TERESHKOV_FIGURE_KEYS),
-    log:
-        log_path("tereshkov/fig2"),
-    benchmark:
-        bench_path("tereshkov/fig2"),
-    threads: 1
-    resources:
-        **SMALL,
-    script:
-        "../scripts/tereshkov_figure.py"
-
-
-rule tereshkov_fig3_figure:
-    input:
-        field=f"{TERESHKOV_DIR}/field.csv.gz",
-        straight=f"{TERESHKOV_DIR}/straight.csv.gz",
-        summary=f"{TERESHKOV_DIR}/summary.csv",
-    output:
-        **figure_outputs("tereshkov_fig3", "../report/tereshkov_fig3.rst", "Tereshkov"),
-    params:
-        figure="fig3",
-        cfg=config_keys(TERESHKOV, *TERESHKOV_FIGURE_KEYS),
-    log:
-        log_path("tereshkov/fig3"),
-    benchmark:
-        bench_path("tereshkov/fig3"),
-    threads: 1
-    resources:
-        mem_mb=2000,
-        runtime=10,
-    script:
-        "../scripts/tereshkov_figure.py"
-
-
-rule tereshkov_fig4_figure:
-    input:
-        field=f"{TERESHKOV_DIR}/field.csv.gz",
-        straight=f"{TERESHKOV_DIR}/straight.csv.gz",
-        artificial=f"{TERESHKOV_DIR}/artificial.csv.gz",
-        summary=f"{TERESHKOV_DIR}/summary.csv",
-    output:
-        **figure_outputs("tereshkov_fig4", "../report/tereshkov_fig4.rst", "Tereshkov"),
-    params:
-        figure="fig4",
-        cfg=config_keys(TERESHKOV, *TERESHKOV_FIGURE_KEYS),
-    log:
-        log_path("tereshkov/fig4"),
-    benchmark:
-        bench_path("tereshkov/fig4"),
-    threads: 1
-    resources:
-        mem_mb=2000,
-        runtime=10,
-    script:
-        "../scripts/tereshkov_figure.py"
-
-
-rule tereshkov_installation_figure:
-    input:
-        sweep=f"{TERESHKOV_DIR}/sweep_summary.csv",
-    output:
-        **figure_outputs("tereshkov_installation", "../report/tereshkov_installation.rst", "Tereshkov"),
-    params:
-        figure="installation",
-        cfg=config_keys(TERESHKOV, *TERESHKOV_FIGURE_KEYS),
-    log:
-        log_path("tereshkov/installation"),
-    benchmark:
-        bench_path("tereshkov/installation"),
-    threads: 1
-    resources:
-        **SMALL,
-    script:
-        "../scripts/tereshkov_figure.py"
-
-
 # ---------------------------------------------------------------------------- comparison
 # Tereshkov against the Batista et al. (2011) Kalman filter on the same simulated runs.
 
@@ -337,24 +254,26 @@ rule tereshkov_comparison:
         "../scripts/tereshkov_comparison.py"
 
 
-rule bias_convergence_comparison_figure:
-    input:
-        table=f"{TERESHKOV_DIR}/comparison.csv.gz",
-        summary=f"{TERESHKOV_DIR}/comparison_summary.csv",
-    output:
-        **figure_outputs("bias_convergence_comparison", "../report/tereshkov_comparison.rst", "Tereshkov"),
-    params:
-        figure="comparison",
-        cfg=config_keys(TERESHKOV, *TERESHKOV_FIGURE_KEYS),
-    log:
-        log_path("tereshkov/comparison_figure"),
-    benchmark:
-        bench_path("tereshkov/comparison_figure"),
-    threads: 1
-    resources:
-        **SMALL,
-    script:
-        "../scripts/tereshkov_figure.py"
+# One job draws every figure (rule tereshkov_figures, common.smk's stage_figures).
+stage_figures(
+    TERESHKOV_STAGE,
+    {
+        "tereshkov_fig2": {"headings": f"{TERESHKOV_DIR}/headings.csv"},
+        "tereshkov_fig3": {"field": f"{TERESHKOV_DIR}/field.csv.gz", "straight": f"{TERESHKOV_DIR}/straight.csv.gz",
+                           "summary": f"{TERESHKOV_DIR}/summary.csv"},
+        "tereshkov_fig4": {"field": f"{TERESHKOV_DIR}/field.csv.gz", "straight": f"{TERESHKOV_DIR}/straight.csv.gz",
+                           "artificial": f"{TERESHKOV_DIR}/artificial.csv.gz",
+                           "summary": f"{TERESHKOV_DIR}/summary.csv"},
+        "tereshkov_installation": {"sweep": f"{TERESHKOV_DIR}/sweep_summary.csv"},
+        "bias_convergence_comparison": {"table": f"{TERESHKOV_DIR}/comparison.csv.gz",
+                                        "summary": f"{TERESHKOV_DIR}/comparison_summary.csv"},
+    },
+    "Tereshkov",
+    "../scripts/tereshkov_figure.py",
+    params=dict(cfg=config_keys(TERESHKOV, *TERESHKOV_FIGURE_KEYS)),
+    captions={"bias_convergence_comparison": "../report/tereshkov_comparison.rst"},
+    resources={"mem_mb": 2000, "runtime": 10},
+)
 
 
 rule tereshkov:

@@ -16,6 +16,7 @@ import logging
 import os
 import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import yaml
 
@@ -101,6 +102,18 @@ def mock_snakemake_from_argv(default_rule: str, **default_wildcards):
     rule = args.pop(0) if args and "=" not in args[0] else default_rule
     wildcards = {**default_wildcards, **dict(a.split("=", 1) for a in args)}
     return mock_snakemake(rule, **wildcards)
+
+
+def stage_figures(snakemake):
+    """``(figure id, input, output)`` for each figure of a stage's figure job (common.smk's
+    stage_figures): ``input`` holds that figure's named inputs under their own keys and
+    ``output`` its ``png`` and ``pdf`` paths."""
+    for fid in snakemake.params.figures:
+        prefix = f"{fid}__"
+        inp = SimpleNamespace(**{k.removeprefix(prefix): v for k, v in snakemake.input.items() if k.startswith(prefix)})
+        out = SimpleNamespace(png=getattr(snakemake.output, f"{prefix}png"),
+                              pdf=getattr(snakemake.output, f"{prefix}pdf"))
+        yield fid, inp, out
 
 
 def configure_logging(snakemake, level=logging.INFO) -> logging.Logger:

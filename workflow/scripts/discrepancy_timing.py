@@ -14,7 +14,7 @@ rows = []
 for path in [*snakemake.input.chunks, *snakemake.input.other]:
     b = pd.read_csv(path, sep="\t")
     job = Path(path).stem
-    rows.append({"job": job, "kind": "chunk" if job.startswith("chunk_") else ("figure" if job.endswith("_figure") else job),
+    rows.append({"job": job, "kind": "chunk" if job.startswith("chunk_") else ("figure" if job == "figures" else job),
                  "wall_s": float(b["s"].iloc[-1]),
                  "cpu_s": float(b["cpu_time"].iloc[-1]), "max_rss_mb": float(b["max_rss"].iloc[-1]),
                  "mean_load": float(b["mean_load"].iloc[-1])})
