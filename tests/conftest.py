@@ -59,6 +59,20 @@ def session_shared_dir(tmp_path_factory, worker_id) -> Path:
     return base if worker_id == "master" else base.parent
 
 
+def once_per_session(tmp_path_factory, worker_id, name, make):
+    """``(workdir, record)``: ``make(workdir)`` (a JSON-able record) run once per test session
+    in the session's shared temporary folder.  The first worker that needs it makes it while
+    holding a lock; the others wait for it and read its record."""
+    shared = session_shared_dir(tmp_path_factory, worker_id)
+    workdir, record = shared / name, shared / f"{name}.json"
+    with open(shared / f"{name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
+        if not record.exists():
+            workdir.mkdir()
+            record.write_text(json.dumps(make(workdir)))
+        return workdir, json.loads(record.read_text())
+
+
 @pytest.fixture(scope="session")
 def ci_workflow(tmp_path_factory, worker_id):
     """`snakemake all` on the CI config, once per test session (the most expensive step of
@@ -69,22 +83,17 @@ def ci_workflow(tmp_path_factory, worker_id):
     needs the run makes it while holding a lock in the session's shared temporary folder,
     and the others wait for it and reuse it (the run itself uses both cores).
     """
-    shared = session_shared_dir(tmp_path_factory, worker_id)
-    workdir, record = shared / "ci_workflow", shared / "ci_workflow.json"
-    with open(shared / "ci_workflow.lock", "w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
-        if not record.exists():
-            workdir.mkdir()
-            t0 = time.perf_counter()
-            try:  # generous: a loaded machine must make the run slow, not fail it
-                proc = run_snakemake(workdir, "all", "--configfile", CI_CONFIG, timeout=CI_RUN_TIMEOUT_S)
-                returncode, stderr = proc.returncode, proc.stderr
-            except subprocess.TimeoutExpired as e:  # recorded, so the other workers fail the same way
-                err = e.stderr.decode(errors="replace") if isinstance(e.stderr, bytes) else e.stderr or ""
-                returncode, stderr = -1, f"CI workflow run timed out after {e.timeout} s\n{err}"
-            record.write_text(json.dumps({"returncode": returncode, "stderr": stderr,
-                                          "elapsed": time.perf_counter() - t0}))
-        run = json.loads(record.read_text())
+    def make(workdir):
+        t0 = time.perf_counter()
+        try:  # generous: a loaded machine must make the run slow, not fail it
+            proc = run_snakemake(workdir, "all", "--configfile", CI_CONFIG, timeout=CI_RUN_TIMEOUT_S)
+            returncode, stderr = proc.returncode, proc.stderr
+        except subprocess.TimeoutExpired as e:  # recorded, so the other workers fail the same way
+            err = e.stderr.decode(errors="replace") if isinstance(e.stderr, bytes) else e.stderr or ""
+            returncode, stderr = -1, f"CI workflow run timed out after {e.timeout} s\n{err}"
+        return {"returncode": returncode, "stderr": stderr, "elapsed": time.perf_counter() - t0}
+
+    workdir, run = once_per_session(tmp_path_factory, worker_id, "ci_workflow", make)
     assert run["returncode"] == 0, run["stderr"][-4000:]
     return workdir, run["stderr"], run["elapsed"]
 
@@ -95,15 +104,11 @@ def default_dry_run(tmp_path_factory, worker_id):
     once per test session (~3 s of CPU a process): ``(workdir, returncode, stdout + stderr)``.
     Its job table is what tests of the default config read (the checks pass, the grid's
     job count); the first worker that needs it runs it under a lock, the others reuse it."""
-    shared = session_shared_dir(tmp_path_factory, worker_id)
-    workdir, record = shared / "default_dry_run", shared / "default_dry_run.json"
-    with open(shared / "default_dry_run.lock", "w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
-        if not record.exists():
-            workdir.mkdir()
-            proc = run_snakemake(workdir, "-n", "all", timeout=300)
-            record.write_text(json.dumps({"returncode": proc.returncode, "out": proc.stdout + proc.stderr}))
-        run = json.loads(record.read_text())
+    def make(workdir):
+        proc = run_snakemake(workdir, "-n", "all", timeout=300)
+        return {"returncode": proc.returncode, "out": proc.stdout + proc.stderr}
+
+    workdir, run = once_per_session(tmp_path_factory, worker_id, "default_dry_run", make)
     return workdir, run["returncode"], run["out"]
 
 

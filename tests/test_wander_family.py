@@ -12,11 +12,14 @@ import numpy as np
 import pytest
 
 from accelcal.discrepancy import wander as C
+from accelcal.discrepancy.fit import fit
 from accelcal.discrepancy.rules import WANDER_FAMILIES, Rules
 from accelcal.discrepancy.stochastic.implication import pose_difference_variance
 from accelcal.discrepancy.wander.rests import RestAllan, rest_allan, rest_deviance
+from accelcal.discrepancy.wander_model import linearise_noise
 from accelcal.errors import AccelcalError
 from accelcal.noise import simulate_noise
+from tests.wander_sessions import rest_session
 
 FS = 100.0
 
@@ -101,41 +104,14 @@ def test_wander_family_is_checked_and_the_old_one_stays_selectable():
     assert isinstance(rest_allan(np.ones((400, 3)), np.array([[0, 400]]), FS), RestAllan)
 
 
-def _flicker_session(rng, B, n=30, rest=6.0, move=2.0, init=20.0, trim=0.25):
-    """Pose data of a simulated session whose sensor noise (white 3.3 counts per sample plus a
-    flicker bias of coefficient ``B`` counts) runs through rests and motions alike, with the
-    rests' samples (what the joint likelihood borrows)."""
-    from accelcal.discrepancy.fit import forward, pose_data
-    from accelcal.model import m_from_params
-    from accelcal.simulation import random_directions
-
-    starts, durs, t = [trim], [init - 2 * trim], init + move
-    for _ in range(1, n):
-        starts.append(t + trim)
-        durs.append(rest - 2 * trim)
-        t += rest + move
-    iv = np.round(np.column_stack([starts, np.add(starts, durs)]) * FS).astype(int)
-    noise = simulate_noise(rng, int(t * FS), FS, {"white": 0.33, "bias_instability": B}, size=3)
-    u = random_directions(rng, n)
-    M, b = m_from_params(415 * (1 + rng.uniform(-0.01, 0.01, 3)) - 1, np.deg2rad([0.5, -0.7, 1.1])), 32768.0
-    z = forward(9.80665 * u, M, b + np.zeros(3), {}) + np.array([noise[i0:i1].mean(axis=0) for i0, i1 in iv])
-    n_s = (iv[:, 1] - iv[:, 0]).astype(float)
-    ms = np.repeat((3.3 / np.sqrt(n_s))[:, None], 3, axis=1)
-    data = pose_data(z, 9.80665, ms, iv.mean(axis=1) / FS, t_start=iv[:, 0] / FS, t_end=(iv[:, 1] - 1) / FS)
-    return dataclasses.replace(data, rests=rest_allan(noise, iv, FS))
-
-
 def test_joint_likelihood_names_the_flicker_member_the_pose_means_alone_cannot():
     """A flicker wander 3 pose-mean sigmas strong: with the rests the joint REML chooses the
     flicker member on most sessions; from the pose means alone it does so far less often
     (and never in the old family, which lacks it)."""
-    from accelcal.discrepancy.fit import fit
-    from accelcal.discrepancy.wander_model import linearise_noise
-
     rng = np.random.default_rng(11)
     chosen = {"one_process": [], "flicker": [], "flicker_rests": []}
     for _ in range(4):
-        data = _flicker_session(rng, B=3 * 0.141 / 0.664)
+        data, _, _ = rest_session(rng, {"white": 0.33, "bias_instability": 3 * 0.141 / 0.664}, sample_sd=3.3)
         f = fit(data)
         for fam in chosen:
             chosen[fam].append(bool(linearise_noise(data, f, fam)[2].flicker))

@@ -5,55 +5,28 @@ against inventing one in white noise), the whitened problem against the covarian
 must whiten, and the family against ``flicker`` where the rests show nothing short.
 """
 
-import dataclasses
-
 import numpy as np
 
-from accelcal.discrepancy.fit import fit, forward, pose_data
+from accelcal.discrepancy.fit import fit
 from accelcal.discrepancy.wander import sums
-from accelcal.discrepancy.wander.rests import rest_allan
 from accelcal.discrepancy.wander_model import linearise, linearise_noise
-from accelcal.model import m_from_params
-from accelcal.noise import simulate_noise
-from accelcal.simulation import random_directions
-
-FS = 100.0
-
-
-def _session(rng, terms, n=30, rest=6.0, move=2.0, init=20.0, trim=0.25):
-    """Pose data (with the rests' samples) of a session whose noise ``terms`` [counts] runs
-    through rests and motions alike."""
-    starts, durs, t = [trim], [init - 2 * trim], init + move
-    for _ in range(1, n):
-        starts.append(t + trim)
-        durs.append(rest - 2 * trim)
-        t += rest + move
-    iv = np.round(np.column_stack([starts, np.add(starts, durs)]) * FS).astype(int)
-    noise = simulate_noise(rng, int(t * FS), FS, terms, size=3)
-    u = random_directions(rng, n)
-    M = m_from_params(415 * (1 + rng.uniform(-0.01, 0.01, 3)) - 1, np.deg2rad([0.5, -0.7, 1.1]))
-    z = forward(9.80665 * u, M, np.full(3, 32768.0), {}) + np.array([noise[a:b].mean(axis=0) for a, b in iv])
-    # the pose's own standard error: white plus the short part's interval-mean variance
-    n_s = (iv[:, 1] - iv[:, 0]).astype(float)
-    ms = np.repeat(np.sqrt(noise.var(axis=0).mean() / n_s)[:, None], 3, axis=1)
-    data = pose_data(z, 9.80665, ms, iv.mean(axis=1) / FS, t_start=iv[:, 0] / FS, t_end=(iv[:, 1] - 1) / FS)
-    return dataclasses.replace(data, rests=rest_allan(noise, iv, FS)), iv, noise
+from tests.wander_sessions import FS, rest_session
 
 
 def test_rests_pin_the_short_component_and_invent_none_in_white_noise():
     rng = np.random.default_rng(21)
-    data, _, _ = _session(rng, {"white": 0.33, "gauss_markov": (2.0, 0.5)})
+    data, _, _ = rest_session(rng, {"white": 0.33, "gauss_markov": (2.0, 0.5)})
     sp = sums.fit_short(data.rests.full)
     assert sp is not None and 0.2 <= sp.tau <= 1.25 and 4.0 / 3 <= sp.q_abs <= 4.0 * 3, sp
     assert data.rests.full.taus[0] == 1.0 / FS and data.rests.full.taus.size > data.rests.taus.size
-    white, _, _ = _session(rng, {"white": 0.33})
+    white, _, _ = rest_session(rng, {"white": 0.33})
     assert sums.fit_short(white.rests.full) is None
     assert sums.fit_short(None) is None
 
 
 def test_pinned_problem_whitens_the_short_part_and_keeps_its_columns():
     rng = np.random.default_rng(22)
-    data, _, _ = _session(rng, {"white": 0.33, "gauss_markov": (2.0, 0.5)})
+    data, _, _ = rest_session(rng, {"white": 0.33, "gauss_markov": (2.0, 0.5)})
     f = fit(data)
     prob = linearise(data, f, common=None)
     sp = sums.ShortPart(tau=0.5, q_abs=4.0, gain=100.0)
@@ -80,10 +53,10 @@ def test_pinned_problem_whitens_the_short_part_and_keeps_its_columns():
 
 def test_sum_family_is_flicker_without_a_short_part_and_pins_one_when_present():
     rng = np.random.default_rng(23)
-    white, _, _ = _session(rng, {"white": 0.33})
+    white, _, _ = rest_session(rng, {"white": 0.33})
     f = fit(white)
     a, b = linearise_noise(white, f, "sum")[2], linearise_noise(white, f, "flicker")[2]
     assert (a.t, a.q_rel, a.common) == (b.t, b.q_rel, b.common)
-    short, _, _ = _session(rng, {"white": 0.33, "gauss_markov": (2.0, 0.5)})
+    short, _, _ = rest_session(rng, {"white": 0.33, "gauss_markov": (2.0, 0.5)})
     prob, _, w = linearise_noise(short, fit(short), "sum")
     assert any("sum of processes" in n for n in prob.notes) and np.isfinite(w.reml)
