@@ -43,6 +43,10 @@ NOISE_ALPHAS = (2, 1, 0, -1, -2)
 #: Smallest pooled white-FM edf of a τ kept in the default grid (module docstring).
 DEFAULT_MIN_EDF = 3.0
 
+#: CPU the compiled Allan sums save per sample, column and averaging factor [s]: 10⁶ × 3
+#: samples at 19 octaves took 0.164 s in numpy and 0.065 s compiled (one core, side by side).
+ALLAN_SAVES_S = 1.7e-9
+
 
 class AllanError(AccelcalError):
     """Segments that cannot give an Allan variance (too short, non-finite, wrong shape)."""
@@ -224,7 +228,7 @@ def allan_variance(segments, fs: float, *, m=None, min_edf: float = DEFAULT_MIN_
     if m.size == 0 or np.any(m < 1):
         raise AllanError(f"no averaging time has pooled edf >= {min_edf:g}: the rests are too short "
                          f"(longest {max(lengths)} samples)")
-    fast = kernels.compiled("noise._fast")
+    fast = kernels.compiled_if_it_pays("noise._fast", ALLAN_SAVES_S * sum(s.size for s in segs) * m.size)
 
     d = segs[0].shape[1]
     sums = np.zeros((m.size, d))
@@ -238,9 +242,13 @@ def allan_variance(segments, fs: float, *, m=None, min_edf: float = DEFAULT_MIN_
             sums[reach] += fast.allan_sums(s, s.mean(axis=0), m[reach]) / (2.0 * m[reach, None] ** 2)
         else:
             c = np.concatenate([np.zeros((1,) + s.shape[1:]), np.cumsum(s - s.mean(axis=0), axis=0)])
+            buf = np.empty_like(c)  # c[i+2m] − 2 c[i+m] + c[i] in place: no 3 temporaries per m
             for k in np.flatnonzero(reach):
                 mk = m[k]
-                dd = c[2 * mk:] - 2 * c[mk:-mk] + c[: c.shape[0] - 2 * mk]
+                dd = buf[: c.shape[0] - 2 * mk]
+                np.multiply(c[mk:-mk], 2.0, out=dd)
+                np.subtract(c[2 * mk:], dd, out=dd)
+                np.add(dd, c[: c.shape[0] - 2 * mk], out=dd)
                 sums[k] += np.einsum("ij,ij->j", dd, dd) / (2.0 * mk * mk)
         terms[reach] += n1 - 2 * m[reach]
     if np.any(terms == 0):
