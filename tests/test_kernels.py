@@ -528,18 +528,3 @@ def test_gauss_markov_simulation_is_bit_for_bit_lfilter(rho):
     terms = {"white": 1e-3, "gauss_markov": (2e-3, 30.0)}
     a, b = both(lambda: simulate_noise(np.random.default_rng(3), 20000, 100.0, terms, size=3))
     assert np.array_equal(a, b)
-
-
-def test_a_batch_that_cannot_pay_numbas_start_up_stays_in_numpy(monkeypatch):
-    """compiled_if_it_pays: under ``auto`` a batched call runs compiled only if numba is loaded
-    already or the call alone saves STARTUP_S; it adds nothing to the single-problem sum."""
-    monkeypatch.setattr(kernels, "STARTUP_S", 3.0)
-    monkeypatch.setattr(kernels, "_loaded", {})
-    kernels.set_backend(None)
-    kernels.set_backend("auto")
-    assert [kernels.compiled_if_it_pays("noise._fast", 2.9) for _ in range(3)] == [None] * 3
-    assert kernels._forgone_s == 0.0
-    assert kernels.compiled_if_it_pays("noise._fast", 3.0) is not None  # this call alone pays
-    assert kernels.compiled_if_it_pays("noise._fast", 0.0) is not None  # numba is loaded now
-    kernels.set_backend("numpy")
-    assert kernels.compiled_if_it_pays("noise._fast", 100.0) is None

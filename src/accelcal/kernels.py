@@ -144,20 +144,6 @@ def compiled(module: str, single: bool = False, saves_s: float = 0.0):
     return mod
 
 
-def compiled_if_it_pays(module: str, saves_s: float):
-    """:func:`compiled` for a batched call that its compiled form makes ``saves_s`` seconds
-    faster: under ``auto`` it runs compiled if numba is loaded in this process already, or
-    if the call alone saves numba's start-up (:data:`STARTUP_S`); it never starts numba
-    for a call that cannot pay for it, and adds nothing to the single-problem sum.
-
-    Why not that sum: a one-off command's calls (``accelcal noise``: its Allan variances
-    and bootstrap fits save 0.6 s compiled, about numba's start-up, 0.47-0.69 s measured
-    for ``noise._fast``) would cross the threshold near their end and pay the start-up
-    for the last few calls.
-    """
-    return compiled(module, single=saves_s < STARTUP_S)
-
-
 def load() -> None:
     """Load every kernel module now (numba's start-up paid here), so that the
     single-problem estimators run compiled under ``auto`` too; nothing without numba."""
@@ -240,4 +226,4 @@ def _one_compiler_at_a_time(dispatcher):
     return dispatcher
 
 
-__all__ = ["BACKENDS", "KERNEL_MODULES", "STARTUP_S", "backend", "choice", "compiled", "compiled_if_it_pays", "jit", "load", "set_backend"]
+__all__ = ["BACKENDS", "KERNEL_MODULES", "STARTUP_S", "backend", "choice", "compiled", "jit", "load", "set_backend"]

@@ -43,11 +43,6 @@ NOISE_ALPHAS = (2, 1, 0, -1, -2)
 #: Smallest pooled white-FM edf of a τ kept in the default grid (module docstring).
 DEFAULT_MIN_EDF = 3.0
 
-#: CPU the compiled Allan sums save per sample, column and averaging factor [s]: 10⁶ × 3
-#: samples at 19 octaves took 0.164 s in numpy and 0.065 s compiled (one core, side by side).
-ALLAN_SAVES_S = 1.7e-9
-
-
 class AllanError(AccelcalError):
     """Segments that cannot give an Allan variance (too short, non-finite, wrong shape)."""
 
@@ -228,7 +223,7 @@ def allan_variance(segments, fs: float, *, m=None, min_edf: float = DEFAULT_MIN_
     if m.size == 0 or np.any(m < 1):
         raise AllanError(f"no averaging time has pooled edf >= {min_edf:g}: the rests are too short "
                          f"(longest {max(lengths)} samples)")
-    fast = kernels.compiled_if_it_pays("noise._fast", ALLAN_SAVES_S * sum(s.size for s in segs) * m.size)
+    fast = kernels.compiled("noise._fast")
 
     d = segs[0].shape[1]
     sums = np.zeros((m.size, d))

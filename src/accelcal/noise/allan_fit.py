@@ -128,11 +128,6 @@ def _nnls_batch(A: np.ndarray, b: np.ndarray) -> np.ndarray:
     return out
 
 
-#: CPU the compiled IRLS saves per problem [s]: 400 bootstrap refits of the five IEEE terms on
-#: the ADIS record took 0.076 s in numpy and 0.017 s compiled (one core, side by side).
-IRLS_SAVES_S = 1.5e-4
-
-
 def _irls(H: np.ndarray, y: np.ndarray, edf: np.ndarray, max_iter: int = 200, tol: float = 1e-10):
     """Gamma ML with identity link and ``c ≥ 0`` for a batch: ``H`` (G, k, p), ``y`` (G, k) → (c, deviance).
 
@@ -141,7 +136,7 @@ def _irls(H: np.ndarray, y: np.ndarray, edf: np.ndarray, max_iter: int = 200, to
     in ``c``, and plain scoring can cycle); each problem stops when its deviance changes
     by less than ``tol`` relative.
     """
-    fast = kernels.compiled_if_it_pays("noise._fast", IRLS_SAVES_S * y.shape[0])
+    fast = kernels.compiled("noise._fast")
     if fast is not None:  # the same algorithm, compiled (accelcal[fast])
         return fast.irls_gamma(H, y, edf, max_iter, tol)
     G = y.shape[0]
