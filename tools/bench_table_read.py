@@ -11,7 +11,8 @@ child, one BLAS thread) and peak resident memory (``ru_maxrss`` of the child)::
 * noise: ``accelcal noise FILE.csv --unit g --gyro-unit deg/s --out J`` (the whole command:
   start-up, reading, Allan deviations, the noise fit, its intervals, the JSON) against a
   process running ``pandas.read_csv`` and ``allantools.oadev`` of the six channels at the
-  octave τ of tools/bench_noise.py.
+  octave τ of tools/bench_noise.py; and the command on the numpy kernels
+  (``ACCELCAL_KERNELS=numpy``: no numba start-up, as without the ``fast`` extra).
 
 The file is the ADIS16405 record of ``../shared/data`` (10⁶ × 6: ``Gyro. X/Y/Z`` in deg/s,
 ``Accel. X/Y/Z`` in g, as the R data file holds them) with a time column ``time`` in s,
@@ -69,9 +70,9 @@ def write_csv(rda: Path, out: Path) -> None:
     df.to_csv(out, index=False)
 
 
-def child(cmd: list[str]) -> tuple[float, float, str]:
+def child(cmd: list[str], env: dict | None = None) -> tuple[float, float, str]:
     """(CPU seconds, peak RSS [MB], stdout) of one child process (its own rusage: ``os.wait4``)."""
-    proc = subprocess.Popen(cmd, env=ONE_CORE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    proc = subprocess.Popen(cmd, env=env or ONE_CORE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     out = proc.stdout.read()
     _, status, usage = os.wait4(proc.pid, 0)
     proc.returncode = os.waitstatus_to_exitcode(status)
@@ -97,11 +98,14 @@ def main(argv=None) -> int:
                 "read: accelcal read_table": ("read", [py, "-c", READ, str(csv), "accelcal"]),
                 "noise: pandas + allantools oadev": ("proc", [py, "-c", PANDAS_ALLANTOOLS, str(csv)]),
                 "noise: accelcal noise": ("proc", [py, "-m", "accelcal.cli", "noise", str(csv), "--unit", "g",
-                                                   "--gyro-unit", "deg/s", "--out", str(work / "noise.json")])}
+                                                   "--gyro-unit", "deg/s", "--out", str(work / "noise.json")]),
+                "noise: accelcal noise, numpy kernels": ("numpy", [py, "-m", "accelcal.cli", "noise", str(csv), "--unit",
+                                                                 "g", "--gyro-unit", "deg/s", "--out",
+                                                                 str(work / "noise_numpy.json")])}
         res = {k: [] for k in runs}
         for _ in range(args.repeat):
             for label, (kind, cmd) in runs.items():
-                cpu, rss, out = child(cmd)
+                cpu, rss, out = child(cmd, {**ONE_CORE, "ACCELCAL_KERNELS": "numpy"} if kind == "numpy" else None)
                 if kind == "read":
                     import json
 
