@@ -15,7 +15,9 @@ from snakemake.exceptions import WorkflowError
 # parsed, only by its jobs: the estimator names a config may list come from the registry's
 # table read as JSON (workflow/scripts/_registry_table.py, standard library only), which the
 # stage files import from the scripts' folder (tests/test_workflow_parse.py holds this).
-sys.path.insert(0, os.path.join(workflow.basedir, "workflow", "scripts"))
+# (beside this file, not the top Snakefile: a test's throwaway Snakefile includes it alone)
+WORKFLOW_DIR = os.path.dirname(str(workflow.current_basedir))  # workflow/
+sys.path.insert(0, os.path.join(WORKFLOW_DIR, "scripts"))
 from _registry_table import accelerometer_estimators
 
 
@@ -24,7 +26,7 @@ from _registry_table import accelerometer_estimators
 # The tables of the reproductions that the DAG needs (datasets and files of the sessions)
 # live as data files in src/accelcal_repro/data/, read by their modules and, here, as plain
 # JSON: parsing the workflow (every snakemake call, every SLURM job) imports no reproduction.
-REPRO_DATA = os.path.join(workflow.basedir, "src", "accelcal_repro", "data")
+REPRO_DATA = os.path.join(os.path.dirname(WORKFLOW_DIR), "src", "accelcal_repro", "data")
 
 
 def repro_table(name):

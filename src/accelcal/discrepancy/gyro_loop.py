@@ -58,7 +58,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..errors import NotConvergedError
+from ..errors import AccelcalError, NotConvergedError
 from ..gyro.calibrate import motion_intervals
 from ..gyro.effects import directions as effect_directions
 from ..gyro.fit import MotionSet, evaluate, fit_iterative, motion_residuals
@@ -518,7 +518,6 @@ def gyro_layer(rec, g: float, poses, *, alpha: float = 0.05, n_boot: int = 999, 
     to the loop (a candidate decided by the motions' evidence, not switched on by default).
     """
     from ..calibration import calibrate_poses
-    from ..errors import AccelcalError
     from ..gyro.recording import calibrate_recording_gyro
 
     if rec.gyro is None:
