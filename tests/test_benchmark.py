@@ -5,11 +5,20 @@ Wall times are never asserted on: the tables are checked for what they contain (
 method, backend and pose count; speed-ups computed from paired timings with a fake clock).
 """
 
+import builtins
+import dis
+import os
+import subprocess
+import sys
+from functools import partial
+
 import numpy as np
 import pandas as pd
 import pytest
 
 from accelcal import kernels
+from accelcal.registry import estimators
+from accelcal.tereshkov.estimator import TereshkovParams
 from accelcal_repro import first_calls, timing
 from accelcal_repro.cost import headline, plot_cost
 
@@ -73,8 +82,6 @@ def test_batched_calls_per_backend():
 
 
 def _tereshkov_data(runs=2, n=300):
-    from accelcal.tereshkov.estimator import TereshkovParams
-
     f = np.zeros((runs, n, 3))
     f[..., 2] = -9.80665
     return {"gyro": np.zeros((runs, n, 3)), "accel": f.copy(), "f_ext": f, "course": np.zeros((runs, n)),
@@ -125,10 +132,6 @@ def test_a_copied_kernel_cache_loads_without_compiling(tmp_path):
     """The compile job compiles once, in an empty folder of its own, and copies that cache
     into the project's (copy_kernel_cache): the copy holds every file, no lock, and a fresh
     process with it compiles nothing (it would write new files)."""
-    import os
-    import subprocess
-    import sys
-
     timed, project = tmp_path / "timed", tmp_path / "project"
     env = dict(os.environ, ACCELCAL_KERNELS="numba")
 
@@ -156,11 +159,6 @@ def test_first_call_script_names_every_call_and_defines_what_they_use():
     namespace = {}
     exec(compile(head.replace("import numba\n", ""), "<first calls>", "exec"), namespace)
     assert [name for name, _ in namespace["calls"]] == list(timing.FIRST_CALLS)
-    import builtins
-    import dis
-
-    from functools import partial
-
     for name, call in namespace["calls"]:
         if isinstance(call, partial):  # an estimator's call, from the registry
             assert call.func.__self__.name == name.split(" ")[0].removesuffix("_batch"), name
@@ -169,8 +167,6 @@ def test_first_call_script_names_every_call_and_defines_what_they_use():
         missing = sorted(n for n in used if n not in namespace and not hasattr(builtins, n))
         assert not missing, (name, missing)
     # every registered estimator with a compiled kernel has its first calls timed
-    from accelcal.registry import estimators
-
     for e in estimators("accelerometer", compiled=True):
         assert e.name in timing.FIRST_CALLS and e.batch_name in timing.FIRST_CALLS, e.name
 
