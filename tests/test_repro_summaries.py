@@ -36,7 +36,7 @@ def test_discrepancy_prints_the_reports_summary(two_effects, tmp_path, monkeypat
     assert any(ln.startswith("  excess: ") and "against the rests' white noise alone" in ln for ln in lines)
     assert lines[-3].startswith("  noise terms named: x: ") and lines[-1] == f"  written to {out}"
     # the deterministic layer's own summary is the report's first lines
-    det = rep.deterministic.summary(rep.unit).splitlines()
+    det = rep.deterministic.summary(unit=rep.unit).splitlines()
     assert lines[:len(det)] == det and len(det) < len(lines)
 
 

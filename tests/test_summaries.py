@@ -1,6 +1,9 @@
 """Results render their own summary: what `accelcal calibrate` and `accelcal discrepancy`
 print is the result's ``summary()``, also for a calibration read back from its file."""
 
+import ast
+from pathlib import Path
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -90,7 +93,7 @@ def test_one_summary_type_with_three_renderers():
     s = Summary(["gyroscope: gyro_iterative", "  scale factors [ppm]: x +12 ± 3", "warning: gyroscope: few motions",
                  "written to c.json"])
     assert s == "gyroscope: gyro_iterative\n  scale factors [ppm]: x +12 ± 3\nwarning: gyroscope: few motions\n" \
-                "written to c.json" and s + "\n" == str(s) + "\n"
+                "written to c.json" and s + "\n" == str(s) + "\n" and s.as_text() == str(s)
     assert s.as_dict() == {"title": "gyroscope: gyro_iterative",
                            "lines": ["  scale factors [ppm]: x +12 ± 3", "written to c.json"],
                            "warnings": ["gyroscope: few motions"]}
@@ -103,13 +106,36 @@ def test_every_result_type_returns_a_summary():
     import inspect
 
     from accelcal.calibration.base import Calibration
+    from accelcal.discrepancy.gyro_loop import GyroLoopResult
+    from accelcal.discrepancy.mag_loop import MagLoopResult
     from accelcal.discrepancy.report import DiscrepancyReport
     from accelcal.discrepancy.results import DiscrepancyResult
     from accelcal.gyro.result import GyroCalibration
     from accelcal.mag.result import MagCalibration
     from accelcal.noise.report import NoiseReport
 
-    for cls in (Calibration, GyroCalibration, MagCalibration, DiscrepancyReport, DiscrepancyResult, NoiseReport):
+    # the loops' results are lines of the discrepancy report's summary
+    results = (Calibration, GyroCalibration, MagCalibration, DiscrepancyReport, DiscrepancyResult, NoiseReport,
+               GyroLoopResult, MagLoopResult)
+    for cls in results:
         sig = inspect.signature(cls.summary)
         assert "written_to" in sig.parameters and sig.parameters["written_to"].kind is inspect.Parameter.KEYWORD_ONLY
+        assert all(p.kind is inspect.Parameter.KEYWORD_ONLY for name, p in sig.parameters.items() if name != "self"), \
+            (cls.__name__, sig)  # one signature: what a type adds is a keyword
         assert sig.return_annotation in ("Summary", "Summary"), (cls.__name__, sig.return_annotation)
+    assert classes_with_a_summary(SRC / "accelcal") == sorted(c.__name__ for c in results)
+
+
+SRC = Path(__file__).resolve().parents[1] / "src"
+
+
+def classes_with_a_summary(root: Path) -> list[str]:
+    """The classes under ``root`` that define a ``summary`` method (files parsed, not imported)."""
+    return sorted(node.name for path in root.rglob("*.py") for node in ast.walk(ast.parse(path.read_text()))
+                  if isinstance(node, ast.ClassDef)
+                  and any(isinstance(m, ast.FunctionDef) and m.name == "summary" for m in node.body))
+
+
+def test_the_summary_census_sees_a_new_result_type(tmp_path):
+    (tmp_path / "m.py").write_text("class Fit:\n    def summary(self):\n        return ''\n\n\ndef summary():\n    pass\n")
+    assert classes_with_a_summary(tmp_path) == ["Fit"]

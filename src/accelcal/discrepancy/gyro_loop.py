@@ -65,6 +65,7 @@ from ..gyro.fit import MotionSet, evaluate, fit_iterative, motion_residuals
 from ..gyro.model import GyroModel
 from ..gyro.rests import (MIN_STILL_SAMPLES, RestStatistics, bias_series, fit_bias, gyro_rests, motion_bias_variance,
                           rest_noise, sample_interval, saturated_samples)
+from ..summary import Summary
 from .nested import MAX_ABSORBED, LoopOutcome, nested_f_test
 from .statistics import holm
 
@@ -342,10 +343,11 @@ class GyroLoopResult(LoopOutcome):
                                "rests)",
                 "notes": list(self.notes), "calibration": self.calibration}
 
-    def summary(self) -> str:
+    def summary(self, *, written_to=None) -> Summary:
         named = ", ".join(self.named) or "none"
-        return (f"gyroscope: {self.n_motions} motions; effect named: {named}; excess {self.excess_before:.3g} -> "
+        line = (f"gyroscope: {self.n_motions} motions; effect named: {named}; excess {self.excess_before:.3g} -> "
                 f"{self.excess_after:.3g}")
+        return Summary([line] + ([f"  written to {written_to}"] if written_to is not None else []))
 
 
 def _unformed(name: str, gm: GyroMotions) -> str:

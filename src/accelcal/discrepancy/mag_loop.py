@@ -42,6 +42,7 @@ from ..errors import AccelcalError
 from ..mag.fit import FieldSamples, fit_ellipsoid_ml, fit_hard_iron, sampson_residuals
 from ..mag.noise import ARNoise, block_covariance, fit_ar
 from ..mag.trust import prepare, quiet_intervals, rest_noise
+from ..summary import Summary
 from .nested import LoopOutcome, nested_f_test, orthonormal_basis, project_out
 from .statistics import holm
 
@@ -108,10 +109,11 @@ class MagLoopResult(LoopOutcome):
                                "from the residuals; a candidate is named only when the Wald test with the block jackknife's "
                                "covariance (p_blocks) rejects too", "noise": self.noise, "notes": list(self.notes)}
 
-    def summary(self) -> str:
+    def summary(self, *, written_to=None) -> Summary:
         named = ", ".join(self.named) or "none"
-        return (f"magnetometer: {self.n_samples} samples; effect named: {named}; excess {self.excess_before:.3g} -> "
+        line = (f"magnetometer: {self.n_samples} samples; effect named: {named}; excess {self.excess_before:.3g} -> "
                 f"{self.excess_after:.3g}")
+        return Summary([line] + ([f"  written to {written_to}"] if written_to is not None else []))
 
 
 def _base(samples: FieldSamples, soft_iron: bool):

@@ -206,7 +206,7 @@ class DiscrepancyResult:
         r, _, _ = evaluate(self.final.p, self.data, self.final.effects, jacobian=False)
         return np.full(len(self.data), np.nan) if r is None else r
 
-    def summary(self, unit: str | None = None, *, written_to=None) -> Summary:
+    def summary(self, *, unit: str | None = None, written_to=None) -> Summary:
         """The deterministic layer in a few lines (:func:`~accelcal.discrepancy.summary.result_lines`; ``unit``: the data's)."""
         lines = result_lines(self, unit)
         return Summary(lines + ([f"written to {written_to}"] if written_to is not None else []))
