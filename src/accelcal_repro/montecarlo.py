@@ -374,13 +374,6 @@ def rms_ratio(err: np.ndarray, ref: np.ndarray) -> tuple[float, float]:
     return r, float(se_r2 / (2 * r)) if r > 0 else float("nan")
 
 
-def _relative(d: pd.DataFrame, q: str) -> np.ndarray:
-    """``(estimate - truth) / |truth|`` per component (trials, 3); NaN where the truth is 0."""
-    err = d[[f"{q}_err_{a}" for a in AXES[q]]].to_numpy(float)
-    true = np.abs(d[[f"true_{q}_{a}" for a in AXES[q]]].to_numpy(float))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(true > 0, err / true, np.nan)
-
 
 def relative_norm(d: pd.DataFrame, q: str) -> np.ndarray:
     """``||estimate - truth|| / ||truth||`` per trial (NaN where the truth is 0)."""

@@ -20,7 +20,7 @@ import numpy as np
 
 from .. import distributions as dist  # scipy.stats would cost ~1 s at import
 from .errors import MagDegenerateError, MagFitError, MagInputError
-from .model import PARAMETERS, sym_from_vec, vec_from_sym
+from .model import sym_from_vec, vec_from_sym
 from .noise import block_covariance
 
 #: Fewest samples: nine unknowns and one more so that a residual checks the fit.
@@ -100,9 +100,6 @@ class EllipsoidFit:
     @property
     def se(self) -> np.ndarray | None:
         return None if self.cov is None else np.sqrt(np.diag(self.cov))
-
-    def named_se(self) -> dict:
-        return {} if self.se is None else dict(zip(PARAMETERS, self.se.tolist()))
 
 
 def _sqrtm_spd(M) -> np.ndarray:

@@ -69,20 +69,6 @@ def euler_to_dcm(roll, pitch, yaw) -> np.ndarray:
     return out
 
 
-def dcm_to_euler(C: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Inverse of :func:`euler_to_dcm`: ``(roll, pitch, yaw)`` in radians."""
-    C = np.asarray(C, dtype=float)
-    roll = np.arctan2(C[..., 2, 1], C[..., 2, 2])
-    pitch = -np.arcsin(np.clip(C[..., 2, 0], -1.0, 1.0))
-    yaw = np.arctan2(C[..., 1, 0], C[..., 0, 0])
-    return roll, pitch, yaw
-
-
-def wrap_angle(a):
-    """Angles wrapped to ``[-π, π)``."""
-    return (np.asarray(a) + np.pi) % (2.0 * np.pi) - np.pi
-
-
 def rotation_angle(C: np.ndarray) -> np.ndarray:
     """Angle of rotation matrices ``C`` [rad] (0 for the identity)."""
     tr = np.trace(C, axis1=-2, axis2=-1)

@@ -21,9 +21,6 @@ from .trajectory import stepped_euler_series  # noqa: E402
 
 AXES = "xyz"
 COMP_COLORS = ("C0", "C1", "C2")
-METHOD_LABELS = {"batista2011": "Table I (known rotations, quadratic term)",
-                 "batista2011_linear": "Table I steps 1-2 (no quadratic term)",
-                 "full_lls": "full LLS, Burkhard 2024 (neither)"}
 DATA_LABELS = {"quadratic": "data with the paper's F2", "linear": "data with F2 = 0"}
 
 

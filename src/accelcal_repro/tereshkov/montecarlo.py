@@ -510,10 +510,6 @@ def artificial_summary(df: pd.DataFrame, steady_state_from_s: float) -> pd.DataF
     return pd.DataFrame(rows)
 
 
-def run_sweep(cfg: dict) -> tuple[pd.DataFrame, dict]:
-    """Installation-angle sweep: tidy table (as :func:`tidy`, with ``kind`` and ``angle_deg``)."""
-    return run_scenarios(cfg, ["sweep"])["sweep"]
-
 
 def sweep_summary(df: pd.DataFrame, steady_state_from_s: float, fraction: float = 0.05,
                   nonconvergence_ratio: float = 0.5) -> pd.DataFrame:
