@@ -15,6 +15,8 @@ The benchmark's figures (confusion matrix, power) are in
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
 
 from ..noise.terms import TERMS
@@ -171,8 +173,6 @@ def stochastic_from_report(d: dict):
     """The parts of a :class:`~accelcal.discrepancy.stochastic.StochasticResult` that
     :func:`plot_allan` draws, rebuilt from its ``to_dict()``
     (JSON: null for NaN)."""
-    from types import SimpleNamespace
-
     arrays = ("taus", "adev_measured", "adev_ci", "adev_longest_rest", "adev_model_before", "adev_model_after",
               "adev_resim_before", "adev_resim_after")
     axes = []

@@ -32,6 +32,7 @@ import numpy as np
 from ..effects import effect
 from ..errors import AccelcalError, NotConvergedError
 from ..extended_model import NEWTON_RTOL
+from ..lls import full_lls
 from ..model import m_from_params, params_from_m
 from .poses import PoseData, pose_data, pose_data_from_static
 from .residuals import (
@@ -139,8 +140,6 @@ class Fit:
 def _start(data: PoseData, effects, p0) -> np.ndarray:
     q = n_parameters(effects)
     if p0 is None:
-        from .. import full_lls
-
         base = full_lls(data.z, data.g)
         s, th = params_from_m(base.M)
         p0 = np.concatenate([base.bias, s, th])

@@ -58,11 +58,13 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from ..calibration import calibrate_poses
 from ..errors import AccelcalError, NotConvergedError
 from ..gyro.calibrate import motion_intervals
 from ..gyro.effects import directions as effect_directions
 from ..gyro.fit import MotionSet, evaluate, fit_iterative, motion_residuals
 from ..gyro.model import GyroModel
+from ..gyro.recording import calibrate_recording_gyro
 from ..gyro.rests import (MIN_STILL_SAMPLES, RestStatistics, bias_series, fit_bias, gyro_rests, motion_bias_variance,
                           rest_noise, sample_interval, saturated_samples)
 from ..summary import Summary
@@ -519,9 +521,6 @@ def gyro_layer(rec, g: float, poses, *, alpha: float = 0.05, n_boot: int = 999, 
     The gyro is calibrated as ``accelcal calibrate`` does, but with the g-sensitivity left
     to the loop (a candidate decided by the motions' evidence, not switched on by default).
     """
-    from ..calibration import calibrate_poses
-    from ..gyro.recording import calibrate_recording_gyro
-
     if rec.gyro is None:
         return None, "no gyro in the recording"
     if rec.rotations:

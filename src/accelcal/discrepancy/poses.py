@@ -17,7 +17,9 @@ import numpy as np
 
 from ..effects import COVARIATES, TEMPERATURE, TIME
 from ..errors import AccelcalError
+from ..evaluation import residual_sigma
 from ..extended_model import EffectTerms, effect_terms
+from ..lls import full_lls
 from .wander.rests import RestAllan, rest_allan
 
 
@@ -123,9 +125,6 @@ def pose_data(z, g: float, mean_std, t, temp=None, sigma=None, t_start=None, t_e
         Shapes that do not match, or the full LLS failing on the poses (too few or
         degenerate poses: the same one-line errors as ``accelcal calibrate``).
     """
-    from .. import full_lls
-    from ..evaluation import residual_sigma
-
     z = np.asarray(z, float)
     mean_std = np.asarray(mean_std, float)
     t = np.asarray(t, float)
