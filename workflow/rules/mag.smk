@@ -63,7 +63,7 @@ rule mag_sessions:
         table=results("mag/sessions.csv"),
         stability=results("mag/stability.csv"),
     params:
-        mag=MAG,
+        mag=config_keys(MAG, "sessions"),
     log:
         log_path("mag/sessions"),
     benchmark:
@@ -81,7 +81,7 @@ rule mag_montecarlo:
     output:
         results("mag/montecarlo.csv"),
     params:
-        mag=MAG,
+        mag=config_keys(MAG, "seed", "monte_carlo"),
     log:
         log_path("mag/montecarlo"),
     benchmark:
@@ -100,7 +100,7 @@ rule mag_loop_benchmark:
         cases=results("mag/loop_benchmark_cases.csv"),
         summary=results("mag/loop_benchmark.csv"),
     params:
-        mag=MAG,
+        mag=config_keys(MAG, "seed", "loop"),
     log:
         log_path("mag/loop_benchmark"),
     benchmark:
@@ -120,7 +120,7 @@ rule mag_loop_sessions:
     output:
         results("mag/loop_sessions.csv"),
     params:
-        mag=MAG,
+        mag=config_keys(MAG, "seed", "sessions", "loop"),
     log:
         log_path("mag/loop_sessions"),
     benchmark:
