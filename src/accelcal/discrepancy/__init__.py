@@ -23,7 +23,6 @@ re-simulates (the subpackage :mod:`.stochastic`, on the noise analysis of
 benchmark is ``accelcal_repro.discrepancy``.
 """
 
-from ..effects import EFFECT_IDS, EFFECTS
 from .wander import WanderError, WanderFit
 from .detect import discrepancy
 from .figures import plot_allan
@@ -42,8 +41,6 @@ from .stochastic import (
 )
 
 __all__ = [
-    "EFFECTS",
-    "EFFECT_IDS",
     "NULLS",
     "WanderError",
     "WanderFit",
