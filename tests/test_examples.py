@@ -16,13 +16,18 @@ import sys
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
+from accelcal.errors import RecordingError
+from accelcal.formats import read
+from accelcal.noise.terms import TERMS, unregister_term
 from accelcal.registry import ESTIMATORS, register, unregister
 
-from accelcal.noise.terms import TERMS, unregister_term
-
+from .format_samples import RATE_HZ, SAMPLES, specific_force
 from .test_estimator_conformance import CHECKS, run_check
 from .test_noise_term_conformance import CHECKS as TERM_CHECKS
+from .test_reader_fuzz import _check_recording, damaged_files
 
 REPO = Path(__file__).resolve().parents[1]
 EXAMPLES = REPO / "examples"
@@ -139,11 +144,47 @@ def example_format():
 def test_the_example_reader_needs_no_checks_of_its_own(example_format, tmp_path, body, cause):
     """The recording's invariants are checked where every reader's output passes (formats.read): the
     guide's reader, which checks neither row count nor finiteness, still gives one line."""
-    from accelcal.errors import RecordingError
-    from accelcal.formats import read
-
     path = tmp_path / "short.txt"
     path.write_text(f"{example_format.MAGIC} 100 Hz\n{body}")
     with pytest.raises(RecordingError, match=cause) as e:
         read(path)
     assert "\n" not in str(e.value)
+
+
+@pytest.fixture()
+def fuzzed_example_format(example_format):
+    """The guide's reader registered, with a sample file the fuzz damages (as tests/format_samples.py has one per format)."""
+    def sample(rng) -> bytes:
+        acc = specific_force(rng, scale=1.0)
+        return (f"{example_format.MAGIC} {RATE_HZ:g} Hz\n"
+                + "".join(f"{x:.6g} {y:.6g} {z:.6g}\n" for x, y, z in acc)).encode()
+
+    SAMPLES[example_format.ENTRY.name] = sample
+    yield example_format.ENTRY.name
+    SAMPLES.pop(example_format.ENTRY.name, None)
+
+
+@st.composite
+def xyz_logs(draw) -> bytes:
+    """Well-formed xyz-log files of few rows and any float (nan, inf, huge): what the reader itself never checks."""
+    value = st.floats(allow_nan=True, allow_infinity=True) | st.sampled_from([0.0, 1.0, -1.0])
+    rows = draw(st.lists(st.tuples(value, value, value), max_size=15))
+    rate = draw(st.sampled_from([100.0, 1e-300, 1e300]))
+    return (f"# xyz-log {rate:g} Hz\n" + "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in rows)).encode()
+
+
+@settings(max_examples=60, deadline=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large, HealthCheck.function_scoped_fixture])
+@given(data=st.data())
+def test_the_example_reader_passes_the_reader_fuzz(fuzzed_example_format, data, tmp_path):
+    """The reader fuzz's property on the guide's reader, which checks neither row count nor
+    finiteness nor time itself: damaged files (tests/test_reader_fuzz.py's, and short files
+    of any float) give a valid Recording or one RecordingError line."""
+    path = tmp_path / "rec.txt"
+    path.write_bytes(data.draw(damaged_files(fuzzed_example_format) | xyz_logs()))
+    try:
+        rec = read(path, format=fuzzed_example_format)
+    except RecordingError as e:
+        assert str(e) and "\n" not in str(e)
+    else:
+        _check_recording(rec, fuzzed_example_format, False)
