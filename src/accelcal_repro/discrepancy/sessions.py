@@ -48,6 +48,7 @@ import pandas as pd
 from accelcal import distributions as dist
 from accelcal.discrepancy.fit import evaluate, fit, forward, pose_data, pose_data_from_static
 from accelcal.discrepancy.statistics import holm
+from accelcal.discrepancy.stochastic import rest_segments, stochastic_layer
 from accelcal.errors import AccelcalError
 from accelcal.model import m_from_params
 from accelcal.recording import Recording
@@ -218,8 +219,6 @@ def few_poses_rows(name: str, rec: Recording, measured_summary: pd.DataFrame, st
 
     Returns (named rows, excess rows) in the form of :func:`named_rows` and :func:`excess_rows`.
     """
-    from accelcal.discrepancy.stochastic import rest_segments, stochastic_layer
-
     poses = poses_of(rec)
     named = []
 
