@@ -57,6 +57,21 @@ def test_every_page_is_in_the_site_and_linked_from_the_readme():
     assert (REPO / "docs" / "index.md").read_text() == index_text(readme), "run python tools/docs_index.py"
 
 
+def undocumented_packages(layout: str, src: Path) -> list[str]:
+    """The subpackages under ``src``'s packages that ``layout`` does not name as ``name/``."""
+    return [f"{pkg.name}/{sub.name}" for pkg in sorted(src.iterdir()) if (pkg / "__init__.py").exists()
+            for sub in sorted(pkg.iterdir()) if sub.is_dir() and (sub / "__init__.py").exists()
+            and f"`{sub.name}/`" not in layout]
+
+
+def test_the_layout_names_every_package():
+    """docs/development.md's layout names every subpackage (it once left out the gyroscope's)."""
+    text = (REPO / "docs" / "development.md").read_text()
+    layout = text[text.index("## Layout"):text.index("\n## ", text.index("## Layout") + 1)]
+    assert undocumented_packages(layout, REPO / "src") == []
+    assert undocumented_packages("`gyro/` `cli/`", REPO / "src")  # the check sees a package left out
+
+
 @pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
 def test_every_command_shown_parses(page):
     parser = cli._parser()  # the command line's own parser
