@@ -118,9 +118,16 @@ DISCREPANCY_STAGE = declare_stage(
 )
 
 
+#: The benchmark keys a chunk reads (not the profiles' own: they come in profiles.json;
+#: not the figures' confusion_size_mde): a new figure size reruns no chunk.
+BENCH_CHUNK_KEYS = ("session", "nulls", "oracle", "sizes_mde", "seeds", "seeds_none", "seeds_none_real",
+                    "seeds_constant", "pairs", "outlier", "power_curve", "chunks")
+
+
 def _bench_params():
     """Everything that defines the benchmark's recordings and their detection."""
-    return dict(seed=DISCREPANCY["seed"], benchmark=DISCREPANCY_BENCH, rules=DISCREPANCY["rules"])
+    return dict(seed=DISCREPANCY["seed"], benchmark=config_keys(DISCREPANCY_BENCH, *BENCH_CHUNK_KEYS),
+                rules=DISCREPANCY["rules"])
 
 
 rule discrepancy_adis_fetch:
@@ -213,7 +220,7 @@ rule discrepancy_profiles:
         table=BENCH_PROFILES,
         screen=f"{BENCH_DIR}/record_screen.csv",
     params:
-        benchmark=DISCREPANCY_BENCH,
+        benchmark=config_keys(DISCREPANCY_BENCH, "session", "profiles", "record_screen"),
     log:
         log_path("discrepancy/profiles"),
     benchmark:
@@ -334,7 +341,7 @@ rule discrepancy_session:
         sims=SESSION_RESIM,
         gap=SESSION_GAP,
     params:
-        sessions=DISCREPANCY_SESSIONS,
+        sessions=config_keys(DISCREPANCY_SESSIONS, "replicates", "seed"),
     log:
         log_path("discrepancy/session_{recording}"),
     benchmark:
