@@ -1,7 +1,8 @@
 """The README leads and the documentation holds: the two commands and a first calibration
-open the README; every `accelcal` command shown in the README and docs/ parses with the
-command line's own parser; every Python block outside the extending guide (whose blocks
-tests/test_examples.py checks) runs; the site builds with `mkdocs build --strict`."""
+open the README, and that first calibration runs as printed; every `accelcal` command
+shown in the README and docs/ parses with the command line's own parser; every Python
+block outside the extending guide (whose blocks tests/test_examples.py checks) runs; the
+layout names every package; the site builds with `mkdocs build --strict`."""
 
 from __future__ import annotations
 
@@ -101,6 +102,26 @@ def session(tmp_path_factory):
                    comments="")
     assert cli.main(["calibrate", str(folder / "session.csv"), "--out", str(folder / "calibration.json")]) == 0
     return folder
+
+
+def test_the_readmes_first_calibration_runs_as_printed(session, tmp_path, monkeypatch, capsys):
+    """The README's first commands (calibrate, apply, noise, export) run as written, on a
+    session, a flight and a static record made for them: exit 0 and every file written."""
+    readme = (REPO / "README.md").read_text()
+    section = readme[readme.index("## A first calibration"):]
+    commands = _commands(section[:section.index("\n## ")])
+    assert [c.split()[1] for c in commands] == ["calibrate", "apply", "noise", "export"]
+    for name in ("session.csv", "flight.csv"):
+        (tmp_path / name).write_bytes((session / name).read_bytes())
+    rng = np.random.default_rng(1)
+    n = 30_000  # five minutes at 100 Hz at rest
+    np.savetxt(tmp_path / "static.csv", np.column_stack([np.arange(n) / 100.0, [0, 0, 9.80665] + 0.01 *
+               rng.standard_normal((n, 3))]), delimiter=",", header="t,ax,ay,az", comments="", fmt="%.6f")
+    monkeypatch.chdir(tmp_path)
+    for command in commands:
+        args = shlex.split(command)[1:]
+        assert cli.main(args) == 0, (command, capsys.readouterr().err[-2000:])
+        assert (tmp_path / args[args.index("--out") + 1]).stat().st_size > 0, command
 
 
 @pytest.mark.parametrize("page", [p for p in PAGES if p.name not in ("extending.md",)], ids=lambda p: p.name)
