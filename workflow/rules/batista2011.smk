@@ -277,7 +277,8 @@ rule batista2011_claims:
     output:
         results("claims/batista2011.csv"),
     params:
-        cfg=BATISTA,
+        cfg=config_keys(BATISTA, "claims", "filter.bias", "filter.noise.accel", "filter.steady_from_s",
+                        "observability.runs"),
     log:
         log_path("batista2011/claims"),
     benchmark:

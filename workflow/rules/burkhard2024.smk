@@ -206,7 +206,8 @@ rule burkhard2024_claims:
     output:
         results("claims/burkhard2024.csv"),
     params:
-        cfg=BURKHARD,
+        cfg=config_keys(BURKHARD, "experiments", "claims", "timing.headline_interleave",
+                        "timing.headline_n_poses"),
     log:
         log_path("burkhard2024/claims"),
     benchmark:
