@@ -137,7 +137,7 @@ def test_mock_snakemake_gives_the_rules_paths():
     assert smk.output.detections == "results/discrepancy/benchmark/detections/chunk_3.csv"
     assert smk.input.profiles == "results/discrepancy/benchmark/profiles.json"
     assert smk.log == ["results/logs/discrepancy/chunk_3.log"]
-    assert smk.config["discrepancy"]["benchmark"]["chunks"] == 16  # the default config
+    assert smk.config["discrepancy"]["benchmark"]["chunks"] == 8  # the default config
     ci = _helpers.mock_snakemake("discrepancy_chunk", configfile=CI_CONFIG, chunk="0")
     assert ci.config["discrepancy"]["benchmark"]["chunks"] == 2
 
