@@ -454,7 +454,8 @@ def _assess(fit, all_ms: MotionSet, used, notes, t, tb, best, integrator, base_c
                           excess=fit.excess, residual_rms_deg=float(np.sqrt(np.mean(ev.angles_deg ** 2))),
                           predicted_rms_deg=float(np.sqrt(np.mean(ev.predicted_deg ** 2))),
                           axis_turn_deg=tuple(float(v) for v in turn), warnings=tuple(warnings + more_warnings),
-                          flags=tuple(flags + more_flags))
+                          flags=tuple(flags + more_flags),
+                          scale_rel_se=tuple(float(v) for v in np.diag(se_C) / np.abs(np.diag(fit.C))))
     return quality, table
 
 
@@ -493,6 +494,12 @@ def _fit_warnings(fit, p: float, turn, se_C) -> tuple[list, list]:
                         f"{fit.chi2 / dof:.3g} on {dof} dof): the gyro model, the integration or the rests miss "
                         "something (a disturbed rest, saturation, bias drift); the ± carry the noise model fitted to "
                         "the motions (settings: noise_model)")
+    if 0 < dof < RULES["min_dof"]:
+        flags.append("few_dof")
+        warnings.append(f"only {dof} degrees of freedom check the fit (2 per motion less the 9 parameters): a misfit "
+                        "hardly shows and the ± it scales are uncertain by "
+                        f"{100 * math.sqrt(2 / dof):.0f}%; record at least {math.ceil((RULES['min_dof'] + 9) / 2)} motions "
+                        "between rests")
     rel = np.diag(se_C) / np.abs(np.diag(C))
     weak = [a for a in range(3) if rel[a] > RULES["scale_rel_se"] or turn[a] < RULES["min_axis_turn_deg"]]
     if weak:
