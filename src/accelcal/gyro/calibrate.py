@@ -196,7 +196,7 @@ def accel_direction_cov(accel, f_rest) -> np.ndarray | None:
     return U @ cov @ U.T
 
 
-def _motion_noise(rs, best, t, starts, stops, f_rest, direction_cov=None) -> MotionNoise:
+def motion_noise(rs, best, t, starts, stops, f_rest, direction_cov=None) -> MotionNoise:
     """The noise model of the motions before its components are fitted: durations and the
     wander's part (:mod:`accelcal.gyro.noise`), for the bias mode of ``best``."""
     q = bias_wander(rs.means, rs.mean_std, rs.t_mid, f_rest if best.g_sensitivity is not None else None)
@@ -397,7 +397,7 @@ def _usable_motions(y, t, tb, rests: GyroRests, best, accel, gyro, gyro_range):
     starts, stops, before, after, notes = motion_intervals(rests.intervals, tb.gaps, sat)
     all_ms = MotionSet(y, tb.h, starts, stops, before, after, u, u_cov, rest_noise(rs),
                        motion_bias_variance(best, rs, before, after),
-                       _motion_noise(rs, best, t, starts, stops, f_rest, accel_direction_cov(accel, f_rest)))
+                       motion_noise(rs, best, t, starts, stops, f_rest, accel_direction_cov(accel, f_rest)))
     if all_ms.n_motions < MIN_MOTIONS:
         raise TooFewMotionsError(f"{len(u)} rests give {all_ms.n_motions} motions; the gyro's 9 parameters need at "
                                  f"least {MIN_MOTIONS}: record more poses (or shorter still phases: --min-duration)")
@@ -574,4 +574,4 @@ def evaluate_model(t, gyro, poses, accel, C, bias_vector, *, integrator: str = "
 
 
 __all__ = ["MIN_MOTIONS", "accel_direction_cov", "calibrate_gyro", "evaluate_model", "motion_estimator",
-           "motion_intervals"]
+           "motion_intervals", "motion_noise"]
