@@ -187,7 +187,8 @@ def benchmark_tables(config: dict) -> tuple[pd.DataFrame, pd.DataFrame]:
     """The workflow's gyro loop benchmark (config ``gyro.loop.benchmark``): cases and summary."""
     c = config["loop"]["benchmark"]
     cases, summary = run_benchmark(int(c["n_null"]), int(c["n_effect"]), tuple(float(m) for m in c["multiples"]),
-                                   seed=int(config["seed"]), n_boot=int(c["n_boot"]))
+                                   seed=int(config["seed"]), n_boot=int(c["n_boot"]),
+                                   noise=config["loop"].get("noise", "common"))
     cases = cases.assign(named=cases.named.map(lambda v: ",".join(v) or "none"),
                          not_identifiable=cases.not_identifiable.map(",".join),
                          mde=cases.mde.map(lambda m: ";".join(f"{k}={v:.4g}" for k, v in m.items())),

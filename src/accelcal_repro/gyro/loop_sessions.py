@@ -104,7 +104,8 @@ def repeat_table(results: dict, units=UNITS) -> pd.DataFrame:
 def session_tables(config: dict, paths=None) -> tuple[pd.DataFrame, pd.DataFrame]:
     """The workflow's real sessions through the loop (config ``gyro.loop.sessions``): rows, repeats."""
     c = config["loop"]
-    results = session_results(c["sessions"], n_boot=int(c["benchmark"]["n_boot"]), paths=paths)
+    results = session_results(c["sessions"], n_boot=int(c["benchmark"]["n_boot"]), paths=paths,
+                              noise=c.get("noise", "common"))
     return session_rows(results), repeat_table(results)
 
 
