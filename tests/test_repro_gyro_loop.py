@@ -147,3 +147,24 @@ def test_the_benchmark_claims_judge_its_summary():
     assert "time_offset 0.60" in power["evidence"]
     size, power = LB.loop_claims(summary(2, 0, 1, (1.0, 1.0)))
     assert size["verdict"] == power["verdict"] == "not_testable_at_this_scale"
+
+
+def test_the_components_noise_model_takes_in_the_wander_that_one_common_scale_smears():
+    """A bias random walk (3e-5 rad^2/s^3, as the real sessions' excess asks for) inflates the motions'
+    residuals by their duration: one common scale over the rest noise reads an excess near 1.8 and
+    spreads it over every motion alike; the components (the wander per gyro axis, a per-motion error of
+    C, the motions' rate noise, the rests' directions, each sized by REML) leave an excess near 1 and
+    weight the long motions less, so every identifiable candidate's MDE shrinks or stays."""
+    wander = {"bias_walk_psd": 3e-5}
+    common = LB.run_case(4, design=wander, noise="common", n_boot=199)
+    comp = LB.run_case(4, design=wander, noise="components", n_boot=199)
+    assert common["named"] == comp["named"] == []
+    assert common["excess_before"] > 1.4 and comp["excess_before"] == pytest.approx(1.0, abs=0.15)
+    assert set(comp["mde"]) == set(common["mde"])
+    assert all(comp["mde"][c] < 1.05 * common["mde"][c] for c in common["mde"])
+    assert comp["mde"]["scale_asymmetry"] < 0.85 * common["mde"]["scale_asymmetry"]
+
+
+def test_an_unknown_noise_model_is_refused_in_one_line():
+    with pytest.raises(ValueError, match="one of common, components"):
+        GL.gyro_motions(None, None, None, None, "wander")

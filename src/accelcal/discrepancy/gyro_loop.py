@@ -60,11 +60,12 @@ import numpy as np
 
 from ..calibration import calibrate_poses
 from ..errors import AccelcalError, NotConvergedError
-from ..gyro.calibrate import motion_intervals
+from ..gyro.calibrate import motion_intervals, motion_noise
 from ..gyro.effects import directions as effect_directions
 from ..gyro.fit import MotionSet, evaluate, fit_iterative, motion_residuals
 from ..gyro.model import GyroModel
 from ..gyro.recording import calibrate_recording_gyro
+from ..gyro.noise import fit_with_noise
 from ..gyro.rests import (MIN_STILL_SAMPLES, RestStatistics, bias_series, fit_bias, gyro_rests, motion_bias_variance,
                           rest_noise, sample_interval, saturated_samples)
 from ..summary import Summary
@@ -78,6 +79,12 @@ MARGIN = 3
 MIN_REST_SAMPLES = MIN_STILL_SAMPLES
 #: "Moving" (the motion bias's samples): a rate above this many times the rest noise on some axis.
 MOVING_SIGMAS = 5.0
+#: The loop's noise models (:func:`gyro_motions`): ``common``, the rests' noise times one scale
+#: estimated from the residuals; ``components``, the gyro calibration's noise model
+#: (:mod:`accelcal.gyro.noise`), a scale per source fitted by REML on these motions: the bias's
+#: wander per gyro axis, a per-motion error of C and extra rate noise in the motions (the gyro),
+#: the rests' directions (the accelerometer); the F test's common scale stays on top of it.
+NOISE_MODELS = ("common", "components")
 
 
 @dataclass(frozen=True)
@@ -132,7 +139,7 @@ class GyroMotions:
     still_rests: bool = False  #: the rests are the gyro's still samples: every motion starts and ends at rest
 
 
-def gyro_motions(rec, acc_cal, poses, gcal) -> GyroMotions:
+def gyro_motions(rec, acc_cal, poses, gcal, noise: str = "common") -> GyroMotions:
     """The motion set of :func:`accelcal.gyro.calibrate.calibrate_gyro`'s fit ``gcal``, on the gyro's
     own still rests, with ``C`` refitted there under the rests' noise alone.
 
@@ -140,8 +147,11 @@ def gyro_motions(rec, acc_cal, poses, gcal) -> GyroMotions:
     the gyro is still, the gravity directions averaged over the same samples), bias mode,
     g-sensitivity, time base and used motions (its table) as the calibration the user gets: the
     accelerometer's rests take in the slow ends of the turns, whose rotation the motions then
-    lack, and the loop would name that as an effect of the gyro.
+    lack, and the loop would name that as an effect of the gyro.  ``noise``: one of
+    :data:`NOISE_MODELS`.
     """
+    if noise not in NOISE_MODELS:
+        raise ValueError(f"gyro loop noise model {noise!r}: one of {', '.join(NOISE_MODELS)}")
     s = gcal.settings
     t, gyro = rec.t, np.asarray(rec.gyro, float)
     tb = sample_interval(t)
@@ -155,14 +165,19 @@ def gyro_motions(rec, acc_cal, poses, gcal) -> GyroMotions:
         y = y - f @ best.g_sensitivity.T
     starts, stops, before, after, _ = motion_intervals(iv, tb.gaps, saturated_samples(gyro, None))
     h = tb.h if s.get("time_base", {}).get("used", "index") == "index" else t
+    mn = motion_noise(rs, best, t, starts, stops, f_rest if gs else None) if noise == "components" else None
     ms = MotionSet(y, h, starts, stops, before, after, u, u_cov, rest_noise(rs),
-                   motion_bias_variance(best, rs, before, after))
+                   motion_bias_variance(best, rs, before, after), mn)
     used = np.asarray(gcal.motions.get("used", [True] * ms.n_motions), bool)
     integrator = s.get("integrator", "magnus4")
     ms = ms.subset(used)
     C = np.asarray(gcal.model.C, float)
     try:
-        C = fit_iterative(ms, C, integrator).C
+        if mn is None:
+            C = fit_iterative(ms, C, integrator).C
+        else:  # the components' sizes by REML on these motions, alternated with C
+            fit, ms, _ = fit_with_noise(fit_iterative, ms, C, integrator)
+            C = fit.C
     except NotConvergedError:
         pass  # the calibration's C: the tests project out its change to first order anyway
     return GyroMotions(ms, C, integrator, f, float(s.get("nominal", 1.0)), gs, np.asarray(t, float), rs,
@@ -332,6 +347,7 @@ class GyroLoopResult(LoopOutcome):
     dC: np.ndarray | None = None  #: the refit's change of ``C`` with the named effects
     calibration: dict | None = None  #: the gyro calibration with the named effects (``apply`` reads it)
     motions: GyroMotions | None = field(default=None, repr=False)  #: the data tested (not in :meth:`to_dict`)
+    noise: str = "common"  #: the noise model tested under (:data:`NOISE_MODELS`)
 
     def to_dict(self) -> dict:
         return {"named": list(self.named) or ["none"], "outcome": self.outcome, "candidates": self.rounds,
@@ -341,8 +357,10 @@ class GyroLoopResult(LoopOutcome):
                 "n_motions": self.n_motions, "alpha": self.alpha, "n_boot": self.n_boot,
                 "noise_model": "rest noise integrated over each motion, the rests' mean errors shared by the motions "
                                "that subtract them, the gravity directions' noise (rests shrunk to the gyro's still "
-                               "samples) times one common scale estimated from the residuals (what wanders between "
-                               "rests)",
+                               "samples)" + (", the bias's wander, a per-motion error of C, extra rate noise in the "
+                                             "motions and the rests' directions, each with its own size (REML)"
+                                             if self.noise == "components" else "") +
+                               " times one common scale estimated from the residuals (what wanders between rests)",
                 "notes": list(self.notes), "calibration": self.calibration}
 
     def summary(self, *, written_to=None) -> Summary:
@@ -423,7 +441,7 @@ def gyro_discrepancy(gm: GyroMotions, *, alpha: float = 0.05, n_boot: int = 999,
         base = np.column_stack([base, Xws[best]])
     est, excess1, dC = _refit(Jw, rw, [Xws[c] for c in named], named, n)
     return GyroLoopResult(tuple(named), rounds, excess0, excess1 if named else excess0, est, gm.ms.n_motions, alpha,
-                          n_boot, tuple(notes), dC)
+                          n_boot, tuple(notes), dC, noise="common" if gm.ms.noise is None else "components")
 
 
 def estimate_effects(gm: GyroMotions, names) -> dict:
@@ -513,7 +531,8 @@ def rest_noise_problem(gyro, intervals, rate: float) -> str | None:
     return None
 
 
-def gyro_layer(rec, g: float, poses, *, alpha: float = 0.05, n_boot: int = 999, seed: int = 20240708):
+def gyro_layer(rec, g: float, poses, *, alpha: float = 0.05, n_boot: int = 999, seed: int = 20240708,
+               noise: str = "common"):
     """The gyro loop of a recording on the accelerometer's poses: ``(result, None)``, or
     ``(None, reason)`` in one line when the gyro cannot be calibrated from them (no gyro,
     rests too short for its noise, too few motions...): the accelerometer's loop runs anyway.
@@ -531,13 +550,14 @@ def gyro_layer(rec, g: float, poses, *, alpha: float = 0.05, n_boot: int = 999, 
     try:
         acc = calibrate_poses(poses, g, "full_lls", unit=rec.unit)
         gcal = calibrate_recording_gyro(rec, acc, poses, g_sensitivity=False)
-        gm = gyro_motions(rec, acc, poses, gcal)
+        gm = gyro_motions(rec, acc, poses, gcal, noise)
         res = gyro_discrepancy(gm, alpha=alpha, n_boot=n_boot, seed=seed)
         return replace(res, calibration=with_effects(gcal, gm, res), motions=gm), None
     except AccelcalError as e:
         return None, f"gyroscope not tested: {str(e).splitlines()[0]}"
 
 
-__all__ = ["CANDIDATES", "CANDIDATE_NAMES", "GyroCandidate", "GyroLoopResult", "GyroMotions", "candidate_jacobian",
+__all__ = ["CANDIDATES", "CANDIDATE_NAMES", "NOISE_MODELS", "GyroCandidate", "GyroLoopResult", "GyroMotions",
+           "candidate_jacobian",
            "bias_error_jacobian", "compact", "effect_constants", "estimate_effects", "gyro_discrepancy", "gyro_layer",
            "gyro_motions", "loop_evaluation", "rest_noise_problem", "with_effects"]

@@ -196,7 +196,7 @@ def accel_direction_cov(accel, f_rest) -> np.ndarray | None:
     return U @ cov @ U.T
 
 
-def _motion_noise(rs, best, t, starts, stops, f_rest, direction_cov=None) -> MotionNoise:
+def motion_noise(rs, best, t, starts, stops, f_rest, direction_cov=None) -> MotionNoise:
     """The noise model of the motions before its components are fitted: durations and the
     wander's part (:mod:`accelcal.gyro.noise`), for the bias mode of ``best``."""
     q = bias_wander(rs.means, rs.mean_std, rs.t_mid, f_rest if best.g_sensitivity is not None else None)
@@ -397,7 +397,7 @@ def _usable_motions(y, t, tb, rests: GyroRests, best, accel, gyro, gyro_range):
     starts, stops, before, after, notes = motion_intervals(rests.intervals, tb.gaps, sat)
     all_ms = MotionSet(y, tb.h, starts, stops, before, after, u, u_cov, rest_noise(rs),
                        motion_bias_variance(best, rs, before, after),
-                       _motion_noise(rs, best, t, starts, stops, f_rest, accel_direction_cov(accel, f_rest)))
+                       motion_noise(rs, best, t, starts, stops, f_rest, accel_direction_cov(accel, f_rest)))
     if all_ms.n_motions < MIN_MOTIONS:
         raise TooFewMotionsError(f"{len(u)} rests give {all_ms.n_motions} motions; the gyro's 9 parameters need at "
                                  f"least {MIN_MOTIONS}: record more poses (or shorter still phases: --min-duration)")
@@ -454,7 +454,8 @@ def _assess(fit, all_ms: MotionSet, used, notes, t, tb, best, integrator, base_c
                           excess=fit.excess, residual_rms_deg=float(np.sqrt(np.mean(ev.angles_deg ** 2))),
                           predicted_rms_deg=float(np.sqrt(np.mean(ev.predicted_deg ** 2))),
                           axis_turn_deg=tuple(float(v) for v in turn), warnings=tuple(warnings + more_warnings),
-                          flags=tuple(flags + more_flags))
+                          flags=tuple(flags + more_flags),
+                          scale_rel_se=tuple(float(v) for v in np.diag(se_C) / np.abs(np.diag(fit.C))))
     return quality, table
 
 
@@ -493,6 +494,12 @@ def _fit_warnings(fit, p: float, turn, se_C) -> tuple[list, list]:
                         f"{fit.chi2 / dof:.3g} on {dof} dof): the gyro model, the integration or the rests miss "
                         "something (a disturbed rest, saturation, bias drift); the ± carry the noise model fitted to "
                         "the motions (settings: noise_model)")
+    if 0 < dof < RULES["min_dof"]:
+        flags.append("few_dof")
+        warnings.append(f"only {dof} degrees of freedom check the fit (2 per motion less the 9 parameters): a misfit "
+                        "hardly shows and the ± it scales are uncertain by "
+                        f"{100 * math.sqrt(2 / dof):.0f}%; record at least {math.ceil((RULES['min_dof'] + 9) / 2)} motions "
+                        "between rests")
     rel = np.diag(se_C) / np.abs(np.diag(C))
     weak = [a for a in range(3) if rel[a] > RULES["scale_rel_se"] or turn[a] < RULES["min_axis_turn_deg"]]
     if weak:
@@ -567,4 +574,4 @@ def evaluate_model(t, gyro, poses, accel, C, bias_vector, *, integrator: str = "
 
 
 __all__ = ["MIN_MOTIONS", "accel_direction_cov", "calibrate_gyro", "evaluate_model", "motion_estimator",
-           "motion_intervals"]
+           "motion_intervals", "motion_noise"]

@@ -27,7 +27,16 @@ from .model import RAW_UNITS, GyroModel
 #: Thresholds of the warnings (:mod:`accelcal.gyro.calibrate`).
 RULES = {"excess": 1.5, "p_value": 1e-3, "scale_rel_se": 0.01, "min_axis_turn_deg": 90.0, "short_deg": 10.0,
          "min_long_motions": 5, "integration_fraction": 0.3, "jitter": 0.05, "bias_excess": 3.0,
-         "range_fraction": 0.9}
+         "range_fraction": 0.9, "min_dof": 10}
+
+#: The trust verdicts, least trusted first.  ``poorly_determined``: the motions do not pin the
+#: parameters down, or too few residuals check them (the flags in :data:`UNDETERMINED_FLAGS`, or
+#: fewer than ``RULES["min_dof"]`` degrees of freedom: with ν dof the excess that scales the ±
+#: is itself uncertain by ``sqrt(2/ν)``, over 45 % below 10, and t(0.975, ν) exceeds 1.96 by over
+#: 14 %); ``caution``: determined, but a warning holds (residuals beyond the noise, saturation,
+#: the sample rate, ...); ``trusted``: no warning.
+VERDICTS = ("poorly_determined", "caution", "trusted")
+UNDETERMINED_FLAGS = ("few_dof", "few_axes", "short_motions", "exactly_determined")
 
 
 @dataclass(frozen=True)
@@ -45,15 +54,39 @@ class GyroQuality:
     axis_turn_deg: tuple  #: total rotation about each gyro axis over the used motions [deg]
     warnings: tuple[str, ...]
     flags: tuple[str, ...] = ()
+    scale_rel_se: tuple = ()  #: relative standard error of each gyro axis' scale (diag of C)
 
     @property
     def trustworthy(self) -> bool:
         return not self.warnings
 
+    @property
+    def verdict(self) -> str:
+        """One of :data:`VERDICTS`, from the same evidence as the warnings (their flags and the dof)."""
+        if set(self.flags) & set(UNDETERMINED_FLAGS) or self.dof < RULES["min_dof"]:
+            return "poorly_determined"
+        return "caution" if self.warnings else "trusted"
+
+    @property
+    def reasons(self) -> tuple[str, ...]:
+        """Short reasons behind :attr:`verdict` (for a figure's mark or the summary's trust line)."""
+        out = []
+        if self.dof < RULES["min_dof"]:
+            out.append(f"{self.dof} dof" + (" (exactly determined)" if "exactly_determined" in self.flags else ""))
+        if "few_axes" in self.flags or "short_motions" in self.flags:
+            rel = np.asarray(self.scale_rel_se, float)
+            out.append(f"scale x/y/z ± {'/'.join(f'{100 * v:.2g}' for v in rel)} %" if rel.size == 3 else
+                       "little rotation per axis")
+        if "excess" in self.flags:
+            out.append(f"excess {self.excess:.3g}")
+        out += [f.replace("_", " ") for f in self.flags if f not in UNDETERMINED_FLAGS + ("excess",)]
+        return tuple(out)
+
     def to_dict(self) -> dict:
         d = asdict(self)
         d.update(warnings=list(self.warnings), flags=list(self.flags), axis_turn_deg=list(self.axis_turn_deg),
-                 trustworthy=self.trustworthy, rules=dict(RULES))
+                 scale_rel_se=list(self.scale_rel_se), trustworthy=self.trustworthy, verdict=self.verdict,
+                 reasons=list(self.reasons), rules=dict(RULES))
         return d
 
     @classmethod
@@ -62,6 +95,7 @@ class GyroQuality:
         v = {k: d[k] for k in keys if k in d}
         v["warnings"], v["flags"] = tuple(v.get("warnings", ())), tuple(v.get("flags", ()))
         v["axis_turn_deg"] = tuple(v.get("axis_turn_deg", ()))
+        v["scale_rel_se"] = tuple(float("nan") if x is None else float(x) for x in v.get("scale_rel_se", ()))
         for k in ("chi2", "p_value", "excess", "residual_rms_deg", "predicted_rms_deg"):
             v[k] = float("nan") if v.get(k) is None else float(v[k])
         return cls(**v)
@@ -226,6 +260,7 @@ class GyroCalibration:
                          f"{1e3 * (nm.get('rest_direction') or 0):.2g} mrad, bias wander PSD [{wander}] ({unit})^2/s "
                          f"(chi2/dof = {nm.get('chi2_per_dof', float('nan')):.3g})")
         lines.append(f"  nominal {nom:.6g} rad/s per {unit} ({s.get('nominal_from', 'unit')})")
+        lines.append(f"  trust: {q.verdict.replace('_', ' ')}" + (f" ({'; '.join(q.reasons)})" if q.reasons else ""))
         lines += [f"warning: gyroscope: {w}" for w in q.warnings]
         if written_to is not None:
             lines.append(f"written to {written_to}")
@@ -254,4 +289,4 @@ class GyroFerrarisCalibration(GyroCalibration):
 
 
 __all__ = ["GyroCalibration", "GyroFerrarisCalibration", "GyroIterativeCalibration", "GyroOneStepCalibration",
-           "GyroQuality", "RULES"]
+           "GyroQuality", "RULES", "UNDETERMINED_FLAGS", "VERDICTS"]

@@ -28,7 +28,7 @@ from accelcal.gyro.ferraris import calibrate_ferraris_session, fit_ferraris, sta
 from accelcal.gyro.model import RAW_UNITS, GyroModel
 from accelcal.gyro.rests import rest_noise, rest_statistics
 
-from .peers import AffineAccel
+from .peers import AffineAccel, trust_columns
 
 CTU_WINDOWS = {"x": (2420, 2910), "y": (2565, 3120), "z": (2975, 3500)}  # 1-based, inclusive
 CTU_ANGLES = (361.338, 367.160, 363.6703)
@@ -97,12 +97,13 @@ def imucal_comparison(r: dict, imucal: dict) -> tuple[pd.DataFrame, pd.DataFrame
     ref = params[params.calibration == "accelcal"].set_index("parameter")
     params["diff_in_se"] = [(v - ref.loc[p, "value"]) / ref.loc[p, "se"] for p, v in zip(params.parameter, params.value)]
     foms = []
-    for name, model in (("accelcal", ours.model), ("accelcal_measured_axes", measured.model), ("imucal", theirs)):
+    for name, cal in (("accelcal", ours), ("accelcal_measured_axes", measured), ("imucal", None)):
+        model = theirs if cal is None else cal.model
         ev, _ = evaluate_model(rec.t, rec.gyro, poses, acc_cal, model.C, model.bias)
         foms.append({"session": "imucal_ferraris", "calibration": name, "bias": "own_bias", "motions": len(ev.r),
                      "rms_deg": float(np.sqrt(np.mean(ev.angles_deg ** 2))), "median_deg": float(np.median(
                          ev.angles_deg)), "max_deg": float(ev.angles_deg.max()),
-                     "noise_rms_deg": float(np.sqrt(np.mean(ev.predicted_deg ** 2)))})
+                     "noise_rms_deg": float(np.sqrt(np.mean(ev.predicted_deg ** 2))), **trust_columns(cal)})
     return params, pd.DataFrame(foms)
 
 

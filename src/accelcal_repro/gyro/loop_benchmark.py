@@ -32,6 +32,7 @@ from accelcal.gyro.simulate import simulate_recording
 from accelcal.recording import Recording
 
 from ..claims import Claim, MinimumSample
+from ..discrepancy.claims import minimum
 from ..discrepancy.scoring import clopper_pearson
 
 #: The parameter each hidden effect sets (first of its candidate's on the x gyro).
@@ -42,10 +43,10 @@ LOOP_SIZE = Claim("gyro", "loop_false_positives", "On effect-free simulated sess
                   "interval is at most 2 alpha", "upper bound <= 0.10")
 LOOP_POWER = Claim("gyro", "loop_power_3x_mde", "At 3 times its minimum detectable effect every hidden gyro effect "
                    "is named on at least 80 % of simulated sessions", ">= 0.8")
-#: Effect-free sessions before the size rule decides: at a true rate of 0.035 the interval's upper end
-#: exceeds 2 alpha with probability 0.005 on 300 (0.050 on 200, 0.16 on 150: binomial, Clopper-Pearson).
-SIZE_MINIMUM = MinimumSample(300, "effect-free sessions", "with fewer, a loop whose true rate is 0.035 fails the "
-                             "rule with probability 1 % or more (the interval's upper end above 2 alpha)")
+#: Effect-free sessions before the size rule decides: the accelerometer loop's rule, one function
+#: (a loop whose true rate is 0.7 alpha = 0.035 fails it with probability below 1 % at this size and
+#: every larger one: 280 at alpha 0.05; 0.050 on 200, 0.16 on 150, 0.27 on 100: binomial, Clopper-Pearson).
+SIZE_MINIMUM = minimum("fpr_decided", unit="effect-free sessions")
 #: Sessions per candidate at 3x MDE: the power's binomial s.e. at 0.8 below 0.09.
 POWER_MINIMUM = MinimumSample(20, "sessions per candidate at 3x MDE", "with fewer, the power's binomial standard "
                               "error exceeds 0.09")
@@ -100,7 +101,8 @@ def clock_recording(rng, size: float, design=None, fs: float = 100.0, fine: int 
     return Recording(t=stamps, acc=acc, temp=None, source="clock", unit="m/s^2", gyro=gyro, gyro_unit="rad/s")
 
 
-def run_case(seed: int, effect: str | None = None, size: float = 0.0, n_boot: int = 199, design=None) -> dict:
+def run_case(seed: int, effect: str | None = None, size: float = 0.0, n_boot: int = 199, design=None,
+             noise: str = "common") -> dict:
     """One simulated session through the loop: what it named, and the hidden parameter's MDE."""
     rng = np.random.default_rng(seed)
     if effect == "sample_clock":
@@ -112,7 +114,7 @@ def run_case(seed: int, effect: str | None = None, size: float = 0.0, n_boot: in
                         gyro=_hide(sim, effect, size), gyro_unit="rad/s")
     acc, poses = calibrate_recording(rec, sim["g"], "full_lls", search=True, min_poses=MIN_RESTS)
     gcal = calibrate_recording_gyro(rec, acc, poses, g_sensitivity=False)  # the loop decides it
-    res = gyro_discrepancy(gyro_motions(rec, acc, poses, gcal), n_boot=n_boot, seed=seed)
+    res = gyro_discrepancy(gyro_motions(rec, acc, poses, gcal, noise), n_boot=n_boot, seed=seed)
     mde = {}
     for c, row in res.rounds[0].items():
         if row.get("status") == "tested":
@@ -124,7 +126,7 @@ def run_case(seed: int, effect: str | None = None, size: float = 0.0, n_boot: in
 
 
 def run_benchmark(n_null: int = 20, n_effect: int = 10, multiples=(0.5, 1.0, 3.0), seed: int = 1, n_boot: int = 999,
-                  candidates=tuple(HIDDEN)) -> tuple[pd.DataFrame, pd.DataFrame]:
+                  candidates=tuple(HIDDEN), noise: str = "common", design=None) -> tuple[pd.DataFrame, pd.DataFrame]:
     """Effect-free cases (FPR) and ``n_effect`` cases per candidate and multiple of its MDE (power).
 
     Returns the per-case rows and the summary, one row per candidate and multiple: the
@@ -134,7 +136,8 @@ def run_benchmark(n_null: int = 20, n_effect: int = 10, multiples=(0.5, 1.0, 3.0
     the power (that candidate named), the MDE used (median over the effect-free sessions)
     and the share of them on which it was identifiable.
     """
-    null = [run_case(seed + i, n_boot=n_boot) for i in range(n_null)]
+    kw = {"n_boot": n_boot, "noise": noise, "design": design}
+    null = [run_case(seed + i, **kw) for i in range(n_null)]
     rows, summary = list(null), []
     k = int(sum(bool(r["named"]) for r in null))
     lo, hi = clopper_pearson(k, n_null)
@@ -142,7 +145,7 @@ def run_benchmark(n_null: int = 20, n_effect: int = 10, multiples=(0.5, 1.0, 3.0
     for c in candidates:
         own = null
         if c == "sample_clock":  # its effect-free sessions: stamps that wander, samples taken evenly (w = 0)
-            own = [run_case(seed + 500 + i, c, 0.0, n_boot=n_boot) for i in range(n_null)]
+            own = [run_case(seed + 500 + i, c, 0.0, **kw) for i in range(n_null)]
             rows += own
         mdes = [r["mde"][c] for r in own if c in r["mde"]]
         this = float(np.mean([c in r["named"] for r in own])) if own else float("nan")
@@ -153,7 +156,7 @@ def run_benchmark(n_null: int = 20, n_effect: int = 10, multiples=(0.5, 1.0, 3.0
                 summary.append({**row, "mde": float("nan"), "power": float("nan"), "n_effect": 0})
                 continue
             mde = float(np.median(mdes))
-            cases = [run_case(seed + 1000 * (j + 1) + i, c, mult * mde, n_boot=n_boot) for i in range(n_effect)]
+            cases = [run_case(seed + 1000 * (j + 1) + i, c, mult * mde, **kw) for i in range(n_effect)]
             rows += cases
             summary.append({**row, "mde": mde, "power": float(np.mean([c in r["named"] for r in cases])),
                             "n_effect": n_effect})
@@ -184,7 +187,8 @@ def benchmark_tables(config: dict) -> tuple[pd.DataFrame, pd.DataFrame]:
     """The workflow's gyro loop benchmark (config ``gyro.loop.benchmark``): cases and summary."""
     c = config["loop"]["benchmark"]
     cases, summary = run_benchmark(int(c["n_null"]), int(c["n_effect"]), tuple(float(m) for m in c["multiples"]),
-                                   seed=int(config["seed"]), n_boot=int(c["n_boot"]))
+                                   seed=int(config["seed"]), n_boot=int(c["n_boot"]),
+                                   noise=config["loop"].get("noise", "common"))
     cases = cases.assign(named=cases.named.map(lambda v: ",".join(v) or "none"),
                          not_identifiable=cases.not_identifiable.map(",".join),
                          mde=cases.mde.map(lambda m: ";".join(f"{k}={v:.4g}" for k, v in m.items())),

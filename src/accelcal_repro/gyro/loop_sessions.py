@@ -34,7 +34,7 @@ UNITS = {"imutk_fork": ("fork_data1", "fork_data2", "fork_data3", "fork_data4"),
 AGREE_P = 0.01
 
 
-def session_results(names=None, n_boot: int = 999, paths=None) -> dict:
+def session_results(names=None, n_boot: int = 999, paths=None, noise: str = "common") -> dict:
     """``{session: (GyroLoopResult or None, reason)}`` of every session in ``names`` (default:
     :data:`UNITS`); ``paths`` ``{dataset: {file: path}}`` (default: the shared copy, else a download)."""
     names = list(names or [n for u in UNITS.values() for n in u])
@@ -48,7 +48,7 @@ def session_results(names=None, n_boot: int = 999, paths=None) -> dict:
         except AccelcalError as e:
             out[n] = (None, str(e).splitlines()[0][:160])
             continue
-        out[n] = gyro_layer(rec, spec.g, poses, n_boot=n_boot)
+        out[n] = gyro_layer(rec, spec.g, poses, n_boot=n_boot, noise=noise)
     return out
 
 
@@ -104,7 +104,8 @@ def repeat_table(results: dict, units=UNITS) -> pd.DataFrame:
 def session_tables(config: dict, paths=None) -> tuple[pd.DataFrame, pd.DataFrame]:
     """The workflow's real sessions through the loop (config ``gyro.loop.sessions``): rows, repeats."""
     c = config["loop"]
-    results = session_results(c["sessions"], n_boot=int(c["benchmark"]["n_boot"]), paths=paths)
+    results = session_results(c["sessions"], n_boot=int(c["benchmark"]["n_boot"]), paths=paths,
+                              noise=c.get("noise", "common"))
     return session_rows(results), repeat_table(results)
 
 

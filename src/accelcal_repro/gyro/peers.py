@@ -27,7 +27,9 @@ Figure of merit: the angle between each rest's gravity direction and the previou
 carried over by the calibrated, integrated gyro (Magnus-4), per motion, RMS over a session,
 on the same rests for everyone (the gyro's own, :func:`accelcal.gyro.rests.gyro_rests`), each
 calibration with its own accelerometer and either its own bias (``own_bias``: as published)
-or the session's rest bias (``rest_bias``: the scale and misalignment alone).
+or the session's rest bias (``rest_bias``: the scale and misalignment alone).  accelcal's rows
+carry its trust verdict and reasons (:func:`trust_columns`), so that the figure marks a
+poorly determined calibration beside well-determined ones.
 """
 
 from __future__ import annotations
@@ -158,9 +160,18 @@ def figure_of_merit(session: str, rec, poses, ours_acc, ours, peers: dict,
             a = ev.angles_deg[used]
             rows.append({"session": session, "calibration": name, "bias": kind, "motions": int(used.sum()),
                          "rms_deg": float(np.sqrt(np.mean(a ** 2))), "median_deg": float(np.median(a)),
-                         "max_deg": float(a.max()), "noise_rms_deg": float(np.sqrt(np.mean(ev.predicted_deg ** 2)))})
+                         "max_deg": float(a.max()), "noise_rms_deg": float(np.sqrt(np.mean(ev.predicted_deg ** 2))),
+                         **trust_columns(ours if name == "accelcal" else None)})
     return pd.DataFrame(rows)
 
 
+def trust_columns(cal) -> dict:
+    """``verdict`` and ``reasons`` of a calibration's trust (:attr:`accelcal.gyro.result.GyroQuality.verdict`);
+    empty for a peer's calibration, which carries no evidence of its own."""
+    if cal is None:
+        return {"verdict": "", "reasons": ""}
+    return {"verdict": cal.quality.verdict, "reasons": "; ".join(cal.quality.reasons)}
+
+
 __all__ = ["AffineAccel", "XSENS_FACTORY", "compare_parameters", "figure_of_merit", "peer_calibrations",
-           "read_calib", "to_accelcal_frame"]
+           "read_calib", "to_accelcal_frame", "trust_columns"]

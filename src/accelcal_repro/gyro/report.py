@@ -154,8 +154,10 @@ COLORS = {"accelcal": "C0", "accelcal_rest_noise": "0.6", "imutk_run": "C1", "im
 
 
 def figure(fom: pd.DataFrame, imucal_fom: pd.DataFrame | None = None):
-    """RMS per-motion misfit [deg] per session and calibration (own bias), and the noise level."""
+    """RMS per-motion misfit [deg] per session and calibration (own bias), and the noise level;
+    a calibration whose trust verdict is ``poorly_determined`` is hatched, its reasons written above it."""
     import matplotlib.pyplot as plt
+    from matplotlib.patches import Patch
 
     from accelcal.plotting import RC
 
@@ -163,24 +165,37 @@ def figure(fom: pd.DataFrame, imucal_fom: pd.DataFrame | None = None):
     sub = pd.concat([f[f.bias == "own_bias"] if "bias" in f.columns else f.assign(bias="own_bias") for f in frames],
                     ignore_index=True) if frames else pd.DataFrame(columns=["session", "calibration", "rms_deg",
                                                                             "noise_rms_deg"])
+    poor = (sub.verdict == "poorly_determined").to_numpy() if "verdict" in sub.columns else np.zeros(len(sub), bool)
     sessions = list(dict.fromkeys(sub.session))
     with plt.rc_context(RC):
-        fig, ax = plt.subplots(figsize=(8.0, 3.3), layout="constrained")
-        seen = set()
+        fig, ax = plt.subplots(figsize=(8.0, 3.6), layout="constrained")
         for i, sname in enumerate(sessions):
-            d = sub[sub.session == sname]
+            d, bad = sub[sub.session == sname], poor[sub.session.to_numpy() == sname]
             width = 0.8 / len(d)
-            for j, (c, v) in enumerate(zip(d.calibration, d.rms_deg)):
-                ax.bar(i + (j - (len(d) - 1) / 2) * width, v, width, color=COLORS.get(c, "0.5"),
-                       label=None if c in seen else c.replace("_", " "))
-                seen.add(c)
+            x = i + (np.arange(len(d)) - (len(d) - 1) / 2) * width
+            ax.bar(x, d.rms_deg, width, color=[COLORS.get(c, "0.5") for c in d.calibration],
+                   hatch=["////" if b else None for b in bad], edgecolor=["C3" if b else "none" for b in bad],
+                   linewidth=0.8)
+            if bad.any():  # the reasons once per session, above its highest poorly determined bar
+                why = dict.fromkeys(r for rs in d.reasons[bad] for r in str(rs).split("; "))
+                ax.annotate("\n".join(why).replace(" (", "\n("), (x[bad].mean(), d.rms_deg[bad].max()), xytext=(0, 2),
+                            textcoords="offset points", ha="center", va="bottom", fontsize=5.5, color="C3", zorder=4)
         noise = sub.groupby("session").noise_rms_deg.first()
         ax.scatter(range(len(sessions)), [noise[s] for s in sessions], marker="_", s=400, color="k", zorder=3,
                    label="noise (rests)")
+        handles, labels = ax.get_legend_handles_labels()
+        for c in dict.fromkeys(sub.calibration):
+            handles.append(Patch(color=COLORS.get(c, "0.5")))
+            labels.append(c.replace("_", " "))
+        if poor.any():
+            handles.append(Patch(facecolor="white", edgecolor="C3", hatch="////"))
+            labels.append("poorly determined\n(accelcal's trust verdict:\nfew dof or none, little\nrotation per axis; "
+                          "reasons\nabove the bar)")
         ax.set_yscale("log")
+        ax.margins(y=0.25)
         ax.set_xticks(range(len(sessions)), [s.replace("_", " ") for s in sessions], rotation=20, fontsize=7.5)
         ax.set_ylabel("RMS gravity misfit per motion [deg]")
-        ax.legend(fontsize=6.5, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+        ax.legend(handles, labels, fontsize=6.5, loc="upper left", bbox_to_anchor=(1.0, 1.0))
         ax.set_title("gravity at each rest vs the previous rest's carried by the calibrated gyro (Magnus-4)",
                      fontsize=8.5)
     return fig
