@@ -151,18 +151,22 @@ _parse = jit(error_model="python")(_parse)
 
 
 def parse_lines(pieces, delim: str, k: int, n: int) -> list[np.ndarray] | None:
-    """The ``k`` columns (``n`` floats each) of the lines in ``pieces`` (ASCII ``bytes``, each
-    ending after a line feed but the last), or None if a line is not ``k`` plain numbers
-    (module docstring) or the lines are not ``n``."""
-    out = np.empty((k, n))
+    """The ``k`` columns (``n`` floats each, an array of its own per column: a reader frees the
+    columns it has used) of the lines in ``pieces`` (ASCII ``bytes``, each ending after a line
+    feed but the last), or None if a line is not ``k`` plain numbers (module docstring) or the
+    lines are not ``n``."""
+    columns = [np.empty(n) for _ in range(k)]
     row = 0
     code = 32 if delim == " " else ord(delim)
     for piece in pieces:
-        got = _parse(np.frombuffer(piece, np.uint8), code, out, row)
-        if got < 0:
+        block = np.empty((k, piece.count(b"\n") + 1))
+        got = _parse(np.frombuffer(piece, np.uint8), code, block, 0)
+        if got < 0 or row + got > n:
             return None
+        for column, values in zip(columns, block):
+            column[row:row + got] = values[:got]
         row += got
-    return list(out) if row == n else None
+    return columns if row == n else None
 
 
 __all__ = ["parse_lines"]
