@@ -165,13 +165,18 @@ class _Columns:
         return x if x is not None else parse_numbers(self.column(role), tab.dc, self.path, role, tab.names,
                                                      self.roles[role], tab.lines)
 
+    def release(self, role):
+        """Let go of the role's floats (read once; a 10⁶-row column is 8 MB); a matrix's are
+        kept: they are its columns' text too (:meth:`_Table.column`), and the caller's."""
+        if self.floats is not None and role in self.roles and (self.tab.raw is not None or self.tab.data is not None):
+            self.floats[self.roles[role]] = None
+
     def triad(self, axes):
         """The three columns as a fresh (n, 3) array; their floats are let go (each role is
         read once: a 10⁶-row table's triad is 24 MB of the reading's peak memory)."""
         out = np.column_stack([self.numbers(a) for a in axes])
-        if self.floats is not None:
-            for a in axes:
-                self.floats[self.roles[a]] = None
+        for a in axes:
+            self.release(a)
         return out
 
 
@@ -194,6 +199,7 @@ def _table_recording(tab, path, notes, columns, unit, time_unit, rate, gyro_unit
         t, tnote = time_seconds(cols.column("t") if "t" in roles else None, rate, time_unit, units.get("t"), names,
                                 roles, tab.dc, path, lines, tab.preamble,
                                 parsed=cols.parsed("t") if "t" in roles else None, counter=_counter_label(names, roles))
+        cols.release("t")  # t is time_seconds' array now: the column's floats would sit beside the clock's fit
     t, cnotes = _sensor_clock(t, tnote, cols.numbers, names, roles, units, clock, rate, lines, path)
     notes += cnotes
     temp = None
