@@ -4,8 +4,10 @@ A table whose data lines are ``k`` plain numbers each (no comment or blank line 
 no text, empty or quoted field) is parsed by a compiled reader instead of line by line in
 Python (0.2 s instead of 4 s for 10⁶ lines): :func:`parse_block`.  A large block is read by
 the compiled parser of :mod:`._parse_kernels` where numba is installed (no pandas, no
-decoded copy of the block), and by pandas' C reader where that parser gives up or is
-absent; a small one by numpy's ``loadtxt``.  The strings of
+decoded copy of the block) when numba is loaded already (its start-up, 0.5 s and ~100 MB,
+repays itself only where the caller compiles anyway: ``accelcal noise`` loads its kernels
+before reading), and by pandas' C reader otherwise or where that parser gives up; a small
+one by numpy's ``loadtxt``.  The strings of
 one column (a time column is kept as written) are cut out of the text by position, not by
 splitting lines: :func:`field_strings`.  The structure of the table (delimiter, header,
 first data line) is found by :mod:`.table`, which reads anything else line by line.
@@ -73,7 +75,7 @@ def parse_block(text: str, offset: int, delim: str, k: int) -> tuple[list[np.nda
         end -= 1
     n = text.count("\n", offset, end) + 1
     body = Body(text, offset, end)
-    if end - offset >= _PANDAS_FROM_CHARS:
+    if end - offset >= _PANDAS_FROM_CHARS and "numba" in sys.modules:
         columns = _compiled_columns(body, delim, k, n)
         if columns is not None:
             return columns, body
@@ -102,7 +104,7 @@ _PIECE_CHARS = 1 << 22
 
 def _compiled_columns(body: Body, delim: str, k: int, n: int) -> list[np.ndarray] | None:
     """The ``k`` columns of the ``n`` lines of ``body`` by the compiled parser
-    (:func:`._parse_kernels.parse_lines`), or None where it is not installed or gives up
+    (:func:`._parse_kernels.parse_lines`), or None where the kernels are off or it gives up
     (pandas then reads the block, and decides).  The block is handed over in pieces of
     :data:`_PIECE_CHARS` characters that end after a line feed, so that no copy of the
     whole block is made (10⁶ lines of the ADIS record: 47 MB)."""
