@@ -56,7 +56,7 @@ class BiasGNCalibration(Calibration):
 
 TOY = PoseEstimator(name="bias_gn", model="bias", algorithm="gn", label="bias-only Gauss-Newton", family="iterative",
                 function=f"{__name__}:bias_gn", calibration=f"{__name__}:BiasGNCalibration", baseline="bias_nlls",
-                conditioning="accelcal.lls:design_singular_values",
+                conditioning="accelcal.lls:design_singular_values", min_poses=4,
                 description="Gauss-Newton from the algebraic fit, M = I (a test's toy)")
 
 

@@ -36,12 +36,15 @@ def test_the_workflow_reads_the_registrys_own_table(tmp_path):
     assert list(points.FEWEST) == list(METHODS) and points.DATA_MODELS == DATA_MODELS
     table = json.loads(TABLE_PATH.read_text(encoding="utf-8"))
     for row in table["estimators"]:
-        row["redundancy"] += 3
+        row["min_poses"] += 3
     (tmp_path / "estimators.json").write_text(json.dumps(table), encoding="utf-8")
     read = accelerometer_estimators(tmp_path / "estimators.json")
     assert read == {r["name"]: {"model": r["model"], "fewest": entry_from_table(r).min_poses}
                     for r in table["estimators"] if r["sensor"] == "accelerometer"}
     assert read["full_lls"]["fewest"] == 13 and read["bias_lls"]["fewest"] == 7
+    row = dict(table["estimators"][0], min_poses=8)  # 8 poses give 8 equations for the 9 unknowns
+    with pytest.raises(ValueError, match="min_poses too small"):
+        entry_from_table(row)
 
 
 def test_shared_points_run_once_with_the_union_of_cases():

@@ -44,7 +44,7 @@ def test_the_registrys_class_comes_before_another_of_the_same_tag():
 
     register(PoseEstimator(name="toy_tagged", model="bias", algorithm="lls", label="toy", family="closed_form",
                        function="accelcal.lls:bias_lls", calibration=f"{__name__}:ToyTaggedCalibration",
-                       conditioning="accelcal.lls:design_singular_values", description="a test's toy"))
+                       conditioning="accelcal.lls:design_singular_values", min_poses=4, description="a test's toy"))
     try:
         assert calibration_class("toy_tagged") is ToyTaggedCalibration
     finally:

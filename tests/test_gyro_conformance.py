@@ -219,11 +219,11 @@ def test_the_checks_can_fail(tmp_path):
     """Entries that lie (a minimum of another data kind, another estimator's class, a baseline of
     another sensor, a one-step estimate declared iterative) fail their checks."""
     it = ESTIMATORS["gyro_iterative"]
-    lies = [(check_min_data, replace(it, redundancy=3)),
+    lies = [(check_min_data, replace(it, min_poses=it.min_poses + 1)),
             (check_entry, replace(it, calibration="accelcal.gyro.result:GyroOneStepCalibration")),
             (check_entry, replace(ESTIMATORS["gyro_one_step"], baseline="full_nlls")),
             (check_min_data, replace(ESTIMATORS["gyro_one_step"], family="iterative")),
-            (check_min_data, replace(ESTIMATORS["gyro_ferraris"], redundancy=1))]
+            (check_min_data, replace(ESTIMATORS["gyro_ferraris"], min_poses=4))]
     for check, e in lies:
         with pytest.raises((AssertionError, pytest.fail.Exception)):
             run_check(check, e, tmp_path)

@@ -5,7 +5,8 @@ few hundred per step; in numpy, the per-call overhead (about a microsecond per c
 tens of calls per problem or step) costs far more than the arithmetic.  The kernels
 (:mod:`accelcal._lls_kernels`, :mod:`accelcal.batista._filter_kernels`,
 :mod:`accelcal.tereshkov._estimator_kernels`, :mod:`accelcal.noise._fast`) are the same algorithms written as
-scalar loops and compiled with numba.
+scalar loops and compiled with numba; :mod:`accelcal.formats._parse_kernels` reads a large
+numeric table's lines (pandas' C reader where it gives up or numba is absent).
 
 Why numba: it compiles the plain Python/numpy of the reference implementations (the
 same language, read and tested side by side), needs no C toolchain at install time
@@ -153,7 +154,7 @@ def load() -> None:
 
 #: Every kernel module (relative to the accelcal package).
 KERNEL_MODULES = ("_lls_kernels", "batista._filter_kernels", "tereshkov._estimator_kernels", "noise._fast",
-                  "discrepancy._fit_kernels")
+                  "discrepancy._fit_kernels", "formats._parse_kernels")
 
 
 def jit(*args, **options):

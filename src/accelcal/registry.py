@@ -22,7 +22,7 @@ name                model   fewest       g   noise       family       baseline  
 
 *model*: s.m. is the gyroscope's ``scale_misalignment``.
 *fewest*: the fewest poses (motions between rests, rotations: :attr:`Estimator.data`) it
-accepts: enough equations for the unknowns plus :attr:`Estimator.redundancy`.  *g*: the estimate depends on the gravity
+accepts (:attr:`Estimator.min_poses`, a number of the table): enough equations for the unknowns and one more.  *g*: the estimate depends on the gravity
 magnitude (every estimator takes g; the bias-only LLS bias does not change with it).
 *noise*: what the estimator uses the noise level of the pose means for
 (:meth:`Estimator.fit`, ``noise_std``): ALS for its correction (else it estimates the
@@ -112,10 +112,13 @@ class Estimator:
     description : str
     baseline : str or None
         The estimator this one is compared with (accuracy and speed).
-    redundancy : int
-        Equations beyond the unknowns that the fewest data must leave: 1, so that a
-        residual checks the fit; 0 for an estimate that is exactly determined by design
-        (the Ferraris protocol's three rotations).
+    min_poses : int
+        Fewest poses (motions, rotations: :attr:`data`) the estimator accepts: enough
+        equations for its unknowns and one more, so that a residual checks the fit (poses:
+        one more than the unknowns, Burkhard et al. Sec. 1.2); exactly determined for the
+        Ferraris protocol's three rotations.  A number of the table (``estimators.json``),
+        which the workflow reads too; an entry with too few equations for its unknowns is
+        refused, and the conformance suites check that one datum fewer is refused.
     """
 
     #: What the entries of the class fit: a key of :data:`DATA`.
@@ -132,7 +135,7 @@ class Estimator:
     conditioning: str
     description: str
     baseline: str | None = None
-    redundancy: int = 1
+    min_poses: int
 
     def __post_init__(self):
         if self.data not in DATA:
@@ -141,17 +144,13 @@ class Estimator:
             raise ValueError(f"{self.name}: model {self.model!r} is not one of {', '.join(N_PARAMETERS)}")
         if self.family not in FAMILIES:
             raise ValueError(f"{self.name}: family {self.family!r} is not one of {', '.join(FAMILIES)}")
+        if self.min_poses * DATA[self.data] < self.n_parameters:
+            raise ValueError(f"{self.name}: {self.min_poses} {self.data} give {self.min_poses * DATA[self.data]} "
+                             f"equations for {self.n_parameters} unknowns (min_poses too small)")
 
     @property
     def n_parameters(self) -> int:
         return N_PARAMETERS[self.model]
-
-    @property
-    def min_poses(self) -> int:
-        """Fewest poses (motions, rotations: :attr:`data`) the estimator accepts: enough
-        equations for its unknowns and :attr:`redundancy` more (poses: one more than the
-        unknowns, Burkhard et al. Sec. 1.2)."""
-        return -(-(self.n_parameters + self.redundancy) // DATA[self.data])
 
     @property
     def cli_name(self) -> str:
@@ -273,7 +272,6 @@ class RotationEstimator(Estimator):
     data: ClassVar[str] = "rotations"
 
     sensor: str = "gyroscope"
-    redundancy: int = 0
 
     def fit(self, segments, h: float, angles_deg, **kw):
         """Fit the rotations' samples ``segments`` (bias removed) of interval ``h`` [s] and known angles."""

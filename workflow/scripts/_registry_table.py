@@ -18,10 +18,9 @@ ESTIMATOR_TABLE = Path(__file__).resolve().parents[2] / "src" / "accelcal" / "es
 
 def accelerometer_estimators(table_path: Path = ESTIMATOR_TABLE) -> dict[str, dict]:
     """``{name: {"model", "fewest"}}`` of the registry's accelerometer estimators, in the
-    registry's order; fewest poses: the unknowns and the entry's redundancy over the equations
-    one pose gives, rounded up (accelcal.registry.Estimator.min_poses, from the same rows)."""
+    registry's order; fewest poses: the row's ``min_poses`` (accelcal.registry.Estimator.min_poses,
+    the same number: the rule lives in the table, not in either reader)."""
     with open(table_path, encoding="utf-8") as f:
         table = json.load(f)
-    return {e["name"]: {"model": e["model"], "fewest": -(-(table["n_parameters"][e["model"]] + e["redundancy"])
-                                                        // table["equations"][e["data"]])}
+    return {e["name"]: {"model": e["model"], "fewest": e["min_poses"]}
             for e in table["estimators"] if e["sensor"] == "accelerometer"}

@@ -181,7 +181,7 @@ def fit_clock(stamps, k) -> tuple[np.ndarray, float, float, float]:
     sums = _PowerSums(xk, sk, mid)  # the line's and the quadratic's sums, each taken once
     if every > 1:
         h, a = sums.fit(1)
-    times, drift = a + h * x, 0.0
+    times, drift = None, 0.0  # the line's times made last: not beside the quadratic's sums
     if len(xk) > 10 and last > 0 and np.ptp(xk) > 0.5 * mid:  # a curvature needs the stamps' span
         c = sums.fit(2)
         del sums
@@ -195,6 +195,9 @@ def fit_clock(stamps, k) -> tuple[np.ndarray, float, float, float]:
         se_c = s2 * float(np.sqrt(np.linalg.inv(xtx)[0, 0])) / max(mid, 1.0) ** 2
         if abs(c[0]) > DRIFT_SIGNIFICANT * se_c:  # a drift the stamps show: follow it
             times, sigma = quadratic, s2
+        del quadratic
+    if times is None:
+        times = a + h * x
     return times, float(h), sigma, drift
 
 

@@ -31,15 +31,18 @@ from .units_evidence import acceleration_unit_from_rests, gyro_unit_from_values
 TYPICAL_RATE_HZ = 100.0
 
 
-def convert_acc(acc, u: str, how: str):
+def convert_acc(acc, u: str, how: str, own: bool = False):
+    """``acc`` in m/s² (or counts) and the note; ``own``: ``acc`` is the caller's fresh array,
+    converted in place (a 10⁶-row triad is 24 MB, part of a table reading's peak memory)."""
     if u in ("g", "mg"):
         f = G0 if u == "g" else G0 * 1e-3
-        return acc * f, f"unit: {u} ({how}), converted to m/s^2 with standard gravity {G0} m/s^2 per g"
+        return _scaled(acc, f, own), f"unit: {u} ({how}), converted to m/s^2 with standard gravity {G0} m/s^2 per g"
     return acc, f"unit: {u} ({how})"
 
 
-def resolve_acceleration_unit(acc, units: dict, unit: str | None, path):
-    """Acceleration in m/s² or counts, its unit name, and a note saying where the unit came from."""
+def resolve_acceleration_unit(acc, units: dict, unit: str | None, path, own: bool = False):
+    """Acceleration in m/s² or counts, its unit name, and a note saying where the unit came from
+    (``own``: ``acc`` is the caller's fresh array, converted in place)."""
     header = units.get("acc_units", {})
     if unit is not None:
         u, how = acceleration_unit(unit), "--unit"
@@ -54,26 +57,33 @@ def resolve_acceleration_unit(acc, units: dict, unit: str | None, path):
                                  "convert them to one unit or pass --unit")
         u, how = next(iter(header.values())), "from the header"
     else:
-        return infer_acceleration_unit(acc, path)
-    acc, note = convert_acc(acc, u, how)
+        return infer_acceleration_unit(acc, path, own)
+    acc, note = convert_acc(acc, u, how, own)
     return acc, "counts" if u == "counts" else "m/s^2", note
 
 
-def infer_acceleration_unit(acc, path):
+def infer_acceleration_unit(acc, path, own: bool = False):
     u, how = acceleration_unit_from_rests(acc)  # the rests' magnitude decides (units_evidence)
-    acc, note = convert_acc(acc, u, how)
+    acc, note = convert_acc(acc, u, how, own)
     return acc, "counts" if u == "counts" else "m/s^2", note
 
 
-def convert_gyro(gyro, u: str, how: str):
+def _scaled(a, f: float, own: bool):
+    """``a * f``: in place when ``own`` (the same bits)."""
+    return np.multiply(a, f, out=a) if own else a * f
+
+
+def convert_gyro(gyro, u: str, how: str, own: bool = False):
+    """:func:`convert_acc` of a gyroscope: rad/s (or counts)."""
     if u == "deg/s":
-        return gyro * ANGULAR_RATE_UNITS["deg/s"], f"gyro unit: deg/s ({how}), converted to rad/s"
+        return _scaled(gyro, ANGULAR_RATE_UNITS["deg/s"], own), f"gyro unit: deg/s ({how}), converted to rad/s"
     return gyro, f"gyro unit: {u} ({how})"
 
 
-def resolve_gyro_unit(gyro, units: dict, gyro_unit: str | None, path):
+def resolve_gyro_unit(gyro, units: dict, gyro_unit: str | None, path, own: bool = False):
     """Angular rate in rad/s or counts, its unit name and a note saying where the unit came from; the raw
-    values, unit None, when nothing but the motions can decide it (:mod:`.units_evidence`)."""
+    values, unit None, when nothing but the motions can decide it (:mod:`.units_evidence`).  ``own``:
+    ``gyro`` is the caller's fresh array, converted in place."""
     header = units.get("gyro_units", {})
     if gyro_unit is not None:
         u = angular_rate_unit(gyro_unit)
@@ -91,7 +101,7 @@ def resolve_gyro_unit(gyro, units: dict, gyro_unit: str | None, path):
         u, how = gyro_unit_from_values(gyro)
         if u is None:  # left to the evidence of the motions (units_evidence)
             return gyro, None, how
-    gyro, note = convert_gyro(gyro, u, how)
+    gyro, note = convert_gyro(gyro, u, how, own)
     return gyro, "counts" if u == "counts" else "rad/s", note
 
 

@@ -1,8 +1,13 @@
 """The numbers of a plain numeric table by a compiled parser, and its fields as strings.
 
 A table whose data lines are ``k`` plain numbers each (no comment or blank line among them,
-no text, empty or quoted field) is parsed by pandas' or numpy's C reader instead of line by
-line in Python (0.2 s instead of 4 s for 10⁶ lines): :func:`parse_block`.  The strings of
+no text, empty or quoted field) is parsed by a compiled reader instead of line by line in
+Python (0.2 s instead of 4 s for 10⁶ lines): :func:`parse_block`.  A large block is read by
+the compiled parser of :mod:`._parse_kernels` where numba is installed (no pandas, no
+decoded copy of the block) when numba is loaded already (its start-up, 0.5 s and ~100 MB,
+repays itself only where the caller compiles anyway: ``accelcal noise`` loads its kernels
+before reading), and by pandas' C reader otherwise or where that parser gives up; a small
+one by numpy's ``loadtxt``.  The strings of
 one column (a time column is kept as written) are cut out of the text by position, not by
 splitting lines: :func:`field_strings`.  The structure of the table (delimiter, header,
 first data line) is found by :mod:`.table`, which reads anything else line by line.
@@ -16,6 +21,8 @@ import sys
 from typing import NamedTuple
 
 import numpy as np
+
+from .. import kernels
 
 #: Data blocks from this size [characters] are parsed by pandas (6 ms/MB, 0.24 s to import),
 #: smaller ones by numpy's loadtxt (25 ms/MB, numpy being loaded anyway); pandas also when loaded.
@@ -68,6 +75,10 @@ def parse_block(text: str, offset: int, delim: str, k: int) -> tuple[list[np.nda
         end -= 1
     n = text.count("\n", offset, end) + 1
     body = Body(text, offset, end)
+    if end - offset >= _PANDAS_FROM_CHARS and "numba" in sys.modules:
+        columns = _compiled_columns(body, delim, k, n)
+        if columns is not None:
+            return columns, body
     stream = _AsciiStream(body)
     try:
         if use_pandas(end - offset):
@@ -85,6 +96,34 @@ def parse_block(text: str, offset: int, delim: str, k: int) -> tuple[list[np.nda
         if stream.controls != n - 1 + cr + text.count("\t", offset, end) or cr != text.count("\r\n", offset, end):
             return None
     return columns, body
+
+
+#: Characters of a block handed to the compiled parser at once (their ASCII bytes a copy).
+_PIECE_CHARS = 1 << 22
+
+
+def _compiled_columns(body: Body, delim: str, k: int, n: int) -> list[np.ndarray] | None:
+    """The ``k`` columns of the ``n`` lines of ``body`` by the compiled parser
+    (:func:`._parse_kernels.parse_lines`), or None where the kernels are off or it gives up
+    (pandas then reads the block, and decides).  The block is handed over in pieces of
+    :data:`_PIECE_CHARS` characters that end after a line feed, so that no copy of the
+    whole block is made (10⁶ lines of the ADIS record: 47 MB)."""
+    parser = kernels.compiled("formats._parse_kernels")
+    if parser is None:
+        return None
+
+    def pieces():
+        text, pos = body.text, body.start
+        while pos < body.end:
+            stop = text.find("\n", min(pos + _PIECE_CHARS, body.end), body.end)
+            stop = body.end if stop < 0 else stop + 1
+            yield text[pos:stop].encode("ascii")
+            pos = stop
+
+    try:
+        return parser.parse_lines(pieces(), delim, k, n)
+    except UnicodeEncodeError:
+        return None
 
 
 def _pandas_columns(stream, delim: str, k: int, n: int) -> list[np.ndarray]:

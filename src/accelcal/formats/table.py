@@ -165,8 +165,19 @@ class _Columns:
         return x if x is not None else parse_numbers(self.column(role), tab.dc, self.path, role, tab.names,
                                                      self.roles[role], tab.lines)
 
+    def release(self, role):
+        """Let go of the role's floats (read once; a 10⁶-row column is 8 MB); a matrix's are
+        kept: they are its columns' text too (:meth:`_Table.column`), and the caller's."""
+        if self.floats is not None and role in self.roles and (self.tab.raw is not None or self.tab.data is not None):
+            self.floats[self.roles[role]] = None
+
     def triad(self, axes):
-        return np.column_stack([self.numbers(a) for a in axes])
+        """The three columns as a fresh (n, 3) array; their floats are let go (each role is
+        read once: a 10⁶-row table's triad is 24 MB of the reading's peak memory)."""
+        out = np.column_stack([self.numbers(a) for a in axes])
+        for a in axes:
+            self.release(a)
+        return out
 
 
 def _table_recording(tab, path, notes, columns, unit, time_unit, rate, gyro_unit, file_rate=None, *,
@@ -188,6 +199,7 @@ def _table_recording(tab, path, notes, columns, unit, time_unit, rate, gyro_unit
         t, tnote = time_seconds(cols.column("t") if "t" in roles else None, rate, time_unit, units.get("t"), names,
                                 roles, tab.dc, path, lines, tab.preamble,
                                 parsed=cols.parsed("t") if "t" in roles else None, counter=_counter_label(names, roles))
+        cols.release("t")  # t is time_seconds' array now: the column's floats would sit beside the clock's fit
     t, cnotes = _sensor_clock(t, tnote, cols.numbers, names, roles, units, clock, rate, lines, path)
     notes += cnotes
     temp = None
@@ -215,13 +227,14 @@ def _sensors(cols: _Columns, units: dict, unit, gyro_unit, mag_unit, notes: list
     roles, path = cols.roles, cols.path
     out = dict.fromkeys(("acc", "unit", "gyro", "gyro_unit", "mag", "mag_unit"))
     if "ax" in roles:
-        out["acc"], out["unit"], note = resolve_acceleration_unit(cols.triad(ACC_ROLES), units, unit, path)
+        out["acc"], out["unit"], note = resolve_acceleration_unit(cols.triad(ACC_ROLES), units, unit, path, own=True)
         notes.append(note)
     elif unit is not None:
         raise RecordingError(f"{path}: --unit {unit} given, but the table has no acceleration columns (gyro only)")
     notes.append(units.get("gyro_note", ""))
     if "gx" in roles:
-        out["gyro"], out["gyro_unit"], note = resolve_gyro_unit(cols.triad(GYRO_ROLES), units, gyro_unit, path)
+        out["gyro"], out["gyro_unit"], note = resolve_gyro_unit(cols.triad(GYRO_ROLES), units, gyro_unit, path,
+                                                                own=True)
         notes.append(note)
     if "mx" in roles:
         out["mag"], out["mag_unit"], note = resolve_mag_unit(cols.triad(MAG_ROLES), units.get("mag_units", {}),

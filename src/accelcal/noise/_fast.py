@@ -6,7 +6,7 @@ the Allan variance of every replicate.  In numpy each small problem pays the ove
 dozens of array calls; these kernels run the same algorithms in one compiled loop:
 
 * :func:`irls_gamma` — :func:`accelcal.noise.allan_fit._irls` (Fisher scoring of
-  the Gamma likelihood, non-negative least squares by enumerating the supports, step
+  the Gamma likelihood, non-negative least squares by Lawson and Hanson's active set, step
   halving), problem by problem;
 * :func:`allan_sums` — the sums of squared second differences of the running sums that
   :func:`accelcal.noise.allan.allan_variance` accumulates (the running sums formed here
@@ -21,25 +21,14 @@ as it does every other kernel; without numba the callers use their numpy version
 
 from __future__ import annotations
 
-from itertools import combinations
-
 import numpy as np
 
 from ..kernels import jit
 
 
-def _nnls_small(A, b, subsets, sizes):
-    """Best non-negative least-squares solution over the given supports (rows of ``subsets``,
-    the first ``sizes[j]`` entries used): ``A`` (k, p), ``b`` (k,).
-
-    The Gram matrix and ``Aᵀb`` are formed once; each support solves its sub-system by
-    Cholesky and scores ``|b − A x|² = bᵀb − 2 xᵀAᵀb + xᵀ(AᵀA)x``."""
+def _gram(A, b, gram, rhs):
+    """``gram = AᵀA + 1e-12 I`` and ``rhs = Aᵀb`` (the ridge keeps a column of zeros solvable)."""
     k, p = A.shape
-    gram = np.empty((p, p))
-    rhs = np.empty(p)
-    bb = 0.0
-    for i in range(k):
-        bb += b[i] * b[i]
     for a in range(p):
         acc = 0.0
         for i in range(k):
@@ -51,57 +40,96 @@ def _nnls_small(A, b, subsets, sizes):
                 acc += A[i, a] * A[i, c]
             gram[a, c] = acc
             gram[c, a] = acc
-    best_x = np.zeros(p)
-    best = bb
+        gram[a, a] += 1e-12
+
+
+def _solve_passive(gram, rhs, passive, L, z, out):
+    """``out`` = the least-squares solution on the passive columns (Cholesky of their Gram
+    sub-matrix), 0 elsewhere; False if that sub-matrix is not positive definite."""
+    p = rhs.shape[0]
+    idx = np.empty(p, np.int64)
+    s = 0
+    for a in range(p):
+        out[a] = 0.0
+        if passive[a]:
+            idx[s] = a
+            s += 1
+    for a in range(s):
+        for c in range(a + 1):
+            acc = gram[idx[a], idx[c]]
+            for e in range(c):
+                acc -= L[a, e] * L[c, e]
+            if a == c:
+                if not acc > 0:
+                    return False
+                L[a, a] = np.sqrt(acc)
+            else:
+                L[a, c] = acc / L[c, c]
+    for a in range(s):
+        acc = rhs[idx[a]]
+        for e in range(a):
+            acc -= L[a, e] * z[e]
+        z[a] = acc / L[a, a]
+    for a in range(s - 1, -1, -1):
+        acc = z[a]
+        for e in range(a + 1, s):
+            acc -= L[e, a] * out[idx[e]]
+        out[idx[a]] = acc / L[a, a]
+    return True
+
+
+def _nnls_small(A, b):
+    """Non-negative least squares ``min |A x − b|, x ≥ 0`` of one small problem, ``A`` (k, p), by
+    Lawson and Hanson's active-set method (Solving Least Squares Problems, 1974, ch. 23; as
+    ``scipy.optimize.nnls``) on the Gram matrix: columns enter the passive set while the
+    gradient ``Aᵀ(b − A x)`` is positive on them, and a step that would make a passive
+    coefficient negative stops at the boundary and frees it.  A few solves instead of the
+    2^p − 1 of enumerating every support (the same optimum: the problem is strictly convex)."""
+    p = A.shape[1]
+    gram = np.empty((p, p))
+    rhs = np.empty(p)
+    _gram(A, b, gram, rhs)
+    x = np.zeros(p)
+    s = np.zeros(p)
     L = np.empty((p, p))
     z = np.empty(p)
-    xs = np.empty(p)
-    for j in range(subsets.shape[0]):
-        s = sizes[j]
-        idx = subsets[j]
-        ok = True
-        for a in range(s):  # Cholesky of gram[idx, idx] + 1e-12 I
-            for c in range(a + 1):
-                acc = gram[idx[a], idx[c]] + (1e-12 if a == c else 0.0)
-                for e in range(c):
-                    acc -= L[a, e] * L[c, e]
-                if a == c:
-                    if not acc > 0:
-                        ok = False
-                        break
-                    L[a, a] = np.sqrt(acc)
-                else:
-                    L[a, c] = acc / L[c, c]
-            if not ok:
-                break
-        if not ok:
-            continue
-        for a in range(s):
-            acc = rhs[idx[a]]
-            for e in range(a):
-                acc -= L[a, e] * z[e]
-            z[a] = acc / L[a, a]
-        for a in range(s - 1, -1, -1):
-            acc = z[a]
-            for e in range(a + 1, s):
-                acc -= L[e, a] * xs[e]
-            xs[a] = acc / L[a, a]
-            if not xs[a] >= 0:
-                ok = False
-        if not ok:
-            continue
-        obj = bb
-        for a in range(s):
-            obj -= 2.0 * xs[a] * rhs[idx[a]]
-            for c in range(s):
-                obj += xs[a] * gram[idx[a], idx[c]] * xs[c]
-        if obj < best:
-            best = obj
+    passive = np.zeros(p, np.bool_)
+    for _ in range(4 * p):
+        best, j = _NNLS_TOL, -1
+        for a in range(p):  # the most promising column outside the passive set
+            if not passive[a]:
+                w = rhs[a]
+                for c in range(p):
+                    w -= gram[a, c] * x[c]
+                if w > best:
+                    best, j = w, a
+        if j < 0:
+            break
+        passive[j] = True
+        for _inner in range(p + 1):
+            if not _solve_passive(gram, rhs, passive, L, z, s):
+                passive[j] = False
+                return x
+            alpha, block = 2.0, -1
             for a in range(p):
-                best_x[a] = 0.0
-            for a in range(s):
-                best_x[idx[a]] = xs[a]
-    return best_x
+                if passive[a] and s[a] <= 0.0:
+                    step = x[a] / (x[a] - s[a])
+                    if step < alpha:
+                        alpha, block = step, a
+            if block < 0:  # every passive coefficient positive: take the solution
+                for a in range(p):
+                    x[a] = s[a]
+                break
+            for a in range(p):  # stop at the boundary, free what reached it
+                x[a] += alpha * (s[a] - x[a])
+                if passive[a] and (a == block or x[a] <= 0.0):
+                    passive[a] = False
+                    x[a] = 0.0
+    return x
+
+
+#: Gradient below which a column does not enter the passive set (the columns have unit norm).
+_NNLS_TOL = 1e-13
 
 
 def _deviance(y, m, edf):
@@ -122,7 +150,7 @@ def _floored_model(H, c, floor, out):
         out[i] = max(acc, floor)
 
 
-def _irls_one(H, y, edf, subsets, sizes, max_iter, tol):
+def _irls_one(H, y, edf, max_iter, tol):
     k, p = H.shape
     ymax = y[0]
     for i in range(k):
@@ -149,7 +177,7 @@ def _irls_one(H, y, edf, subsets, sizes, max_iter, tol):
             scale[a] = np.sqrt(acc) if acc > 0 else 1.0
             for i in range(k):
                 A[i, a] /= scale[a]
-        c_new = _nnls_small(A, bw, subsets, sizes) / scale
+        c_new = _nnls_small(A, bw) / scale
         _floored_model(H, c_new, floor, m_new)
         d_new = _deviance(y, m_new, edf)
         d_old = dev
@@ -171,12 +199,12 @@ def _irls_one(H, y, edf, subsets, sizes, max_iter, tol):
     return c, dev
 
 
-def _irls_batch(H, y, edf, subsets, sizes, max_iter, tol):
+def _irls_batch(H, y, edf, max_iter, tol):
     G, k, p = H.shape
     c = np.zeros((G, p))
     dev = np.empty(G)
     for g in range(G):
-        cg, dg = _irls_one(H[g], y[g], edf, subsets, sizes, max_iter, tol)
+        cg, dg = _irls_one(H[g], y[g], edf, max_iter, tol)
         c[g] = cg
         dev[g] = dg
     return c, dev
@@ -265,6 +293,8 @@ def _ar1(e, rho):
 # The Python error model: these kernels never divide by zero on valid input, and the
 # numpy versions raise where they would.
 _jit = jit(error_model="python")
+_gram = _jit(_gram)
+_solve_passive = _jit(_solve_passive)
 _nnls_small = _jit(_nnls_small)
 _deviance = _jit(_deviance)
 _floored_model = _jit(_floored_model)
@@ -275,22 +305,10 @@ _allan_sums = _jit(_allan_sums)
 _ar1 = _jit(_ar1)
 
 
-def supports(p: int) -> tuple[np.ndarray, np.ndarray]:
-    """Every non-empty support of ``p`` columns, in the order the numpy solver tries them
-    (by size, then lexicographic): rows padded with -1, and their sizes."""
-
-    rows = [idx for s in range(1, p + 1) for idx in combinations(range(p), s)]
-    out = np.full((len(rows), p), -1, dtype=np.int64)
-    for j, idx in enumerate(rows):
-        out[j, : len(idx)] = idx
-    return out, np.array([len(r) for r in rows], dtype=np.int64)
-
-
 def irls_gamma(H: np.ndarray, y: np.ndarray, edf: np.ndarray, max_iter: int = 200, tol: float = 1e-10):
     """Compiled :func:`accelcal.noise.allan_fit._irls`: ``H`` (G, k, p), ``y`` (G, k)."""
-    subsets, sizes = supports(H.shape[2])
     return _irls_batch(np.ascontiguousarray(H, dtype=np.float64), np.ascontiguousarray(y, dtype=np.float64),
-                       np.ascontiguousarray(edf, dtype=np.float64), subsets, sizes, int(max_iter), float(tol))
+                       np.ascontiguousarray(edf, dtype=np.float64), int(max_iter), float(tol))
 
 
 def allan_sums(s: np.ndarray, mean: np.ndarray, m: np.ndarray) -> np.ndarray:
@@ -306,4 +324,4 @@ def ar1(e: np.ndarray, rho: float) -> np.ndarray:
     return _ar1(np.ascontiguousarray(e, dtype=np.float64), float(rho))
 
 
-__all__ = ["allan_sums", "ar1", "irls_gamma", "supports"]
+__all__ = ["allan_sums", "ar1", "irls_gamma"]
