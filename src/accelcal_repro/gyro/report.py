@@ -157,7 +157,6 @@ def figure(fom: pd.DataFrame, imucal_fom: pd.DataFrame | None = None):
     """RMS per-motion misfit [deg] per session and calibration (own bias), and the noise level;
     a calibration whose trust verdict is ``poorly_determined`` is hatched, its reasons written above it."""
     import matplotlib.pyplot as plt
-    from matplotlib.patches import Patch
 
     from accelcal.plotting import RC
 
@@ -185,10 +184,10 @@ def figure(fom: pd.DataFrame, imucal_fom: pd.DataFrame | None = None):
                    label="noise (rests)")
         handles, labels = ax.get_legend_handles_labels()
         for c in dict.fromkeys(sub.calibration):
-            handles.append(Patch(color=COLORS.get(c, "0.5")))
+            handles.append(plt.Rectangle((0, 0), 1, 1, color=COLORS.get(c, "0.5")))
             labels.append(c.replace("_", " "))
         if poor.any():
-            handles.append(Patch(facecolor="white", edgecolor="C3", hatch="////"))
+            handles.append(plt.Rectangle((0, 0), 1, 1, facecolor="white", edgecolor="C3", hatch="////"))
             labels.append("poorly determined\n(accelcal's trust verdict:\nfew dof or none, little\nrotation per axis; "
                           "reasons\nabove the bar)")
         ax.set_yscale("log")
