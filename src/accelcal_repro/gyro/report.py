@@ -175,9 +175,9 @@ def figure(fom: pd.DataFrame, imucal_fom: pd.DataFrame | None = None):
             ax.bar(x, d.rms_deg, width, color=[COLORS.get(c, "0.5") for c in d.calibration],
                    hatch=["////" if b else None for b in bad], edgecolor=["C3" if b else "none" for b in bad],
                    linewidth=0.8)
-            if bad.any():  # the reasons once per session, above its highest poorly determined bar
+            if bad.any():  # the reasons once per session, above its highest bar (so no bar covers them)
                 why = dict.fromkeys(r for rs in d.reasons[bad] for r in str(rs).split("; "))
-                ax.annotate("\n".join(why).replace(" (", "\n("), (x[bad].mean(), d.rms_deg[bad].max()), xytext=(0, 2),
+                ax.annotate("\n".join(why).replace(" (", "\n("), (x[bad].mean(), d.rms_deg.max()), xytext=(0, 2),
                             textcoords="offset points", ha="center", va="bottom", fontsize=5.5, color="C3", zorder=4)
         noise = sub.groupby("session").noise_rms_deg.first()
         ax.scatter(range(len(sessions)), [noise[s] for s in sessions], marker="_", s=400, color="k", zorder=3,
