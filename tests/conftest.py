@@ -177,20 +177,12 @@ def pytest_collection_modifyitems(config, items):
 
 @pytest.hookimpl(optionalhook=True)  # xdist's hook: the suite also runs with -p no:xdist
 def pytest_xdist_make_scheduler(config, log):
-    """``--dist loadfile``, but a worker gets its next module only at the last test of the
-    one it runs (xdist gives the next one at the last two: the worker of the real-SLURM
-    module, whose last tests wait minutes, then kept two modules that need the CI run
-    queued while the other workers were idle).  The last test itself has to wait for the
-    next module: a worker runs a test only once it knows the one after it."""
+    """``--dist loadfile`` as tests/xdist_schedule.OneModuleAhead hands it out: the next
+    module at the last test of the current one, and a crashed worker fails its test
+    instead of hanging the run."""
     if config.getvalue("dist") != "loadfile":
         return None
-    from xdist.scheduler import LoadFileScheduling
-
-    class OneModuleAhead(LoadFileScheduling):
-        def _reschedule(self, node):
-            if not node.shutting_down and self.workqueue and self._pending_of(self.assigned_work[node]) > 1:
-                return
-            super()._reschedule(node)
+    from tests.xdist_schedule import OneModuleAhead  # xdist is imported only when it runs the suite
 
     return OneModuleAhead(config, log)
 
