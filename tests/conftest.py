@@ -163,12 +163,15 @@ def config_error(cfg: dict, path: Path) -> str | None:
 #: most of their time waiting, each on a worker of its own: the real SLURM (daemons, status
 #: polls, a time limit of a minute) and the module whose first test starts the CI run (which
 #: uses both cores itself).  Last, the other modules that need the CI run: dispatched early
-#: they would hold a worker idle while it runs.  A module of one test takes the next module
-#: with it (a worker runs a test once it knows the one after it), so the one-test reruns
-#: module comes before a light one, not before another long one.
+#: they would hold a worker idle while it runs (with xdist, the scheduler hands them out
+#: as soon as the run exists instead: tests/xdist_schedule.py).
 FIRST_MODULES = ("test_real_slurm.py", "test_workflow.py")
-LAST_MODULES = ("test_workflow_interrupts.py", "test_burkhard2024_workflow.py", "test_workflow_reruns.py",
-                "test_discrepancy_workflow.py", "test_workflow_structure.py", "test_benchmark.py")
+#: The module whose first test makes the CI run (its worker waits for it).
+CI_RUN_MODULE = "test_workflow.py"
+#: The modules that need the CI run, longest first: the scheduler (tests/xdist_schedule.py)
+#: hands them out ahead of the queue once a test of CI_RUN_MODULE has ended.
+LAST_MODULES = ("test_workflow_reruns.py", "test_workflow_interrupts.py", "test_burkhard2024_workflow.py",
+                "test_workflow_structure.py", "test_benchmark.py", "test_discrepancy_workflow.py")
 
 
 def pytest_collection_modifyitems(config, items):
@@ -191,7 +194,7 @@ def pytest_xdist_make_scheduler(config, log):
         return None
     from tests.xdist_schedule import OneModuleAhead  # xdist is imported only when it runs the suite
 
-    return OneModuleAhead(config, log)
+    return OneModuleAhead(config, log, after=LAST_MODULES, gate=CI_RUN_MODULE)
 
 
 @pytest.hookimpl(optionalhook=True)  # xdist's hook: the suite also runs with -p no:xdist
