@@ -16,9 +16,12 @@ name: the sniff goes by the MAT-file header, so they stay tables.
 
 from __future__ import annotations
 
+import io
+
 import numpy as np
 
 from ..errors import RecordingError
+from .mat_v5 import check_v5
 from .variables import Variable, choose, describe, read_variables, usable
 
 #: The start of a MAT-file's 116-byte text header; the version and endian marks at bytes 124-127.
@@ -62,8 +65,11 @@ def read_mat(path, *, variable: str | None = None, columns=None, unit=None, time
 def _load_v5(path) -> dict:
     import scipy.io  # ~0.3 s: only when a .mat is read
 
+    with open(path, "rb") as fh:
+        data = fh.read()
     try:
-        return scipy.io.loadmat(path, squeeze_me=False, chars_as_strings=True)
+        check_v5(data)  # SciPy's parser can crash the process on a damaged layout (mat_v5's docstring)
+        return scipy.io.loadmat(io.BytesIO(data), squeeze_me=False, chars_as_strings=True)
     except Exception as e:  # a damaged file can fail anywhere inside the parser
         raise RecordingError(f"{path}: not a readable MATLAB v5 file ({type(e).__name__}: {str(e)[:80]}): the file "
                              "is damaged or not a .mat; copy or save it again") from None
