@@ -55,6 +55,8 @@ def _number(buf, pos, end, out, col, row):
         pos += 1
     if pos < end and buf[pos] == 46:  # .
         pos += 1
+        # the integer part's loop again, with the scale: a shared helper returning a tuple
+        # made the whole parse 1.18x slower (measured side by side, 15 rounds)
         while pos < end and 48 <= buf[pos] <= 57:
             d = buf[pos] - 48
             if digits > 0 or d != 0:
