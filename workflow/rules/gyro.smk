@@ -95,7 +95,7 @@ rule gyro_integrators:
     output:
         results("gyro/integrators.csv"),
     params:
-        gyro=GYRO,
+        gyro=config_keys(GYRO, "seed", "integrators"),
     log:
         log_path("gyro/integrators"),
     benchmark:
@@ -114,7 +114,7 @@ rule gyro_montecarlo:
         summary=results("gyro/montecarlo_summary.csv"),
         timing=results("gyro/montecarlo_timing.csv"),
     params:
-        gyro=GYRO,
+        gyro=config_keys(GYRO, "seed", "monte_carlo"),
     log:
         log_path("gyro/montecarlo"),
     benchmark:
@@ -137,7 +137,7 @@ rule gyro_coverage:
         table=results("gyro/coverage.csv"),
         summary=results("gyro/coverage_summary.csv"),
     params:
-        gyro=GYRO,
+        gyro=config_keys(GYRO, "seed", "coverage"),
     log:
         log_path("gyro/coverage"),
     benchmark:
@@ -157,7 +157,7 @@ rule gyro_ipopt:
         table=results("gyro/ipopt_check.csv"),
         timing=results("gyro/ipopt_timing.csv"),
     params:
-        gyro=GYRO,
+        gyro=config_keys(GYRO, "seed", "ipopt_check"),
     log:
         log_path("gyro/ipopt"),
     benchmark:
@@ -198,7 +198,7 @@ rule gyro_loop_benchmark:
         cases=results("gyro/loop/benchmark_cases.csv"),
         summary=results("gyro/loop/benchmark_summary.csv"),
     params:
-        gyro=GYRO,
+        gyro=config_keys(GYRO, "seed", "loop.benchmark", "loop.noise"),
     log:
         log_path("gyro/loop_benchmark"),
     benchmark:
@@ -220,7 +220,7 @@ rule gyro_loop_sessions:
         sessions=results("gyro/loop/sessions.csv"),
         repeats=results("gyro/loop/repeats.csv"),
     params:
-        gyro=GYRO,
+        gyro=config_keys(GYRO, "loop.sessions", "loop.benchmark.n_boot", "loop.noise"),
     log:
         log_path("gyro/loop_sessions"),
     benchmark:
