@@ -39,8 +39,6 @@ from ..static import static_poses_from_intervals
 from .errors import GyroInputError
 
 BIAS_MODES = ("all", "interpolated", "first")
-#: Relative jitter of the time steps above which a warning says the sample index is used.
-JITTER_WARN = 0.05
 #: A step this many times the median is a gap (dropped samples).
 GAP_FACTOR = 1.5
 

@@ -34,7 +34,6 @@ from accelcal.static import static_poses_from_intervals
 SESSION = {"n_motions": 16, "angle_deg": 90.0, "peak_rate_dps": 150.0, "fs": 100.0, "rest_s": 1.5,
            "init_rest_s": 5.0, "acc_noise": 0.03, "gyro_noise": 7e-4, "bias_walk_psd": 1e-7,
            "motion_rel_std": 2e-3, "rest_offset_std": 0.0, "fitted_accelerometer": True}
-Z95 = 1.959963984540054
 PARAMETERS = ("s_x", "s_y", "s_z", "T_xy", "T_xz", "T_yx", "T_yz", "T_zx", "T_zy")
 
 

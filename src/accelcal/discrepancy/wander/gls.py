@@ -78,8 +78,7 @@ class Surface:
     ``quad`` (B, T, Q): ``yᵀ P y`` with ``P`` the GLS residual projector of ``I + q K_τ``;
     ``logdet`` (T, Q): ``log|I + q K_τ|``; ``logdet_a`` (T, Q): ``log|Xᵀ(I + q K_τ)⁻¹X|``;
     ``m`` contrasts, ``p`` columns; ``shift_quad`` (B, T, Q, n) or None: ``quad`` of the
-    model with a free shift of each pose; ``best_shift_quad`` (B, T, Q) or None: the
-    smallest of those over the poses.  With ``Σ = s (I + q K_τ)``, ``s`` at its optimum
+    model with a free shift of each pose.  With ``Σ = s (I + q K_τ)``, ``s`` at its optimum
     ``ŝ = quad/ν`` clipped to [MIN_WHITE_SCALE, MAX_WHITE_SCALE], ``ν = m`` (ML) or ``m − p`` (REML)::
 
         −2ℓ   = m log ŝ + quad/ŝ + logdet                  (+ constants)
@@ -92,7 +91,6 @@ class Surface:
     m: int
     p: int
     shift_quad: np.ndarray | None = None
-    best_shift_quad: np.ndarray | None = None
 
     @property
     def ml(self) -> np.ndarray:
@@ -114,12 +112,6 @@ class Surface:
         """Grid minimum of ``−2ℓ`` of the model with pose ``i`` shifted, per data set (B, n)."""
         ml = _neg2ll(self.shift_quad, self.m, self.logdet[None, :, :, None])
         return ml.reshape(ml.shape[0], -1, ml.shape[-1]).min(axis=1)
-
-    def best_shift_ml_min(self) -> np.ndarray:
-        """Grid minimum of ``−2ℓ`` of the best single-pose shift, per data set (B,): the
-        minimum over the poses of :meth:`shift_ml_min` (at each grid point ``−2ℓ`` grows
-        with ``quad``, so the best pose there is the one with the smallest ``quad``)."""
-        return _neg2ll_min(self.best_shift_quad, self.m, self.logdet)
 
 
 @dataclass(frozen=True)
@@ -162,7 +154,7 @@ def basis(prob: Problem, X: np.ndarray) -> Basis:
 
 
 def profile(prob: Problem, X: np.ndarray, Y: np.ndarray, qrel, shifts: bool = False,
-            best_shift: bool = False, bas: Basis | None = None) -> Surface:
+            bas: Basis | None = None) -> Surface:
     """The likelihood :class:`Surface` of data sets ``Y`` (B, m) under the model with columns
     ``X`` (m, p), over the grid ``prob.taus`` × ``qrel`` ((Q,), or (T, Q): one row per τ);
     with ``prob.rests``, the rests' deviance joins ``logdet`` (:mod:`.rests`).
@@ -173,8 +165,7 @@ def profile(prob: Problem, X: np.ndarray, Y: np.ndarray, qrel, shifts: bool = Fa
 
     ``shifts``: also the model with a free shift of pose ``i``'s residual, for every pose
     (the outlier model): ``quad − (P r)_i²/P_ii`` (a rank-one update of the GLS fit, ``P``
-    the residual projector in the pose space); ``best_shift``: only the smallest of those
-    over the poses (what the outlier family's statistic needs).
+    the residual projector in the pose space).
     """
     bas = basis(prob, X) if bas is None else bas
     qrel = np.asarray(qrel, float)
@@ -190,19 +181,16 @@ def profile(prob: Problem, X: np.ndarray, Y: np.ndarray, qrel, shifts: bool = Fa
     logdet_a = np.log(one).sum(axis=2) + bas.logdet_xx - logdet if p else np.zeros(q.shape)
     if prob.rests is not None:  # the joint likelihood: the rests' deviance rides on log|Σ| (:mod:`.rests`)
         logdet = logdet + prob.rests.deviance_grid(prob.taus, prob.scale, q)
-    shift_quad = best = None
-    if shifts or best_shift:
+    shift_quad = None
+    if shifts:
         M = (prob.L @ bas.K)[None] @ bas.U                      # (T, n, r): poses from rotated contrasts
         d = np.clip((M * M) @ w.transpose(0, 2, 1), 1e-300, None)   # (T, n, Q): P_ii
         # (P r)_i / sqrt(P_ii) for all (q, i) as one matrix product per τ (Q n × r times r × B)
         A = M[:, None] * w[:, :, None, :] / np.sqrt(d.transpose(0, 2, 1))[..., None]   # (T, Q, n, r)
         z = A.reshape(T, -1, A.shape[-1]) @ Yt.transpose(0, 2, 1)                     # (T, Q n, B)
         gain = np.square(z, out=z).reshape(T, q.shape[1], -1, Y.shape[0])             # (T, Q, n, B)
-        if shifts:
-            shift_quad = np.clip(quad.transpose(1, 2, 0)[:, :, None, :] - gain, 1e-300, None).transpose(3, 0, 1, 2)
-        if best_shift:
-            best = np.clip(quad - gain.max(axis=2).transpose(2, 0, 1), 1e-300, None)   # (B, T, Q)
-    return Surface(quad, logdet, logdet_a, prob.m, p, shift_quad, best)
+        shift_quad = np.clip(quad.transpose(1, 2, 0)[:, :, None, :] - gain, 1e-300, None).transpose(3, 0, 1, 2)
+    return Surface(quad, logdet, logdet_a, prob.m, p, shift_quad)
 
 
 def gls_projector(prob: Problem, X: np.ndarray, t: int, q: float) -> np.ndarray:

@@ -226,10 +226,6 @@ class Problem:
         """The same problem on another grid of correlation times."""
         return self._rebuilt(np.asarray(taus, float), self.common)
 
-    def with_common(self, common: float) -> Problem:
-        """The same problem with the wander's axis correlation ``φ = common``."""
-        return self if common == self.common else self._rebuilt(self.taus, float(common))
-
     def _rebuilt(self, taus, common):
         lam, V, scale = kernel_eigensystems(self, taus, common)
         return Problem(self.y, self.X0, self.L, self.sigma, self.grad, self.starts, self.durations,
