@@ -170,7 +170,7 @@ def _read(args, *, accelerometer: bool = True, time_column: bool = True):
     """The recording of ``args``; ``accelerometer``: the command needs one (a gyro alone is
     refused in one line); ``time_column``: keep the time column as written (what ``apply``
     writes back; a table's is cut from the file's text, which it keeps alive: 45 MB of a
-    10⁶-row CSV that a command without it frees)."""
+    10⁶-row CSV that a command without it lets go while reading)."""
     from ..formats import read
 
     with _step(f"reading {args.recording}"):
@@ -179,13 +179,11 @@ def _read(args, *, accelerometer: bool = True, time_column: bool = True):
                    gyro=None if args.no_gyro else args.gyro, gyro_unit=args.gyro_unit, topic=args.topic,
                    instance=args.instance, time_source=args.time_source, clock=args.clock, variable=args.variable,
                    mag_unit=args.mag_unit, mag_topic=getattr(args, "mag_topic", None),
-                   mag_instance=getattr(args, "mag_instance", None))
+                   mag_instance=getattr(args, "mag_instance", None), time_column=time_column)
     if getattr(args, "no_mag", False):  # a log's magnetometer left out: no warning about it either
         from ..formats.mag_logs import MAG_WARNING
 
         rec = dataclasses.replace(rec, notes=tuple(n for n in rec.notes if not n.startswith(MAG_WARNING)))
-    if not time_column and rec.time_column is not None:
-        rec = dataclasses.replace(rec, time_column=None)
     if accelerometer and rec.acc is None:
         raise AccelcalError(f"{args.recording}: no accelerometer in this recording (a gyro alone), which "
                             f"'accelcal {args.command}' needs; name its columns with --columns ax=..,ay=..,az=..")

@@ -28,7 +28,7 @@ from pathlib import Path
 from ..errors import RecordingError
 from ..units import acceleration_unit, angular_rate_unit
 from ..units import time_unit as time_unit_name
-from .registry import (BINARY_HEAD_BYTES, FALLBACK, FORMATS, LOG_OPTIONS, MAG_LOG_OPTIONS, OPTION_FLAGS,
+from .registry import (BINARY_HEAD_BYTES, FALLBACK, FORMATS, KEEP_OPTIONS, LOG_OPTIONS, MAG_LOG_OPTIONS, OPTION_FLAGS,
                        TEXT_HEAD_CHARS, TIME_SOURCES,
                        Format, format_named)
 from .text import load_text
@@ -42,7 +42,8 @@ def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit
          time_unit: str | None = None, rate: float | None = None, intervals=None, gyro=None,
          gyro_unit: str | None = None, topic: str | None = None, instance: int | None = None,
          time_source: str | None = None, clock: str | None = None, variable: str | None = None,
-         mag_unit: str | None = None, mag_topic: str | None = None, mag_instance: int | None = None):
+         mag_unit: str | None = None, mag_topic: str | None = None, mag_instance: int | None = None,
+         time_column: bool = True):
     """Read an accelerometer recording (and its gyroscope, when the file or ``gyro`` has one).
 
     Parameters
@@ -96,6 +97,10 @@ def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit
         Tables: time the samples by the sensor's clock, fitted to the time stamps against
         the sample counter or the row index (``'auto'``, the default: rate, jitter, drift and
         gaps in the notes, :mod:`accelcal.formats.clock`), or by the stamps as they are.
+    time_column : bool
+        Keep the time column as written (:attr:`~accelcal.recording.Recording.time_column`,
+        what ``accelcal apply`` writes back; default).  False: not kept, and a table's reader
+        lets the file's text go as soon as its time is read.
 
     Returns
     -------
@@ -110,15 +115,23 @@ def read(path, *, strict: bool = False, format: str = "auto", columns=None, unit
                "mag_unit": mag_unit, "topic": topic, "instance": instance, "time_source": time_source, "clock": clock,
                "variable": variable, "mag_topic": mag_topic, "mag_instance": mag_instance}
     if strict:
-        return checked_recording(_read_strict(path, format, {**options, "intervals": intervals, "gyro": gyro}))
+        return checked_recording(_without_time_column(
+            _read_strict(path, format, {**options, "intervals": intervals, "gyro": gyro}), time_column))
     fmt = None if format == "auto" else format_named(format)
     _check_options(unit, time_unit, rate, gyro_unit, time_source)
     if clock is not None and clock not in CLOCK_MODES:
         raise RecordingError(f"--clock must be {' or '.join(CLOCK_MODES)}, got {clock!r}")
     fmt, text, notes = _format_and_text(path, fmt)
-    rec = _read_format(path, fmt, text, options, notes)
-    rec = replace(rec, notes=tuple(notes) + rec.notes)
+    held = [text]  # handed over to the reader, not kept here: it may let the text go early
+    del text
+    rec = _read_format(path, fmt, held, {**options, "time_column": None if time_column else False}, notes)
+    rec = replace(_without_time_column(rec, time_column), notes=tuple(notes) + rec.notes)
     return checked_recording(_with_side_files(rec, intervals, gyro, gyro_unit, time_unit, clock))
+
+
+def _without_time_column(rec, time_column: bool):
+    """``rec`` without its time column as written unless ``time_column``."""
+    return rec if time_column or rec.time_column is None else replace(rec, time_column=None)
 
 
 def _format_and_text(path: Path, fmt: Format | None) -> tuple[Format, str | None, list[str]]:
@@ -225,9 +238,11 @@ def _sniff_text(path: Path, text: str) -> Format:
     return next(found, FORMATS[FALLBACK])
 
 
-def _read_format(path: Path, fmt: Format, text: str | None, options: dict, notes: list[str]):
+def _read_format(path: Path, fmt: Format, held: list, options: dict, notes: list[str]):
     """Run ``fmt``'s reader with the options it takes; apply the others (see
-    :data:`~accelcal.formats.registry.READING_OPTIONS`); notes on the file go to ``notes``."""
+    :data:`~accelcal.formats.registry.READING_OPTIONS`); notes on the file go to ``notes``.
+    ``held``: ``[the text]`` (None for a binary format), emptied here or by the reader: the
+    reader holds the only reference to the text, so that it may let it go before it returns."""
     for option in ("columns", "variable", *LOG_OPTIONS, *MAG_LOG_OPTIONS):
         if options[option] is not None and option not in fmt.options:
             takers = [f.name for f in FORMATS.values() if option in f.options]
@@ -238,7 +253,10 @@ def _read_format(path: Path, fmt: Format, text: str | None, options: dict, notes
                                  f"{'s' if len(takers) > 1 else ''}, not to {fmt.name} ({fix})")
     reader = fmt.load_reader(path)
     own = {k: v for k, v in options.items() if k in fmt.options and v is not None}
-    rec = reader(path, text=text, **own) if fmt.text else reader(path, **own)
+    if fmt.text:  # a reader that may let the text go takes it handed over (a ** call's dict would hold it)
+        rec = reader(path, text=held if KEEP_OPTIONS[0] in fmt.options else held.pop(), **own)
+    else:
+        rec = reader(path, **own)
     rate = options["rate"]
     if rate is not None and "rate" not in fmt.options:
         import numpy as np

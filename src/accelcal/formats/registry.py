@@ -45,7 +45,11 @@ LOG_OPTIONS = ("topic", "instance", "time_source")
 MAG_LOG_OPTIONS = ("mag_topic", "mag_instance")
 #: The values of ``time_source``.
 TIME_SOURCES = ("header", "log")
-READING_OPTIONS = TABLE_OPTIONS + VARIABLE_OPTIONS + LOG_OPTIONS + MAG_LOG_OPTIONS
+#: Whether the recording keeps its time column as written (``time_column=False``: not, which
+#: the dispatcher applies to any format; a table's is cut from the file's text, so its reader,
+#: told so, lets the text go before the clock fit: 47 MB of a 10⁶-row CSV at the reading's peak).
+KEEP_OPTIONS = ("time_column",)
+READING_OPTIONS = TABLE_OPTIONS + VARIABLE_OPTIONS + LOG_OPTIONS + MAG_LOG_OPTIONS + KEEP_OPTIONS
 #: The command-line option of each reading option, for messages.
 OPTION_FLAGS = {"columns": "--columns", "unit": "--unit", "time_unit": "--time-unit", "rate": "--rate",
                 "gyro_unit": "--gyro-unit", "mag_unit": "--mag-unit", "topic": "--topic", "instance": "--instance",
@@ -69,7 +73,9 @@ class Format:
         What the format is, one line for the CLI's help.
     reader : str
         ``'module:function'`` of the reader.  Text formats: ``f(path, text=..., **options)``
-        with the decoded text (gzip undone); binary formats: ``f(path, **options)``.
+        with the decoded text (gzip undone; handed over as ``[text]``, which the reader empties,
+        to a reader that takes ``time_column``: it may let the text go before it returns);
+        binary formats: ``f(path, **options)``.
         ``options`` are those of :attr:`options` the caller gave (never None).
     sniff : str or None
         ``'module:function'`` of ``f(path, head) -> bool``: whether a file is in this
@@ -167,7 +173,7 @@ FORMATS: dict[str, Format] = {f.name: f for f in (
            reader="accelcal.formats.imucal_annotated:read_annotated_session",
            sniff="accelcal.formats.imucal_annotated:sniff", options=("rate",), defines_time=False, intervals=True),
     Format(name="csv", title="any delimited table (see 'input' above)",
-           reader="accelcal.formats.table:read_table", options=TABLE_OPTIONS, intervals=True,
+           reader="accelcal.formats.table:read_table", options=TABLE_OPTIONS + KEEP_OPTIONS, intervals=True,
            strict_reader="accelcal.formats.canonical:read_canonical",
            writer="accelcal.formats.canonical:write_canonical"),
     Format(name="imutk", title="IMU-TK ASCII (t x y z, e.g. xsens_acc.mat), which csv reads too",
@@ -227,6 +233,6 @@ def formats_help(width: int = 80) -> str:
     return "\n".join(lines)
 
 
-__all__ = ["BINARY_HEAD_BYTES", "FALLBACK", "FORMATS", "Format", "LOG_OPTIONS", "MAG_LOG_OPTIONS", "OPTION_FLAGS",
+__all__ = ["BINARY_HEAD_BYTES", "FALLBACK", "FORMATS", "Format", "KEEP_OPTIONS", "LOG_OPTIONS", "MAG_LOG_OPTIONS", "OPTION_FLAGS",
            "READING_OPTIONS",
            "TABLE_OPTIONS", "VARIABLE_OPTIONS", "TEXT_HEAD_CHARS", "TIME_SOURCES", "format_named", "formats_help"]

@@ -96,19 +96,23 @@ class _Table(NamedTuple):
             return np.asarray([r[i] for r in self.data], dtype=object)
         if self.raw is None:  # a matrix (read_matrix): its numbers as text
             return np.asarray([repr(float(v)) for v in self.numbers[i]], dtype=object)
-        return TextColumn(self.raw, i, self.delim, self.k, len(self.numbers[0]))
+        return TextColumn(self.raw, i, self.delim, self.k, len(self.lines))  # a column's floats may be let go
 
 
-def read_table(path, *, text: str | None = None, columns=None, unit: str | None = None,
+def read_table(path, *, text: str | list | None = None, columns=None, unit: str | None = None,
                time_unit: str | None = None, rate: float | None = None, gyro_unit: str | None = None,
-               clock: str = "auto", mag_unit: str | None = None) -> Recording:
+               clock: str = "auto", mag_unit: str | None = None, time_column: bool = True) -> Recording:
     """Read a delimited text table (the ``csv`` format; see the module docstring).
 
     ``gyro_unit`` (``rad/s``, ``deg/s``, ``counts``) is the unit of the gyro columns, if
     any (default: the header's, else inferred from the values).  ``clock``: ``'auto'``
     times the samples by the sensor's clock fitted to the time stamps against the sample
     counter (or the row index), ``'stamps'`` by the stamps as they are
-    (:mod:`accelcal.formats.clock`).
+    (:mod:`accelcal.formats.clock`).  ``time_column=False``: the time column as written is
+    not kept, and the text is let go once the time is read (before the clock's fit: a
+    10⁶-row table's 47 MB are then no part of the reading's peak memory, where the caller
+    holds no reference to it either: :func:`accelcal.formats.read` hands it over as
+    ``[text]``, which is emptied).
 
     Raises
     ------
@@ -118,10 +122,12 @@ def read_table(path, *, text: str | None = None, columns=None, unit: str | None 
     """
     path = Path(path)
     notes: list[str] = []
-    if text is None:
-        text, notes = load_text(path)
-    return _table_recording(_split_table(text, path), path, notes, columns, unit, time_unit, rate, gyro_unit,
-                            clock=clock, mag_unit=mag_unit)
+    held = text if isinstance(text, list) else [text]  # handed over (formats.read), or given
+    del text  # the split table holds the only reference from here: _table_recording may let it go
+    if held[0] is None:
+        held[0], notes = load_text(path)
+    return _table_recording(_split_table(held.pop(), path), path, notes, columns, unit, time_unit, rate, gyro_unit,
+                            clock=clock, mag_unit=mag_unit, time_column=time_column)
 
 
 def read_matrix(path, names, block: np.ndarray, *, notes=(), columns=None, unit: str | None = None,
@@ -150,6 +156,8 @@ class _Columns:
         self._strings = {}
 
     def column(self, role):
+        if self.tab is None:
+            raise RuntimeError("the table's text was let go; its string columns are read before")
         if role not in self._strings:
             self._strings[role] = self.tab.column(self.roles[role])
         return self._strings[role]
@@ -161,14 +169,24 @@ class _Columns:
 
     def numbers(self, role):
         x = self.parsed(role)
+        if x is not None:
+            return x
         tab = self.tab
-        return x if x is not None else parse_numbers(self.column(role), tab.dc, self.path, role, tab.names,
-                                                     self.roles[role], tab.lines)
+        return parse_numbers(self.column(role), tab.dc, self.path, role, tab.names, self.roles[role], tab.lines)
+
+    def let_go_of_text(self) -> None:
+        """Let go of a plain table's text (its data lines, which the string columns are cut
+        from) where every column still to be read has its floats (a bad value's message quotes
+        the text: :meth:`numbers`); from here on only floats are read."""
+        still = [r for r in self.roles if r not in ("t", "pose")]
+        if self.tab.raw is not None and all(self.parsed(r) is not None for r in still):
+            self.tab, self._strings = None, {}
 
     def release(self, role):
         """Let go of the role's floats (read once; a 10⁶-row column is 8 MB); a matrix's are
         kept: they are its columns' text too (:meth:`_Table.column`), and the caller's."""
-        if self.floats is not None and role in self.roles and (self.tab.raw is not None or self.tab.data is not None):
+        if self.floats is not None and role in self.roles and (self.tab is None or self.tab.raw is not None
+                                                               or self.tab.data is not None):
             self.floats[self.roles[role]] = None
 
     def triad(self, axes):
@@ -181,9 +199,11 @@ class _Columns:
 
 
 def _table_recording(tab, path, notes, columns, unit, time_unit, rate, gyro_unit, file_rate=None, *,
-                     clock: str = "auto", mag_unit: str | None = None) -> Recording:
-    """The recording of a split table (:func:`read_table`'s second half)."""
-    names, lines = tab.names, tab.lines
+                     clock: str = "auto", mag_unit: str | None = None, time_column: bool = True) -> Recording:
+    """The recording of a split table (:func:`read_table`'s second half).  Its string columns
+    (time, pose labels) are read first, so that without ``time_column`` the text is let go
+    before the floats' work (units, the clock's fit)."""
+    names, lines, dc = tab.names, tab.lines, tab.dc
     what = {"\t": "tab", ";": "semicolon", ",": "comma", "|": "'|'", " ": "whitespace"}[tab.delim]
     if tab.delim != "," or tab.dc:
         notes.append(f"{what}-separated" + (", decimal comma" if tab.dc else ""))
@@ -191,15 +211,24 @@ def _table_recording(tab, path, notes, columns, unit, time_unit, rate, gyro_unit
     if names is None:
         notes.append("no header: columns read as " + ", ".join(
             f"{r}=column {i + 1}" for r, i in roles.items()) + " (pass --columns to change)")
-    cols = _Columns(tab, roles, path)
-    sensors = _sensors(cols, units, unit, gyro_unit, mag_unit, notes)
+    cols, preamble = _Columns(tab, roles, path), tab.preamble
+    del tab  # only cols holds the table from here: it may let the text go
     if "t" not in roles and rate is None and file_rate is not None:
         t, tnote = np.arange(len(lines)) / file_rate[0], f"t = sample index / {file_rate[0]:g} Hz ({file_rate[1]})"
     else:
         t, tnote = time_seconds(cols.column("t") if "t" in roles else None, rate, time_unit, units.get("t"), names,
-                                roles, tab.dc, path, lines, tab.preamble,
+                                roles, dc, path, lines, preamble,
                                 parsed=cols.parsed("t") if "t" in roles else None, counter=_counter_label(names, roles))
         cols.release("t")  # t is time_seconds' array now: the column's floats would sit beside the clock's fit
+    iv, labels = (intervals_from_labels(cols.column("pose").astype(str)) if "pose" in roles else (None, None))
+    written = None
+    if "t" in roles and rate is None and time_column:
+        written = cols.column("t")  # a TextColumn stays one: cut out of the text if apply asks for it
+        written = (names[roles["t"]].strip() if names is not None else "t",
+                   written if isinstance(written, TextColumn) else written.astype(str))
+    else:
+        cols.let_go_of_text()
+    sensors = _sensors(cols, units, unit, gyro_unit, mag_unit, notes)
     t, cnotes = _sensor_clock(t, tnote, cols.numbers, names, roles, units, clock, rate, lines, path)
     notes += cnotes
     temp = None
@@ -208,15 +237,9 @@ def _table_recording(tab, path, notes, columns, unit, time_unit, rate, gyro_unit
         if units.get("temp") in ("K", "degF"):
             temp = to_celsius(temp, units["temp"])
             notes.append(f"temperature converted from {units['temp']} to degC")
-    iv, labels = (intervals_from_labels(cols.column("pose").astype(str)) if "pose" in roles else (None, None))
-    time_column = None
-    if "t" in roles and rate is None:
-        written = cols.column("t")  # a TextColumn stays one: cut out of the text if apply asks for it
-        time_column = (names[roles["t"]].strip() if names is not None else "t",
-                       written if isinstance(written, TextColumn) else written.astype(str))
     made = {k: handed_over(sensors[k]) for k in ("acc", "gyro", "mag")}  # arrays of ours: kept, not copied
     return Recording(handed_over(t), made["acc"], temp, str(path), intervals=iv, labels=labels,
-                     notes=tuple(n for n in notes if n), unit=sensors["unit"], time_column=time_column,
+                     notes=tuple(n for n in notes if n), unit=sensors["unit"], time_column=written,
                      gyro=made["gyro"], gyro_unit=sensors["gyro_unit"], mag=made["mag"],
                      mag_unit=sensors["mag_unit"])
 
