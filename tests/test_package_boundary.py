@@ -23,7 +23,9 @@ CORE = SRC / "accelcal"
 LAYERS = {"accelcal": CORE, "accelcal_repro": SRC / "accelcal_repro", "workflow": REPO / "workflow" / "scripts"}
 PACKAGES = ("accelcal", "accelcal_repro")
 #: Third-party packages the core may import anywhere, and where matplotlib is allowed.
-CORE_DEPENDENCIES = {"numpy", "scipy", "pandas", "casadi"}
+# threadpoolctl: the BLAS's thread count around the loop's small stacked LAPACK calls (accelcal.threads;
+# pure Python, no dependencies of its own, what scikit-learn and scipy's own tests use for the same job)
+CORE_DEPENDENCIES = {"numpy", "scipy", "pandas", "casadi", "threadpoolctl"}
 PLOTTING_MODULES = {"plotting.py", "discrepancy/figures.py", "noise/figures.py"}
 #: Optional extras (ros, px4, ardupilot, rdata, mat73, geomag), each imported lazily by its reader (the IGRF by
 #: the magnetometer's field module) only.

@@ -14,6 +14,7 @@ result class and its JSON (:mod:`.rules`, :mod:`.results`).
 
 from __future__ import annotations
 
+from ..threads import one_blas_thread
 from .fit import PoseData
 from .results import DiscrepancyResult
 from .rules import Rules
@@ -21,6 +22,7 @@ from .wander_loop import discrepancy_wander
 from .white_loop import discrepancy_white
 
 
+@one_blas_thread  # small stacked eigenproblems: threads only spin (accelcal.threads)
 def discrepancy(data: PoseData, rules: Rules | None = None, report: bool = True) -> DiscrepancyResult:
     """Run the deterministic layer (module docstring) on one pose set.
 
