@@ -65,6 +65,8 @@ def test_location_and_date_give_the_igrf_field_in_ut(tmp_path, capsys):
     rec = _session(tmp_path / "s.csv")
     out = tmp_path / "m.json"
     assert main(["mag", str(rec), "--out", str(out), "--location", "37.5,127.0", "--date", "2018-08-30"]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert err[-1] == f"written to {out}", "the output ends with where the calibration was written"
     d = json.loads(out.read_text())["magnetometer"]
     assert d["model"]["strength_unit"] == "uT" and d["model"]["strength"] == pytest.approx(f["strength"])
     assert main(["mag", str(rec), "--out", str(out), "--location", "97,0", "--date", "2018-08-30"]) == 2

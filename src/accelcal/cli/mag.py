@@ -121,8 +121,7 @@ def _mag(args) -> int:
     for n in tab.notes:
         print(f"read: {n}", file=sys.stderr)
     print(f"accelerometer: {how}", file=sys.stderr)
-    print(mcal.summary(), file=sys.stderr)
-    print(f"written to {args.out}" + "".join(f", {p}" for p, _ in outputs), file=sys.stderr)
+    print(mcal.summary(written_to=", ".join([str(args.out), *(str(p) for p, _ in outputs)])), file=sys.stderr)
     return 0
 
 
