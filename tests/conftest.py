@@ -108,15 +108,23 @@ def ci_workflow(tmp_path_factory, worker_id):
 @pytest.fixture(scope="session")
 def default_dry_run(tmp_path_factory, worker_id):
     """`snakemake -n all` on the default config (config/config.yaml) in an empty folder,
-    once per test session (~3 s of CPU a process): ``(workdir, returncode, stdout + stderr)``.
-    Its job table is what tests of the default config read (the checks pass, the grid's
-    job count); the first worker that needs it runs it under a lock, the others reuse it."""
+    planned once per test session in the process of the first worker that needs it
+    (tests/snakemake_plan.py; ~1 s of CPU there against ~3 s for a Snakemake process):
+    ``(workdir, error, {rule: jobs})``, error the config check's message or None.  Its job
+    table is what tests of the default config read (the checks pass, the grid's job count);
+    the other workers read its record."""
     def make(workdir):
-        proc = run_snakemake(workdir, "-n", "all", timeout=300)
-        return {"returncode": proc.returncode, "out": proc.stdout + proc.stderr}
+        # deferred: Snakemake's API (~1.2 s to import) only in the worker that plans
+        from snakemake.exceptions import WorkflowError
+
+        from tests.snakemake_plan import planned_jobs, rule_counts
+        try:
+            return {"error": None, "jobs": rule_counts(planned_jobs(workdir, ["all"]))}
+        except WorkflowError as e:
+            return {"error": str(e), "jobs": {}}
 
     workdir, run = once_per_session(tmp_path_factory, worker_id, "default_dry_run", make)
-    return workdir, run["returncode"], run["out"]
+    return workdir, run["error"], run["jobs"]
 
 
 def copy_of_ci_workflow(ci_workflow, dest: Path) -> Path:
@@ -128,6 +136,15 @@ def copy_of_ci_workflow(ci_workflow, dest: Path) -> Path:
     return dest
 
 
+def write_config(cfg: dict, path: Path) -> Path:
+    """``cfg`` written to ``path`` for ``--configfile`` as JSON, which is YAML too: Snakemake
+    reads a config file as JSON first, and its YAML path (yte, pure-Python PyYAML) costs
+    ~0.04 s of CPU per read of the CI config, twice per parse, ~0.1 s with the dump (of
+    ~0.33 s per parse).  The dict Snakemake gets is the same (a test compares)."""
+    path.write_text(json.dumps(cfg, indent=1))
+    return path
+
+
 def config_error(cfg: dict, path: Path) -> str | None:
     """The Snakefile parsed in this process with ``cfg`` as the whole config (what
     ``snakemake --configfile PATH --replace-workflow-config`` reads; ``cfg`` is written to
@@ -137,13 +154,12 @@ def config_error(cfg: dict, path: Path) -> str | None:
     any DAG: what a broken config gets is decided here, without a Snakemake process per
     case (~1.5 s each).  The command line's behaviour on a broken config (one line, no
     traceback, no job) is tested through a subprocess once per stage."""
-    import yaml
     from snakemake.api import SnakemakeApi
     from snakemake.exceptions import WorkflowError
     from snakemake.settings.types import (ConfigSettings, DeploymentSettings, OutputSettings, ResourceSettings,
                                           StorageSettings, WorkflowSettings)
 
-    path.write_text(yaml.safe_dump(cfg))
+    write_config(cfg, path)
     workdir = path.parent / "parse"
     workdir.mkdir(exist_ok=True)
     with SnakemakeApi(OutputSettings(quiet={"all"})) as api:

@@ -16,7 +16,11 @@ import pytest
 import yaml
 
 from tests.configs import ci_config, load_config
-from tests.conftest import config_error
+from snakemake.exceptions import MissingInputException
+from snakemake.common.configfile import load_configfile
+
+from tests.conftest import config_error, write_config
+from tests.snakemake_plan import planned_jobs
 from tests.test_workflow import CI, REPO, snakemake
 
 DEFAULT = REPO / "config" / "config.yaml"
@@ -52,8 +56,7 @@ def changed(changes):
 
 
 def dry_run(tmp_path, cfg):
-    path = tmp_path / "config.yaml"
-    path.write_text(yaml.safe_dump(cfg))
+    path = write_config(cfg, tmp_path / "config.yaml")
     workdir = tmp_path / "work"
     workdir.mkdir()
     proc = snakemake(workdir, "-n", "all", "--configfile", path, "--replace-workflow-config", timeout=180)
@@ -198,12 +201,13 @@ def test_a_missing_imutk_run_is_the_gyro_jobs_missing_input_not_a_parse_check(tm
     that does not exist plans no job and names the file (Snakemake's own missing-input
     error), while the workflow's parse reads no file system."""
     cfg = changed({"gyro.imutk_run": "results/gyro/peers/none.json"})
-    assert config_error(cfg, tmp_path / "config.yaml") is None  # the parse accepts it
-    _, workdir, proc = dry_run(tmp_path, cfg)
-    out = proc.stdout + proc.stderr
-    assert proc.returncode != 0, out[-2000:]
-    assert "Missing input files" in out and "results/gyro/peers/none.json" in out, out[-2000:]
-    assert "Traceback" not in out and not (workdir / "results").exists()
+    path = tmp_path / "config.yaml"
+    assert config_error(cfg, path) is None  # the parse accepts it
+    workdir = tmp_path / "work"
+    workdir.mkdir()
+    with pytest.raises(MissingInputException, match=r"results/gyro/peers/none\.json"):
+        planned_jobs(workdir, ["all"], [path], replace_config=True)  # `snakemake -n all`, in this process
+    assert not (workdir / "results").exists()
 
 
 # Valid configs at the edges of the rules above (the same checks must let them through):
@@ -237,17 +241,17 @@ def test_valid_configs_at_the_edges_pass_the_checks(tmp_path, stage):
 
 
 def test_valid_configs_at_the_edges_pass_the_dry_run(tmp_path):
-    """Every stage's edges at once (they change disjoint keys) through `snakemake -n all`:
-    the command line accepts them and builds the DAG.  One process for the five stages (a
-    dry run costs ~3 s of CPU); which stage's edge a failure comes from, the message names
-    (its key) and the per-stage parse test above tells apart."""
+    """Every stage's edges at once (they change disjoint keys) through `snakemake -n all`,
+    planned in this process (tests/snakemake_plan.py): the checks accept them and the DAG is
+    built, with every stage's jobs in it.  Which stage's edge a failure comes from, the
+    message names (its key) and the per-stage parse test above tells apart."""
     changes = {k: v for stage in STAGES for k, v in EDGE_CHANGES[stage].items()}
     assert len(changes) == sum(map(len, EDGE_CHANGES.values()))  # disjoint: no stage's edge overwritten
-    _, workdir, proc = dry_run(tmp_path, changed(changes))
-    out = proc.stdout + proc.stderr
-    assert proc.returncode == 0, out[-3000:]
-    assert "invalid config" not in out
-    assert "Job stats" in out  # the DAG was built
+    path = write_config(changed(changes), tmp_path / "config.yaml")
+    workdir = tmp_path / "work"
+    workdir.mkdir()
+    rules = {rule for rule, _ in planned_jobs(workdir, ["all"], [path], replace_config=True).values()}
+    assert {"all", "batista2011_claims", "tereshkov_claims", "measured_claims", "gyro_claims", "noise_claims"} <= rules
     assert not (workdir / "results").exists()
 
 
@@ -343,3 +347,14 @@ def test_full_models_on_a_section_list_are_refused_by_the_measured_job():
     with pytest.raises(TooFewPosesError, match=r"^measured.recordings.imucal_ferraris.estimators: full_lls need at "
                                                r"least 10 poses, pose_selection 'section_list' gives the session's 6"):
         check_section_list_estimators("imucal_ferraris", ["full_lls", "bias_lls"], sections, "section_list")
+
+
+@pytest.mark.parametrize("case", ["batista_missing_key", "measured_unknown_recording", "noise_term_missing"])
+def test_a_config_the_tests_write_reads_as_its_yaml_would(tmp_path, case):
+    """The tests write configs as JSON (tests/conftest.write_config: Snakemake reads JSON
+    first, and its YAML path is the slow part of a parse): Snakemake gets the same dict as
+    from the YAML a user would write (broken configs included)."""
+    cfg, _ = BROKEN[case]
+    as_yaml = tmp_path / "config.yaml"
+    as_yaml.write_text(yaml.safe_dump(cfg))
+    assert load_configfile(write_config(cfg, tmp_path / "config.json")) == load_configfile(as_yaml) == cfg

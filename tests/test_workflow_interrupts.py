@@ -20,6 +20,7 @@ import time
 import pytest
 
 from tests.conftest import copy_of_ci_workflow
+from tests.snakemake_plan import planned_jobs
 from tests.test_resilience import (
     CI,
     HELD_OUTPUT,
@@ -49,10 +50,8 @@ def uninterrupted(ci_workflow, tmp_path_factory):
     """The reference: the session's CI run (tests/conftest.py; the same config, so the same
     outputs of TARGET) and the jobs TARGET takes from scratch (a dry run in an empty folder),
     of which the tests undo the gather job and REDONE Monte Carlo jobs."""
-    workdir = tmp_path_factory.mktemp("plan")
-    proc = snakemake(workdir, "--dry-run", TARGET, "--configfile", CI, "--cores", "1")
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    return ci_workflow, jobs_in(proc.stdout + proc.stderr)
+    workdir = tmp_path_factory.mktemp("plan")  # `snakemake -n TARGET`, planned in this process
+    return ci_workflow, planned_jobs(workdir, [TARGET], [CI])
 
 
 def partly_undone(ci_workflow, ref_jobs, dest):
@@ -153,9 +152,9 @@ def test_interrupted_run_resumes_without_redoing_finished_jobs(tmp_path, uninter
           f"{len(files)} whole files, temporaries left: {[str(p.relative_to(results)) for p in temporaries]}")
 
     # (b) the dry run of the resumed run plans exactly the unfinished jobs
-    proc = snakemake(workdir, "--dry-run", TARGET, "--configfile", CI, "--cores", "1", timeout=600)
-    assert proc.returncode == 0, proc.stderr[-3000:]
-    planned = {o for _, outputs in jobs_in(proc.stdout + proc.stderr).values() for o in outputs}
+    # (planned in this process: tests/snakemake_plan.py; what the interrupted run printed is
+    # still read from its console)
+    planned = {o for _, outputs in planned_jobs(workdir, [TARGET], [CI]).values() for o in outputs}
     every = {o for _, outputs in undone.values() for o in outputs}
     assert not planned & set(finished), f"finished jobs planned again: {sorted(planned & set(finished))}"
     assert planned == every - set(finished), sorted(planned ^ (every - set(finished)))

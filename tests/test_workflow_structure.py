@@ -15,18 +15,12 @@ import pytest
 
 from tests.configs import CI_CONFIG, REPO, load_config
 
-from .conftest import copy_of_ci_workflow, run_snakemake
+from .conftest import copy_of_ci_workflow
+from .snakemake_plan import planned_jobs, rule_counts
 
 SCRIPTS = REPO / "workflow" / "scripts"
 sys.path.insert(0, str(SCRIPTS))
 import _helpers  # noqa: E402
-
-
-def _job_counts(stderr_and_stdout: str) -> dict[str, int]:
-    """``{rule: jobs}`` from the 'Job stats' table of a dry run."""
-    table = stderr_and_stdout.split("Job stats:", 1)[1]
-    return {m.group(1): int(m.group(2)) for m in re.finditer(r"^(\w+)\s+(\d+)\s*$", table, re.M)
-            if m.group(1) != "total"}
 
 
 def test_stage_include_order_does_not_matter(tmp_path):
@@ -41,14 +35,9 @@ def test_stage_include_order_does_not_matter(tmp_path):
     reordered = reordered[:at] + "".join(sorted(includes, reverse=True)) + reordered[at:]
     snakefile = REPO / f".Snakefile.reordered.{os.getpid()}"  # beside the real one: same basedir
     snakefile.write_text(reordered)
-    try:
-        counts = []
-        for sf in (REPO / "Snakefile", snakefile):
-            proc = subprocess.run([str(Path(sys.executable).with_name("snakemake")), "--snakefile", str(sf),
-                                   "--directory", str(tmp_path), "-n", "all", "--configfile", str(CI_CONFIG),
-                                   "--cores", "2"], cwd=REPO, capture_output=True, text=True, timeout=300)
-            assert proc.returncode == 0, proc.stderr[-3000:]
-            counts.append(_job_counts(proc.stdout + proc.stderr))
+    try:  # the dry runs' job tables, planned in this process (tests/snakemake_plan.py)
+        counts = [rule_counts(planned_jobs(tmp_path, ["all"], [CI_CONFIG], snakefile=sf))
+                  for sf in (REPO / "Snakefile", snakefile)]
     finally:
         snakefile.unlink()
     assert counts[0] == counts[1]
@@ -94,21 +83,19 @@ def test_final_targets_are_the_stages_declarations_and_match_the_rules(workflow)
 _OFFLINE = {k: "http://127.0.0.1:9" for k in ("http_proxy", "https_proxy", "HTTP_PROXY", "HTTPS_PROXY")}
 
 
-def test_simulation_stages_plan_without_the_measured_data(tmp_path):
+def test_simulation_stages_plan_without_the_measured_data(tmp_path, monkeypatch):
     """No shared copy, no download cache and no network: the simulation stages and their
     figures plan and need no fetch; `all` plans too, with the fetch jobs in it (they fail
-    when they run: tests/test_resilience.py)."""
+    when they run: tests/test_resilience.py).  Planned in this process, offline as the
+    command line would be (tests/snakemake_plan.py)."""
     overlay = tmp_path / "no_data.yaml"
     overlay.write_text(f"measured:\n  data_dir: {tmp_path / 'absent'}\n  resources_dir: {tmp_path / 'cache'}\n")
-    env = {**os.environ, **_OFFLINE, "no_proxy": "", "NO_PROXY": ""}
+    for var, value in {**_OFFLINE, "no_proxy": "", "NO_PROXY": ""}.items():
+        monkeypatch.setenv(var, value)
+    (tmp_path / "work").mkdir()
 
     def dry_run(*targets):
-        proc = subprocess.run([str(Path(sys.executable).with_name("snakemake")), "--snakefile", str(REPO / "Snakefile"),
-                               "--directory", str(tmp_path / "work"), "-n", *targets, "--configfile", str(CI_CONFIG),
-                               str(overlay), "--cores", "2"], cwd=REPO, env=env, capture_output=True, text=True,
-                              timeout=300)
-        assert proc.returncode == 0, proc.stderr[-3000:]
-        return _job_counts(proc.stdout + proc.stderr)
+        return rule_counts(planned_jobs(tmp_path / "work", targets, [CI_CONFIG, overlay]))
 
     jobs = dry_run("burkhard2024", "batista2011", "tereshkov", "burkhard2024_fig1a", "batista2011_fig4")
     assert {"burkhard2024_mc", "batista2011_filter_mc", "tereshkov_simulate", "burkhard2024_fig1a"} <= set(jobs)
@@ -156,8 +143,8 @@ def test_a_script_run_standalone_rebuilds_the_workflows_output(ci_workflow, tmp_
     assert proc.returncode == 0, proc.stderr[-3000:]
     assert target.read_bytes() == want
     # and Snakemake sees nothing to redo beyond that file's own rule
-    proc = run_snakemake(work, "-n", "results/claims.csv", "--configfile", CI_CONFIG)
-    assert proc.returncode == 0, proc.stderr
+    rules = {rule for rule, _ in planned_jobs(work, ["results/claims.csv"], [CI_CONFIG]).values()}
+    assert rules <= {"claims"}, rules
     shutil.rmtree(work / "results")
 
 
