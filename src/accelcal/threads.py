@@ -8,14 +8,17 @@ OpenBLAS's default threads against 0.36 s with one (measured side by side; 10x).
 command line and the workflow set one thread through the environment before numpy loads
 (:data:`accelcal.cli.BLAS_THREADS`, the Snakefile); a Python user of the library gets it
 from :func:`one_blas_thread` on the entry that runs the loop, which limits the BLAS
-libraries loaded at the call (threadpoolctl, ~0.25 ms per call) and restores them after.
+libraries and restores them after.  The libraries are found once, at the first call
+(threadpoolctl's controller: 8 µs per call after that, where a fresh ``threadpool_limits``
+scans every loaded library again, 3.4 ms per call in a benchmark chunk's process: 40 s of
+CPU over a default run's ~12,000 calls); numpy's and scipy's BLAS are loaded by then.
 """
 
 from __future__ import annotations
 
-from functools import wraps
+from functools import cache, wraps
 
-from threadpoolctl import threadpool_limits
+from threadpoolctl import ThreadpoolController
 
 
 def one_blas_thread(function):
@@ -23,10 +26,16 @@ def one_blas_thread(function):
 
     @wraps(function)
     def limited(*args, **kwargs):
-        with threadpool_limits(limits=1, user_api="blas"):
+        with _controller().limit(limits=1, user_api="blas"):
             return function(*args, **kwargs)
 
     return limited
+
+
+@cache
+def _controller() -> ThreadpoolController:
+    """The loaded thread pools, found once (module docstring)."""
+    return ThreadpoolController()
 
 
 __all__ = ["one_blas_thread"]
