@@ -18,15 +18,15 @@ from __future__ import annotations
 
 import time
 
+import allantools  # the peer: the `peer` extra, pinned in environment.lock and installed by tools/setup.sh
 import numpy as np
+import pandas as pd
 import pytest
 
 from accelcal import kernels
 from accelcal.formats.table import read_table
 from accelcal.noise import analyse_noise
 
-allantools = pytest.importorskip("allantools")
-pd = pytest.importorskip("pandas")
 
 FS = 100.0
 ROWS = 300_000

@@ -55,7 +55,6 @@ def test_gives_up_on_what_it_cannot_read_exactly(text):
 def test_a_large_block_reads_as_pandas_reads_it(monkeypatch):
     """parse_block's compiled route (a block from the size that pandas would read) against
     pandas' route on the same text; and a field it gives up on goes to pandas, same numbers."""
-    pytest.importorskip("pandas")
     rng = np.random.default_rng(1)
     x = np.round(rng.normal(size=(3000, 4)) * 10.0 ** rng.integers(-3, 4, size=(3000, 4)), 5)
     text = "a,b,c,d\n" + "\n".join(",".join(repr(float(v)) for v in row) for row in x) + "\n"
