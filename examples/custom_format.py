@@ -21,7 +21,7 @@ import numpy as np
 from accelcal import cli
 from accelcal.errors import RecordingError
 from accelcal.formats import FORMATS, Format, detect_format, read
-from accelcal.recording import Recording
+from accelcal.recording import Origin, Recording
 from accelcal.simulation import random_directions, simulate_recording
 from accelcal.units import G0
 
@@ -34,18 +34,22 @@ def sniff(path: Path, head: str) -> bool:
 
 
 def read_xyz_log(path, text: str) -> Recording:
-    """The samples of an xyz-log file (``text``: its decoded content), in m/s²."""
+    """The samples of an xyz-log file (``text``: its decoded content), in m/s².
+
+    Row count, finite values and increasing time are not checked here: ``read`` checks them
+    for every reader, and the :class:`Origin` (each sample's line) lets its message name the line."""
     lines = text.splitlines()
+    rows = [(no, line) for no, line in enumerate(lines[1:], start=2) if line.strip()]
     try:
         rate = float(lines[0].removeprefix(MAGIC).split()[0])
-        acc = np.array([[float(v) for v in line.split()] for line in lines[1:] if line.strip()]) * G0
+        acc = np.array([[float(v) for v in line.split()] for _, line in rows]) * G0
     except (ValueError, IndexError):
         raise RecordingError(f"{path}: not an xyz-log file (first line '{MAGIC} <rate> Hz', then x y z in g)") \
             from None
     if acc.ndim != 2 or acc.shape[1] != 3 or not rate > 0:
         raise RecordingError(f"{path}: an xyz-log file has three values per line and a positive rate")
     return Recording(np.arange(len(acc)) / rate, acc, None, str(path), unit="m/s^2",
-                     notes=(f"xyz-log: {rate:g} Hz, values in g",))
+                     notes=(f"xyz-log: {rate:g} Hz, values in g",), origin=Origin("line", numbers=[no for no, _ in rows]))
 
 
 ENTRY = Format(name="xyz-log", title="xyz-log: '# xyz-log RATE Hz', then x y z per line in g",

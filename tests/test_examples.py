@@ -138,8 +138,8 @@ def example_format():
 
 
 @pytest.mark.parametrize("body, cause", [
-    ("0 0 1\n", "only 1 samples"),
-    ("0 0 1\n" * 11 + "nan 0 1\n", "not a finite number"),
+    ("0 0 1\n", "only 1 data rows; need at least 10"),
+    ("0 0 1\n" * 11 + "nan 0 1\n", "non-finite value nan at line 13"),
 ])
 def test_the_example_reader_needs_no_checks_of_its_own(example_format, tmp_path, body, cause):
     """The recording's invariants are checked where every reader's output passes (formats.read): the

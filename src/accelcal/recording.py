@@ -8,6 +8,7 @@ intervals, notes on what a reader assumed, the units.  Readers of the file forma
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -16,6 +17,74 @@ from .errors import RecordingError
 
 #: Fewest samples a recording may have: below this nothing (rest, noise) can be estimated.
 MIN_ROWS = 10
+
+
+#: What a reader's sample is called in a count ("only 3 messages"), by the unit that numbers it.
+_COUNT_NOUNS = {"line": "data rows", "message": "messages", "sample": "samples", "row": "rows"}
+#: The default names of the fields :func:`checked_recording` checks.
+_FIELD_NAMES = {"t": "time", "acc": "specific force", "gyro": "angular rate"}
+
+
+@dataclass(frozen=True)
+class Origin:
+    """Where a reader found the samples of a recording: what the one-line messages of
+    :func:`checked_recording` need to name the place a user can open, and the fix.
+
+    The checks every recording must pass are made once, on every reader's output; only the
+    reader knows that sample 7 is line 12 of a table or message 7 of topic ``/imu``, so it
+    says so here.
+
+    Attributes
+    ----------
+    unit : str
+        What numbers a sample in the file: ``'line'`` (a text file, 1-based), ``'message'``
+        (a log, 0-based as its tools count), ``'sample'`` (nothing better).
+    first : int
+        The number of sample 0 (the line of the first data row).
+    numbers : sequence of int, or None
+        Each sample's number when it is not ``first + k`` (comment lines skipped, rows
+        sorted by a counter); None otherwise.
+    label : str
+        What in the file holds the samples (``'topic /imu'``, ``'sensor_accel instance 0'``);
+        ``''``: the whole file.
+    names : tuple of (field, name)
+        What the file calls the checked fields ``t``, ``acc``, ``gyro``: one name
+        (``('acc', 'linear_acceleration')``) or one per column (``('acc', ("column 'ax'",
+        "column 'ay'", "column 'az'"))``); a field not named is called by what it is.
+    fix : str
+        What to do about a recording too short in this file (``'choose another topic with
+        --topic'``); ``''``: the general hint.
+    time_fix : str
+        What to do about time that does not increase in this file (a log's sensor stamps:
+        ``'use the bag's record time (--time-source log)'``); ``''``: the general hints.
+    """
+
+    unit: str = "sample"
+    first: int = 0
+    numbers: Sequence[int] | None = None
+    label: str = ""
+    names: tuple = ()
+    fix: str = ""
+    time_fix: str = ""
+
+    def place(self, k: int) -> str:
+        """Where sample ``k`` is in the file (``'line 12'``, ``'message 7'``)."""
+        return f"{self.unit} {int(self.numbers[k]) if self.numbers is not None else self.first + k}"
+
+    def name(self, field: str, column: int | None = None) -> str:
+        """What the file calls ``field`` (``t``, ``acc``, ``gyro``), or its ``column``."""
+        named = dict(self.names).get(field)
+        if isinstance(named, tuple):
+            named = named[column] if column is not None else ", ".join(named)
+        return _FIELD_NAMES[field] + (f" ({named})" if named else "")
+
+    def count(self, n: int) -> str:
+        """``n`` samples counted as the file counts them (``'only 3 messages'``, ``'no messages'``)."""
+        return f"{'only ' + str(n) if n else 'no'} {_COUNT_NOUNS.get(self.unit, self.unit + 's')}"
+
+
+#: The origin of a recording whose reader says nothing about where its samples are.
+BY_INDEX = Origin()
 
 
 @dataclass(frozen=True)
@@ -77,6 +146,9 @@ class Recording:
         Separately recorded runs joined into one recording (``[start, stop)``, sorted,
         covering every sample; several variables of one ``.mat`` file): each rests on its
         own, so each has its own bias, and no motion spans two.  None: one run.
+    origin : Origin or None
+        Where the reader found the samples (the line, message or topic), for the messages
+        of :func:`checked_recording`; None: samples are named by their index.
     """
 
     t: np.ndarray
@@ -96,6 +168,7 @@ class Recording:
     runs: np.ndarray | None = None
     mag: np.ndarray | None = None
     mag_unit: str | None = None
+    origin: Origin | None = None
 
     def __post_init__(self):
         t = _frozen_float(self.t)
@@ -125,6 +198,8 @@ class Recording:
         object.__setattr__(self, "notes", tuple(self.notes))
         object.__setattr__(self, "rotations", _check_rotations(self.rotations, t.size, self.source))
         object.__setattr__(self, "runs", _check_runs(self.runs, t.size, self.source))
+        if self.origin is not None and self.origin.numbers is not None and len(self.origin.numbers) != t.size:
+            raise RecordingError(f"{self.source}: the origin numbers {len(self.origin.numbers)} samples of {t.size}")
         if self.unit not in (None, "m/s^2", "counts"):
             raise RecordingError(f"{self.source}: unit {self.unit!r}; a Recording holds m/s^2 or counts "
                                  "(convert g and mg when reading)")
@@ -146,24 +221,44 @@ def checked_recording(rec: Recording) -> Recording:
     The invariants of a recording that the estimators rely on, checked once where every
     reader's output passes (:func:`accelcal.formats.read`), not in each reader: at least
     :data:`MIN_ROWS` samples, finite time, specific force and angular rate, time strictly
-    increasing.  A temperature column with non-finite values is dropped, with a note.
+    increasing.  A temperature column with non-finite values is dropped, with a note.  The
+    message names the place in the file from the reader's :class:`Origin` (the line, the
+    message of a topic) and the fix.
     """
-    where = rec.source
+    origin = rec.origin or BY_INDEX
+    where = f"{rec.source}: {origin.label}: " if origin.label else f"{rec.source}: "
     if rec.n < MIN_ROWS:
-        raise RecordingError(f"{where}: only {rec.n} samples; need at least {MIN_ROWS} (an empty or truncated file?)")
-    for name, values in (("time", rec.t), ("specific force", rec.acc), ("angular rate", rec.gyro)):
+        fix = origin.fix or "an empty or truncated file?"
+        raise RecordingError(f"{where}{origin.count(rec.n)}; need at least {MIN_ROWS} ({fix})")
+    for field in ("t", "acc", "gyro"):
+        values = getattr(rec, field)
         if values is not None and not np.all(np.isfinite(values)):
-            k = int(np.flatnonzero((~np.isfinite(values.reshape(rec.n, -1))).any(axis=1))[0])
-            raise RecordingError(f"{where}: {name} of sample {k} is not a finite number (nan or inf); "
-                                 "remove or repair that row")
-    steps = np.diff(rec.t)
-    if np.any(steps <= 0):
-        k = int(np.flatnonzero(steps <= 0)[0]) + 1
-        raise RecordingError(f"{where}: time not strictly increasing at sample {k} ({rec.t[k - 1]:.9g} then "
-                             f"{rec.t[k]:.9g} s); sort the file or give --rate to time it by the sample index")
+            bad = ~np.isfinite(values.reshape(rec.n, -1))
+            k = int(np.flatnonzero(bad.any(axis=1))[0])
+            j = int(np.flatnonzero(bad[k])[0]) if values.ndim == 2 else None
+            raise RecordingError(
+                f"{where}{origin.name(field, j)}: non-finite value {values.reshape(rec.n, -1)[k, j or 0]} at "
+                f"{origin.place(k)} ({int(bad.any(axis=1).sum())} such {origin.unit}(s)); remove or repair it")
+    _check_increasing(rec.t, where, origin)
     if rec.temp is not None and not np.all(np.isfinite(rec.temp)):
         return replace(rec, temp=None, notes=rec.notes + ("temperature column has non-finite values: not used",))
     return rec
+
+
+def _check_increasing(t: np.ndarray, where: str, origin: Origin) -> None:
+    """Time strictly increasing, else one line: where it repeats or goes back, and the fix for each."""
+    steps = np.diff(t)
+    bad = np.flatnonzero(steps <= 0)
+    if bad.size == 0:
+        return
+    k = int(bad[0]) + 1
+    if steps[k - 1] == 0:
+        what, fix = "repeats", "time stamps coarser than the sampling? pass --rate HZ to time the samples by their index"
+    else:
+        what, fix = "goes back", ("samples out of order or two recordings joined: sort or split the file, or pass "
+                                  "--rate HZ to time the samples by their index")
+    raise RecordingError(f"{where}{origin.name('t')} {what} at {origin.place(k)} ({t[k]:.9g} s after "
+                         f"{t[k - 1]:.9g} s; {bad.size} such step(s)); {origin.time_fix or fix}")
 
 
 def _check_gyro(gyro, unit: str | None, n: int, source: str):

@@ -28,8 +28,8 @@ import numpy as np
 
 from ..errors import LogFormatError
 from .ardupilot_mag import add_magnetometer
-from .logs import (ColumnBuffer, Progress, check_finite, check_rows, check_time_source, choose, make_recording,
-                      microseconds, require_extra, stamps_to_time)
+from .logs import (ColumnBuffer, Progress, check_time_source, choose, make_recording, microseconds, require_extra,
+                   stamps_to_time, topic_origin)
 
 #: A DataFlash log starts with the FMT message's header: 0xA3 0x95 0x80 (FMT describes itself).
 DATAFLASH_MAGIC = b"\xa3\x95\x80"
@@ -176,20 +176,20 @@ def _stream(log, path, name: str, count: int, progress) -> np.ndarray:
 
 def _recording(path, name: str, inst: int, rows: np.ndarray, time_source: str):
     label = f"{name} instance {inst}"
-    check_rows(path, label, len(rows))
     us = microseconds(rows[:, 0], path, f"{label}: TimeUS")
-    t = stamps_to_time(us * 1000, path, f"{label}: TimeUS", "the log's stamps are not in order (a damaged log?)")
+    t = stamps_to_time(us * 1000)
     acc, gyro, temp = rows[:, 2:5], rows[:, 5:8], rows[:, 8]
-    check_finite(path, label, acc, "AccX/Y/Z")
-    check_finite(path, label, gyro, "GyrX/Y/Z")
-    rate = 1.0 / float(np.median(np.diff(t)))
+    steps = np.diff(t)
+    rate = 1.0 / float(np.median(steps)) if len(steps) and np.all(steps > 0) else float("nan")
     notes = [f"ArduPilot DataFlash, {label}: {len(rows)} samples at {rate:.4g} Hz; AccX/Y/Z [m/s^2] and GyrX/Y/Z "
              "[rad/s] as logged, after ArduPilot's own calibration (INS_ACCOFFS/INS_ACCSCAL): a calibration fitted "
              "to them corrects what the autopilot's calibration left"]
     if time_source == "log":
         notes.append("the IMU message has one time stamp (TimeUS): used for --time-source log too")
+    origin = topic_origin(label, time="TimeUS", time_fix="the log's stamps are not in order (a damaged log?)",
+                          acc=("AccX", "AccY", "AccZ"), gyro=("GyrX", "GyrY", "GyrZ"))
     return make_recording(path, t=t, acc=acc, gyro=gyro, notes=notes, time_name="TimeUS", time_values=us,
-                          temp=temp if np.all(np.isfinite(temp)) else None)
+                          temp=temp if np.any(np.isfinite(temp)) else None, origin=origin)  # no T field: nan
 
 
 __all__ = ["read", "sniff"]

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RecordingError
-from ..recording import MIN_ROWS, Recording
+from ..recording import MIN_ROWS, Origin, Recording
 from ..units import G0, acceleration_unit
 
 #: Prompt that opens a block of a serial-monitor block log (FastAhrs' FXOS8700 calibration sketch).
@@ -45,7 +45,7 @@ def read_block_log(path, text: str | None = None) -> Recording:
     lines = _text_lines(path, what) if text is None else text.splitlines()
     if not lines:
         raise RecordingError(f"{path}: empty file (expected {what})")
-    rows, blocks, seconds, unit = _parse_blocks(lines, path)
+    rows, blocks, seconds, unit, row_lines = _parse_blocks(lines, path)
     rate = _block_rate(blocks, seconds, path)
     acc = np.array(rows, dtype=float)
     t = np.arange(len(acc)) / rate
@@ -60,13 +60,14 @@ def read_block_log(path, text: str | None = None) -> Recording:
             canonical = "m/s^2"
         notes.append(f"unit from the banner: {unit}")
     return Recording(t, acc, None, str(path), intervals=[(a, b) for a, b, _ in blocks],
-                     labels=tuple(f"block{k:02d}" for k in range(len(blocks))), notes=tuple(notes), unit=canonical)
+                     labels=tuple(f"block{k:02d}" for k in range(len(blocks))), notes=tuple(notes), unit=canonical,
+                     origin=Origin("line", numbers=np.array(row_lines, dtype=np.int64), names=(("acc", ("x", "y", "z")),)))
 
 
 def _parse_blocks(lines: list[str], path):
     """Rows ``x, y, z``; blocks ``[first row, end row, line of the prompt]``; each block's
-    stated seconds; the unit of the banner (or None)."""
-    rows, blocks, seconds, unit = [], [], [], None
+    stated seconds; the unit of the banner (or None); the line of each row."""
+    rows, blocks, seconds, unit, row_lines = [], [], [], None, []
     current = None  # index into blocks of the block being filled, None outside a block
     for no, line in enumerate(lines, start=1):
         s = line.strip()
@@ -96,12 +97,13 @@ def _parse_blocks(lines: list[str], path):
             vals = [float(x) for x in parts]
         except ValueError:
             vals = []
-        if len(vals) != 3 or not all(np.isfinite(vals)):
+        if len(vals) != 3:  # nan and inf are numbers: checked_recording refuses them, at this line
             raise RecordingError(f"{path}: line {no}: expected three numbers 'x, y, z' in block {current}, "
                                  f"got {s[:40]!r}")
         rows.append(vals)
+        row_lines.append(no)
         blocks[current][1] = len(rows)
-    return rows, blocks, seconds, unit
+    return rows, blocks, seconds, unit, row_lines
 
 
 def _block_rate(blocks, seconds, path) -> float:

@@ -18,8 +18,8 @@ import numpy as np
 
 from ..atomic import atomic_output
 from ..errors import RecordingError
-from ..recording import Recording, intervals_from_labels, labels_from_intervals
-from .parsing import check_time, drop_trailing_blank, read_delimited, to_float
+from ..recording import Origin, Recording, intervals_from_labels, labels_from_intervals
+from .parsing import columns_named, drop_trailing_blank, read_delimited, to_float
 
 #: Columns of the canonical CSV.
 REQUIRED_COLUMNS = ("t", "ax", "ay", "az")
@@ -45,8 +45,9 @@ def read_canonical(path) -> Recording:
     Raises
     ------
     RecordingError
-        Missing/empty file, no header or missing columns, non-numeric or non-finite
-        values, fewer than ``MIN_ROWS`` rows, time not strictly increasing.
+        Missing/empty file, no header or missing columns, non-numeric values; fewer
+        than ``MIN_ROWS`` rows, non-finite values or time not strictly increasing are
+        refused by :func:`accelcal.recording.checked_recording`, with the line.
     """
     what = "a CSV with header t,ax,ay,az[,temp]"
     df = drop_trailing_blank(read_delimited(path, what))
@@ -65,11 +66,11 @@ def read_canonical(path) -> Recording:
     if len(df) == 0:
         raise RecordingError(f"{path}: header but no data rows")
     cols = {c: to_float(df, c, path, first_line=2) for c in (*REQUIRED_COLUMNS, *OPTIONAL_COLUMNS) if c in df}
-    check_time(cols["t"], path, first_line=2)
     intervals, labels = (intervals_from_labels(df[POSE_COLUMN].to_numpy(dtype=str)) if POSE_COLUMN in df
                          else (None, None))
     return Recording(cols["t"], np.column_stack([cols["ax"], cols["ay"], cols["az"]]), cols.get("temp"), str(path),
-                     intervals=intervals, labels=labels)
+                     intervals=intervals, labels=labels,
+                     origin=Origin("line", 2, names=columns_named(t="t", acc=("ax", "ay", "az"))))
 
 
 def _is_number(s: str) -> bool:

@@ -34,6 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import RecordingError
+from ..recording import MIN_ROWS
 
 #: Column names (lower case, separators removed) of sample counters.
 COUNTER_NAMES = frozenset({
@@ -418,11 +419,14 @@ def clocked_time(t, counter, *, counter_name: str, mode: str, timed_by_rate: boo
     """The recording's times and the notes on its clock (the table reader's route).
 
     ``t``: times [s] from the time column, or from the sample index and a rate
-    (``timed_by_rate``); ``counter``: the counter column's values (or None).
+    (``timed_by_rate``); ``counter``: the counter column's values (or None).  Stamps no
+    clock can be fitted to (too few, not finite, going back, or repeating without a
+    counter that numbers the samples) are returned as they are, for the check every
+    recording passes to refuse with the line (:func:`accelcal.recording.checked_recording`).
     """
     if mode not in CLOCK_MODES:
         raise RecordingError(f"--clock must be {' or '.join(CLOCK_MODES)}, got {mode!r}")
-    if mode == "stamps" or len(t) < 4:
+    if mode == "stamps" or not _fits_a_clock(t, counter):
         return t, ["clock: the time stamps as they are (--clock stamps)"] if mode == "stamps" else []
     if timed_by_rate:
         if counter is None:
@@ -442,6 +446,15 @@ def clocked_time(t, counter, *, counter_name: str, mode: str, timed_by_rate: boo
         return t, [f"clock: the stamps follow no constant rate (their medians over {WANDER_BLOCK} samples wander "
                    f"{1e3 * wander:.3g} ms from the best one, {c.rate:.6g} Hz): kept as they are"]
     return c.t, [c.note()]
+
+
+def _fits_a_clock(t, counter) -> bool:
+    """Whether stamps ``t`` can be fitted a clock: enough of them, finite, never going back,
+    repeating only where a counter numbers the samples (a batch received at once)."""
+    if len(t) < MIN_ROWS or not np.all(np.isfinite(t)):
+        return False
+    steps = np.diff(t)
+    return bool(np.all(steps > 0) if counter is None else np.all(steps >= 0))
 
 
 def _wander(r) -> float:

@@ -20,12 +20,13 @@ import numpy as np
 from ..errors import RecordingError
 from ..gyro.errors import GyroInputError
 from ..gyro.rests import check_time_base, sample_interval
+from ..recording import Recording, checked_recording
 from .clock import clocked_time
 from .inference import resolve_gyro_unit, time_seconds
 from .parsing import parse_numbers
 from .sync import estimate_offset, shift_gyro, sphere_centre
 from .columns import ACC_ROLES, GYRO_ROLES, map_columns
-from .table import _split_table, numeric_columns
+from .table import _split_table, numeric_columns, table_origin
 from .text import load_text
 
 
@@ -49,12 +50,17 @@ def read_gyro_table(path, *, gyro_unit: str | None = None, time_unit: str | None
     else:  # column by column: names the first bad value and its line
         raw = np.column_stack([parse_numbers(column(r), tab.dc, path, r, tab.names, roles[r], tab.lines)
                                for r in triad])
-    gyro, unit, note = resolve_gyro_unit(raw, units, gyro_unit, path)
     t = None
     if "t" in roles:
         tcol = floats[roles["t"]] if floats is not None and np.all(np.isfinite(floats[roles["t"]])) else None
         t, _ = time_seconds(column("t"), None, time_unit, units.get("t"), tab.names, roles, tab.dc, path, tab.lines,
                             tab.preamble, parsed=tcol)
+    # a file of its own: checked as every recording is, while its lines can still be named
+    checked_recording(Recording(np.arange(len(raw)) if t is None else t, None, None, str(path), gyro=raw,
+                                origin=table_origin(tab.names, {**roles, **dict(zip(GYRO_ROLES, map(roles.get, triad)))},
+                                                    tab.lines, "line", timed=t is not None)))
+    gyro, unit, note = resolve_gyro_unit(raw, units, gyro_unit, path)
+    if t is not None:
         t, _ = clocked_time(t, None, counter_name="", mode=clock, timed_by_rate=False,
                             where=lambda i: f"line {tab.lines[i]}", path=path)  # on the clock, as the accelerometer
     return t, gyro, unit, [*notes, f"gyro from {path.name}: {note}"]

@@ -6,8 +6,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..recording import Recording
-from .parsing import check_counter, check_time, drop_trailing_blank, read_delimited, require_columns, to_float
+from ..recording import Origin, Recording
+from .parsing import (check_counter, columns_named, drop_trailing_blank, read_delimited, require_columns,
+                      to_float)
 from .text import content_lines, header_fields
 
 #: Sampling rate of imucal's example session: its example script (``examples/basic_ferraris.py``)
@@ -36,11 +37,12 @@ def read_imucal_session(csv_path, rate: float = IMUCAL_RATE_HZ, text: str | None
     require_columns(df, cols, csv_path)
     # Gyro columns are checked too: a damaged gyro field means a damaged file.
     v = {c: to_float(df, c, csv_path, first_line=2) for c in cols}
-    check_counter(v["n_samples"], "n_samples", csv_path, first_line=2)
+    check_counter(v["n_samples"], "n_samples", csv_path)
     t = v["n_samples"] / rate
-    check_time(t, csv_path, first_line=2)
     gyro = np.deg2rad(np.column_stack([v["gyr_x"], v["gyr_y"], v["gyr_z"]]))
     return Recording(t, np.column_stack([v["acc_x"], v["acc_y"], v["acc_z"]]), None, str(csv_path), unit="m/s^2",
                      gyro=gyro, gyro_unit="rad/s",
+                     origin=Origin("line", 2, names=columns_named(t="n_samples", acc=("acc_x", "acc_y", "acc_z"),
+                                                                  gyro=("gyr_x", "gyr_y", "gyr_z"))),
                      notes=(f"imucal session: t = n_samples / {rate:g} Hz (the file has no rate; --rate to change), "
                             "gyro in deg/s converted to rad/s",))

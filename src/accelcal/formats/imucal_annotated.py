@@ -8,9 +8,10 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RecordingError
-from ..recording import Recording, intervals_from_labels
+from ..recording import Origin, Recording, intervals_from_labels
 from .imucal import IMUCAL_RATE_HZ
-from .parsing import check_counter, check_time, drop_trailing_blank, read_delimited, require_columns, to_float
+from .parsing import (check_counter, columns_named, drop_trailing_blank, read_delimited, require_columns,
+                      to_float)
 from .text import content_lines, header_fields
 
 #: Columns whose presence in the header recognises an annotated session.
@@ -55,14 +56,15 @@ def read_imucal_annotated(csv_path, rate: float = IMUCAL_RATE_HZ,
     v = {c: to_float(df, c, csv_path, first_line=2) for c in cols[1:]}
     s = v["samples"]
     order = np.argsort(s, kind="stable")
-    check_counter(s[order], "samples", csv_path, first_line=None)
+    check_counter(s, "samples", csv_path)
     parts = df["part"].str.strip().to_numpy(dtype=str)[order]
     if (parts == "").any():
-        raise RecordingError(f"{csv_path}: empty 'part' label at line {2 + int(np.flatnonzero(parts == '')[0])}")
+        raise RecordingError(f"{csv_path}: empty 'part' label at line {2 + int(order[np.flatnonzero(parts == '')[0]])}")
     acc = np.column_stack([v["acc_x"], v["acc_y"], v["acc_z"]])[order]
     gyro = np.column_stack([v["gyr_x"], v["gyr_y"], v["gyr_z"]])[order]
-    t = s[order] / rate
-    check_time(t, csv_path, first_line=2)
+    t = s[order] / rate  # a repeated sample number: time that repeats (checked_recording: its line)
+    names = columns_named(t="samples", acc=("acc_x", "acc_y", "acc_z"), gyro=("gyr_x", "gyr_y", "gyr_z"))
     return Recording(t, acc, None, str(csv_path), unit="counts", gyro=gyro, gyro_unit="counts",
+                     origin=Origin("line", numbers=order + 2, names=names),
                      notes=(f"imucal annotated session: t = samples / {rate:g} Hz (the file has no rate; --rate "
                             "to change)",)), parts

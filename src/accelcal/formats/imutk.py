@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..recording import Recording
+from ..recording import Origin, Recording
 from ..errors import RecordingError
 from .clock import clocked_time
-from .parsing import check_time, drop_trailing_blank, read_delimited, to_float
+from .parsing import drop_trailing_blank, read_delimited, to_float
 
 
 def read_imutk_ascii(path, text: str | None = None, clock: str = "auto") -> Recording:
@@ -22,7 +22,7 @@ def read_imutk_ascii(path, text: str | None = None, clock: str = "auto") -> Reco
     if df.shape[1] != 4:
         raise RecordingError(f"{path}: {df.shape[1]} columns, expected 4 (t x y z) in an IMU-TK ASCII file")
     t, x, y, z = (to_float(df, i, path, first_line=1, name=n) for i, n in enumerate(("t", "x", "y", "z")))
-    check_time(t, path, first_line=1)
     t, notes = clocked_time(t, None, counter_name="", mode=clock, timed_by_rate=False,
                             where=lambda i: f"line {i + 1}", path=path)
-    return Recording(t, np.column_stack([x, y, z]), None, str(path), notes=tuple(notes))
+    return Recording(t, np.column_stack([x, y, z]), None, str(path), notes=tuple(notes),
+                     origin=Origin("line", 1, names=(("t", "column 1"), ("acc", ("column 2", "column 3", "column 4")))))

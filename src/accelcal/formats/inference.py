@@ -24,7 +24,7 @@ import numpy as np
 from ..errors import RecordingError
 from ..recording import Recording
 from ..units import ANGULAR_RATE_UNITS, G0, acceleration_unit, angular_rate_unit, time_unit
-from .parsing import DECIMAL_COMMA, NUMBER, norm_name, parse_numbers
+from .parsing import DECIMAL_COMMA, NON_FINITE, NUMBER, norm_name, parse_numbers
 from .units_evidence import acceleration_unit_from_rests, gyro_unit_from_values
 
 #: Canonical sampling rate the time-unit inference aims at [Hz] (typical IMU logging).
@@ -146,7 +146,7 @@ def time_seconds(values, rate, tu, header_unit, names, roles, dc, path, lines, p
     # second of 10^6 strings) only where that needs it: date-times, integers
     head = np.char.strip(np.asarray(values[:1000]).astype(str))
     label = f"time (column {names[roles['t']].strip()!r})" if names is not None else "time"
-    if not all(NUMBER.match(v) or (dc and DECIMAL_COMMA.match(v)) for v in head):
+    if not all(NUMBER.match(v) or (dc and DECIMAL_COMMA.match(v)) or NON_FINITE.match(v) for v in head):
         return _datetime_time(np.char.strip(values.astype(str, copy=False)), path, label, lines)
     integer, exact = all(re.fullmatch(r"[+-]?\d+", v) for v in head), False
     if integer:
@@ -165,7 +165,6 @@ def time_seconds(values, rate, tu, header_unit, names, roles, dc, path, lines, p
         x = parsed if parsed is not None else parse_numbers(values, dc, path, "t", names, roles["t"], lines)
         t0 = float(x[0])
         rel = x - x[0]
-    _check_increasing(rel, path, label, lines, repeats_allowed=counter is not None)
     if tu is not None:
         unit, how = time_unit(tu), "--time-unit"
     elif header_unit is not None:
@@ -176,9 +175,7 @@ def time_seconds(values, rate, tu, header_unit, names, roles, dc, path, lines, p
     epoch = abs(t0) * f >= 1e6  # clock or epoch time: seconds from the first sample keep the digits
     t = rel * f if epoch else x * f
     del rel  # not beside the steps: 8 MB of a 10⁶-row table at the reading's peak
-    steps = np.diff(t)
-    steps = steps if steps.size and steps.min() > 0 else steps[steps > 0]
-    rate_hz = 1.0 / float(np.median(steps, overwrite_input=True))  # a temporary: no copy of it
+    rate_hz = 1.0 / _median_step(t)
     note = f"time unit: {unit} ({how}): {rate_hz:.4g} Hz over {t[-1] - t[0]:.4g} s"
     if how.startswith("inferred") or not 1.0 <= rate_hz <= 20000.0:
         note += "; pass --time-unit if wrong"
@@ -194,7 +191,7 @@ def _infer_time_unit(rel, t0: float, integer: bool) -> tuple[str, str]:
         for u, f in factors.items():
             if 1e8 <= abs(t0) * f < 1e10:
                 return u, f"inferred from the epoch time stamp {t0:.6g}"
-    dt = float(np.median(np.diff(rel), overwrite_input=True))
+    dt = _median_step(rel)  # of the steps forward: a batch's repeated stamps (with a counter) are no step
     cands = ("ms", "us", "ns", "s") if integer else ("s", "ms")
     best = min(cands, key=lambda u: abs(np.log10(1.0 / (dt * factors[u]) / TYPICAL_RATE_HZ)))
     why = "integer steps" if integer else "fractional values"
@@ -221,18 +218,13 @@ def _datetime_time(s, path, label, lines):
                              "ISO 8601 date-time; pass --rate HZ to time the samples by their index")
     ns = ts.dt.tz_localize(None).to_numpy().astype("datetime64[ns]").astype(np.int64)
     t = (ns - ns[0]).astype(float) * 1e-9
-    _check_increasing(t, path, label, lines)
-    rate_hz = 1.0 / float(np.median(np.diff(t)))
+    rate_hz = 1.0 / _median_step(t)
     return t, (f"time: ISO 8601 date-times from {ts.iloc[0].isoformat()} (UTC): {rate_hz:.4g} Hz, {t[-1]:.4g} s")
 
 
-def _check_increasing(t, path, label, lines, repeats_allowed: bool = False):
-    """Time must increase; with a sample counter it may repeat (a batch of samples received at once)."""
-    d = np.diff(t)
-    bad = np.flatnonzero(d < 0 if repeats_allowed else d <= 0)
-    if bad.size:
-        i = int(bad[0]) + 1
-        what = "repeats" if d[bad[0]] == 0 else "goes back"
-        hint = ("time stamps coarser than the sampling? pass --rate HZ to time the samples by their index"
-                if d[bad[0]] == 0 else "rows out of order or two recordings joined; sort or split the file")
-        raise RecordingError(f"{path}: {label} {what} at line {lines[i]} ({int(bad.size)} such step(s)); {hint}")
+def _median_step(t) -> float:
+    """The median of the positive steps of ``t`` (nan when there is none: time that does not
+    increase is refused later, with its line, by :func:`accelcal.recording.checked_recording`)."""
+    steps = np.diff(t)
+    steps = steps if steps.size and steps.min() > 0 else steps[steps > 0]
+    return float(np.median(steps, overwrite_input=True)) if steps.size else float("nan")  # a temporary: no copy

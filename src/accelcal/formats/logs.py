@@ -28,7 +28,7 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from ..errors import LogFormatError, TopicError
-from ..recording import MIN_ROWS, Recording
+from ..recording import Origin, Recording
 from .clock import clocked_time
 from .registry import TIME_SOURCES, format_named
 
@@ -161,16 +161,11 @@ def microseconds(values, path, label: str) -> np.ndarray:
     return v.astype(np.int64)
 
 
-def stamps_to_time(stamps_ns: np.ndarray, path, label: str, fix: str) -> np.ndarray:
-    """Seconds since the first stamp of strictly increasing integer nanosecond stamps; else one line."""
-    d = np.diff(stamps_ns)
-    bad = np.flatnonzero(d <= 0)
-    if bad.size:
-        i = int(bad[0]) + 1
-        what = "repeats" if d[i - 1] == 0 else "goes back"
-        raise LogFormatError(f"{path}: {label} {what} at message {i} ({int(stamps_ns[i])} ns after "
-                             f"{int(stamps_ns[i - 1])} ns; {bad.size} such steps): {fix}")
-    return (stamps_ns - stamps_ns[0]) * 1e-9
+def stamps_to_time(stamps_ns: np.ndarray) -> np.ndarray:
+    """Seconds since the first of integer nanosecond stamps (exact differences in int64 first).  Stamps
+    that do not increase are refused with every recording's (:func:`accelcal.recording.checked_recording`),
+    with the message and the fix the reader's :class:`~accelcal.recording.Origin` gives."""
+    return (stamps_ns - stamps_ns[0]) * 1e-9 if len(stamps_ns) else np.zeros(0)
 
 
 def clock_note(sensor_ns: np.ndarray, log_ns: np.ndarray, sensor_name: str, log_name: str) -> str | None:
@@ -186,36 +181,32 @@ def clock_note(sensor_ns: np.ndarray, log_ns: np.ndarray, sensor_name: str, log_
             f"{1e3 * med:.4g} ms, 1-99 % spread {1e3 * (hi - lo):.3g} ms (sample period {1e3 * period:.3g} ms)")
 
 
-def check_rows(path, topic: str, n: int) -> None:
-    if n == 0:
-        raise TopicError(f"{path}: topic {topic} has no messages (an empty topic: record the IMU again, or choose "
-                         "another topic)")
-    if n < MIN_ROWS:
-        raise TopicError(f"{path}: topic {topic} has only {n} messages; need at least {MIN_ROWS}")
+def topic_origin(label: str, *, time: str, time_fix: str, acc: tuple, gyro: tuple, numbers=None) -> Origin:
+    """Where an IMU topic's samples are (its messages, numbered from 0 as the log's tools count
+    them), what the log calls its fields (``acc``, ``gyro``: the three of each), and the fixes,
+    for the recording's check."""
+    return Origin("message", numbers=numbers, label=label, names=(("t", time), ("acc", acc), ("gyro", gyro)),
+                  fix="an empty or truncated topic: record the IMU again, or choose another", time_fix=time_fix)
 
 
-def check_finite(path, topic: str, values: np.ndarray, what: str) -> None:
-    bad = ~np.all(np.isfinite(values), axis=1)
-    if bad.any():
-        raise LogFormatError(f"{path}: topic {topic}: non-finite {what} in message {int(np.flatnonzero(bad)[0])} "
-                             f"({int(bad.sum())} such messages)")
-
-
-def make_recording(path, *, t, acc, gyro, notes: Sequence[str], time_name: str, time_values,
+def make_recording(path, *, t, acc, gyro, notes: Sequence[str], time_name: str, time_values, origin: Origin,
                    temp=None, device_id: str | None = None, precalibrated: str | None = None, counter=None,
                    counter_name: str = "counter") -> Recording:
     """The :class:`Recording` of an IMU topic: acc in m/s², gyro in rad/s, the recorded time column kept;
     timed by the sensor's clock fitted to the chosen stamps against ``counter`` (ROS 1's
     ``header.seq``) or the message index (:mod:`.clock`: stamps on it are kept as they are; a
-    log's record time, which jitters, is replaced by it)."""
-    t, clock_notes = clocked_time(np.asarray(t, float), counter, counter_name=counter_name, mode="auto",
-                                  timed_by_rate=False,
+    log's record time, which jitters, is replaced by it).  A sensor stamps each sample: stamps
+    that repeat are refused (``origin``'s fix) even with a counter, which numbers gaps only."""
+    t = np.asarray(t, float)
+    if counter is not None and not np.all(np.diff(t) > 0):
+        counter = None  # the stamps are left as they are, for checked_recording to refuse
+    t, clock_notes = clocked_time(t, counter, counter_name=counter_name, mode="auto", timed_by_rate=False,
                                   where=lambda i: f"message {i}", path=path)
     notes = (*notes, *clock_notes)
     return Recording(t, acc, temp, str(path), notes=tuple(notes), unit="m/s^2", time_column=(time_name, time_values),
                      gyro=gyro, gyro_unit=None if gyro is None else "rad/s", device_id=device_id,
-                     precalibrated=precalibrated)
+                     precalibrated=precalibrated, origin=origin)
 
 
-__all__ = ["MAX_STAMP_US", "ColumnBuffer", "Progress", "microseconds", "TIME_SOURCES", "check_finite", "check_rows", "check_time_source", "choose",
-           "clock_note", "require_extra", "make_recording", "stamps_to_time"]
+__all__ = ["MAX_STAMP_US", "ColumnBuffer", "Progress", "microseconds", "TIME_SOURCES", "check_time_source", "choose",
+           "clock_note", "require_extra", "make_recording", "stamps_to_time", "topic_origin"]

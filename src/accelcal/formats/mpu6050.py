@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RecordingError
-from ..recording import Recording
-from .parsing import check_time, drop_trailing_blank, read_delimited, require_columns, to_float
+from ..recording import Origin, Recording
+from .parsing import columns_named, drop_trailing_blank, read_delimited, require_columns, to_float
 from .text import content_lines
 
 
@@ -47,6 +47,7 @@ def read_mpu6050_csv(path, text: str | None = None) -> Recording:
     acc = np.column_stack([v["ax"], v["ay"], v["az"]])
     gyro = np.column_stack([v["gx"], v["gy"], v["gz"]])
     t = np.arange(len(df)) / fs
-    check_time(t, path, first_line=6)
+    names = columns_named(acc=("ax", "ay", "az"), gyro=("gx", "gy", "gz"))
     return Recording(t, acc, None, str(path), unit="counts", gyro=gyro, gyro_unit="counts",
+                     origin=Origin("line", 6, names=names),
                      notes=(f"MPU-6050 log: t = row / Fs = {fs:g} Hz",))

@@ -13,12 +13,13 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RecordingError
-from ..recording import MIN_ROWS
 
 #: Spellings that pandas parses as NaN: reported as non-finite, not as non-numeric.
 NAN_SPELLINGS = {"nan", "+nan", "-nan"}
 NUMBER = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
 DECIMAL_COMMA = re.compile(r"^[+-]?\d+,\d+([eE][+-]?\d+)?$")
+#: Spellings of nan and inf that Python's float reads: numbers, refused in a recording with their line.
+NON_FINITE = re.compile(r"^[+-]?(nan|inf|infinity)$", re.IGNORECASE)
 
 
 def read_delimited(path, what: str, text: str | None = None, **kw):
@@ -61,10 +62,12 @@ def drop_trailing_blank(df):
 
 
 def to_float(df, col, path, first_line: int, name: str | None = None) -> np.ndarray:
-    """Strictly convert one string column: non-numeric and non-finite values are errors.
+    """Strictly convert one string column: non-numeric values are errors.
 
     ``first_line`` is the 1-based file line of the first data row, so that messages
-    point at the line a user can open.
+    point at the line a user can open.  ``nan`` and ``inf`` are numbers here: whether a
+    recording may hold them is :func:`accelcal.recording.checked_recording`'s to say, with
+    the line (the reader's :class:`~accelcal.recording.Origin`).
     """
     name = col if name is None else name
     s = df[col].str.strip()
@@ -78,22 +81,14 @@ def to_float(df, col, path, first_line: int, name: str | None = None) -> np.ndar
         what = "missing value (short or blank line)" if val == "" else f"non-numeric value {val[:20]!r}"
         raise RecordingError(f"{path}: column {name!r}: {what} at line {first_line + i}"
                              f" ({int(bad.sum())} bad value(s) in this column)")
-    nonfinite = ~np.isfinite(x)
-    if nonfinite.any():
-        i = int(np.flatnonzero(nonfinite)[0])
-        raise RecordingError(f"{path}: column {name!r}: non-finite value {s.iloc[i]!r} at line {first_line + i}")
     return x
 
 
-def check_time(t: np.ndarray, path, first_line: int) -> None:
-    """Enough rows and strictly increasing time."""
-    if t.size < MIN_ROWS:
-        raise RecordingError(f"{path}: only {t.size} data rows; need at least {MIN_ROWS}")
-    bad = np.flatnonzero(np.diff(t) <= 0)
-    if bad.size:
-        i = int(bad[0]) + 1
-        raise RecordingError(f"{path}: time not strictly increasing at line {first_line + i}"
-                             f" (t = {t[i]:g} after {t[i - 1]:g})")
+def columns_named(**fields) -> tuple:
+    """An :class:`~accelcal.recording.Origin`'s ``names``: each field's columns as the file names them
+    (``columns_named(t="t", acc=("ax", "ay", "az"))``)."""
+    return tuple((f, f"column {c!r}" if isinstance(c, str) else tuple(f"column {x!r}" for x in c))
+                 for f, c in fields.items())
 
 
 def require_columns(df, cols, path) -> None:
@@ -103,15 +98,11 @@ def require_columns(df, cols, path) -> None:
         raise RecordingError(f"{path}: missing column(s) {', '.join(missing)} (found: {', '.join(df.columns)[:120]})")
 
 
-def check_counter(s: np.ndarray, name: str, path, first_line: int | None) -> None:
-    """A sample counter must hold integers, strictly increasing (after sorting if first_line is None)."""
+def check_counter(s: np.ndarray, name: str, path) -> None:
+    """A sample counter must hold integers (a format's own structure: the time made from it is
+    checked with every recording's, :func:`accelcal.recording.checked_recording`)."""
     if np.any(s != np.round(s)):
         raise RecordingError(f"{path}: column {name!r} holds non-integer sample numbers")
-    d = np.diff(s)
-    if np.any(d <= 0):
-        i = int(np.flatnonzero(d <= 0)[0]) + 1
-        where = f"line {first_line + i}" if first_line is not None else f"sample {int(s[i])}"
-        raise RecordingError(f"{path}: column {name!r} not strictly increasing (repeated at {where})")
 
 
 def split_fields(line: str, delim: str) -> list[str]:
@@ -122,8 +113,10 @@ def norm_name(name: str) -> str:
     return re.sub(r"[\s_.\-:/]+", "", name.lower())
 
 
-def parse_numbers(values, dc: bool, path, role: str, names, col: int, lines) -> np.ndarray:
-    """Strict float conversion of one column; the first bad value is reported with its line."""
+def parse_numbers(values, dc: bool, path, role: str, names, col: int, lines, finite: bool = False) -> np.ndarray:
+    """Strict float conversion of one column; the first bad value is reported with its line.  ``nan``
+    and ``inf`` are numbers (a recording's are refused by :func:`accelcal.recording.checked_recording`),
+    unless ``finite``: a column whose nan would mean something else (a magnetometer's: no sample)."""
     s = np.char.strip(values.astype(str))
     if dc:
         s = np.char.replace(s, ",", ".")
@@ -143,8 +136,8 @@ def parse_numbers(values, dc: bool, path, role: str, names, col: int, lines) -> 
         v = s[bad]
         what = "empty field" if v == "" else f"non-numeric value {v[:20]!r}"
         raise RecordingError(f"{path}: {label}: {what} at line {lines[bad]}")
-    nonfinite = ~np.isfinite(out)
+    nonfinite = ~np.isfinite(out) if finite else np.zeros(0, bool)
     if nonfinite.any():
         i = int(np.flatnonzero(nonfinite)[0])
-        raise RecordingError(f"{path}: {label}: non-finite value {s[i]!r} at line {lines[i]}")
+        raise RecordingError(f"{path}: {label}: non-finite value {str(s[i])!r} at line {lines[i]}")
     return out

@@ -36,8 +36,8 @@ import numpy as np
 
 from ..errors import LogFormatError, TopicError
 from ..recording import MIN_ROWS
-from .logs import (Progress, check_finite, check_rows, check_time_source, choose, clock_note, make_recording,
-                      microseconds, require_extra, stamps_to_time)
+from .logs import (Progress, check_time_source, choose, clock_note, make_recording, microseconds, require_extra,
+                   stamps_to_time, topic_origin)
 from .px4_mag import MAG_TOPICS, add_magnetometer
 from .sync import estimate_offset, shift_gyro
 
@@ -182,21 +182,17 @@ def _raw(path, data, inst: int, ulog, time_source: str, notes: list):
     sample, log = _stamps(path, acc_d, time_source, "sensor_accel", notes)
     chosen = sample if time_source == "header" else log
     name = "timestamp_sample_us" if time_source == "header" and "timestamp_sample" in acc_d.data else "timestamp_us"
-    t = stamps_to_time(chosen * 1000, path, f"sensor_accel instance {inst}: {name[:-3]}",
-                       "the log's stamps are not in order (a damaged log?)")
+    t = stamps_to_time(chosen * 1000)
     acc = np.column_stack([acc_d.data[k].astype(np.float64) for k in ("x", "y", "z")])
-    check_rows(path, f"sensor_accel instance {inst}", len(acc))
-    check_finite(path, "sensor_accel", acc, "acceleration")
     temp = acc_d.data["temperature"].astype(np.float64) if "temperature" in acc_d.data else None
-    if temp is not None and not np.all(np.isfinite(temp)):
-        temp = None
     old = "x_raw" in acc_d.data
     notes.insert(0, f"PX4 ULog, sensor_accel instance {inst} (device id {_device(acc_d)}): {len(acc)} samples at "
                     f"{_rate(acc_d):.4g} Hz, m/s^2" + (
                         "; in this PX4 version x, y, z are already calibrated (x_raw holds the counts)" if old else
                         ", the driver's output before the autopilot's calibration"))
     gyro = _gyro(path, data, inst, time_source, chosen, notes)
-    if gyro is not None and any("interpolated to the accelerometer" in n for n in notes):
+    if gyro is not None and any("interpolated to the accelerometer" in n for n in notes) and np.all(
+            np.isfinite(acc)) and np.all(np.diff(t) > 0):  # else checked_recording refuses the accelerometer's
         gyro = _aligned(path, t, acc, gyro, notes)
     note = clock_note(sample * 1000, log * 1000, "sample times", "publication times")
     if note and "timestamp_sample" in acc_d.data:
@@ -205,9 +201,12 @@ def _raw(path, data, inst: int, ulog, time_source: str, notes: list):
     if cal:
         notes.append(f"the autopilot's own calibration of accelerometer {inst} is in the log's parameters: {cal}")
     device = _device(acc_d)
+    origin = topic_origin(f"sensor_accel instance {inst}", time=name[:-3], acc=("x", "y", "z"),
+                          gyro=tuple(f"sensor_gyro {a}" for a in "xyz"),
+                          time_fix="the log's stamps are not in order (a damaged log?)")
     return make_recording(path, t=t, acc=acc, gyro=gyro, notes=notes, time_name=name, time_values=chosen, temp=temp,
                           device_id=None if device == "?" else device,
-                          precalibrated=OLD_ACCEL_CALIBRATED if old else None)
+                          precalibrated=OLD_ACCEL_CALIBRATED if old else None, origin=origin)
 
 
 def _gyro(path, data, inst: int, time_source: str, at_us: np.ndarray, notes: list):
@@ -219,7 +218,12 @@ def _gyro(path, data, inst: int, time_source: str, at_us: np.ndarray, notes: lis
     sample, log = _stamps(path, d, time_source, "sensor_gyro", [])
     ts = sample if time_source == "header" else log
     w = np.column_stack([d.data[k].astype(np.float64) for k in ("x", "y", "z")])
-    check_finite(path, "sensor_gyro", w, "angular rate")
+    # a topic of its own, resampled to the accelerometer's times: checked here, where its messages can be named
+    # (checked_recording sees the resampled values only)
+    bad = ~np.all(np.isfinite(w), axis=1)
+    if bad.any():
+        raise LogFormatError(f"{path}: topic sensor_gyro: non-finite angular rate in message "
+                             f"{int(np.flatnonzero(bad)[0])} ({int(bad.sum())} such messages)")
     if np.any(np.diff(ts) <= 0):
         raise LogFormatError(f"{path}: sensor_gyro instance {inst}: time stamps not in order (a damaged log?)")
     if len(ts) == len(at_us) and np.array_equal(ts, at_us):
@@ -248,12 +252,9 @@ def _aligned(path, t, acc, gyro, notes: list):
 def _combined(path, d, time_source: str, notes: list):
     _require(path, d, [f"{k}[{i}]" for k in ("accelerometer_m_s2", "gyro_rad") for i in range(3)])
     ts = microseconds(d.data["timestamp"], path, "sensor_combined: timestamp")
-    t = stamps_to_time(ts * 1000, path, "sensor_combined: timestamp", "the log's stamps are not in order")
+    t = stamps_to_time(ts * 1000)
     acc = np.column_stack([d.data[f"accelerometer_m_s2[{k}]"].astype(np.float64) for k in range(3)])
     gyro = np.column_stack([d.data[f"gyro_rad[{k}]"].astype(np.float64) for k in range(3)])
-    check_rows(path, "sensor_combined", len(acc))
-    check_finite(path, "sensor_combined", acc, "accelerometer_m_s2")
-    check_finite(path, "sensor_combined", gyro, "gyro_rad")
     notes.insert(0, f"PX4 ULog, sensor_combined: {len(acc)} samples at {_rate(d):.4g} Hz; already calibrated by the "
                     "autopilot (CAL_ACC*/CAL_GYRO* applied) and averaged over its integration interval: a calibration "
                     "fitted to it corrects what the autopilot's calibration left")
@@ -262,8 +263,11 @@ def _combined(path, d, time_source: str, notes: list):
         notes.append(f"the accelerometer is stamped {np.median(rel):.0f} us (median) after the gyro; t is the gyro's")
     if time_source == "log":
         notes.append("sensor_combined has one time stamp (timestamp): used for --time-source log too")
+    origin = topic_origin("sensor_combined", time="timestamp", time_fix="the log's stamps are not in order",
+                          acc=tuple(f"accelerometer_m_s2[{k}]" for k in range(3)),
+                          gyro=tuple(f"gyro_rad[{k}]" for k in range(3)))
     return make_recording(path, t=t, acc=acc, gyro=gyro, notes=notes, time_name="timestamp_us", time_values=ts,
-                          precalibrated=COMBINED_CALIBRATED)
+                          precalibrated=COMBINED_CALIBRATED, origin=origin)
 
 
 def _device(d) -> str:

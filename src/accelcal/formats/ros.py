@@ -39,8 +39,8 @@ import numpy as np
 from ..errors import LogFormatError, RecordingError, TopicError
 from . import ros_recover
 from .clock import looks_like_counter
-from .logs import (ColumnBuffer, Progress, check_finite, check_rows, check_time_source, choose, clock_note,
-                      make_recording, require_extra, stamps_to_time)
+from .logs import (ColumnBuffer, Progress, check_time_source, choose, clock_note, make_recording, require_extra,
+                   stamps_to_time, topic_origin)
 from .ros_mag import add_magnetometer
 
 IMU_TYPE = "sensor_msgs/msg/Imu"
@@ -395,17 +395,14 @@ def _compare_with_rosbags(path, topic, raw, ros1, typestore, decoder) -> None:
 
 def _recording(path, topic, kind, decoded, time_source):
     floats, stamps = decoded["floats"], decoded["stamps"]
-    check_rows(path, topic, len(floats))
     acc, gyro = floats[:, :3], floats[:, 3:]
-    check_finite(path, topic, acc, "linear_acceleration")
-    check_finite(path, topic, gyro, "angular_velocity")
     header_ns, log_ns, seq = stamps[:, 0], stamps[:, 1], stamps[:, 2]
     order = np.arange(len(acc))
     frames = ", ".join(sorted(f.decode("utf-8", "replace") or "''" for f in decoded["frames"]))
     notes = [f"{kind}, topic {topic} (sensor_msgs/Imu, frame {frames}): {len(acc)} messages; "
              "linear_acceleration [m/s^2] and angular_velocity [rad/s]"]
     if time_source == "header":
-        if np.all(header_ns == 0):
+        if len(header_ns) and np.all(header_ns == 0):
             raise LogFormatError(f"{path}: topic {topic}: every header stamp is zero (the driver does not stamp its "
                                  "messages); use the bag's record time (--time-source log)")
         late = int(np.sum(np.diff(header_ns) < 0))
@@ -413,12 +410,13 @@ def _recording(path, topic, kind, decoded, time_source):
             order = np.argsort(header_ns, kind="stable")
             acc, gyro, header_ns, log_ns, seq = acc[order], gyro[order], header_ns[order], log_ns[order], seq[order]
             notes.append(f"{late} message(s) were recorded out of header-stamp order: sorted by header stamp")
-        t = stamps_to_time(header_ns, path, f"topic {topic}: header.stamp",
-                           "the driver's stamps are not in order; use the bag's record time (--time-source log)")
+        t = stamps_to_time(header_ns)
+        stamp, fix = "header.stamp", "the driver's stamps are not in order; use the bag's record time (--time-source log)"
         notes.append("time: header.stamp, t = 0 at the first message")
         time_col = ("header_stamp_ns", header_ns.copy())
     else:
-        t = stamps_to_time(log_ns, path, f"topic {topic}: the bag's record time", "the bag is damaged")
+        t = stamps_to_time(log_ns)
+        stamp, fix = "the bag's record time", "the bag is damaged"
         notes.append("time: the bag's record time (--time-source log), t = 0 at the first message")
         time_col = ("log_time_ns", log_ns.copy())
     note = clock_note(header_ns, log_ns, "header stamps", "bag record times")
@@ -427,8 +425,11 @@ def _recording(path, topic, kind, decoded, time_source):
     # ROS 1 numbers each message in header.seq (a counter of the publisher's messages: one per sample);
     # drivers that leave it 0 number nothing
     counter = seq if np.all(seq >= 0) and looks_like_counter(seq) else None
+    origin = topic_origin(f"topic {topic}", time=stamp, time_fix=fix, numbers=order,
+                          acc=tuple(f"linear_acceleration.{a}" for a in "xyz"),
+                          gyro=tuple(f"angular_velocity.{a}" for a in "xyz"))
     rec = make_recording(path, t=t, acc=acc, gyro=gyro, notes=notes, time_name=time_col[0], time_values=time_col[1],
-                         counter=counter, counter_name="header.seq")
+                         counter=counter, counter_name="header.seq", origin=origin)
     return rec, order
 
 

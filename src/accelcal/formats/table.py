@@ -21,7 +21,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import RecordingError
-from ..recording import MIN_ROWS, Recording, handed_over, intervals_from_labels
+from ..recording import MIN_ROWS, Origin, Recording, handed_over, intervals_from_labels
 from ..units import to_celsius
 from .clock import clocked_time, looks_like_counter
 from .columns import ACC_ROLES, GYRO_ROLES, map_columns, parse_columns
@@ -138,11 +138,12 @@ def read_matrix(path, names, block: np.ndarray, *, notes=(), columns=None, unit:
     headerless table) or by ``columns=``.  ``file_rate`` (Hz, where the file states it)
     times the samples when the matrix has no time column and ``rate`` is not given."""
     block = np.asarray(block, dtype=float)
-    if block.ndim != 2 or len(block) < MIN_ROWS:
-        raise RecordingError(f"{path}: only {len(block)} rows; need at least {MIN_ROWS}")
+    if block.ndim != 2:
+        raise RecordingError(f"{path}: a numeric variable of {block.ndim} dimensions, not a matrix of one row per sample")
     tab = _Table(None if names is None else [str(n) for n in names], None, range(1, len(block) + 1), [], ",", False,
                  block.shape[1], list(block.T), None)
-    return _table_recording(tab, Path(path), list(notes), columns, unit, time_unit, rate, gyro_unit, file_rate)
+    return _table_recording(tab, Path(path), list(notes), columns, unit, time_unit, rate, gyro_unit, file_rate,
+                            numbered="row")
 
 
 class _Columns:
@@ -167,12 +168,13 @@ class _Columns:
         x = None if self.floats is None else self.floats[self.roles[role]]
         return x if x is not None and np.all(np.isfinite(x)) else None
 
-    def numbers(self, role):
+    def numbers(self, role, finite: bool = False):
         x = self.parsed(role)
         if x is not None:
             return x
         tab = self.tab
-        return parse_numbers(self.column(role), tab.dc, self.path, role, tab.names, self.roles[role], tab.lines)
+        return parse_numbers(self.column(role), tab.dc, self.path, role, tab.names, self.roles[role], tab.lines,
+                             finite)
 
     def let_go_of_text(self) -> None:
         """Let go of a plain table's text (its data lines, which the string columns are cut
@@ -189,20 +191,23 @@ class _Columns:
                                                                or self.tab.data is not None):
             self.floats[self.roles[role]] = None
 
-    def triad(self, axes):
+    def triad(self, axes, finite: bool = False):
         """The three columns as a fresh (n, 3) array; their floats are let go (each role is
-        read once: a 10⁶-row table's triad is 24 MB of the reading's peak memory)."""
-        out = np.column_stack([self.numbers(a) for a in axes])
+        read once: a 10⁶-row table's triad is 24 MB of the reading's peak memory).  ``finite``:
+        nan and inf refused here (:func:`.parsing.parse_numbers`)."""
+        out = np.column_stack([self.numbers(a, finite) for a in axes])
         for a in axes:
             self.release(a)
         return out
 
 
 def _table_recording(tab, path, notes, columns, unit, time_unit, rate, gyro_unit, file_rate=None, *,
-                     clock: str = "auto", mag_unit: str | None = None, time_column: bool = True) -> Recording:
+                     clock: str = "auto", mag_unit: str | None = None, time_column: bool = True,
+                     numbered: str = "line") -> Recording:
     """The recording of a split table (:func:`read_table`'s second half).  Its string columns
     (time, pose labels) are read first, so that without ``time_column`` the text is let go
-    before the floats' work (units, the clock's fit)."""
+    before the floats' work (units, the clock's fit).  ``numbered``: what ``tab.lines``
+    number (a text's lines, a matrix's rows), for the messages of the recording's check."""
     names, lines, dc = tab.names, tab.lines, tab.dc
     what = {"\t": "tab", ";": "semicolon", ",": "comma", "|": "'|'", " ": "whitespace"}[tab.delim]
     if tab.delim != "," or tab.dc:
@@ -238,10 +243,25 @@ def _table_recording(tab, path, notes, columns, unit, time_unit, rate, gyro_unit
             temp = to_celsius(temp, units["temp"])
             notes.append(f"temperature converted from {units['temp']} to degC")
     made = {k: handed_over(sensors[k]) for k in ("acc", "gyro", "mag")}  # arrays of ours: kept, not copied
+    origin = table_origin(names, roles, lines, numbered, timed="t" in roles and rate is None)
     return Recording(handed_over(t), made["acc"], temp, str(path), intervals=iv, labels=labels,
                      notes=tuple(n for n in notes if n), unit=sensors["unit"], time_column=written,
                      gyro=made["gyro"], gyro_unit=sensors["gyro_unit"], mag=made["mag"],
-                     mag_unit=sensors["mag_unit"])
+                     mag_unit=sensors["mag_unit"], origin=origin)
+
+
+def table_origin(names, roles, lines, numbered: str, timed: bool) -> Origin:
+    """Where the table's samples are (its lines) and what its columns are called, for the recording's check."""
+    def called(role_names):
+        cols = [roles[r] for r in role_names if r in roles]
+        if len(cols) != len(role_names):
+            return None
+        return tuple(f"column {names[c].strip()!r}" if names is not None else f"column {c + 1}" for c in cols)
+
+    fields = {"t": ("t",) if timed else None, "acc": ACC_ROLES, "gyro": GYRO_ROLES}
+    named = {f: called(r) for f, r in fields.items() if r is not None}
+    return Origin(numbered, numbers=lines if isinstance(lines, range) else np.asarray(lines, dtype=np.int64),
+                  names=tuple((f, c[0] if f == "t" else c) for f, c in named.items() if c))
 
 
 def _sensors(cols: _Columns, units: dict, unit, gyro_unit, mag_unit, notes: list) -> dict:
@@ -260,7 +280,8 @@ def _sensors(cols: _Columns, units: dict, unit, gyro_unit, mag_unit, notes: list
                                                                 own=True)
         notes.append(note)
     if "mx" in roles:
-        out["mag"], out["mag_unit"], note = resolve_mag_unit(cols.triad(MAG_ROLES), units.get("mag_units", {}),
+        # a Recording's nan field is a log's "no sample here" (mag_logs), not a value a table's line may hold
+        out["mag"], out["mag_unit"], note = resolve_mag_unit(cols.triad(MAG_ROLES, finite=True), units.get("mag_units", {}),
                                                              mag_unit, path)
         notes.append(note)
     return out
@@ -336,8 +357,6 @@ def _general_table(text: str, path) -> _Table:
     if bad is not None:
         raise RecordingError(f"{path}: line {lines[bad]} has {len(data[bad])} fields where the table has {k} "
                              "(truncated, or a line of another kind inside the data)")
-    if len(data) < MIN_ROWS:
-        raise RecordingError(f"{path}: only {len(data)} data rows; need at least {MIN_ROWS}")
     return _Table(rows[header] if header is not None else None, data, lines, preamble, delim, dc, k)
 
 

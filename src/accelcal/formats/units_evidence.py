@@ -98,9 +98,13 @@ def rest_magnitude(acc) -> float:
     for a in range(0, m, _REST_CHUNK):
         b = min(a + _REST_CHUNK, m)
         blocks = np.ascontiguousarray(acc[a * REST_BLOCK: b * REST_BLOCK].T).reshape(3, b - a, REST_BLOCK)
-        var[a:b] = blocks.var(axis=2).sum(axis=0)
+        with np.errstate(invalid="ignore"):  # an inf: a block of nan variance, left out below
+            var[a:b] = blocks.var(axis=2).sum(axis=0)
         means[:, a:b] = blocks.mean(axis=2)
-    quiet = var <= np.median(var)
+    finite = np.isfinite(var)  # a block with a nan or inf says nothing (the recording's check refuses it)
+    if not finite.any():
+        return float("nan")
+    quiet = finite & (var <= np.median(var[finite]))
     return float(np.median(np.linalg.norm(means[:, quiet], axis=0)))
 
 

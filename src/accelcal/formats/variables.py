@@ -25,7 +25,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import RecordingError
-from ..recording import MIN_ROWS, Recording
+from ..recording import MIN_ROWS, Recording, checked_recording
 from .table import read_matrix
 
 #: Time [s] put between runs joined from several variables (their own times are not related).
@@ -108,12 +108,15 @@ def read_variables(path, variables: list[Variable], *, columns=None, unit=None, 
                               rate=rate, gyro_unit=gyro_unit, file_rate=file_rate)
         except RecordingError as e:
             raise RecordingError(f"{e} ({kind} {v.name})" if len(variables) > 1 else str(e)) from None
-        recs.append(rec)
+        recs.append(replace(rec, origin=replace(rec.origin, label=f"{kind} {v.name}")))
     return recs[0] if len(recs) == 1 else join_runs(recs, [v.name for v in variables], path)
 
 
 def join_runs(recs: list[Recording], names: list[str], path) -> Recording:
-    """Recordings of one session recorded apart, as one with :attr:`~Recording.runs`."""
+    """Recordings of one session recorded apart, as one with :attr:`~Recording.runs`; each run
+    checked as every recording is (:func:`~accelcal.recording.checked_recording`) while its
+    rows still name their variable."""
+    recs = [checked_recording(r) for r in recs]
     first = recs[0]
     for name, r in zip(names[1:], recs[1:]):
         same = ((r.acc is None) == (first.acc is None) and (r.gyro is None) == (first.gyro is None)
@@ -136,7 +139,7 @@ def join_runs(recs: list[Recording], names: list[str], path) -> Recording:
     notes.append(f"{len(recs)} runs joined ({', '.join(names)}), each from t = 0, {RUN_GAP_S:g} s apart: "
                  "each rests and has its bias on its own")
     return replace(first, t=np.concatenate(t), acc=cat("acc"), temp=cat("temp"), gyro=cat("gyro"), notes=tuple(notes),
-                   time_column=None, intervals=None, labels=None, rotations=None, runs=np.array(runs))
+                   time_column=None, intervals=None, labels=None, rotations=None, runs=np.array(runs), origin=None)
 
 
 __all__ = ["MAX_COLUMNS", "RUN_GAP_S", "Variable", "choose", "describe", "read_variables", "usable"]
