@@ -31,8 +31,6 @@ FORMATS_DIR = Path(recording.__file__).parent / "formats"
 #: (format, damage) -> why a check of the format's own structure refuses it first.
 FORMATS_OWN = {
     ("block-log", "one_row"): "each block is one pose and needs MIN_ROWS rows of its own (block_log._block_rate)",
-    ("imucal-annotated", "one_row"): "its one row is a known static part of one sample, which a Recording "
-                                     "refuses on construction (an interval needs two)",
     ("px4", "one_row"): "an instance of fewer than MIN_ROWS samples is no candidate: which sensor_accel is read",
     ("mat", "one_row"): "a variable of fewer than MIN_ROWS rows is no candidate: which variable is the recording",
     ("rda", "one_row"): "a variable of fewer than MIN_ROWS rows is no candidate: which variable is the recording",
@@ -158,10 +156,29 @@ def test_no_reader_checks_rows_finiteness_or_time_of_its_own():
     assert set(OWN_CHECKS) <= found, f"listed but gone (drop them from OWN_CHECKS): {set(OWN_CHECKS) - found}"
 
 
+#: Where the shared check is called besides formats.read, and why there.
+CALLERS = {
+    "variables.py": "each run of a file of variables, while its rows still name their variable",
+    "gyro_file.py": "a gyro file of its own (--gyro): its lines, not the accelerometer's",
+    "ros.py": "read_topic, the route of `accelcal apply` to a bag (and a recovered bag's part, named damaged)",
+    "imucal_annotated.py": "before its parts become known intervals (a Recording refuses a 1-sample rest)",
+}
+
+
 def test_the_shared_check_runs_where_a_files_samples_are_read():
-    """formats.read (both routes), and the two places a second set of samples comes in: the runs of a
-    file of variables (each checked while its rows still name their variable) and a gyro file."""
+    """formats.read (both routes), and where samples reach a recording another way (:data:`CALLERS`)."""
     callers = {p.name for p in FORMATS_DIR.glob("*.py") if "checked_recording" in _called_or_defined(p)}
-    assert callers == {"dispatch.py", "variables.py", "gyro_file.py"}
+    assert callers == {"dispatch.py", *CALLERS}
     dispatch = (FORMATS_DIR / "dispatch.py").read_text()
     assert dispatch.count("return checked_recording(") == 2
+
+
+def test_the_route_of_apply_to_a_bag_checks_it_too(tmp_path):
+    """``accelcal apply`` reads a bag with ros.read_topic (for the bag's order), not formats.read."""
+    from accelcal.formats import ros
+
+    path = tmp_path / "nan.bag"
+    path.write_bytes(SAMPLES["ros"](np.random.default_rng(1), "nan"))
+    with pytest.raises(RecordingError, match=r"topic /imu: specific force \(linear_acceleration.x\): non-finite value "
+                                             r"nan at message 7 "):
+        ros.read_topic(path)

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import RecordingError
-from ..recording import Origin, Recording, intervals_from_labels
+from ..recording import Origin, Recording, checked_recording, intervals_from_labels
 from .imucal import IMUCAL_RATE_HZ
 from .parsing import (check_counter, columns_named, drop_trailing_blank, read_delimited, require_columns,
                       to_float)
@@ -25,8 +25,11 @@ def sniff(path: Path, head: str) -> bool:
 
 
 def read_annotated_session(path, text: str | None = None, rate: float = IMUCAL_RATE_HZ) -> Recording:
-    """The annotated session with its static parts (all but ``*_rot``) as known static intervals."""
+    """The annotated session with its static parts (all but ``*_rot``) as known static intervals
+    (made from the samples: checked first as every recording is, so that a short or damaged
+    file is refused with its line, not as a part too short to be a rest)."""
     rec, parts = read_imucal_annotated(path, rate, text=text)
+    rec = checked_recording(rec)
     static = np.array([p if not p.endswith("_rot") else "" for p in parts])
     iv, labels = intervals_from_labels(static)
     turns, names = intervals_from_labels(np.array([p if p.endswith("_rot") else "" for p in parts]))

@@ -37,6 +37,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import LogFormatError, RecordingError, TopicError
+from ..recording import checked_recording
 from . import ros_recover
 from .clock import looks_like_counter
 from .logs import (ColumnBuffer, Progress, check_time_source, choose, clock_note, make_recording, require_extra,
@@ -112,14 +113,17 @@ class TopicRead(NamedTuple):
 def read_topic(path, *, topic: str | None = None, time_source: str = "header", progress=None,
                mag_topic: str | None = False) -> TopicRead:
     """:func:`read`, with the bag's order of the messages (the recording's rows are sorted by
-    header stamp when the bag recorded some out of order); ``mag_topic=False``: no magnetometer."""
+    header stamp when the bag recorded some out of order); ``mag_topic=False``: no magnetometer.
+    The recording is checked as :func:`accelcal.formats.read` checks every reader's
+    (:func:`~accelcal.recording.checked_recording`): ``accelcal apply`` reads a bag through here."""
     check_time_source(time_source)
     path = Path(path)
     require_extra("ros", path)
     bag_path, kind = _locate(path)
     try:
         with _open(bag_path, kind) as reader:
-            return _read_open(reader, path, bag_path, kind, topic, time_source, progress, mag_topic)
+            got = _read_open(reader, path, bag_path, kind, topic, time_source, progress, mag_topic)
+        return got._replace(recording=checked_recording(got.recording))
     except DamagedBagError as damaged:
         storage = storage_file(bag_path, kind)
         if storage is None:
@@ -131,6 +135,7 @@ def read_topic(path, *, topic: str | None = None, time_source: str = "header", p
             raise LogFormatError(f"{damaged}; {why}") from None
         try:
             got = _read_open(reader, path, bag_path, kind, topic, time_source, progress, mag_topic)
+            got = got._replace(recording=checked_recording(got.recording))
         except RecordingError as e:  # nothing usable before the damage
             raise LogFormatError(f"{damaged}; read up to the damage: {str(e).split(': ', 1)[-1]}") from None
         finally:
