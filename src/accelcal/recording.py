@@ -199,7 +199,8 @@ class Recording:
         object.__setattr__(self, "rotations", _check_rotations(self.rotations, t.size, self.source))
         object.__setattr__(self, "runs", _check_runs(self.runs, t.size, self.source))
         if self.origin is not None and self.origin.numbers is not None and len(self.origin.numbers) != t.size:
-            raise RecordingError(f"{self.source}: the origin numbers {len(self.origin.numbers)} samples of {t.size}")
+            raise RecordingError(f"{self.source}: the origin places {len(self.origin.numbers)} samples, the recording "
+                                 f"has {t.size}")
         if self.unit not in (None, "m/s^2", "counts"):
             raise RecordingError(f"{self.source}: unit {self.unit!r}; a Recording holds m/s^2 or counts "
                                  "(convert g and mg when reading)")
