@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from accelcal.summary import Summary, read_summaries, write_summaries
-from accelcal_repro.report import ReportError, build_report, summaries_html
+from accelcal_repro.report import FIGURE_SECTIONS, ReportError, build_report, summaries_html
 from tests.test_report import tree  # noqa: F401  (the fake results tree of the report's tests, a fixture)
 
 REPO = Path(__file__).resolve().parents[1]
@@ -41,6 +41,8 @@ def test_summaries_file_keeps_every_summary_whole(tmp_path):
     back = read_summaries(path)
     assert list(back) == ["full_lls", "bias_lls"] and back["full_lls"] == a and back["bias_lls"] == b
     assert back["full_lls"].warnings == ["only 3 degree(s) of freedom"]
+    nested = Summary("magnetometer (ellipsoid_ml)\n  hard iron b = 1 ± 2\n  warning: magnetometer: few directions")
+    assert nested.warnings == ["magnetometer: few directions"] and nested.body == ["  hard iron b = 1 ± 2"]
     (tmp_path / "bad.json").write_text('{"tables": []}')
     with pytest.raises(ReportError, match="not a summaries file"):
         summaries_html(tmp_path / "bad.json")
@@ -52,8 +54,8 @@ def test_report_sections_render_the_summaries_by_as_html(tree, tmp_path):  # noq
     kw = tree[1]
     page = build_report(**kw, summaries=[("measured", "xsens: each estimator's calibration", path),
                                          ("noise", "ADIS16405", tmp_path / "absent.json")])
-    for s in (a, b):
-        assert s.as_html() in page
+    for name, s in (("full_lls", a), ("bias_lls", b)):
+        assert f'<p class="fid">{name}</p>{s.as_html()}' in page  # under its name in the job
     assert "&lt;1&gt;" in page and "<1>" not in page  # the renderer escapes
     measured = page.index('id="measured"')
     assert measured < page.index(a.as_html()) < page.index("<td>xsens_mti</td>") < page.index('id="discrepancy"')
@@ -93,3 +95,16 @@ def test_every_summary_type_is_in_the_census():
 
     inside_another = {"DiscrepancyResult", "GyroLoopResult", "MagLoopResult"}
     assert sorted(set(classes_with_a_summary(SRC / "accelcal")) - inside_another) == sorted(SUMMARY_SOURCES)
+
+
+def test_every_stage_has_a_section_of_the_report():
+    """The page shows a stage's tables and summaries in the section named after it: the mag stage had
+    none, and its tables were left out of the page; a section-less table now goes to "Other"."""
+    stages = set(re.findall(r'declare_stage\(\s*name="(\w+)"', "".join(p.read_text() for p in RULES.glob("*.smk"))))
+    assert len(stages) >= 9 and stages <= {key for key, _, _ in FIGURE_SECTIONS}, stages
+
+
+def test_a_table_of_an_unknown_section_is_shown_not_dropped(tree, tmp_path):  # noqa: F811
+    path, a, _ = _summaries(tmp_path)
+    page = build_report(**tree[1], summaries=[("no_such_stage", "kept", path)])
+    assert page.index('id="other"') < page.index(a.as_html())

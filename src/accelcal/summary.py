@@ -6,8 +6,8 @@ has ``summary(*, written_to=None, ...)`` returning a :class:`Summary`.  The text
 string itself (``print`` it; it compares and concatenates as a ``str``); the same content
 renders as a dict (:meth:`Summary.as_dict`, JSON) and as HTML (:meth:`Summary.as_html`).
 Its structure is read from the lines, so every renderer says the same: the first line is
-the title, a line starting with ``warning:`` is a warning, the others are the body with
-their indentation.
+the title, a line starting with ``warning:`` (after its indentation: a sensor's warnings
+nested under it) is a warning, the others are the body with their indentation.
 
 A workflow job that makes results keeps their summaries for the report
 (:func:`write_summaries`, a JSON of the texts: the text is the whole Summary), and the report
@@ -41,11 +41,11 @@ class Summary(str):
     @property
     def body(self) -> list[str]:
         """The lines after the title that are not warnings (indentation kept)."""
-        return [x for x in self.splitlines()[1:] if not x.startswith(WARNING)]
+        return [x for x in self.splitlines()[1:] if not _is_warning(x)]
 
     @property
     def warnings(self) -> list[str]:
-        return [x[len(WARNING):].strip() for x in self.splitlines() if x.startswith(WARNING)]
+        return [x.strip()[len(WARNING):].strip() for x in self.splitlines() if _is_warning(x)]
 
     def as_text(self) -> str:
         return str(self)
@@ -62,6 +62,10 @@ class Summary(str):
             parts.append("<ul class=\"warnings\">" + "".join(f"<li>{html.escape(w)}</li>" for w in self.warnings)
                          + "</ul>")
         return "".join(parts) + "</section>"
+
+
+def _is_warning(line: str) -> bool:
+    return line.lstrip().startswith(WARNING)
 
 
 def write_summaries(path: str | os.PathLike, summaries: Mapping[str, Summary]) -> None:

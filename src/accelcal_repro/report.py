@@ -36,8 +36,9 @@ from accelcal.atomic import atomic_output
 from accelcal.summary import read_summaries
 from .claims import COLUMNS, NOT_TESTABLE, PAPERS, VERDICTS
 
-#: Sections of the page that hold figures: (key, title, figure-id prefixes).  A figure id
-#: matching no prefix goes to "Other figures" (shown, never dropped).
+#: Sections of the page that hold figures: (key, title, figure-id prefixes), one per stage
+#: (the key is the stage's name).  A figure id matching no prefix, or a table of a stage without
+#: a section, goes to "Other figures" (shown, never dropped).
 FIGURE_SECTIONS = (
     ("burkhard2024", "Burkhard, Sharma, Skaloud (2024): linear estimation of deterministic accelerometer errors",
      ("foundation_", "burkhard2024_")),
@@ -50,6 +51,7 @@ FIGURE_SECTIONS = (
     ("gyro", "Gyroscope: calibrated from the same session, one-step vs iterative, and the peers side by side",
      ("gyro_",)),
     ("noise", "Noise: a static record's noise terms against the datasheet, and the intervals' coverage", ("noise_",)),
+    ("mag", "Magnetometer: calibrated from the same session, beside the peers", ("mag_",)),
     ("benchmark", "Benchmark: where the compute time goes (estimators, filters, compilation, stages)", ("timing_",)),
 )
 OTHER_SECTION = ("other", "Other figures")
@@ -94,7 +96,7 @@ mark{background:#ffe57a}
 thead th{position:sticky;top:0}
 h4{margin:.9em 0 .2em;font-size:.95em}
 details summary{cursor:pointer;color:#3b78c2;font-size:.9em;margin:.3em 0}
-section.summary{border:1px solid #ddd;border-radius:6px;padding:.2em .8em;margin:.6em 0;background:#fcfcfc}
+section.summary{border:1px solid #ddd;border-radius:6px;padding:.2em .8em;margin:.1em 0 .8em;background:#fcfcfc}
 section.summary pre{margin:.3em 0;padding:.5em;white-space:pre-wrap}
 ul.warnings{color:#6b4500;font-size:.85em;margin:.3em 0;padding-left:1.2em}
 """
@@ -461,8 +463,9 @@ def _figure_sections(ledger, figures, captions, conclusions, tables, config) -> 
         by_section.setdefault(figure_section(fid), []).append(fid)
     sections = [(k, t) for k, t, _ in FIGURE_SECTIONS] + [OTHER_SECTION]
     tables_by_section: dict[str, list[tuple[str, Path]]] = {}
-    for key, title, path in tables:  # the summaries first, then the tables
-        tables_by_section.setdefault(key, []).append((title, Path(path)))
+    known = {k for k, _ in sections}
+    for key, title, path in tables:  # the summaries first, then the tables; an unknown section's: "Other"
+        tables_by_section.setdefault(key if key in known else OTHER_SECTION[0], []).append((title, Path(path)))
     nav, body = [], []
     for key, title in sections:
         figs, tabs = by_section.get(key, []), tables_by_section.get(key, [])
@@ -490,7 +493,9 @@ def summaries_html(path: str | os.PathLike) -> str:
         summaries = read_summaries(path)
     except (OSError, ValueError) as e:  # json.JSONDecodeError is a ValueError
         raise ReportError(f"summaries {path} are not readable: {str(e).splitlines()[0]}") from None
-    return '<div class="summaries">' + "".join(s.as_html() for s in summaries.values()) + "</div>"
+    # each under its name in the job (a session, an estimator): the Summary's own title may not say it
+    return '<div class="summaries">' + "".join(f'<p class="fid">{_esc(name)}</p>{s.as_html()}'
+                                               for name, s in summaries.items()) + "</div>"
 
 
 def _table_html(title: str, path: Path) -> str:
