@@ -5,9 +5,10 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from accelcal.discrepancy.allan_check import allan_check
 from accelcal.discrepancy.detect import discrepancy
 from accelcal.discrepancy.fit import forward, pose_data
-from accelcal.discrepancy.report import allan_check, noise_implication, rests_implication
+from accelcal.discrepancy.noise_implication import noise_implication, rests_implication
 from accelcal.discrepancy.rules import Rules
 from accelcal.model import m_from_params
 from accelcal.simulation import random_directions

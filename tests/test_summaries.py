@@ -108,8 +108,7 @@ def test_every_result_type_returns_a_summary():
     from accelcal.calibration.base import Calibration
     from accelcal.discrepancy.gyro_loop import GyroLoopResult
     from accelcal.discrepancy.mag_loop import MagLoopResult
-    from accelcal.discrepancy.report import DiscrepancyReport
-    from accelcal.discrepancy.results import DiscrepancyResult
+    from accelcal.discrepancy.results import DiscrepancyReport, DiscrepancyResult
     from accelcal.gyro.result import GyroCalibration
     from accelcal.mag.result import MagCalibration
     from accelcal.noise.report import NoiseReport

@@ -78,6 +78,11 @@ def test_final_targets_are_the_stages_declarations_and_match_the_rules(workflow)
     tables = g["report_tables"]()
     made = {str(f) for r in workflow.rules for f in r.output}
     assert tables and all(path in made for _, _, path in tables), [t for t in tables if t[2] not in made]
+    # the results' summaries the report renders (Summary.as_html): every stage that shows results with a
+    # Summary declares them, and a rule makes each (tests/test_report_summaries.py: the scripts write them)
+    summaries = g["report_summaries"]()
+    assert {stage for stage, _, _ in summaries} == {"measured", "discrepancy", "gyro", "noise", "mag"}
+    assert all(any(r.is_producer(path) for r in workflow.rules) for _, _, path in summaries), summaries
 
 
 _OFFLINE = {k: "http://127.0.0.1:9" for k in ("http_proxy", "https_proxy", "HTTP_PROXY", "HTTPS_PROXY")}

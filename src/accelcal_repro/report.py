@@ -3,7 +3,9 @@
 :func:`build_report` turns the workflow's results into one HTML string: for each paper its
 figures, each beside a one-line statement of the paper's conclusion
 (``workflow/report/conclusions.yaml``) and its caption; the measured-data and discrepancy
-figures and summary tables; the claims ledger with colour-coded verdicts; the
+figures, the summaries of the results they show (each rendered by its
+:meth:`accelcal.summary.Summary.as_html`, the text the command line prints) and summary
+tables; the claims ledger with colour-coded verdicts; the
 configuration with the seeds highlighted; the package versions pinned in
 ``environment.lock``; and the wall time and peak memory of each stage from Snakemake's
 benchmark files (``results/benchmarks/<stage>/<job>.tsv``).
@@ -31,10 +33,12 @@ import pandas as pd
 import yaml
 
 from accelcal.atomic import atomic_output
+from accelcal.summary import read_summaries
 from .claims import COLUMNS, NOT_TESTABLE, PAPERS, VERDICTS
 
-#: Sections of the page that hold figures: (key, title, figure-id prefixes).  A figure id
-#: matching no prefix goes to "Other figures" (shown, never dropped).
+#: Sections of the page that hold figures: (key, title, figure-id prefixes), one per stage
+#: (the key is the stage's name).  A figure id matching no prefix, or a table of a stage without
+#: a section, goes to "Other figures" (shown, never dropped).
 FIGURE_SECTIONS = (
     ("burkhard2024", "Burkhard, Sharma, Skaloud (2024): linear estimation of deterministic accelerometer errors",
      ("foundation_", "burkhard2024_")),
@@ -47,6 +51,7 @@ FIGURE_SECTIONS = (
     ("gyro", "Gyroscope: calibrated from the same session, one-step vs iterative, and the peers side by side",
      ("gyro_",)),
     ("noise", "Noise: a static record's noise terms against the datasheet, and the intervals' coverage", ("noise_",)),
+    ("mag", "Magnetometer: calibrated from the same session, beside the peers", ("mag_",)),
     ("benchmark", "Benchmark: where the compute time goes (estimators, filters, compilation, stages)", ("timing_",)),
 )
 OTHER_SECTION = ("other", "Other figures")
@@ -91,6 +96,9 @@ mark{background:#ffe57a}
 thead th{position:sticky;top:0}
 h4{margin:.9em 0 .2em;font-size:.95em}
 details summary{cursor:pointer;color:#3b78c2;font-size:.9em;margin:.3em 0}
+section.summary{border:1px solid #ddd;border-radius:6px;padding:.2em .8em;margin:.1em 0 .8em;background:#fcfcfc}
+section.summary pre{margin:.3em 0;padding:.5em;white-space:pre-wrap}
+ul.warnings{color:#6b4500;font-size:.85em;margin:.3em 0;padding-left:1.2em}
 """
 
 
@@ -397,7 +405,8 @@ def config_html(config: Mapping) -> str:
 def build_report(*, claims: str | os.PathLike, figures: Mapping[str, str | os.PathLike],
                  captions: Mapping[str, str], conclusions: Mapping[str, str],
                  tables: Sequence[tuple[str, str, str | os.PathLike]], config: Mapping, lock_text: str,
-                 benchmarks_dir: str | os.PathLike, config_files: Sequence[str] = ()) -> str:
+                 benchmarks_dir: str | os.PathLike, config_files: Sequence[str] = (),
+                 summaries: Sequence[tuple[str, str, str | os.PathLike]] = ()) -> str:
     """The report page as one HTML string.
 
     Parameters
@@ -423,9 +432,13 @@ def build_report(*, claims: str | os.PathLike, figures: Mapping[str, str | os.Pa
         ``results/benchmarks``: read as it is when the report is built.
     config_files
         The config files of the run, in the order they were applied.
+    summaries
+        ``(section key, title, path)`` of the stages' summaries files
+        (:func:`accelcal.summary.write_summaries`): each result's Summary rendered by its
+        ``as_html``, before the section's tables; a path that does not exist is noted.
     """
     ledger = read_claims(claims)
-    nav, body = _figure_sections(ledger, figures, captions, conclusions, tables, config)
+    nav, body = _figure_sections(ledger, figures, captions, conclusions, [*summaries, *tables], config)
     for key, title, html in (("claims", "Claims ledger", _ledger_section(ledger)),
                              ("config", "Configuration and seeds", _config_section(config, config_files)),
                              ("environment", "Package versions", _environment_section(lock_text)),
@@ -450,8 +463,9 @@ def _figure_sections(ledger, figures, captions, conclusions, tables, config) -> 
         by_section.setdefault(figure_section(fid), []).append(fid)
     sections = [(k, t) for k, t, _ in FIGURE_SECTIONS] + [OTHER_SECTION]
     tables_by_section: dict[str, list[tuple[str, Path]]] = {}
-    for key, title, path in tables:
-        tables_by_section.setdefault(key, []).append((title, Path(path)))
+    known = {k for k, _ in sections}
+    for key, title, path in tables:  # the summaries first, then the tables; an unknown section's: "Other"
+        tables_by_section.setdefault(key if key in known else OTHER_SECTION[0], []).append((title, Path(path)))
     nav, body = [], []
     for key, title in sections:
         figs, tabs = by_section.get(key, []), tables_by_section.get(key, [])
@@ -473,10 +487,23 @@ def _figure_sections(ledger, figures, captions, conclusions, tables, config) -> 
     return nav, body
 
 
+def summaries_html(path: str | os.PathLike) -> str:
+    """The Summaries of a summaries file, each by its own ``as_html`` (one renderer for every consumer)."""
+    try:
+        summaries = read_summaries(path)
+    except (OSError, ValueError) as e:  # json.JSONDecodeError is a ValueError
+        raise ReportError(f"summaries {path} are not readable: {str(e).splitlines()[0]}") from None
+    # each under its name in the job (a session, an estimator): the Summary's own title may not say it
+    return '<div class="summaries">' + "".join(f'<p class="fid">{_esc(name)}</p>{s.as_html()}'
+                                               for name, s in summaries.items()) + "</div>"
+
+
 def _table_html(title: str, path: Path) -> str:
     head = f"<h3>{_esc(title)} <span class=\"fid\">{_esc(path.as_posix())}</span></h3>"
     if not path.is_file():
         return head + '\n<p class="note">not present (the stage has not run).</p>'
+    if path.suffix == ".json":  # a summaries file (accelcal.summary.write_summaries)
+        return head + "\n" + summaries_html(path)
     try:
         return head + "\n" + view_table(pd.read_csv(path), TABLE_VIEWS.get(path.as_posix()))
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as e:
@@ -534,4 +561,5 @@ def write_report(text: str, path: str | os.PathLike) -> Path:
 
 
 __all__ = ["ReportError", "build_report", "embed_png", "figure_section", "load_conclusions", "parse_lock",
-           "read_benchmarks", "read_claims", "render_caption", "seed_paths", "stage_times", "write_report"]
+           "read_benchmarks", "read_claims", "render_caption", "seed_paths", "stage_times", "summaries_html",
+           "write_report"]

@@ -118,19 +118,22 @@ class Stage:
 
     ``figures``: figure ids (each a rule target and results/figures/<id>.png|pdf);
     ``claims``: whether it writes results/claims/<name>.csv for the ledger; ``tables``:
-    (title, path) of its summary tables shown in the report, in the stage's section.
+    (title, path) of its summary tables shown in the report, in the stage's section;
+    ``summaries``: (title, path) of its results' summaries files (accelcal.summary.write_summaries),
+    shown there before the tables, each result by its Summary's as_html.
     """
 
     name: str
     figures: tuple = ()
     claims: bool = True
     tables: tuple = ()
+    summaries: tuple = ()
 
 
-def declare_stage(name, figures=(), claims=True, tables=()):
+def declare_stage(name, figures=(), claims=True, tables=(), summaries=()):
     """The :class:`Stage` ``name``, and each of its figure ids as a target rule of its own:
     `snakemake <id>` makes its PNG and PDF (target only: no job, no log)."""
-    stage = Stage(name, tuple(figures), claims, tuple(tables))
+    stage = Stage(name, tuple(figures), claims, tuple(tables), tuple(summaries))
     for fid in stage.figures:
 
         rule:
@@ -160,6 +163,16 @@ def claim_stages():
 def report_tables():
     """(section, title, path) of every stage's summary tables, in the report's order."""
     return [(stage.name, title, path) for stage in STAGES for title, path in stage.tables]
+
+
+def report_summaries():
+    """(section, title, path) of every stage's summaries files, in the report's order."""
+    return [(stage.name, title, path) for stage in STAGES for title, path in stage.summaries]
+
+
+def summaries_path(name):
+    """results/summaries/<name>.json: the Summaries of one job's results, for the report."""
+    return results(f"summaries/{name}.json")
 
 
 def get_final_output():

@@ -115,6 +115,8 @@ DISCREPANCY_STAGE = declare_stage(
         ("ADIS16405: observed and predicted pose-mean wander on session-shaped pieces", ADIS_CHECK_SUMMARY),
         ("Discrepancy summary", DISCREPANCY_SUMMARY),
     ),
+    summaries=tuple((f"{r}: both layers (accelcal discrepancy)", summaries_path(f"discrepancy_{r}"))
+                    for r in DISCREPANCY_RECORDINGS),
 )
 
 
@@ -314,6 +316,7 @@ rule discrepancy_measured_report:
         csv=MEASURED_CSV,
     output:
         RECORDING_REPORT,
+        summaries=summaries_path("discrepancy_{recording}"),
     params:
         g=lambda w: config["measured"]["recordings"][w.recording]["g"],
         rules=DISCREPANCY["rules"],

@@ -60,6 +60,7 @@ GYRO_STAGE = declare_stage(
             ("The gyro loop on the real sessions: effects named, excess before/after", results("gyro/loop/sessions.csv")),
             ("Named gyro effects across sessions of one unit: do their estimates agree?",
              results("gyro/loop/repeats.csv"))),
+    summaries=(("Real sessions: each gyroscope calibration", summaries_path("gyro_sessions")),),
 )
 
 
@@ -177,6 +178,7 @@ rule gyro_sessions:
         imutk_run=GYRO_IMUTK_RUN,
     output:
         **{t: results(f"gyro/sessions/{t}.csv") for t in GYRO_SESSION_TABLES},
+        summaries=summaries_path("gyro_sessions"),
     params:
         sessions=GYRO["sessions"],
     log:

@@ -28,6 +28,7 @@ MAG_STAGE = declare_stage(
             ("Monte Carlo: RMS error / CRLB of the ellipsoid parameters", results("mag/montecarlo.csv")),
             ("Discrepancy loop: false positives and power at 3x MDE (simulated)", results("mag/loop_benchmark.csv")),
             ("Discrepancy loop on the real sessions", results("mag/loop_sessions.csv"))),
+    summaries=(("Real sessions: each magnetometer calibration", summaries_path("mag_sessions")),),
 )
 
 
@@ -62,6 +63,7 @@ rule mag_sessions:
     output:
         table=results("mag/sessions.csv"),
         stability=results("mag/stability.csv"),
+        summaries=summaries_path("mag_sessions"),
     params:
         mag=config_keys(MAG, "sessions"),
     log:

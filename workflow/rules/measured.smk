@@ -38,6 +38,7 @@ MEASURED_STAGE = declare_stage(
     tables=(("Fit quality per recording and estimator (χ², leave-one-pose-out, bootstrap)", MEASURED_SUMMARY),
             ("Sensitivities against the data sheet", results("measured/nominal.csv")))
     + tuple(("imucal's Ferraris calibration against accelcal", p) for p in MEASURED_PEER),
+    summaries=tuple((f"{r}: each estimator's calibration", summaries_path(f"measured_{r}")) for r in MEASURED_RECORDINGS),
 )
 
 
@@ -81,6 +82,7 @@ rule measured_calibrate:
         kernel_cache=KERNEL_CACHE,
     output:
         **{t: results(f"measured/{{recording}}/{t}.csv") for t in MEASURED_TABLES},
+        summaries=summaries_path("measured_{recording}"),
     params:
         settings=lambda w: MEASURED["recordings"][w.recording],
         bootstrap=MEASURED["bootstrap"],

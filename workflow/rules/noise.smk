@@ -41,6 +41,7 @@ NOISE_STAGE = declare_stage(
     figures=("noise_adis16405",),
     tables=(("ADIS16405 (2.78 h static record): noise terms against the datasheet", NOISE_DATASHEET),
             ("Coverage of the term intervals on simulated records with known terms", NOISE_COVERAGE)),
+    summaries=(("ADIS16405: the noise report (accelcal noise)", summaries_path("noise_adis16405")),),
 )
 
 
@@ -57,6 +58,7 @@ rule noise_adis:
         kalibr=f"{NOISE_ADIS_DIR}/imu.yaml",
         openvins=f"{NOISE_ADIS_DIR}/kalibr_imu_chain.yaml",
         datasheet=NOISE_DATASHEET,
+        summaries=summaries_path("noise_adis16405"),
         **figure_outputs("noise_adis16405", "../report/noise_adis16405.rst", "Noise"),
     params:
         file="adis_16405_imu1.rda",

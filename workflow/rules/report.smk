@@ -2,7 +2,7 @@
 papers' conclusions, the claims ledger, measured-data and discrepancy tables, config and
 seeds, locked package versions, wall time per stage).
 
-Needs from common.smk: results, figure_ids, report_tables, log_path.  Inputs are
+Needs from common.smk: results, figure_ids, report_tables, report_summaries, log_path.  Inputs are
 functions, so that stages included after this file are still seen (they run once the DAG
 is built).
 The benchmark files (results/benchmarks/) are not inputs: the page reads whatever is there
@@ -42,6 +42,7 @@ rule report:
         claims=results("claims.csv"),
         figures=lambda w: expand(results("figures/{figure}.png"), figure=sorted(figure_ids())),
         tables=lambda w: [path for _, _, path in report_tables()],
+        summaries=lambda w: [path for _, _, path in report_summaries()],
         captions=lambda w: sorted(report_captions().values()),
         conclusions=os.path.join(workflow.basedir, "workflow", "report", "conclusions.yaml"),
         lock=os.path.join(workflow.basedir, "environment.lock"),
@@ -51,6 +52,7 @@ rule report:
         figure_ids=lambda w: sorted(figure_ids()),
         captions=lambda w: report_captions(),
         tables=lambda w: [list(t) for t in report_tables()],
+        summaries=lambda w: [list(t) for t in report_summaries()],
         benchmarks_dir=results("benchmarks"),
         config_files=report_config_files(),
     log:

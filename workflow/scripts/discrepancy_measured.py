@@ -10,6 +10,7 @@ from accelcal.discrepancy.report import StochasticSettings, discrepancy_report
 from accelcal_repro.measured.sources import source
 from accelcal.formats import read
 from accelcal.jsonsafe import json_safe
+from accelcal.summary import write_summaries
 from accelcal_repro.discrepancy.sessions import with_disjoint_rests
 
 if "snakemake" not in globals():  # standalone run: see _helpers.mock_snakemake_from_argv
@@ -31,4 +32,6 @@ if note:
 with atomic_output(snakemake.output[0]) as tmp, open(tmp, "w") as fh:
     json.dump(json_safe(out), fh, indent=1, sort_keys=False)
     fh.write("\n")
-log.info("%s: %s\n%s", name, analysis.deterministic.outcome, analysis.summary(written_to=snakemake.output[0]))
+summary = analysis.summary(written_to=snakemake.output[0])
+write_summaries(snakemake.output.summaries, {name: summary})
+log.info("%s: %s\n%s", name, analysis.deterministic.outcome, summary)

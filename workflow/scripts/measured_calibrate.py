@@ -3,6 +3,7 @@
 from _helpers import configure_logging, mock_snakemake_from_argv, write_csv
 
 from accelcal.errors import TooFewPosesError
+from accelcal.summary import write_summaries
 from accelcal_repro.measured.calibrate import TABLES, calibrate_recording, check_section_list_estimators
 from accelcal_repro.measured.sources import read_manifest, read_source, section_list
 
@@ -30,3 +31,4 @@ for r in mc.summary.itertuples():
              f" ({r.lopo_note})" if r.lopo_note else "", 100 * r.boot_valid_fraction, r.ci_method)
 for t in TABLES:
     write_csv(getattr(mc, t), getattr(snakemake.output, t))
+write_summaries(snakemake.output.summaries, {e: mc.results[e].summary() for e in mc.summary["estimator"]})

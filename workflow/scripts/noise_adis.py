@@ -12,6 +12,7 @@ from accelcal.noise import analyse_noise
 from accelcal.noise.export import kalibr_yaml, openvins_yaml
 from accelcal.noise.figures import noise_figure
 from accelcal.plotting import save_figure
+from accelcal.summary import write_summaries
 from accelcal_repro.measured.smac import read_smac_imu
 from accelcal_repro.measured.sources import read_manifest
 from accelcal_repro.noise.adis import datasheet_table, figure_references
@@ -29,6 +30,7 @@ except AccelcalError as e:
 rec = replace(rec, source=f"smac_adis16405/{p.file}")  # the dataset's name, not this machine's path
 report = analyse_noise(rec, level=p.adis["level"], n_boot=p.adis["n_boot"], seed=p.adis["seed"])
 write_json_atomic(out.report, report.to_dict())
+write_summaries(out.summaries, {"adis16405": report.summary(written_to=out.report)})
 texts = {out.kalibr: kalibr_yaml(report, rostopic=p.adis["rostopic"], inflate=p.adis["inflate"]),
          out.openvins: openvins_yaml(report, rostopic=p.adis["rostopic"], inflate=p.adis["inflate"])[0]}
 for path, text in texts.items():

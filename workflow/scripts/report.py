@@ -23,6 +23,7 @@ try:
         captions={fid: Path(p).read_text(encoding="utf-8") for fid, p in snakemake.params.captions.items()},
         conclusions=load_conclusions(snakemake.input.conclusions),
         tables=[tuple(t) for t in snakemake.params.tables],
+        summaries=[tuple(t) for t in snakemake.params.summaries],
         config=snakemake.config,
         lock_text=Path(snakemake.input.lock).read_text(encoding="utf-8"),
         benchmarks_dir=snakemake.params.benchmarks_dir,

@@ -160,7 +160,7 @@ def _calibrate_gyro_only(args, rec, t0) -> int:
            "gyroscope": cal.to_dict(), "notes": list(rec.notes), **_provenance(args, t0)}
     write_json_atomic(args.out, json_safe(out))
     lines = [f"read: {n}" for n in rec.notes if n]
-    print("\n".join(lines + [cal.summary(), f"written to {args.out}"]), file=sys.stderr)
+    print("\n".join(lines + [cal.summary(written_to=args.out)]), file=sys.stderr)  # the Summary's own text
     return 0
 
 

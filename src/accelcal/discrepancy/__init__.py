@@ -18,8 +18,10 @@ the measured rests with the simulator's noise model, names the missing noise ter
 re-simulates (the subpackage :mod:`.stochastic`, on the noise analysis of
 :mod:`accelcal.noise`).
 
-:func:`discrepancy_report` runs both layers on a recording and joins them
-(:mod:`.report`, the ``accelcal discrepancy`` command); :mod:`.figures` draws them.  The
+:func:`discrepancy_report` runs both layers on a recording (:mod:`.report`, the
+``accelcal discrepancy`` command) and joins them (:mod:`.noise_implication`, with the
+wander's :mod:`.allan_check`); its result :class:`DiscrepancyReport` is in :mod:`.results`;
+:mod:`.figures` draws them.  The
 benchmark is ``accelcal_repro.discrepancy``.
 """
 
@@ -28,8 +30,8 @@ from .detect import discrepancy
 from .figures import plot_allan
 from .fit import PoseData, fit, pose_data, pose_data_from_static
 from .identifiability import identifiability
-from .report import DiscrepancyReport, discrepancy_report
-from .results import DiscrepancyResult
+from .report import discrepancy_report
+from .results import DiscrepancyReport, DiscrepancyResult
 from .rules import NULLS, Rules
 from .stochastic import (
     DEFAULT_CANDIDATES,

@@ -1,5 +1,7 @@
-"""The rows and the result of the discrepancy loop: :class:`Candidate`, the outlier family's
-:class:`OutlierTest` and :class:`OutlierPose`, and :class:`DiscrepancyResult` with its JSON."""
+"""The rows and the results of the discrepancy loop: :class:`Candidate`, the outlier family's
+:class:`OutlierTest` and :class:`OutlierPose`, :class:`DiscrepancyResult` (the deterministic
+layer) with its JSON, and :class:`DiscrepancyReport` (both layers and the sensors' loops on one
+recording, what :func:`accelcal.discrepancy.report.discrepancy_report` returns)."""
 
 from __future__ import annotations
 
@@ -8,14 +10,17 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from .. import distributions as dist
-from ..summary import Summary
 from ..effects import EFFECTS
+from ..static import StaticPoses
+from ..summary import Summary
 from .fit import Fit, PoseData, evaluate, parameter_names
 from .identifiability import Identifiability
 from .rules import Rules
 from .schema import white_excess_status
 from .statistics import gap
-from .summary import result_lines
+from .stochastic import StochasticResult
+from .summary import report_summary, result_lines
+from .wander_model import describe_noise_model
 
 @dataclass(frozen=True)
 class Candidate:
@@ -318,4 +323,60 @@ def _white_noise_model(res: DiscrepancyResult) -> dict:
             "reason": "null 'white': the tests estimate a common scale of the per-pose noise; no bias wander"}
 
 
-__all__ = ["Candidate", "DiscrepancyResult", "OutlierPose", "OutlierTest"]
+@dataclass(frozen=True)
+class DiscrepancyReport:
+    """Both layers on one recording: what ``accelcal discrepancy`` reports (:meth:`to_dict`)."""
+
+    poses: StaticPoses
+    deterministic: DiscrepancyResult
+    stochastic: StochasticResult | None
+    stochastic_error: str
+    implication: dict
+    fs: float
+    unit: str | None = None
+    static: dict | None = None  #: the detection settings and the search's record (as calibrate's provenance)
+    gyro: object = None  #: the gyro loop's GyroLoopResult, or None (``gyro_error`` says why)
+    gyro_error: str = "not run"
+    mag: object = None  #: the magnetometer loop's MagLoopResult, or None (``mag_error`` says why)
+    mag_error: str = "not run"
+
+    def to_dict(self) -> dict:
+        d = self.deterministic.to_dict()
+        d["noise_model"]["reading"] = describe_noise_model(d["noise_model"], self.unit)
+        d["stochastic"] = self.stochastic.to_dict() if self.stochastic is not None else None
+        if self.stochastic is None:
+            d["stochastic_error"] = self.stochastic_error
+        d["noise_implication"] = self.implication
+        if self.static is not None:
+            d["static"] = self.static
+        # one report for the whole IMU: the accelerometer's keys at the top (as before), each sensor below
+        d["gyroscope"] = self.gyro.to_dict() if self.gyro is not None else {"outcome": "not_tested",
+                                                                            "reason": self.gyro_error}
+        d["magnetometer"] = self.mag.to_dict() if self.mag is not None else {"outcome": "not_tested",
+                                                                             "reason": self.mag_error}
+        d["poses"].update({"t_start": self.poses.t_start.tolist(), "t_end": self.poses.t_end.tolist(),
+                           "mean": self.poses.means.tolist(), "mean_std": self.poses.mean_std.tolist(),
+                           "n_samples": self.poses.n_samples.tolist()})
+        return d
+
+    def summary(self, *, written_to=None) -> Summary:
+        """Both layers in a few lines: what ``accelcal discrepancy`` prints.
+
+        The deterministic layer's lines (:meth:`DiscrepancyResult.summary
+        <accelcal.discrepancy.results.DiscrepancyResult.summary>`), the noise terms
+        named from the rests and what they imply for the pose residuals.
+
+        Parameters
+        ----------
+        written_to : path, optional
+            Where the report was written (a line says so).
+
+        Returns
+        -------
+        Summary
+            Lines without a final newline (a ``str``; also as a dict and HTML).
+        """
+        return Summary(report_summary(self, written_to))
+
+
+__all__ = ["Candidate", "DiscrepancyReport", "DiscrepancyResult", "OutlierPose", "OutlierTest"]

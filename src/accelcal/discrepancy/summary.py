@@ -1,7 +1,7 @@
 """The text the discrepancy results render of themselves: the deterministic layer's
 (:meth:`DiscrepancyResult.summary <accelcal.discrepancy.results.DiscrepancyResult.summary>`)
 and the whole report's (:meth:`DiscrepancyReport.summary
-<accelcal.discrepancy.report.DiscrepancyReport.summary>`), what ``accelcal discrepancy``
+<accelcal.discrepancy.results.DiscrepancyReport.summary>`), what ``accelcal discrepancy``
 prints and the workflow logs.
 
 Built from the result objects, not from their JSON: non-finite numbers print as ``inf``
@@ -54,7 +54,7 @@ def _noise_lines(nm: dict, wander: dict, unit: str | None) -> list[str]:
 
 
 def report_summary(report, written_to=None) -> str:
-    """The lines of :meth:`DiscrepancyReport.summary <accelcal.discrepancy.report.DiscrepancyReport.summary>`."""
+    """The lines of :meth:`DiscrepancyReport.summary <accelcal.discrepancy.results.DiscrepancyReport.summary>`."""
     lines = result_lines(report.deterministic, report.unit)
     st = report.stochastic
     if st is not None:

@@ -70,7 +70,7 @@ from .allan import DEFAULT_MIN_EDF, AllanVariance, allan_variance
 from .allan_fit import NoiseFit, bootstrap_fits, fit_avar_model_error, model_edf
 from .avr import avr_lines
 from .export import conversions, exported_values, report_dict
-from .planner import plan_lines
+from .planner import DEFAULT_WIDTH, plan_lines
 from .terms import TERMS, model_avar
 
 #: The IEEE Std 952 terms fitted, in order of the τ where they act (short to long).
@@ -152,7 +152,8 @@ class NoiseReport:
 
 # --------------------------------------------------------------------------- analysis
 
-    def summary(self, *, written_to=None, plan_width=None, allan_variance_ros: dict | None = None) -> Summary:
+    def summary(self, *, written_to=None, plan_width: float = DEFAULT_WIDTH,
+                allan_variance_ros: dict | None = None) -> Summary:
         """The report in a few lines: what ``accelcal noise`` prints (its warnings apart).
 
         Per sensor the exported noise density and random walk, the data-sheet units, the

@@ -98,8 +98,10 @@ def _session_row(name: str, r: dict) -> dict:
             "iterations": g.settings.get("iterations"), "warnings": " | ".join(q.warnings), "error": ""}
 
 
-def run(out: Path, paths: dict, sessions=tuple(SESSIONS), imutk_run: dict | None = None) -> dict[str, pd.DataFrame]:
-    """Calibrate every session, compare with the peers, and write the tables into ``out``.
+def run(out: Path, paths: dict, sessions=tuple(SESSIONS), imutk_run: dict | None = None,
+        summaries: dict | None = None) -> dict[str, pd.DataFrame]:
+    """Calibrate every session, compare with the peers, and write the tables into ``out``;
+    ``summaries``, if given, receives each session's gyro calibration's Summary (for the report).
 
     ``paths``: ``{dataset: {file: path}}`` (:func:`.sessions.local_paths`, or the workflow's
     manifests); ``imutk_run``: the ``runs`` of ``tools/gyro_peers.py``'s ``imutk.json``, or None.
@@ -117,6 +119,8 @@ def run(out: Path, paths: dict, sessions=tuple(SESSIONS), imutk_run: dict | None
             srows.append({"session": name, "error": f"{type(e).__name__}: {e}"})
             continue
         srows.append(_session_row(name, r))
+        if summaries is not None:
+            summaries[name] = r["gyro"].summary()
         times.append({"session": name, "accelerometer_s": r["acc_seconds"], "gyro_s": r["gyro_seconds"]})
         prows += _our_parameters(name, r["gyro"])
         if any(name in g for g in GROUPS.values()):  # the same session with the rest noise alone (before)
