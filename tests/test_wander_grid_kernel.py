@@ -57,7 +57,7 @@ def test_compiled_and_numpy_grids_agree_inside_and_at_the_ends_of_the_white_scal
         (quad > MIN_WHITE_SCALE) & (quad < MAX_WHITE_SCALE)).any()
 
 
-def _cpu(f, repeats: int = 20) -> float:
+def _cpu(f, repeats: int = 10) -> float:
     t0 = time.process_time()
     for _ in range(repeats):
         f()
