@@ -1,13 +1,17 @@
 """The benchmark's cheaper paths give the same decisions: the wander loop's decisions-only
-mode (no fits of candidates that cannot pass) and the stacked refits of the bootstrap."""
+mode (no fits of candidates that cannot pass) and the stacked refits of the bootstrap,
+compiled and in numpy."""
 
 import numpy as np
+import pytest
+
+from accelcal import kernels
 
 from accelcal.discrepancy import rules as D
 from accelcal.discrepancy.detect import discrepancy
 from accelcal.discrepancy.fit import pose_data_from_static
 from accelcal.discrepancy.wander import Q_REL_GRID, basis, profile
-from accelcal.discrepancy.wander.bootstrap import _stacked_ml_min
+from accelcal.discrepancy.wander.gls import grid_logdet, grid_ml_min
 from accelcal.discrepancy.wander_model import linearise_noise
 from accelcal.static import detect_static_recording
 from accelcal_repro.discrepancy import benchmark as B
@@ -36,14 +40,20 @@ def test_decisions_only_mode_decides_as_the_report():
     assert all(np.isfinite(c.estimate).all() for c in full.candidates if c.identifiable)
 
 
-def test_stacked_refits_equal_one_profile_per_model():
+@pytest.mark.parametrize("backend", ["numba", "numpy"])
+def test_stacked_refits_equal_one_profile_per_model(backend):
     data = _data("none", 0.0, 1)
     prob, bas0, _ = linearise_noise(data, discrepancy(data, RULES, report=False).base)
     rng = np.random.default_rng(3)
+    # data sets of every size: the white scale inside its range and at both of its ends
     cols = [rng.standard_normal((prob.m, 3)) for _ in range(3)]
     bases = [basis(prob, np.hstack([prob.X0, c])) for c in cols]
-    Y = rng.standard_normal((7, prob.m))
-    sf0 = profile(prob, prob.X0, Y, Q_REL_GRID, bas=bas0)
+    Y = rng.standard_normal((9, prob.m)) * np.array([1.0] * 5 + [0.3, 0.1, 3.0, 10.0])[:, None]
     one = np.array([profile(prob, np.hstack([prob.X0, c]), Y, Q_REL_GRID, bas=b).ml_min()
                     for c, b in zip(cols, bases)])
-    assert np.allclose(_stacked_ml_min(bases, Y, sf0), one, rtol=1e-12, atol=1e-9)
+    previous = kernels.set_backend(backend)
+    try:
+        stacked = grid_ml_min(bases, Y, grid_logdet(prob), prob.m)
+    finally:
+        kernels.set_backend(previous)
+    assert np.allclose(stacked, one, rtol=1e-12, atol=1e-9)

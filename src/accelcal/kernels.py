@@ -154,7 +154,7 @@ def load() -> None:
 
 #: Every kernel module (relative to the accelcal package).
 KERNEL_MODULES = ("_lls_kernels", "batista._filter_kernels", "tereshkov._estimator_kernels", "noise._fast",
-                  "discrepancy._fit_kernels", "formats._parse_kernels")
+                  "discrepancy._fit_kernels", "discrepancy.wander._grid_kernels", "formats._parse_kernels")
 
 
 def jit(*args, **options):

@@ -43,7 +43,7 @@ import numpy as np
 
 from accelcal import distributions as dist
 from accelcal.discrepancy.wander import max_null_pvalue
-from accelcal.discrepancy.fit import PoseData, effect_columns, fit
+from accelcal.discrepancy.fit import Fit, PoseData, effect_columns, fit
 from accelcal.discrepancy.identifiability import applicable, identifiability
 from accelcal.discrepancy.rules import Rules
 from accelcal.discrepancy.statistics import holm
@@ -130,7 +130,7 @@ def _resolve(gls: _Gls, X: np.ndarray, passing: list, cols: dict, alpha: float, 
 
 
 def oracle_loop(data: PoseData, cov_r: np.ndarray, rules: Rules, rng: np.random.Generator,
-                gate: dict | None = None) -> dict:
+                gate: dict | None = None, base: Fit | None = None) -> dict:
     """The oracle's decisions on one pose set (module docstring).
 
     Parameters
@@ -145,6 +145,8 @@ def oracle_loop(data: PoseData, cov_r: np.ndarray, rules: Rules, rng: np.random.
     gate : dict, optional
         ``{effect: identifiable}`` at the base fit, if the loop has it (its round 1: the
         same check on the same poses); computed otherwise.
+    base : Fit, optional
+        The base model fitted to ``data`` (``fit(data)``), if the caller has it.
 
     Returns
     -------
@@ -154,7 +156,7 @@ def oracle_loop(data: PoseData, cov_r: np.ndarray, rules: Rules, rng: np.random.
         ``outlier_t_detected`` (their mid times, as the loop's rows),
         ``named_set`` (effects and ``outlier_pose@i``, sorted, '+'-joined), ``outcome``.
     """
-    base = fit(data)
+    base = fit(data) if base is None else base
     n = len(data)
     gls = _Gls(base.residuals, cov_r)
     cands, _ = applicable(data, rules.candidates)
@@ -246,7 +248,7 @@ def oracle_detection(data: PoseData, profile, fs: float, rules: Rules, rng: np.r
         durations = data.t_end - data.t_start + 1.0 / fs
         w = -(base.J[:, :3] * base.sigma[:, None])      # ∂r/∂z
         cov = pose_residual_covariance(profile, data.t_start, durations, np.round(durations * fs), fs, w)
-        out = oracle_loop(data, cov, rules, rng, _gate(loop_rows or [], rules.candidates))
+        out = oracle_loop(data, cov, rules, rng, _gate(loop_rows or [], rules.candidates), base)
     except (AccelcalError, np.linalg.LinAlgError) as err:
         row["error"] = str(err).splitlines()[0]
         return row

@@ -147,7 +147,8 @@ durations is partly counted in both (it then shows as a smaller ``σ_w`` or ``s`
 interval-mean covariance is exact for the wander as modelled.
 
 Modules: :mod:`.problem` (the noise model's kernels and the linearised problem),
-:mod:`.gls` (likelihood over the grid, GLS projector, information), :mod:`.reml` (the
+:mod:`.gls` (likelihood over the grid, GLS projector, information; the grid minima of many
+data sets compiled in :mod:`._grid_kernels`), :mod:`.reml` (the
 fitted wander), :mod:`.bootstrap` (the round's tests), :mod:`.simulation` (exact draws
 of interval means, the covariance a simulation implies).
 """

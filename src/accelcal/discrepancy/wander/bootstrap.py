@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .gls import Q_REL_GRID, Basis, Surface, basis, profile, studentised
+from .gls import Q_REL_GRID, Basis, basis, grid_logdet, grid_ml_min, profile, studentised
 from .outliers import directions, max_null_pvalue, studentised_max
 from .problem import Problem
 from .reml import WanderFit, fit_wander
@@ -77,14 +77,14 @@ def round_tests(prob: Problem, X_alts: list, rng: np.random.Generator, n_boot: i
     Xs = [np.hstack([X0, Xa]) for Xa in X_alts]
     bases = [basis(prob, X0) if bas0 is None else bas0] + [basis(prob, X1) for X1 in Xs]
     sf0 = profile(prob, X0, prob.y[None], Q_REL_GRID, shifts=outliers, bas=bases[0])
-    m0 = float(sf0.ml_min()[0])
+    logdet = grid_logdet(prob)   # every model's on this problem: computed once for the round
+    m0 = float(grid_ml_min(bases[:1], prob.y, logdet, prob.m)[0, 0])
     # the bootstrap simulates the REML noise of the current model.  (Estimating it with the
     # most outlying pose free, against masking, was tried: under a random-walk wander it
     # lowered the simulated noise and raised the outlier family's false positives from
     # 7.5 % to 11 % and the candidates' from 5.3 % to 7.2 %, 120 sessions each.)
     null = fit_wander(prob, X0, fine=False) if null is None else null
-    lr = np.array([max(m0 - float(profile(prob, X1, prob.y[None], Q_REL_GRID, bas=b).ml_min()[0]), 0.0)
-                   for X1, b in zip(Xs, bases[1:])])
+    lr = np.array([max(m0 - float(grid_ml_min([b], prob.y, logdet, prob.m)[0, 0]), 0.0) for b in bases[1:]])
     o_i, o_lr, o_p, o_draws = -1, float("nan"), float("nan"), 0
     if outliers:  # first: the bootstrap's extension needs its p-value (its own stream: the replicates stay)
         tt, t_max = studentised_max(prob, bases[0], null.t, null.q_rel)
@@ -95,7 +95,7 @@ def round_tests(prob: Problem, X_alts: list, rng: np.random.Generator, n_boot: i
                                        alpha=alpha, family=len(X_alts) + 1)
     seq = _Sequential(len(X_alts), stop_count(alpha, n_boot))
     if X_alts:
-        _bootstrap(prob, bases, Xs, lr, rng, null, seq, n_boot, n_boot_max, alpha,
+        _bootstrap(prob, bases, logdet, lr, rng, null, seq, n_boot, n_boot_max, alpha,
                    None if extend is None else _with_fixed(extend, outliers, o_p))
     t_obs, _ = studentised(prob, X0, null.t, null.q_rel, scale=null.white_scale)
     return RoundTests(lr=lr, p_values=seq.p_values(), bartlett=seq.mean_lr(X_alts),
@@ -115,9 +115,10 @@ def _with_fixed(extend, outliers: bool, p_outlier: float):
     return wrapped
 
 
-def _bootstrap(prob: Problem, bases: list, Xs: list, observed: np.ndarray, rng, null: WanderFit, seq, n_boot: int,
-               n_boot_max: int | None, alpha: float, extend) -> None:
-    """The sequential bootstrap of the candidates' likelihood ratios (:func:`round_tests`)."""
+def _bootstrap(prob: Problem, bases: list, logdet: np.ndarray, observed: np.ndarray, rng, null: WanderFit, seq,
+               n_boot: int, n_boot_max: int | None, alpha: float, extend) -> None:
+    """The sequential bootstrap of the candidates' likelihood ratios (:func:`round_tests`;
+    ``logdet``: the round's :func:`~.gls.grid_logdet`)."""
     # replicates drawn through the Cholesky factor of the null covariance: unique, unlike the
     # eigenvectors (whose signs depend on the LAPACK routine), so the replicates are too
     root = np.linalg.cholesky(null.white_scale * prob.sigma_c(null.t, null.q_rel))
@@ -125,7 +126,7 @@ def _bootstrap(prob: Problem, bases: list, Xs: list, observed: np.ndarray, rng, 
     while True:
         batch = min(BATCHES[min(k, len(BATCHES) - 1)], cap - seq.n)
         Ystar = rng.standard_normal((batch, prob.m)) @ root.T
-        seq.add(_bootstrap_batch(prob, bases, Xs, Ystar, seq.running), observed)
+        seq.add(_bootstrap_batch(prob, bases, logdet, Ystar, seq.running), observed)
         k += 1
         if not seq.running.any():
             break
@@ -183,36 +184,19 @@ class _Sequential:
         return self.sums[:k] / np.maximum(self.used[:k], 1) / np.array([Xa.shape[1] for Xa in X_alts])
 
 
-def _bootstrap_batch(prob: Problem, bases: list, Xs: list, Ystar: np.ndarray, running: np.ndarray) -> np.ndarray:
+def _bootstrap_batch(prob: Problem, bases: list, logdet: np.ndarray, Ystar: np.ndarray,
+                     running: np.ndarray) -> np.ndarray:
     """Replicates ``Ystar`` (B, m) drawn under the null, refitted as the data: per replicate
     the LR of each candidate, NaN for the tests no longer ``running``.  The candidates with
-    as many free contrasts are refitted together (:func:`_stacked_ml_min`)."""
+    as many free contrasts are refitted together (:func:`~.gls.grid_ml_min`)."""
     out = np.full((Ystar.shape[0], len(running)), np.nan)
-    sf0 = profile(prob, prob.X0, Ystar, Q_REL_GRID, bas=bases[0])
-    m0s = sf0.ml_min()
-    todo = np.flatnonzero(running[:len(Xs)])
+    m0s = grid_ml_min(bases[:1], Ystar, logdet, prob.m)[0]
+    todo = np.flatnonzero(running[:len(bases) - 1])
     for r in sorted({bases[k + 1].K.shape[1] for k in todo}):
         group = [k for k in todo if bases[k + 1].K.shape[1] == r]
-        m1s = _stacked_ml_min([bases[k + 1] for k in group], Ystar, sf0)
+        m1s = grid_ml_min([bases[k + 1] for k in group], Ystar, logdet, prob.m)
         out[:, group] = np.maximum(m0s[:, None] - m1s.T, 0.0)
     return out
-
-
-def _stacked_ml_min(bases: list, Y: np.ndarray, sf0: Surface) -> np.ndarray:
-    """Grid minimum of ``−2ℓ`` (G, B) of data sets ``Y`` (B, m) under each of ``G`` models of
-    as many free contrasts (their :class:`Basis`), in one pass: :func:`profile`'s quadratic
-    forms with the models stacked; ``log|Σ|`` is the models' common one, ``sf0``'s (a
-    surface on the same problem and grid)."""
-    K = np.stack([b.K for b in bases])                              # (G, m, r)
-    U = np.stack([b.U for b in bases])                              # (G, T, r, r)
-    mu = np.stack([b.mu for b in bases])                            # (G, T, r)
-    q = np.broadcast_to(Q_REL_GRID, (U.shape[1], Q_REL_GRID.size))  # (T, Q)
-    Yt = (Y[None] @ K)[:, None] @ U                                 # (G, T, B, r)
-    w = 1.0 / (1.0 + q[None, :, :, None] * mu[:, :, None, :])       # (G, T, Q, r)
-    quad = ((Yt * Yt) @ w.transpose(0, 1, 3, 2)).transpose(0, 2, 1, 3)   # (G, B, T, Q)
-    G, B = quad.shape[:2]
-    sf = Surface(quad.reshape((G * B,) + quad.shape[2:]), sf0.logdet, sf0.logdet_a, sf0.m, 0)
-    return sf.ml_min().reshape(G, B)
 
 
 

@@ -13,10 +13,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
+from ... import kernels
 from .problem import Problem
+
+#: The compiled kernel of :func:`grid_ml_min` (:mod:`._grid_kernels`).
+_KERNELS = "discrepancy.wander._grid_kernels"
 
 #: Relative wander variance ``q`` (over the white variance of the contrasts) the tests
 #: profile over: 0, then three per decade (the likelihood is smooth in log q: the grid
@@ -130,6 +135,13 @@ class Basis:
     mu: np.ndarray
     logdet_xx: float
 
+    @cached_property
+    def grid_weights(self) -> np.ndarray:
+        """``1/(1 + q μ_j)`` (T, Q, r) over :data:`Q_REL_GRID`: the same for every data set
+        (a round's bootstrap refits each model on several batches of replicates)."""
+        q = np.broadcast_to(Q_REL_GRID, (self.U.shape[0], Q_REL_GRID.size))
+        return 1.0 / (1.0 + q[:, :, None] * self.mu[:, None, :])
+
 
 def basis(prob: Problem, X: np.ndarray) -> Basis:
     """The :class:`Basis` of columns ``X`` on ``prob``'s grid of ``τ``.
@@ -179,8 +191,7 @@ def profile(prob: Problem, X: np.ndarray, Y: np.ndarray, qrel, shifts: bool = Fa
     quad = ((Yt * Yt) @ w.transpose(0, 2, 1)).transpose(1, 0, 2)   # (B, T, Q)
     logdet = np.log(1.0 + q[:, :, None] * prob.lam[:, None, :]).sum(axis=2)
     logdet_a = np.log(one).sum(axis=2) + bas.logdet_xx - logdet if p else np.zeros(q.shape)
-    if prob.rests is not None:  # the joint likelihood: the rests' deviance rides on log|Σ| (:mod:`.rests`)
-        logdet = logdet + prob.rests.deviance_grid(prob.taus, prob.scale, q)
+    logdet = _with_rests(prob, logdet, q)
     shift_quad = None
     if shifts:
         M = (prob.L @ bas.K)[None] @ bas.U                      # (T, n, r): poses from rotated contrasts
@@ -191,6 +202,51 @@ def profile(prob: Problem, X: np.ndarray, Y: np.ndarray, qrel, shifts: bool = Fa
         gain = np.square(z, out=z).reshape(T, q.shape[1], -1, Y.shape[0])             # (T, Q, n, B)
         shift_quad = np.clip(quad.transpose(1, 2, 0)[:, :, None, :] - gain, 1e-300, None).transpose(3, 0, 1, 2)
     return Surface(quad, logdet, logdet_a, prob.m, p, shift_quad)
+
+
+def _with_rests(prob: Problem, logdet: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """``logdet`` with the rests' deviance when the likelihood borrows from them (:mod:`.rests`:
+    it rides on ``log|Σ|``)."""
+    return logdet if prob.rests is None else logdet + prob.rests.deviance_grid(prob.taus, prob.scale, q)
+
+
+def grid_logdet(prob: Problem, qrel=Q_REL_GRID) -> np.ndarray:
+    """``log|I + q K_τ|`` (T, Q) over ``prob.taus`` × ``qrel``, with the rests' deviance
+    (:func:`profile`'s ``logdet``: the same for every model's columns on ``prob``)."""
+    qrel = np.asarray(qrel, float)
+    q = np.broadcast_to(qrel, (prob.taus.size, qrel.shape[-1]))
+    return _with_rests(prob, np.log(1.0 + q[:, :, None] * prob.lam[:, None, :]).sum(axis=2), q)
+
+
+def grid_ml_min(bases: list, Y: np.ndarray, logdet: np.ndarray, m: int) -> np.ndarray:
+    """Grid minimum of ``−2ℓ`` (G, B) of data sets ``Y`` (B, m) under each of ``G`` models of
+    as many free contrasts (their :class:`Basis` on one problem's grid of ``τ`` ×
+    :data:`Q_REL_GRID`; ``logdet`` its :func:`grid_logdet`): :meth:`Surface.ml_min` of
+    :func:`profile` for every model at once, without the surface.
+
+    The compiled kernel (:mod:`._grid_kernels`) keeps running minima over the grid instead
+    of building the quadratic forms of every grid point (models × τ × data sets × q); the
+    exponentials and logarithms of both paths are numpy's."""
+    K = np.stack([b.K for b in bases])                              # (G, m, r)
+    U = np.stack([b.U for b in bases])                              # (G, T, r, r)
+    w = np.stack([b.grid_weights for b in bases])                   # (G, T, Q, r)
+    Y = np.atleast_2d(Y)
+    Yt = (Y[None] @ K)[:, None] @ U                                 # (G, T, B, r)
+    G, B = U.shape[0], Y.shape[0]
+    kern = kernels.compiled(_KERNELS)
+    if kern is None:
+        quad = ((Yt * Yt) @ w.transpose(0, 1, 3, 2)).transpose(0, 2, 1, 3)   # (G, B, T, Q)
+        return _neg2ll_min(quad.reshape((G * B,) + quad.shape[2:]), m, logdet).reshape(G, B)
+    ld = np.asarray(logdet, float)
+    ld0 = float(ld.min())
+    with np.errstate(over="ignore"):
+        ex = np.exp((ld - ld0) / m)
+    prod, low, high = kern.grid_minima(Yt, w, ex, ld, m, MIN_WHITE_SCALE, MAX_WHITE_SCALE)
+    with np.errstate(divide="ignore"):
+        out = m * (np.log(prod / m) + 1.0) + ld0
+    for end, lin in ((MIN_WHITE_SCALE, low), (MAX_WHITE_SCALE, high)):
+        out = np.minimum(out, lin + m * math.log(end))
+    return out
 
 
 def gls_projector(prob: Problem, X: np.ndarray, t: int, q: float) -> np.ndarray:
@@ -283,4 +339,5 @@ def excess_distribution(prob: Problem, X: np.ndarray, t: int, q: float, scale: f
 
 
 __all__ = ["MAX_WHITE_SCALE", "MIN_WHITE_SCALE", "Q_REL_GRID", "Basis", "EffectInformation", "Surface", "basis",
-           "effect_information", "excess_distribution", "gls_projector", "gls_step", "profile", "studentised"]
+           "effect_information", "excess_distribution", "gls_projector", "gls_step", "grid_logdet", "grid_ml_min",
+           "profile", "studentised"]
