@@ -26,7 +26,7 @@ import numpy as np
 from .. import distributions as dist
 from ..errors import AccelcalError
 from ..noise.allan import avar_interval, pooled_edf
-from ..noise.terms import TERMS, model_avar
+from ..noise.terms import model_avar
 from ..recording import Recording
 from ..registry import estimator
 from ..static import StaticPoses
@@ -40,6 +40,7 @@ from .stochastic import StochasticResult
 from .stochastic.implication import centred_pose_variance, pose_difference_variance
 from .stochastic.layer import DEFAULT_CANDIDATES, rest_segments, stochastic_layer
 from .wander_model import describe_noise_model
+from .wander_process import process_in
 from .summary import report_summary
 from .results import DiscrepancyResult
 from .rules import Rules
@@ -248,7 +249,7 @@ def noise_implication(det: DiscrepancyResult, stoch, starts, durations, alpha: f
     upper = float(dist.gamma_sf(chi2, mean ** 2 / var, scale=var / mean)) if dof > 0 and var > 0 else None
     p, verdict = _two_sided(upper, alpha)
     term = nm.get("term", "none")
-    named = {a: [term] if term != "none" else ["none"] for a in "xyz"}
+    named = {a: [term] for a in "xyz"}
     out = {
         "model": "white per-pose noise (rests) + bias wander (REML, jointly with the calibration)",
         "named_terms": named,
@@ -288,26 +289,14 @@ def allan_check(noise_model: dict, stoch, level: float = 0.95, min_share: float 
     otherwise; ``not visible in the rests`` when the wander is below ``min_share`` at every
     ``τ_A`` the rests reach.
     """
-    tau_c = noise_model.get("tau_s")
-    K, K_ci = noise_model.get("random_walk_K"), noise_model.get("random_walk_K_ci") or [np.nan, np.nan]
-    flicker = noise_model.get("process") == "flicker"
-    if flicker:  # a flat floor (2 ln 2/π) B², its band from B's interval
-        K, K_ci = noise_model.get("size"), noise_model.get("size_ci") or [np.nan, np.nan]
-    if noise_model.get("term") == "per_placement_offset":
-        return {"verdict": "not visible in the rests",
-                "reason": "a per-placement offset is constant within each rest: the rests' Allan deviation "
-                          "cannot see it"}
-    if noise_model.get("term") != "bias_wander" or K is None or not np.isfinite(K):
-        return {"verdict": "no wander named"}
+    found = process_in(noise_model).rest_allan(noise_model)
+    if isinstance(found, dict):  # nothing the rests can show
+        return found
+    K, K_ci, avar = found
     fs = stoch.fs
 
     def wander_avar(taus, k):
-        if flicker:
-            return k ** 2 * TERMS["bias_instability"].basis(taus, fs, None)
-        if tau_c is None or not np.isfinite(tau_c):
-            return k ** 2 * taus / 3.0
-        s2 = k ** 2 * tau_c / 2.0
-        return s2 * TERMS["gauss_markov"].basis(taus, fs, tau_c)
+        return avar(taus, k, fs)
 
     band = (K_ci[0] if np.isfinite(K_ci[0]) else 0.0, K_ci[1] if np.isfinite(K_ci[1]) else np.inf)
     axes = {a.axis: _axis_allan_check(a, stoch, wander_avar, K, band, level, min_share) for a in stoch.axes}
