@@ -95,6 +95,7 @@ def check_components_simulate_its_covariance(proc):
             np.zeros((len(STARTS),) * 2))
     D = D + 2.0 * proc.placement_size(nm) ** 2 * (1.0 - np.eye(len(STARTS)))
     assert all(term == proc.noise_term for term, _ in proc.components(nm))
+    assert proc.placement_size(nm) ** 2 == pytest.approx(proc.own_variance(w), rel=1e-9)
     np.testing.assert_allclose(D, proc.difference_variance(w, STARTS, DURATIONS), rtol=1e-6, atol=1e-15)
 
 
@@ -155,7 +156,7 @@ def test_a_check_fails_on_an_entry_whose_simulation_differs():
     """The suite can fail: a Gauss–Markov entry simulated at twice its correlation time."""
     gm = PROCESSES["gauss_markov"]
     wrong = SimpleNamespace(**{k: getattr(gm, k) for k in ("id", "noise_term", "example", "difference_variance",
-                                                            "placement_size")},
+                                                            "placement_size", "own_variance")},
                             components=lambda nm: ((gm.noise_term, (float(nm["size"]), 2 * float(nm["tau_s"]))),))
     with pytest.raises(AssertionError):
         check_components_simulate_its_covariance(wrong)

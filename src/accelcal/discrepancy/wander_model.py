@@ -154,8 +154,10 @@ def repeated_placements(data: PoseData, f: Fit, w: C.WanderFit | None, max_angle
                                   "three orientations twice, not in a row)"}
     grad = -(f.J[:, :3] * f.sigma[:, None])
     v = (w.white_scale if w is not None else 1.0) * f.sigma ** 2
-    if w is not None and w.placement:
-        v = v + w.q_abs * C.axis_weight(grad, w.common)
+    starts, durations, _ = intervals(data)
+    own = process_of(w, float(np.max(starts + durations) - np.min(starts))).own_variance(w) if w is not None else 0.0
+    if own:  # a per-placement offset: independent from pose to pose, part of each pose's own variance
+        v = v + own * C.axis_weight(grad, w.common)
     chi2 = 0.0
     for g in groups:
         r, wi = f.residuals[g], 1.0 / v[g]

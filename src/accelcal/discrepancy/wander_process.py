@@ -130,6 +130,11 @@ class WanderProcess:
         """The noise library's model entry of the estimate (``noise_term``'s coefficient)."""
         return math.sqrt(w.q_abs)
 
+    def own_variance(self, w) -> float:
+        """Variance it adds to each pose mean independently of the others (data unit²; only
+        an offset drawn once per placement has one: a wander's is in its covariance)."""
+        return 0.0
+
     def difference_variance(self, w, starts, durations) -> np.ndarray:
         """``D_ij = Var(β̄_i − β̄_j)`` of the estimate between the poses' means (data unit²)."""
         return pose_difference_variance(self.noise_term, self.model_entry(w), starts, durations)
@@ -263,6 +268,9 @@ class PerPlacement(WanderProcess):
 
     def time_correlated(self, w, shortest):
         return False
+
+    def own_variance(self, w):
+        return w.q_abs
 
     def difference_variance(self, w, starts, durations):
         return 2.0 * w.q_abs * (1.0 - np.eye(len(starts)))
