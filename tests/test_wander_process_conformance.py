@@ -23,7 +23,8 @@ from accelcal.discrepancy import wander as C
 from accelcal.discrepancy.schema import STATUS, check_statuses
 from accelcal.discrepancy.stochastic import pose_difference_variance
 from accelcal.discrepancy.wander_model import describe_noise_model, noise_model_dict
-from accelcal.discrepancy.wander_process import PROCESSES, process_in, process_of
+from accelcal.discrepancy.rules import WANDER_FAMILIES
+from accelcal.discrepancy.wander_process import FAMILIES, PROCESSES, process_in, process_of
 from accelcal.jsonsafe import json_safe
 from accelcal.noise.terms import TERMS
 
@@ -160,3 +161,11 @@ def test_a_check_fails_on_an_entry_whose_simulation_differs():
                             components=lambda nm: ((gm.noise_term, (float(nm["size"]), 2 * float(nm["tau_s"]))),))
     with pytest.raises(AssertionError):
         check_components_simulate_its_covariance(wrong)
+
+
+@pytest.mark.parametrize("family", FAMILIES.values(), ids=lambda f: f.id)
+def test_every_family_says_what_its_grid_holds(family):
+    """The family's entry is what the wander's grid and problem are built from."""
+    assert family.meaning and family.id in WANDER_FAMILIES
+    grid = C.tau_grid(DURATIONS, SPAN, flicker=family.flicker)
+    assert (C.FLICKER in grid) == family.flicker and C.PLACEMENT in grid and np.isinf(grid).any()
