@@ -48,8 +48,10 @@ def _about_a_process(node) -> bool:
 
 def name_comparisons(path: Path) -> list[str]:
     """``file:line: source`` of every comparison on a wander process's name in ``path``."""
-    out = []
-    for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
+    out, text = [], path.read_text()
+    if not any(f'"{n}"' in text or f"'{n}'" in text for n in NAMES):  # no name: nothing to parse
+        return out
+    for node in ast.walk(ast.parse(text, filename=str(path))):
         if not isinstance(node, ast.Compare):
             continue
         sides = [node.left, *node.comparators]
