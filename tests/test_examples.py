@@ -19,6 +19,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from accelcal.discrepancy.wander_process import PROCESSES, unregister_process
 from accelcal.errors import RecordingError
 from accelcal.formats import read
 from accelcal.noise.terms import TERMS, unregister_term
@@ -27,6 +28,7 @@ from accelcal.registry import ESTIMATORS, register, unregister
 from .format_samples import RATE_HZ, SAMPLES, specific_force
 from .test_estimator_conformance import CHECKS, run_check
 from .test_noise_term_conformance import CHECKS as TERM_CHECKS
+from .test_wander_process_conformance import CHECKS as PROCESS_CHECKS
 from .test_reader_fuzz import _check_recording, damaged_files
 
 REPO = Path(__file__).resolve().parents[1]
@@ -124,6 +126,28 @@ def example_term():
 @pytest.mark.parametrize("check", TERM_CHECKS, ids=lambda c: c.__name__.removeprefix("check_"))
 def test_the_example_noise_term_passes_every_conformance_check(example_term, check):
     check(example_term)
+
+
+def test_the_wander_process_example_names_and_reads_its_process(tmp_path):
+    p = _run("custom_wander_process.py", tmp_path)
+    assert p.returncode == 0, p.stderr
+    lines = p.stdout.splitlines()
+    assert lines[0] == "process: unresolved_wander (wander of unknown time scale)", p.stdout
+    assert lines[1].startswith("reading: noise between the poses of 0.00182 data unit per axis, time scale not")
+    assert lines[2] == "simulated as: (('gauss_markov', (0.001821, 5.967)),)", p.stdout
+
+
+@pytest.fixture(scope="module")
+def example_process():
+    _example_module("custom_wander_process")  # registers the process on import
+    yield PROCESSES["unresolved_wander"]
+    unregister_process("unresolved_wander")
+    sys.modules.pop("custom_wander_process", None)
+
+
+@pytest.mark.parametrize("check", PROCESS_CHECKS, ids=lambda c: c.__name__.removeprefix("check_"))
+def test_the_example_wander_process_passes_every_conformance_check(example_process, check):
+    check(example_process)
 
 
 @pytest.fixture()

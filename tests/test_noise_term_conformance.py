@@ -86,9 +86,22 @@ def check_pose_mean_scatter_matches_the_simulation(term):
     assert np.all(np.abs(mc - pred) < 4 * mc_se + 0.05 * pred), (mc, pred)
 
 
+def check_white_level_is_what_long_means_see(term):
+    """Where a term says it acts as white noise (``white_level``: ``N²``), the means of two
+    adjacent intervals far longer than its time scale differ as white noise's do, ``2 N²/T``."""
+    v, shape = term_parameters(term.id, term.example)
+    T = 1e3 * (shape or 1.0)
+    n2 = term.white_level(term.example, T)
+    assert n2 is None or n2 > 0
+    if n2 is not None:
+        D = term.interval_difference_variance(v**2, shape, IntervalPairs(np.array([0.0, T]), np.array([T, T])))
+        assert D[0, 1] == pytest.approx(2 * n2 / T, rel=0.01)
+
+
 CHECKS = (check_entry_is_complete, check_allan_basis_is_finite_and_non_negative,
           check_simulation_is_shaped_and_reproducible, check_simulation_has_its_allan_variance,
-          check_adjacent_pose_difference_is_twice_the_allan_variance, check_pose_mean_scatter_matches_the_simulation)
+          check_adjacent_pose_difference_is_twice_the_allan_variance, check_pose_mean_scatter_matches_the_simulation,
+          check_white_level_is_what_long_means_see)
 
 
 @pytest.mark.parametrize("check", CHECKS, ids=lambda c: c.__name__.removeprefix("check_"))

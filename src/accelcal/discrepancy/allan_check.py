@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..noise.allan import avar_interval, pooled_edf
-from ..noise.terms import TERMS
+from .wander_process import process_in
 
 
 def allan_check(noise_model: dict, stoch, level: float = 0.95, min_share: float = 0.1) -> dict:
@@ -32,26 +32,14 @@ def allan_check(noise_model: dict, stoch, level: float = 0.95, min_share: float 
     otherwise; ``not visible in the rests`` when the wander is below ``min_share`` at every
     ``τ_A`` the rests reach.
     """
-    tau_c = noise_model.get("tau_s")
-    K, K_ci = noise_model.get("random_walk_K"), noise_model.get("random_walk_K_ci") or [np.nan, np.nan]
-    flicker = noise_model.get("process") == "flicker"
-    if flicker:  # a flat floor (2 ln 2/π) B², its band from B's interval
-        K, K_ci = noise_model.get("size"), noise_model.get("size_ci") or [np.nan, np.nan]
-    if noise_model.get("term") == "per_placement_offset":
-        return {"verdict": "not visible in the rests",
-                "reason": "a per-placement offset is constant within each rest: the rests' Allan deviation "
-                          "cannot see it"}
-    if noise_model.get("term") != "bias_wander" or K is None or not np.isfinite(K):
-        return {"verdict": "no wander named"}
+    found = process_in(noise_model).rest_allan(noise_model)
+    if isinstance(found, dict):  # nothing the rests can show
+        return found
+    K, K_ci, avar = found
     fs = stoch.fs
 
     def wander_avar(taus, k):
-        if flicker:
-            return k ** 2 * TERMS["bias_instability"].basis(taus, fs, None)
-        if tau_c is None or not np.isfinite(tau_c):
-            return k ** 2 * taus / 3.0
-        s2 = k ** 2 * tau_c / 2.0
-        return s2 * TERMS["gauss_markov"].basis(taus, fs, tau_c)
+        return avar(taus, k, fs)
 
     band = (K_ci[0] if np.isfinite(K_ci[0]) else 0.0, K_ci[1] if np.isfinite(K_ci[1]) else np.inf)
     axes = {a.axis: _axis_allan_check(a, stoch, wander_avar, K, band, level, min_share) for a in stoch.axes}

@@ -151,7 +151,7 @@ def noise_implication(det: DiscrepancyResult, stoch, starts, durations, alpha: f
     upper = float(dist.gamma_sf(chi2, mean ** 2 / var, scale=var / mean)) if dof > 0 and var > 0 else None
     p, verdict = _two_sided(upper, alpha)
     term = nm.get("term", "none")
-    named = {a: [term] if term != "none" else ["none"] for a in "xyz"}
+    named = {a: [term] for a in "xyz"}
     out = {
         "model": "white per-pose noise (rests) + bias wander (REML, jointly with the calibration)",
         "named_terms": named,

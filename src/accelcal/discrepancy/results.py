@@ -21,6 +21,7 @@ from .statistics import gap
 from .stochastic import StochasticResult
 from .summary import report_summary, result_lines
 from .wander_model import describe_noise_model
+from .wander_process import process_in
 
 @dataclass(frozen=True)
 class Candidate:
@@ -263,12 +264,13 @@ class DiscrepancyResult:
             return {**out, "excess_status": "untestable",
                     "excess_status_model": "the wander null's noise model was not estimated"}
         term = nm.get("term", "none")
-        model = "white per-pose noise of the rests x white scale" + ("" if term == "none" else f" + {term}")
+        named = process_in(nm).named
+        model = "white per-pose noise of the rests x white scale" + (f" + {term}" if named else "")
         status = "explained" if self.wander_summary.get("excess_explained") else "not explained"
         by = [e for e in self.effects if e != "outlier_pose"]
         if self.outliers:
             by.append(f"{len(self.outliers)} outlier pose(s) left out")
-        if term != "none":
+        if named:
             by.append(term)
         ws_lo = (nm.get("white_scale_ci") or [float("nan")])[0]
         if ws_lo is not None and np.isfinite(ws_lo) and ws_lo > 1:

@@ -15,6 +15,7 @@ import numpy as np
 
 from ..effects import EFFECT_IDS, effect
 from ..errors import AccelcalError
+from .wander_process import FAMILIES
 
 CORRECTIONS = ("holm", "bonferroni", "none")
 #: The noise models of the null hypothesis: ``wander`` (white per-pose noise + a bias wander
@@ -31,15 +32,9 @@ def null_name(null: str) -> str:
 
 
 #: The members the wander null's noise model is chosen from (REML, by likelihood: one size
-#: parameter each): ``one_process`` a per-placement offset, one Gauss–Markov process or a
-#: random walk (the earlier model); ``flicker`` those and a flicker (1/f) bias, which
-#: stands for a sum of processes spread over the decades (:data:`.wander.FLICKER`);
-#: ``flicker_rests`` the same members chosen by the joint likelihood of the pose residuals
-#: and the rests' own samples (:mod:`.wander.rests`; as ``flicker`` when the pose data do
-#: not carry the rests); ``sum`` a sum of processes: ``flicker``'s members for the long
-#: part, plus a short Gauss–Markov component pinned by the rests' Allan variances when they
-#: show one (:mod:`.wander.sums`).
-WANDER_FAMILIES = ("one_process", "flicker", "flicker_rests", "sum")
+#: parameter each): the entries of :data:`.wander_process.FAMILIES`, where each says what
+#: it holds and what its problem is joined with.
+WANDER_FAMILIES = tuple(FAMILIES)
 
 
 @dataclass(frozen=True)

@@ -24,6 +24,7 @@ import math
 from ..effects import EFFECT_IDS
 from ..errors import AccelcalError
 from .rules import null_name
+from .wander_process import MEANINGS
 
 _EXCESS = {
     "no excess": "the base model's residuals are consistent with the rests' white pose noise at level alpha: "
@@ -76,15 +77,7 @@ STATUS: dict[str, dict[str, str]] = {
         "none": "the pose-to-pose noise beyond the rests' is estimated at zero",
         "not_estimated": "too few poses (or a degenerate design) to estimate it; reason says why",
     },
-    "noise_model.process": {
-        "gauss_markov": "first-order Gauss-Markov: size (std) and correlation time tau_s",
-        "random_walk": "random walk: no stationary size and no correlation time; random_walk_K, its change over "
-                       "t seconds having std K sqrt(t)",
-        "per_placement": "independent between poses: size (std per axis), no time scale",
-        "flicker": "flicker (1/f) bias: a flat Allan floor 0.664 B at every averaging time, no single correlation "
-                   "time; size is B",
-        "none": "no second term",
-    },
+    "noise_model.process": MEANINGS,
     "noise_implication.verdict": {
         "consistent": "the final residuals' chi-square lies in the central 1 - alpha of what the named noise "
                       "model predicts",

@@ -14,11 +14,11 @@ import numpy as np
 
 from .. import distributions as dist
 from ..errors import AccelcalError
-from ..jsonsafe import is_finite
 from . import wander as C
 from .fit import Fit, PoseData, evaluate
 from .wander.sums import fit_short, pinned
-from .stochastic.implication import centred_pose_variance, pose_difference_variance
+from .stochastic.implication import centred_pose_variance
+from .wander_process import FAMILIES, process_in, process_of, words_of
 
 
 def intervals(data: PoseData) -> tuple[np.ndarray, np.ndarray, tuple]:
@@ -46,10 +46,11 @@ def linearise_noise(data: PoseData, f: Fit, family: str = "flicker") -> tuple[C.
     fit's own model (:func:`~.wander.fit_common`): the problem, the :class:`~.wander.Basis`
     of its columns and the REML noise (test grid), the wander chosen from the members of
     ``family`` (:data:`~.rules.WANDER_FAMILIES`)."""
+    fam = FAMILIES[family]
     starts, durations, _ = intervals(data)
-    taus = C.tau_grid(durations, float(np.max(starts + durations) - np.min(starts)), flicker=family != "one_process")
-    prob = linearise(data, f, taus=taus, common=None, rests=family == "flicker_rests")
-    if family == "sum":  # the short part pinned by the rests (:mod:`.wander.sums`)
+    taus = C.tau_grid(durations, float(np.max(starts + durations) - np.min(starts)), flicker=fam.flicker)
+    prob = linearise(data, f, taus=taus, common=None, rests=fam.rests)
+    if fam.short:  # the short part pinned by the rests (:mod:`.wander.sums`)
         short = fit_short(data.rests.full if data.rests is not None else None)
         prob = pinned(prob, short) if short is not None else prob
     return C.fit_common(prob, prob.X0)
@@ -70,23 +71,19 @@ def noise_model_dict(w: C.WanderFit | None, prob: C.Problem | None, reason: str 
         return {**out, "reading": describe_noise_model(out)}
     shortest = float(np.min(prob.durations)) if prob is not None else float("nan")
     span = prob.span if prob is not None else float("nan")
-    white_like = bool(w.present and not w.flicker and np.isfinite(w.tau) and w.tau < 0.5 * shortest)
-    process = "none" if not w.present else (
-        "per_placement" if w.placement else "flicker" if w.flicker else (
-            "random_walk" if np.isinf(w.tau) else "gauss_markov"))
+    proc = process_of(w, span)
+    white_like = proc.white_like(w, shortest)
     # the wander is time-correlated beyond doubt when its τ interval stays above the poses
-    lo = w.tau_ci[0] if w.tau_ci else float("nan")
-    correlated = bool(w.present and not w.placement and (w.flicker or (np.isfinite(lo) and lo >= 0.5 * shortest)))
-    term = "none" if not w.present else ("per_placement_offset" if w.placement else "bias_wander")
-    out = {**base, "term": term, "process": process, "estimated": True,
+    correlated = proc.time_correlated(w, shortest)
+    out = {**base, "term": proc.term, "process": proc.id, "estimated": True,
            "white_like": white_like, "time_correlation_established": correlated,
-           "white_excess_N": math.sqrt(2 * w.q_abs * w.tau) if white_like and not w.placement else float("nan"),
+           "white_excess_N": proc.white_excess(w, shortest),
            "size": w.size, "size_ci": list(w.size_ci),
-           "tau_s": w.tau if w.present and not w.flicker else float("nan"),
+           "tau_s": proc.tau_s(w),
            "tau_ci": list(w.tau_ci),
            "white_scale": w.white_scale, "white_scale_ci": list(w.white_scale_ci),
            "random_walk_K": w.K, "random_walk_K_ci": list(w.K_ci), "q_rel": w.q_rel,
-           "change_over_session": w.K * math.sqrt(span) if process == "random_walk" else float("nan"),
+           "change_over_session": proc.change_over_session(w, span),
            "session_s": span,
            "excess_ci": list(w.excess_ci), "at_bound": list(w.at_bound),
            "axis_correlation": w.common, "axis_correlation_ci": list(w.common_ci),
@@ -104,62 +101,18 @@ def noise_model_dict(w: C.WanderFit | None, prob: C.Problem | None, reason: str 
     return {**out, "reading": describe_noise_model(out)}
 
 
-def _g(v) -> str:
-    return "open" if v is None or not np.isfinite(v) else f"{v:.3g}"
-
-
-def _interval(ci, what: str = "") -> str:
-    lo, hi = (list(ci) + [float("nan")] * 2)[:2] if ci else (float("nan"),) * 2
-    return f"[{_g(lo)}, {_g(hi)}{(' ' + what) if what else ''}]"
-
-
 def describe_noise_model(nm: dict, unit: str | None = None) -> str:
     """The named noise term in words, with what its numbers mean (``reading`` of the JSON and
-    the command line's line): a random walk as its coefficient and its change over the
-    session (it has no stationary size, no correlation time), a Gauss–Markov wander as its
-    size and correlation time (an interval open at the top: a random walk is not ruled out;
-    reaching 0: a per-placement offset is not), a per-placement offset as its size with what
-    separates it from an effect of the orientation.  ``unit``: the data unit, if known (in
-    m/s² the sizes are also given in mg)."""
-    u = unit or "data unit"
-
-    def size(v):
-        if v is None or not np.isfinite(v):
-            return "open"
-        return f"{v:.3g} {u}" + (f" ({1e3 * v / 9.80665:.3g} mg)" if unit == "m/s^2" else "")
-
+    the command line's line; each process's own words: :meth:`.wander_process.WanderProcess.reading`):
+    a random walk as its coefficient and its change over the session (it has no stationary
+    size, no correlation time), a Gauss–Markov wander as its size and correlation time (an
+    interval open at the top: a random walk is not ruled out; reaching 0: a per-placement
+    offset is not), a per-placement offset as its size with what separates it from an
+    effect of the orientation.  ``unit``: the data unit, if known (in m/s² the sizes are
+    also given in mg)."""
     if not nm.get("estimated"):
         return f"bias wander not estimated (nor a per-placement offset): {nm.get('reason', '')}".rstrip(": ")
-    proc = nm.get("process")
-    ws = nm.get("white_scale")
-    white = (f"; white scale {_g(ws)} {_interval(nm.get('white_scale_ci'))} (the rests' pose noise variance times "
-             f"this)" if ws is not None else "")
-    axes = (f"; correlation between the axes {_g(nm.get('axis_correlation'))} "
-            f"{_interval(nm.get('axis_correlation_ci'))}" if is_finite(nm.get("axis_correlation")) else "")
-    if proc == "none":
-        return f"no pose-to-pose noise beyond the rests' white noise (REML estimate 0){white}"
-    if proc == "random_walk":
-        K, (klo, khi) = nm.get("random_walk_K"), (list(nm.get("random_walk_K_ci") or []) + [None, None])[:2]
-        return (f"bias wander: a random walk (no stationary size, no correlation time: it drifts without bound), "
-                f"K {_g(K)} {u}/sqrt(s) {_interval([klo, khi])}: its change over t seconds has standard deviation "
-                f"K sqrt(t), {size(nm.get('change_over_session'))} over the {_g(nm.get('session_s'))} s session"
-                f"{axes}{white}")
-    if proc == "flicker":
-        return (f"bias wander: flicker (1/f, a flat Allan floor: no single correlation time), B {size(nm.get('size'))} "
-                f"{_interval(nm.get('size_ci'))}, Allan floor 0.664 B{axes}{white}")
-    if proc == "per_placement":
-        pl = nm.get("placement") or {}
-        return (f"per-placement offset: {size(nm.get('size'))} per axis {_interval(nm.get('size_ci'))}, independent "
-                f"from pose to pose, constant within each (no time correlation between the poses){axes}{white}"
-                + (f"; {pl['reading']}" if pl.get("reading") else ""))
-    tlo, thi = (list(nm.get("tau_ci") or []) + [None, None])[:2]
-    low = "0: a per-placement offset is not ruled out" if tlo == 0 else _g(tlo)
-    high = "no upper bound: a random walk is not ruled out" if thi is None or not np.isfinite(thi) else _g(thi)
-    tau = f"correlation time {_g(nm.get('tau_s'))} s [{low}, {high}]"
-    slow = ("" if nm.get("time_correlation_established") else
-            "; its time correlation is not established (it may be extra noise of each pose rather than a wander)")
-    return (f"bias wander: Gauss-Markov, size {size(nm.get('size'))} per axis {_interval(nm.get('size_ci'))}, "
-            f"{tau}{axes}{white}{slow}")
+    return process_in(nm).reading(nm, words_of(nm, unit))
 
 
 def repeated_placements(data: PoseData, f: Fit, w: C.WanderFit | None, max_angle_deg: float = 5.0,
@@ -201,8 +154,10 @@ def repeated_placements(data: PoseData, f: Fit, w: C.WanderFit | None, max_angle
                                   "three orientations twice, not in a row)"}
     grad = -(f.J[:, :3] * f.sigma[:, None])
     v = (w.white_scale if w is not None else 1.0) * f.sigma ** 2
-    if w is not None and w.placement:
-        v = v + w.q_abs * C.axis_weight(grad, w.common)
+    starts, durations, _ = intervals(data)
+    own = process_of(w, float(np.max(starts + durations) - np.min(starts))).own_variance(w) if w is not None else 0.0
+    if own:  # a per-placement offset: independent from pose to pose, part of each pose's own variance
+        v = v + own * C.axis_weight(grad, w.common)
     chi2 = 0.0
     for g in groups:
         r, wi = f.residuals[g], 1.0 / v[g]
@@ -263,13 +218,7 @@ def wander_summary(data, base, prob, wander, cur_data, current) -> dict:
 
 def _difference_variance(w: C.WanderFit, starts, durations) -> np.ndarray:
     """``D_ij = Var(β̄_i − β̄_j)`` of the fitted wander or per-placement offset (data unit²)."""
-    if w.placement:
-        return 2.0 * w.q_abs * (1.0 - np.eye(len(starts)))
-    if w.flicker:
-        return pose_difference_variance("bias_instability", math.sqrt(w.q_abs), starts, durations)
-    if np.isinf(w.tau):
-        return pose_difference_variance("random_walk", math.sqrt(w.q_abs), starts, durations)
-    return pose_difference_variance("gauss_markov", (math.sqrt(w.q_abs), w.tau), starts, durations)
+    return process_of(w, float(np.max(starts + durations) - np.min(starts))).difference_variance(w, starts, durations)
 
 
 def _quad(prob: C.Problem, q: float, X) -> float:

@@ -141,6 +141,11 @@ class NoiseTerm:
         """``(n, cols)`` samples of the term with coefficient ``v`` for one segment (module docstring)."""
         raise NotImplementedError
 
+    def white_level(self, v, shortest: float) -> float | None:
+        """``N²`` the term (model entry ``v``) adds to the white noise of means over intervals
+        at least ``shortest`` seconds long, when it acts as white noise there; None when not."""
+        return None
+
     def interval_difference_variance(self, v2: float, shape: float | None, iv: "IntervalPairs") -> np.ndarray:
         """``Var(ē_i − ē_j)`` of the term's means over the interval pairs ``iv`` (coefficient² ``v2``)."""
         raise NotImplementedError
@@ -214,6 +219,9 @@ class White(NoiseTerm):
 
     def interval_difference_variance(self, v2, shape, iv):
         return v2 * (1 / iv.Ti + 1 / iv.Tj)
+
+    def white_level(self, v, shortest):
+        return term_parameters(self.id, v)[0] ** 2
 
 
 @register_term
@@ -326,6 +334,10 @@ class GaussMarkov(NoiseTerm):
         from scipy.signal import lfilter
 
         return lfilter([1.0], [1.0, -rho], e, axis=0)
+
+    def white_level(self, v, shortest):  # white noise through a low-pass filter well below the intervals
+        sigma, tc = term_parameters(self.id, v)
+        return 2 * sigma**2 * tc if tc < 0.1 * shortest else None
 
     def interval_difference_variance(self, v2, shape, iv):
         tc, T = shape, iv.T

@@ -15,6 +15,7 @@ import re
 import numpy as np
 
 from accelcal.discrepancy.fit import fit
+from accelcal.discrepancy.wander_process import process_in
 from accelcal.errors import AccelcalError
 
 from .sessions import pose_data_of
@@ -95,7 +96,7 @@ def _num(v) -> float:
 def _noise_evidence(name: str, report: dict) -> dict:
     """The session's named noise term between the poses as an evidence row."""
     nm = report.get("noise_model") or {}
-    size = nm.get("size") if nm.get("process") in ("per_placement", "gauss_markov", "flicker") else None
+    size = process_in(nm).size(nm)
     lo, hi = (list(nm.get("size_ci") or []) + [None, None])[:2]
     return {"recording": name, "item": "noise", "candidate": nm.get("term", "not_estimated"),
             "identifiable": bool(nm.get("estimated")), "reasons": nm.get("reason", ""),

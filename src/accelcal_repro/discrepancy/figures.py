@@ -22,6 +22,7 @@ import math
 import numpy as np
 import pandas as pd
 
+from accelcal.discrepancy.wander_process import wander_named
 from accelcal.effects import EFFECT_IDS, EFFECTS
 from accelcal.plotting import RC, plt
 
@@ -262,8 +263,7 @@ def plot_adis_allan(curves: pd.DataFrame, allan: pd.DataFrame, check: pd.DataFra
 
 
 def wander_named(report: dict) -> bool:
-    nm = report.get("noise_model") or {}
-    return bool(nm.get("estimated")) and nm.get("term") not in (None, "none")
+    return wander_named(report.get("noise_model"))
 
 
 def plot_sessions(reports: dict, sims: dict, gaps: pd.DataFrame):

@@ -71,6 +71,7 @@ from itertools import permutations
 import numpy as np
 
 from accelcal.discrepancy.stochastic import pose_difference_variance
+from accelcal.discrepancy.wander_process import process_in, wander_named
 from accelcal.errors import AccelcalError
 from accelcal.noise import TERMS, simulate_noise
 
@@ -440,21 +441,16 @@ def xsens_source(report: dict) -> dict:
 def wander_axis_correlation(report: dict) -> float:
     """The joint model's correlation of its named bias wander between the axes (0 without one)."""
     nm = report.get("noise_model") or {}
-    named = nm.get("estimated") and nm.get("term") not in (None, "none")
-    return float(nm.get("axis_correlation") or 0.0) if named else 0.0
+    return float(nm.get("axis_correlation") or 0.0) if wander_named(nm) else 0.0
 
 
 def wander_components(report: dict) -> tuple[tuple[str, tuple], ...]:
     """The joint model's named bias wander as profile components (same on every axis, data
     unit; a per-placement offset is not a component of the time series: sessions.placement_of)."""
     nm = report.get("noise_model") or {}
-    if not nm.get("estimated") or nm.get("term") in (None, "none") or nm.get("process") == "per_placement":
+    if not nm.get("estimated"):
         return ()
-    if nm.get("process") == "random_walk":
-        return (("random_walk", (float(nm["random_walk_K"]),) * 3),)
-    if nm.get("process") == "flicker":  # size is the flicker coefficient B, the noise library's bias_instability
-        return (("bias_instability", (float(nm["size"]),) * 3),)
-    return (("gauss_markov", ((float(nm["size"]), float(nm["tau_s"])),) * 3),)
+    return tuple((term, (value,) * 3) for term, value in process_in(nm).components(nm))
 
 
 def joint_source(report: dict, name: str) -> dict:
@@ -479,7 +475,7 @@ def joint_source(report: dict, name: str) -> dict:
         m = {"white": float(white[a]) / math.sqrt(fs)}
         m.update({term: values[a] for term, values in wander_components(report)})
         models.append(m)
-    placement = float(nm["size"]) if nm.get("process") == "per_placement" else 0.0
+    placement = process_in(nm).placement_size(nm)
     return {"models": models, "fs": fs, "unit_to_counts": 1.0, "white_match": False, "placement": placement,
             "axis_correlation": wander_axis_correlation(report),
             "description": f"{name}: the joint model's bias wander ({nm.get('process', 'none')}) and the rests' white "

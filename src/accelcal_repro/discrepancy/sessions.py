@@ -49,6 +49,7 @@ from accelcal import distributions as dist
 from accelcal.discrepancy.fit import evaluate, fit, forward, pose_data, pose_data_from_static
 from accelcal.discrepancy.statistics import holm
 from accelcal.discrepancy.stochastic import rest_segments, stochastic_layer
+from accelcal.discrepancy.wander_process import process_in
 from accelcal.errors import AccelcalError
 from accelcal.model import m_from_params
 from accelcal.recording import Recording
@@ -113,8 +114,7 @@ def pose_data_of(report: dict):
 def placement_of(report: dict) -> tuple[float, float, float]:
     """The joint model's named per-placement offset per axis (data unit; zeros without one)."""
     nm = report.get("noise_model") or {}
-    size = float(nm["size"]) if nm.get("estimated") and nm.get("process") == "per_placement" else 0.0
-    return (size,) * 3
+    return (process_in(nm).placement_size(nm),) * 3
 
 
 def white_scale_of(report: dict) -> float:
@@ -144,22 +144,12 @@ def named_rows(name: str, report: dict) -> list[dict]:
                         f"({_g(o.get('shift_sigma'))} sigma), adjusted p {_g(o.get('p_adjusted'))}"))
     nm = report.get("noise_model") or {}
     if nm.get("estimated"):
-        if nm.get("term") in (None, "none"):
+        if not process_in(nm).named:
             rows.append(row("stochastic (joint)", "none", "no bias wander", "size 0",
                             f"size [{', '.join(map(_g, nm.get('size_ci') or [None, None]))}]"))
         else:
             proc = nm.get("process", "")
-            size_ci = f"size [{', '.join(map(_g, nm.get('size_ci') or [None, None]))}]"
-            if proc == "random_walk":
-                value = f"K {_g(nm.get('random_walk_K'))}/sqrt(s)"
-                ci = f"K [{', '.join(map(_g, nm.get('random_walk_K_ci') or [None, None]))}]"
-            elif proc == "per_placement":
-                value, ci = f"size {_g(nm.get('size'))} per axis, no time correlation", size_ci
-            elif proc == "flicker":
-                value, ci = f"flicker B {_g(nm.get('size'))} (Allan floor 0.664 B), no single tau", size_ci
-            else:
-                value = f"size {_g(nm.get('size'))}, tau {_g(nm.get('tau_s'))} s"
-                ci = f"{size_ci}, tau [{', '.join(map(_g, nm.get('tau_ci') or [None, None]))}] s"
+            value, ci = process_in(nm).cell(nm, _g)
             if nm.get("axis_correlation") is not None:
                 value += f", axis correlation {_g(nm['axis_correlation'])}"
                 ci += f", axis correlation [{', '.join(map(_g, nm.get('axis_correlation_ci') or [None, None]))}]"

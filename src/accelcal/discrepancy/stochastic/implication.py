@@ -130,15 +130,12 @@ def pose_residual_implication(terms: Mapping[str, object], starts, durations, fs
 
 def _white_like(terms: Mapping[str, object], shortest: float) -> tuple[list[str], float]:
     """The terms that act as white noise at the scale of the poses (white, and a Gauss–Markov
-    term with ``T_c`` below a tenth of the shortest pose) and their white level ``N²``."""
-    white_like = ["white"]
-    n2_white = term_parameters("white", terms["white"])[0] ** 2 if "white" in terms else 0.0
-    if "gauss_markov" in terms:
-        sigma, tc = term_parameters("gauss_markov", terms["gauss_markov"])
-        if tc < 0.1 * shortest:
-            white_like.append("gauss_markov")
-            n2_white += 2 * sigma**2 * tc
-    return white_like, n2_white
+    term with ``T_c`` below a tenth of the shortest pose: :meth:`~accelcal.noise.terms.NoiseTerm.white_level`)
+    and their white level ``N²``."""
+    levels = {k: noise_term(k).white_level(v, shortest) for k, v in terms.items()}
+    white_like = [k for k, n2 in levels.items() if n2 is not None]
+    return white_like, sum((n2 for n2 in levels.values() if n2 is not None), 0.0)
+
 
 def expected_residual_std(result: StochasticResult, directions) -> dict:
     """Expected std of each pose's scalar calibration residual from the noise models, white only and full.
