@@ -370,3 +370,33 @@ def test_record_screen_errors_are_one_line():
     prof = P.NoiseProfile("r", (1.0,) * 3, real="adis16405", real_windows=(0, 9), kind="real")
     with pytest.raises(P.ProfileError, match="beyond the 2 windows"):
         P.window_of(prof, 0, 2 * N_WIN, N_WIN)
+
+
+def test_a_designs_owed_noise_draw_keeps_the_stream(monkeypatch):
+    """The noise-free design leaves its (zero-weighted) noise draw owing and makes it only when
+    its generator draws again: a redrawn design and an outlier pose see the stream they saw
+    when the draw was made at once (the recordings and keys are the same)."""
+    import accelcal.simulation as sim
+
+    def refuse_first(real):  # the first design is not identifiable: the redraw path runs
+        calls = {"n": 0}
+
+        def ident(*args, **kwargs):
+            calls["n"] += 1
+            out = real(*args, **kwargs)
+            return dataclasses.replace(out, identifiable=False) if calls["n"] == 1 else out
+        return ident
+
+    def case():
+        monkeypatch.setattr(B, "identifiability", refuse_first(B.identifiability))
+        rec, key = B.simulate_case(B.OUTLIER, 3.0, 0, seed=SEED, session=SESSION, rules=RULES, profile=WHITE)
+        monkeypatch.undo()
+        return rec, key
+
+    rec, key = case()
+    real_sim = sim.simulate_recording
+    monkeypatch.setattr(B, "simulate_recording", lambda *a, draw_noise=True, **k: real_sim(*a, **k))
+    monkeypatch.setattr(B, "_owed_draw", lambda rng, n: None)  # the draw made at once, as before
+    rec0, key0 = case()
+    assert key["redraws"] == key0["redraws"] == 1 and key["outlier_pose"] == key0["outlier_pose"]
+    assert np.array_equal(rec.acc, rec0.acc) and key == key0

@@ -457,9 +457,13 @@ def _segment_statistics(segs) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         groups.setdefault(len(s), []).append(i)
     for n, idx in groups.items():
         X = np.stack([segs[i] for i in idx])
-        means[idx] = X.mean(axis=1)
-        std[idx] = X.std(axis=1, ddof=1)
-        C = (X - X.mean(axis=1, keepdims=True)).transpose(0, 2, 1).reshape(-1, n)  # one row per column
+        # one mean and one pass of deviations for the means, the stds and the autocovariances
+        # (the operations of ``X.mean``/``X.std(ddof=1)`` in their order: the same bits)
+        mu = X.mean(axis=1, keepdims=True)
+        D = X - mu
+        means[idx] = mu[:, 0, :]
+        std[idx] = np.sqrt(np.square(D).sum(axis=1) / (n - 1))
+        C = D.transpose(0, 2, 1).reshape(-1, n)  # one row per column
         tau[idx] = _geyer(_leading_autocovariances(C, min(DIRECT_LAGS, 2 * (n // 2))), n).reshape(-1, 3)
         for i in np.asarray(idx)[np.isnan(tau[idx]).any(axis=1)]:  # sequence longer than the direct lags
             tau[i] = integrated_autocorr_time(segs[i])

@@ -336,6 +336,7 @@ def simulate_case(truth: str, size_mde: float, replicate: int, *, seed: int, ses
 
     outlier = {"outlier_pose": -1, "outlier_t": np.nan, "outlier_shift_mde": np.nan, "outlier_shift": np.nan}
     if truth == OUTLIER:
+        _owed_draw(rng, len(t))
         outlier = _shift_one_pose(z, rng, ss, design, oracle, w, size_mde, rules, family)
     rec = Recording(t, np.round(z), temp, f"{profile.name}__{truth}_{size_mde:g}_{replicate:04d}")
     # Real-noise profiles reuse the windows of one record: the scoring counts independent ones.
@@ -392,9 +393,12 @@ def _draw_design(rng, ss: Session, profile: NoiseProfile, rules: Rules, sensor: 
     identifiable on the true design."""
     g = ss.g
     for redraws in range(MAX_REDRAWS):
+        if redraws:
+            _owed_draw(rng, len(t))
         u = random_directions(rng, ss.n_poses)
+        # noise-free: its zero-weighted noise draw is owed, made only if ``rng`` draws again
         sim = simulate_recording(rng, u, g, np.eye(3), np.zeros(3), 0.0, rate=ss.rate, rest_s=ss.rest_s,
-                                 move_s=ss.move_s, init_rest_s=ss.init_rest_s)
+                                 move_s=ss.move_s, init_rest_s=ss.init_rest_s, draw_noise=False)
         t, x = sim["t"], sim["acc"]  # true specific force (unit of g) along the whole session
         span = t[-1] - t[0] + 1.0 / ss.rate
         temp = ss.temp_mean + ss.temp_amplitude * np.sin(2 * np.pi * ss.temp_cycles * t / span + phase)
@@ -415,6 +419,12 @@ def _draw_design(rng, ss: Session, profile: NoiseProfile, rules: Rules, sensor: 
         if all(i.identifiable for i in idents.values()):
             return _Design(t, x, temp, win, t_mid, temp_pose, n_eff, data, p_true, base, cands, idents, redraws)
     raise AccelcalError(f"{truth}: no pose design with every candidate identifiable in {MAX_REDRAWS} draws")
+
+
+def _owed_draw(rng, n: int) -> None:
+    """The noise draw a design's noise-free :func:`simulate_recording` (``draw_noise=False``)
+    left owing, made before ``rng`` draws again: the stream goes on as if it had drawn it."""
+    rng.standard_normal((n, 3))
 
 
 def _effect_sizes(design: _Design, oracle: Oracle, dirs: dict, size_mde: float, rules: Rules,

@@ -93,7 +93,9 @@ def max_null_pvalue(bhat: np.ndarray, statistic: float, rng: np.random.Generator
         z = rng.standard_normal((min(DRAW_BATCH if n else FIRST_BATCH, max_draws - n), r))
         if studentised:
             z *= np.sqrt(r) / np.linalg.norm(z, axis=1, keepdims=True)
-        count += int(np.sum(np.max(np.abs(z @ bhat.T), axis=1) >= statistic - tol))
+        stats = z @ bhat.T
+        np.abs(stats, out=stats)  # in place: no second (draws, n) array per batch
+        count += int(np.count_nonzero(stats.max(axis=1) >= statistic - tol))
         n += z.shape[0]
         lo = dist.beta_ppf(edge, count, n - count + 1) if count else 0.0
         hi = dist.beta_ppf(1 - edge, count + 1, n - count) if count < n else 1.0
