@@ -31,6 +31,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -264,8 +265,8 @@ def _standard_errors(C, cov, nominal, excess, bias_est) -> dict:
 
 def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, t_gyro=None,
                    nominal_sensitivity=None, estimator: str = "gyro_iterative", integrator: str = "magnus4",
-                   bias: str = "interpolated", g_sensitivity="auto", gyro_range=None,
-                   time_base: str = "auto", noise_model: bool = True) -> GyroCalibration:
+                   bias: str = "interpolated", g_sensitivity="auto", gyro_range=None, time_base: str = "auto",
+                   noise_model: bool | tuple = True) -> GyroCalibration | tuple[GyroCalibration, ...]:
     """Calibrate the gyro of a multi-position session (module docstring).
 
     Parameters
@@ -310,14 +311,26 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
         5 %); then both are fitted and the one whose motion residuals fit the noise better
         (lower χ²) is kept — host receive times jitter while the sensor samples evenly,
         a sensor's own time stamps jitter with its sampling — and the choice is said.
-    noise_model : bool
+    noise_model : bool or tuple of bool
         Fit the noise between the rests (:mod:`accelcal.gyro.noise`: the bias's wander from
         the rests, per-motion rotation errors, extra angle random walk in the motions, rest
         direction errors) and weight the motions and give the ± by it (default).  False:
         the rests' white noise alone, the ± scaled by ``max(1, excess)`` (the former
         behaviour; the 95 % intervals then cover far less than 95 % when the bias wanders).
+        A tuple: one calibration per value (a tuple), the rests and motions found once.
     """
     t0 = time.perf_counter()
+    s = _session(t, gyro, poses, accel, raw_unit, acc, t_gyro, nominal_sensitivity, estimator, integrator, bias,
+                 g_sensitivity, gyro_range, time_base)
+    prepared_s = time.perf_counter() - t0
+    if isinstance(noise_model, tuple):  # one calibration per model; the rests and motions found once
+        return tuple(_fit_session(s, m, prepared_s) for m in noise_model)
+    return _fit_session(s, noise_model, prepared_s)
+
+
+def _session(t, gyro, poses, accel, raw_unit, acc, t_gyro, nominal_sensitivity, estimator, integrator, bias,
+             g_sensitivity, gyro_range, time_base) -> SimpleNamespace:
+    """Steps 1-3 of the module docstring: what the fit of ``C`` starts from, whatever the noise model."""
     t = np.asarray(t, float)
     gyro = np.asarray(gyro, float)
     if gyro.shape != (t.size, 3) or not np.all(np.isfinite(gyro)):
@@ -330,7 +343,7 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
     if g_sensitivity is True and acc is None:
         raise GyroInputError("the g-sensitivity needs the raw accelerometer samples (acc=)")
     rests = gyro_rests(t, gyro, poses, accel, acc)
-    rs, u, u_cov, f_rest = rests.stats, rests.u, rests.u_cov, rests.f
+    rs, u, f_rest = rests.stats, rests.u, rests.f
     g_sensitivity, g_test = _use_g_sensitivity(g_sensitivity, rs, bias, f_rest, acc)
     best = fit_bias(rs, bias, f_rest if g_sensitivity else None)
     y = gyro - bias_series(best, rs, t)
@@ -340,26 +353,34 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
     ms = all_ms.subset(used)
     raw_unit, nominal, nominal_from = _unit_and_nominal(raw_unit, nominal_sensitivity, ms, u, integrator, gyro)
     _check_axes(ms, nominal, tb.h)
-    bases = _time_bases(time_base, tb, t)
-    fits, rest_fits, noises = _fit_time_bases(est.load(), ms, bases, nominal, integrator, noise_model)
+    return SimpleNamespace(t=t, gyro=gyro, est=est, tb=tb, n_rests=len(u), best=best, g_sensitivity=g_sensitivity,
+                           g_test=g_test, all_ms=all_ms, used=used, notes=notes, ms=ms, raw_unit=raw_unit,
+                           nominal=nominal, nominal_from=nominal_from, bases=_time_bases(time_base, tb, t),
+                           integrator=integrator, bias=bias, gyro_range=gyro_range)
+
+
+def _fit_session(s: SimpleNamespace, noise_model: bool, prepared_s: float) -> GyroCalibration:
+    """Steps 4-5 of the module docstring on a :func:`_session`: ``C`` fitted and judged."""
+    t0 = time.perf_counter()
+    fits, rest_fits, noises = _fit_time_bases(s.est.load(), s.ms, s.bases, s.nominal, s.integrator, noise_model)
     chosen = min(rest_fits, key=lambda k: rest_fits[k].chi2)
-    fit = fits[chosen]
+    fit, best, tb = fits[chosen], s.best, s.tb
     noise, adj = noises[chosen]
-    all_ms = dataclasses.replace(all_ms, h=bases[chosen])
-    model = GyroModel(fit.C, best.bias, best.g_sensitivity if g_sensitivity else None, raw_unit)
-    se = _standard_errors(fit.C, fit.cov, nominal, fit.excess, best)
+    all_ms = dataclasses.replace(s.all_ms, h=s.bases[chosen])
+    model = GyroModel(fit.C, best.bias, best.g_sensitivity if s.g_sensitivity else None, s.raw_unit)
+    se = _standard_errors(fit.C, fit.cov, s.nominal, fit.excess, best)
     chi2_per_dof = {k: f.chi2 / max(f.dof, 1) for k, f in rest_fits.items()}
-    quality, table = _assess(rest_fits[chosen], all_ms, used, notes, t, tb, best, integrator, chi2_per_dof, chosen,
-                             _range_use(gyro, gyro_range, all_ms.subset(used)), se["C"])
-    settings = {"estimator": est.name, "integrator": integrator, "bias_mode": bias, "nominal": nominal,
-                "nominal_from": nominal_from, "iterations": fit.iterations, "fit_seconds": fit.seconds,
-                "seconds": time.perf_counter() - t0, "n_rests": len(u),
+    quality, table = _assess(rest_fits[chosen], all_ms, s.used, s.notes, s.t, tb, best, s.integrator, chi2_per_dof,
+                             chosen, _range_use(s.gyro, s.gyro_range, all_ms.subset(s.used)), se["C"])
+    settings = {"estimator": s.est.name, "integrator": s.integrator, "bias_mode": s.bias, "nominal": s.nominal,
+                "nominal_from": s.nominal_from, "iterations": fit.iterations, "fit_seconds": fit.seconds,
+                "seconds": prepared_s + time.perf_counter() - t0, "n_rests": s.n_rests,
                 "time_base": {"h": tb.h, "rate": tb.rate, "jitter": tb.jitter, "gaps": int(len(tb.gaps)),
                               "used": chosen, "chi2_per_dof": chi2_per_dof},
                 "bias_rests": {"chi2": best.chi2, "dof": best.dof, "excess": best.excess},
-                "g_sensitivity": bool(g_sensitivity), "g_sensitivity_test": g_test,
+                "g_sensitivity": bool(s.g_sensitivity), "g_sensitivity_test": s.g_test,
                 "noise_model": _noise_settings(noise, adj, fit) if noise_model else None}
-    return est.load_calibration()(model, se, quality, table, settings)
+    return s.est.load_calibration()(model, se, quality, table, settings)
 
 
 def _noise_settings(noise, adj, fit) -> dict:
