@@ -136,13 +136,16 @@ def write_csv(df, path: str | os.PathLike, **kwargs) -> Path:
     """Write a CSV atomically: a temporary file in the target directory, then rename.
 
     A name ending in ``.gz`` is gzip-compressed with an empty file name and no time stamp
-    in the gzip header, so that rerunning a job gives byte-identical files.
+    in the gzip header, so that rerunning a job gives byte-identical files.  Level 1: on
+    the Burkhard Monte Carlo table (48 MB of CSV) level 9 took 6.1 s of CPU for 16.6 MB,
+    level 1 0.4 s for 19.1 MB; over a default run's ~90 tables that is ~33 s of CPU.
     """
     path = Path(path)
     with atomic_output(path) as tmp:
         if path.name.endswith(".gz"):
             text = df.to_csv(index=False, **kwargs).encode()
-            with open(tmp, "wb") as raw, gzip.GzipFile(filename="", mode="wb", fileobj=raw, mtime=0) as gz:
+            with open(tmp, "wb") as raw, gzip.GzipFile(filename="", mode="wb", fileobj=raw, mtime=0,
+                                                 compresslevel=1) as gz:
                 gz.write(text)
         else:
             df.to_csv(tmp, index=False, **kwargs)
