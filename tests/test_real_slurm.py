@@ -119,8 +119,12 @@ def slurm(tmp_path_factory):
     assert proc.returncode == 0, proc.stdout + proc.stderr
     t2 = time.perf_counter()
     print(f"\nreal SLURM: install {t1 - t0:.1f} s ({len(installed)} packages), bring-up {t2 - t1:.1f} s")
+    cluster = Cluster(state)
     try:
-        yield Cluster(state)
+        # every CPU of this machine (the fault runs go side by side, one SLURM CPU each)
+        cpus = set(cluster.run("sinfo", "-h", "-N", "-o", "%c").split())  # a line per partition
+        assert cpus == {str(len(os.sched_getaffinity(0)))}, f"node CPUs {cpus}, this machine {os.sched_getaffinity(0)}"
+        yield cluster
     finally:
         t3 = time.perf_counter()
         subprocess.run([TOOLS / "stop_single_node.sh", "--keep", state], timeout=300)  # logs kept for a failure
