@@ -220,15 +220,28 @@ def pytest_xdist_auto_num_workers(config):
     return max(3, os.cpu_count() or 1)
 
 
-def pytest_runtest_logreport(report):
-    """With $ACCELCAL_TEST_TIMELINE set to a folder: one line per test phase (end time,
-    worker, phase, seconds, test, and the worker's CPU seconds so far: its own and its
-    finished subprocesses') in a file per worker, to see where a run's wall time and CPU
-    go (which module waits for what); nothing otherwise."""
+def _timeline(when: str, seconds: float, nodeid: str) -> None:
+    """One line of $ACCELCAL_TEST_TIMELINE (see pytest_runtest_logreport), if it is set."""
     folder = os.environ.get("ACCELCAL_TEST_TIMELINE")
     if folder:
         worker = os.environ.get("PYTEST_XDIST_WORKER", "master")
         own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
         cpu = own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
         with open(Path(folder) / f"{worker}.tsv", "a") as f:
-            f.write(f"{time.time():.1f}\t{worker}\t{report.when}\t{report.duration:.2f}\t{report.nodeid}\t{cpu:.2f}\n")
+            f.write(f"{time.time():.1f}\t{worker}\t{when}\t{seconds:.2f}\t{nodeid}\t{cpu:.2f}\n")
+
+
+def pytest_runtest_logreport(report):
+    """With $ACCELCAL_TEST_TIMELINE set to a folder: one line per test phase (end time,
+    worker, phase, seconds, test, and the worker's CPU seconds so far: its own and its
+    finished subprocesses') in a file per worker, to see where a run's wall time and CPU
+    go (which module waits for what; tools/test_timeline.py makes the per-module table);
+    nothing otherwise.  Processes that are not the worker's waited-for children are not
+    counted: the real-SLURM module's daemons and its SLURM jobs."""
+    _timeline(report.when, report.duration, report.nodeid)
+
+
+def pytest_collection_finish(session):
+    """The timeline's first line of a process: its start-up and collection (so that the
+    first test's setup is not charged with them)."""
+    _timeline("collect", 0.0, "(collection)")

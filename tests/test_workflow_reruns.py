@@ -15,10 +15,13 @@ from .snakemake_plan import planned_jobs
 
 def test_ci_reruns_are_byte_identical(ci_workflow, tmp_path):
     """Determinism: forcing a representative set of jobs to rerun with the same config
-    (a Monte Carlo grid point and its gather, a calibration and a filter Monte Carlo chunk,
-    real-data tables, a discrepancy benchmark chunk, its scoring and summary, a measured
-    discrepancy report, the ADIS analysis, figures, the stage claims and the ledger)
-    rewrites identical bytes.  Only those jobs run (``--force`` on them as targets, not
+    (a Monte Carlo grid point, a calibration and a filter Monte Carlo chunk, real-data
+    tables, a discrepancy benchmark chunk, its scoring and summary, a measured discrepancy
+    report, the ADIS analysis, figures, the stage claims and the ledger) rewrites identical
+    bytes.  The Burkhard gather and figure jobs are not forced here: their scripts rerun
+    outside Snakemake on a copy of the CI run must rewrite every table and figure of the
+    stage byte for byte (tests/test_burkhard2024_workflow.py), the same determinism check
+    without a second redraw.  Only those jobs run (``--force`` on them as targets, not
     ``--forcerun``, which would redo everything downstream too: the same determinism,
     minutes more).  Wall-time measurements are the exception: files with "timing" in their
     path, the speed claims computed from them, and the report that shows them (its
@@ -27,12 +30,12 @@ def test_ci_reruns_are_byte_identical(ci_workflow, tmp_path):
 
     workdir = copy_of_ci_workflow(ci_workflow, tmp_path / "copy")
     point = sorted((workdir / "results" / "burkhard2024" / "mc").glob("*.csv.gz"))[0].relative_to(workdir)
-    targets = [point, "burkhard2024_summary", "results/batista2011/chunks/calibration_errors_0.csv.gz",
+    targets = [point, "results/batista2011/chunks/calibration_errors_0.csv.gz",
                "results/tereshkov/chunks/field_0.csv.gz", "measured_tables", "tereshkov_summary",
                "results/discrepancy/benchmark/detections/chunk_0.csv", "results/discrepancy/benchmark/scores.csv.gz",
                "results/discrepancy/summary.csv", "results/discrepancy/measured/mpu6050.json",
                "results/discrepancy/adis/models.csv", "results/claims/discrepancy.csv",
-               "results/figures/discrepancy_confusion.png", "burkhard2024_figures", "batista2011_figures", "claims"]
+               "results/figures/discrepancy_confusion.png", "batista2011_figures", "claims"]
     results = workdir / "results"
 
     def digests():
@@ -58,7 +61,7 @@ def test_ci_reruns_are_byte_identical(ci_workflow, tmp_path):
     assert not changed, f"rerun changed {changed}"
     out = proc.stdout + proc.stderr
     ran = set(re.findall(r"^(?:local)?rule (\w+):$", out, re.M))
-    for rule in ("burkhard2024_mc", "burkhard2024_summary", "batista2011_calibration_mc", "tereshkov_simulate",
+    for rule in ("burkhard2024_mc", "batista2011_calibration_mc", "tereshkov_simulate",
                  "discrepancy_chunk", "discrepancy_score", "discrepancy_summary", "discrepancy_measured_report",
                  "discrepancy_adis", "discrepancy_claims", "discrepancy_figures", "claims"):
         assert rule in ran, rule  # the job did rerun

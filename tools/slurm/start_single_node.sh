@@ -63,7 +63,10 @@ DBD_PORT=$((CTLD_PORT + 2))
 DB_PORT=$((CTLD_PORT + 3))
 
 NODE=$(hostname -s)
-CPUS=$(nproc)
+# the CPUs this process may use, not OpenMP's thread count: GNU nproc returns
+# $OMP_NUM_THREADS when it is set, and the test suite sets it to 1 (tests/conftest.py), which
+# made a one-CPU node of a two-core machine (the SLURM jobs meant to run side by side queued)
+CPUS=$(env -u OMP_NUM_THREADS -u OMP_THREAD_LIMIT nproc)
 MEM_MB=$(awk '/^MemTotal:/ {printf "%d", $2 / 1024 * 0.9}' /proc/meminfo)
 
 # munge: a key of its own (1024 random bytes, mode 0400 as munged requires)
