@@ -58,10 +58,13 @@ def test_compiled_and_numpy_grids_agree_inside_and_at_the_ends_of_the_white_scal
 
 
 def _cpu(f, repeats: int = 10) -> float:
-    t0 = time.process_time()
+    """CPU of this thread only: the calls are a few ms, so another thread of the worker
+    (a leftover of an earlier test) would add the same CPU to both sides of the ratio
+    under ``process_time`` and pull it towards 1 (seen once at -n 2 under load 15)."""
+    t0 = time.thread_time()
     for _ in range(repeats):
         f()
-    return time.process_time() - t0
+    return time.thread_time() - t0
 
 
 def test_the_compiled_grid_keeps_its_speed():
@@ -71,7 +74,7 @@ def test_the_compiled_grid_keeps_its_speed():
     logdet = rng.uniform(0.0, 6.0, (T, Q_REL_GRID.size))
     args = (models, Y, logdet, M)
     _grid("numba", *args), _grid("numpy", *args)   # warm: the kernel loaded, the weights cached
-    pairs = [(_cpu(lambda: _grid("numba", *args)), _cpu(lambda: _grid("numpy", *args))) for _ in range(3)]
+    pairs = [(_cpu(lambda: _grid("numba", *args)), _cpu(lambda: _grid("numpy", *args))) for _ in range(5)]
     ratio = min(f for f, _ in pairs) / min(n for _, n in pairs)
     assert ratio < MAX_RATIO, (f"the compiled likelihood grid costs {ratio:.2f}x the numpy path (measured "
                                f"{MEASURED_RATIO}, bound {MAX_RATIO:.2f}): the kernel slipped")
