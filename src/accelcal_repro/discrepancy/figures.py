@@ -262,10 +262,6 @@ def plot_adis_allan(curves: pd.DataFrame, allan: pd.DataFrame, check: pd.DataFra
     return fig
 
 
-def wander_named(report: dict) -> bool:
-    return wander_named(report.get("noise_model"))
-
-
 def plot_sessions(reports: dict, sims: dict, gaps: pd.DataFrame):
     """Per real session: the distribution (ECDF) of the measured normalised pose residuals
     |r/σ| of the base model against those of the session re-simulated with the model before
@@ -282,7 +278,7 @@ def plot_sessions(reports: dict, sims: dict, gaps: pd.DataFrame):
             x = np.sort(meas)
             ax.step(x, np.arange(1, x.size + 1) / x.size, where="post", color="k", lw=1.6, label="measured")
             g = gaps[gaps.recording == name].set_index("model")
-            nothing = not rep.get("effects") and not wander_named(rep)
+            nothing = not rep.get("effects") and not wander_named(rep.get("noise_model"))
             for model, col in (("before", "C0"), ("after", "C3")):
                 if model == "after" and nothing:  # nothing named: the model after is the one before
                     continue
@@ -295,7 +291,7 @@ def plot_sessions(reports: dict, sims: dict, gaps: pd.DataFrame):
                         label=f"re-simulated, {model}: excess {r.excess_sim_median:.2f}, KS {r.ks_distance:.2f}")
             named = "+".join(rep.get("effects", [])) or "no effect"
             nm = rep.get("noise_model") or {}
-            wander = nm.get("process", "") if wander_named(rep) else "no wander"
+            wander = nm.get("process", "") if wander_named(rep.get("noise_model")) else "no wander"
             ax.set_title(f"{name}: {rep['n_poses']} poses, excess {g.excess_measured.iloc[0]:.2f}\n"
                          f"named: {named}; {wander}" if len(g) else f"{name}: {rep['n_poses']} poses (no dof)",
                          fontsize=7.5)
