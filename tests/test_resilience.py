@@ -232,9 +232,14 @@ WRITERS = {
     "download": ("from accelcal_repro.measured.data import fetch_file",
                  "fetch_file('imu_tk_xsens', 'xsens_acc.mat', resources_dir={cache!r}, url={url!r}, sha256={sha!r})",
                  "cache/imu_tk_xsens/xsens_acc.mat"),
-    "discrepancy_measured": ("import json, runpy\nfrom types import SimpleNamespace",
+    # the script writes its report (output[0], the writer under test) and then its Summary
+    # (output.summaries), as Snakemake's named output list allows: kept outside out/
+    "discrepancy_measured": ("import json, os, runpy\nfrom types import SimpleNamespace\n"
+                             "class Outputs(list):\n    pass",
+                             "out = Outputs([{target!r}]); "
+                             "out.summaries = os.path.join(os.path.dirname(os.path.dirname({target!r})), 'summaries.json'); "
                              "runpy.run_path({script!r}, init_globals={{'snakemake': SimpleNamespace(rule='r', "
-                             "input=SimpleNamespace(csv={inputs!r} + '/rec.csv'), output=[{target!r}], "
+                             "input=SimpleNamespace(csv={inputs!r} + '/rec.csv'), output=out, "
                              "params=SimpleNamespace(**json.load(open({inputs!r} + '/params.json'))), "
                              "log=[{inputs!r} + '/log'], wildcards=SimpleNamespace(recording='xsens_mti'))}})",
                              "out/xsens_mti.json"),
