@@ -61,9 +61,8 @@ def test_compiled_and_numpy_grids_agree_inside_and_at_the_ends_of_the_white_scal
 
 
 def _cpu(f, repeats: int = 10) -> float:
-    """CPU of this thread only: the calls are a few ms, so another thread of the worker
-    (a leftover of an earlier test) would add the same CPU to both sides of the ratio
-    under ``process_time`` and pull it towards 1 (seen once at -n 2 under load 15)."""
+    """CPU of this thread only (the kernel and numpy's one-thread BLAS both run here): the
+    calls take a few ms, so no other thread's CPU may enter either side of the ratio."""
     t0 = time.thread_time()
     for _ in range(repeats):
         f()
