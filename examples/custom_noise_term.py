@@ -25,7 +25,7 @@ from accelcal.noise.terms import TERMS, NoiseTerm, register_term
 @register_term
 class Telegraph(NoiseTerm):
     name = "random telegraph"
-    id, symbol, unit, alpha = "telegraph", "A", "u", -2
+    id, symbol, unit, alpha = "telegraph", "A", "{u}", -2
     meaning = "a bias switching between +A and -A at random (popcorn noise)"
     colour, shape_key, example = "C7", "dwell_time_s", (1.0, 0.7)
 

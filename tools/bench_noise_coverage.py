@@ -29,7 +29,8 @@ import time
 import numpy as np
 
 from accelcal.noise.simulation import simulate_noise
-from accelcal.noise.report import IEEE_TERMS, analyse_noise
+from accelcal.noise.report import analyse_noise
+from accelcal.noise.terms import ieee_terms
 from accelcal.recording import Recording
 
 FS = 100.0
@@ -59,16 +60,16 @@ def one_record(n: int, terms: dict, seed: int, level: float, n_boot: int):
 
 def run(config: str, seeds: int, level: float, n_boot: int, first_seed: int) -> dict:
     n, terms = CONFIGS[config]
-    hits = {k: [] for k in IEEE_TERMS}
-    width = {k: [] for k in IEEE_TERMS}
-    resolved = {k: [] for k in IEEE_TERMS}
+    hits = {k: [] for k in ieee_terms()}
+    width = {k: [] for k in ieee_terms()}
+    resolved = {k: [] for k in ieee_terms()}
     errors = []
     t0 = time.perf_counter()
     for seed in range(first_seed, first_seed + seeds):
         s = one_record(n, terms, seed, level, n_boot)
         errors += list(s.model_error)
         for axis in s.terms:
-            for k in IEEE_TERMS:
+            for k in ieee_terms():
                 e, truth = axis[k], terms.get(k, 0.0)
                 hits[k].append(e.lo <= truth <= e.hi)
                 resolved[k].append(e.resolved)
@@ -76,7 +77,7 @@ def run(config: str, seeds: int, level: float, n_boot: int, first_seed: int) -> 
                     width[k].append((e.hi - e.lo) / truth)
     out = {"n": n, "duration_h": n / FS / 3600, "terms": terms, "seeds": seeds, "level": level, "n_boot": n_boot,
            "elapsed_s": time.perf_counter() - t0, "model_error_median": float(np.median(errors)), "per_term": {}}
-    for k in IEEE_TERMS:
+    for k in ieee_terms():
         h = np.array(hits[k], dtype=float)
         cov = float(h.mean())
         out["per_term"][k] = {"true": terms.get(k, 0.0), "replicates": int(h.size), "coverage": cov,

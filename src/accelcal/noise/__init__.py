@@ -54,13 +54,13 @@ from .allan import (
     octave_m,
     pooled_edf,
 )
-from .allan_fit import (OCTAVE_CORRELATION, NoiseFit, bootstrap_fits, fit_avar, fit_avar_batch, fit_avar_model_error,
+from .allan_fit import (NoiseFit, bootstrap_fits, fit_avar, fit_avar_batch, fit_avar_model_error,
                         gamma_deviance, log_avar_covariance, model_edf)
 from .report import NoiseAnalysisError, NoiseReport, analyse_noise
 from .simulation import simulate_noise, simulate_segments
 from .terms import TERMS, NoiseModelError, NoiseTerm, model_avar, noise_term, register_term, term_ids, term_parameters
 
-__all__ = ["DEFAULT_MIN_EDF", "NOISE_ALPHAS", "OCTAVE_CORRELATION", "TERMS", "AllanError", "AllanVariance",
+__all__ = ["DEFAULT_MIN_EDF", "NOISE_ALPHAS", "TERMS", "AllanError", "AllanVariance",
            "NoiseAnalysisError", "NoiseFit", "NoiseModelError", "NoiseReport", "NoiseTerm", "allan_variance",
            "analyse_noise", "avar_interval", "bootstrap_fits", "check_segments", "edf_overlapping", "fit_avar",
            "fit_avar_batch", "fit_avar_model_error", "gamma_deviance", "log_avar_covariance", "model_avar",

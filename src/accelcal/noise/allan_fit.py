@@ -20,7 +20,7 @@ are calibrated by a bootstrap of the time series with those weights.
 
 Intervals (:func:`bootstrap_fits`): the coefficients refitted to correlated draws of the
 fitted model's Allan variances (:func:`log_avar_covariance`, with the correlation of
-``ln Â`` between octaves of :data:`OCTAVE_CORRELATION`).
+``ln Â`` between octaves each term carries: :attr:`~accelcal.noise.terms.NoiseTerm.octave_correlation`).
 """
 
 from __future__ import annotations
@@ -305,34 +305,11 @@ def _model_error_variance(lr2: np.ndarray, nu: np.ndarray, dof: int) -> float:
     return 0.5 * (lo + hi)
 
 
-#: Correlation of ln AVAR between octaves 1…6 apart, per noise type, for the overlapping estimator
-#: on a long record (measured: 1000 simulated records of 2^16 samples per type, averaged over
-#: m = 4 … 1024; :func:`octave_correlations` recomputes them).  Beyond 6 octaves: 0, except
-#: the random walk (decaying by 0.7 per octave) and quantization (0.28).
-OCTAVE_CORRELATION = {
-    "white": (0.52, 0.18, 0.06, 0.03, 0.03, 0.03),
-    "quantization": (0.12, 0.31, 0.30, 0.30, 0.31, 0.28),
-    "bias_instability": (0.69, 0.32, 0.14, 0.07, 0.04, 0.0),
-    "random_walk": (0.89, 0.67, 0.48, 0.34, 0.23, 0.16),
-}
-OCTAVE_CORRELATION["drift_ramp"] = OCTAVE_CORRELATION["random_walk"]  # both α = −2 in the library
-
-
-def _rho(term: str, d: np.ndarray) -> np.ndarray:
-    if term not in OCTAVE_CORRELATION:
-        raise NoiseModelError(f"the correlated bootstrap knows the octave correlations of {', '.join(OCTAVE_CORRELATION)}"
-                              f", not of {term}")
-    table = np.array((1.0,) + OCTAVE_CORRELATION[term])
-    tail = {"random_walk": 0.16, "drift_ramp": 0.16, "quantization": 0.28}.get(term, 0.0)
-    far = tail * (0.7 ** (d - 6) if term in ("random_walk", "drift_ramp") else 1.0)
-    return np.where(d <= 6, table[np.minimum(d, 6)], far)
-
-
 def log_avar_covariance(allan: AllanVariance, fit: NoiseFit, model_error: float = 0.0) -> np.ndarray:
     """(k, k) covariance of ``ln Â`` at the τ grid under the fitted model, plus the model error on the diagonal.
 
     Correlations: each term ``t`` contributes ``ρ_t(d_ij) s_it s_jt`` with
-    ``s_it = A_it √(2/ν_it) / A_i`` (its share of the Allan variance times its relative
+    ``s_it = A_it √(2/ν_it) / A_i`` (``ρ_t``: :meth:`~accelcal.noise.terms.NoiseTerm.octave_rho`; its share of the Allan variance times its relative
     standard error, NIST edf) and ``d_ij`` the octaves between the two τ, normalised to a
     correlation matrix.  Variances: ``2/ν`` of the coherent mix (:func:`model_edf`), plus
     ``σ_m²``.
@@ -342,7 +319,7 @@ def log_avar_covariance(allan: AllanVariance, fit: NoiseFit, model_error: float 
     total = fit.avar(allan.taus, allan.fs)
     cov = np.zeros(d.shape)
     for k, c in zip(fit.term_ids, fit.c):
-        rho = _rho(k, d)
+        rho = noise_term(k).octave_rho(d)
         part = c * TERMS[k].basis(allan.taus, allan.fs)
         s = part / total * np.sqrt(2.0 / np.maximum(allan.edf_for(TERMS[k].alpha), 1e-12))
         cov += rho * np.outer(s, s)
@@ -373,7 +350,7 @@ def bootstrap_fits(fit: NoiseFit, allan: AllanVariance, edf, model_error: float,
 
 
 def octave_correlations(rng, term: str, n: int = 2**16, reps: int = 1000, batch: int = 100) -> np.ndarray:
-    """Measure :data:`OCTAVE_CORRELATION` for one term: mean correlation of ``ln Â`` 1…6 octaves apart."""
+    """Measure a term's :attr:`~accelcal.noise.terms.NoiseTerm.octave_correlation`: mean correlation of ``ln Â`` 1…6 octaves apart."""
 
     m = 2 ** np.arange(13)
     la = np.hstack([np.log(allan_variance(simulate_noise(rng, n, 1.0, {term: 1.0}, size=batch), 1.0, m=m).avar)
@@ -382,5 +359,5 @@ def octave_correlations(rng, term: str, n: int = 2**16, reps: int = 1000, batch:
     return np.array([np.mean(np.diag(c, d)[2:12 - d]) for d in range(1, 7)])
 
 
-__all__ = ["EDF_MIXES", "OCTAVE_CORRELATION", "NoiseFit", "bootstrap_fits", "fit_avar", "fit_avar_batch", "fit_avar_model_error",
+__all__ = ["EDF_MIXES", "NoiseFit", "bootstrap_fits", "fit_avar", "fit_avar_batch", "fit_avar_model_error",
            "gamma_deviance", "log_avar_covariance", "model_edf", "octave_correlations"]

@@ -33,6 +33,8 @@ import math
 
 import numpy as np
 
+from .terms import exported_term
+
 #: allan_variance_ros's τ grid: 0.1 s · (1 … 9999).
 AVR_TAUS = 0.1 * np.arange(1, 10000)
 #: Its white-noise fit uses the τ below this [s].
@@ -113,21 +115,24 @@ def avr_reading(x, fs: float) -> dict:
             "complete": bool(taus[-1] >= AVR_TAUS[-1]), "tau_max_s": float(taus[-1])}
 
 
+#: Why allan_variance_ros's noise density differs from the IEEE fit's.
+_WHY_WHITE = ("it fits a -1/2 slope to the tau < 10 s of its own grid and reads it at 1 s, where quantization, the "
+              "sensor's filter or the bias instability still bend the curve; the IEEE fit separates them")
+
+
 def avr_lines(sensor: str, unit: str, reading: dict, ours_n: list, ours_k: list) -> list[str]:
     """Summary lines where allan_variance_ros's worst-axis value is more than DIFFER_FACTOR apart from ours."""
     out = []
-    walk_unit = {"m/s^2": "m/s^3/sqrt(Hz)", "rad/s": "rad/s^2/sqrt(Hz)"}.get(unit, f"{unit}/s/sqrt(Hz)")
-    for key, ours, name, u in (("noise_density", ours_n, "noise density", f"{unit}/sqrt(Hz)"),
-                               ("random_walk", ours_k, "random walk", walk_unit)):
+    # allan_variance_ros's imu.yaml fields, each with the term the exports give it (its unit) and why they differ
+    for key, ours, name, why in (("noise_density", ours_n, "noise density", _WHY_WHITE),
+                                 ("random_walk", ours_k, "random walk", _why_walk(reading))):
+        u = exported_term(key).unit_of(unit)
         theirs, mine = max(reading[key]), max(ours)
         if not (math.isfinite(theirs) and mine > 0):
             continue
         r = theirs / mine
         if 1 / DIFFER_FACTOR <= r <= DIFFER_FACTOR:
             continue
-        why = _why_walk(reading) if key == "random_walk" else (
-            "it fits a -1/2 slope to the tau < 10 s of its own grid and reads it at 1 s, where quantization, the "
-            "sensor's filter or the bias instability still bend the curve; the IEEE fit separates them")
         out.append(f"{sensor}: allan_variance_ros would write {name} {theirs:.3g} {u} to imu.yaml, {r:.2g}x this "
                    f"report's {mine:.3g}: {why}")
     return out

@@ -41,12 +41,10 @@ from ..export import kalibr, openvins
 from ..export.api import export
 from ..export.base import ExportError, ExportInputs
 from ..jsonsafe import json_safe
+from .terms import TERMS, NoiseModelError, exported_term
 
 FORMAT = "accelcal-noise"
 FORMAT_VERSION = 1
-#: Unit of each term's coefficient, for data unit ``u``.
-TERM_UNITS = {"quantization": "{u}*s", "white": "{u}/sqrt(Hz)", "bias_instability": "{u}",
-              "random_walk": "{w}", "drift_ramp": "{u}/s"}
 AVR_WHITE_TAU_MAX = 10.0
 
 
@@ -67,29 +65,34 @@ def _sensor_dict(s) -> dict:
     a = s.allan
     axes = {}
     for j, (ax, terms) in enumerate(zip("xyz", s.terms)):
-        units = {k: TERM_UNITS[k].format(u=s.unit, w=walk_unit(s.unit)) for k in terms}
-        axes[ax] = {"terms": {k: {**e.to_dict(), "unit": units[k]} for k, e in terms.items()},
+        axes[ax] = {"terms": {k: {**e.to_dict(), "unit": TERMS[k].unit_of(s.unit)} for k, e in terms.items()},
                     **exported_values(s, j), "allan_variance_ros": avr_convention(a.taus, a.adev[:, j]),
-                    "adev_floor": {"value": 0.664 * terms["bias_instability"].value, "unit": s.unit,
+                    "adev_floor": {"value": adev_floor(terms), "unit": s.unit,
                                    "meaning": "flicker floor of the fit, 0.664 B"},
                     "conversions": conversions(s.sensor, s.unit, terms)}
     return {"unit": s.unit, "taus_s": a.taus, "m": a.m, "n_terms": a.n_terms, "adev": a.adev,
             "adev_interval": s.adev_interval, "edf": s.edf, "adev_model": s.model_adev(a.taus), "axes": axes}
 
 
-def walk_unit(unit: str) -> str:
-    """Unit of a random walk coefficient K of data in ``unit`` (``u/s/sqrt(Hz)``, spelled out for SI data)."""
-    return {"m/s^2": "m/s^3/sqrt(Hz)", "rad/s": "rad/s^2/sqrt(Hz)"}.get(unit, f"{unit}/s/sqrt(Hz)")
+def adev_floor(terms: dict) -> float:
+    """The fit's Allan-deviation floor: the coefficient of the term that has one (flicker's 0.664 B)
+    times its :attr:`~accelcal.noise.terms.NoiseTerm.floor_factor`."""
+    floors = [TERMS[k].floor_factor * e.value for k, e in terms.items() if TERMS[k].floor_factor is not None]
+    if len(floors) != 1:
+        raise NoiseModelError(f"the report needs one term with an Allan-deviation floor in the fit, got {len(floors)}")
+    return floors[0]
 
 
 def exported_values(s, j: int) -> dict:
-    """Noise density and random walk of axis ``j`` as the exports write them (see the module docstring)."""
+    """Noise density and random walk of axis ``j`` as the exports write them (see the module docstring):
+    the coefficients of the terms :attr:`~accelcal.noise.terms.NoiseTerm.exported_as` names."""
     t = s.terms[j]
-    w, k = t["white"], t["random_walk"]
+    nd, walk = exported_term("noise_density"), exported_term("random_walk")
+    w, k = t[nd.id], t[walk.id]
     rw = k.value if k.resolved else k.hi
     u = s.unit
-    return {"noise_density": {"value": w.value, "interval": [w.lo, w.hi], "unit": f"{u}/sqrt(Hz)"},
-            "random_walk": {"value": rw, "interval": [k.lo, k.hi], "unit": walk_unit(u),
+    return {"noise_density": {"value": w.value, "interval": [w.lo, w.hi], "unit": nd.unit_of(u)},
+            "random_walk": {"value": rw, "interval": [k.lo, k.hi], "unit": walk.unit_of(u),
                             "upper_bound": not k.resolved, "fitted": k.value}}
 
 
@@ -106,7 +109,7 @@ def avr_convention(taus, adev) -> dict:
 
 def conversions(sensor: str, unit: str, terms: dict) -> dict:
     """Datasheet units of the white noise and the flicker floor (m/s² or rad/s data only)."""
-    n, b = terms["white"].value, 0.664 * terms["bias_instability"].value
+    n, b = terms[exported_term("noise_density").id].value, adev_floor(terms)
     if unit == "m/s^2":
         return {"velocity_random_walk_m_s_sqrt_h": 60.0 * n, "bias_instability_floor_mg": 1e3 * b / 9.80665}
     if unit == "rad/s":
@@ -141,5 +144,5 @@ def calibrated_kalibr_yaml(report, calibration, *, rostopic: str = "/imu0", infl
     return out.files[""], [x.line() for x in out.left_out]
 
 
-__all__ = ["ExportError", "calibrated_kalibr_yaml", "FORMAT", "FORMAT_VERSION", "avr_convention", "conversions",
-           "exported_values", "kalibr_yaml", "openvins_yaml", "report_dict", "walk_unit"]
+__all__ = ["ExportError", "calibrated_kalibr_yaml", "FORMAT", "FORMAT_VERSION", "adev_floor", "avr_convention",
+           "conversions", "exported_values", "kalibr_yaml", "openvins_yaml", "report_dict"]

@@ -15,8 +15,7 @@ from matplotlib.figure import Figure
 
 from ..plotting import RC
 from .export import exported_values
-from .report import IEEE_TERMS
-from .terms import TERMS
+from .terms import TERMS, exported_term
 
 
 def noise_figure(report, title: str | None = None, references: dict | None = None,
@@ -52,8 +51,9 @@ def noise_figure(report, title: str | None = None, references: dict | None = Non
                 _references(ax, grid, (references or {}).get(s.sensor, {}), reference_label)
                 ex = exported_values(s, j)
                 n_exp, k_exp = ex["noise_density"]["value"], ex["random_walk"]["value"]
-                ax.plot([1.0], [n_exp], "s", color="C0", ms=5, mfc="none", zorder=6, label="exported N (at τ = 1 s)")
-                ax.plot([3.0], [k_exp], "^", color="C3", ms=5, mfc="none", zorder=6,
+                ax.plot([1.0], [n_exp], "s", color=exported_term("noise_density").colour, ms=5, mfc="none", zorder=6,
+                        label="exported N (at τ = 1 s)")
+                ax.plot([3.0], [k_exp], "^", color=exported_term("random_walk").colour, ms=5, mfc="none", zorder=6,
                         label="exported K (at τ = 3 s; an upper bound if not resolved)")
                 lo, hi = np.nanmin(ci[:, 0]), np.nanmax(ci[:, 1])
                 lo = min(lo / 2, 0.7 * k_exp) if k_exp > 0 else lo / 2
@@ -83,7 +83,7 @@ def _references(ax, grid, ref: dict, label: str) -> None:
 def _band(s, j: int, grid, level: float) -> np.ndarray:
     """(2, len(grid)): percentiles of the Allan deviation of the bootstrap's refitted models."""
     boot = s.boot_fits[j]
-    basis = np.array([TERMS[k].basis(grid, s.allan.fs) for k in IEEE_TERMS])
+    basis = np.array([TERMS[k].basis(grid, s.allan.fs) for k in s.fits[j].term_ids])  # the bootstrap's columns
     adev = np.sqrt(boot**2 @ basis)
     return np.percentile(adev, [100 * (0.5 - level / 2), 100 * (0.5 + level / 2)], axis=0)
 

@@ -32,8 +32,6 @@ from .. import distributions as dist
 from .allan import edf_overlapping
 from .terms import TERMS, model_avar
 
-#: The terms planned, with the name the summary gives them.
-PLANNED = {"white": "noise density", "bias_instability": "bias instability", "random_walk": "random walk"}
 DEFAULT_WIDTH = 0.25
 #: Longest record considered [s].
 MAX_RECORD_S = 1e8
@@ -64,7 +62,7 @@ def plan(s, duration_s: float, width: float = DEFAULT_WIDTH, level: float = 0.95
     """``{term: (record length [s] per axis, optimistic per axis)}`` of one sensor (:class:`SensorNoise`)."""
     fs = s.allan.fs
     out = {}
-    for term in PLANNED:
+    for term in planned(s):
         lengths, optimistic = [], []
         for fit, terms in zip(s.fits, s.terms):
             est = terms[term]
@@ -79,6 +77,11 @@ def plan(s, duration_s: float, width: float = DEFAULT_WIDTH, level: float = 0.95
             optimistic.append(scale == 1.0)
         out[term] = (lengths, optimistic)
     return out
+
+
+def planned(s) -> list[str]:
+    """The terms of ``s``'s fit that the planner plans (:attr:`~accelcal.noise.terms.NoiseTerm.planned_as`)."""
+    return [k for k in s.terms[0] if TERMS[k].planned_as]
 
 
 def _shortest(coef, term, fs, level, width) -> float:
@@ -111,8 +114,8 @@ def plan_lines(s, duration_s: float, width: float, level: float) -> list[str]:
     """The summary lines of the planner for one sensor (worst axis)."""
     p = plan(s, duration_s, width, level)
     parts = []
-    for term, name in PLANNED.items():
-        lengths, optimistic = p[term]
+    for term, (lengths, optimistic) in p.items():
+        name = TERMS[term].planned_as
         j = int(np.argmax(lengths))
         if all(t[term].resolved for t in s.terms) or not math.isfinite(lengths[j]):
             parts.append(f"{name} {duration_text(lengths[j])}"
@@ -122,4 +125,4 @@ def plan_lines(s, duration_s: float, width: float, level: float) -> list[str]:
     return [f"  record for +-{100 * width:.0f} % ({100 * level:.0f} % intervals, worst axis): " + "; ".join(parts)]
 
 
-__all__ = ["DEFAULT_WIDTH", "PLANNED", "duration_text", "half_width", "information", "plan", "plan_lines"]
+__all__ = ["DEFAULT_WIDTH", "duration_text", "half_width", "information", "plan", "plan_lines"]

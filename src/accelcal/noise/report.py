@@ -20,7 +20,8 @@ For the accelerometer and (when recorded) the gyroscope of one static recording:
    model's points (a parametric bootstrap of the fit, fast because it redraws the Allan
    variances, not the time series; basic or percentile intervals, :func:`_term_table`).
    The overlapping estimates at neighbouring octaves are correlated (0.5 one octave apart
-   for white noise, 0.9 for a random walk: :data:`~accelcal.noise.allan_fit.OCTAVE_CORRELATION`,
+   for white noise, 0.9 for a random walk: each term's
+   :attr:`~accelcal.noise.terms.NoiseTerm.octave_correlation`,
    measured by simulation); drawing them
    independently gave 84 % coverage for white noise at a stated 95 %, so the draws are
    correlated (a Gaussian copula, :func:`~accelcal.noise.allan_fit.bootstrap_fits`), and
@@ -71,10 +72,8 @@ from .allan_fit import NoiseFit, bootstrap_fits, fit_avar_model_error, model_edf
 from .avr import avr_lines
 from .export import conversions, exported_values, report_dict
 from .planner import DEFAULT_WIDTH, plan_lines
-from .terms import TERMS, model_avar
+from .terms import TERMS, ieee_terms, model_avar
 
-#: The IEEE Std 952 terms fitted, in order of the τ where they act (short to long).
-IEEE_TERMS = ("quantization", "white", "bias_instability", "random_walk", "drift_ramp")
 DEFAULT_LEVEL = 0.95
 DEFAULT_N_BOOT = 400
 #: Refuse / warn: largest angle [deg] of a 1 s mean accelerometer direction from the median one.
@@ -339,10 +338,10 @@ def _sensor(name, segments, unit, fs, level, n_boot, seed_seq, min_edf) -> Senso
 
 
 def fit_ieee(allan: AllanVariance, j: int, max_iter: int = 10) -> tuple[NoiseFit, np.ndarray, float]:
-    """The five IEEE terms fitted to axis ``j`` with the model error the fit leaves
-    (:func:`accelcal.noise.allan_fit.fit_avar_model_error`): (fit, edf of each τ used by the
-    fit, model error σ_m)."""
-    return fit_avar_model_error(allan, allan.avar[:, j], IEEE_TERMS, max_iter=max_iter)
+    """The five IEEE terms (:func:`~accelcal.noise.terms.ieee_terms`) fitted to axis ``j`` with the
+    model error the fit leaves (:func:`accelcal.noise.allan_fit.fit_avar_model_error`): (fit, edf of
+    each τ used by the fit, model error σ_m)."""
+    return fit_avar_model_error(allan, allan.avar[:, j], ieee_terms(), max_iter=max_iter)
 
 
 def _term_table(fit: NoiseFit, boot: np.ndarray, taus, fs: float, level: float) -> dict:
@@ -431,8 +430,9 @@ def static_check(acc, gyro, fs: float) -> dict:
 
 
 def resolution_warnings(s: SensorNoise, duration: float) -> list[str]:
-    """A warning per unresolved random walk or bias instability (the record is too short to see it), and
-    per axis the five terms describe only roughly."""
+    """A warning per unresolved term that asks for one (:attr:`~accelcal.noise.terms.NoiseTerm.warn_unresolved`:
+    the random walk and the bias instability, which a short record cannot see), and per axis the five
+    terms describe only roughly."""
     out = []
     if max(s.model_error) / 2 > MODEL_ERROR_WARN:
         out.append(f"{s.sensor}: the five IEEE terms follow the Allan deviation only to about "
@@ -440,7 +440,7 @@ def resolution_warnings(s: SensorNoise, duration: float) -> list[str]:
                    "(a feature they lack: the sensor's filter, a periodic disturbance...); the intervals include this "
                    "misfit")
     tau_max = float(s.allan.taus[-1])
-    for k in ("bias_instability", "random_walk"):
+    for k in (k for k in s.terms[0] if TERMS[k].warn_unresolved):
         axes = [a for a, terms in zip("xyz", s.terms) if not terms[k].resolved]
         if not axes:
             continue
@@ -456,7 +456,7 @@ def resolution_warnings(s: SensorNoise, duration: float) -> list[str]:
             how = ""
         out.append(f"{s.sensor} {', '.join(axes)}: {k} is not resolved by this record ({duration / 3600:.3g} h, tau "
                    f"up to {tau_max:.3g} s){how}; only its upper bound is known"
-                   + (" (the exports use it)" if k == "random_walk" else ""))
+                   + (" (the exports use it)" if TERMS[k].exported_as else ""))
     return out
 
 
@@ -489,6 +489,6 @@ def _quoted(s) -> str:
                      for k in c[0] if k in names) + " (x, y, z)"
 
 
-__all__ = ["DEFAULT_LEVEL", "DEFAULT_N_BOOT", "IEEE_TERMS", "NoiseAnalysisError", "NoiseReport", "SensorNoise",
+__all__ = ["DEFAULT_LEVEL", "DEFAULT_N_BOOT", "NoiseAnalysisError", "NoiseReport", "SensorNoise",
            "TermEstimate", "analyse_noise", "fit_ieee", "needed_tau",
            "resolution_warnings", "sampling_warnings", "static_check"]

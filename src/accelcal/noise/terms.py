@@ -92,14 +92,16 @@ class NoiseTerm:
     A term is one subclass with one instance in :data:`TERMS` (:func:`register_term`); what
     the library does with a term (its Allan variance, the profile grid of its nonlinear
     parameter, its simulation, the variance of the difference of two interval means, its
-    label and colour in figures) is a method or attribute here, never a branch on its id
-    elsewhere.  ``shape_key`` names the second, nonlinear parameter of the two-parameter
-    terms (``gauss_markov``: correlation time, ``sinusoid``: frequency), None otherwise.
+    label and colour in figures, its unit in the reports, its octave correlation in the
+    bootstrap, whether the noise report fits, plans, exports and warns about it) is a method
+    or attribute here, never a branch on its id elsewhere (``tests/test_noise_term_table.py``).
+    ``shape_key`` names the second, nonlinear parameter of the two-parameter terms
+    (``gauss_markov``: correlation time, ``sinusoid``: frequency), None otherwise.
     """
 
     id: str
     symbol: str
-    unit: str
+    unit: str      # the coefficient's unit, ``{u}`` standing for the data unit (e.g. ``{u}/sqrt(Hz)``)
     alpha: int
     meaning: str
     name: str      # what figures and summaries call it
@@ -107,6 +109,28 @@ class NoiseTerm:
     shape_key: str | None = None
     #: A model entry of the term for the conformance suite (``(coefficient, shape)`` for two parameters).
     example: object = 1.0
+    #: Exponent μ of a power-law Allan variance ``∝ τ^μ`` (None: not one power law); orders the IEEE terms.
+    avar_slope: int | None = None
+    #: One of the IEEE Std 952 terms the noise report fits (:func:`ieee_terms`).
+    ieee: bool = False
+    #: Correlation of ln AVAR between octaves 1…6 apart, overlapping estimator on a long record
+    #: (:func:`accelcal.noise.allan_fit.octave_correlations` measures it: 1000 simulated records of
+    #: 2^16 samples, averaged over m = 4 … 1024); None: the correlated bootstrap cannot draw the term.
+    octave_correlation: tuple[float, ...] | None = None
+    #: Beyond 6 octaves: this correlation, times ``far_decay`` per octave beyond the sixth (None: constant).
+    far_correlation: float = 0.0
+    far_decay: float | None = None
+    #: What the record-length planner (:mod:`accelcal.noise.planner`) calls the term; None: not planned.
+    planned_as: str | None = None
+    #: The exported value the term gives (:func:`accelcal.noise.export.exported_values`: the
+    #: keys of Kalibr's ``*_noise_density`` and ``*_random_walk``); None: not exported.
+    exported_as: str | None = None
+    #: Whether the noise report warns when a record does not resolve the term (a long-τ term
+    #: a short record cannot see).
+    warn_unresolved: bool = False
+    #: Allan-deviation floor per unit coefficient (flicker: ``√(2 ln 2/π)`` as the reports quote
+    #: it, 0.664); None: the term has no floor.
+    floor_factor: float | None = None
 
     @property
     def label(self) -> str:
@@ -117,6 +141,19 @@ class NoiseTerm:
     def n_parameters(self) -> int:
         """Free parameters of the term in a fit: 2 for the two-parameter terms, else 1."""
         return 2 if self.shape_key else 1
+
+    def unit_of(self, data_unit: str) -> str:
+        """The coefficient's unit for data in ``data_unit`` (:attr:`unit` with ``{u}`` the data unit)."""
+        return self.unit.format(u=data_unit)
+
+    def octave_rho(self, d: np.ndarray) -> np.ndarray:
+        """Correlation of ln AVAR between τ ``d`` octaves apart (:attr:`octave_correlation`, then the far tail)."""
+        if self.octave_correlation is None:
+            known = ", ".join(k for k, t in TERMS.items() if t.octave_correlation is not None)
+            raise NoiseModelError(f"the correlated bootstrap knows the octave correlations of {known}, not of {self.id}")
+        table = np.array((1.0,) + tuple(self.octave_correlation))
+        far = self.far_correlation * (self.far_decay ** (d - 6) if self.far_decay is not None else 1.0)
+        return np.where(d <= 6, table[np.minimum(d, 6)], far)
 
     def basis(self, tau, fs: float, shape: float | None = None) -> np.ndarray:
         """AVAR(τ) per unit squared coefficient (two-parameter terms need ``shape``)."""
@@ -207,9 +244,11 @@ def unregister_term(term_id: str) -> None:
 class White(NoiseTerm):
     example = 1.0
     name = "white noise"
-    id, symbol, unit, alpha = "white", "N", "u*s^0.5", 0
+    id, symbol, unit, alpha = "white", "N", "{u}/sqrt(Hz)", 0
     meaning = "white noise of the rate (velocity random walk)"
     colour = "C0"
+    avar_slope, ieee, octave_correlation = -1, True, (0.52, 0.18, 0.06, 0.03, 0.03, 0.03)
+    planned_as, exported_as = "noise density", "noise_density"
 
     def _basis(self, tau, fs, shape):
         return 1.0 / tau
@@ -228,9 +267,11 @@ class White(NoiseTerm):
 class Quantization(NoiseTerm):
     example = 1.0
     name = "quantization"
-    id, symbol, unit, alpha = "quantization", "Q", "u*s", 2
+    id, symbol, unit, alpha = "quantization", "Q", "{u}*s", 2
     meaning = "rounding of the integrated output (white PM)"
     colour = "C4"
+    avar_slope, ieee, octave_correlation = -2, True, (0.12, 0.31, 0.30, 0.30, 0.31, 0.28)
+    far_correlation = 0.28
 
     def _basis(self, tau, fs, shape):
         return 3.0 / tau**2
@@ -249,9 +290,11 @@ class Quantization(NoiseTerm):
 class BiasInstability(NoiseTerm):
     example = 1.0
     name = "bias instability (flicker)"
-    id, symbol, unit, alpha = "bias_instability", "B", "u", -1
+    id, symbol, unit, alpha = "bias_instability", "B", "{u}", -1
     meaning = "flicker (1/f) bias: flat Allan floor 0.664 B"
     colour = "C2"
+    avar_slope, ieee, octave_correlation = 0, True, (0.69, 0.32, 0.14, 0.07, 0.04, 0.0)
+    planned_as, warn_unresolved, floor_factor = "bias instability", True, 0.664
 
     def _basis(self, tau, fs, shape):
         return np.full_like(tau, 2.0 * LN2 / math.pi)
@@ -274,9 +317,15 @@ class BiasInstability(NoiseTerm):
 class RandomWalk(NoiseTerm):
     example = 1.0
     name = "random walk"
-    id, symbol, unit, alpha = "random_walk", "K", "u/s^0.5", -2
+    id, symbol, unit, alpha = "random_walk", "K", "{u}/s/sqrt(Hz)", -2
     meaning = "rate random walk of the bias"
     colour = "C3"
+    avar_slope, ieee, octave_correlation = 1, True, (0.89, 0.67, 0.48, 0.34, 0.23, 0.16)
+    far_correlation, far_decay = 0.16, 0.7
+    planned_as, exported_as, warn_unresolved = "random walk", "random_walk", True
+
+    def unit_of(self, data_unit):  # u·s^-½ = u/s/√Hz, spelled out for SI data
+        return _SI_WALK_UNITS.get(data_unit, super().unit_of(data_unit))
 
     def _basis(self, tau, fs, shape):
         return tau / 3.0
@@ -292,9 +341,12 @@ class RandomWalk(NoiseTerm):
 class DriftRamp(NoiseTerm):
     example = 1.0
     name = "drift ramp"
-    id, symbol, unit, alpha = "drift_ramp", "R", "u/s", -2
+    id, symbol, unit, alpha = "drift_ramp", "R", "{u}/s", -2
     meaning = "linear drift within each rest"
     colour = "C1"
+    avar_slope, ieee = 2, True
+    # α = −2 like the random walk: the bootstrap draws its octaves with the walk's correlations
+    octave_correlation, far_correlation, far_decay = RandomWalk.octave_correlation, 0.16, 0.7
 
     def _basis(self, tau, fs, shape):
         return tau**2 / 2.0
@@ -311,7 +363,7 @@ class DriftRamp(NoiseTerm):
 class GaussMarkov(NoiseTerm):
     example = (1.0, 0.7)
     name = "Gauss-Markov"
-    id, symbol, unit, alpha = "gauss_markov", "sigma", "u", -2
+    id, symbol, unit, alpha = "gauss_markov", "sigma", "{u}", -2
     meaning = "first-order Gauss-Markov bias (or low-passed white noise)"
     colour, shape_key = "C5", "correlation_time_s"
 
@@ -351,7 +403,7 @@ class GaussMarkov(NoiseTerm):
 class Sinusoid(NoiseTerm):
     example = (1.0, 0.3)
     name = "sinusoid"
-    id, symbol, unit, alpha = "sinusoid", "A", "u", -2
+    id, symbol, unit, alpha = "sinusoid", "A", "{u}", -2
     meaning = "periodic disturbance of amplitude A"
     colour, shape_key = "C6", "frequency_hz"
 
@@ -370,6 +422,10 @@ class Sinusoid(NoiseTerm):
         sinc = np.sinc(shape * iv.T)  # numpy's sinc is sin(πx)/(πx)
         return 0.5 * v2 * (sinc[:, None] ** 2 + sinc[None, :] ** 2 - 2 * sinc[:, None] * sinc[None, :]
                            * np.cos(2 * math.pi * shape * iv.mid_difference))
+
+
+#: The random walk coefficient's unit spelled out for SI data (u·s^-½ = u/s/√Hz).
+_SI_WALK_UNITS = {"m/s^2": "m/s^3/sqrt(Hz)", "rad/s": "rad/s^2/sqrt(Hz)"}
 
 
 def _octave_grid(lo: float, hi: float, per: int) -> np.ndarray:
@@ -425,6 +481,20 @@ def term_ids() -> tuple[str, ...]:
 
 
 
+def ieee_terms() -> tuple[str, ...]:
+    """The IEEE Std 952 terms the noise report fits (:attr:`NoiseTerm.ieee`), in the order of the τ
+    where they act, short to long (their Allan-variance slopes)."""
+    return tuple(sorted((k for k, t in TERMS.items() if t.ieee), key=lambda k: TERMS[k].avar_slope))
+
+
+def exported_term(key: str) -> NoiseTerm:
+    """The term whose coefficient the exports write as ``key`` (:attr:`NoiseTerm.exported_as`)."""
+    found = [t for t in TERMS.values() if t.exported_as == key]
+    if len(found) != 1:
+        raise NoiseModelError(f"{len(found)} noise terms are exported as {key!r}; the exports need exactly one")
+    return found[0]
+
+
 def noise_term(term_id: str) -> NoiseTerm:
     """The library's term ``term_id`` (raises :class:`NoiseModelError` naming the known ids)."""
     try:
@@ -467,5 +537,5 @@ def model_avar(terms: Mapping[str, object], taus, fs: float) -> np.ndarray:
     return out
 
 
-__all__ = ["LN2", "IntervalPairs", "NoiseModelError", "NoiseTerm", "TERMS", "model_avar", "noise_term",
-           "register_term", "term_ids", "term_parameters", "unregister_term"]
+__all__ = ["LN2", "IntervalPairs", "NoiseModelError", "NoiseTerm", "TERMS", "exported_term", "ieee_terms",
+           "model_avar", "noise_term", "register_term", "term_ids", "term_parameters", "unregister_term"]
