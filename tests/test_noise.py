@@ -19,7 +19,8 @@ from accelcal.noise.simulation import simulate_noise
 from accelcal.errors import NotStaticError
 from accelcal.noise.export import ExportError, avr_convention, kalibr_yaml, openvins_yaml
 from accelcal.noise.allan_fit import octave_correlations
-from accelcal.noise.report import NoiseAnalysisError, analyse_noise
+from accelcal.noise.planner import plan_lines
+from accelcal.noise.report import NoiseAnalysisError, analyse_noise, resolution_warnings
 from accelcal.noise.terms import TERMS, ieee_terms
 from accelcal.recording import Recording
 
@@ -310,3 +311,19 @@ def test_accelcal_noise_pays_for_neither_the_gyro_package_nor_the_tables_text(tm
                           str(tmp_path / "noise.json")], capture_output=True, text=True, timeout=120)
     assert (tmp_path / "noise.json").is_file(), out.stderr
     assert out.stdout.strip().splitlines()[-1] == "[] [None]", out.stdout
+
+
+def test_the_report_reads_each_terms_roles_from_its_entry(report, monkeypatch):
+    """The warnings, the planner and the JSON's units follow the entry's fields (no list of ids elsewhere):
+    the ramp, given a planner name and the unresolved warning, is planned and warned about; a unit on the
+    entry is the JSON's."""
+    s = report.sensors["accelerometer"]
+    assert not any("drift_ramp" in w for w in resolution_warnings(s, report.duration_s))
+    ramp = TERMS["drift_ramp"]
+    monkeypatch.setattr(ramp, "planned_as", "ramp")
+    monkeypatch.setattr(ramp, "warn_unresolved", True)
+    monkeypatch.setattr(ramp, "unit", "{u} per second")
+    assert any(w.startswith("accelerometer x, y, z: drift_ramp is not resolved") and "exports" not in w
+               for w in resolution_warnings(s, report.duration_s))
+    assert "; ramp " in plan_lines(s, report.duration_s, 0.25, 0.95)[0]
+    assert report.to_dict()["sensors"]["accelerometer"]["axes"]["x"]["terms"]["drift_ramp"]["unit"] == "m/s^2 per second"
