@@ -60,16 +60,17 @@ def one_record(n: int, terms: dict, seed: int, level: float, n_boot: int):
 
 def run(config: str, seeds: int, level: float, n_boot: int, first_seed: int) -> dict:
     n, terms = CONFIGS[config]
-    hits = {k: [] for k in ieee_terms()}
-    width = {k: [] for k in ieee_terms()}
-    resolved = {k: [] for k in ieee_terms()}
+    fitted = ieee_terms()
+    hits = {k: [] for k in fitted}
+    width = {k: [] for k in fitted}
+    resolved = {k: [] for k in fitted}
     errors = []
     t0 = time.perf_counter()
     for seed in range(first_seed, first_seed + seeds):
         s = one_record(n, terms, seed, level, n_boot)
         errors += list(s.model_error)
         for axis in s.terms:
-            for k in ieee_terms():
+            for k in fitted:
                 e, truth = axis[k], terms.get(k, 0.0)
                 hits[k].append(e.lo <= truth <= e.hi)
                 resolved[k].append(e.resolved)
@@ -77,7 +78,7 @@ def run(config: str, seeds: int, level: float, n_boot: int, first_seed: int) -> 
                     width[k].append((e.hi - e.lo) / truth)
     out = {"n": n, "duration_h": n / FS / 3600, "terms": terms, "seeds": seeds, "level": level, "n_boot": n_boot,
            "elapsed_s": time.perf_counter() - t0, "model_error_median": float(np.median(errors)), "per_term": {}}
-    for k in ieee_terms():
+    for k in fitted:
         h = np.array(hits[k], dtype=float)
         cov = float(h.mean())
         out["per_term"][k] = {"true": terms.get(k, 0.0), "replicates": int(h.size), "coverage": cov,

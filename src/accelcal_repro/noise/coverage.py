@@ -42,9 +42,10 @@ def coverage_rows(name: str, terms: dict, *, records: int, samples: int, fs: flo
     ``index`` (the configuration's place in the config) and the record number seed each
     record, so a configuration's records do not depend on the others'.
     """
-    hits = {k: [] for k in ieee_terms()}
-    width = {k: [] for k in ieee_terms()}
-    resolved = {k: [] for k in ieee_terms()}
+    fitted = ieee_terms()
+    hits = {k: [] for k in fitted}
+    width = {k: [] for k in fitted}
+    resolved = {k: [] for k in fitted}
     for r in range(records):
         seq = np.random.SeedSequence([int(seed), int(index), r])
         record_seed, boot_seed = (int(s.generate_state(1)[0]) for s in seq.spawn(2))
@@ -53,14 +54,14 @@ def coverage_rows(name: str, terms: dict, *, records: int, samples: int, fs: flo
         sensor = analyse_noise(rec, level=level, n_boot=n_boot, seed=boot_seed,
                                allow_motion=True).sensors["accelerometer"]
         for axis in sensor.terms:
-            for k in ieee_terms():
+            for k in fitted:
                 e, truth = axis[k], float(terms.get(k, 0.0))
                 hits[k].append(e.lo <= truth <= e.hi)
                 resolved[k].append(e.resolved)
                 if truth > 0:
                     width[k].append((e.hi - e.lo) / truth)
     rows = []
-    for k in ieee_terms():
+    for k in fitted:
         h = np.array(hits[k], dtype=float)
         lo, hi = clopper_pearson(np.array(h.sum()), np.array(h.size), level=0.95)
         truth = float(terms.get(k, 0.0))
