@@ -5,10 +5,11 @@ the exports use it are attributes of its entry).  Files are parsed, not imported
 
 Three shapes are counted in ``src/accelcal`` (terms.py itself apart):
 
-* ``compare``: a comparison with a term id (``term == "white"``, ``k in ("random_walk", "drift_ramp")``);
+* ``compare``: a comparison with a term id (``term == "white"``, ``k in ("random_walk", "drift_ramp")``,
+  ``case "white":``);
 * ``table``: a literal holding two or more term ids (a dict keyed by them, a tuple or list
   of them: ``IEEE_TERMS``, ``PLANNED``, ``for k in ("bias_instability", "random_walk")``);
-* ``pick``: a subscript by a term id (``terms["white"]``).
+* ``pick``: a subscript by a term id (``terms["white"]``, ``terms.get("white")``).
 
 Naming one term to *use* it (a noise model ``{"random_walk": 1.0}``, ``noise_term("white")``,
 ``fit_avar(..., ("white",), fs)``) is not counted: that is the public API's way of
@@ -78,8 +79,12 @@ def _kind(node, not_a_table: bool) -> str | None:
         return "table" if sum(1 for k in keys if _ids_in(k)) >= 2 else None
     if isinstance(node, (ast.Tuple, ast.List, ast.Set)) and not not_a_table:
         return "table" if len(_ids_in(node)) >= 2 else None
+    if isinstance(node, ast.MatchValue):
+        return "compare" if _ids_in(node.value) else None
     if isinstance(node, ast.Subscript):
         return "pick" if _ids_in(node.slice) else None
+    if isinstance(node, ast.Call) and getattr(node.func, "attr", "") in ("get", "pop") and node.args:
+        return "pick" if _ids_in(node.args[0]) else None
     return None
 
 
@@ -137,8 +142,12 @@ def test_the_check_sees_the_old_branches(tmp_path):
         '    for k in ("bias_instability", "random_walk"):\n'
         '        pass\n'
         '    n = terms["white"].value\n'
+        '    q = terms.get("quantization", 0.0)\n'
+        '    match term:\n'
+        '        case "sinusoid":\n'
+        '            pass\n'
         '    x = " (the exports use it)" if term == "random_walk" else ""\n'
         '    model = {"white": 0.01}\n'
         '    used = fit(("white",), noise_term("gauss_markov"))\n')
     kinds = sorted(k for k, _, _ in name_uses(old, tmp_path))
-    assert kinds == ["compare", "compare", "pick", "table", "table", "table"], kinds
+    assert kinds == ["compare", "compare", "compare", "pick", "pick", "table", "table", "table"], kinds
