@@ -20,7 +20,8 @@ are calibrated by a bootstrap of the time series with those weights.
 
 Intervals (:func:`bootstrap_fits`): the coefficients refitted to correlated draws of the
 fitted model's Allan variances (:func:`log_avar_covariance`, with the correlation of
-``ln Â`` between octaves each term carries: :attr:`~accelcal.noise.terms.NoiseTerm.octave_correlation`).
+``ln Â`` between octaves that each term carries,
+:attr:`~accelcal.noise.terms.NoiseTerm.octave_correlation`).
 """
 
 from __future__ import annotations
@@ -309,10 +310,10 @@ def log_avar_covariance(allan: AllanVariance, fit: NoiseFit, model_error: float 
     """(k, k) covariance of ``ln Â`` at the τ grid under the fitted model, plus the model error on the diagonal.
 
     Correlations: each term ``t`` contributes ``ρ_t(d_ij) s_it s_jt`` with
-    ``s_it = A_it √(2/ν_it) / A_i`` (``ρ_t``: :meth:`~accelcal.noise.terms.NoiseTerm.octave_rho`; its share of the Allan variance times its relative
-    standard error, NIST edf) and ``d_ij`` the octaves between the two τ, normalised to a
-    correlation matrix.  Variances: ``2/ν`` of the coherent mix (:func:`model_edf`), plus
-    ``σ_m²``.
+    ``s_it = A_it √(2/ν_it) / A_i`` (its share of the Allan variance times its relative
+    standard error, NIST edf) and ``d_ij`` the octaves between the two τ (``ρ_t``: the term's
+    :meth:`~accelcal.noise.terms.NoiseTerm.octave_rho`), normalised to a correlation matrix.
+    Variances: ``2/ν`` of the coherent mix (:func:`model_edf`), plus ``σ_m²``.
     """
     octave = np.log2(allan.m.astype(float))
     d = np.rint(np.abs(octave[:, None] - octave[None, :])).astype(int)
@@ -350,7 +351,8 @@ def bootstrap_fits(fit: NoiseFit, allan: AllanVariance, edf, model_error: float,
 
 
 def octave_correlations(rng, term: str, n: int = 2**16, reps: int = 1000, batch: int = 100) -> np.ndarray:
-    """Measure a term's :attr:`~accelcal.noise.terms.NoiseTerm.octave_correlation`: mean correlation of ``ln Â`` 1…6 octaves apart."""
+    """Measure a term's :attr:`~accelcal.noise.terms.NoiseTerm.octave_correlation`: the mean
+    correlation of ``ln Â`` 1…6 octaves apart."""
 
     m = 2 ** np.arange(13)
     la = np.hstack([np.log(allan_variance(simulate_noise(rng, n, 1.0, {term: 1.0}, size=batch), 1.0, m=m).avar)
