@@ -12,7 +12,9 @@ runs these checks on it too.
 
 from __future__ import annotations
 
+import ast
 import math
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -167,3 +169,76 @@ def test_a_code_is_one_members_and_an_unknown_code_is_refused():
     assert "another_offset" not in C.MEMBERS
     with pytest.raises(AccelcalError, match="no grid member has the code"):
         C.wander_kernels(np.array([-7.0]), STARTS, DURATIONS, E_X)
+
+
+# --------------------------------------------------------------------------- no branch on a code elsewhere
+
+ROOT = Path(__file__).resolve().parents[1]
+TABLE = ROOT / "src" / "accelcal" / "discrepancy" / "wander" / "members.py"
+CODE_NAMES = {"FLICKER", "PLACEMENT"}
+
+
+def _names_a_code(node) -> bool:
+    """``FLICKER``/``PLACEMENT`` (or ``C.FLICKER``), alone or in a tuple, list or set."""
+    if isinstance(node, ast.Tuple | ast.List | ast.Set):
+        return any(map(_names_a_code, node.elts))
+    return isinstance(node, ast.Name | ast.Attribute) and (
+        node.id if isinstance(node, ast.Name) else node.attr) in CODE_NAMES
+
+
+def _is_code_literal(node) -> bool:
+    """The literal 0 or −1 (the offset's and flicker's codes)."""
+    if isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub):
+        return isinstance(node.operand, ast.Constant) and node.operand.value == 1
+    return isinstance(node, ast.Constant) and type(node.value) in (int, float) and node.value == 0
+
+
+def _mentions_tau(node) -> bool:
+    """A name or attribute that is a τ of the grid: ``tau``, ``taus``, ``w.tau``, ``tv`` (reml's)."""
+    return any("tau" in name or name == "tv" for name in (n.id if isinstance(n, ast.Name) else n.attr
+               for n in ast.walk(node) if isinstance(n, ast.Name | ast.Attribute)))
+
+
+def _branches(node) -> bool:
+    if isinstance(node, ast.Compare):
+        sides = [node.left, *node.comparators]
+        if not all(isinstance(op, ast.Eq | ast.NotEq | ast.In | ast.NotIn) for op in node.ops):
+            return False
+        return any(map(_names_a_code, sides)) or (
+            any(map(_is_code_literal, sides)) and any(_mentions_tau(s) and not _is_code_literal(s) for s in sides))
+    if isinstance(node, ast.Call):
+        return getattr(node.func, "attr", getattr(node.func, "id", "")) == "isinf" and any(map(_mentions_tau,
+                                                                                              node.args))
+    return False
+
+
+def code_branches(path: Path, root: Path = ROOT) -> list[str]:
+    """``file:line: source`` of every comparison with a member's code (by name, or a τ with 0
+    or −1) and every ``isinf`` of a τ (the random walk's code) in ``path``."""
+    return [f"{path.relative_to(root)}:{node.lineno}: {ast.unparse(node)}"
+            for node in ast.walk(ast.parse(path.read_text(), filename=str(path))) if _branches(node)]
+
+
+def test_no_module_branches_on_a_members_code():
+    """What a member does is on its entry: no ``tau == FLICKER``, ``tau == 0``, ``np.isinf(tau)``
+    in the discrepancy packages outside the table (rests.py, reml.py, problem.py and the
+    process table had them)."""
+    files = sorted(p for pkg in ("accelcal", "accelcal_repro") for p in (ROOT / "src" / pkg / "discrepancy").rglob("*.py")
+                   if p != TABLE)
+    assert len(files) > 40
+    assert [c for p in files for c in code_branches(p)] == []
+
+
+def test_the_code_check_sees_the_old_branches(tmp_path):
+    old = tmp_path / "old.py"
+    old.write_text("def f(tau, taus, w, qv, shortest):\n"
+                   "    a = tau == 0.0\n"
+                   "    b = taus == FLICKER\n"
+                   "    c = np.isinf(w.tau)\n"
+                   "    d = tau == -1.0\n"
+                   "    e = w.tau == PLACEMENT\n"
+                   "    g = tau in (PLACEMENT, FLICKER)\n"
+                   "    fine = (tau > 0.5 * shortest, tau > 0, qv == 0, np.isinf(qv))\n")
+    found = [line.split(": ", 1)[1] for line in code_branches(old, tmp_path)]
+    assert found == ["tau == 0.0", "taus == FLICKER", "np.isinf(w.tau)", "tau == -1.0", "w.tau == PLACEMENT",
+                     "tau in (PLACEMENT, FLICKER)"], found
