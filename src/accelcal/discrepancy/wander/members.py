@@ -199,10 +199,16 @@ class GaussMarkov(GridMember):
     def variogram(self, taus, starts, durations, gap):
         T = durations
         tc = taus[:, None]                                                           # (T', 1)
-        W = 2 * (tc * T + tc**2 * np.expm1(-T / tc)) / T**2                          # (T', n)
+        W = self.interval_variance(tc, T)                                            # (T', n)
         E = -np.expm1(-T / tc) / T                                                   # (T', n)
         cov = tc[:, :, None] ** 2 * E[:, :, None] * E[:, None, :] * np.exp(-gap / tc[:, :, None])
         return W[:, :, None] + W[:, None, :] - 2 * cov
+
+    @staticmethod
+    def interval_variance(tau, durations):
+        """Variance of the mean of a unit process over intervals of ``durations`` (correlation time ``tau``)."""
+        T = durations
+        return 2 * (tau * T + tau**2 * np.expm1(-T / tau)) / T**2
 
     def K(self, q_abs, taus):  # the short-lag random-walk coefficient K = sqrt(2 s²/τ)
         return np.sqrt(2 * q_abs / taus)
