@@ -91,15 +91,21 @@ def check_rest_avar_is_half_the_adjacent_difference(member):
 
 
 def check_size_and_K_agree(member):
-    """The scalar ``(size, K)`` of an estimate is the member's vectorised ``K`` and its size rule."""
+    """The scalar ``(size, K)`` of an estimate is the member's vectorised ``K`` and its size
+    rule, and ``K`` is its kernel's short-lag random-walk coefficient: two means of short
+    intervals ``h`` apart (``h`` a thousandth of τ) differ with variance ``≈ K² h``."""
     for code in codes_of(member):
         size, K = C.gm_variance(Q_ABS, float(code))
         assert size == (math.sqrt(Q_ABS) if member.stationary else math.inf)
-        if member.timed:
-            assert K == pytest.approx(float(member.K(np.array([Q_ABS]), np.array([code]))[0]), rel=1e-15) and K > 0
-        else:
-            assert math.isnan(K)
         assert C.gm_variance(0.0, float(code))[0] == 0.0
+        if not member.timed:
+            assert math.isnan(K)
+            continue
+        assert K == pytest.approx(float(member.K(np.array([Q_ABS]), np.array([code]))[0]), rel=1e-15) and K > 0
+        h = 1e-3 * (float(code) if np.isfinite(code) else 1.0)
+        eps = 1e-2 * h  # the intervals' length: a random walk's means differ by K² (h + 2 eps/3)
+        D = -2.0 * Q_ABS * C.wander_kernel(float(code), np.array([0.0, eps + h]), np.array([eps, eps]), E_X[:2])
+        assert D[0, 1] == pytest.approx(K ** 2 * (h + 2 * eps / 3), rel=2e-3), code
 
 
 def check_the_likelihoods_stack_is_its_kernel(member):
