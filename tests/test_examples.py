@@ -19,6 +19,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from accelcal.discrepancy.wander import MEMBERS, unregister_member
 from accelcal.discrepancy.wander_process import PROCESSES, unregister_process
 from accelcal.errors import RecordingError
 from accelcal.formats import read
@@ -28,6 +29,7 @@ from accelcal.registry import ESTIMATORS, register, unregister
 from .format_samples import RATE_HZ, SAMPLES, specific_force
 from .test_estimator_conformance import CHECKS, run_check
 from .test_noise_term_conformance import CHECKS as TERM_CHECKS
+from .test_wander_member_conformance import CHECKS as MEMBER_CHECKS
 from .test_wander_process_conformance import CHECKS as PROCESS_CHECKS
 from .test_reader_fuzz import _check_recording, damaged_files
 
@@ -148,6 +150,33 @@ def example_process():
 @pytest.mark.parametrize("check", PROCESS_CHECKS, ids=lambda c: c.__name__.removeprefix("check_"))
 def test_the_example_wander_process_passes_every_conformance_check(example_process, check):
     check(example_process)
+
+
+def test_the_grid_member_example_is_named_on_a_drifting_session(tmp_path):
+    p = _run("custom_grid_member.py", tmp_path)
+    assert p.returncode == 0, p.stderr
+    lines = p.stdout.splitlines()
+    assert lines[0].startswith("rate 2e-05: grid of 26 codes, drift_rate's among them: True; REML named: drift_rate"), p.stdout
+    assert lines[2] == "in one_process's grid: False", p.stdout
+
+
+@pytest.fixture(scope="module")
+def example_member():
+    _example_module("custom_grid_member")  # registers the member and its process on import
+    yield MEMBERS["drift_rate"], PROCESSES["drift_rate"]
+    unregister_process("drift_rate")
+    unregister_member("drift_rate")
+    sys.modules.pop("custom_grid_member", None)
+
+
+@pytest.mark.parametrize("check", MEMBER_CHECKS, ids=lambda c: c.__name__.removeprefix("check_"))
+def test_the_example_grid_member_passes_every_conformance_check(example_member, check):
+    check(example_member[0])
+
+
+@pytest.mark.parametrize("check", PROCESS_CHECKS, ids=lambda c: c.__name__.removeprefix("check_"))
+def test_the_example_grid_members_process_passes_every_conformance_check(example_member, check):
+    check(example_member[1])
 
 
 @pytest.fixture()

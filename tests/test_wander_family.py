@@ -17,6 +17,7 @@ from accelcal.discrepancy.rules import WANDER_FAMILIES, Rules
 from accelcal.discrepancy.stochastic.implication import pose_difference_variance
 from accelcal.discrepancy.wander.rests import RestAllan, rest_allan, rest_deviance
 from accelcal.discrepancy.wander_model import linearise_noise
+from accelcal.discrepancy.wander_process import FAMILIES
 from accelcal.errors import AccelcalError
 from accelcal.noise import simulate_noise
 from tests.wander_sessions import rest_session
@@ -38,7 +39,7 @@ def test_flicker_member_is_the_noise_librarys_flicker():
     assert np.allclose(D, -0.5 * G * ref)
     grid = C.tau_grid(durations, 60.0)
     assert grid[0] == C.FLICKER and grid[1] == C.PLACEMENT and np.isinf(grid[-1])
-    assert C.FLICKER not in C.tau_grid(durations, 60.0, flicker=False)
+    assert C.FLICKER not in C.tau_grid(durations, 60.0, members=FAMILIES["one_process"].members)
 
 
 def test_rest_allan_gives_white_then_the_flicker_floor():
@@ -114,6 +115,7 @@ def test_joint_likelihood_names_the_flicker_member_the_pose_means_alone_cannot()
         data, _, _ = rest_session(rng, {"white": 0.33, "bias_instability": 3 * 0.141 / 0.664}, sample_sd=3.3)
         f = fit(data)
         for fam in chosen:
-            chosen[fam].append(bool(linearise_noise(data, f, fam)[2].flicker))
+            w = linearise_noise(data, f, fam)[2]
+            chosen[fam].append(bool(w.present and w.member is C.MEMBERS["flicker"]))
     assert not any(chosen["one_process"]), chosen
     assert sum(chosen["flicker_rests"]) >= 3 and sum(chosen["flicker_rests"]) > sum(chosen["flicker"]), chosen

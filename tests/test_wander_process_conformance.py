@@ -167,5 +167,7 @@ def test_a_check_fails_on_an_entry_whose_simulation_differs():
 def test_every_family_says_what_its_grid_holds(family):
     """The family's entry is what the wander's grid and problem are built from."""
     assert family.meaning and family.id in WANDER_FAMILIES
-    grid = C.tau_grid(DURATIONS, SPAN, flicker=family.flicker)
-    assert (C.FLICKER in grid) == family.flicker and C.PLACEMENT in grid and np.isinf(grid).any()
+    grid = C.tau_grid(DURATIONS, SPAN, members=family.members)
+    assert C.members_in(grid) == family.grid_members() and set(family.grid_members()) <= set(C.MEMBERS)
+    assert (C.FLICKER in grid) == ("flicker" in family.grid_members()) and C.PLACEMENT in grid
+    assert np.isinf(grid).any()

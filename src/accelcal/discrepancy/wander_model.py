@@ -48,7 +48,7 @@ def linearise_noise(data: PoseData, f: Fit, family: str = "flicker") -> tuple[C.
     ``family`` (:data:`~.rules.WANDER_FAMILIES`)."""
     fam = FAMILIES[family]
     starts, durations, _ = intervals(data)
-    taus = C.tau_grid(durations, float(np.max(starts + durations) - np.min(starts)), flicker=fam.flicker)
+    taus = C.tau_grid(durations, float(np.max(starts + durations) - np.min(starts)), members=fam.members)
     prob = linearise(data, f, taus=taus, common=None, rests=fam.rests)
     if fam.short:  # the short part pinned by the rests (:mod:`.wander.sums`)
         short = fit_short(data.rests.full if data.rests is not None else None)

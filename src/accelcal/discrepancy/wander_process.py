@@ -20,6 +20,9 @@ process (JSON)     term (JSON)               numbers (JSON keys)          noise-
 ``gauss_markov``   ``bias_wander``           ``size``, ``tau_s``          ``gauss_markov``
 =================  ========================  ===========================  ====================
 
+What the grid's members are numerically (their codes, kernels, Allan variances in the
+rests) is the member table's (:data:`accelcal.discrepancy.wander.MEMBERS`,
+:mod:`.wander.members`); a process names its member (``member``).
 :func:`process_of` names the process of a REML estimate (the last registered entry whose
 :meth:`WanderProcess.matches` holds: an entry added later refines an earlier one);
 :func:`process_in` reads it back from a report's ``noise_model``.
@@ -41,7 +44,7 @@ from ..errors import AccelcalError
 from ..jsonsafe import is_finite
 from ..noise.terms import TERMS
 from .stochastic.implication import pose_difference_variance
-from .wander import FLICKER, PLACEMENT
+from .wander import FLICKER, MEMBERS, PLACEMENT
 
 NAN = float("nan")
 
@@ -99,11 +102,15 @@ class WanderProcess:
     example: dict | None = None
     #: Whether it is a noise term beyond the rests' white noise (False only for ``none``).
     named: bool = True
+    #: The member of the REML grid (:data:`accelcal.discrepancy.wander.MEMBERS`) whose
+    #: estimate it is; its covariance is that member's kernel.
+    member: str | None = None
 
     # ----- from the REML estimate (:class:`~.wander.WanderFit`)
     def matches(self, w, span: float) -> bool:
-        """Whether the estimate ``w`` (session of ``span`` seconds) is this process."""
-        raise NotImplementedError
+        """Whether the estimate ``w`` (session of ``span`` seconds) is this process: a
+        wander at a code of its :attr:`member`."""
+        return bool(w.present and w.member.id == self.member)
 
     def tau_s(self, w) -> float:
         """The JSON's ``tau_s`` (s; 0 for the offset, inf for a random walk, NaN without one)."""
@@ -262,9 +269,7 @@ class PerPlacement(WanderProcess):
     meaning = "independent between poses: size (std per axis), no time scale"
     parameters = {"size": "std of the offset per axis (data unit)"}
     example = {"tau": PLACEMENT, "q_abs": 4e-6}
-
-    def matches(self, w, span):
-        return w.placement
+    member = "per_placement"
 
     def time_correlated(self, w, shortest):
         return False
@@ -304,9 +309,7 @@ class Flicker(WanderProcess):
                "time; size is B")
     parameters = {"size": "the flicker coefficient B (data unit; Allan floor 0.664 B)"}
     example = {"tau": FLICKER, "q_abs": 4e-6}
-
-    def matches(self, w, span):
-        return w.flicker
+    member = "flicker"
 
     def tau_s(self, w):
         return NAN
@@ -347,9 +350,7 @@ class RandomWalk(WanderProcess):
                "t seconds having std K sqrt(t)")
     parameters = {"random_walk_K": "data unit / sqrt(s): the change over t seconds has std K sqrt(t)"}
     example = {"tau": math.inf, "q_abs": 1e-7}
-
-    def matches(self, w, span):
-        return w.present and bool(np.isinf(w.tau))
+    member = "random_walk"
 
     def change_over_session(self, w, span):
         return w.K * math.sqrt(span)
@@ -382,9 +383,7 @@ class GaussMarkov(WanderProcess):
     meaning = "first-order Gauss-Markov: size (std) and correlation time tau_s"
     parameters = {"size": "std of the wander per axis (data unit)", "tau_s": "correlation time (s)"}
     example = {"tau": 30.0, "q_abs": 4e-6}
-
-    def matches(self, w, span):
-        return w.present and w.tau > 0 and bool(np.isfinite(w.tau))
+    member = "gauss_markov"
 
     def model_entry(self, w):
         return math.sqrt(w.q_abs), w.tau
@@ -435,22 +434,26 @@ def words_of(nm: dict, unit: str | None = None) -> Words:
 @dataclass(frozen=True)
 class WanderFamily:
     """The members the wander is chosen from and what its problem is joined with (the
-    ``wander_family`` rule): ``flicker`` whether the grid holds the flicker member,
-    ``rests`` whether the likelihood is joined by the rests' own samples
-    (:mod:`.wander.rests`), ``short`` whether a short component the rests pin is taken out
-    first (:mod:`.wander.sums`)."""
+    ``wander_family`` rule): ``members`` the ids of the grid's members
+    (:data:`~.wander.MEMBERS`; None: every registered member, in table order), ``rests``
+    whether the likelihood is joined by the rests' own samples (:mod:`.wander.rests`),
+    ``short`` whether a short component the rests pin is taken out first (:mod:`.wander.sums`)."""
 
     id: str
     meaning: str
-    flicker: bool = True
+    members: tuple[str, ...] | None = None
     rests: bool = False
     short: bool = False
+
+    def grid_members(self) -> tuple[str, ...]:
+        """The ids of the members its grid holds, in table order."""
+        return tuple(m for m in MEMBERS if self.members is None or m in self.members)
 
 
 #: The families, in the order :data:`~.rules.WANDER_FAMILIES` lists them.
 FAMILIES: dict[str, WanderFamily] = {f.id: f for f in (
     WanderFamily("one_process", "a per-placement offset, one Gauss-Markov process or a random walk (the earlier "
-                                "model)", flicker=False),
+                                "model)", members=("per_placement", "gauss_markov", "random_walk")),
     WanderFamily("flicker", "one_process's members and a flicker (1/f) bias, which stands for a sum of processes "
                             "spread over the decades (wander.FLICKER)"),
     WanderFamily("flicker_rests", "flicker's members chosen by the joint likelihood of the pose residuals and the "

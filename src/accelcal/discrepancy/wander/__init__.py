@@ -79,7 +79,8 @@ misalignment parameters, the named effects, the candidate) and ``q`` the wander
 variance relative to the white one, the whole times the white scale ``s``.  ``K_τ`` is
 diagonalised once per ``τ`` of a grid
 (the per-placement offset, five per decade from a tenth of the shortest pose to ten
-session lengths, then the random walk); each model's columns are projected out once per ``τ`` (:class:`Basis`: the
+session lengths, then the random walk; each member of the grid, its code and its kernel,
+is one entry of :data:`MEMBERS`, :mod:`.members`); each model's columns are projected out once per ``τ`` (:class:`Basis`: the
 contrasts the model leaves free, in which its GLS residual projector is diagonal), so
 every likelihood on the grid costs ``O(n)``.
 
@@ -170,10 +171,9 @@ from .gls import (
     profile,
     studentised,
 )
+from .members import FLICKER, MEMBERS, PLACEMENT, GridMember, member_of, members_in, register_member, unregister_member
 from .problem import (
-    FLICKER,
     MIN_WANDER_DOF,
-    PLACEMENT,
     POINT_DURATION,
     TAU_PER_DECADE,
     TAU_PER_DECADE_FINE,
@@ -193,7 +193,8 @@ from .rests import RestAllan, rest_allan
 from .simulation import contrast_covariance, simulate_interval_means
 
 __all__ = ["BATCHES", "Basis", "CHI2_95", "COMMON_GRID", "EffectInformation", "FLICKER", "MAX_WHITE_SCALE",
-           "MIN_WANDER_DOF", "RestAllan", "is_timed", "rest_allan",
+           "GridMember", "MEMBERS", "MIN_WANDER_DOF", "RestAllan", "is_timed", "member_of", "members_in", "register_member",
+           "rest_allan", "unregister_member",
            "MIN_WHITE_SCALE", "PLACEMENT", "POINT_DURATION", "Problem", "Q_REL_FINE", "Q_REL_GRID", "RoundTests",
            "S_FACTORS", "Surface", "TAU_PER_DECADE", "TAU_PER_DECADE_FINE", "WanderError", "WanderFit", "at",
            "axis_gram", "axis_weight", "basis", "contrast_covariance", "directions", "effect_information",

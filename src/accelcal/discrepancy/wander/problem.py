@@ -8,13 +8,12 @@ contrast coordinates, with the kernels diagonalised on a grid of correlation tim
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ...errors import AccelcalError
-from ...noise.terms import IntervalPairs, noise_term
+from .members import MEMBERS, column_members, member_of
 from .rests import RestAllan
 
 #: Correlation times per decade of the grid of the tests, and of the report's profile.
@@ -35,37 +34,25 @@ class WanderError(AccelcalError):
 # --------------------------------------------------------------------------- kernels
 
 
-#: The member of the grid of correlation times that stands for the per-placement offset: an
-#: offset independent from pose to pose and constant within each (``τ = 0`` on the grid).
-PLACEMENT = 0.0
-#: The member that stands for a flicker bias (1/f: a flat Allan floor ``0.664 B`` at every
-#: averaging time; the limit of Gauss–Markov components of equal Allan share spread evenly
-#: over the decades).  Its generalised covariance is ``−(B²/π) ln|t − t'|``
-#: (:class:`accelcal.noise.terms.BiasInstability`), a unit member has ``B = 1``, so its
-#: ``q_abs`` is ``B²``.  A sum of processes from seconds to minutes (the "flicker-like
-#: floor" of many MEMS records) is nearer to it than to any one Gauss–Markov process or
-#: random walk: with it in the grid, REML chooses between them by their likelihood (the
-#: same number of parameters).  Coded as ``τ = −1`` (no correlation time).
-FLICKER = -1.0
-
-
 def is_timed(taus) -> np.ndarray:
     """Whether each member of a grid has a correlation time (Gauss–Markov or random walk,
-    not the per-placement offset nor flicker)."""
+    not the per-placement offset nor flicker: :attr:`.members.GridMember.timed`)."""
     taus = np.asarray(taus, float)
-    return (taus != PLACEMENT) & (taus != FLICKER)
+    out = np.zeros(taus.shape, bool)
+    for m, own in column_members(taus):
+        out |= own & m.timed
+    return out
 
 
-def tau_grid(durations, span: float, per_decade: int = TAU_PER_DECADE, flicker: bool = True) -> np.ndarray:
-    """The wander's members: flicker (:data:`FLICKER`, unless ``flicker`` is False), the
-    per-placement offset (:data:`PLACEMENT`), then correlation times [s], ``per_decade``
-    per decade from a tenth of the shortest pose to ten session lengths, then ``inf`` (the
-    random walk)."""
+def tau_grid(durations, span: float, per_decade: int = TAU_PER_DECADE, members=None) -> np.ndarray:
+    """The wander's grid: the codes of each member of :data:`.members.MEMBERS` (``members``:
+    their ids, default all), in table order — flicker (:data:`~.members.FLICKER`), the per-placement
+    offset (:data:`~.members.PLACEMENT`), correlation times [s], ``per_decade`` per decade from a
+    tenth of the shortest pose to ten session lengths, then ``inf`` (the random walk)."""
     lo = 0.1 * max(float(np.min(durations)), POINT_DURATION)
     hi = 10.0 * max(span, 10 * lo)
-    k = int(math.ceil(math.log10(hi / lo) * per_decade))
-    head = [FLICKER, PLACEMENT] if flicker else [PLACEMENT]
-    return np.concatenate([head, np.geomspace(lo, hi, k + 1), [np.inf]])
+    chosen = MEMBERS.values() if members is None else [m for m in MEMBERS.values() if m.id in members]
+    return np.concatenate([m.codes(lo, hi, per_decade) for m in chosen])
 
 
 def axis_gram(grad, common: float = 0.0) -> np.ndarray:
@@ -111,37 +98,17 @@ def wander_kernels(taus, starts, durations, grad, common: float = 0.0) -> np.nda
 
 
 def _variograms(taus, starts, durations) -> np.ndarray:
-    """``D_ij = Var(β̄_i − β̄_j)`` of a unit wander for every ``τ`` of ``taus`` (T, n, n);
-    ``τ = 0`` (:data:`PLACEMENT`): unit offsets independent between poses, ``D = 2`` off the
-    diagonal; ``τ = −1`` (:data:`FLICKER`): flicker of ``B = 1``."""
+    """``D_ij = Var(β̄_i − β̄_j)`` of a unit wander for every code of ``taus`` (T, n, n):
+    each member's own (:meth:`.members.GridMember.variogram`)."""
     taus = np.asarray(taus, float)
     a, T = np.asarray(starts, float), np.asarray(durations, float)
     first_end = np.where(a[:, None] <= a[None, :], (a + T)[:, None], (a + T)[None, :])
     gap = np.maximum(np.maximum(a[:, None], a[None, :]) - first_end, 0.0)      # (n, n)
     D = np.empty((taus.size,) + gap.shape)
-    rw = np.isinf(taus)
-    D[rw] = gap + (T[:, None] + T[None, :]) / 3
-    pl = taus == PLACEMENT
-    D[pl] = 2.0
-    fl = taus == FLICKER
-    if fl.any():
-        D[fl] = flicker_variogram(a, T)
-    tc = taus[~rw & ~pl & ~fl][:, None]                                          # (T', 1)
-    W = 2 * (tc * T + tc**2 * np.expm1(-T / tc)) / T**2                          # (T', n)
-    E = -np.expm1(-T / tc) / T                                                   # (T', n)
-    cov = tc[:, :, None] ** 2 * E[:, :, None] * E[:, None, :] * np.exp(-gap / tc[:, :, None])
-    D[~rw & ~pl & ~fl] = W[:, :, None] + W[:, None, :] - 2 * cov
+    for m, own in column_members(taus):
+        D[own] = m.variogram(taus[own], a, T, gap)
     idx = np.arange(gap.shape[0])
     D[:, idx, idx] = 0.0
-    return D
-
-
-def flicker_variogram(starts, durations) -> np.ndarray:
-    """``D_ij`` of the interval means of a unit flicker (``B = 1``, :data:`FLICKER`)."""
-    a, T = np.asarray(starts, float), np.asarray(durations, float)
-    D = np.asarray(noise_term("bias_instability").interval_difference_variance(1.0, None, IntervalPairs(a, T)),
-                   float).copy()
-    np.fill_diagonal(D, 0.0)
     return D
 
 
@@ -149,12 +116,9 @@ def gm_variance(q_abs: float, tau: float) -> tuple[float, float]:
     """``(s, K)`` of a wander: Gauss–Markov std ``s`` and its short-lag random-walk
     coefficient ``K = sqrt(2 s²/τ)``; for ``tau = inf``, ``q_abs`` is ``K²`` and ``s = inf``;
     for the per-placement offset (``tau = 0``) ``s`` its std and ``K`` NaN (no time scale);
-    for flicker (``tau = −1``) ``s`` its coefficient ``B`` and ``K`` NaN."""
-    if tau in (PLACEMENT, FLICKER):
-        return math.sqrt(max(q_abs, 0.0)), float("nan")
-    if np.isinf(tau):
-        return float("inf") if q_abs > 0 else 0.0, math.sqrt(max(q_abs, 0.0))
-    return math.sqrt(max(q_abs, 0.0)), math.sqrt(2.0 * max(q_abs, 0.0) / tau)
+    for flicker (``tau = −1``) ``s`` its coefficient ``B`` and ``K`` NaN (the member's
+    :meth:`~.members.GridMember.size_K`)."""
+    return member_of(tau).size_K(q_abs, tau)
 
 
 # --------------------------------------------------------------------------- the linearised problem
@@ -291,7 +255,6 @@ def problem(r, J, sigma, grad, starts, durations, taus=None, notes=(), common: f
 
 
 
-__all__ = ["FLICKER", "MIN_WANDER_DOF", "PLACEMENT", "flicker_variogram", "is_timed", "POINT_DURATION", "TAU_PER_DECADE", "TAU_PER_DECADE_FINE", "Problem",
-           "WanderError", "axis_gram", "axis_weight", "gm_variance", "kernel_eigensystems", "problem", "tau_grid",
-           "wander_kernel",
-           "wander_kernels"]
+__all__ = ["MIN_WANDER_DOF", "POINT_DURATION", "TAU_PER_DECADE", "TAU_PER_DECADE_FINE", "Problem", "WanderError",
+           "axis_gram", "axis_weight", "gm_variance", "is_timed", "kernel_eigensystems", "problem", "tau_grid",
+           "wander_kernel", "wander_kernels"]

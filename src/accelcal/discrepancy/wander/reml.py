@@ -11,7 +11,8 @@ import numpy as np
 
 from ... import distributions as dist
 from .gls import MAX_WHITE_SCALE, MIN_WHITE_SCALE, Q_REL_GRID, Basis, basis, profile
-from .problem import FLICKER, PLACEMENT, TAU_PER_DECADE_FINE, Problem, gm_variance, kernel_eigensystems, tau_grid
+from .members import GridMember, column_members, member_of, members_in
+from .problem import TAU_PER_DECADE_FINE, Problem, gm_variance, kernel_eigensystems, tau_grid
 
 #: ``χ²₁`` quantile of the 95 % profile-likelihood intervals.
 CHI2_95 = float(dist.chi2_isf(0.05, 1))
@@ -58,14 +59,9 @@ class WanderFit:
         return self.q_rel > 0
 
     @property
-    def placement(self) -> bool:
-        """Whether the estimate is the per-placement offset (``τ = 0``: :data:`~.problem.PLACEMENT`)."""
-        return self.present and self.tau == PLACEMENT
-
-    @property
-    def flicker(self) -> bool:
-        """Whether the estimate is the flicker member (``τ = −1``: :data:`~.problem.FLICKER`)."""
-        return self.present and self.tau == FLICKER
+    def member(self) -> GridMember:
+        """The member of the grid the estimate stands at (:data:`.members.MEMBERS`)."""
+        return member_of(self.tau)
 
 
 #: Relative variances of the report's grid: 0, then ten per decade.
@@ -86,8 +82,7 @@ def fit_wander(prob: Problem, X: np.ndarray, fine: bool = True, bas: Basis | Non
         reml = sf.reml[0]
         t, k = np.unravel_index(int(np.argmin(reml)), reml.shape)
         return _wander_at(prob, int(t), float(Q_REL_GRID[k]), float(sf.white_scale()[0, t, k]), float(reml[t, k]))
-    fp = prob.with_taus(tau_grid(prob.durations, prob.span, TAU_PER_DECADE_FINE, flicker=bool(np.any(
-        prob.taus == FLICKER))))
+    fp = prob.with_taus(tau_grid(prob.durations, prob.span, TAU_PER_DECADE_FINE, members=members_in(prob.taus)))
     sf = profile(fp, X, fp.y[None], Q_REL_FINE)
     nu = max(sf.m - sf.p, 1)
     quad = sf.quad[0]                                           # (T, Q)
@@ -106,26 +101,27 @@ def fit_wander(prob: Problem, X: np.ndarray, fine: bool = True, bas: Basis | Non
     taus, T = fp.taus, fp.taus.size
     tv, qv = taus[ct][:, None], Q_REL_FINE[cq][:, None]
     q_abs = s_full * qv / fp.scale[ct][:, None]
-    rw, pl, fl = np.isinf(tv), tv == PLACEMENT, tv == FLICKER
+    col = _columns(taus)
+    stationary, has_tau, kind = (a[ct][:, None] for a in (col.stationary, col.has_tau, col.size_kind))
     with np.errstate(divide="ignore", invalid="ignore"):
-        size = np.where(rw, np.inf, np.sqrt(q_abs))
-        K = np.where(rw, np.sqrt(q_abs), np.sqrt(2 * q_abs / np.where(rw | pl | fl, 1.0, tv)))
+        size = np.where(stationary, np.sqrt(q_abs), np.inf)
+        K = np.where(qv > 0, col.K(ct, q_abs, tv), 0.0)  # no wander: K = 0 whatever the member
     # the residual excess the model predicts on average: sqrt(s (1 + q)) (mean eigenvalue 1)
     excess = np.sqrt(s_full * (1.0 + qv))
     wander = inside & (qv > 0)
-    # the per-placement and flicker members have no time scale: the intervals of τ and K are
-    # the timed wanders' (the flicker member's size is its B, not a std: the size interval
-    # is of the member chosen)
-    timed = wander & ~pl & ~fl
-    bound = _bounds(inside, wander, timed, wander & pl, ct, cq, taus, float(s_hat[tf, kf]), wander & fl)
+    # members without a time scale (the per-placement offset, flicker): the intervals of τ
+    # and K are the timed wanders' (and τ's the offset's 0; the flicker member's size is
+    # its B, not a std: the size interval is of the members whose size is the chosen one's)
+    timed = wander & col.timed[ct][:, None]
+    bound = _bounds(inside, wander, timed, ct, cq, col, float(s_hat[tf, kf]))
 
     def rng(a, mask):
         v = a[mask]
         return (float(np.min(v)), float(np.max(v))) if v.size else (float("nan"), float("nan"))
 
-    tau_ci = rng(np.broadcast_to(tv, inside.shape), wander & ~fl)
-    same = inside & ((fl == (taus[tf] == FLICKER)) | (qv == 0))
-    size_ci, K_ci = rng(size, same), rng(K, inside & ~((pl | fl) & (qv > 0)))
+    tau_ci = rng(np.broadcast_to(tv, inside.shape), wander & has_tau)
+    same = inside & ((kind == col.size_kind[tf]) | (qv == 0))
+    size_ci, K_ci = rng(size, same), rng(K, inside & (col.timed[ct][:, None] | (qv == 0)))
     if inside[cq == 0].any():  # q = 0 inside the region: the lower ends are 0
         size_ci, K_ci = (0.0, size_ci[1]), (0.0, K_ci[1])
     out = _wander_at(fp, int(tf), float(Q_REL_FINE[kf]), float(s_hat[tf, kf]), best)
@@ -134,24 +130,58 @@ def fit_wander(prob: Problem, X: np.ndarray, fine: bool = True, bas: Basis | Non
                         "at_bound": bound})
 
 
-def _bounds(inside, wander, timed, held, ct, cq, taus, s_opt: float, flick=None) -> tuple[str, ...]:
+@dataclass(frozen=True)
+class _Columns:
+    """What each column of a grid's member is (:mod:`.members`): the arrays (T,) of
+    :attr:`~.members.GridMember.stationary`, ``timed``, ``has_tau``, ``size_kind``."""
+
+    taus: np.ndarray
+    owners: list
+    stationary: np.ndarray
+    timed: np.ndarray
+    has_tau: np.ndarray
+    size_kind: np.ndarray
+
+    def K(self, ct, q_abs, tv) -> np.ndarray:
+        """Each member's random-walk coefficient at the grid points of columns ``ct`` (N,)."""
+        out = np.full(q_abs.shape, np.nan)
+        for m, own in self.owners:
+            rows = own[ct]
+            out[rows] = m.K(q_abs[rows], tv[rows])
+        return out
+
+    def notes(self, wander, ct) -> list[tuple[str, str]]:
+        """``(tau_note, region_note)`` of each member, in table order, that the region holds with a wander."""
+        return [(m.tau_note, m.region_note) for m, own in self.owners if wander[own[ct]].any()]
+
+
+def _columns(taus) -> _Columns:
+    owners = column_members(taus)
+    member = [next(m for m, own in owners if own[t]) for t in range(taus.size)]
+
+    def attr(name, dtype):
+        return np.array([getattr(m, name) for m in member], dtype)
+
+    return _Columns(taus, owners, attr("stationary", bool), attr("timed", bool), attr("has_tau", bool),
+                    attr("size_kind", object))
+
+
+def _bounds(inside, wander, timed, ct, cq, col: _Columns, s_opt: float) -> tuple[str, ...]:
     """Where the 95 % region of :func:`fit_wander` meets an end of its grid (``inside``: the
-    region's points; ``wander``/``timed``: those with a wander / a timed one; ``held``: the
-    per-placement member with a wander; ``ct``/``cq``: their τ and q indices; ``taus``: the
-    grid; ``s_opt``: the white scale at the optimum; ``flick``: the flicker member with a
-    wander)."""
+    region's points; ``wander``/``timed``: those with a wander / a timed one; ``ct``/``cq``:
+    their τ and q indices; ``col``: the grid's members; ``s_opt``: the white scale at the
+    optimum), and the notes of the members it holds with a wander (:mod:`.members`)."""
     bound = []
-    finite = taus[np.isfinite(taus) & (taus > 0)]
+    taus = col.taus
+    finite = taus[np.isfinite(taus) & col.timed]
     if inside[cq == Q_REL_FINE.size - 1].any():
         bound.append("size: upper end of the grid (q_rel 1e4)")
     if timed[(taus[ct] >= finite.max())[:, None] & timed].any():
         bound.append("tau: the interval reaches the random walk (no upper bound)")
     if timed[(taus[ct] == finite.min())[:, None] & timed].any():
         bound.append("tau: lower end of the grid")
-    if held.any():
-        bound.append("tau: the interval holds the per-placement offset (no time correlation between the poses)")
-    if flick is not None and flick.any():
-        bound.append("the 95 % region holds the flicker member (a 1/f floor: no single correlation time)")
+    notes = col.notes(wander, ct)
+    bound += [t for t, _ in notes if t] + [r for _, r in notes if r]
     if inside[:, 0].any() or inside[:, -1].any():
         bound.append("white scale: end of the scanned range (x0.1 - x10 of its estimate)")
     if np.isclose(s_opt, MIN_WHITE_SCALE):

@@ -42,7 +42,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...noise.terms import model_avar
+from .members import member_of
 
 #: Fewest blocks of one octave a rest must hold for that octave (three differences).
 MIN_BLOCKS = 4
@@ -92,14 +92,8 @@ class RestAllan:
 
     def member_avar(self, tau: float) -> np.ndarray:
         """``A_M(τ_k)`` (K,) of a unit member of the wander's grid (``tau``: its code,
-        :func:`~.problem.tau_grid`; the per-placement offset is invisible in the rests)."""
-        if tau == 0.0:
-            return np.zeros(self.taus.size)
-        if tau == -1.0:
-            return model_avar({"bias_instability": 1.0}, self.taus, self.fs)
-        if np.isinf(tau):
-            return model_avar({"random_walk": 1.0}, self.taus, self.fs)
-        return model_avar({"gauss_markov": (1.0, float(tau))}, self.taus, self.fs)
+        :meth:`.members.GridMember.rest_avar`; the per-placement offset is invisible in the rests)."""
+        return member_of(tau).rest_avar(tau, self.taus, self.fs)
 
     def deviance_grid(self, taus, scale, qrel) -> np.ndarray:
         """The rests' ``−2ℓ`` on the wander's grid (T, Q), at ``q_abs = q/scale_t``

@@ -47,6 +47,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .members import member_of
 from .problem import Problem, wander_kernel
 from .rests import RestAllan, rest_deviance
 
@@ -113,9 +114,8 @@ def pose_covariance(short: ShortPart, starts, durations, grad) -> np.ndarray:
     """Covariance (n, n) of the pose residuals from the short component, less each pose
     mean's own variance (already in its standard error; module docstring)."""
     K = wander_kernel(short.tau, starts, durations, grad)        # its diagonal is the bias's business
-    T = np.asarray(durations, float)
-    tau = short.tau
-    own = 2 * (tau * T + tau**2 * np.expm1(-T / tau)) / T**2     # variance of a unit process's interval mean
+    # the variance of a unit process's interval mean (the short part is a Gauss-Markov member)
+    own = member_of(short.tau).interval_variance(short.tau, np.asarray(durations, float))
     gdiag = np.sum(np.asarray(grad, float) ** 2, axis=1)
     return short.q_abs * (K - np.diag(gdiag * own))
 
