@@ -35,14 +35,14 @@ import time
 import numpy as np
 
 from ..model import dM_dparams, params_from_m
-from ..registry import estimators
+from ..registry import MotionEstimator, estimators
 from ..uncertainty import residual_jacobian
 from .assess import assess, range_use
 from .errors import GyroInputError, NoMotionError, SaturatedGyroError, TooFewMotionsError
 from .fit import MIN_MOTIONS, MotionSet, evaluate, initial_scale
 from .model import RAW_UNITS, GyroModel
 from .noise import MotionNoise, bias_wander, fit_with_noise, g_sensitivity_test, wander_variance
-from .rests import (GyroRests, bias_series, check_time_base, fit_bias, gyro_rests,
+from .rests import (BiasEstimate, GyroRests, TimeBase, bias_series, check_time_base, fit_bias, gyro_rests,
                     motion_bias_variance, rest_noise, sample_interval, saturated_samples)
 from .result import RULES, GyroCalibration
 from .unit_evidence import unit_from_motions
@@ -357,7 +357,7 @@ def prepare_session(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None,
     _check_axes(ms, nominal, tb.h)
     return PreparedSession(t=t, gyro=gyro, estimator=est, time_base=tb, n_rests=len(u), bias_fit=best,
                            g_sensitivity=g_sensitivity, g_test=g_test, all_motions=all_ms, used=used, notes=notes,
-                           raw_unit=raw_unit, nominal=nominal, nominal_from=nominal_from,
+                           motions=ms, raw_unit=raw_unit, nominal=nominal, nominal_from=nominal_from,
                            bases=_time_bases(time_base, tb, t), integrator=integrator, bias=bias,
                            gyro_range=gyro_range, seconds=time.perf_counter() - t0)
 
@@ -371,22 +371,23 @@ class PreparedSession:
 
     t: np.ndarray  #: time [s] of the samples (n,)
     gyro: np.ndarray  #: raw gyro samples (n, 3)
-    estimator: object  #: the registry's entry of the motion estimator
-    time_base: object  #: the time column's step, rate, jitter and gaps (:func:`accelcal.gyro.rests.sample_interval`)
+    estimator: MotionEstimator  #: the registry's entry
+    time_base: TimeBase  #: the time column's step, rate, jitter and gaps
     n_rests: int
-    bias_fit: object  #: the bias (and g-sensitivity) from the rests (:func:`accelcal.gyro.rests.fit_bias`)
+    bias_fit: BiasEstimate  #: the bias (and g-sensitivity) from the rests
     g_sensitivity: bool  #: whether ``G`` is fitted
     g_test: dict  #: how that was decided
     all_motions: MotionSet  #: every motion between the rests, bias removed, with its noise
     used: np.ndarray  #: which motions are usable (bool per motion)
     notes: list  #: why the others are not
+    motions: MotionSet  #: the usable motions
     raw_unit: str
     nominal: float  #: rad/s per raw unit
     nominal_from: str  #: where ``nominal`` comes from
     bases: dict  #: the time bases to fit, ``{name: h or t}``
     integrator: str
     bias: str  #: the bias mode
-    gyro_range: object  #: the measuring range given, or None
+    gyro_range: tuple | None  #: the measuring range given
     seconds: float  #: wall time of the preparation
 
     def fit(self, noise_model: bool = True) -> GyroCalibration:
@@ -397,8 +398,8 @@ class PreparedSession:
                                  "models, prepare the session once (prepare_session) and fit it with each")
         t0 = time.perf_counter()
         best, tb, used = self.bias_fit, self.time_base, self.used
-        fits, rest_fits, noises = _fit_time_bases(self.estimator.load(), self.all_motions.subset(used), self.bases,
-                                                  self.nominal, self.integrator, noise_model)
+        fits, rest_fits, noises = _fit_time_bases(self.estimator.load(), self.motions, self.bases, self.nominal,
+                                                  self.integrator, noise_model)
         chosen = min(rest_fits, key=lambda k: rest_fits[k].chi2)
         fit = fits[chosen]
         noise, adj = noises[chosen]
