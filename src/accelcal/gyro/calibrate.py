@@ -18,8 +18,12 @@ calibration (anything with ``apply(raw) -> m/s²``, e.g. :class:`accelcal.calibr
 5. judges the result: χ² of the motion residuals against the noise, the rotation each
    gyro axis saw, the integration error (the two product integrators differ by more than
    a fraction of the noise: the sample rate is too low for the motion), the bias moving
-   between rests, jittery timestamps.  Each finding is a plain sentence in
-   ``quality.warnings``.
+   between rests, jittery timestamps (:mod:`accelcal.gyro.assess`).  Each finding is a
+   plain sentence in ``quality.warnings``.
+
+Steps 1-3 do not depend on the noise model: :func:`prepare_session` does them once and
+returns a :class:`PreparedSession`, whose ``fit(noise_model)`` does steps 4-5 and
+returns one calibration; :func:`calibrate_gyro` is the two in a row.
 
 Bad input raises a typed error (:mod:`accelcal.gyro.errors`) with one line naming the
 cause and the fix: no rotation between the rests, a gyro that shows no rotation where
