@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from accelcal.calibration import calibrate_poses
-from accelcal.gyro.calibrate import calibrate_gyro
+from accelcal.gyro.calibrate import calibrate_gyro, prepare_session
 from accelcal.gyro.errors import GyroInputError, NoMotionError, SaturatedGyroError, TooFewMotionsError
 from accelcal.gyro.rests import gyro_rests
 from accelcal.gyro.result import GyroCalibration
@@ -153,19 +153,34 @@ def test_too_few_motions_and_an_axis_that_never_turns():
         calibrate_gyro(about_x["t"], about_x["gyro"], poses, _Identity())
 
 
-def test_several_noise_models_in_one_call_equal_separate_calls():
-    """A tuple of noise models finds the rests and motions once (the coverage Monte Carlo
-    compares the two): each calibration is the one a separate call gives, bit for bit."""
+def test_a_prepared_session_fits_each_noise_model_as_a_separate_call_does():
+    """The rests and motions found once (prepare_session; the coverage Monte Carlo fits
+    each trial both ways): each fit is the one a separate calibrate_gyro call gives, bit for
+    bit, and fitting leaves the session as it was (a second fit gives the same)."""
     r = _recording(seed=11)
     poses = detect_static(r["t"], r["acc"])
     cal = calibrate_poses(poses, r["g"], "full_lls", unit="m/s^2")
-    both = calibrate_gyro(r["t"], r["gyro"], poses, cal, acc=r["acc"], noise_model=(True, False))
-    assert isinstance(both, tuple) and len(both) == 2
-    for model, g in zip((True, False), both):
+    session = prepare_session(r["t"], r["gyro"], poses, cal, acc=r["acc"])
+
+    def without_times(g):  # wall times differ from run to run
+        d = g.to_dict()
+        d["settings"] = {k: v for k, v in d["settings"].items() if k not in ("seconds", "fit_seconds")}
+        return d
+
+    fitted = {model: session.fit(noise_model=model) for model in (True, False)}
+    for model, g in fitted.items():
         one = calibrate_gyro(r["t"], r["gyro"], poses, cal, acc=r["acc"], noise_model=model)
-        a, b = g.to_dict(), one.to_dict()
-        for d in (a, b):  # wall times differ from run to run
-            d["settings"] = {k: v for k, v in d["settings"].items() if k not in ("seconds", "fit_seconds")}
-        assert a == b
+        assert type(g) is type(one)
+        assert without_times(g) == without_times(one)
         assert np.array_equal(g.standard_errors["C"], one.standard_errors["C"])
-    assert both[0].settings["noise_model"] is not None and both[1].settings["noise_model"] is None
+        assert without_times(session.fit(noise_model=model)) == without_times(g)
+    assert fitted[True].settings["noise_model"] is not None and fitted[False].settings["noise_model"] is None
+    assert not np.array_equal(fitted[True].standard_errors["C"], fitted[False].standard_errors["C"])
+
+
+@pytest.mark.parametrize("value", [(True, False), None])
+def test_noise_model_is_a_bool_and_a_tuple_says_how_to_fit_several(value):
+    r = _recording(seed=11)
+    poses = detect_static(r["t"], r["acc"])
+    with pytest.raises(GyroInputError, match="noise_model must be True or False.*prepare the session once"):
+        calibrate_gyro(r["t"], r["gyro"], poses, _Identity(), noise_model=value)

@@ -18,8 +18,12 @@ calibration (anything with ``apply(raw) -> m/s²``, e.g. :class:`accelcal.calibr
 5. judges the result: χ² of the motion residuals against the noise, the rotation each
    gyro axis saw, the integration error (the two product integrators differ by more than
    a fraction of the noise: the sample rate is too low for the motion), the bias moving
-   between rests, jittery timestamps.  Each finding is a plain sentence in
-   ``quality.warnings``.
+   between rests, jittery timestamps (:mod:`accelcal.gyro.assess`).  Each finding is a
+   plain sentence in ``quality.warnings``.
+
+Steps 1-3 do not depend on the noise model: :func:`prepare_session` does them once and
+returns a :class:`PreparedSession`, whose ``fit(noise_model)`` does steps 4-5 and
+returns one calibration; :func:`calibrate_gyro` is the two in a row.
 
 Bad input raises a typed error (:mod:`accelcal.gyro.errors`) with one line naming the
 cause and the fix: no rotation between the rests, a gyro that shows no rotation where
@@ -31,22 +35,20 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
-from types import SimpleNamespace
 
 import numpy as np
 
-from .. import distributions as dist
 from ..model import dM_dparams, params_from_m
-from ..registry import estimators
+from ..registry import MotionEstimator, estimators
 from ..uncertainty import residual_jacobian
+from .assess import assess, range_use
 from .errors import GyroInputError, NoMotionError, SaturatedGyroError, TooFewMotionsError
-from .fit import MIN_MOTIONS, MotionSet, evaluate, initial_scale, rotation_angles_deg
-from .integrate import integrate_intervals, log_so3
+from .fit import MIN_MOTIONS, MotionSet, evaluate, initial_scale
 from .model import RAW_UNITS, GyroModel
 from .noise import MotionNoise, bias_wander, fit_with_noise, g_sensitivity_test, wander_variance
-from .rests import (GyroRests, bias_series, check_time_base, fit_bias, gyro_rests, measuring_range,
+from .rests import (BiasEstimate, GyroRests, TimeBase, bias_series, check_time_base, fit_bias, gyro_rests,
                     motion_bias_variance, rest_noise, sample_interval, saturated_samples)
-from .result import RULES, GyroCalibration, GyroQuality
+from .result import RULES, GyroCalibration
 from .unit_evidence import unit_from_motions
 
 #: Total rotation [deg] about a gyro axis below which its column of C is not determined.
@@ -266,8 +268,9 @@ def _standard_errors(C, cov, nominal, excess, bias_est) -> dict:
 def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, t_gyro=None,
                    nominal_sensitivity=None, estimator: str = "gyro_iterative", integrator: str = "magnus4",
                    bias: str = "interpolated", g_sensitivity="auto", gyro_range=None, time_base: str = "auto",
-                   noise_model: bool | tuple = True) -> GyroCalibration | tuple[GyroCalibration, ...]:
-    """Calibrate the gyro of a multi-position session (module docstring).
+                   noise_model: bool = True) -> GyroCalibration:
+    """Calibrate the gyro of a multi-position session (module docstring):
+    :func:`prepare_session`, then :meth:`PreparedSession.fit` with ``noise_model``.
 
     Parameters
     ----------
@@ -311,26 +314,29 @@ def calibrate_gyro(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, 
         5 %); then both are fitted and the one whose motion residuals fit the noise better
         (lower χ²) is kept — host receive times jitter while the sensor samples evenly,
         a sensor's own time stamps jitter with its sampling — and the choice is said.
-    noise_model : bool or tuple of bool
+    noise_model : bool
         Fit the noise between the rests (:mod:`accelcal.gyro.noise`: the bias's wander from
         the rests, per-motion rotation errors, extra angle random walk in the motions, rest
         direction errors) and weight the motions and give the ± by it (default).  False:
         the rests' white noise alone, the ± scaled by ``max(1, excess)`` (the former
         behaviour; the 95 % intervals then cover far less than 95 % when the bias wanders).
-        A tuple: one calibration per value (a tuple), the rests and motions found once.
+        Both on one session: :func:`prepare_session` once, then its ``fit`` with each.
     """
+    return prepare_session(t, gyro, poses, accel, raw_unit=raw_unit, acc=acc, t_gyro=t_gyro, bias=bias,
+                           nominal_sensitivity=nominal_sensitivity, estimator=estimator, integrator=integrator,
+                           g_sensitivity=g_sensitivity, gyro_range=gyro_range, time_base=time_base).fit(noise_model)
+
+
+def prepare_session(t, gyro, poses, accel, *, raw_unit: str = "rad/s", acc=None, t_gyro=None,
+                    nominal_sensitivity=None, estimator: str = "gyro_iterative", integrator: str = "magnus4",
+                    bias: str = "interpolated", g_sensitivity="auto", gyro_range=None,
+                    time_base: str = "auto") -> PreparedSession:
+    """Steps 1-3 of the module docstring, which no noise model changes: the time base, the
+    gyro's rests and its bias, the usable motions with their noise, the unit and the
+    nominal scale — checked, with bad input refused here.  The parameters are
+    :func:`calibrate_gyro`'s; the result is fitted per noise model by
+    :meth:`PreparedSession.fit` (the coverage Monte Carlo fits each trial both ways)."""
     t0 = time.perf_counter()
-    s = _session(t, gyro, poses, accel, raw_unit, acc, t_gyro, nominal_sensitivity, estimator, integrator, bias,
-                 g_sensitivity, gyro_range, time_base)
-    prepared_s = time.perf_counter() - t0
-    if isinstance(noise_model, tuple):  # one calibration per model; the rests and motions found once
-        return tuple(_fit_session(s, m, prepared_s) for m in noise_model)
-    return _fit_session(s, noise_model, prepared_s)
-
-
-def _session(t, gyro, poses, accel, raw_unit, acc, t_gyro, nominal_sensitivity, estimator, integrator, bias,
-             g_sensitivity, gyro_range, time_base) -> SimpleNamespace:
-    """Steps 1-3 of the module docstring: what the fit of ``C`` starts from, whatever the noise model."""
     t = np.asarray(t, float)
     gyro = np.asarray(gyro, float)
     if gyro.shape != (t.size, 3) or not np.all(np.isfinite(gyro)):
@@ -353,34 +359,71 @@ def _session(t, gyro, poses, accel, raw_unit, acc, t_gyro, nominal_sensitivity, 
     ms = all_ms.subset(used)
     raw_unit, nominal, nominal_from = _unit_and_nominal(raw_unit, nominal_sensitivity, ms, u, integrator, gyro)
     _check_axes(ms, nominal, tb.h)
-    return SimpleNamespace(t=t, gyro=gyro, est=est, tb=tb, n_rests=len(u), best=best, g_sensitivity=g_sensitivity,
-                           g_test=g_test, all_ms=all_ms, used=used, notes=notes, ms=ms, raw_unit=raw_unit,
-                           nominal=nominal, nominal_from=nominal_from, bases=_time_bases(time_base, tb, t),
-                           integrator=integrator, bias=bias, gyro_range=gyro_range)
+    return PreparedSession(t=t, gyro=gyro, estimator=est, time_base=tb, n_rests=len(u), bias_fit=best,
+                           g_sensitivity=g_sensitivity, g_test=g_test, all_motions=all_ms, used=used, notes=notes,
+                           motions=ms, raw_unit=raw_unit, nominal=nominal, nominal_from=nominal_from,
+                           bases=_time_bases(time_base, tb, t), integrator=integrator, bias=bias,
+                           gyro_range=gyro_range, seconds=time.perf_counter() - t0)
 
 
-def _fit_session(s: SimpleNamespace, noise_model: bool, prepared_s: float) -> GyroCalibration:
-    """Steps 4-5 of the module docstring on a :func:`_session`: ``C`` fitted and judged."""
-    t0 = time.perf_counter()
-    fits, rest_fits, noises = _fit_time_bases(s.est.load(), s.ms, s.bases, s.nominal, s.integrator, noise_model)
-    chosen = min(rest_fits, key=lambda k: rest_fits[k].chi2)
-    fit, best, tb = fits[chosen], s.best, s.tb
-    noise, adj = noises[chosen]
-    all_ms = dataclasses.replace(s.all_ms, h=s.bases[chosen])
-    model = GyroModel(fit.C, best.bias, best.g_sensitivity if s.g_sensitivity else None, s.raw_unit)
-    se = _standard_errors(fit.C, fit.cov, s.nominal, fit.excess, best)
-    chi2_per_dof = {k: f.chi2 / max(f.dof, 1) for k, f in rest_fits.items()}
-    quality, table = _assess(rest_fits[chosen], all_ms, s.used, s.notes, s.t, tb, best, s.integrator, chi2_per_dof,
-                             chosen, _range_use(s.gyro, s.gyro_range, all_ms.subset(s.used)), se["C"])
-    settings = {"estimator": s.est.name, "integrator": s.integrator, "bias_mode": s.bias, "nominal": s.nominal,
-                "nominal_from": s.nominal_from, "iterations": fit.iterations, "fit_seconds": fit.seconds,
-                "seconds": prepared_s + time.perf_counter() - t0, "n_rests": s.n_rests,
-                "time_base": {"h": tb.h, "rate": tb.rate, "jitter": tb.jitter, "gaps": int(len(tb.gaps)),
-                              "used": chosen, "chi2_per_dof": chi2_per_dof},
-                "bias_rests": {"chi2": best.chi2, "dof": best.dof, "excess": best.excess},
-                "g_sensitivity": bool(s.g_sensitivity), "g_sensitivity_test": s.g_test,
-                "noise_model": _noise_settings(noise, adj, fit) if noise_model else None}
-    return s.est.load_calibration()(model, se, quality, table, settings)
+@dataclasses.dataclass(frozen=True, eq=False)
+class PreparedSession:
+    """A session ready for the fit of ``C`` (:func:`prepare_session`): what every noise model
+    starts from.  :meth:`fit` leaves it unchanged, so one session gives each noise model
+    the calibration a separate :func:`calibrate_gyro` call gives (imucal's split of the
+    algorithm from its result: the data prepared once, fitted into a result object)."""
+
+    t: np.ndarray  #: time [s] of the samples (n,)
+    gyro: np.ndarray  #: raw gyro samples (n, 3)
+    estimator: MotionEstimator  #: the registry's entry
+    time_base: TimeBase  #: the time column's step, rate, jitter and gaps
+    n_rests: int
+    bias_fit: BiasEstimate  #: the bias (and g-sensitivity) from the rests
+    g_sensitivity: bool  #: whether ``G`` is fitted
+    g_test: dict  #: how that was decided
+    all_motions: MotionSet  #: every motion between the rests, bias removed, with its noise
+    used: np.ndarray  #: which motions are usable (bool per motion)
+    notes: list  #: why the others are not
+    motions: MotionSet  #: the usable motions
+    raw_unit: str
+    nominal: float  #: rad/s per raw unit
+    nominal_from: str  #: where ``nominal`` comes from
+    bases: dict  #: the time bases to fit, ``{name: h or t}``
+    integrator: str
+    bias: str  #: the bias mode
+    gyro_range: tuple | None  #: the measuring range given
+    seconds: float  #: wall time of the preparation
+
+    def fit(self, noise_model: bool = True) -> GyroCalibration:
+        """Steps 4-5 of the module docstring: ``C`` fitted on each time base, the base chosen,
+        judged (:func:`accelcal.gyro.assess.assess`); ``noise_model`` as :func:`calibrate_gyro`'s."""
+        if not isinstance(noise_model, (bool, np.bool_)):
+            raise GyroInputError(f"noise_model must be True or False, got {noise_model!r}: to fit several noise "
+                                 "models, prepare the session once (prepare_session) and fit it with each")
+        t0 = time.perf_counter()
+        best, tb, used = self.bias_fit, self.time_base, self.used
+        fits, rest_fits, noises = _fit_time_bases(self.estimator.load(), self.motions, self.bases, self.nominal,
+                                                  self.integrator, noise_model)
+        chosen = min(rest_fits, key=lambda k: rest_fits[k].chi2)
+        fit = fits[chosen]
+        noise, adj = noises[chosen]
+        all_ms = dataclasses.replace(self.all_motions, h=self.bases[chosen])
+        model = GyroModel(fit.C, best.bias, best.g_sensitivity if self.g_sensitivity else None, self.raw_unit)
+        se = _standard_errors(fit.C, fit.cov, self.nominal, fit.excess, best)
+        chi2_per_dof = {k: f.chi2 / max(f.dof, 1) for k, f in rest_fits.items()}
+        quality, table = assess(rest_fits[chosen], all_ms, used, self.notes, self.t, tb, best, self.integrator,
+                                chi2_per_dof, chosen, range_use(self.gyro, self.gyro_range, all_ms.subset(used)),
+                                se["C"])
+        settings = {"estimator": self.estimator.name, "integrator": self.integrator, "bias_mode": self.bias,
+                    "nominal": self.nominal, "nominal_from": self.nominal_from, "iterations": fit.iterations,
+                    "fit_seconds": fit.seconds, "seconds": self.seconds + time.perf_counter() - t0,
+                    "n_rests": self.n_rests,
+                    "time_base": {"h": tb.h, "rate": tb.rate, "jitter": tb.jitter, "gaps": int(len(tb.gaps)),
+                                  "used": chosen, "chi2_per_dof": chi2_per_dof},
+                    "bias_rests": {"chi2": best.chi2, "dof": best.dof, "excess": best.excess},
+                    "g_sensitivity": bool(self.g_sensitivity), "g_sensitivity_test": self.g_test,
+                    "noise_model": _noise_settings(noise, adj, fit) if noise_model else None}
+        return self.estimator.load_calibration()(model, se, quality, table, settings)
 
 
 def _noise_settings(noise, adj, fit) -> dict:
@@ -451,131 +494,6 @@ def _fit_time_bases(fitter, ms, bases: dict, nominal: float, integrator: str, no
     return fits, rest_fits, noises
 
 
-def _range_use(gyro, gyro_range, ms: MotionSet) -> float:
-    """Largest fraction of the measuring range (half-span about its centre) the used motions reach (NaN: unknown)."""
-    rng = measuring_range(gyro, gyro_range)
-    if rng is None:
-        return float("nan")
-    centre, half = 0.5 * (rng[0] + rng[1]), 0.5 * (rng[1] - rng[0])
-    return max(float(np.max(np.abs(gyro[a:b + 1] - centre))) / half for a, b in zip(ms.starts, ms.stops))
-
-
-def _assess(fit, all_ms: MotionSet, used, notes, t, tb, best, integrator, base_chi2, chosen, range_use, se_C):
-    """Quality, warnings and the per-motion table of a fit (``fit``: judged by the rest noise
-    alone; ``se_C`` the standard errors of ``C`` with the noise model)."""
-    ev = fit.evaluation
-    ms = all_ms.subset(used)
-    table, int_err, peak = _motion_table(fit, all_ms, used, notes, t, integrator)
-    turn = np.rad2deg(np.sum(np.abs(log_so3(ev.R)), axis=0))
-    dof = fit.dof
-    p = float(dist.chi2_sf(fit.chi2, dof)) if dof > 0 else float("nan")
-    flags, warnings = _fit_warnings(fit, p, turn, se_C)
-    more_flags, more_warnings = _data_warnings(ev, notes, tb, best, base_chi2, chosen, range_use, int_err, peak[used])
-    quality = GyroQuality(n_motions=ms.n_motions, n_parameters=9, dof=dof, chi2=fit.chi2, p_value=p,
-                          excess=fit.excess, residual_rms_deg=float(np.sqrt(np.mean(ev.angles_deg ** 2))),
-                          predicted_rms_deg=float(np.sqrt(np.mean(ev.predicted_deg ** 2))),
-                          axis_turn_deg=tuple(float(v) for v in turn), warnings=tuple(warnings + more_warnings),
-                          flags=tuple(flags + more_flags),
-                          scale_rel_se=tuple(float(v) for v in np.diag(se_C) / np.abs(np.diag(fit.C))))
-    return quality, table
-
-
-def _motion_table(fit, all_ms: MotionSet, used, notes, t, integrator):
-    """The per-motion table (every motion, used or left out), the difference of the two
-    integrators on the used ones [deg] and each motion's peak rate [deg/s]."""
-    ev = fit.evaluation
-    ms = all_ms.subset(used)
-    omega = all_ms.y @ fit.C.T
-    R_all = integrate_intervals(omega, all_ms.h, all_ms.starts, all_ms.stops, integrator).R
-    other = "coning" if integrator == "magnus4" else "magnus4"
-    R_other = integrate_intervals(omega, ms.h, ms.starts, ms.stops, other).R
-    int_err = rotation_angles_deg(np.swapaxes(ev.R, -1, -2) @ R_other)
-    peak = np.array([np.rad2deg(np.linalg.norm(omega[a:b + 1], axis=1).max()) for a, b in
-                     zip(all_ms.starts, all_ms.stops)])
-    res_all = np.full(all_ms.n_motions, np.nan)
-    pred_all = np.full(all_ms.n_motions, np.nan)
-    res_all[used], pred_all[used] = ev.angles_deg, ev.predicted_deg
-    table = {"t_start": t[all_ms.starts].tolist(), "t_end": t[all_ms.stops].tolist(),
-             "angle_deg": rotation_angles_deg(R_all).tolist(), "peak_rate_dps": peak.tolist(),
-             "residual_deg": res_all.tolist(), "predicted_deg": pred_all.tolist(),
-             "integration_deg": [None] * all_ms.n_motions, "used": used.tolist(), "note": list(notes)}
-    for i, e in zip(np.flatnonzero(used), int_err):
-        table["integration_deg"][i] = float(e)
-    return table, int_err, peak
-
-
-def _fit_warnings(fit, p: float, turn, se_C) -> tuple[list, list]:
-    """Flags and warnings about the fit itself: residuals beyond the noise, scales the motions
-    do not determine, motions too short."""
-    ev, dof, C = fit.evaluation, fit.dof, fit.C
-    warnings, flags = [], []
-    if dof > 0 and fit.excess > RULES["excess"] and p < RULES["p_value"]:
-        flags.append("excess")
-        warnings.append(f"motion residuals are {fit.excess:.3g}x what the rest noise predicts (chi2/dof = "
-                        f"{fit.chi2 / dof:.3g} on {dof} dof): the gyro model, the integration or the rests miss "
-                        "something (a disturbed rest, saturation, bias drift); the ± carry the noise model fitted to "
-                        "the motions (settings: noise_model)")
-    if 0 < dof < RULES["min_dof"]:
-        flags.append("few_dof")
-        warnings.append(f"only {dof} degrees of freedom check the fit (2 per motion less the 9 parameters): a misfit "
-                        "hardly shows and the ± it scales are uncertain by "
-                        f"{100 * math.sqrt(2 / dof):.0f}%; record at least {math.ceil((RULES['min_dof'] + 9) / 2)} motions "
-                        "between rests")
-    rel = np.diag(se_C) / np.abs(np.diag(C))
-    weak = [a for a in range(3) if rel[a] > RULES["scale_rel_se"] or turn[a] < RULES["min_axis_turn_deg"]]
-    if weak:
-        flags.append("few_axes")
-        warnings.append("the motions turn the sensor little about " + ", ".join(
-            f"{'xyz'[a]} ({turn[a]:.0f} deg in all, scale ± {100 * rel[a]:.2g}%)" for a in weak)
-            + ": that gyro's scale is poorly determined; add rotations about that axis between rests")
-    long = int(np.sum(rotation_angles_deg(ev.R) >= 30.0))
-    if long < RULES["min_long_motions"]:
-        flags.append("short_motions")
-        short = int(np.sum(rotation_angles_deg(ev.R) < RULES["short_deg"]))
-        warnings.append(f"only {long} motions turn 30 deg or more ({short} "
-                        f"turn less than {RULES['short_deg']:g} deg): short motions hardly determine the scales; "
-                        "turn the sensor further between rests")
-    return flags, warnings
-
-
-def _data_warnings(ev, notes, tb, best, base_chi2, chosen, range_use, int_err, peak_used) -> tuple[list, list]:
-    """Flags and warnings about the data: the sample rate against the motions, saturation, the
-    measuring range, gaps, jittering time steps, a drifting bias."""
-    warnings, flags = [], []
-    bad_int = int_err > RULES["integration_fraction"] * ev.predicted_deg
-    if np.any(bad_int):
-        flags.append("sample_rate")
-        warnings.append(f"in {int(bad_int.sum())} motions the two integrators differ by up to {int_err.max():.2g} deg "
-                        f"(noise {np.median(ev.predicted_deg):.2g} deg): the sample rate ({tb.rate:.4g} Hz) is low "
-                        "for these motions (up to {:.0f} deg/s); record faster or turn more slowly".format(
-                            np.nanmax(peak_used)))
-    n_sat = sum("saturated" in n for n in notes)
-    if n_sat:
-        flags.append("saturated")
-        warnings.append(f"{n_sat} motions left out: the gyro reaches its range in them (saturation); turn the "
-                        "sensor more slowly between poses")
-    if range_use > RULES["range_fraction"]:
-        flags.append("near_range")
-        warnings.append(f"the motions reach {100 * range_use:.0f}% of the gyro's measuring range: near saturation the "
-                        "scale may not be linear; turn the sensor more slowly, or give the range (--gyro-range)")
-    n_gap = sum("missing" in n for n in notes)
-    if n_gap:
-        flags.append("gaps")
-        warnings.append(f"{n_gap} motions left out: samples are missing in them (time gaps)")
-    if tb.jitter > RULES["jitter"]:
-        flags.append("jitter")
-        how = ("with the sample index at the mean rate {:.4g} Hz (host receive times?)".format(tb.rate)
-               if chosen == "index" else "with the time stamps' own steps (the sensor's sampling jitters)")
-        tried = ", ".join(f"{k} {v:.3g}" for k, v in base_chi2.items())
-        warnings.append(f"time steps jitter by {100 * tb.jitter:.0f}% of the step: the motions are integrated {how}"
-                        f" (chi2/dof: {tried})")
-    if best.mode == "all" and best.dof > 0 and best.excess > RULES["bias_excess"]:
-        flags.append("bias_drift")
-        warnings.append(f"the gyro's rest means scatter {best.excess:.3g}x their noise: the bias moves during the "
-                        "session (warm-up, drift); bias 'interpolated' follows it")
-    return flags, warnings
-
-
 def evaluate_model(t, gyro, poses, accel, C, bias_vector, *, integrator: str = "magnus4", g_sensitivity=None,
                    acc=None):
     """Per-motion misfit [deg] of *any* gyro calibration (a peer's) on a session: the angle between
@@ -594,5 +512,5 @@ def evaluate_model(t, gyro, poses, accel, C, bias_vector, *, integrator: str = "
     return evaluate(ms, C, integrator), ms
 
 
-__all__ = ["MIN_MOTIONS", "accel_direction_cov", "calibrate_gyro", "evaluate_model", "motion_estimator",
-           "motion_intervals", "motion_noise"]
+__all__ = ["MIN_MOTIONS", "PreparedSession", "accel_direction_cov", "calibrate_gyro", "evaluate_model",
+           "motion_estimator", "motion_intervals", "motion_noise", "prepare_session"]

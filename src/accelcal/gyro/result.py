@@ -24,7 +24,7 @@ from .effects import correct as correct_effects
 from .model import RAW_UNITS, GyroModel
 
 
-#: Thresholds of the warnings (:mod:`accelcal.gyro.calibrate`).
+#: Thresholds of the warnings (:mod:`accelcal.gyro.assess`).
 RULES = {"excess": 1.5, "p_value": 1e-3, "scale_rel_se": 0.01, "min_axis_turn_deg": 90.0, "short_deg": 10.0,
          "min_long_motions": 5, "integration_fraction": 0.3, "jitter": 0.05, "bias_excess": 3.0,
          "range_fraction": 0.9, "min_dof": 10}

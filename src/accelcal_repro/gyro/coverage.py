@@ -6,10 +6,11 @@ angle, per-rest accelerometer offsets, white noise — at sizes measured on the 
 and SNU sessions (:mod:`accelcal.gyro.noise`'s estimates there: walk PSD 1e-8-2e-7
 rad²/s³, per-motion relative error 0.1-0.4 %, white noise 6-7e-4 rad/s per sample at 100
 Hz), an accelerometer with 5 mrad errors calibrated (full LLS) from the same 17 rests.
-Each trial is calibrated by :func:`accelcal.gyro.calibrate.calibrate_gyro` as a
-session is (the known rests as poses, a perfect accelerometer, or with ``fitted_accelerometer``
+Each trial is calibrated as :func:`accelcal.gyro.calibrate.calibrate_gyro` calibrates a
+session (the known rests as poses, a perfect accelerometer, or with ``fitted_accelerometer``
 one with its own errors calibrated from the same rests: the gyro's frame is then the
-fitted one, whose uncertainty the ± carry), once with the noise model
+fitted one, whose uncertainty the ± carry), prepared once
+(:func:`accelcal.gyro.calibrate.prepare_session`) and fitted once with the noise model
 and once with the rest noise alone (the ± scaled by ``max(1, excess)``, the former way);
 a parameter is covered when ``|estimate - truth|`` is within its 95 % interval
 (:meth:`accelcal.gyro.result.GyroCalibration.interval95`: ``t(0.975, ν) s.e.`` with the
@@ -25,7 +26,7 @@ import numpy as np
 import pandas as pd
 
 from accelcal.calibration.fitting import calibrate_poses
-from accelcal.gyro.calibrate import calibrate_gyro
+from accelcal.gyro.calibrate import prepare_session
 from accelcal.gyro.model import GyroModel
 from accelcal.gyro.simulate import random_gyro_matrix, simulate_recording
 from accelcal.static import static_poses_from_intervals
@@ -73,9 +74,9 @@ def trial(rng: np.random.Generator, session: dict = SESSION) -> list[dict]:
         accel = calibrate_poses(poses, sim["g"], "full_lls", unit="m/s^2")
     truth = _values(GyroModel(C, np.zeros(3)))
     rows = []
-    models = (True, False)  # one call: the rests and motions are found once for both
-    cals = calibrate_gyro(sim["t"], sim["gyro"], poses, accel, g_sensitivity=False, noise_model=models)
-    for model, cal in zip(models, cals):
+    prepared = prepare_session(sim["t"], sim["gyro"], poses, accel, g_sensitivity=False)  # once for both models
+    for model in (True, False):
+        cal = prepared.fit(noise_model=model)
         est, se, half = _values(cal.model), _ses(cal), _ses(cal, half=True)
         for p, e, s, w, t in zip(PARAMETERS, est, se, half, truth):
             rows.append({"noise_model": model, "parameter": p, "error": e - t, "se": s, "half_width": w,
