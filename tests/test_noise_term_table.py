@@ -57,6 +57,9 @@ ALLOWED = {
     ("src/accelcal/discrepancy/stochastic/layer.py", "current.term_ids == ('white',)"): _BASE,
     ("src/accelcal/discrepancy/stochastic/layer.py", "current.coefficients['white']"): _BASE,
     ("src/accelcal/discrepancy/allan_check.py", "a.fit_before['white']"): _BASE,
+    ("src/accelcal/discrepancy/wander_process.py", "('per_placement', 'gauss_markov', 'random_walk')"):
+        "a wander family's REML grid members (discrepancy/wander/members.py's table, whose ids two noise "
+        "terms share): which members a family's grid holds, not a noise term's behaviour",
 }
 
 
