@@ -21,6 +21,9 @@ from snakemake.utils import min_version
 min_version("9.0")
 
 
+include: "workflow/rules/scheduler.smk"
+
+
 # One BLAS thread per job: the jobs are the parallelism (--cores, or one SLURM task each).
 # With a multi-threaded BLAS in each of two jobs on two cores, their threads spin for each
 # other's core: the discrepancy benchmark's detection ran 22x slower per job that way.
