@@ -24,6 +24,10 @@ import numpy as np
 
 from ..kernels import jit
 
+#: A flag that numba types as ``bool``, not as the constant ``Literal[bool]`` (which would
+#: compile a callee once more for that constant; see the end of the module).
+_YES, _NO = np.True_, np.False_
+
 
 def _model(p, M, dM, A):
     """``M(s, θ)``, ``∂M/∂(s, θ)`` and ``A = M⁻¹`` (identity when invalid) of one parameter
@@ -78,7 +82,7 @@ def _evaluate_batch(P, z, cov, power, additive, harmonic, basis, g, jacobian, rt
     off = _offsets(harmonic, basis)
     top = 1  # the highest power of P(x)
     poly = False  # P(x) = y needs solving (a power-1 term too)
-    coupled = False  # a harmonic effect: the three axes at once
+    coupled = _NO  # a harmonic effect: the three axes at once
     for e in range(k):
         if harmonic[e]:
             coupled = True
@@ -89,8 +93,12 @@ def _evaluate_batch(P, z, cov, power, additive, harmonic, basis, g, jacobian, rt
     for b in range(B):
         for e in range(k):
             if harmonic[e]:
-                for m in range(basis.shape[1]):
-                    K[b] += P[b, off[e] + m] * basis[e, m]
+                for m in range(basis.shape[1]):  # K[b] += P[b, off[e] + m] * basis[e, m], element by element
+                    c = P[b, off[e] + m]
+                    for j in range(3):
+                        for kk in range(3):
+                            for ll in range(3):
+                                K[b, j, kk, ll] += c * basis[e, m, j, kk, ll]
     Ms = np.empty((B, 3, 3))
     dMs = np.empty((B, 6, 3, 3))
     As = np.empty((B, 3, 3))
@@ -382,8 +390,12 @@ def _lopo_system(P, z, cov, power, additive, harmonic, basis, g, rtol, sig, norm
             d[b, j] = np.sqrt(acc) if acc != 0 else 1.0
             for i in range(n):
                 Js[j, i] /= d[b, j]
-        H[b] = np.dot(Js, Js.T)  # BLAS, as numpy's matmul of the reference
-        grad[b] = np.dot(Js, rw)
+        Hb = np.dot(Js, Js.T)  # BLAS, as numpy's matmul of the reference
+        gb = np.dot(Js, rw)
+        for j in range(q):  # copied element by element: see the end of the module
+            grad[b, j] = gb[j]
+            for k in range(q):
+                H[b, j, k] = Hb[j, k]
     return r, cost, d, H, grad
 
 
@@ -440,7 +452,7 @@ def _lopo_step(P, z, cov, power, additive, harmonic, basis, g, rtol, sig, normal
 def _weighted(p, z, cov, power, additive, harmonic, basis, g, rtol, sig):
     """Residuals, weighted Jacobian ``J / σ`` and ``x`` at one parameter vector; ``ok`` false
     where the model cannot be inverted (the numpy fit's ``fun`` returning None)."""
-    r, J, x = _evaluate_batch(p.reshape(1, -1), z, cov, power, additive, harmonic, basis, g, True, rtol)
+    r, J, x = _evaluate_batch(p.reshape(1, -1), z, cov, power, additive, harmonic, basis, g, _YES, rtol)
     n, q = J.shape[1], J.shape[2]
     ok = True
     for i in range(n):
@@ -477,7 +489,9 @@ def _lm_step(r, Jw, sig, cost, lam):
             A[i, j] = Jw[i, j] / d[j]
     for j in range(q):
         A[n + j, j] = np.sqrt(lam)
-    step = _least_squares(A, rhs) / d
+    step = _least_squares(A, rhs)
+    for j in range(q):
+        step[j] /= d[j]
     pred = 0.0
     for i in range(n):
         acc = r[i] / sig[i]
@@ -539,7 +553,9 @@ def _lm_fit(p, z, cov, power, additive, harmonic, basis, g, rtol, sig, max_iter,
     lam = 1e-6
     for it in range(1, max_iter + 1):
         step, pred = _lm_step(r, J, sig, cost, lam)
-        p_new = p + step
+        p_new = np.empty(p.shape[0])
+        for j in range(p.shape[0]):
+            p_new[j] = p[j] + step[j]
         r_new, J_new, x_new, ok = _weighted(p_new, z, cov, power, additive, harmonic, basis, g, rtol, sig)
         cost_new = _chi2(r_new, sig) if ok else np.inf
         if ok and cost_new <= cost:
@@ -558,9 +574,24 @@ def _lm_fit(p, z, cov, power, additive, harmonic, basis, g, rtol, sig, max_iter,
     return p, r, J, x, max_iter, 2
 
 
-_model = jit(_model)
+# Compile time (a fresh clone compiles every kernel once; tools/bench_kernel_compile.py
+# measures it).  numba compiles each jitted callee as a library of its own and links its
+# code into every caller's library, where LLVM optimises and emits it again: each level of
+# calls between an entry point and _evaluate_batch paid for that whole tree once more.  So:
+# * the small helpers and the wrappers between an entry point and _evaluate_batch are
+#   inlined by numba (``inline="always"``): no library of their own.  The large _newton,
+#   _newton_coupled and _jacobian keep theirs (numba's inliner deep-copies a callee's IR:
+#   inlining them measured 1-2 s slower), as do the three entry points, _coupled_at, _chi2;
+# * flags go to a jitted callee typed ``bool`` (_YES, _NO, or an argument): a literal
+#   True compiled a second _evaluate_batch (and _jacobian) typed on the constant;
+# * arrays are copied into arrays element by element, not by ``a[i] = b``: numba's
+#   array-to-array assignment brings its shape-mismatch error message, whose string
+#   formatting took ~5 s to compile;
+# * no array expressions (``a + b`` of arrays): each compiles a loop of its own.
+# The arithmetic is unchanged (the same operations in the same order: the same bits).
+_model = jit(_model, inline="always")
 _newton = jit(_newton)
-_offsets = jit(_offsets)
+_offsets = jit(_offsets, inline="always")
 _inverse3 = jit(_inverse3, inline="always")
 _coupled_at = jit(_coupled_at)
 _newton_coupled = jit(_newton_coupled)
@@ -568,13 +599,13 @@ _ipow = jit(_ipow, inline="always")
 _value_and_slope = jit(_value_and_slope, inline="always")
 _jacobian = jit(_jacobian)
 _evaluate_batch = jit(_evaluate_batch)
-_lopo_system = jit(_lopo_system)
-_lu_solve = jit(_lu_solve)
+_lopo_system = jit(_lopo_system, inline="always")
+_lu_solve = jit(_lu_solve, inline="always")
 _lopo_step = jit(_lopo_step)
-_weighted = jit(_weighted)
+_weighted = jit(_weighted, inline="always")
 _chi2 = jit(_chi2)
-_least_squares = jit(_least_squares)
-_lm_step = jit(_lm_step)
+_least_squares = jit(_least_squares, inline="always")
+_lm_step = jit(_lm_step, inline="always")
 _lm_fit = jit(_lm_fit)
 
 

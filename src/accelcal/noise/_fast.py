@@ -177,7 +177,9 @@ def _irls_one(H, y, edf, max_iter, tol):
             scale[a] = np.sqrt(acc) if acc > 0 else 1.0
             for i in range(k):
                 A[i, a] /= scale[a]
-        c_new = _nnls_small(A, bw) / scale
+        c_new = _nnls_small(A, bw)
+        for a in range(p):
+            c_new[a] /= scale[a]
         _floored_model(H, c_new, floor, m_new)
         d_new = _deviance(y, m_new, edf)
         d_old = dev
@@ -189,8 +191,10 @@ def _irls_one(H, y, edf, max_iter, tol):
             _floored_model(H, c_new, floor, m_new)
             d_new = _deviance(y, m_new, edf)
         if d_new <= d_old:
-            c[:] = c_new
-            model[:] = m_new
+            for a in range(p):  # element by element: see the end of the module
+                c[a] = c_new[a]
+            for i in range(k):
+                model[i] = m_new[i]
             dev = d_new
         else:
             d_new = d_old
@@ -205,7 +209,8 @@ def _irls_batch(H, y, edf, max_iter, tol):
     dev = np.empty(G)
     for g in range(G):
         cg, dg = _irls_one(H[g], y[g], edf, max_iter, tol)
-        c[g] = cg
+        for a in range(p):  # element by element: see the end of the module
+            c[g, a] = cg[a]
         dev[g] = dg
     return c, dev
 
@@ -292,36 +297,54 @@ def _ar1(e, rho):
 
 # The Python error model: these kernels never divide by zero on valid input, and the
 # numpy versions raise where they would.
+# Compile time (a fresh clone compiles every kernel once; tools/bench_kernel_compile.py):
+# _nnls_small and _irls_one have one caller each and are inlined by numba (a jitted callee
+# is a library of its own whose code every caller's library links, optimises and emits
+# again); arrays are copied element by element (numba's array-to-array assignment brings
+# its shape-mismatch message, whose string formatting is seconds to compile) and divided
+# in loops (an array expression compiles a loop of its own); inputs arrive read-only
+# (:func:`_read_only`).  The same operations in the same order: the same bits.
 _jit = jit(error_model="python")
 _gram = _jit(_gram)
 _solve_passive = _jit(_solve_passive)
-_nnls_small = _jit(_nnls_small)
+_nnls_small = jit(_nnls_small, error_model="python", inline="always")
 _deviance = _jit(_deviance)
 _floored_model = _jit(_floored_model)
-_irls_one = _jit(_irls_one)
+_irls_one = jit(_irls_one, error_model="python", inline="always")
 _irls_batch = _jit(_irls_batch)
 _sums4 = _jit(_sums4)
 _allan_sums = _jit(_allan_sums)
 _ar1 = _jit(_ar1)
 
 
+def _read_only(a, dtype=np.float64) -> np.ndarray:
+    """``a`` as a C-contiguous array of ``dtype``, seen read-only (a view: no copy).
+
+    numba compiles a kernel once per argument type, and a read-only array is a type of its
+    own: callers pass both (a frozen recording, a broadcast design), which compiled every
+    kernel on the path twice.  The kernels only read their inputs, so they take them read-only."""
+    a = np.ascontiguousarray(a, dtype=dtype)
+    if a.flags.writeable:
+        a = a.view()
+        a.flags.writeable = False
+    return a
+
+
 def irls_gamma(H: np.ndarray, y: np.ndarray, edf: np.ndarray, max_iter: int = 200, tol: float = 1e-10):
     """Compiled :func:`accelcal.noise.allan_fit._irls`: ``H`` (G, k, p), ``y`` (G, k)."""
-    return _irls_batch(np.ascontiguousarray(H, dtype=np.float64), np.ascontiguousarray(y, dtype=np.float64),
-                       np.ascontiguousarray(edf, dtype=np.float64), int(max_iter), float(tol))
+    return _irls_batch(_read_only(H), _read_only(y), _read_only(edf), int(max_iter), float(tol))
 
 
 def allan_sums(s: np.ndarray, mean: np.ndarray, m: np.ndarray) -> np.ndarray:
     """Compiled sums of squared second differences of the running sums of ``s − mean`` (:func:`_allan_sums`)."""
-    return _allan_sums(np.ascontiguousarray(s, dtype=np.float64), np.ascontiguousarray(mean, dtype=np.float64),
-                       np.ascontiguousarray(m, dtype=np.int64))
+    return _allan_sums(_read_only(s), _read_only(mean), _read_only(m, np.int64))
 
 
 def ar1(e: np.ndarray, rho: float) -> np.ndarray:
     """Compiled ``scipy.signal.lfilter([1], [1, -rho], e, axis=0)`` of a 2-D ``e``: the same
     operations in the same order (``y = 1·e + (0·e' + rho·y')``, which is ``e + rho·y'``
     exactly), so the same bits; scipy.signal costs ~1 s of CPU to import."""
-    return _ar1(np.ascontiguousarray(e, dtype=np.float64), float(rho))
+    return _ar1(_read_only(e), float(rho))
 
 
 __all__ = ["allan_sums", "ar1", "irls_gamma"]
