@@ -98,33 +98,16 @@ def _grid_calls(h) -> None:
 
 
 def _first_calls(h) -> None:
-    """The calls of the ``kernel_cache`` job (:data:`accelcal_repro.first_calls.SCRIPT`: every
-    estimator's compiled kernels, the filters', Tereshkov's), their results hashed."""
+    """The calls of the ``kernel_cache`` job (:func:`accelcal_repro.first_calls.kernel_first_calls`:
+    every estimator's compiled kernels, the filters', Tereshkov's), their results hashed."""
     import pickle
 
-    from accelcal.batista.filter import covariance_sequence, kalman_filter
-    from accelcal.simulation import random_directions, sample_truth, simulate_poses
-    from accelcal.tereshkov.estimator import run_estimator
-    from accelcal_repro.first_calls import estimator_calls
+    from accelcal_repro.first_calls import kernel_first_calls
 
-    rng = np.random.default_rng(0)
-    tr = sample_truth(rng, 4)
-    z = simulate_poses(random_directions(rng, 24, 4), 9.8, tr["M"], tr["bias"], 1e-3, rng)
-    n = 50
-    t = np.arange(n) * 0.01
-    w = np.full((n, 3), 0.1)
-    a = np.zeros((n, 3))
-    f = np.zeros((1, n, 3))
-    f[..., 2] = -9.8
-    calls = [call for _, call in estimator_calls(z, 9.8, 1e-3)] + [
-        lambda: kalman_filter(t, a, w, a, np.zeros(9), np.ones(9)),
-        lambda: covariance_sequence(t, w, np.ones(9)),
-        lambda: run_estimator(f * 0, f, f, np.zeros((1, n)), np.ones((1, n)), 0.01)]
-    for call in calls:
+    for _, call in kernel_first_calls():
         h.update(pickle.dumps(call(), protocol=4))
 
 
-#: ``--calls``: a kernel module's entry points alone, compiled in a fresh process.
 CALLS = {"fit": _fit_calls, "noise": _noise_calls, "grid": _grid_calls, "first": _first_calls}
 
 

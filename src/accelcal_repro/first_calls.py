@@ -1,7 +1,6 @@
-"""The first calls of the compiled kernels, as a script that a fresh process runs
-(:func:`accelcal_repro.timing.compile_timing`), and their names (what the benchmark
-config's ``compile_calls`` may list).  Light to import: the workflow's config check reads
-the names while the Snakefile is parsed.
+"""The first calls of the compiled kernels (:func:`kernel_first_calls`), as a script that a
+fresh process runs (:func:`accelcal_repro.timing.compile_timing`), and their names (what
+the benchmark config's ``compile_calls`` may list; the benchmark job checks them).
 
 The estimators' calls come from the registry (every estimator with a compiled kernel:
 its single-problem form, the same without the noise level if it uses one, then the
@@ -11,40 +10,28 @@ from __future__ import annotations
 
 from functools import partial
 
+import numpy as np
+
+from accelcal.batista.filter import covariance_sequence, kalman_filter
 from accelcal.errors import AccelcalError
 from accelcal.registry import estimators
+from accelcal.simulation import random_directions, sample_truth, simulate_poses
+from accelcal.tereshkov.estimator import run_estimator
 
 #: Calls that trigger every compiled kernel once, in the order of the table (run in a
 #: fresh process by :func:`accelcal_repro.timing.compile_timing`).
 SCRIPT = """
 import json, sys, time
 t0 = time.perf_counter()
-import numpy as np
 from accelcal import kernels
-from accelcal.batista.filter import covariance_sequence, kalman_filter
-from accelcal.tereshkov.estimator import run_estimator
-from accelcal.simulation import random_directions, sample_truth, simulate_poses
-from accelcal_repro.first_calls import compiled_estimators, estimator_calls
+from accelcal_repro.first_calls import compiled_estimators, kernel_first_calls
 for e in compiled_estimators():
     e.load(), e.load_batch()
 rows = [("import accelcal estimators", time.perf_counter() - t0)]
 t0 = time.perf_counter()
 import numba
 rows.append(("import numba", time.perf_counter() - t0))
-rng = np.random.default_rng(0)
-tr = sample_truth(rng, 4)
-z = simulate_poses(random_directions(rng, 24, 4), 9.8, tr["M"], tr["bias"], 1e-3, rng)
-n = 50
-t = np.arange(n) * 0.01
-w = np.full((n, 3), 0.1)
-a = np.zeros((n, 3))
-f = np.zeros((1, n, 3))
-f[..., 2] = -9.8
-calls = estimator_calls(z, 9.8, 1e-3) + [
-    ("kalman_filter", lambda: kalman_filter(t, a, w, a, np.zeros(9), np.ones(9))),
-    ("covariance_sequence", lambda: covariance_sequence(t, w, np.ones(9))),
-    ("tereshkov run_estimator", lambda: run_estimator(f * 0, f, f, np.zeros((1, n)), np.ones((1, n)), 0.01)),
-]
+calls = kernel_first_calls()
 wanted = json.loads(sys.argv[1])
 for name, call in calls:
     if wanted == "all" or name in wanted:
@@ -77,6 +64,25 @@ def estimator_calls(z, g: float, noise_std: float) -> list[tuple[str, object]]:
     return out
 
 
+def kernel_first_calls() -> list[tuple[str, object]]:
+    """``(name, call)`` of every compiled kernel's first call, in :data:`SCRIPT`'s order: the
+    estimators' (:func:`estimator_calls` on 24 simulated poses), then the filters'
+    (:data:`FILTER_CALLS`, on 50 steps)."""
+    rng = np.random.default_rng(0)
+    tr = sample_truth(rng, 4)
+    z = simulate_poses(random_directions(rng, 24, 4), 9.8, tr["M"], tr["bias"], 1e-3, rng)
+    n = 50
+    t = np.arange(n) * 0.01
+    w = np.full((n, 3), 0.1)
+    a = np.zeros((n, 3))
+    f = np.zeros((1, n, 3))
+    f[..., 2] = -9.8
+    filters = (partial(kalman_filter, t, a, w, a, np.zeros(9), np.ones(9)),
+               partial(covariance_sequence, t, w, np.ones(9)),
+               partial(run_estimator, f * 0, f, f, np.zeros((1, n)), np.ones((1, n)), 0.01))
+    return estimator_calls(z, 9.8, 1e-3) + list(zip(FILTER_CALLS, filters))
+
+
 def first_call_names() -> tuple[str, ...]:
     """The names of the calls of :data:`SCRIPT`, in its order (without running anything)."""
     return tuple(name for name, _ in estimator_calls([None], 0.0, 0.0)) + FILTER_CALLS
@@ -99,4 +105,4 @@ def check_calls(calls, where: str = "benchmark.compile_calls") -> None:
 
 
 __all__ = ["FILTER_CALLS", "FIRST_CALLS", "SCRIPT", "check_calls", "compiled_estimators", "estimator_calls",
-           "first_call_names"]
+           "first_call_names", "kernel_first_calls"]
