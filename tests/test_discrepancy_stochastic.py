@@ -212,6 +212,10 @@ def test_result_is_json_ready_and_deterministic(white_result):
         assert key in ax
     again = st.stochastic_layer(_segments(10, {"white": N_WHITE}), FS, seed=5, n_boot=99)
     assert json.dumps(again.to_dict(), allow_nan=False) == text
+    # each term's unit in the data's unit, as the noise report writes it (the term's own template)
+    units = {k: t["unit"] for k, t in d["terms"].items()}
+    assert units["white"] == f"{d['unit']}/sqrt(Hz)" and units["quantization"] == f"{d['unit']}*s", units
+    assert all(d["unit"] in u and "{" not in u for u in units.values()), units
 
 
 # --------------------------------------------------------------------------- simulation and models

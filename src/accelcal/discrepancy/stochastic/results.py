@@ -80,7 +80,7 @@ class StochasticResult:
         out["candidates"] = list(self.candidates)
         out["segment_lengths"] = list(self.segment_lengths)
         out["notes"] = list(self.notes)
-        out["terms"] = {k: {"parameter": t.symbol, "unit": t.unit.replace("u", self.unit, 1), "meaning": t.meaning}
+        out["terms"] = {k: {"parameter": t.symbol, "unit": t.unit_of(self.unit), "meaning": t.meaning}
                         for k, t in TERMS.items()}
         out["axes"] = {a.axis: a.to_dict() for a in self.axes}
         return json_safe(out)
