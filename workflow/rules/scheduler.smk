@@ -34,7 +34,16 @@ def _one_pending_reevaluation(self, delay):
     _threading.Timer(delay, wake).start()
 
 
-_released = getattr(_JobScheduler, "_schedule_reevalutation", None)
-if (_released is not None and _released.__name__ == "_schedule_reevalutation"  # not applied by an earlier parse
-        and "threading.Timer(" in _inspect.getsource(_released)):
+def _arms_a_timer_per_pass(method) -> bool:
+    """Whether ``method`` is the released one (not this file's from an earlier parse), read
+    from its source; False where the source is not installed (nothing is replaced then)."""
+    if method is None or method.__name__ != "_schedule_reevalutation":
+        return False
+    try:
+        return "threading.Timer(" in _inspect.getsource(method)
+    except (OSError, TypeError):
+        return False
+
+
+if _arms_a_timer_per_pass(getattr(_JobScheduler, "_schedule_reevalutation", None)):
     _JobScheduler._schedule_reevalutation = _one_pending_reevaluation
